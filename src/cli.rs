@@ -1,0 +1,175 @@
+//! The `stereocull` command line.
+
+use std::path::{Path, PathBuf};
+
+use clap::{Args, Parser, Subcommand};
+use serde::Serialize;
+
+use crate::contexts::DisplayContext;
+use crate::cull::{CullOutput, cpu};
+use crate::device::{Gpu, OPTIONAL_FEATURES};
+use crate::error::{Error, Result};
+use crate::records::CullLayout;
+use crate::rig::Rig;
+use crate::scene::Scene;
+
+#[derive(Parser)]
+#[command(
+    name = "stereocull",
+    version,
+    about = "GPU-driven stereo and multi-display scene submission on wgpu"
+)]
+struct Cli {
+    #[command(subcommand)]
+    command: Command,
+}
+
+#[derive(Subcommand)]
+enum Command {
+    /// Print the adapter, backend, driver and which optional features are present.
+    Info,
+    /// Cull a scene for every display of a rig and dump the visible lists and draws.
+    Cull(CullArgs),
+}
+
+/// Where the scene and viewer come from; shared by every command that draws.
+#[derive(Args, Clone, Debug)]
+pub struct SceneArgs {
+    /// A .gltf/.glb file, or procedural:N[:MESHES[:SEED]].
+    #[arg(long, default_value = "procedural:1000")]
+    pub scene: String,
+    /// A preset (hmd, cave, hmd-peripheral) or a .json/.toml rig file.
+    #[arg(long, default_value = "hmd")]
+    pub rig: String,
+    /// Viewer position override: x,y,z in meters.
+    #[arg(long, value_parser = parse_vec3, allow_hyphen_values = true)]
+    pub viewer: Option<[f32; 3]>,
+    /// Viewer yaw override in degrees (positive turns left).
+    #[arg(long, allow_hyphen_values = true)]
+    pub yaw: Option<f32>,
+    /// Viewer pitch override in degrees (positive looks up).
+    #[arg(long, allow_hyphen_values = true)]
+    pub pitch: Option<f32>,
+}
+
+impl SceneArgs {
+    pub fn load_rig(&self) -> Result<Rig> {
+        let mut rig = Rig::load(&self.rig)?;
+        if let Some(p) = self.viewer {
+            rig.viewer.position = p;
+        }
+        if let Some(y) = self.yaw {
+            rig.viewer.yaw_deg = y;
+        }
+        if let Some(p) = self.pitch {
+            rig.viewer.pitch_deg = p;
+        }
+        rig.validate(&self.rig)?;
+        Ok(rig)
+    }
+}
+
+#[derive(Args)]
+struct CullArgs {
+    #[command(flatten)]
+    scene: SceneArgs,
+    /// Write the per-display visible lists and draws here as JSON.
+    #[arg(long)]
+    dump_visible: PathBuf,
+}
+
+fn parse_vec3(s: &str) -> std::result::Result<[f32; 3], String> {
+    let parts: Vec<f32> = s
+        .split(',')
+        .map(|p| p.trim().parse::<f32>().map_err(|e| format!("{p:?}: {e}")))
+        .collect::<std::result::Result<_, _>>()?;
+    match parts.as_slice() {
+        [x, y, z] if parts.iter().all(|v| v.is_finite()) => Ok([*x, *y, *z]),
+        _ => Err(format!("{s:?}: expected three finite numbers x,y,z")),
+    }
+}
+
+pub fn run() -> Result<()> {
+    match Cli::parse().command {
+        Command::Info => info(),
+        Command::Cull(args) => cull(&args),
+    }
+}
+
+fn info() -> Result<()> {
+    let gpu = Gpu::headless()?;
+    println!("adapter: {}", gpu.adapter_line());
+    let features = gpu.device.features();
+    for (feature, name, without) in OPTIONAL_FEATURES {
+        if features.contains(feature) {
+            println!("  {name:28} yes");
+        } else {
+            println!("  {name:28} no  ({without})");
+        }
+    }
+    Ok(())
+}
+
+/// One display's entry in the `--dump-visible` file.
+#[derive(Serialize)]
+pub struct DisplayDump {
+    pub name: String,
+    pub views: u32,
+    pub visible: Vec<u32>,
+    pub draws: Vec<DrawDump>,
+    pub draw_count: u32,
+}
+
+#[derive(Serialize)]
+pub struct DrawDump {
+    pub mesh: u32,
+    pub index_count: u32,
+    pub instance_count: u32,
+    pub first_index: u32,
+    pub base_vertex: i32,
+    pub first_instance: u32,
+}
+
+pub fn display_dump(name: &str, views: u32, out: &CullOutput, scene: &Scene) -> DisplayDump {
+    let meshes = out.draw_meshes(views, |id| scene.instances[id as usize].mesh);
+    DisplayDump {
+        name: name.into(),
+        views,
+        visible: out.visible.clone(),
+        draws: out.draws[..out.draw_count as usize]
+            .iter()
+            .zip(meshes)
+            .map(|(d, mesh)| DrawDump {
+                mesh,
+                index_count: d.index_count,
+                instance_count: d.instance_count,
+                first_index: d.first_index,
+                base_vertex: d.base_vertex,
+                first_instance: d.first_instance,
+            })
+            .collect(),
+        draw_count: out.draw_count,
+    }
+}
+
+fn cull(args: &CullArgs) -> Result<()> {
+    let rig = args.scene.load_rig()?;
+    let scene = Scene::load(&args.scene.scene)?;
+    let layout = CullLayout::new(&scene);
+    let displays = (0..rig.displays.len())
+        .map(|i| {
+            let ctx = DisplayContext::new(&rig, i)?;
+            let out = cpu::cull(&layout, &ctx.planes, ctx.views);
+            Ok(display_dump(&rig.displays[i].name, ctx.views, &out, &scene))
+        })
+        .collect::<Result<Vec<_>>>()?;
+    write_json(
+        &args.dump_visible,
+        &serde_json::json!({ "displays": displays }),
+    )
+}
+
+pub fn write_json(path: &Path, value: &impl Serialize) -> Result<()> {
+    let text = serde_json::to_string(value).expect("plain data always serializes");
+    std::fs::write(path, text).map_err(|e| Error::io(path, e))
+}

@@ -1,0 +1,32 @@
+//! Per-display frustum culling into draw lists, on the CPU ([`cpu`]) or the GPU
+//! ([`gpu`]). Both honour one contract, byte for byte (see `DESIGN.md`):
+//!
+//! - one draw per mesh with at least one visible instance, in ascending mesh id, packed
+//!   at the front of `draws`; the rest of `draws` is zero; `draw_count` is their number;
+//! - within a draw, visible instance ids ascend;
+//! - `instance_count = views * visible_in_mesh`, `first_instance = views * offset`.
+
+pub mod cpu;
+
+use crate::records::DrawArgs;
+
+/// One display's cull result, as the draw pass consumes it.
+#[derive(Clone, Debug, PartialEq, Eq)]
+pub struct CullOutput {
+    /// Visible instance ids (exactly the visible ones; the GPU buffer's capacity is
+    /// the instance count and its tail past these is unspecified).
+    pub visible: Vec<u32>,
+    /// One entry per mesh: the packed draws, then zeros.
+    pub draws: Vec<DrawArgs>,
+    pub draw_count: u32,
+}
+
+impl CullOutput {
+    /// The mesh each packed draw draws, recovered from its first visible instance.
+    pub fn draw_meshes(&self, views: u32, instance_mesh: impl Fn(u32) -> u32) -> Vec<u32> {
+        self.draws[..self.draw_count as usize]
+            .iter()
+            .map(|d| instance_mesh(self.visible[(d.first_instance / views) as usize]))
+            .collect()
+    }
+}

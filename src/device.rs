@@ -1,0 +1,168 @@
+//! A headless device for the CLI, tests and benches. Embedders bring their own
+//! `wgpu::Device` instead and never need this module.
+
+use wgpu::Features;
+
+use crate::error::{Error, Result};
+
+/// Optional features the pipeline uses when present, with what it does without them.
+pub const OPTIONAL_FEATURES: [(Features, &str, &str); 6] = [
+    (
+        Features::MULTI_DRAW_INDIRECT_COUNT,
+        "multi_draw_indirect_count",
+        "fixed-count multi-draw; empty draws are skipped by the GPU",
+    ),
+    (
+        Features::INDIRECT_FIRST_INSTANCE,
+        "indirect_first_instance",
+        "GPU-driven drawing is unavailable (first_instance offsets)",
+    ),
+    (
+        Features::CLIP_DISTANCES,
+        "clip_distances",
+        "eyes kept in their half by a fragment discard",
+    ),
+    (
+        Features::MULTIVIEW,
+        "multiview",
+        "the multiview mode is unavailable",
+    ),
+    (
+        Features::TIMESTAMP_QUERY,
+        "timestamp_query",
+        "CPU timings only",
+    ),
+    (
+        Features::PIPELINE_STATISTICS_QUERY,
+        "pipeline_statistics_query",
+        "no vertex-invocation counts",
+    ),
+];
+
+/// The adapter, device and queue that the CLI and tests use.
+pub struct Gpu {
+    pub adapter: wgpu::Adapter,
+    pub device: wgpu::Device,
+    pub queue: wgpu::Queue,
+}
+
+impl Gpu {
+    /// Picks an adapter (honouring `WGPU_BACKEND` and `WGPU_ADAPTER_NAME`), preferring
+    /// real GPUs over software ones, and opens a device with every optional feature the
+    /// adapter has and the adapter's own limits (large scenes need large buffers).
+    pub fn headless() -> Result<Gpu> {
+        pollster::block_on(Self::headless_async(Features::all()))
+    }
+
+    /// As [`Gpu::headless`], but never enables optional features outside `allowed`
+    /// (to test the fallback tiers).
+    pub fn headless_with(allowed: Features) -> Result<Gpu> {
+        pollster::block_on(Self::headless_async(allowed))
+    }
+
+    async fn headless_async(allowed: Features) -> Result<Gpu> {
+        let adapter = find_adapter().await?;
+        let optional = OPTIONAL_FEATURES
+            .iter()
+            .map(|(f, ..)| *f)
+            .fold(Features::empty(), |a, f| a | f);
+        let features = adapter.features() & optional & allowed;
+        let (device, queue) = adapter
+            .request_device(&wgpu::DeviceDescriptor {
+                label: Some("stereocull"),
+                required_features: features,
+                required_limits: adapter.limits(),
+                ..Default::default()
+            })
+            .await?;
+        let info = adapter.get_info();
+        log::info!(
+            "adapter: {} ({:?}, {})",
+            info.name,
+            info.backend,
+            info.driver
+        );
+        Ok(Gpu {
+            adapter,
+            device,
+            queue,
+        })
+    }
+
+    /// One line naming the adapter, its backend and driver.
+    pub fn adapter_line(&self) -> String {
+        let i = self.adapter.get_info();
+        format!(
+            "{} ({:?}, {:?}, driver {} {})",
+            i.name, i.backend, i.device_type, i.driver, i.driver_info
+        )
+    }
+}
+
+/// `WGPU_BACKEND` when set; otherwise the primary backends, then GL only if they have
+/// no adapter (probing EGL is slow and noisy where Vulkan works).
+async fn find_adapter() -> Result<wgpu::Adapter> {
+    let from_env = wgpu::Backends::from_env();
+    let tries = match from_env {
+        Some(b) => vec![b],
+        None => vec![wgpu::Backends::PRIMARY, wgpu::Backends::GL],
+    };
+    let mut last = None;
+    for backends in tries {
+        let mut descriptor = wgpu::InstanceDescriptor::new_without_display_handle_from_env();
+        descriptor.backends = backends;
+        let instance = wgpu::Instance::new(descriptor);
+        match choose_adapter(instance.enumerate_adapters(backends).await, backends) {
+            Err(Error::NoAdapter { .. }) => last = Some(backends),
+            other => return other,
+        }
+    }
+    Err(Error::NoAdapter {
+        backends: format!("{:?}", last.unwrap_or(wgpu::Backends::all())),
+    })
+}
+
+fn choose_adapter(adapters: Vec<wgpu::Adapter>, backends: wgpu::Backends) -> Result<wgpu::Adapter> {
+    let names = || {
+        adapters
+            .iter()
+            .map(|a| a.get_info().name)
+            .collect::<Vec<_>>()
+            .join(", ")
+    };
+    let wanted = std::env::var("WGPU_ADAPTER_NAME")
+        .ok()
+        .map(|s| s.to_lowercase());
+    if let Some(wanted) = &wanted
+        && !adapters
+            .iter()
+            .any(|a| a.get_info().name.to_lowercase().contains(wanted))
+    {
+        return Err(Error::AdapterNotFound {
+            wanted: wanted.clone(),
+            present: names(),
+        });
+    }
+    let rank = |a: &wgpu::Adapter| {
+        let info = a.get_info();
+        let kind = match info.device_type {
+            wgpu::DeviceType::DiscreteGpu => 0,
+            wgpu::DeviceType::IntegratedGpu => 1,
+            wgpu::DeviceType::VirtualGpu => 2,
+            wgpu::DeviceType::Cpu => 3,
+            wgpu::DeviceType::Other => 4,
+        };
+        (kind, info.backend != wgpu::Backend::Vulkan)
+    };
+    adapters
+        .into_iter()
+        .filter(|a| {
+            wanted
+                .as_ref()
+                .is_none_or(|w| a.get_info().name.to_lowercase().contains(w))
+        })
+        .min_by_key(rank)
+        .ok_or_else(|| Error::NoAdapter {
+            backends: format!("{backends:?}"),
+        })
+}

@@ -1,0 +1,80 @@
+//! Typed errors. Every fallible public function returns [`Error`]; the CLI prints its
+//! `Display` as one line and exits non-zero.
+
+use std::path::PathBuf;
+
+/// Installs the software Vulkan driver on a GPU-less Debian or Ubuntu machine.
+pub const LAVAPIPE_INSTALL: &str = "apt-get install -y mesa-vulkan-drivers";
+
+#[derive(Debug, thiserror::Error)]
+pub enum Error {
+    /// No adapter on any enabled backend: usually no Vulkan driver is installed.
+    #[error(
+        "no GPU adapter found (backends {backends}): install a Vulkan driver; on a GPU-less Debian or Ubuntu machine run `{LAVAPIPE_INSTALL}` (lavapipe)"
+    )]
+    NoAdapter { backends: String },
+
+    /// `WGPU_ADAPTER_NAME` is set but names none of the adapters present.
+    #[error("WGPU_ADAPTER_NAME={wanted:?} matches no adapter; present: {present}")]
+    AdapterNotFound { wanted: String, present: String },
+
+    /// The adapter refused the device we asked for.
+    #[error("the adapter refused the device: {0}")]
+    RequestDevice(#[from] wgpu::RequestDeviceError),
+
+    /// A rig (preset, file or override) is invalid.
+    #[error("rig {origin}: {message}")]
+    Rig { origin: String, message: String },
+
+    /// A scene file could not be read or makes no sense.
+    #[error("scene {path}: {message}")]
+    Scene { path: PathBuf, message: String },
+
+    /// A `procedural:N[:M]` scene specification is malformed.
+    #[error("scene {spec:?}: {message}")]
+    SceneSpec { spec: String, message: String },
+
+    /// The scene or rig does not fit the device's limits.
+    #[error("{0}")]
+    Limits(String),
+
+    /// Reading results back from the GPU failed (device lost, map failure).
+    #[error("GPU readback failed: {0}")]
+    Readback(String),
+
+    /// wgpu reported a validation or out-of-memory error inside an error scope.
+    #[error("wgpu: {0}")]
+    Wgpu(#[from] wgpu::Error),
+
+    /// Writing an output file failed.
+    #[error("{path}: {source}")]
+    Io {
+        path: PathBuf,
+        source: std::io::Error,
+    },
+
+    /// Encoding an image failed.
+    #[error("{path}: {source}")]
+    Image {
+        path: PathBuf,
+        source: image::ImageError,
+    },
+}
+
+impl Error {
+    pub(crate) fn rig(origin: impl Into<String>, message: impl Into<String>) -> Self {
+        Error::Rig {
+            origin: origin.into(),
+            message: message.into(),
+        }
+    }
+
+    pub(crate) fn io(path: impl Into<PathBuf>, source: std::io::Error) -> Self {
+        Error::Io {
+            path: path.into(),
+            source,
+        }
+    }
+}
+
+pub type Result<T, E = Error> = std::result::Result<T, E>;

@@ -1,0 +1,262 @@
+//! Perspective views, frustum planes and the combined (display, frame) frustum.
+//!
+//! Conventions: right-handed, +Y up, a view looks down its own -Z, clip depth 0..1 (wgpu).
+//! Planes are `Vec4(n, d)` with `dot(n, p) + d >= 0` inside, `n` unit length.
+
+use glam::{Affine3A, Mat4, Quat, Vec3, Vec4, Vec4Swizzles};
+use serde::{Deserialize, Serialize};
+
+/// Field of view as tangents of the half-angles from the view axis to each edge.
+/// Asymmetric and off-axis frusta are just unequal tangents; a tangent may be
+/// negative when the axis lies outside the window (a far-off CAVE wall).
+#[derive(Clone, Copy, Debug, PartialEq, Serialize, Deserialize)]
+#[serde(deny_unknown_fields)]
+pub struct Fov {
+    pub left: f32,
+    pub right: f32,
+    pub up: f32,
+    pub down: f32,
+}
+
+impl Fov {
+    /// The same window seen mirrored left-right (the other eye of a symmetric headset).
+    pub fn mirrored(self) -> Fov {
+        Fov {
+            left: self.right,
+            right: self.left,
+            ..self
+        }
+    }
+
+    /// A window that has area and stays in front of the eye (each tangent finite, so
+    /// every half-angle is below 90 degrees and the whole angle below 180).
+    pub fn is_valid(&self) -> bool {
+        let t = [self.left, self.right, self.up, self.down];
+        t.iter().all(|v| v.is_finite()) && self.left + self.right > 0.0 && self.up + self.down > 0.0
+    }
+}
+
+/// One center of projection: an eye, or the apex of a combined frustum.
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub struct View {
+    /// Rigid pose (rotation and translation only); its translation is the apex.
+    pub world_from_view: Affine3A,
+    pub fov: Fov,
+    pub near: f32,
+    pub far: f32,
+}
+
+impl View {
+    pub fn position(&self) -> Vec3 {
+        self.world_from_view.translation.into()
+    }
+
+    pub fn view_from_world(&self) -> Mat4 {
+        Mat4::from(self.world_from_view.inverse())
+    }
+
+    /// Off-axis perspective projection with depth 0 at `near` and 1 at `far`.
+    pub fn clip_from_view(&self) -> Mat4 {
+        let Fov {
+            left: l,
+            right: r,
+            up: u,
+            down: d,
+        } = self.fov;
+        let (n, f) = (self.near, self.far);
+        Mat4::from_cols(
+            Vec4::new(2.0 / (l + r), 0.0, 0.0, 0.0),
+            Vec4::new(0.0, 2.0 / (u + d), 0.0, 0.0),
+            Vec4::new((r - l) / (l + r), (u - d) / (u + d), f / (n - f), -1.0),
+            Vec4::new(0.0, 0.0, n * f / (n - f), 0.0),
+        )
+    }
+
+    pub fn clip_from_world(&self) -> Mat4 {
+        self.clip_from_view() * self.view_from_world()
+    }
+
+    pub fn frustum(&self) -> Frustum {
+        Frustum::from_clip_from_world(self.clip_from_world())
+    }
+
+    /// The 8 corners in world space: near lower-left, lower-right, upper-right,
+    /// upper-left, then the far ones in the same order (corner `i` and `i + 4` span
+    /// one lateral edge).
+    pub fn corners(&self) -> [Vec3; 8] {
+        let Fov {
+            left: l,
+            right: r,
+            up: u,
+            down: d,
+        } = self.fov;
+        let window = [(-l, -d), (r, -d), (r, u), (-l, u)];
+        std::array::from_fn(|i| {
+            let dist = if i < 4 { self.near } else { self.far };
+            let (tx, ty) = window[i % 4];
+            self.world_from_view
+                .transform_point3(Vec3::new(tx * dist, ty * dist, -dist))
+        })
+    }
+}
+
+/// Six planes: left, right, bottom, top, near, far.
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub struct Frustum {
+    pub planes: [Vec4; 6],
+}
+
+impl Frustum {
+    /// Gribb-Hartmann extraction for a 0..1 depth range.
+    pub fn from_clip_from_world(m: Mat4) -> Frustum {
+        let (r0, r1, r2, r3) = (m.row(0), m.row(1), m.row(2), m.row(3));
+        let raw = [r3 + r0, r3 - r0, r3 + r1, r3 - r1, r2, r3 - r2];
+        Frustum {
+            planes: raw.map(|p| p / p.xyz().length()),
+        }
+    }
+
+    pub fn contains_point(&self, p: Vec3) -> bool {
+        self.planes.iter().all(|pl| pl.xyz().dot(p) + pl.w >= 0.0)
+    }
+
+    /// Conservative sphere test; `sphere` is `(center, radius)`. The operation order is
+    /// the contract with `wgsl/shared/cull_math.wgsl`: same products, same sums, left to
+    /// right, no fused multiply-add, so CPU and GPU decide identically.
+    #[inline]
+    pub fn intersects_sphere(&self, sphere: Vec4) -> bool {
+        sphere_in_planes(&self.planes, sphere)
+    }
+}
+
+/// The CPU twin of `sphere_in_planes` in `wgsl/shared/cull_math.wgsl`.
+#[inline]
+pub fn sphere_in_planes(planes: &[Vec4; 6], s: Vec4) -> bool {
+    planes
+        .iter()
+        .all(|p| p.x * s.x + p.y * s.y + p.z * s.z + p.w >= -s.w)
+}
+
+/// How far (meters) every side of a combined frustum is pushed out beyond the exact
+/// bound, so that float rounding in plane extraction can never make it smaller than
+/// the views it must contain.
+const ENCLOSING_SLACK: f32 = 1e-5;
+
+/// The smallest-apex perspective view, oriented by `orientation`, that contains every
+/// given frustum (each as its 8 corners, see [`View::corners`]).
+///
+/// The chapter's Figure 1.2, generalised to asymmetric, canted and off-axis views: each
+/// side takes the widest lateral-edge tangent of the inputs, then the apex is placed
+/// (behind the eyes) so that every side plane contains every input corner; near and far
+/// take the nearest and farthest input corners. For two parallel eyes this is exactly the
+/// chapter's construction (right plane = left eye's right plane moved to the right eye).
+/// `None` when the inputs span 180 degrees or more (no single frustum holds them: a CAVE).
+pub fn enclosing_view(orientation: Quat, frusta: &[[Vec3; 8]]) -> Option<View> {
+    let to_basis = orientation.inverse();
+    let local: Vec<[Vec3; 8]> = frusta.iter().map(|c| c.map(|p| to_basis * p)).collect();
+    let fov = widest_fov(&local)?;
+    let corners = || local.iter().flatten().copied();
+    let reach =
+        |f: &dyn Fn(Vec3) -> f32| corners().map(f).fold(f32::MIN, f32::max) + ENCLOSING_SLACK;
+    let c_right = reach(&|p| p.x + fov.right * p.z);
+    let c_left = reach(&|p| -p.x + fov.left * p.z);
+    let c_up = reach(&|p| p.y + fov.up * p.z);
+    let c_down = reach(&|p| -p.y + fov.down * p.z);
+    let apex_z = f32::max(
+        (c_right + c_left) / (fov.left + fov.right),
+        (c_up + c_down) / (fov.up + fov.down),
+    );
+    // Any x in [c_right - r z, l z - c_left] works; the middle keeps slack on both sides.
+    let apex_x = 0.5 * ((c_right - fov.right * apex_z) + (fov.left * apex_z - c_left));
+    let apex_y = 0.5 * ((c_up - fov.up * apex_z) + (fov.down * apex_z - c_down));
+    let z_nearest = corners().map(|p| p.z).fold(f32::MIN, f32::max);
+    let z_farthest = corners().map(|p| p.z).fold(f32::MAX, f32::min);
+    let near = apex_z - z_nearest;
+    let far = apex_z - z_farthest + ENCLOSING_SLACK;
+    if !(near > 0.0 && far > near && apex_z.is_finite()) {
+        return None;
+    }
+    Some(View {
+        world_from_view: Affine3A::from_rotation_translation(
+            orientation,
+            orientation * Vec3::new(apex_x, apex_y, apex_z),
+        ),
+        fov,
+        near,
+        far,
+    })
+}
+
+/// Widest tangent per side over all lateral edges, in the basis the corners are given in.
+fn widest_fov(local: &[[Vec3; 8]]) -> Option<Fov> {
+    let mut fov = Fov {
+        left: f32::MIN,
+        right: f32::MIN,
+        up: f32::MIN,
+        down: f32::MIN,
+    };
+    for c in local {
+        for i in 0..4 {
+            let e = c[i + 4] - c[i];
+            let depth = -e.z;
+            // An edge at 89.9 degrees or more from the axis: no finite tangent holds it.
+            if depth <= 1e-3 * e.length() {
+                return None;
+            }
+            fov.right = fov.right.max(e.x / depth);
+            fov.left = fov.left.max(-e.x / depth);
+            fov.up = fov.up.max(e.y / depth);
+            fov.down = fov.down.max(-e.y / depth);
+        }
+    }
+    fov.is_valid().then_some(fov)
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    fn eye(x: f32) -> View {
+        View {
+            world_from_view: Affine3A::from_translation(Vec3::new(x, 0.0, 0.0)),
+            fov: Fov {
+                left: 1.0,
+                right: 0.8,
+                up: 0.9,
+                down: 1.1,
+            },
+            near: 0.1,
+            far: 50.0,
+        }
+    }
+
+    #[test]
+    fn projection_maps_corners_to_ndc_corners() {
+        let v = eye(0.3);
+        let m = v.clip_from_world();
+        let ndc = [(-1.0, -1.0), (1.0, -1.0), (1.0, 1.0), (-1.0, 1.0)];
+        for (i, c) in v.corners().iter().enumerate() {
+            let p = m.project_point3(*c);
+            let (x, y) = ndc[i % 4];
+            let z = if i < 4 { 0.0 } else { 1.0 };
+            assert!(
+                (p - Vec3::new(x, y, z)).abs().max_element() < 1e-4,
+                "{i}: {p}"
+            );
+        }
+    }
+
+    #[test]
+    fn parallel_eyes_give_the_chapters_construction() {
+        let (l, r) = (eye(-0.032), eye(0.032));
+        let d = enclosing_view(Quat::IDENTITY, &[l.corners(), r.corners()]).unwrap();
+        // The apex lies behind the eyes where the two outer planes meet.
+        let expected_z = 0.064 / (1.0 + 0.8);
+        assert!(
+            (d.position().z - expected_z).abs() < 1e-4,
+            "{}",
+            d.position()
+        );
+        assert_eq!(d.fov, l.fov);
+    }
+}

@@ -1,0 +1,228 @@
+//! glTF 2.0 / GLB import into a [`Scene`].
+//!
+//! Instance ids: the default scene's nodes (the first scene when none is the default)
+//! are visited depth-first, children in order; within a node, its mesh's primitives in
+//! order; within a primitive, the `EXT_mesh_gpu_instancing` copies in order. One mesh
+//! record per glTF primitive, shared by every node that uses that mesh.
+
+use std::collections::HashMap;
+use std::path::Path;
+
+use glam::{Affine3A, Mat4, Quat, Vec3, Vec4};
+use gltf::Document;
+use gltf::buffer::Data;
+
+use crate::error::{Error, Result};
+use crate::scene::{Instance, Scene, Vertex};
+
+const INSTANCING: &str = "EXT_mesh_gpu_instancing";
+
+pub fn import(path: &Path) -> Result<Scene> {
+    let fail = |message: String| Error::Scene {
+        path: path.into(),
+        message,
+    };
+    let bytes = std::fs::read(path).map_err(|e| fail(e.to_string()))?;
+    let gltf = gltf::Gltf::from_slice(&bytes).map_err(|e| fail(format!("not valid glTF: {e}")))?;
+    let buffers = gltf::import_buffers(&gltf.document, path.parent(), gltf.blob.clone())
+        .map_err(|e| fail(format!("buffer: {e}")))?;
+    let mut importer = Importer {
+        document: &gltf.document,
+        buffers: &buffers,
+        scene: Scene::default(),
+        primitive_mesh: HashMap::new(),
+        skipped: 0,
+    };
+    let root = gltf
+        .document
+        .default_scene()
+        .or_else(|| gltf.document.scenes().next())
+        .ok_or_else(|| fail("the file has no scene".into()))?;
+    for node in root.nodes() {
+        importer.visit(node, Affine3A::IDENTITY).map_err(&fail)?;
+    }
+    if importer.skipped > 0 {
+        log::warn!(
+            "{}: skipped {} non-triangle primitive instance(s)",
+            path.display(),
+            importer.skipped
+        );
+    }
+    Ok(importer.scene)
+}
+
+struct Importer<'a> {
+    document: &'a Document,
+    buffers: &'a [Data],
+    scene: Scene,
+    /// (glTF mesh, primitive) -> our mesh id, so shared meshes share one record.
+    primitive_mesh: HashMap<(usize, usize), Option<u32>>,
+    skipped: usize,
+}
+
+type Step<T> = std::result::Result<T, String>;
+
+impl Importer<'_> {
+    fn visit(&mut self, node: gltf::Node, parent: Affine3A) -> Step<()> {
+        let local = Mat4::from_cols_array_2d(&node.transform().matrix());
+        let world = parent * Affine3A::from_mat4(local);
+        if let Some(mesh) = node.mesh() {
+            let copies = self.instancing_copies(&node)?;
+            for primitive in mesh.primitives() {
+                let Some(id) = self.mesh_id(&mesh, &primitive)? else {
+                    self.skipped += copies.len();
+                    continue;
+                };
+                let color = Vec4::from(
+                    primitive
+                        .material()
+                        .pbr_metallic_roughness()
+                        .base_color_factor(),
+                );
+                for copy in &copies {
+                    self.scene.instances.push(Instance {
+                        world_from_local: world * *copy,
+                        mesh: id,
+                        color,
+                    });
+                }
+            }
+        }
+        for child in node.children() {
+            self.visit(child, world)?;
+        }
+        Ok(())
+    }
+
+    /// The node's `EXT_mesh_gpu_instancing` transforms, or one identity copy.
+    fn instancing_copies(&self, node: &gltf::Node) -> Step<Vec<Affine3A>> {
+        let Some(ext) = node.extension_value(INSTANCING) else {
+            return Ok(vec![Affine3A::IDENTITY]);
+        };
+        let where_ = || format!("node {} {INSTANCING}", node.index());
+        let attribute = |name: &str| {
+            ext.get("attributes")
+                .and_then(|a| a.get(name))
+                .and_then(|v| v.as_u64())
+        };
+        let t: Option<Vec<[f32; 3]>> = attribute("TRANSLATION")
+            .map(|i| self.read(i, &where_))
+            .transpose()?;
+        let r: Option<Vec<[f32; 4]>> = attribute("ROTATION")
+            .map(|i| self.read(i, &where_))
+            .transpose()?;
+        let s: Option<Vec<[f32; 3]>> = attribute("SCALE")
+            .map(|i| self.read(i, &where_))
+            .transpose()?;
+        let lens = [
+            t.as_ref().map(Vec::len),
+            r.as_ref().map(Vec::len),
+            s.as_ref().map(Vec::len),
+        ];
+        let count = lens.iter().flatten().copied().max().unwrap_or(0);
+        if lens.iter().flatten().any(|&l| l != count) {
+            return Err(format!("{}: attributes differ in count", where_()));
+        }
+        Ok((0..count)
+            .map(|i| {
+                Affine3A::from_scale_rotation_translation(
+                    s.as_ref().map_or(Vec3::ONE, |v| Vec3::from(v[i])),
+                    r.as_ref()
+                        .map_or(Quat::IDENTITY, |v| Quat::from_array(v[i])),
+                    t.as_ref().map_or(Vec3::ZERO, |v| Vec3::from(v[i])),
+                )
+            })
+            .collect())
+    }
+
+    fn read<T: gltf::accessor::Item>(
+        &self,
+        index: u64,
+        where_: &dyn Fn() -> String,
+    ) -> Step<Vec<T>> {
+        let accessor = self
+            .document
+            .accessors()
+            .nth(index as usize)
+            .ok_or_else(|| format!("{}: accessor {index} does not exist", where_()))?;
+        let iter = gltf::accessor::Iter::<T>::new(accessor, |b| {
+            self.buffers.get(b.index()).map(|d| &d.0[..])
+        })
+        .ok_or_else(|| format!("{}: accessor {index} has no readable data", where_()))?;
+        Ok(iter.collect())
+    }
+
+    /// Our mesh id for a primitive, created on first use; `None` for primitives that are
+    /// not triangle lists (skipped with a warning).
+    fn mesh_id(&mut self, mesh: &gltf::Mesh, primitive: &gltf::Primitive) -> Step<Option<u32>> {
+        let key = (mesh.index(), primitive.index());
+        if let Some(&id) = self.primitive_mesh.get(&key) {
+            return Ok(id);
+        }
+        let id = if primitive.mode() == gltf::mesh::Mode::Triangles {
+            let (vertices, indices) = self.triangles(primitive, key)?;
+            let name = format!("{}#{}", mesh.name().unwrap_or("mesh"), primitive.index());
+            Some(self.scene.add_mesh(name, &vertices, &indices))
+        } else {
+            None
+        };
+        self.primitive_mesh.insert(key, id);
+        Ok(id)
+    }
+
+    fn triangles(
+        &self,
+        primitive: &gltf::Primitive,
+        key: (usize, usize),
+    ) -> Step<(Vec<Vertex>, Vec<u32>)> {
+        let where_ = format!("mesh {} primitive {}", key.0, key.1);
+        let reader = primitive.reader(|b| self.buffers.get(b.index()).map(|d| &d.0[..]));
+        let positions: Vec<Vec3> = reader
+            .read_positions()
+            .ok_or_else(|| format!("{where_}: no POSITION"))?
+            .map(Vec3::from)
+            .collect();
+        let indices: Vec<u32> = match reader.read_indices() {
+            Some(i) => i.into_u32().collect(),
+            None => (0..positions.len() as u32).collect(),
+        };
+        if let Some(bad) = indices.iter().find(|&&i| i as usize >= positions.len()) {
+            return Err(format!(
+                "{where_}: index {bad} out of range ({} vertices)",
+                positions.len()
+            ));
+        }
+        if indices.len() % 3 != 0 {
+            return Err(format!(
+                "{where_}: {} indices is not a whole number of triangles",
+                indices.len()
+            ));
+        }
+        let normals: Vec<Vec3> = match reader.read_normals() {
+            Some(n) => n.map(Vec3::from).collect(),
+            None => smooth_normals(&positions, &indices),
+        };
+        if normals.len() != positions.len() {
+            return Err(format!("{where_}: NORMAL and POSITION differ in count"));
+        }
+        let vertices = positions
+            .iter()
+            .zip(&normals)
+            .map(|(&p, &n)| Vertex::new(p, n))
+            .collect();
+        Ok((vertices, indices))
+    }
+}
+
+/// Area-weighted vertex normals for primitives that carry none.
+fn smooth_normals(positions: &[Vec3], indices: &[u32]) -> Vec<Vec3> {
+    let mut normals = vec![Vec3::ZERO; positions.len()];
+    for t in indices.chunks_exact(3) {
+        let [a, b, c] = [t[0], t[1], t[2]].map(|i| positions[i as usize]);
+        let n = (b - a).cross(c - a);
+        for &i in t {
+            normals[i as usize] += n;
+        }
+    }
+    normals.iter().map(|n| n.normalize_or(Vec3::Y)).collect()
+}

@@ -1,0 +1,26 @@
+//! stereocull: scene submission for stereo and multi-display rendering on wgpu.
+//!
+//! The work of a frame is split the way the chapter *Efficient Stereo and VR Rendering*
+//! splits it: the **frame** context (once per frame: the viewer), the **display**
+//! context (once per display: culling against the combined frustum of both eyes and
+//! building the multi-draw-indirect buffers), and the **eye** context (only what truly
+//! differs per eye: the projection, and the eye position for specular).
+//!
+//! Modules, in the order data flows: [`rig`] (viewer and displays) ->
+//! [`frustum`] (eye, display and frame frusta) -> [`contexts`] (what shaders read) ->
+//! [`scene`] / [`gltf_import`] (what is drawn) -> [`records`] (GPU layouts) ->
+//! [`cull`] (visible lists and draw arguments, CPU or GPU).
+
+pub mod cli;
+pub mod contexts;
+pub mod cull;
+pub mod device;
+pub mod error;
+pub mod frustum;
+pub mod gltf_import;
+pub mod records;
+pub mod rig;
+pub mod scene;
+pub mod shapes;
+
+pub use error::{Error, Result};

@@ -1,0 +1,124 @@
+//! The storage-buffer records the GPU reads and writes (`#[repr(C)]` + bytemuck),
+//! mirrored in `wgsl/shared/records.wgsl`; `records_match_wgsl` checks every offset.
+
+use bytemuck::{Pod, Zeroable};
+use glam::Vec4;
+
+use crate::scene::Scene;
+
+/// What the vertex shader reads per instance, indexed by instance id (64 bytes).
+#[repr(C)]
+#[derive(Clone, Copy, Debug, PartialEq, Pod, Zeroable)]
+pub struct InstanceRecord {
+    /// Rows of the 3x4 affine `world_from_local`: `world = rows * vec4(local, 1)`.
+    pub world_from_local: [[f32; 4]; 3],
+    /// RGBA8 unorm, linear.
+    pub color: u32,
+    pub mesh: u32,
+    /// Keeps the record at 64 bytes, the stride WGSL gives a struct holding `vec4`s.
+    pub reserved: [u32; 2],
+}
+
+/// A mesh's index range, and its range in the cull order (written once at upload).
+#[repr(C)]
+#[derive(Clone, Copy, Debug, PartialEq, Eq, Pod, Zeroable)]
+pub struct MeshRecord {
+    pub first_index: u32,
+    pub index_count: u32,
+    pub base_vertex: i32,
+    /// First position of this mesh's instances in [`CullLayout::order`].
+    pub cull_start: u32,
+    pub cull_count: u32,
+}
+
+/// One indexed indirect draw, as `multi_draw_indexed_indirect(_count)` reads it.
+/// The draws pass (`wgsl/cull_draws.wgsl`) writes every field each frame, and so does
+/// `cull::cpu`; entries from `draw_count` to the mesh count are all zero.
+#[repr(C)]
+#[derive(Clone, Copy, Debug, Default, PartialEq, Eq, Pod, Zeroable)]
+pub struct DrawArgs {
+    /// The mesh's, copied.
+    pub index_count: u32,
+    /// `views * visible instances of this mesh`: doubled for stereo so that
+    /// `instance_index >> 1` is the slot in the visible list and `& 1` the eye.
+    pub instance_count: u32,
+    /// The mesh's, copied.
+    pub first_index: u32,
+    /// The mesh's, copied.
+    pub base_vertex: i32,
+    /// `views * offset of this mesh's first visible instance in the visible list`.
+    pub first_instance: u32,
+}
+
+/// The scene as culling sees it: instances grouped by mesh, ascending id within a mesh.
+/// With this order one prefix sum over visibility flags gives every visible instance its
+/// slot, already grouped by draw and sorted: the contract falls out of the storage order.
+#[derive(Clone, Debug, PartialEq)]
+pub struct CullLayout {
+    /// World bounding spheres (center, radius) in cull order.
+    pub spheres: Vec<Vec4>,
+    /// Instance id at each cull position.
+    pub order: Vec<u32>,
+    pub meshes: Vec<MeshRecord>,
+}
+
+impl CullLayout {
+    /// A stable counting sort by mesh: O(instances + meshes).
+    pub fn new(scene: &Scene) -> CullLayout {
+        let mut starts = vec![0u32; scene.meshes.len() + 1];
+        for inst in &scene.instances {
+            starts[inst.mesh as usize + 1] += 1;
+        }
+        for m in 0..scene.meshes.len() {
+            starts[m + 1] += starts[m];
+        }
+        let meshes = scene
+            .meshes
+            .iter()
+            .enumerate()
+            .map(|(m, mesh)| MeshRecord {
+                first_index: mesh.first_index,
+                index_count: mesh.index_count,
+                base_vertex: mesh.base_vertex,
+                cull_start: starts[m],
+                cull_count: starts[m + 1] - starts[m],
+            })
+            .collect();
+        let mut order = vec![0u32; scene.instances.len()];
+        let mut spheres = vec![Vec4::ZERO; scene.instances.len()];
+        let mut cursor = starts;
+        for (id, inst) in scene.instances.iter().enumerate() {
+            let slot = &mut cursor[inst.mesh as usize];
+            order[*slot as usize] = id as u32;
+            spheres[*slot as usize] = scene.world_sphere(inst);
+            *slot += 1;
+        }
+        CullLayout {
+            spheres,
+            order,
+            meshes,
+        }
+    }
+}
+
+pub fn instance_records(scene: &Scene) -> Vec<InstanceRecord> {
+    scene
+        .instances
+        .iter()
+        .map(|inst| {
+            let m = glam::Mat4::from(inst.world_from_local);
+            InstanceRecord {
+                world_from_local: [m.row(0).into(), m.row(1).into(), m.row(2).into()],
+                color: pack_unorm4x8(inst.color),
+                mesh: inst.mesh,
+                reserved: [0; 2],
+            }
+        })
+        .collect()
+}
+
+/// Same rounding as WGSL's `pack4x8unorm`.
+pub fn pack_unorm4x8(c: Vec4) -> u32 {
+    let b = (c.clamp(Vec4::ZERO, Vec4::ONE) * 255.0).round();
+    (b.x as u32) | (b.y as u32) << 8 | (b.z as u32) << 16 | (b.w as u32) << 24
+}

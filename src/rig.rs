@@ -1,0 +1,479 @@
+//! The viewing rig: a tracked viewer and its displays, each stereo or mono, head-fixed
+//! (an HMD panel) or world-fixed (a CAVE wall given by its corners).
+//!
+//! Everything is in meters, in tracking space, which is also world space here: the
+//! scene is authored at real scale and nothing rescales it.
+
+use std::path::Path;
+
+use glam::{Affine3A, EulerRot, Mat3, Quat, Vec3};
+use serde::{Deserialize, Serialize};
+
+use crate::error::{Error, Result};
+use crate::frustum::{Fov, View, enclosing_view};
+
+/// The tracked head. Orientation is yaw (about +Y, positive turns left), then pitch
+/// (about the turned +X, positive looks up), then roll; at zero it looks down -Z.
+#[derive(Clone, Copy, Debug, PartialEq, Serialize, Deserialize)]
+#[serde(deny_unknown_fields)]
+pub struct Viewer {
+    pub position: [f32; 3],
+    #[serde(default)]
+    pub yaw_deg: f32,
+    #[serde(default)]
+    pub pitch_deg: f32,
+    #[serde(default)]
+    pub roll_deg: f32,
+    /// Inter-pupillary distance in meters.
+    #[serde(default = "default_ipd")]
+    pub ipd: f32,
+}
+
+fn default_ipd() -> f32 {
+    0.063
+}
+
+impl Viewer {
+    pub fn orientation(&self) -> Quat {
+        Quat::from_euler(
+            EulerRot::YXZ,
+            self.yaw_deg.to_radians(),
+            self.pitch_deg.to_radians(),
+            self.roll_deg.to_radians(),
+        )
+    }
+
+    pub fn position(&self) -> Vec3 {
+        Vec3::from(self.position)
+    }
+
+    /// Eye centers: left then right for stereo, the cyclopean point for mono.
+    pub fn eye_positions(&self, views: u32) -> Vec<Vec3> {
+        let right = self.orientation() * Vec3::X * (0.5 * self.ipd);
+        match views {
+            1 => vec![self.position()],
+            _ => vec![self.position() - right, self.position() + right],
+        }
+    }
+}
+
+/// A panel fixed to the head, like an HMD's.
+#[derive(Clone, Copy, Debug, PartialEq, Serialize, Deserialize)]
+#[serde(deny_unknown_fields)]
+pub struct HeadFixed {
+    /// The left eye's window (or the only eye's, for mono), as tangents.
+    pub fov: Fov,
+    /// The right eye's window; default: `fov` mirrored.
+    #[serde(default)]
+    pub fov_right: Option<Fov>,
+    /// Direction of the panel relative to the head (peripheral panels turn 45 degrees).
+    #[serde(default)]
+    pub yaw_deg: f32,
+    #[serde(default)]
+    pub pitch_deg: f32,
+    /// Each eye's panel turned outwards by this angle (canted HMD optics).
+    #[serde(default)]
+    pub cant_deg: f32,
+}
+
+/// A planar screen fixed in tracking space, given by three of its corners; the view is
+/// the generalized (off-axis) perspective projection from each eye through it.
+#[derive(Clone, Copy, Debug, PartialEq, Serialize, Deserialize)]
+#[serde(deny_unknown_fields)]
+pub struct Screen {
+    pub lower_left: [f32; 3],
+    pub lower_right: [f32; 3],
+    pub upper_left: [f32; 3],
+}
+
+#[derive(Clone, Debug, PartialEq, Serialize, Deserialize)]
+#[serde(deny_unknown_fields)]
+pub struct Display {
+    pub name: String,
+    /// Two views (left, right) when true, one otherwise.
+    pub stereo: bool,
+    /// Pixels per eye: the stereo target is twice as wide.
+    pub resolution: [u32; 2],
+    #[serde(default)]
+    pub head: Option<HeadFixed>,
+    #[serde(default)]
+    pub screen: Option<Screen>,
+}
+
+impl Display {
+    pub fn views(&self) -> u32 {
+        if self.stereo { 2 } else { 1 }
+    }
+}
+
+#[derive(Clone, Debug, PartialEq, Serialize, Deserialize)]
+#[serde(deny_unknown_fields)]
+pub struct Rig {
+    pub viewer: Viewer,
+    #[serde(default = "default_near")]
+    pub near: f32,
+    #[serde(default = "default_far")]
+    pub far: f32,
+    pub displays: Vec<Display>,
+}
+
+fn default_near() -> f32 {
+    0.05
+}
+fn default_far() -> f32 {
+    1000.0
+}
+
+/// The preset names `Rig::preset` knows.
+pub const PRESETS: [&str; 3] = ["hmd", "cave", "hmd-peripheral"];
+
+impl Rig {
+    /// `hmd`, `cave` or `hmd-peripheral`; see the README for what each is.
+    pub fn preset(name: &str) -> Result<Rig> {
+        let rig = match name {
+            "hmd" => hmd(),
+            "cave" => cave(),
+            "hmd-peripheral" => hmd_peripheral(),
+            _ => {
+                return Err(Error::rig(
+                    name,
+                    format!("unknown preset; known: {}", PRESETS.join(", ")),
+                ));
+            }
+        };
+        rig.validate(name)?;
+        Ok(rig)
+    }
+
+    /// A preset name, or a `.json` / `.toml` rig file.
+    pub fn load(spec: &str) -> Result<Rig> {
+        if PRESETS.contains(&spec) {
+            return Rig::preset(spec);
+        }
+        let path = Path::new(spec);
+        let text = std::fs::read_to_string(path).map_err(|e| {
+            Error::rig(
+                spec,
+                format!("{e} (not a file, and not a preset: {})", PRESETS.join(", ")),
+            )
+        })?;
+        let rig = Rig::parse(&text, path.extension().and_then(|e| e.to_str()))
+            .map_err(|m| Error::rig(spec, m))?;
+        rig.validate(spec)?;
+        Ok(rig)
+    }
+
+    /// Parses rig text; `extension` picks TOML for `toml`, JSON otherwise. The message
+    /// names the line and column (JSON) or the span and field (TOML).
+    pub fn parse(text: &str, extension: Option<&str>) -> std::result::Result<Rig, String> {
+        match extension {
+            Some("toml") => toml::from_str(text).map_err(|e| e.to_string().replace('\n', " ")),
+            _ => serde_json::from_str(text).map_err(|e| e.to_string()),
+        }
+    }
+
+    /// Checks what serde cannot: numbers in range, one placement per display, screens
+    /// with area. `origin` names the rig in the error.
+    pub fn validate(&self, origin: &str) -> Result<()> {
+        let fail = |m: String| Err(Error::rig(origin, m));
+        let v = &self.viewer;
+        let pose = [v.yaw_deg, v.pitch_deg, v.roll_deg, v.ipd];
+        if !v.position.iter().chain(&pose).all(|x| x.is_finite()) {
+            return fail("viewer: every number must be finite".into());
+        }
+        if v.ipd < 0.0 {
+            return fail(format!("viewer.ipd = {} must not be negative", v.ipd));
+        }
+        if !(self.near > 0.0 && self.far > self.near && self.far.is_finite()) {
+            return fail(format!(
+                "near = {} and far = {} need 0 < near < far",
+                self.near, self.far
+            ));
+        }
+        if self.displays.is_empty() {
+            return fail("displays: at least one display is needed".into());
+        }
+        self.displays.iter().enumerate().try_for_each(|(i, d)| {
+            validate_display(d).or_else(|m| fail(format!("displays[{i}] ({}): {m}", d.name)))
+        })
+    }
+
+    /// The views of display `index`: left then right for stereo, one for mono.
+    pub fn eyes(&self, index: usize) -> Result<Vec<View>> {
+        let d = &self.displays[index];
+        let positions = self.viewer.eye_positions(d.views());
+        positions
+            .iter()
+            .enumerate()
+            .map(|(e, &p)| self.eye_view(d, e, p))
+            .collect::<std::result::Result<_, String>>()
+            .map_err(|m| Error::rig(&d.name, m))
+    }
+
+    fn eye_view(
+        &self,
+        d: &Display,
+        eye: usize,
+        position: Vec3,
+    ) -> std::result::Result<View, String> {
+        let (orientation, fov) = match (&d.head, &d.screen) {
+            (Some(h), _) => head_fixed_basis(&self.viewer, h, eye, d.views()),
+            (None, Some(s)) => screen_basis(s, position)?,
+            (None, None) => return Err("has neither `head` nor `screen`".into()),
+        };
+        Ok(View {
+            world_from_view: Affine3A::from_rotation_translation(orientation, position),
+            fov,
+            near: self.near,
+            far: self.far,
+        })
+    }
+
+    /// The display frustum's view: one frustum holding every eye of the display, the
+    /// only one culling ever uses (never per eye).
+    pub fn display_view(&self, index: usize) -> Result<View> {
+        let eyes = self.eyes(index)?;
+        let corners: Vec<_> = eyes.iter().map(View::corners).collect();
+        let orientation = Quat::from_mat3a(&eyes[0].world_from_view.matrix3);
+        let combined = if let [mono] = eyes.as_slice() {
+            Some(*mono)
+        } else {
+            enclosing_view(display_orientation(self, index, orientation), &corners)
+        };
+        combined.ok_or_else(|| {
+            Error::rig(
+                &self.displays[index].name,
+                "the eyes' frusta span 180 degrees or more; no display frustum holds them",
+            )
+        })
+    }
+
+    /// The frame frustum, holding every display frustum, or `None` when the displays
+    /// surround the viewer (a CAVE) and no single frustum can.
+    pub fn frame_view(&self) -> Result<Option<View>> {
+        let corners = (0..self.displays.len())
+            .map(|i| self.display_view(i).map(|v| v.corners()))
+            .collect::<Result<Vec<_>>>()?;
+        Ok(enclosing_view(self.viewer.orientation(), &corners))
+    }
+}
+
+/// The display's own basis: the panel's facing for head-fixed displays (the eyes'
+/// bases without cant), the screen's basis for world-fixed ones.
+fn display_orientation(rig: &Rig, index: usize, first_eye: Quat) -> Quat {
+    match &rig.displays[index].head {
+        Some(h) => head_panel_orientation(&rig.viewer, h),
+        None => first_eye,
+    }
+}
+
+fn head_panel_orientation(viewer: &Viewer, h: &HeadFixed) -> Quat {
+    viewer.orientation()
+        * Quat::from_euler(
+            EulerRot::YXZ,
+            h.yaw_deg.to_radians(),
+            h.pitch_deg.to_radians(),
+            0.0,
+        )
+}
+
+fn head_fixed_basis(viewer: &Viewer, h: &HeadFixed, eye: usize, views: u32) -> (Quat, Fov) {
+    let panel = head_panel_orientation(viewer, h);
+    if views == 1 {
+        return (panel, h.fov);
+    }
+    // Left eye turns left (+yaw), right eye right.
+    let cant = if eye == 0 { h.cant_deg } else { -h.cant_deg };
+    let fov = if eye == 0 {
+        h.fov
+    } else {
+        h.fov_right.unwrap_or(h.fov.mirrored())
+    };
+    (panel * Quat::from_rotation_y(cant.to_radians()), fov)
+}
+
+/// Kooima's generalized perspective projection: the view looks along the screen's
+/// inward normal and its window is the screen rectangle seen from `eye`.
+fn screen_basis(s: &Screen, eye: Vec3) -> std::result::Result<(Quat, Fov), String> {
+    let (pa, pb, pc) = (
+        Vec3::from(s.lower_left),
+        Vec3::from(s.lower_right),
+        Vec3::from(s.upper_left),
+    );
+    let (vr, vu) = ((pb - pa).normalize(), (pc - pa).normalize());
+    let vn = vr.cross(vu).normalize();
+    let (va, vb, vc) = (pa - eye, pb - eye, pc - eye);
+    let dist = -va.dot(vn);
+    if dist <= 1e-4 {
+        return Err(format!("the eye at {eye} is on or behind the screen"));
+    }
+    let fov = Fov {
+        left: -vr.dot(va) / dist,
+        right: vr.dot(vb) / dist,
+        up: vu.dot(vc) / dist,
+        down: -vu.dot(va) / dist,
+    };
+    Ok((Quat::from_mat3(&Mat3::from_cols(vr, vu, vn)), fov))
+}
+
+fn validate_display(d: &Display) -> std::result::Result<(), String> {
+    if d.resolution[0] == 0 || d.resolution[1] == 0 {
+        return Err(format!(
+            "resolution {:?} must be at least 1x1",
+            d.resolution
+        ));
+    }
+    match (&d.head, &d.screen) {
+        (Some(h), None) => validate_head(h),
+        (None, Some(s)) => validate_screen(s),
+        _ => Err("needs exactly one of `head` or `screen`".into()),
+    }
+}
+
+fn validate_head(h: &HeadFixed) -> std::result::Result<(), String> {
+    let angles = [h.yaw_deg, h.pitch_deg, h.cant_deg];
+    if !angles.iter().all(|a| a.is_finite()) {
+        return Err("head: angles must be finite".into());
+    }
+    for (name, fov) in [("fov", Some(h.fov)), ("fov_right", h.fov_right)] {
+        if let Some(f) = fov
+            && !f.is_valid()
+        {
+            return Err(format!(
+                "head.{name}: tangents must be finite with left + right > 0 and up + down > 0 (a field of view under 180 degrees), got {f:?}"
+            ));
+        }
+    }
+    Ok(())
+}
+
+fn validate_screen(s: &Screen) -> std::result::Result<(), String> {
+    let pts = [s.lower_left, s.lower_right, s.upper_left];
+    if !pts.iter().flatten().all(|x| x.is_finite()) {
+        return Err("screen: corners must be finite".into());
+    }
+    let (pa, pb, pc) = (
+        Vec3::from(s.lower_left),
+        Vec3::from(s.lower_right),
+        Vec3::from(s.upper_left),
+    );
+    let (w, h) = (pb - pa, pc - pa);
+    if w.length() < 1e-4 || h.length() < 1e-4 {
+        return Err("screen: degenerate corners (an edge shorter than 0.1 mm)".into());
+    }
+    if w.normalize().dot(h.normalize()).abs() > 1e-3 {
+        return Err(
+            "screen: lower_left->lower_right and lower_left->upper_left must be perpendicular"
+                .into(),
+        );
+    }
+    Ok(())
+}
+
+fn hmd() -> Rig {
+    Rig {
+        viewer: Viewer {
+            position: [0.0, 1.6, 2.0],
+            yaw_deg: 0.0,
+            pitch_deg: 0.0,
+            roll_deg: 0.0,
+            ipd: default_ipd(),
+        },
+        near: default_near(),
+        far: default_far(),
+        displays: vec![Display {
+            name: "hmd".into(),
+            stereo: true,
+            resolution: [1440, 1600],
+            // Outer half-angle wider than the nasal one, like shipping headsets.
+            head: Some(HeadFixed {
+                fov: Fov {
+                    left: 1.19,
+                    right: 0.84,
+                    up: 1.11,
+                    down: 1.19,
+                },
+                fov_right: None,
+                yaw_deg: 0.0,
+                pitch_deg: 0.0,
+                cant_deg: 0.0,
+            }),
+            screen: None,
+        }],
+    }
+}
+
+/// A 3 m cube of walls around the origin, floor at y = 0.
+fn cave() -> Rig {
+    let h = 1.5;
+    let wall = |name: &str, ll: [f32; 3], lr: [f32; 3], ul: [f32; 3]| Display {
+        name: name.into(),
+        stereo: true,
+        resolution: [1024, 1024],
+        head: None,
+        screen: Some(Screen {
+            lower_left: ll,
+            lower_right: lr,
+            upper_left: ul,
+        }),
+    };
+    Rig {
+        viewer: Viewer {
+            position: [0.2, 1.6, 0.3],
+            yaw_deg: 10.0,
+            pitch_deg: 0.0,
+            roll_deg: 0.0,
+            ipd: default_ipd(),
+        },
+        near: default_near(),
+        far: default_far(),
+        displays: vec![
+            wall("front", [-h, 0.0, -h], [h, 0.0, -h], [-h, 2.0 * h, -h]),
+            wall("left", [-h, 0.0, h], [-h, 0.0, -h], [-h, 2.0 * h, h]),
+            wall("right", [h, 0.0, -h], [h, 0.0, h], [h, 2.0 * h, -h]),
+            wall("floor", [-h, 0.0, h], [h, 0.0, h], [-h, 0.0, -h]),
+            wall(
+                "ceiling",
+                [-h, 2.0 * h, -h],
+                [h, 2.0 * h, -h],
+                [-h, 2.0 * h, h],
+            ),
+        ],
+    }
+}
+
+fn hmd_peripheral() -> Rig {
+    let mut rig = hmd();
+    let center = Fov {
+        left: 1.0,
+        right: 0.84,
+        up: 1.0,
+        down: 1.0,
+    };
+    rig.displays[0].head = Some(HeadFixed {
+        fov: center,
+        ..rig.displays[0].head.expect("hmd preset is head-fixed")
+    });
+    rig.displays[0].name = "center".into();
+    let side = |name: &str, yaw_deg: f32| Display {
+        name: name.into(),
+        stereo: false,
+        resolution: [480, 800],
+        head: Some(HeadFixed {
+            fov: Fov {
+                left: 0.58,
+                right: 0.58,
+                up: 0.84,
+                down: 0.84,
+            },
+            fov_right: None,
+            yaw_deg,
+            pitch_deg: 0.0,
+            cant_deg: 0.0,
+        }),
+        screen: None,
+    };
+    rig.displays.push(side("peripheral-left", 45.0));
+    rig.displays.push(side("peripheral-right", -45.0));
+    rig
+}

@@ -1,0 +1,38 @@
+// The chapter's Listing 1.3 contexts. Mirrored by src/contexts.rs (encase); the test
+// `contexts_match_wgsl` compares the two layouts member by member.
+// Names read like the math: view_from_world is the chapter's mLocation,
+// clip_from_view its mProjection, and the *_inverse twins are the other direction.
+
+struct EyeContext {
+    view_from_world: mat4x4<f32>,
+    world_from_view: mat4x4<f32>,
+    clip_from_view: mat4x4<f32>,
+    view_from_clip: mat4x4<f32>,
+    // The eyeball: apex of this eye's frustum, used for specular.
+    position: vec3<f32>,
+}
+
+struct DisplayContext {
+    // The combined display frustum (apex behind the eyes), used for culling.
+    view_from_world: mat4x4<f32>,
+    world_from_view: mat4x4<f32>,
+    clip_from_view: mat4x4<f32>,
+    view_from_clip: mat4x4<f32>,
+    eye: array<EyeContext, 2>,
+    position: vec3<f32>,
+    // Pixels per eye; a stereo target is 2 * resolution.x wide.
+    resolution: vec2<f32>,
+    // Display frustum planes (left, right, bottom, top, near, far), inside when
+    // dot(n, p) + d >= 0: what the cull pass tests.
+    planes: array<vec4<f32>, 6>,
+    // 2 for stereo, 1 for mono: the instance-count multiplier.
+    views: u32,
+}
+
+struct FrameContext {
+    view_from_world: mat4x4<f32>,
+    world_from_view: mat4x4<f32>,
+    viewer_position: vec3<f32>,
+    viewer_direction: vec3<f32>,
+    time: f32,
+}
