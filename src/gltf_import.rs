@@ -192,7 +192,7 @@ impl Importer<'_> {
                 positions.len()
             ));
         }
-        if indices.len() % 3 != 0 {
+        if !indices.len().is_multiple_of(3) {
             return Err(format!(
                 "{where_}: {} indices is not a whole number of triangles",
                 indices.len()

@@ -21,6 +21,7 @@ pub mod gltf_import;
 pub mod records;
 pub mod rig;
 pub mod scene;
+pub mod shaders;
 pub mod shapes;
 
 pub use error::{Error, Result};

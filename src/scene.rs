@@ -64,14 +64,23 @@ pub const DEFAULT_PROCEDURAL_SEED: u64 = 1;
 
 impl Scene {
     /// `procedural:N[:MESHES[:SEED]]`, or a path to a `.gltf` / `.glb` file.
+    /// An empty scene is an error: there would be nothing to cull or draw, and GPU
+    /// buffers cannot be empty.
     pub fn load(spec: &str) -> Result<Scene> {
-        match spec.strip_prefix("procedural:") {
+        let scene = match spec.strip_prefix("procedural:") {
             Some(rest) => {
                 let (n, meshes, seed) = parse_procedural(spec, rest)?;
-                Ok(Scene::procedural(n, meshes, seed))
+                Scene::procedural(n, meshes, seed)
             }
-            None => crate::gltf_import::import(Path::new(spec)),
+            None => crate::gltf_import::import(Path::new(spec))?,
+        };
+        if scene.instances.is_empty() {
+            return Err(Error::SceneSpec {
+                spec: spec.into(),
+                message: "the scene has no mesh instances to draw".into(),
+            });
         }
+        Ok(scene)
     }
 
     /// Appends a mesh and returns its id. The bounding sphere is centered on the

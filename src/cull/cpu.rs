@@ -44,7 +44,7 @@ pub fn cull(layout: &CullLayout, planes: &[Vec4; 6], views: u32) -> CullOutput {
     let visible_before = |pos: usize| -> u32 {
         let chunk = pos / CHUNK;
         let words = &mask[chunk * WORDS_PER_CHUNK..pos / 64];
-        let partial = if pos % 64 == 0 {
+        let partial = if pos.is_multiple_of(64) {
             0
         } else {
             mask[pos / 64] & ((1u64 << (pos % 64)) - 1)

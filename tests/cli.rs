@@ -1,0 +1,151 @@
+//! The command line as a user runs it: `info` names the adapter, `cull` writes dumps
+//! that follow the contract, bad input gives one line and a non-zero exit.
+
+use std::process::Command;
+
+use serde_json::Value;
+
+fn stereocull(args: &[&str]) -> std::process::Output {
+    Command::new(env!("CARGO_BIN_EXE_stereocull"))
+        .args(args)
+        .output()
+        .expect("the binary runs")
+}
+
+#[test]
+fn info_names_the_adapter() {
+    let out = stereocull(&["info"]);
+    let text = String::from_utf8_lossy(&out.stdout);
+    eprintln!("{text}{}", String::from_utf8_lossy(&out.stderr));
+    assert!(
+        out.status.success(),
+        "no adapter: CI must install mesa-vulkan-drivers"
+    );
+    assert!(text.starts_with("adapter: ") && text.len() > 20, "{text}");
+    assert!(text.contains("multi_draw_indirect_count"), "{text}");
+}
+
+/// Checks one display's dump against the contract and returns its visible count.
+fn check_display(d: &Value, scene_meshes: Option<usize>) -> usize {
+    let views = d["views"].as_u64().unwrap();
+    let visible: Vec<u64> = d["visible"]
+        .as_array()
+        .unwrap()
+        .iter()
+        .map(|v| v.as_u64().unwrap())
+        .collect();
+    let draws = d["draws"].as_array().unwrap();
+    assert_eq!(d["draw_count"].as_u64().unwrap() as usize, draws.len());
+    let mut next_instance = 0;
+    let mut last_mesh = None;
+    for draw in draws {
+        let mesh = draw["mesh"].as_u64().unwrap();
+        assert!(last_mesh.is_none_or(|m| m < mesh), "draws ascend by mesh");
+        last_mesh = Some(mesh);
+        let (first, count) = (
+            draw["first_instance"].as_u64().unwrap(),
+            draw["instance_count"].as_u64().unwrap(),
+        );
+        assert_eq!(first, next_instance, "draws are packed");
+        assert!(count > 0 && count % views == 0);
+        let ids = &visible[(first / views) as usize..((first + count) / views) as usize];
+        assert!(
+            ids.windows(2).all(|w| w[0] < w[1]),
+            "ids ascend within a draw"
+        );
+        next_instance = first + count;
+        if let Some(m) = scene_meshes {
+            assert!((mesh as usize) < m);
+        }
+    }
+    assert_eq!(next_instance, views * visible.len() as u64);
+    visible.len()
+}
+
+fn dump(args: &[&str]) -> Value {
+    let dir = tempfile::tempdir().unwrap();
+    let path = dir.path().join("dump.json");
+    let mut all = args.to_vec();
+    all.extend(["--dump-visible", path.to_str().unwrap()]);
+    let out = stereocull(&all);
+    assert!(
+        out.status.success(),
+        "{}",
+        String::from_utf8_lossy(&out.stderr)
+    );
+    serde_json::from_slice(&std::fs::read(&path).unwrap()).unwrap()
+}
+
+#[test]
+fn cull_dumps_follow_the_contract_for_every_preset() {
+    for (rig, displays) in [("hmd", 1), ("cave", 5), ("hmd-peripheral", 3)] {
+        let v = dump(&["cull", "--scene", "procedural:5000:12", "--rig", rig]);
+        let list = v["displays"].as_array().unwrap();
+        assert_eq!(list.len(), displays, "{rig}");
+        for d in list {
+            let n = check_display(d, Some(12));
+            assert!(n > 0 && n < 5000, "{rig} {}: {n} visible", d["name"]);
+        }
+    }
+}
+
+#[test]
+fn cull_dumps_the_shared_gltf_samples() {
+    let root = concat!(env!("CARGO_MANIFEST_DIR"), "/../shared/gltf-samples");
+    for name in [
+        "Box",
+        "BoxAnimated",
+        "BoxTextured",
+        "CesiumMilkTruck",
+        "AlphaBlendModeTest",
+    ] {
+        let file = format!("{root}/{name}/{name}.glb");
+        // 5 m in front of each model, looking at it.
+        let v = dump(&[
+            "cull", "--scene", &file, "--rig", "hmd", "--viewer", "0,1,6",
+        ]);
+        let n = check_display(&v["displays"][0], None);
+        assert!(n > 0, "{name}: nothing visible");
+    }
+}
+
+#[test]
+fn bad_input_prints_one_line_and_fails() {
+    for args in [
+        vec!["cull", "--rig", "vive", "--dump-visible", "/tmp/x.json"],
+        vec![
+            "cull",
+            "--scene",
+            "procedural:abc",
+            "--dump-visible",
+            "/tmp/x.json",
+        ],
+        vec![
+            "cull",
+            "--scene",
+            "procedural:0",
+            "--dump-visible",
+            "/tmp/x.json",
+        ],
+        vec![
+            "cull",
+            "--scene",
+            "/nonexistent.glb",
+            "--dump-visible",
+            "/tmp/x.json",
+        ],
+        vec![
+            "cull",
+            "--rig",
+            "/nonexistent.toml",
+            "--dump-visible",
+            "/tmp/x.json",
+        ],
+    ] {
+        let out = stereocull(&args);
+        let err = String::from_utf8_lossy(&out.stderr);
+        assert!(!out.status.success(), "{args:?} succeeded");
+        assert_eq!(err.trim_end().lines().count(), 1, "{args:?}: {err}");
+        assert!(err.starts_with("stereocull: "), "{err}");
+    }
+}

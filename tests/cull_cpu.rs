@@ -1,0 +1,177 @@
+//! The CPU reference culler on hand-made cases, and against a naive loop on random
+//! scenes (fixed seeds).
+
+use glam::{Affine3A, Vec3, Vec4, Vec4Swizzles};
+use stereocull::contexts::DisplayContext;
+use stereocull::cull::{CullOutput, cpu};
+use stereocull::records::{CullLayout, DrawArgs};
+use stereocull::rig::Rig;
+use stereocull::scene::{Instance, Scene};
+use stereocull::shapes;
+
+/// Three cube meshes of half-size 0.5 (bounding radius sqrt(3)/2).
+fn scene_with(instances: &[(Vec3, u32)]) -> Scene {
+    let mut s = Scene::default();
+    for k in 0..3 {
+        let c = shapes::cuboid(Vec3::splat(0.5));
+        s.add_mesh(format!("cube{k}"), &c.vertices, &c.indices);
+    }
+    s.instances = instances
+        .iter()
+        .map(|&(p, mesh)| Instance {
+            world_from_local: Affine3A::from_translation(p),
+            mesh,
+            color: Vec4::ONE,
+        })
+        .collect();
+    s
+}
+
+fn cull(scene: &Scene, rig: &Rig, display: usize) -> CullOutput {
+    let ctx = DisplayContext::new(rig, display).unwrap();
+    cpu::cull(&CullLayout::new(scene), &ctx.planes, ctx.views)
+}
+
+/// The viewer of `hmd` stands at (0, 1.6, 2) looking down -Z.
+fn hmd() -> Rig {
+    Rig::preset("hmd").unwrap()
+}
+
+#[test]
+fn nothing_visible_gives_no_draws_and_zeroed_args() {
+    let behind: Vec<_> = (0..10)
+        .map(|i| (Vec3::new(i as f32, 1.6, 10.0), i % 3))
+        .collect();
+    let out = cull(&scene_with(&behind), &hmd(), 0);
+    assert!(out.visible.is_empty());
+    assert_eq!(out.draw_count, 0);
+    assert_eq!(out.draws, vec![DrawArgs::default(); 3]);
+}
+
+#[test]
+fn everything_visible_gives_doubled_counts_grouped_by_mesh() {
+    // Ids 0..6 alternate meshes 2, 0, 1, 2, 0, 1; all 5 m in front of the viewer.
+    let front: Vec<_> = (0..6)
+        .map(|i| (Vec3::new(i as f32 * 0.5 - 1.0, 1.6, -3.0), [2, 0, 1][i % 3]))
+        .collect();
+    let scene = scene_with(&front);
+    let out = cull(&scene, &hmd(), 0);
+    assert_eq!(
+        out.visible,
+        [1, 4, 2, 5, 0, 3],
+        "grouped by mesh, ascending ids within"
+    );
+    assert_eq!(out.draw_count, 3);
+    for (m, d) in out.draws.iter().enumerate() {
+        assert_eq!(d.instance_count, 4, "2 views x 2 instances");
+        assert_eq!(d.first_instance, 4 * m as u32);
+        assert_eq!(d.index_count, 36);
+        assert_eq!(d.first_index, scene.meshes[m].first_index);
+        assert_eq!(d.base_vertex, scene.meshes[m].base_vertex);
+    }
+}
+
+#[test]
+fn empty_meshes_are_skipped_and_draws_packed_at_the_front() {
+    let out = cull(&scene_with(&[(Vec3::new(0.0, 1.6, -3.0), 2)]), &hmd(), 0);
+    assert_eq!(out.draw_count, 1);
+    assert_eq!(out.draws[0].first_index, 72, "mesh 2 comes first");
+    assert_eq!(&out.draws[1..], &[DrawArgs::default(); 2]);
+}
+
+#[test]
+fn spheres_straddling_a_plane_are_visible_and_those_beyond_are_not() {
+    let rig = hmd();
+    let ctx = DisplayContext::new(&rig, 0).unwrap();
+    let radius = 3f32.sqrt() * 0.5;
+    // A point on the left plane, 4 m ahead.
+    let left = ctx.planes[0];
+    let ahead = Vec3::new(0.0, 1.6, -2.0);
+    let on_plane = ahead - left.xyz() * (left.xyz().dot(ahead) + left.w);
+    let outward = -left.xyz();
+    let cases = [
+        (on_plane + outward * (0.5 * radius), true),
+        (on_plane + outward * (0.999 * radius), true),
+        (on_plane + outward * (1.01 * radius), false),
+        (on_plane + outward * (2.0 * radius), false),
+        (on_plane - outward * (0.5 * radius), true),
+    ];
+    let scene = scene_with(&cases.map(|(p, _)| (p, 0)));
+    let out = cull(&scene, &rig, 0);
+    let want: Vec<u32> = (0..cases.len() as u32)
+        .filter(|&i| cases[i as usize].1)
+        .collect();
+    assert_eq!(out.visible, want);
+}
+
+#[test]
+fn mono_displays_do_not_double() {
+    let rig = Rig::preset("hmd-peripheral").unwrap();
+    // 45 degrees to the left of the viewer (0, 1.6, 2), 3 m away.
+    let p = Vec3::new(-2.12, 1.6, 2.0 - 2.12);
+    let scene = scene_with(&[(p, 1), (p, 1), (p, 0)]);
+    let side = cull(&scene, &rig, 1);
+    assert_eq!(rig.displays[1].name, "peripheral-left");
+    assert_eq!(side.visible, [2, 0, 1]);
+    assert_eq!(
+        (side.draws[0].instance_count, side.draws[0].first_instance),
+        (1, 0)
+    );
+    assert_eq!(
+        (side.draws[1].instance_count, side.draws[1].first_instance),
+        (2, 1)
+    );
+    let right = cull(&scene, &rig, 2);
+    assert!(right.visible.is_empty(), "the right panel looks away");
+}
+
+/// What the contract says, written as plainly as possible.
+fn naive(scene: &Scene, planes: &[Vec4; 6], views: u32) -> CullOutput {
+    let mut per_mesh = vec![Vec::new(); scene.meshes.len()];
+    for (id, inst) in scene.instances.iter().enumerate() {
+        let s = scene.world_sphere(inst);
+        if planes
+            .iter()
+            .all(|p| p.x * s.x + p.y * s.y + p.z * s.z + p.w >= -s.w)
+        {
+            per_mesh[inst.mesh as usize].push(id as u32);
+        }
+    }
+    let mut visible = Vec::new();
+    let mut draws = vec![DrawArgs::default(); scene.meshes.len()];
+    let mut draw_count = 0;
+    for (mesh, ids) in scene.meshes.iter().zip(per_mesh) {
+        if !ids.is_empty() {
+            draws[draw_count] = DrawArgs {
+                index_count: mesh.index_count,
+                instance_count: views * ids.len() as u32,
+                first_index: mesh.first_index,
+                base_vertex: mesh.base_vertex,
+                first_instance: views * visible.len() as u32,
+            };
+            draw_count += 1;
+            visible.extend(ids);
+        }
+    }
+    CullOutput {
+        visible,
+        draws,
+        draw_count: draw_count as u32,
+    }
+}
+
+#[test]
+fn matches_the_naive_contract_on_random_scenes() {
+    for (n, meshes, seed) in [(1, 1, 1), (63, 5, 2), (50_001, 40, 3), (70_000, 300, 4)] {
+        let scene = Scene::procedural(n, meshes, seed);
+        for preset in ["hmd", "cave", "hmd-peripheral"] {
+            let rig = Rig::preset(preset).unwrap();
+            for d in 0..rig.displays.len() {
+                let ctx = DisplayContext::new(&rig, d).unwrap();
+                let got = cpu::cull(&CullLayout::new(&scene), &ctx.planes, ctx.views);
+                let want = naive(&scene, &ctx.planes, ctx.views);
+                assert_eq!(got, want, "n={n} meshes={meshes} {preset} display {d}");
+            }
+        }
+    }
+}

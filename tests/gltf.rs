@@ -1,0 +1,202 @@
+//! glTF import on the shared Khronos samples (written by nobody here), hostile files,
+//! and EXT_mesh_gpu_instancing on a small file written by the test.
+
+// Expected values are copied verbatim from the files' JSON, digits and all.
+#![allow(clippy::excessive_precision)]
+
+use std::path::{Path, PathBuf};
+
+use glam::{Affine3A, Mat4, Quat, Vec3, Vec4};
+use stereocull::Error;
+use stereocull::scene::Scene;
+
+fn sample(name: &str) -> PathBuf {
+    Path::new(env!("CARGO_MANIFEST_DIR")).join(format!("../shared/gltf-samples/{name}/{name}.glb"))
+}
+
+fn load(name: &str) -> Scene {
+    let path = sample(name);
+    assert!(
+        path.exists(),
+        "{} is missing: CI needs ../shared beside the clone",
+        path.display()
+    );
+    Scene::load(path.to_str().unwrap()).unwrap_or_else(|e| panic!("{name}: {e}"))
+}
+
+fn assert_close(a: Mat4, b: Mat4, what: &str) {
+    assert!(a.abs_diff_eq(b, 1e-6), "{what}:\n{a}\n!=\n{b}");
+}
+
+#[test]
+fn box_root_matrix_reaches_the_mesh() {
+    let s = load("Box");
+    assert_eq!((s.instances.len(), s.meshes.len()), (1, 1));
+    assert_eq!(s.meshes[0].index_count, 36, "12 triangles");
+    // Node 0's matrix (Y-up to Z-up), column-major in the file.
+    let root = Mat4::from_cols_array(&[
+        1., 0., 0., 0., 0., 0., -1., 0., 0., 1., 0., 0., 0., 0., 0., 1.,
+    ]);
+    assert_close(
+        Mat4::from(s.instances[0].world_from_local),
+        root,
+        "Box world transform",
+    );
+    assert_eq!(s.instances[0].color, Vec4::new(0.8, 0.0, 0.0, 1.0));
+}
+
+#[test]
+fn box_animated_follows_scene_node_order_and_parents() {
+    let s = load("BoxAnimated");
+    assert_eq!((s.instances.len(), s.meshes.len()), (2, 2));
+    // The scene lists node 3 (outer_box) before node 0 (the chain down to inner_box).
+    assert!(
+        s.meshes[s.instances[0].mesh as usize]
+            .name
+            .starts_with("outer_box")
+    );
+    assert!(
+        s.meshes[s.instances[1].mesh as usize]
+            .name
+            .starts_with("inner_box")
+    );
+    let triangles: u32 = s.meshes.iter().map(|m| m.index_count / 3).sum();
+    assert_eq!(triangles, 254);
+}
+
+#[test]
+fn milk_truck_shares_its_wheel_mesh_between_two_nodes() {
+    let s = load("CesiumMilkTruck");
+    assert_eq!(s.instances.len(), 5, "3 body primitives + 2 wheel nodes");
+    assert_eq!(
+        s.meshes.len(),
+        4,
+        "one record per primitive; the wheels share one"
+    );
+    let meshes: Vec<u32> = s.instances.iter().map(|i| i.mesh).collect();
+    assert_eq!(meshes, [0, 1, 2, 3, 3]);
+    // Node 0's children are [3, 1]: the wheel under node 3 (x = +1.43) comes first.
+    let wheel_rotation = Quat::from_xyzw(-0.0, -0.0, 0.08848590403795242, -0.9960774183273315);
+    for (id, x) in [(3, 1.432669997215271), (4, -1.352329969406128)] {
+        let want = Affine3A::from_rotation_translation(
+            wheel_rotation,
+            Vec3::new(x, 0.4277220070362091, -2.98022992950564e-08),
+        );
+        assert_close(
+            Mat4::from(s.instances[id].world_from_local),
+            Mat4::from(want),
+            "wheel",
+        );
+    }
+    let triangles: u32 = s
+        .instances
+        .iter()
+        .map(|i| s.meshes[i.mesh as usize].index_count / 3)
+        .sum();
+    assert_eq!(triangles, 3624);
+    // Materials without a baseColorFactor are white.
+    assert_eq!(
+        s.instances[1].color,
+        Vec4::new(0.0, 0.04050629958510399, 0.021240700036287308, 1.0)
+    );
+    assert_eq!(s.instances[3].color, Vec4::ONE);
+}
+
+#[test]
+fn alpha_blend_mode_test_has_nine_instances() {
+    let s = load("AlphaBlendModeTest");
+    assert_eq!((s.instances.len(), s.meshes.len()), (9, 9));
+}
+
+fn scene_error(path: &Path) -> String {
+    match Scene::load(path.to_str().unwrap()) {
+        Err(e @ Error::Scene { .. }) => e.to_string(),
+        Err(other) => panic!("{}: wrong error kind: {other}", path.display()),
+        Ok(_) => panic!("{}: loaded a broken file", path.display()),
+    }
+}
+
+#[test]
+fn truncated_garbage_and_missing_buffers_give_typed_errors() {
+    let dir = tempfile::tempdir().unwrap();
+    let bytes = std::fs::read(sample("CesiumMilkTruck")).unwrap();
+    for cut in [10, 100, bytes.len() / 2, bytes.len() - 1] {
+        let p = dir.path().join(format!("cut{cut}.glb"));
+        std::fs::write(&p, &bytes[..cut]).unwrap();
+        let msg = scene_error(&p);
+        assert!(msg.contains(&format!("cut{cut}.glb")), "{msg}");
+    }
+    let garbage: Vec<u8> = (0..4096u32)
+        .map(|i| (i.wrapping_mul(2654435761) >> 13) as u8)
+        .collect();
+    let p = dir.path().join("garbage.glb");
+    std::fs::write(&p, garbage).unwrap();
+    scene_error(&p);
+
+    let p = dir.path().join("missing.gltf");
+    std::fs::write(&p, gltf_json(r#""uri": "nowhere.bin""#, "")).unwrap();
+    let msg = scene_error(&p);
+    assert!(msg.contains("buffer"), "{msg}");
+
+    let msg = scene_error(&dir.path().join("no-such-file.glb"));
+    assert!(msg.contains("no-such-file.glb"), "{msg}");
+}
+
+/// A glTF with one triangle mesh and one buffer (`buffer` is its source), used by node 0
+/// (with `node_extra` spliced into it) and node 1 (plain, translated).
+fn gltf_json(buffer: &str, node_extra: &str) -> String {
+    format!(
+        r#"{{
+  "asset": {{"version": "2.0"}},
+  "extensionsUsed": ["EXT_mesh_gpu_instancing"],
+  "scene": 0,
+  "scenes": [{{"nodes": [0, 1]}}],
+  "nodes": [
+    {{"mesh": 0 {node_extra}}},
+    {{"mesh": 0, "translation": [0, 0, -7]}}
+  ],
+  "meshes": [{{"primitives": [{{"attributes": {{"POSITION": 0}}}}]}}],
+  "buffers": [{{{buffer}, "byteLength": 72}}],
+  "bufferViews": [
+    {{"buffer": 0, "byteOffset": 0, "byteLength": 36}},
+    {{"buffer": 0, "byteOffset": 36, "byteLength": 36}}
+  ],
+  "accessors": [
+    {{"bufferView": 0, "componentType": 5126, "count": 3, "type": "VEC3",
+      "min": [0, 0, 0], "max": [1, 1, 0]}},
+    {{"bufferView": 1, "componentType": 5126, "count": 3, "type": "VEC3"}}
+  ]
+}}"#
+    )
+}
+
+#[test]
+fn mesh_gpu_instancing_copies_follow_the_node_in_order() {
+    let dir = tempfile::tempdir().unwrap();
+    let floats: [f32; 18] = [
+        0., 0., 0., 1., 0., 0., 0., 1., 0., // triangle
+        1., 2., 3., -4., 5., 6., 7., -8., 9., // three translations
+    ];
+    std::fs::write(dir.path().join("tri.bin"), bytemuck::cast_slice(&floats)).unwrap();
+    let p = dir.path().join("instanced.gltf");
+    let ext = r#", "extensions": {"EXT_mesh_gpu_instancing": {"attributes": {"TRANSLATION": 1}}}"#;
+    std::fs::write(&p, gltf_json(r#""uri": "tri.bin""#, ext)).unwrap();
+    let s = Scene::load(p.to_str().unwrap()).unwrap();
+    assert_eq!(s.meshes.len(), 1);
+    let t: Vec<Vec3> = s
+        .instances
+        .iter()
+        .map(|i| i.world_from_local.translation.into())
+        .collect();
+    assert_eq!(
+        t,
+        [
+            Vec3::new(1., 2., 3.),
+            Vec3::new(-4., 5., 6.),
+            Vec3::new(7., -8., 9.),
+            Vec3::new(0., 0., -7.)
+        ]
+    );
+    // No normals in the file: they are computed, facing +Z for this triangle.
+    assert_eq!(s.vertices[0].normal, [0.0, 0.0, 1.0]);
+}

@@ -1,0 +1,37 @@
+// The CPU twin is frustum::sphere_in_planes. Same products, same sums, left to right,
+// no fma: CPU and GPU reach identical decisions, which the byte-for-byte tests need.
+fn sphere_in_planes(planes: array<vec4<f32>, 6>, s: vec4<f32>) -> bool {
+    for (var i = 0u; i < 6u; i++) {
+        let p = planes[i];
+        if (p.x * s.x + p.y * s.y + p.z * s.z + p.w < -s.w) {
+            return false;
+        }
+    }
+    return true;
+}
+
+// Bit 31 of a local_prefix entry is the instance's visibility flag; the low bits are
+// its exclusive prefix within its workgroup (< WORKGROUP_SIZE).
+const VISIBLE_BIT: u32 = 0x80000000u;
+
+var<workgroup> scan_scratch: array<u32, WORKGROUP_SIZE>;
+
+// Exclusive prefix sum of `value` over the workgroup (Hillis-Steele); every
+// invocation must call it. Returns (exclusive prefix, workgroup total).
+fn workgroup_exclusive_scan(local: u32, value: u32) -> vec2<u32> {
+    scan_scratch[local] = value;
+    workgroupBarrier();
+    for (var offset = 1u; offset < WORKGROUP_SIZE; offset <<= 1u) {
+        var add = 0u;
+        if (local >= offset) {
+            add = scan_scratch[local - offset];
+        }
+        workgroupBarrier();
+        scan_scratch[local] += add;
+        workgroupBarrier();
+    }
+    let inclusive = scan_scratch[local];
+    let total = scan_scratch[WORKGROUP_SIZE - 1u];
+    workgroupBarrier();
+    return vec2(inclusive - value, total);
+}

@@ -1,0 +1,18 @@
+// Draw-pipeline prelude for stereo with CLIP_DISTANCES: the hardware clips each eye's
+// triangles at the seam of the double-wide target.
+enable clip_distances;
+
+struct VertexOutput {
+    @builtin(position) position: vec4<f32>,
+    @builtin(clip_distances) seam: array<f32, 1>,
+    @location(0) world_position: vec3<f32>,
+    @location(1) normal: vec3<f32>,
+    @location(2) color: vec4<f32>,
+    @location(3) @interpolate(flat) eye: u32,
+}
+
+fn set_seam_distance(out: ptr<function, VertexOutput>, distance: f32) {
+    (*out).seam[0] = distance;
+}
+
+const DISCARD_OTHER_HALF: bool = false;

@@ -1,0 +1,14 @@
+// Draw-pipeline prelude without CLIP_DISTANCES (and for mono, which needs none): a
+// stereo fragment outside its eye's half is discarded instead.
+
+struct VertexOutput {
+    @builtin(position) position: vec4<f32>,
+    @location(0) world_position: vec3<f32>,
+    @location(1) normal: vec3<f32>,
+    @location(2) color: vec4<f32>,
+    @location(3) @interpolate(flat) eye: u32,
+}
+
+fn set_seam_distance(out: ptr<function, VertexOutput>, distance: f32) {}
+
+const DISCARD_OTHER_HALF: bool = VIEWS == 2u;

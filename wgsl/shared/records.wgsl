@@ -1,0 +1,38 @@
+// Storage records; mirrored by src/records.rs (bytemuck). The test
+// `records_match_wgsl` compares offsets and sizes member by member.
+
+struct InstanceRecord {
+    // Rows of the 3x4 affine world_from_local: world = rows * vec4(local, 1).
+    world_from_local: array<vec4<f32>, 3>,
+    // RGBA8 unorm (unpack4x8unorm), linear.
+    color: u32,
+    mesh: u32,
+    reserved: vec2<u32>,
+}
+
+struct MeshRecord {
+    first_index: u32,
+    index_count: u32,
+    base_vertex: i32,
+    // This mesh's range in the cull order (instances grouped by mesh, ids ascending).
+    cull_start: u32,
+    cull_count: u32,
+}
+
+// Written whole by the draws pass every frame: see DrawArgs in src/records.rs.
+struct DrawArgs {
+    index_count: u32,
+    // views * visible instances of the mesh (doubled for stereo).
+    instance_count: u32,
+    first_index: u32,
+    base_vertex: i32,
+    // views * offset of the mesh's first visible instance in `visible`.
+    first_instance: u32,
+}
+
+struct CullParams {
+    instance_count: u32,
+    mesh_count: u32,
+    // Workgroups along x in the cull and compact dispatches (y carries the rest).
+    groups_x: u32,
+}
