@@ -9,16 +9,20 @@
 //! Modules, in the order data flows: [`rig`] (viewer and displays) ->
 //! [`frustum`] (eye, display and frame frusta) -> [`contexts`] (what shaders read) ->
 //! [`scene`] / [`gltf_import`] (what is drawn) -> [`records`] (GPU layouts) ->
-//! [`cull`] (visible lists and draw arguments, CPU or GPU).
+//! [`cull`] (visible lists and draw arguments, CPU or GPU) -> [`draw`] (one indirect
+//! pass per display). [`renderer::Renderer`] ties them together for embedders.
 
 pub mod cli;
 pub mod contexts;
 pub mod cull;
 pub mod device;
+pub mod draw;
 pub mod error;
 pub mod frustum;
 pub mod gltf_import;
+pub mod readback;
 pub mod records;
+pub mod renderer;
 pub mod rig;
 pub mod scene;
 pub mod shaders;

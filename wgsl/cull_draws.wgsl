@@ -8,7 +8,8 @@
 @group(0) @binding(5) var<storage, read_write> local_prefix: array<u32>;
 @group(0) @binding(6) var<storage, read_write> block_sums: array<u32>;
 @group(0) @binding(8) var<storage, read_write> draws: array<DrawArgs>;
-@group(0) @binding(9) var<storage, read_write> draw_count: array<u32>;
+// [0]: the draw count multi_draw_indexed_indirect_count reads; [1]: visible instances.
+@group(0) @binding(9) var<storage, read_write> draw_count: array<u32, 2>;
 
 // Visible instances before cull position `pos` (pos may equal the instance count).
 fn visible_before(pos: u32, total: u32) -> u32 {
@@ -65,5 +66,6 @@ fn draws_main(@builtin(local_invocation_index) local: u32) {
     }
     if (local == 0u) {
         draw_count[0] = packed;
+        draw_count[1] = total;
     }
 }

@@ -7,6 +7,7 @@
 //! - `instance_count = views * visible_in_mesh`, `first_instance = views * offset`.
 
 pub mod cpu;
+pub mod gpu;
 
 use crate::records::DrawArgs;
 
