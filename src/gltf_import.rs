@@ -18,13 +18,22 @@ use crate::scene::{Instance, Scene, Vertex};
 const INSTANCING: &str = "EXT_mesh_gpu_instancing";
 
 pub fn import(path: &Path) -> Result<Scene> {
-    let fail = |message: String| Error::Scene {
+    let bytes = std::fs::read(path).map_err(|e| Error::Scene {
         path: path.into(),
+        message: e.to_string(),
+    })?;
+    import_bytes(&bytes, path.parent(), path)
+}
+
+/// Imports glTF or GLB bytes; external buffers resolve against `base`, and errors
+/// name `origin`.
+pub fn import_bytes(bytes: &[u8], base: Option<&Path>, origin: &Path) -> Result<Scene> {
+    let fail = |message: String| Error::Scene {
+        path: origin.into(),
         message,
     };
-    let bytes = std::fs::read(path).map_err(|e| fail(e.to_string()))?;
-    let gltf = gltf::Gltf::from_slice(&bytes).map_err(|e| fail(format!("not valid glTF: {e}")))?;
-    let buffers = gltf::import_buffers(&gltf.document, path.parent(), gltf.blob.clone())
+    let gltf = gltf::Gltf::from_slice(bytes).map_err(|e| fail(format!("not valid glTF: {e}")))?;
+    let buffers = gltf::import_buffers(&gltf.document, base, gltf.blob.clone())
         .map_err(|e| fail(format!("buffer: {e}")))?;
     let mut importer = Importer {
         document: &gltf.document,
@@ -44,7 +53,7 @@ pub fn import(path: &Path) -> Result<Scene> {
     if importer.skipped > 0 {
         log::warn!(
             "{}: skipped {} non-triangle primitive instance(s)",
-            path.display(),
+            origin.display(),
             importer.skipped
         );
     }

@@ -15,6 +15,7 @@
 pub mod cli;
 pub mod contexts;
 pub mod cull;
+pub mod default_scene;
 pub mod device;
 pub mod draw;
 pub mod error;

@@ -57,13 +57,16 @@ pub struct Scene {
     pub instances: Vec<Instance>,
 }
 
+/// The scene spec naming the built-in room (`assets/room.glb`).
+pub const DEFAULT_SCENE: &str = "default";
 /// Meshes a `procedural:N` scene uses when no count is given.
 pub const DEFAULT_PROCEDURAL_MESHES: u32 = 8;
 /// Seed a `procedural:N` scene uses when none is given.
 pub const DEFAULT_PROCEDURAL_SEED: u64 = 1;
 
 impl Scene {
-    /// `procedural:N[:MESHES[:SEED]]`, or a path to a `.gltf` / `.glb` file.
+    /// `default` (the built-in room), `procedural:N[:MESHES[:SEED]]`, or a path to a
+    /// `.gltf` / `.glb` file.
     /// An empty scene is an error: there would be nothing to cull or draw, and GPU
     /// buffers cannot be empty.
     pub fn load(spec: &str) -> Result<Scene> {
@@ -72,6 +75,11 @@ impl Scene {
                 let (n, meshes, seed) = parse_procedural(spec, rest)?;
                 Scene::procedural(n, meshes, seed)
             }
+            None if spec == DEFAULT_SCENE => crate::gltf_import::import_bytes(
+                crate::default_scene::ROOM_GLB,
+                None,
+                Path::new("assets/room.glb"),
+            )?,
             None => crate::gltf_import::import(Path::new(spec))?,
         };
         if scene.instances.is_empty() {

@@ -1,5 +1,8 @@
 //! The `stereocull` command line.
 
+mod render;
+mod stress;
+
 use std::path::{Path, PathBuf};
 
 use clap::{Args, Parser, Subcommand};
@@ -10,8 +13,9 @@ use crate::cull::{CullOutput, cpu};
 use crate::device::{Gpu, OPTIONAL_FEATURES};
 use crate::error::{Error, Result};
 use crate::records::CullLayout;
+use crate::renderer::{CullMode, Renderer, RendererOptions};
 use crate::rig::Rig;
-use crate::scene::Scene;
+use crate::scene::{DEFAULT_SCENE, Scene};
 
 #[derive(Parser)]
 #[command(
@@ -20,8 +24,9 @@ use crate::scene::Scene;
     about = "GPU-driven stereo and multi-display scene submission on wgpu"
 )]
 struct Cli {
+    /// Without a command: `render` with its defaults (the built-in room on `hmd`, into `out/`).
     #[command(subcommand)]
-    command: Command,
+    command: Option<Command>,
 }
 
 #[derive(Subcommand)]
@@ -30,13 +35,17 @@ enum Command {
     Info,
     /// Cull a scene for every display of a rig and dump the visible lists and draws.
     Cull(CullArgs),
+    /// Render one frame: one PNG per display (double-wide for stereo) and stats.json.
+    Render(render::RenderArgs),
+    /// Run frames headless with a moving viewer and report timings and counts.
+    Stress(stress::StressArgs),
 }
 
 /// Where the scene and viewer come from; shared by every command that draws.
 #[derive(Args, Clone, Debug)]
 pub struct SceneArgs {
-    /// A .gltf/.glb file, or procedural:N[:MESHES[:SEED]].
-    #[arg(long, default_value = "procedural:1000")]
+    /// `default` (the built-in room), a .gltf/.glb file, or procedural:N[:MESHES[:SEED]].
+    #[arg(long, default_value = DEFAULT_SCENE)]
     pub scene: String,
     /// A preset (hmd, cave, hmd-peripheral) or a .json/.toml rig file.
     #[arg(long, default_value = "hmd")]
@@ -50,6 +59,12 @@ pub struct SceneArgs {
     /// Viewer pitch override in degrees (positive looks up).
     #[arg(long, allow_hyphen_values = true)]
     pub pitch: Option<f32>,
+    /// Per-eye width in pixels for every display (default: the rig's).
+    #[arg(long)]
+    pub width: Option<u32>,
+    /// Per-eye height in pixels for every display (default: the rig's).
+    #[arg(long)]
+    pub height: Option<u32>,
 }
 
 impl SceneArgs {
@@ -64,6 +79,12 @@ impl SceneArgs {
         if let Some(p) = self.pitch {
             rig.viewer.pitch_deg = p;
         }
+        for d in &mut rig.displays {
+            d.resolution = [
+                self.width.unwrap_or(d.resolution[0]),
+                self.height.unwrap_or(d.resolution[1]),
+            ];
+        }
         rig.validate(&self.rig)?;
         Ok(rig)
     }
@@ -76,6 +97,9 @@ struct CullArgs {
     /// Write the per-display visible lists and draws here as JSON.
     #[arg(long)]
     dump_visible: PathBuf,
+    /// Cull on the CPU (the reference) or on the GPU (buffers read back).
+    #[arg(long, value_enum, default_value = "cpu")]
+    cull: CullMode,
 }
 
 fn parse_vec3(s: &str) -> std::result::Result<[f32; 3], String> {
@@ -91,8 +115,11 @@ fn parse_vec3(s: &str) -> std::result::Result<[f32; 3], String> {
 
 pub fn run() -> Result<()> {
     match Cli::parse().command {
-        Command::Info => info(),
-        Command::Cull(args) => cull(&args),
+        None => render::render(&render::RenderArgs::parse_from(["render"])),
+        Some(Command::Info) => info(),
+        Some(Command::Cull(args)) => cull(&args),
+        Some(Command::Render(args)) => render::render(&args),
+        Some(Command::Stress(args)) => stress::stress(&args),
     }
 }
 
@@ -155,18 +182,43 @@ pub fn display_dump(name: &str, views: u32, out: &CullOutput, scene: &Scene) -> 
 fn cull(args: &CullArgs) -> Result<()> {
     let rig = args.scene.load_rig()?;
     let scene = Scene::load(&args.scene.scene)?;
-    let layout = CullLayout::new(&scene);
-    let displays = (0..rig.displays.len())
-        .map(|i| {
-            let ctx = DisplayContext::new(&rig, i)?;
-            let out = cpu::cull(&layout, &ctx.planes, ctx.views);
-            Ok(display_dump(&rig.displays[i].name, ctx.views, &out, &scene))
-        })
-        .collect::<Result<Vec<_>>>()?;
+    let outputs = match args.cull {
+        CullMode::Cpu => {
+            let layout = CullLayout::new(&scene);
+            (0..rig.displays.len())
+                .map(|i| {
+                    let ctx = DisplayContext::new(&rig, i)?;
+                    Ok(cpu::cull(&layout, &ctx.planes, ctx.views))
+                })
+                .collect::<Result<Vec<_>>>()?
+        }
+        CullMode::Gpu => gpu_cull(&rig, &scene)?,
+    };
+    let displays: Vec<_> = rig
+        .displays
+        .iter()
+        .zip(&outputs)
+        .map(|(d, out)| display_dump(&d.name, d.views(), out, &scene))
+        .collect();
     write_json(
         &args.dump_visible,
         &serde_json::json!({ "displays": displays }),
     )
+}
+
+/// One GPU-culled frame, its cull buffers read back.
+fn gpu_cull(rig: &Rig, scene: &Scene) -> Result<Vec<CullOutput>> {
+    let gpu = Gpu::headless()?;
+    let renderer = Renderer::new(&gpu.device, scene, rig, RendererOptions::default())?;
+    let targets = renderer.create_targets(&gpu.device);
+    renderer.prepare(&gpu.queue, rig)?;
+    let mut encoder = gpu.device.create_command_encoder(&Default::default());
+    let views: Vec<_> = targets.iter().map(|t| t.views()).collect();
+    renderer.encode(&mut encoder, &views)?;
+    gpu.queue.submit([encoder.finish()]);
+    (0..rig.displays.len())
+        .map(|i| renderer.read_cull(&gpu.device, &gpu.queue, i))
+        .collect()
 }
 
 pub fn write_json(path: &Path, value: &impl Serialize) -> Result<()> {

@@ -1,0 +1,159 @@
+//! `stereocull render`: one frame of every display to PNG, with stats.json.
+
+use std::path::PathBuf;
+use std::time::Instant;
+
+use clap::Parser;
+use serde::Serialize;
+
+use super::{SceneArgs, write_json};
+use crate::device::Gpu;
+use crate::error::{Error, Result};
+use crate::readback::read_rgba8;
+use crate::renderer::{CullMode, DisplayTarget, FrameStats, Renderer, RendererOptions};
+use crate::rig::Rig;
+use crate::scene::Scene;
+
+#[derive(Parser)]
+pub struct RenderArgs {
+    #[command(flatten)]
+    pub scene: SceneArgs,
+    /// Output directory for `<display>.png` and `stats.json`.
+    #[arg(long, default_value = "out")]
+    pub out: PathBuf,
+    #[arg(long, value_enum, default_value = "gpu")]
+    pub cull: CullMode,
+}
+
+/// Everything a command needs to draw frames.
+pub struct Session {
+    pub gpu: Gpu,
+    pub rig: Rig,
+    pub scene: Scene,
+    pub renderer: Renderer,
+    pub targets: Vec<DisplayTarget>,
+}
+
+impl Session {
+    pub fn open(args: &SceneArgs, cull: CullMode) -> Result<Session> {
+        let rig = args.load_rig()?;
+        let scene = Scene::load(&args.scene)?;
+        let gpu = Gpu::headless()?;
+        let options = RendererOptions {
+            cull,
+            ..Default::default()
+        };
+        let renderer = Renderer::new(&gpu.device, &scene, &rig, options)?;
+        let targets = renderer.create_targets(&gpu.device);
+        Ok(Session {
+            gpu,
+            rig,
+            scene,
+            renderer,
+            targets,
+        })
+    }
+
+    /// Writes the contexts, records and submits one frame; returns its stats with the
+    /// CPU time of prepare + encode + submit.
+    pub fn frame(&self) -> Result<(FrameStats, f64)> {
+        let start = Instant::now();
+        let prepared = self.renderer.prepare(&self.gpu.queue, &self.rig)?;
+        let mut encoder = self.gpu.device.create_command_encoder(&Default::default());
+        let views: Vec<_> = self.targets.iter().map(|t| t.views()).collect();
+        let recorded = self.renderer.encode(&mut encoder, &views)?;
+        self.gpu.queue.submit([encoder.finish()]);
+        let cpu_ms = start.elapsed().as_secs_f64() * 1e3;
+        let stats = FrameStats {
+            bytes_uploaded: prepared.bytes_uploaded,
+            cpu_cull: prepared.cpu_cull,
+            ..recorded
+        };
+        Ok((stats, cpu_ms))
+    }
+
+    pub fn wait(&self) -> Result<()> {
+        self.gpu
+            .device
+            .poll(wgpu::PollType::wait_indefinitely())
+            .map(|_| ())
+            .map_err(|e| Error::Readback(e.to_string()))
+    }
+}
+
+#[derive(Serialize)]
+struct DisplayStats {
+    name: String,
+    views: u32,
+    image: String,
+    width: u32,
+    height: u32,
+    visible: u32,
+}
+
+pub fn render(args: &RenderArgs) -> Result<()> {
+    let session = Session::open(&args.scene, args.cull)?;
+    let (stats, cpu_ms) = session.frame()?;
+    let start = Instant::now();
+    session.wait()?;
+    let gpu_wait_ms = start.elapsed().as_secs_f64() * 1e3;
+    std::fs::create_dir_all(&args.out).map_err(|e| Error::io(&args.out, e))?;
+    let visible = session
+        .renderer
+        .read_visible_counts(&session.gpu.device, &session.gpu.queue)?;
+    let mut displays = Vec::new();
+    for ((display, target), visible) in session
+        .rig
+        .displays
+        .iter()
+        .zip(&session.targets)
+        .zip(visible)
+    {
+        let path = args.out.join(format!("{}.png", display.name));
+        let image = read_rgba8(&session.gpu.device, &session.gpu.queue, &target.color)?;
+        image.save(&path).map_err(|source| Error::Image {
+            path: path.clone(),
+            source,
+        })?;
+        println!(
+            "{:>18}: {} views, {}x{}, {visible} visible -> {}",
+            display.name,
+            display.views(),
+            image.width(),
+            image.height(),
+            path.display()
+        );
+        displays.push(DisplayStats {
+            name: display.name.clone(),
+            views: display.views(),
+            image: path.display().to_string(),
+            width: image.width(),
+            height: image.height(),
+            visible,
+        });
+    }
+    println!(
+        "{} instances, cull {:?}: {} draw calls, {} dispatches, {} bytes uploaded, CPU {cpu_ms:.2} ms, GPU wait {gpu_wait_ms:.1} ms",
+        session.scene.instances.len(),
+        args.cull,
+        stats.draw_calls,
+        stats.dispatches,
+        stats.bytes_uploaded
+    );
+    let out = args.out.join("stats.json");
+    write_json(
+        &out,
+        &serde_json::json!({
+            "adapter": session.gpu.adapter_line(),
+            "scene": args.scene.scene,
+            "rig": args.scene.rig,
+            "cull": args.cull,
+            "instances": session.scene.instances.len(),
+            "gpu_bytes_per_instance": session.renderer.gpu_bytes_per_instance(),
+            "frame": stats,
+            "cpu_encode_submit_ms": cpu_ms,
+            "gpu_wait_ms": gpu_wait_ms,
+            "displays": displays,
+        }),
+    )
+}

@@ -1,0 +1,179 @@
+//! `stereocull stress`: frames with a moving viewer, timed, with a progress bar.
+
+use std::time::Instant;
+
+use clap::Args;
+use indicatif::{ProgressBar, ProgressStyle};
+use serde::Serialize;
+
+use super::SceneArgs;
+use super::render::Session;
+use crate::error::Result;
+use crate::renderer::CullMode;
+
+#[derive(Args)]
+pub struct StressArgs {
+    #[command(flatten)]
+    pub scene: SceneArgs,
+    #[arg(long, default_value_t = 100)]
+    pub frames: u32,
+    #[arg(long, value_enum, default_value = "gpu")]
+    pub cull: CullMode,
+    /// Print per-frame and summary figures as one JSON object instead of text.
+    #[arg(long)]
+    pub json: bool,
+}
+
+#[derive(Serialize)]
+struct FrameRecord {
+    frame: u32,
+    /// prepare + encode + submit on the CPU.
+    cpu_ms: f64,
+    /// Until the GPU finished the frame.
+    frame_ms: f64,
+    visible: Vec<u32>,
+    draw_calls: u32,
+    dispatches: u32,
+    bytes_uploaded: u64,
+}
+
+#[derive(Serialize)]
+struct Summary {
+    adapter: String,
+    instances: usize,
+    displays: Vec<String>,
+    cull: CullMode,
+    frames: u32,
+    cpu_ms_median: f64,
+    cpu_ms_p95: f64,
+    frame_ms_median: f64,
+    frame_ms_p95: f64,
+    visible_mean: Vec<f64>,
+    draw_calls_per_frame: u32,
+    dispatches_per_frame: u32,
+    bytes_uploaded_per_frame: u64,
+    gpu_bytes_per_instance: u64,
+}
+
+pub fn stress(args: &StressArgs) -> Result<()> {
+    let mut session = Session::open(&args.scene, args.cull)?;
+    let bar = if args.json {
+        ProgressBar::hidden()
+    } else {
+        ProgressBar::new(args.frames as u64)
+    };
+    bar.set_style(
+        ProgressStyle::with_template("{bar:40} {pos}/{len} frames {msg}")
+            .unwrap_or_else(|_| ProgressStyle::default_bar()),
+    );
+    let base = session.rig.viewer;
+    let mut records = Vec::new();
+    for frame in 0..args.frames {
+        // Look around and sway, so that culling sees a different view every frame.
+        let phase = frame as f32 / args.frames.max(1) as f32 * std::f32::consts::TAU;
+        session.rig.viewer.yaw_deg = base.yaw_deg + 40.0 * phase.sin();
+        session.rig.viewer.position[0] = base.position[0] + 0.3 * (2.0 * phase).sin();
+        let start = Instant::now();
+        let (stats, cpu_ms) = session.frame()?;
+        session.wait()?;
+        let frame_ms = start.elapsed().as_secs_f64() * 1e3;
+        let visible = session
+            .renderer
+            .read_visible_counts(&session.gpu.device, &session.gpu.queue)?;
+        let record = FrameRecord {
+            frame,
+            cpu_ms,
+            frame_ms,
+            visible,
+            draw_calls: stats.draw_calls,
+            dispatches: stats.dispatches,
+            bytes_uploaded: stats.bytes_uploaded,
+        };
+        bar.set_message(format!("cpu {cpu_ms:.3} ms, frame {frame_ms:.1} ms"));
+        if !args.json {
+            bar.println(format!(
+                "frame {frame:>5}: cpu {cpu_ms:8.3} ms  frame {frame_ms:9.2} ms  visible {:?}",
+                record.visible
+            ));
+        }
+        bar.inc(1);
+        records.push(record);
+    }
+    bar.finish_and_clear();
+    let summary = summarize(&session, args, &records);
+    if args.json {
+        let all = serde_json::json!({ "frames": records, "summary": summary });
+        println!("{all}");
+    } else {
+        print_summary(&summary);
+    }
+    Ok(())
+}
+
+fn summarize(session: &Session, args: &StressArgs, records: &[FrameRecord]) -> Summary {
+    let cpu: Vec<f64> = records.iter().map(|r| r.cpu_ms).collect();
+    let frame: Vec<f64> = records.iter().map(|r| r.frame_ms).collect();
+    let displays = session.rig.displays.len();
+    let n = records.len().max(1) as f64;
+    let last = records.last();
+    Summary {
+        adapter: session.gpu.adapter_line(),
+        instances: session.scene.instances.len(),
+        displays: session
+            .rig
+            .displays
+            .iter()
+            .map(|d| d.name.clone())
+            .collect(),
+        cull: args.cull,
+        frames: args.frames,
+        cpu_ms_median: percentile(&cpu, 0.5),
+        cpu_ms_p95: percentile(&cpu, 0.95),
+        frame_ms_median: percentile(&frame, 0.5),
+        frame_ms_p95: percentile(&frame, 0.95),
+        visible_mean: (0..displays)
+            .map(|d| records.iter().map(|r| r.visible[d] as f64).sum::<f64>() / n)
+            .collect(),
+        draw_calls_per_frame: last.map_or(0, |r| r.draw_calls),
+        dispatches_per_frame: last.map_or(0, |r| r.dispatches),
+        bytes_uploaded_per_frame: last.map_or(0, |r| r.bytes_uploaded),
+        gpu_bytes_per_instance: session.renderer.gpu_bytes_per_instance(),
+    }
+}
+
+fn print_summary(s: &Summary) {
+    println!("adapter: {}", s.adapter);
+    println!(
+        "{} instances, {} frames, cull {:?}",
+        s.instances, s.frames, s.cull
+    );
+    println!(
+        "cpu (prepare+encode+submit): median {:.3} ms, p95 {:.3} ms",
+        s.cpu_ms_median, s.cpu_ms_p95
+    );
+    println!(
+        "frame (until GPU done):      median {:.2} ms, p95 {:.2} ms",
+        s.frame_ms_median, s.frame_ms_p95
+    );
+    for (name, v) in s.displays.iter().zip(&s.visible_mean) {
+        println!("  {name:>18}: {v:.0} visible on average");
+    }
+    println!(
+        "per frame: {} draw calls, {} dispatches, {} bytes uploaded; GPU memory {} bytes per instance",
+        s.draw_calls_per_frame,
+        s.dispatches_per_frame,
+        s.bytes_uploaded_per_frame,
+        s.gpu_bytes_per_instance
+    );
+}
+
+/// Nearest-rank percentile of unsorted samples (`q` in 0..=1).
+pub fn percentile(samples: &[f64], q: f64) -> f64 {
+    if samples.is_empty() {
+        return 0.0;
+    }
+    let mut sorted = samples.to_vec();
+    sorted.sort_by(f64::total_cmp);
+    let rank = ((q * sorted.len() as f64).ceil() as usize).clamp(1, sorted.len());
+    sorted[rank - 1]
+}
