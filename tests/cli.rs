@@ -149,3 +149,134 @@ fn bad_input_prints_one_line_and_fails() {
         assert!(err.starts_with("stereocull: "), "{err}");
     }
 }
+
+fn drawn_pixels(path: &std::path::Path, x0: u32, width: u32) -> usize {
+    let image = image::open(path).unwrap().to_rgba8();
+    let clear = *image.get_pixel(0, 0);
+    (x0..x0 + width)
+        .flat_map(|x| (0..image.height()).map(move |y| (x, y)))
+        .filter(|&(x, y)| *image.get_pixel(x, y) != clear)
+        .count()
+}
+
+#[test]
+fn render_writes_one_image_per_display_and_stats() {
+    for (rig, names) in [
+        ("hmd", vec![("hmd", 2)]),
+        (
+            "cave",
+            vec![
+                ("front", 2),
+                ("left", 2),
+                ("right", 2),
+                ("floor", 2),
+                ("ceiling", 2),
+            ],
+        ),
+        (
+            "hmd-peripheral",
+            vec![
+                ("center", 2),
+                ("peripheral-left", 1),
+                ("peripheral-right", 1),
+            ],
+        ),
+    ] {
+        let dir = tempfile::tempdir().unwrap();
+        let out = stereocull(&[
+            "render",
+            "--rig",
+            rig,
+            "--width",
+            "48",
+            "--height",
+            "40",
+            "--out",
+            dir.path().to_str().unwrap(),
+        ]);
+        assert!(
+            out.status.success(),
+            "{}",
+            String::from_utf8_lossy(&out.stderr)
+        );
+        for (name, views) in names {
+            let path = dir.path().join(format!("{name}.png"));
+            let (w, h) = image::image_dimensions(&path).unwrap();
+            assert_eq!((w, h), (48 * views, 40), "{rig} {name}");
+        }
+        let stats: Value =
+            serde_json::from_slice(&std::fs::read(dir.path().join("stats.json")).unwrap()).unwrap();
+        assert_eq!(
+            stats["frame"]["draw_calls"].as_u64(),
+            Some(stats["displays"].as_array().unwrap().len() as u64)
+        );
+        assert!(stats["adapter"].as_str().unwrap().len() > 3);
+    }
+}
+
+#[test]
+fn render_draws_the_shared_gltf_samples_in_both_eyes() {
+    let root = concat!(env!("CARGO_MANIFEST_DIR"), "/../shared/gltf-samples");
+    for name in [
+        "Box",
+        "BoxAnimated",
+        "BoxTextured",
+        "CesiumMilkTruck",
+        "AlphaBlendModeTest",
+    ] {
+        let dir = tempfile::tempdir().unwrap();
+        let file = format!("{root}/{name}/{name}.glb");
+        let args = [
+            "render", "--scene", &file, "--viewer", "0,0.5,4", "--width", "64", "--height", "64",
+        ];
+        let out = stereocull(&[&args[..], &["--out", dir.path().to_str().unwrap()]].concat());
+        assert!(
+            out.status.success(),
+            "{name}: {}",
+            String::from_utf8_lossy(&out.stderr)
+        );
+        let png = dir.path().join("hmd.png");
+        assert!(drawn_pixels(&png, 0, 64) > 20, "{name}: left eye empty");
+        assert!(drawn_pixels(&png, 64, 64) > 20, "{name}: right eye empty");
+    }
+}
+
+#[test]
+fn stress_reports_per_frame_and_summary_figures() {
+    let out = stereocull(&[
+        "stress",
+        "--scene",
+        "procedural:20000",
+        "--rig",
+        "cave",
+        "--frames",
+        "3",
+        "--width",
+        "16",
+        "--height",
+        "16",
+        "--json",
+    ]);
+    assert!(
+        out.status.success(),
+        "{}",
+        String::from_utf8_lossy(&out.stderr)
+    );
+    let v: Value = serde_json::from_slice(&out.stdout).unwrap();
+    assert_eq!(v["frames"].as_array().unwrap().len(), 3);
+    let s = &v["summary"];
+    assert_eq!(s["draw_calls_per_frame"].as_u64(), Some(5), "one per wall");
+    assert_eq!(
+        s["dispatches_per_frame"].as_u64(),
+        Some(15),
+        "three per wall"
+    );
+    assert!(s["cpu_ms_median"].as_f64().unwrap() > 0.0);
+    assert!(
+        s["visible_mean"]
+            .as_array()
+            .unwrap()
+            .iter()
+            .all(|v| v.as_f64().unwrap() > 0.0)
+    );
+}
