@@ -91,10 +91,16 @@ pub fn stress(args: &StressArgs) -> Result<()> {
         };
         bar.set_message(format!("cpu {cpu_ms:.3} ms, frame {frame_ms:.1} ms"));
         if !args.json {
-            bar.println(format!(
+            let line = format!(
                 "frame {frame:>5}: cpu {cpu_ms:8.3} ms  frame {frame_ms:9.2} ms  visible {:?}",
                 record.visible
-            ));
+            );
+            // A bar drawn on no terminal drops its println: print plainly then.
+            if bar.is_hidden() {
+                println!("{line}");
+            } else {
+                bar.println(line);
+            }
         }
         bar.inc(1);
         records.push(record);
