@@ -1,12 +1,15 @@
-//! Drawing: per display, one render pass into its target (2W x H for stereo) with one
-//! multi-draw-indirect call over the cull pass's draws (`wgsl/draw.wgsl`).
+//! Drawing: render passes, the pipelines (`wgsl/draw*.wgsl`), the one multi-draw-indirect
+//! call of the GPU-driven path and the per-instance draws of the classic modes.
 
 use std::collections::HashMap;
+use std::num::NonZeroU32;
 
 use wgpu::util::DeviceExt;
 
+use crate::cull::CullOutput;
 use crate::cull::gpu::CullTargets;
 use crate::records::{InstanceRecord, instance_records};
+use crate::renderer::TargetViews;
 use crate::scene::{Scene, Vertex};
 use crate::shaders::DrawKey;
 
@@ -85,35 +88,43 @@ pub struct Drawer {
 }
 
 impl Drawer {
-    /// Builds the variants for the given view counts (1 and/or 2).
-    pub fn new(device: &wgpu::Device, color_format: wgpu::TextureFormat, views: &[u32]) -> Drawer {
-        let features = DrawFeatures::of(device);
+    /// Builds the pipelines for the given variants.
+    pub fn new(
+        device: &wgpu::Device,
+        color_format: wgpu::TextureFormat,
+        keys: &[DrawKey],
+    ) -> Drawer {
         let layout = bind_group_layout(device);
         let pipeline_layout = device.create_pipeline_layout(&wgpu::PipelineLayoutDescriptor {
             label: Some("stereocull.draw"),
             bind_group_layouts: &[Some(&layout)],
             immediate_size: 0,
         });
-        let pipelines = views
+        let pipelines = keys
             .iter()
-            .map(|&v| DrawKey::new(v, features.clip_distances))
-            .map(|key| (key, pipeline(device, &pipeline_layout, key, color_format)))
+            .map(|&key| (key, pipeline(device, &pipeline_layout, key, color_format)))
             .collect();
         Drawer {
             layout,
             pipelines,
-            features,
+            features: DrawFeatures::of(device),
         }
     }
 
+    /// The variant for `views` views per instance on this device.
+    pub fn key(&self, views: u32) -> DrawKey {
+        DrawKey::new(views, self.features.clip_distances)
+    }
+
+    /// Binds a display context, the instances and a visible list.
     pub fn bind_group(
         &self,
         device: &wgpu::Device,
         display_context: &wgpu::Buffer,
         scene: &DrawScene,
-        cull: &CullTargets,
+        visible: &wgpu::Buffer,
     ) -> wgpu::BindGroup {
-        let entries = [display_context, &scene.instances, &cull.visible]
+        let entries = [display_context, &scene.instances, visible]
             .iter()
             .enumerate()
             .map(|(i, b)| wgpu::BindGroupEntry {
@@ -128,54 +139,92 @@ impl Drawer {
         })
     }
 
-    /// One render pass and one multi-draw call for one display.
-    pub fn encode(
+    /// Sets the pipeline, geometry and bindings on `pass`.
+    pub fn bind(
         &self,
-        encoder: &mut wgpu::CommandEncoder,
-        target: &crate::renderer::TargetViews,
-        views: u32,
+        pass: &mut wgpu::RenderPass,
+        key: DrawKey,
         scene: &DrawScene,
         bind_group: &wgpu::BindGroup,
-        cull: &CullTargets,
     ) {
-        let mut pass = encoder.begin_render_pass(&wgpu::RenderPassDescriptor {
-            label: Some("stereocull.draw"),
-            color_attachments: &[Some(wgpu::RenderPassColorAttachment {
-                view: target.color,
-                depth_slice: None,
-                resolve_target: None,
-                ops: wgpu::Operations {
-                    load: wgpu::LoadOp::Clear(CLEAR_COLOR),
-                    store: wgpu::StoreOp::Store,
-                },
-            })],
-            depth_stencil_attachment: Some(wgpu::RenderPassDepthStencilAttachment {
-                view: target.depth,
-                depth_ops: Some(wgpu::Operations {
-                    load: wgpu::LoadOp::Clear(1.0),
-                    store: wgpu::StoreOp::Discard,
-                }),
-                stencil_ops: None,
-            }),
-            ..Default::default()
-        });
-        let key = DrawKey::new(views, self.features.clip_distances);
         pass.set_pipeline(&self.pipelines[&key]);
         pass.set_bind_group(0, bind_group, &[]);
         pass.set_vertex_buffer(0, scene.vertices.slice(..));
         pass.set_index_buffer(scene.indices.slice(..), wgpu::IndexFormat::Uint32);
+    }
+
+    /// The one multi-draw call of the GPU-driven path.
+    pub fn draw_indirect(&self, pass: &mut wgpu::RenderPass, mesh_count: u32, cull: &CullTargets) {
         if self.features.indirect_count {
-            pass.multi_draw_indexed_indirect_count(
-                &cull.draws,
-                0,
-                &cull.count,
-                0,
-                scene.mesh_count,
-            );
+            pass.multi_draw_indexed_indirect_count(&cull.draws, 0, &cull.count, 0, mesh_count);
         } else {
-            pass.multi_draw_indexed_indirect(&cull.draws, 0, scene.mesh_count);
+            pass.multi_draw_indexed_indirect(&cull.draws, 0, mesh_count);
         }
     }
+}
+
+/// Opens a render pass on `target`, clearing it or keeping what earlier passes drew;
+/// `multiview` renders both layers of a two-layer target.
+pub fn begin_pass<'e>(
+    encoder: &'e mut wgpu::CommandEncoder,
+    target: &TargetViews,
+    clear: bool,
+    multiview: bool,
+    timestamp_writes: Option<wgpu::RenderPassTimestampWrites>,
+) -> wgpu::RenderPass<'e> {
+    let (color_load, depth_load) = if clear {
+        (wgpu::LoadOp::Clear(CLEAR_COLOR), wgpu::LoadOp::Clear(1.0))
+    } else {
+        (wgpu::LoadOp::Load, wgpu::LoadOp::Load)
+    };
+    encoder.begin_render_pass(&wgpu::RenderPassDescriptor {
+        label: Some("stereocull.draw"),
+        color_attachments: &[Some(wgpu::RenderPassColorAttachment {
+            view: target.color,
+            depth_slice: None,
+            resolve_target: None,
+            ops: wgpu::Operations {
+                load: color_load,
+                store: wgpu::StoreOp::Store,
+            },
+        })],
+        depth_stencil_attachment: Some(wgpu::RenderPassDepthStencilAttachment {
+            view: target.depth,
+            depth_ops: Some(wgpu::Operations {
+                load: depth_load,
+                store: wgpu::StoreOp::Store,
+            }),
+            stencil_ops: None,
+        }),
+        timestamp_writes,
+        occlusion_query_set: None,
+        multiview_mask: if multiview {
+            NonZeroU32::new(0b11)
+        } else {
+            None
+        },
+    })
+}
+
+/// One draw call per visible instance of a one-view cull result (the classic modes).
+/// Returns the number of draw calls.
+pub fn draw_instances(pass: &mut wgpu::RenderPass, out: &CullOutput) -> u32 {
+    let mut calls = 0;
+    for d in &out.draws[..out.draw_count as usize] {
+        let indices = d.first_index..d.first_index + d.index_count;
+        for slot in d.first_instance..d.first_instance + d.instance_count {
+            pass.draw_indexed(indices.clone(), d.base_vertex, slot..slot + 1);
+            calls += 1;
+        }
+    }
+    calls
+}
+
+/// Restricts drawing to eye `eye`'s half of a double-wide target of per-eye size `eye_size`.
+pub fn set_eye_viewport(pass: &mut wgpu::RenderPass, eye: u32, eye_size: (u32, u32)) {
+    let (w, h) = eye_size;
+    pass.set_viewport((eye * w) as f32, 0.0, w as f32, h as f32, 0.0, 1.0);
+    pass.set_scissor_rect(eye * w, 0, w, h);
 }
 
 fn bind_group_layout(device: &wgpu::Device) -> wgpu::BindGroupLayout {
@@ -248,7 +297,11 @@ fn pipeline(
             compilation_options: Default::default(),
             targets: &[Some(color_format.into())],
         }),
-        multiview_mask: None,
+        multiview_mask: if key.multiview {
+            NonZeroU32::new(0b11)
+        } else {
+            None
+        },
         cache: None,
     })
 }

@@ -34,6 +34,10 @@ pub enum Error {
     #[error("scene {spec:?}: {message}")]
     SceneSpec { spec: String, message: String },
 
+    /// The device or the chosen mode cannot do what was asked.
+    #[error("{0}")]
+    Unsupported(String),
+
     /// The scene or rig does not fit the device's limits.
     #[error("{0}")]
     Limits(String),

@@ -21,6 +21,8 @@ pub mod draw;
 pub mod error;
 pub mod frustum;
 pub mod gltf_import;
+pub mod modes;
+pub mod profiling;
 pub mod readback;
 pub mod records;
 pub mod renderer;

@@ -42,17 +42,24 @@ fn map(device: &wgpu::Device, staging: &wgpu::Buffer, size: u64) -> Result<Vec<u
     Ok(bytes)
 }
 
-/// Reads an RGBA8 texture (sRGB or not: bytes as stored) into an image.
+/// Reads an RGBA8 texture (bytes as stored, sRGB or not) into an image; the layers of
+/// an array texture are placed side by side, so a two-layer stereo target reads back
+/// like a double-wide one.
 pub fn read_rgba8(
     device: &wgpu::Device,
     queue: &wgpu::Queue,
     texture: &wgpu::Texture,
 ) -> Result<image::RgbaImage> {
-    let (w, h) = (texture.width(), texture.height());
+    let (w, h, layers) = (
+        texture.width(),
+        texture.height(),
+        texture.depth_or_array_layers(),
+    );
     let row = (4 * w).next_multiple_of(wgpu::COPY_BYTES_PER_ROW_ALIGNMENT);
+    let size = (row * h * layers) as u64;
     let staging = device.create_buffer(&wgpu::BufferDescriptor {
         label: Some("stereocull.readback_image"),
-        size: (row * h) as u64,
+        size,
         usage: wgpu::BufferUsages::MAP_READ | wgpu::BufferUsages::COPY_DST,
         mapped_at_creation: false,
     });
@@ -64,18 +71,20 @@ pub fn read_rgba8(
             layout: wgpu::TexelCopyBufferLayout {
                 offset: 0,
                 bytes_per_row: Some(row),
-                rows_per_image: None,
+                rows_per_image: Some(h),
             },
         },
         texture.size(),
     );
     queue.submit([encoder.finish()]);
-    let padded = map(device, &staging, (row * h) as u64)?;
-    let pixels = padded
-        .chunks(row as usize)
-        .flat_map(|r| &r[..4 * w as usize])
-        .copied()
-        .collect();
-    image::RgbaImage::from_raw(w, h, pixels)
-        .ok_or_else(|| Error::Readback("image size mismatch".into()))
+    let padded = map(device, &staging, size)?;
+    let mut image = image::RgbaImage::new(w * layers, h);
+    for (i, chunk) in padded.chunks(row as usize).enumerate() {
+        let (layer, y) = (i as u32 / h, i as u32 % h);
+        for x in 0..w {
+            let p = &chunk[4 * x as usize..4 * x as usize + 4];
+            image.put_pixel(layer * w + x, y, image::Rgba([p[0], p[1], p[2], p[3]]));
+        }
+    }
+    Ok(image)
 }

@@ -24,22 +24,26 @@
 //! Per frame, the GPU-culled path writes one display context per display and records
 //! three dispatches and one draw call per display: its CPU cost does not depend on the
 //! number of instances. With [`CullMode::Cpu`] the visible lists and draws are computed
-//! by [`crate::cull::cpu`] and uploaded instead, into the same buffers.
+//! by [`crate::cull::cpu`] and uploaded instead, into the same buffers. The classic
+//! stereo modes ([`StereoMode`]) draw the same images the way engines did before.
 
 use std::time::{Duration, Instant};
 
 use crate::contexts::{DisplayContext, uniform_bytes};
 use crate::cull::gpu::{COUNT_BYTES, CullScene, CullTargets, GpuCuller};
 use crate::cull::{CullOutput, cpu};
-use crate::draw::{DEPTH_FORMAT, DrawScene, Drawer};
+use crate::draw::{DEPTH_FORMAT, DrawScene, Drawer, begin_pass, set_eye_viewport};
 use crate::error::{Error, Result};
+pub use crate::modes::StereoMode;
+use crate::profiling::GpuTimer;
 use crate::readback::read_buffer;
 use crate::records::{CullLayout, DrawArgs};
 use crate::rig::Rig;
 use crate::scene::Scene;
+use crate::shaders::DrawKey;
 
 /// Where the per-display cull runs.
-#[derive(Clone, Copy, Debug, Default, PartialEq, Eq, clap::ValueEnum, serde::Serialize)]
+#[derive(Clone, Copy, Debug, Default, PartialEq, Eq, Hash, clap::ValueEnum, serde::Serialize)]
 #[serde(rename_all = "lowercase")]
 pub enum CullMode {
     /// Compute passes on the GPU; nothing per instance crosses the bus each frame.
@@ -53,6 +57,7 @@ pub enum CullMode {
 pub struct RendererOptions {
     pub color_format: wgpu::TextureFormat,
     pub cull: CullMode,
+    pub mode: StereoMode,
 }
 
 impl Default for RendererOptions {
@@ -60,12 +65,14 @@ impl Default for RendererOptions {
         RendererOptions {
             color_format: wgpu::TextureFormat::Rgba8UnormSrgb,
             cull: CullMode::Gpu,
+            mode: StereoMode::Instanced,
         }
     }
 }
 
 /// The color and depth views one display renders into: `2W x H` for stereo, `W x H`
-/// for mono, where `W x H` is the display's per-eye resolution.
+/// for mono, where `W x H` is the display's per-eye resolution; in [`StereoMode::Multiview`]
+/// a stereo display's views are `W x H` with two array layers (left, right).
 #[derive(Clone, Copy)]
 pub struct TargetViews<'a> {
     pub color: &'a wgpu::TextureView,
@@ -89,27 +96,43 @@ impl DisplayTarget {
     }
 }
 
-/// What one frame recorded and uploaded.
+/// What one frame recorded and uploaded, and the CPU time of its phases.
 #[derive(Clone, Copy, Debug, Default, PartialEq, serde::Serialize)]
 pub struct FrameStats {
     pub draw_calls: u32,
     pub dispatches: u32,
     pub bytes_uploaded: u64,
-    /// CPU time spent culling (zero on the GPU path).
+    /// CPU culling (zero on the GPU path).
     #[serde(skip)]
     pub cpu_cull: Duration,
+    /// Writing contexts and cull results into buffers.
+    #[serde(skip)]
+    pub cpu_upload: Duration,
+}
+
+/// One eye of a stereo display in the classic modes: its own context (that eye as
+/// `eye[0]`, one view) and, for multi-camera, its own visible list.
+struct EyeState {
+    context: wgpu::Buffer,
+    visible: Option<wgpu::Buffer>,
+    bind_group: wgpu::BindGroup,
 }
 
 struct DisplayState {
+    /// Views of the display (2 stereo, 1 mono).
     views: u32,
-    target_size: (u32, u32),
+    /// Views per instance in the cull contract: 2 only for instanced stereo.
+    cull_views: u32,
+    eye_size: (u32, u32),
     context: wgpu::Buffer,
     cull: CullTargets,
     cull_bind_group: wgpu::BindGroup,
     draw_bind_group: wgpu::BindGroup,
+    eyes: Vec<EyeState>,
 }
 
 pub struct Renderer {
+    mode: StereoMode,
     cull_mode: CullMode,
     color_format: wgpu::TextureFormat,
     culler: GpuCuller,
@@ -119,6 +142,9 @@ pub struct Renderer {
     /// Kept for CPU culling; the GPU holds its own copy.
     layout: CullLayout,
     displays: Vec<DisplayState>,
+    /// The classic modes' CPU culls of this frame: per display, one result, or one per
+    /// eye (multi-camera).
+    per_instance: Vec<Vec<CullOutput>>,
 }
 
 impl Renderer {
@@ -129,42 +155,77 @@ impl Renderer {
         rig: &Rig,
         options: RendererOptions,
     ) -> Result<Renderer> {
-        check_device(device, scene)?;
+        check_device(device, scene, options)?;
         let scope = device.push_error_scope(wgpu::ErrorFilter::Validation);
         let layout = CullLayout::new(scene);
         let cull_scene = CullScene::new(device, &layout);
         let draw_scene = DrawScene::new(device, scene);
         let culler = GpuCuller::new(device);
-        let mut views: Vec<u32> = rig.displays.iter().map(|d| d.views()).collect();
-        views.sort_unstable();
-        views.dedup();
-        let drawer = Drawer::new(device, options.color_format, &views);
+        let drawer = Drawer::new(
+            device,
+            options.color_format,
+            &draw_keys(device, rig, options.mode),
+        );
+        let new_context = || {
+            device.create_buffer(&wgpu::BufferDescriptor {
+                label: Some("stereocull.display_context"),
+                size: <DisplayContext as encase::ShaderType>::min_size().get(),
+                usage: wgpu::BufferUsages::UNIFORM | wgpu::BufferUsages::COPY_DST,
+                mapped_at_creation: false,
+            })
+        };
+        let n = cull_scene.instance_count;
         let displays = rig
             .displays
             .iter()
             .map(|d| {
-                let context = device.create_buffer(&wgpu::BufferDescriptor {
-                    label: Some("stereocull.display_context"),
-                    size: <DisplayContext as encase::ShaderType>::min_size().get(),
-                    usage: wgpu::BufferUsages::UNIFORM | wgpu::BufferUsages::COPY_DST,
-                    mapped_at_creation: false,
-                });
-                let cull =
-                    CullTargets::new(device, cull_scene.instance_count, cull_scene.mesh_count);
-                Ok(DisplayState {
+                let context = new_context();
+                let cull = CullTargets::new(device, n, cull_scene.mesh_count);
+                let per_eye = options.mode.per_instance() && d.stereo;
+                let eyes = (0..if per_eye { 2 } else { 0 })
+                    .map(|_| {
+                        let context = new_context();
+                        let visible = (options.mode == StereoMode::MultiCamera)
+                            .then(|| CullTargets::new(device, n, 1).visible);
+                        let bind_group = drawer.bind_group(
+                            device,
+                            &context,
+                            &draw_scene,
+                            visible.as_ref().unwrap_or(&cull.visible),
+                        );
+                        EyeState {
+                            context,
+                            visible,
+                            bind_group,
+                        }
+                    })
+                    .collect();
+                DisplayState {
                     views: d.views(),
-                    target_size: (d.resolution[0] * d.views(), d.resolution[1]),
+                    cull_views: if d.stereo {
+                        options.mode.stereo_views()
+                    } else {
+                        1
+                    },
+                    eye_size: (d.resolution[0], d.resolution[1]),
                     cull_bind_group: culler.bind_group(device, &cull_scene, &context, &cull),
-                    draw_bind_group: drawer.bind_group(device, &context, &draw_scene, &cull),
+                    draw_bind_group: drawer.bind_group(
+                        device,
+                        &context,
+                        &draw_scene,
+                        &cull.visible,
+                    ),
                     context,
                     cull,
-                })
+                    eyes,
+                }
             })
-            .collect::<Result<Vec<_>>>()?;
+            .collect();
         if let Some(e) = pollster::block_on(scope.pop()) {
             return Err(Error::Wgpu(e));
         }
         Ok(Renderer {
+            mode: options.mode,
             cull_mode: options.cull,
             color_format: options.color_format,
             culler,
@@ -173,21 +234,16 @@ impl Renderer {
             draw_scene,
             layout,
             displays,
+            per_instance: Vec::new(),
         })
+    }
+
+    pub fn mode(&self) -> StereoMode {
+        self.mode
     }
 
     pub fn cull_mode(&self) -> CullMode {
         self.cull_mode
-    }
-
-    /// Switches between GPU and CPU culling; both write the same buffers.
-    pub fn set_cull_mode(&mut self, mode: CullMode) {
-        self.cull_mode = mode;
-    }
-
-    /// Size of each display's target in pixels (double-wide for stereo).
-    pub fn target_sizes(&self) -> Vec<(u32, u32)> {
-        self.displays.iter().map(|d| d.target_size).collect()
     }
 
     /// GPU bytes per instance: the 64-byte instance record, the cull layout and scratch,
@@ -198,9 +254,9 @@ impl Renderer {
             + 4 * self.displays.len() as u64
     }
 
-    /// Writes this frame's display contexts (and, culling on the CPU, the cull results).
+    /// Writes this frame's contexts (and, culling on the CPU, the cull results).
     /// `rig` must have the displays the renderer was made with; only poses may change.
-    pub fn prepare(&self, queue: &wgpu::Queue, rig: &Rig) -> Result<FrameStats> {
+    pub fn prepare(&mut self, queue: &wgpu::Queue, rig: &Rig) -> Result<FrameStats> {
         if rig.displays.len() != self.displays.len()
             || rig
                 .displays
@@ -214,27 +270,89 @@ impl Renderer {
             ));
         }
         let mut stats = FrameStats::default();
+        self.per_instance.clear();
         for (i, state) in self.displays.iter().enumerate() {
-            let ctx = DisplayContext::new(rig, i)?;
-            let bytes = uniform_bytes(&ctx);
-            queue.write_buffer(&state.context, 0, &bytes);
-            stats.bytes_uploaded += bytes.len() as u64;
-            if self.cull_mode == CullMode::Cpu {
-                let start = Instant::now();
-                let out = cpu::cull(&self.layout, &ctx.planes, ctx.views);
-                stats.cpu_cull += start.elapsed();
-                stats.bytes_uploaded += upload_cull(queue, &state.cull, &out);
+            let mut ctx = DisplayContext::new(rig, i)?;
+            ctx.views = state.cull_views;
+            let mut writes = vec![(&state.context, uniform_bytes(&ctx))];
+            for (e, eye) in state.eyes.iter().enumerate() {
+                let one_eye = DisplayContext {
+                    eye: [ctx.eye[e]; 2],
+                    ..ctx
+                };
+                writes.push((&eye.context, uniform_bytes(&one_eye)));
+            }
+            let start = Instant::now();
+            let culls = self.cpu_culls(rig, i, &ctx)?;
+            stats.cpu_cull += start.elapsed();
+            let start = Instant::now();
+            for (buffer, bytes) in writes {
+                queue.write_buffer(buffer, 0, &bytes);
+                stats.bytes_uploaded += bytes.len() as u64;
+            }
+            stats.bytes_uploaded += self.upload_culls(queue, state, &culls);
+            stats.cpu_upload += start.elapsed();
+            if self.mode.per_instance() {
+                self.per_instance.push(culls);
             }
         }
         Ok(stats)
     }
 
-    /// Records every display: its cull dispatches (GPU culling) and its one render pass
-    /// with one multi-draw call, into `targets[i]` for display `i`.
+    /// This display's CPU culls: none on the GPU path, one against the display frustum,
+    /// or one per eye frustum (multi-camera).
+    fn cpu_culls(&self, rig: &Rig, index: usize, ctx: &DisplayContext) -> Result<Vec<CullOutput>> {
+        if self.cull_mode == CullMode::Gpu {
+            return Ok(Vec::new());
+        }
+        if self.mode == StereoMode::MultiCamera && !self.displays[index].eyes.is_empty() {
+            let eyes = rig.eyes(index)?;
+            return Ok(eyes
+                .iter()
+                .map(|e| cpu::cull(&self.layout, &e.frustum().planes, 1))
+                .collect());
+        }
+        Ok(vec![cpu::cull(&self.layout, &ctx.planes, ctx.views)])
+    }
+
+    /// Uploads CPU cull results where the draws read them; returns the bytes written.
+    fn upload_culls(&self, queue: &wgpu::Queue, state: &DisplayState, culls: &[CullOutput]) -> u64 {
+        match (self.mode, culls) {
+            (_, []) => 0,
+            (StereoMode::MultiCamera, [left, right]) => {
+                let visible = |e: usize| {
+                    state.eyes[e]
+                        .visible
+                        .as_ref()
+                        .unwrap_or(&state.cull.visible)
+                };
+                write(queue, visible(0), bytemuck::cast_slice(&left.visible))
+                    + write(queue, visible(1), bytemuck::cast_slice(&right.visible))
+            }
+            (mode, [out, ..]) if mode.per_instance() => write(
+                queue,
+                &state.cull.visible,
+                bytemuck::cast_slice(&out.visible),
+            ),
+            (_, [out, ..]) => {
+                let count = [out.draw_count, out.visible.len() as u32];
+                write(
+                    queue,
+                    &state.cull.visible,
+                    bytemuck::cast_slice(&out.visible),
+                ) + write(queue, &state.cull.draws, bytemuck::cast_slice(&out.draws))
+                    + write(queue, &state.cull.count, bytemuck::cast_slice(&count))
+            }
+        }
+    }
+
+    /// Records every display into `targets[i]` for display `i`: its cull dispatches (GPU
+    /// culling) and its passes. With a timer, each pass is timed as `cull` or `draw`.
     pub fn encode(
         &self,
         encoder: &mut wgpu::CommandEncoder,
         targets: &[TargetViews],
+        mut timer: Option<&mut GpuTimer>,
     ) -> Result<FrameStats> {
         if targets.len() != self.displays.len() {
             return Err(Error::Limits(format!(
@@ -244,42 +362,115 @@ impl Renderer {
             )));
         }
         let mut stats = FrameStats::default();
-        for (state, target) in self.displays.iter().zip(targets) {
+        for (i, (state, target)) in self.displays.iter().zip(targets).enumerate() {
             if self.cull_mode == CullMode::Gpu {
                 let mut pass = encoder.begin_compute_pass(&wgpu::ComputePassDescriptor {
                     label: Some("stereocull.cull"),
-                    timestamp_writes: None,
+                    timestamp_writes: timer.as_deref_mut().and_then(|t| t.compute("cull")),
                 });
                 self.culler
                     .encode(&mut pass, &self.cull_scene, &state.cull_bind_group);
                 stats.dispatches += GpuCuller::DISPATCHES_PER_DISPLAY;
             }
-            self.drawer.encode(
-                encoder,
-                target,
-                state.views,
-                &self.draw_scene,
-                &state.draw_bind_group,
-                &state.cull,
-            );
-            stats.draw_calls += 1;
+            stats.draw_calls += if self.mode.per_instance() {
+                self.encode_per_instance(encoder, target, state, &self.per_instance[i], &mut timer)
+            } else {
+                self.encode_indirect(encoder, target, state, &mut timer)
+            };
+        }
+        if let Some(t) = timer {
+            t.resolve(encoder);
         }
         Ok(stats)
     }
 
-    /// Color (`RENDER_ATTACHMENT | COPY_SRC`) and depth textures for every display.
+    /// Instanced and multiview: one pass, one multi-draw call.
+    fn encode_indirect(
+        &self,
+        encoder: &mut wgpu::CommandEncoder,
+        target: &TargetViews,
+        state: &DisplayState,
+        timer: &mut Option<&mut GpuTimer>,
+    ) -> u32 {
+        let multiview = self.mode == StereoMode::Multiview && state.views == 2;
+        let key = if multiview {
+            DrawKey::MULTIVIEW
+        } else {
+            self.drawer.key(state.cull_views)
+        };
+        let writes = timer.as_deref_mut().and_then(|t| t.render("draw"));
+        let mut pass = begin_pass(encoder, target, true, multiview, writes);
+        self.drawer
+            .bind(&mut pass, key, &self.draw_scene, &state.draw_bind_group);
+        self.drawer
+            .draw_indirect(&mut pass, self.cull_scene.mesh_count, &state.cull);
+        1
+    }
+
+    /// The classic modes: a draw call per visible instance and eye.
+    fn encode_per_instance(
+        &self,
+        encoder: &mut wgpu::CommandEncoder,
+        target: &TargetViews,
+        state: &DisplayState,
+        culls: &[CullOutput],
+        timer: &mut Option<&mut GpuTimer>,
+    ) -> u32 {
+        let key = self.drawer.key(1);
+        if state.eyes.is_empty() {
+            let writes = timer.as_deref_mut().and_then(|t| t.render("draw"));
+            let mut pass = begin_pass(encoder, target, true, false, writes);
+            self.drawer
+                .bind(&mut pass, key, &self.draw_scene, &state.draw_bind_group);
+            return instance_draws(&culls[0])
+                .map(|d| draw(&mut pass, d))
+                .count() as u32;
+        }
+        if self.mode == StereoMode::SinglePass {
+            let writes = timer.as_deref_mut().and_then(|t| t.render("draw"));
+            let mut pass = begin_pass(encoder, target, true, false, writes);
+            self.drawer
+                .bind(&mut pass, key, &self.draw_scene, &state.eyes[0].bind_group);
+            return single_pass_cadence(&mut pass, &culls[0], &state.eyes, state.eye_size);
+        }
+        let mut calls = 0;
+        for (e, eye) in state.eyes.iter().enumerate() {
+            let writes = timer.as_deref_mut().and_then(|t| t.render("draw"));
+            let mut pass = begin_pass(encoder, target, e == 0, false, writes);
+            self.drawer
+                .bind(&mut pass, key, &self.draw_scene, &eye.bind_group);
+            set_eye_viewport(&mut pass, e as u32, state.eye_size);
+            calls += instance_draws(&culls[e.min(culls.len() - 1)])
+                .map(|d| draw(&mut pass, d))
+                .count() as u32;
+        }
+        calls
+    }
+
+    /// Color (`RENDER_ATTACHMENT | COPY_SRC`) and depth textures for every display, shaped
+    /// as [`TargetViews`] describes for this renderer's mode.
     pub fn create_targets(&self, device: &wgpu::Device) -> Vec<DisplayTarget> {
         self.displays
             .iter()
             .map(|d| {
+                let layered = self.mode == StereoMode::Multiview && d.views == 2;
+                let (w, h) = d.eye_size;
+                let size = match layered {
+                    true => wgpu::Extent3d {
+                        width: w,
+                        height: h,
+                        depth_or_array_layers: 2,
+                    },
+                    false => wgpu::Extent3d {
+                        width: w * d.views,
+                        height: h,
+                        depth_or_array_layers: 1,
+                    },
+                };
                 let texture = |label, format, usage| {
                     device.create_texture(&wgpu::TextureDescriptor {
                         label: Some(label),
-                        size: wgpu::Extent3d {
-                            width: d.target_size.0,
-                            height: d.target_size.1,
-                            depth_or_array_layers: 1,
-                        },
+                        size,
                         mip_level_count: 1,
                         sample_count: 1,
                         dimension: wgpu::TextureDimension::D2,
@@ -298,9 +489,19 @@ impl Renderer {
                     DEPTH_FORMAT,
                     wgpu::TextureUsages::RENDER_ATTACHMENT,
                 );
+                let view = |t: &wgpu::Texture| {
+                    t.create_view(&wgpu::TextureViewDescriptor {
+                        dimension: Some(if layered {
+                            wgpu::TextureViewDimension::D2Array
+                        } else {
+                            wgpu::TextureViewDimension::D2
+                        }),
+                        ..Default::default()
+                    })
+                };
                 DisplayTarget {
-                    color_view: color.create_view(&Default::default()),
-                    depth_view: depth.create_view(&Default::default()),
+                    color_view: view(&color),
+                    depth_view: view(&depth),
                     color,
                     depth,
                 }
@@ -319,11 +520,15 @@ impl Renderer {
         let cull = &self.displays[index].cull;
         let count: Vec<u32> =
             bytemuck::pod_collect_to_vec(&read_buffer(device, queue, &cull.count, COUNT_BYTES)?);
-        let visible_bytes = 4 * count[1] as u64;
         let visible = if count[1] == 0 {
             Vec::new()
         } else {
-            bytemuck::pod_collect_to_vec(&read_buffer(device, queue, &cull.visible, visible_bytes)?)
+            bytemuck::pod_collect_to_vec(&read_buffer(
+                device,
+                queue,
+                &cull.visible,
+                4 * count[1] as u64,
+            )?)
         };
         let draws_bytes = (size_of::<DrawArgs>() as u32 * self.cull_scene.mesh_count) as u64;
         let draws =
@@ -335,12 +540,20 @@ impl Renderer {
         })
     }
 
-    /// Visible totals of every display, read back from the count buffers.
+    /// Visible totals of every display: read back from the count buffers on the
+    /// indirect paths, taken from this frame's CPU culls in the classic modes.
     pub fn read_visible_counts(
         &self,
         device: &wgpu::Device,
         queue: &wgpu::Queue,
     ) -> Result<Vec<u32>> {
+        if self.mode.per_instance() {
+            return Ok(self
+                .per_instance
+                .iter()
+                .map(|c| c[0].visible.len() as u32)
+                .collect());
+        }
         self.displays
             .iter()
             .map(|d| {
@@ -356,37 +569,93 @@ impl Renderer {
     }
 }
 
-/// Writes a CPU cull result where the GPU cull would have; returns the bytes written.
-fn upload_cull(queue: &wgpu::Queue, targets: &CullTargets, out: &CullOutput) -> u64 {
-    let count = [out.draw_count, out.visible.len() as u32];
-    let parts: [(&wgpu::Buffer, &[u8]); 3] = [
-        (&targets.visible, bytemuck::cast_slice(&out.visible)),
-        (&targets.draws, bytemuck::cast_slice(&out.draws)),
-        (&targets.count, bytemuck::cast_slice(&count)),
-    ];
-    parts
-        .iter()
-        .filter(|(_, bytes)| !bytes.is_empty())
-        .map(|(buffer, bytes)| {
-            queue.write_buffer(buffer, 0, bytes);
-            bytes.len() as u64
-        })
-        .sum()
+fn write(queue: &wgpu::Queue, buffer: &wgpu::Buffer, bytes: &[u8]) -> u64 {
+    if !bytes.is_empty() {
+        queue.write_buffer(buffer, 0, bytes);
+    }
+    bytes.len() as u64
 }
 
-/// What the GPU path cannot do without, said before anything is built.
-fn check_device(device: &wgpu::Device, scene: &Scene) -> Result<()> {
-    if !device
-        .features()
-        .contains(wgpu::Features::INDIRECT_FIRST_INSTANCE)
-    {
-        return Err(Error::Limits(
-            "the device lacks INDIRECT_FIRST_INSTANCE, which GPU-driven drawing needs for per-mesh offsets".into(),
+/// One per-instance draw: index range, base vertex, and the slot in the visible list.
+type InstanceDraw = (std::ops::Range<u32>, i32, u32);
+
+/// The per-instance draws of a one-view cull result, in visible-list order.
+fn instance_draws(out: &CullOutput) -> impl Iterator<Item = InstanceDraw> + '_ {
+    out.draws[..out.draw_count as usize].iter().flat_map(|d| {
+        let indices = d.first_index..d.first_index + d.index_count;
+        (d.first_instance..d.first_instance + d.instance_count)
+            .map(move |slot| (indices.clone(), d.base_vertex, slot))
+    })
+}
+
+fn draw(pass: &mut wgpu::RenderPass, (indices, base_vertex, slot): InstanceDraw) {
+    pass.draw_indexed(indices, base_vertex, slot..slot + 1);
+}
+
+/// Single-pass stereo: each instance drawn for both eyes, in the left, right, right, left
+/// cadence so that the eye (viewport and binding) switches once per instance, not twice.
+fn single_pass_cadence(
+    pass: &mut wgpu::RenderPass,
+    out: &CullOutput,
+    eyes: &[EyeState],
+    eye_size: (u32, u32),
+) -> u32 {
+    let mut current = usize::MAX;
+    let mut calls = 0;
+    for (k, d) in instance_draws(out).enumerate() {
+        let order = if k % 2 == 0 { [0, 1] } else { [1, 0] };
+        for e in order {
+            if e != current {
+                pass.set_bind_group(0, &eyes[e].bind_group, &[]);
+                set_eye_viewport(pass, e as u32, eye_size);
+                current = e;
+            }
+            draw(pass, d.clone());
+            calls += 1;
+        }
+    }
+    calls
+}
+
+/// The draw variants a rig needs in a mode.
+fn draw_keys(device: &wgpu::Device, rig: &Rig, mode: StereoMode) -> Vec<DrawKey> {
+    let clip = device.features().contains(wgpu::Features::CLIP_DISTANCES);
+    let mut keys: Vec<DrawKey> = rig
+        .displays
+        .iter()
+        .map(|d| match (d.stereo, mode) {
+            (true, StereoMode::Multiview) => DrawKey::MULTIVIEW,
+            (true, StereoMode::Instanced) => DrawKey::new(2, clip),
+            _ => DrawKey::new(1, clip),
+        })
+        .collect();
+    keys.sort_by_key(|k| (k.views, k.multiview));
+    keys.dedup();
+    keys
+}
+
+/// What a mode cannot do without, said before anything is built.
+fn check_device(device: &wgpu::Device, scene: &Scene, options: RendererOptions) -> Result<()> {
+    let features = device.features();
+    let mode = options.mode.name();
+    if options.mode.per_instance() && options.cull == CullMode::Gpu {
+        return Err(Error::Unsupported(format!(
+            "{mode} records a draw call per visible instance, so it culls on the CPU: use --cull cpu"
+        )));
+    }
+    if !options.mode.per_instance() && !features.contains(wgpu::Features::INDIRECT_FIRST_INSTANCE) {
+        return Err(Error::Unsupported(format!(
+            "{mode} needs INDIRECT_FIRST_INSTANCE (per-mesh offsets in indirect draws), which this device lacks"
+        )));
+    }
+    if options.mode == StereoMode::Multiview && !features.contains(wgpu::Features::MULTIVIEW) {
+        return Err(Error::Unsupported(
+            "multiview is unavailable: the device lacks MULTIVIEW".into(),
         ));
     }
     let limits = device.limits();
     let largest = [
-        64 * scene.instances.len() as u64,
+        DrawScene::BYTES_PER_INSTANCE * scene.instances.len() as u64,
         24 * scene.vertices.len() as u64,
         4 * scene.indices.len() as u64,
     ];

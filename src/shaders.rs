@@ -10,7 +10,9 @@ const RECORDS: &str = include_str!("../wgsl/shared/records.wgsl");
 const CULL_MATH: &str = include_str!("../wgsl/shared/cull_math.wgsl");
 const DRAW_CLIP_DISTANCES: &str = include_str!("../wgsl/shared/draw_clip_distances.wgsl");
 const DRAW_NO_CLIP_DISTANCES: &str = include_str!("../wgsl/shared/draw_no_clip_distances.wgsl");
+const DRAW_COMMON: &str = include_str!("../wgsl/shared/draw_common.wgsl");
 const DRAW: &str = include_str!("../wgsl/draw.wgsl");
+const DRAW_MULTIVIEW: &str = include_str!("../wgsl/draw_multiview.wgsl");
 
 /// The three per-display cull passes, in dispatch order.
 #[derive(Clone, Copy, Debug, PartialEq, Eq)]
@@ -55,35 +57,36 @@ impl CullPass {
 /// Names a draw-pipeline variant; produces its source and a readable label.
 #[derive(Clone, Copy, Debug, PartialEq, Eq, Hash)]
 pub struct DrawKey {
-    /// 2: doubled instances into a double-wide target; 1: mono.
+    /// 2: doubled instances into a double-wide target; 1: one view.
     pub views: u32,
     /// Hardware clip distances at the seam, or a fragment discard.
     pub clip_distances: bool,
+    /// One view per instance into a two-layer target, the eye from `view_index`.
+    pub multiview: bool,
 }
 
 impl DrawKey {
     /// Every variant, for validation.
-    pub const ALL: [DrawKey; 3] = [
-        DrawKey {
-            views: 2,
-            clip_distances: true,
-        },
-        DrawKey {
-            views: 2,
-            clip_distances: false,
-        },
-        DrawKey {
-            views: 1,
-            clip_distances: false,
-        },
+    pub const ALL: [DrawKey; 4] = [
+        DrawKey::new(2, true),
+        DrawKey::new(2, false),
+        DrawKey::new(1, false),
+        DrawKey::MULTIVIEW,
     ];
 
-    /// The variant for `views` on a device with or without clip distances (mono never
-    /// needs them).
-    pub fn new(views: u32, clip_distances_available: bool) -> DrawKey {
+    pub const MULTIVIEW: DrawKey = DrawKey {
+        views: 1,
+        clip_distances: false,
+        multiview: true,
+    };
+
+    /// The variant for `views` on a device with or without clip distances (one view
+    /// never needs them).
+    pub const fn new(views: u32, clip_distances_available: bool) -> DrawKey {
         DrawKey {
             views,
             clip_distances: views == 2 && clip_distances_available,
+            multiview: false,
         }
     }
 
@@ -93,8 +96,9 @@ impl DrawKey {
         } else {
             "discard"
         };
-        match self.views {
-            1 => "stereocull.draw.mono".into(),
+        match (self.multiview, self.views) {
+            (true, _) => "stereocull.draw.multiview".into(),
+            (false, 1) => "stereocull.draw.mono".into(),
             _ => format!("stereocull.draw.stereo.{seam}"),
         }
     }
@@ -105,7 +109,16 @@ impl DrawKey {
         } else {
             DRAW_NO_CLIP_DISTANCES
         };
-        [prelude, &constants(self.views), CONTEXTS, RECORDS, DRAW].concat()
+        let entry = if self.multiview { DRAW_MULTIVIEW } else { DRAW };
+        [
+            prelude,
+            &constants(self.views),
+            CONTEXTS,
+            RECORDS,
+            DRAW_COMMON,
+            entry,
+        ]
+        .concat()
     }
 }
 

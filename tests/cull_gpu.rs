@@ -18,12 +18,12 @@ fn gpu() -> Gpu {
 
 /// Runs one GPU-culled frame and compares every display's buffers with the CPU's.
 fn compare(gpu: &Gpu, scene: &Scene, rig: &Rig, what: &str) -> Vec<usize> {
-    let renderer = Renderer::new(&gpu.device, scene, rig, RendererOptions::default()).unwrap();
+    let mut renderer = Renderer::new(&gpu.device, scene, rig, RendererOptions::default()).unwrap();
     let targets = renderer.create_targets(&gpu.device);
     renderer.prepare(&gpu.queue, rig).unwrap();
     let mut encoder = gpu.device.create_command_encoder(&Default::default());
     let views: Vec<_> = targets.iter().map(|t| t.views()).collect();
-    renderer.encode(&mut encoder, &views).unwrap();
+    renderer.encode(&mut encoder, &views, None).unwrap();
     gpu.queue.submit([encoder.finish()]);
     let layout = CullLayout::new(scene);
     (0..rig.displays.len())

@@ -209,12 +209,12 @@ fn cull(args: &CullArgs) -> Result<()> {
 /// One GPU-culled frame, its cull buffers read back.
 fn gpu_cull(rig: &Rig, scene: &Scene) -> Result<Vec<CullOutput>> {
     let gpu = Gpu::headless()?;
-    let renderer = Renderer::new(&gpu.device, scene, rig, RendererOptions::default())?;
+    let mut renderer = Renderer::new(&gpu.device, scene, rig, RendererOptions::default())?;
     let targets = renderer.create_targets(&gpu.device);
     renderer.prepare(&gpu.queue, rig)?;
     let mut encoder = gpu.device.create_command_encoder(&Default::default());
     let views: Vec<_> = targets.iter().map(|t| t.views()).collect();
-    renderer.encode(&mut encoder, &views)?;
+    renderer.encode(&mut encoder, &views, None)?;
     gpu.queue.submit([encoder.finish()]);
     (0..rig.displays.len())
         .map(|i| renderer.read_cull(&gpu.device, &gpu.queue, i))

@@ -56,12 +56,12 @@ impl Session {
 
     /// Writes the contexts, records and submits one frame; returns its stats with the
     /// CPU time of prepare + encode + submit.
-    pub fn frame(&self) -> Result<(FrameStats, f64)> {
+    pub fn frame(&mut self) -> Result<(FrameStats, f64)> {
         let start = Instant::now();
         let prepared = self.renderer.prepare(&self.gpu.queue, &self.rig)?;
         let mut encoder = self.gpu.device.create_command_encoder(&Default::default());
         let views: Vec<_> = self.targets.iter().map(|t| t.views()).collect();
-        let recorded = self.renderer.encode(&mut encoder, &views)?;
+        let recorded = self.renderer.encode(&mut encoder, &views, None)?;
         self.gpu.queue.submit([encoder.finish()]);
         let cpu_ms = start.elapsed().as_secs_f64() * 1e3;
         let stats = FrameStats {
@@ -92,7 +92,7 @@ struct DisplayStats {
 }
 
 pub fn render(args: &RenderArgs) -> Result<()> {
-    let session = Session::open(&args.scene, args.cull)?;
+    let mut session = Session::open(&args.scene, args.cull)?;
     let (stats, cpu_ms) = session.frame()?;
     let start = Instant::now();
     session.wait()?;

@@ -9,6 +9,7 @@ use serde::Serialize;
 use super::SceneArgs;
 use super::render::Session;
 use crate::error::Result;
+use crate::profiling::percentile;
 use crate::renderer::CullMode;
 
 #[derive(Args)]
@@ -171,15 +172,4 @@ fn print_summary(s: &Summary) {
         s.bytes_uploaded_per_frame,
         s.gpu_bytes_per_instance
     );
-}
-
-/// Nearest-rank percentile of unsorted samples (`q` in 0..=1).
-pub fn percentile(samples: &[f64], q: f64) -> f64 {
-    if samples.is_empty() {
-        return 0.0;
-    }
-    let mut sorted = samples.to_vec();
-    sorted.sort_by(f64::total_cmp);
-    let rank = ((q * sorted.len() as f64).ceil() as usize).clamp(1, sorted.len());
-    sorted[rank - 1]
 }
