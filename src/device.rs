@@ -44,6 +44,10 @@ pub struct Gpu {
     pub adapter: wgpu::Adapter,
     pub device: wgpu::Device,
     pub queue: wgpu::Queue,
+    /// The instance's flags: whether wgpu validates indirect draws with an extra pass
+    /// (`VALIDATION_INDIRECT_CALL`, on by default, off with
+    /// `WGPU_VALIDATION_INDIRECT_CALL=0`) matters for GPU timings.
+    pub flags: wgpu::InstanceFlags,
 }
 
 impl Gpu {
@@ -61,7 +65,7 @@ impl Gpu {
     }
 
     async fn headless_async(allowed: Features) -> Result<Gpu> {
-        let adapter = find_adapter().await?;
+        let (adapter, flags) = find_adapter().await?;
         let optional = OPTIONAL_FEATURES
             .iter()
             .map(|(f, ..)| *f)
@@ -86,7 +90,13 @@ impl Gpu {
             adapter,
             device,
             queue,
+            flags,
         })
+    }
+
+    pub fn indirect_validation(&self) -> bool {
+        self.flags
+            .contains(wgpu::InstanceFlags::VALIDATION_INDIRECT_CALL)
     }
 
     /// One line naming the adapter, its backend and driver.
@@ -101,7 +111,7 @@ impl Gpu {
 
 /// `WGPU_BACKEND` when set; otherwise the primary backends, then GL only if they have
 /// no adapter (probing EGL is slow and noisy where Vulkan works).
-async fn find_adapter() -> Result<wgpu::Adapter> {
+async fn find_adapter() -> Result<(wgpu::Adapter, wgpu::InstanceFlags)> {
     let from_env = wgpu::Backends::from_env();
     let tries = match from_env {
         Some(b) => vec![b],
@@ -111,10 +121,11 @@ async fn find_adapter() -> Result<wgpu::Adapter> {
     for backends in tries {
         let mut descriptor = wgpu::InstanceDescriptor::new_without_display_handle_from_env();
         descriptor.backends = backends;
+        let flags = descriptor.flags;
         let instance = wgpu::Instance::new(descriptor);
         match choose_adapter(instance.enumerate_adapters(backends).await, backends) {
             Err(Error::NoAdapter { .. }) => last = Some(backends),
-            other => return other,
+            other => return other.map(|a| (a, flags)),
         }
     }
     Err(Error::NoAdapter {

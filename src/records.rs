@@ -55,8 +55,11 @@ pub struct DrawArgs {
 /// slot, already grouped by draw and sorted: the contract falls out of the storage order.
 #[derive(Clone, Debug, PartialEq)]
 pub struct CullLayout {
-    /// World bounding spheres (center, radius) in cull order.
+    /// World bounding spheres (center, radius) in cull order: what the GPU reads.
     pub spheres: Vec<Vec4>,
+    /// The same spheres as columns (x, y, z, -radius), for the CPU culler: its plane
+    /// tests vectorize over columns. CPU memory only.
+    pub columns: [Vec<f32>; 4],
     /// Instance id at each cull position.
     pub order: Vec<u32>,
     pub meshes: Vec<MeshRecord>,
@@ -93,7 +96,14 @@ impl CullLayout {
             spheres[*slot as usize] = scene.world_sphere(inst);
             *slot += 1;
         }
+        let column = |f: fn(&Vec4) -> f32| spheres.iter().map(f).collect();
         CullLayout {
+            columns: [
+                column(|s| s.x),
+                column(|s| s.y),
+                column(|s| s.z),
+                column(|s| -s.w),
+            ],
             spheres,
             order,
             meshes,

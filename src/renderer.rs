@@ -16,7 +16,7 @@
 //! renderer.prepare(queue, &rig)?;
 //! let mut encoder = device.create_command_encoder(&Default::default());
 //! let views: Vec<_> = targets.iter().map(|t| t.views()).collect();
-//! renderer.encode(&mut encoder, &views)?;
+//! renderer.encode(&mut encoder, &views, None)?; // or Some(&mut timer) for GPU timings
 //! queue.submit([encoder.finish()]);
 //! # Ok(()) }
 //! ```

@@ -280,3 +280,64 @@ fn stress_reports_per_frame_and_summary_figures() {
             .all(|v| v.as_f64().unwrap() > 0.0)
     );
 }
+
+#[test]
+fn profile_writes_table_csv_json_and_chart() {
+    let dir = tempfile::tempdir().unwrap();
+    let out = stereocull(&[
+        "profile",
+        "--instances",
+        "300,900",
+        "--rig",
+        "hmd",
+        "--frames",
+        "2",
+        "--warmup",
+        "1",
+        "--width",
+        "16",
+        "--height",
+        "16",
+        "--out",
+        dir.path().to_str().unwrap(),
+    ]);
+    let text = String::from_utf8_lossy(&out.stdout);
+    assert!(
+        out.status.success(),
+        "{}",
+        String::from_utf8_lossy(&out.stderr)
+    );
+    assert!(text.contains("indirect validation"), "{text}");
+    let csv = std::fs::read_to_string(dir.path().join("profile.csv")).unwrap();
+    let mut lines = csv.lines();
+    assert_eq!(
+        lines.next(),
+        Some(
+            "mode,cull,rig,instances,cpu_ms_median,cpu_ms_p95,gpu_ms_median,gpu_ms_p95,draw_calls,dispatches,bytes_uploaded,adapter"
+        )
+    );
+    // 3 classic modes (CPU cull only) + instanced and multiview with both culls, per count.
+    assert_eq!(lines.count(), 2 * 7);
+    let rows: Value =
+        serde_json::from_slice(&std::fs::read(dir.path().join("profile.json")).unwrap()).unwrap();
+    let rows = rows.as_array().unwrap();
+    assert_eq!(rows.len(), 14);
+    for r in rows {
+        let (mode, calls) = (
+            r["mode"].as_str().unwrap(),
+            r["draw_calls"].as_u64().unwrap(),
+        );
+        match mode {
+            "instanced" | "multiview" => assert_eq!(calls, 1, "{r}"),
+            _ => assert!(calls > 10, "{mode}: one call per visible instance: {r}"),
+        }
+        assert!(
+            r["gpu_ms_median"].as_f64().unwrap() > 0.0,
+            "lavapipe has timestamps: {r}"
+        );
+    }
+    let svg = std::fs::read_to_string(dir.path().join("profile.svg")).unwrap();
+    assert!(
+        svg.starts_with("<svg") && svg.contains("polyline") && svg.contains("instanced / gpu cull")
+    );
+}

@@ -1,5 +1,6 @@
 //! The `stereocull` command line.
 
+mod profile;
 mod render;
 mod stress;
 
@@ -39,6 +40,8 @@ enum Command {
     Render(render::RenderArgs),
     /// Run frames headless with a moving viewer and report timings and counts.
     Stress(stress::StressArgs),
+    /// Compare every stereo mode and cull mode across instance counts: table, CSV, JSON, chart.
+    Profile(profile::ProfileArgs),
 }
 
 /// Where the scene and viewer come from; shared by every command that draws.
@@ -120,6 +123,7 @@ pub fn run() -> Result<()> {
         Some(Command::Cull(args)) => cull(&args),
         Some(Command::Render(args)) => render::render(&args),
         Some(Command::Stress(args)) => stress::stress(&args),
+        Some(Command::Profile(args)) => profile::profile(&args),
     }
 }
 

@@ -10,7 +10,7 @@ use super::{SceneArgs, write_json};
 use crate::device::Gpu;
 use crate::error::{Error, Result};
 use crate::readback::read_rgba8;
-use crate::renderer::{CullMode, DisplayTarget, FrameStats, Renderer, RendererOptions};
+use crate::renderer::{CullMode, DisplayTarget, FrameStats, Renderer, RendererOptions, StereoMode};
 use crate::rig::Rig;
 use crate::scene::Scene;
 
@@ -23,6 +23,8 @@ pub struct RenderArgs {
     pub out: PathBuf,
     #[arg(long, value_enum, default_value = "gpu")]
     pub cull: CullMode,
+    #[arg(long, value_enum, default_value = "instanced")]
+    pub mode: StereoMode,
 }
 
 /// Everything a command needs to draw frames.
@@ -35,12 +37,13 @@ pub struct Session {
 }
 
 impl Session {
-    pub fn open(args: &SceneArgs, cull: CullMode) -> Result<Session> {
+    pub fn open(args: &SceneArgs, cull: CullMode, mode: StereoMode) -> Result<Session> {
         let rig = args.load_rig()?;
         let scene = Scene::load(&args.scene)?;
         let gpu = Gpu::headless()?;
         let options = RendererOptions {
             cull,
+            mode,
             ..Default::default()
         };
         let renderer = Renderer::new(&gpu.device, &scene, &rig, options)?;
@@ -92,7 +95,7 @@ struct DisplayStats {
 }
 
 pub fn render(args: &RenderArgs) -> Result<()> {
-    let mut session = Session::open(&args.scene, args.cull)?;
+    let mut session = Session::open(&args.scene, args.cull, args.mode)?;
     let (stats, cpu_ms) = session.frame()?;
     let start = Instant::now();
     session.wait()?;
@@ -133,8 +136,9 @@ pub fn render(args: &RenderArgs) -> Result<()> {
         });
     }
     println!(
-        "{} instances, cull {:?}: {} draw calls, {} dispatches, {} bytes uploaded, CPU {cpu_ms:.2} ms, GPU wait {gpu_wait_ms:.1} ms",
+        "{} instances, {} with cull {:?}: {} draw calls, {} dispatches, {} bytes uploaded, CPU {cpu_ms:.2} ms, GPU wait {gpu_wait_ms:.1} ms",
         session.scene.instances.len(),
+        args.mode.name(),
         args.cull,
         stats.draw_calls,
         stats.dispatches,
@@ -148,6 +152,7 @@ pub fn render(args: &RenderArgs) -> Result<()> {
             "scene": args.scene.scene,
             "rig": args.scene.rig,
             "cull": args.cull,
+            "mode": args.mode,
             "instances": session.scene.instances.len(),
             "gpu_bytes_per_instance": session.renderer.gpu_bytes_per_instance(),
             "frame": stats,

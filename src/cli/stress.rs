@@ -10,7 +10,7 @@ use super::SceneArgs;
 use super::render::Session;
 use crate::error::Result;
 use crate::profiling::percentile;
-use crate::renderer::CullMode;
+use crate::renderer::{CullMode, StereoMode};
 
 #[derive(Args)]
 pub struct StressArgs {
@@ -20,6 +20,8 @@ pub struct StressArgs {
     pub frames: u32,
     #[arg(long, value_enum, default_value = "gpu")]
     pub cull: CullMode,
+    #[arg(long, value_enum, default_value = "instanced")]
+    pub mode: StereoMode,
     /// Print per-frame and summary figures as one JSON object instead of text.
     #[arg(long)]
     pub json: bool,
@@ -57,7 +59,7 @@ struct Summary {
 }
 
 pub fn stress(args: &StressArgs) -> Result<()> {
-    let mut session = Session::open(&args.scene, args.cull)?;
+    let mut session = Session::open(&args.scene, args.cull, args.mode)?;
     let bar = if args.json {
         ProgressBar::hidden()
     } else {

@@ -1,13 +1,14 @@
-//! The CPU reference culler: the same math as `wgsl/cull*.wgsl`, parallel with rayon.
+//! The CPU reference culler: the same math as `wgsl/cull*.wgsl` (the plane test of
+//! [`crate::frustum::sphere_in_planes`]), parallel with rayon.
 //! It is both what the GPU path is tested against and the baseline it is profiled
-//! against, so it is written to be fast: one pass that tests spheres into a bitmask
-//! and counts per chunk, one that compacts, then per-mesh counts from the bitmask.
+//! against, so it is written to be fast: one pass that tests sphere columns into a
+//! bitmask per display (every display at once, so each sphere is read once) and counts
+//! per chunk, one that compacts, then per-mesh counts from the bitmask.
 
 use glam::Vec4;
 use rayon::prelude::*;
 
 use super::CullOutput;
-use crate::frustum::sphere_in_planes;
 use crate::records::{CullLayout, DrawArgs};
 
 /// Instances per parallel task: large enough to amortise scheduling, a multiple of 64.
@@ -17,20 +18,124 @@ const WORDS_PER_CHUNK: usize = CHUNK / 64;
 /// Culls every instance against `planes` and builds the draws for a display of
 /// `views` views (2 stereo, 1 mono).
 pub fn cull(layout: &CullLayout, planes: &[Vec4; 6], views: u32) -> CullOutput {
-    let n = layout.spheres.len();
-    let mut mask = vec![0u64; n.div_ceil(64)];
-    let counts: Vec<u32> = mask
-        .par_chunks_mut(WORDS_PER_CHUNK)
-        .zip(layout.spheres.par_chunks(CHUNK))
-        .map(|(words, spheres)| test_chunk(planes, spheres, words))
-        .collect();
-    let chunk_start = exclusive_prefix(&counts);
-    let total = chunk_start.last().copied().unwrap_or(0) as usize;
+    cull_many(layout, &[(*planes, views)]).remove(0)
+}
 
+/// Culls for several displays (or eyes) at once, each `(planes, views)`: every sphere
+/// is read once for all of them, which is what a frame with several displays wants.
+pub fn cull_many(layout: &CullLayout, displays: &[([Vec4; 6], u32)]) -> Vec<CullOutput> {
+    let n = layout.spheres.len();
+    let words = n.div_ceil(64);
+    let planes: Vec<[[f32; 4]; 6]> = displays
+        .iter()
+        .map(|(p, _)| p.map(|v| v.to_array()))
+        .collect();
+    // One mask per display, chunk-interleaved so each task writes one contiguous run.
+    let mut masks = vec![0u64; words * displays.len()];
+    let counts: Vec<Vec<u32>> = masks
+        .par_chunks_mut(WORDS_PER_CHUNK * displays.len())
+        .enumerate()
+        .map(|(chunk, out)| test_chunk(layout, &planes, chunk * CHUNK, out))
+        .collect();
+    displays
+        .iter()
+        .enumerate()
+        .map(|(d, &(_, views))| {
+            let mask: Vec<u64> = masks
+                .chunks(WORDS_PER_CHUNK * displays.len())
+                .flat_map(|c| {
+                    let per = c.len() / displays.len();
+                    c[d * per..(d + 1) * per].iter().copied()
+                })
+                .collect();
+            let chunk_counts: Vec<u32> = counts.iter().map(|c| c[d]).collect();
+            build_output(layout, &mask, &chunk_counts, views)
+        })
+        .collect()
+}
+
+/// Tests one chunk of spheres for every display; `out` holds each display's words for
+/// the chunk one after another. Returns the visible count per display.
+fn test_chunk(
+    layout: &CullLayout,
+    planes: &[[[f32; 4]; 6]],
+    start: usize,
+    out: &mut [u64],
+) -> Vec<u32> {
+    let end = (start + CHUNK).min(layout.spheres.len());
+    let per = out.len() / planes.len();
+    let [x, y, z, neg_r] = &layout.columns;
+    let mut counts = vec![0; planes.len()];
+    for (w, group) in (start..end).step_by(64).enumerate() {
+        let g = group..(group + 64).min(end);
+        let cols = [&x[g.clone()], &y[g.clone()], &z[g.clone()], &neg_r[g]];
+        for (d, p) in planes.iter().enumerate() {
+            let bits = test_group(p, cols);
+            out[d * per + w] = bits;
+            counts[d] += bits.count_ones();
+        }
+    }
+    counts
+}
+
+/// Visibility bits of up to 64 spheres given as columns. Per sphere and plane the
+/// arithmetic is exactly [`crate::frustum::sphere_in_planes`]'s (so the decisions are
+/// the GPU's); the loops run plane by plane over 64 lanes of fixed size so that they
+/// vectorize, with AVX2 where the processor has it (the same IEEE operations, wider).
+fn test_group(planes: &[[f32; 4]; 6], cols: [&[f32]; 4]) -> u64 {
+    if let [Ok(x), Ok(y), Ok(z), Ok(r)] = cols.map(<&[f32; 64]>::try_from) {
+        return test_lanes(planes, [x, y, z, r]);
+    }
+    // The last group of a scene is short: pad it, then drop the padding's bits.
+    let n = cols[0].len();
+    let lanes: [[f32; 64]; 4] = cols.map(|c| {
+        let mut lane = [0.0; 64];
+        lane[..n].copy_from_slice(c);
+        lane
+    });
+    let [x, y, z, r] = &lanes;
+    test_lanes(planes, [x, y, z, r]) & ((1u64 << n) - 1)
+}
+
+fn test_lanes(planes: &[[f32; 4]; 6], lanes: [&[f32; 64]; 4]) -> u64 {
+    #[cfg(target_arch = "x86_64")]
+    if std::is_x86_feature_detected!("avx2") {
+        // SAFETY: the processor has AVX2, checked just above.
+        return unsafe { test_lanes_avx2(planes, lanes) };
+    }
+    test_lanes_portable(planes, lanes)
+}
+
+#[cfg(target_arch = "x86_64")]
+#[target_feature(enable = "avx2")]
+fn test_lanes_avx2(planes: &[[f32; 4]; 6], lanes: [&[f32; 64]; 4]) -> u64 {
+    test_lanes_portable(planes, lanes)
+}
+
+#[inline(always)]
+fn test_lanes_portable(planes: &[[f32; 4]; 6], [x, y, z, neg_r]: [&[f32; 64]; 4]) -> u64 {
+    let mut inside = [u32::MAX; 64];
+    for p in planes {
+        for i in 0..64 {
+            let dist = p[0] * x[i] + p[1] * y[i] + p[2] * z[i] + p[3];
+            inside[i] &= ((dist >= neg_r[i]) as u32).wrapping_neg();
+        }
+    }
+    let mut bits = 0u64;
+    for (i, m) in inside.iter().enumerate() {
+        bits |= ((m & 1) as u64) << i;
+    }
+    bits
+}
+
+/// The contract's buffers from one display's visibility bits.
+fn build_output(layout: &CullLayout, mask: &[u64], counts: &[u32], views: u32) -> CullOutput {
+    let chunk_start = exclusive_prefix(counts);
+    let total = chunk_start.last().copied().unwrap_or(0) as usize;
     let mut visible = vec![0u32; total];
     let mut slices = Vec::with_capacity(counts.len());
     let mut rest = visible.as_mut_slice();
-    for &c in &counts {
+    for &c in counts {
         let (head, tail) = rest.split_at_mut(c as usize);
         slices.push(head);
         rest = tail;
@@ -74,19 +179,6 @@ pub fn cull(layout: &CullLayout, planes: &[Vec4; 6], views: u32) -> CullOutput {
         draws,
         draw_count: draw_count as u32,
     }
-}
-
-fn test_chunk(planes: &[Vec4; 6], spheres: &[Vec4], words: &mut [u64]) -> u32 {
-    let mut count = 0;
-    for (word, group) in words.iter_mut().zip(spheres.chunks(64)) {
-        let mut bits = 0u64;
-        for (i, s) in group.iter().enumerate() {
-            bits |= (sphere_in_planes(planes, *s) as u64) << i;
-        }
-        *word = bits;
-        count += bits.count_ones();
-    }
-    count
 }
 
 fn compact_chunk(words: &[u64], order: &[u32], out: &mut [u32]) {

@@ -1,0 +1,40 @@
+//! CPU culling throughput in instances x displays per second (criterion's "elem"): one
+//! display (`hmd`) and five culled in one pass (`cave`), on all cores and on one.
+
+use criterion::{Criterion, Throughput, criterion_group, criterion_main};
+use stereocull::contexts::DisplayContext;
+use stereocull::cull::cpu;
+use stereocull::records::CullLayout;
+use stereocull::rig::Rig;
+use stereocull::scene::Scene;
+
+fn cull(c: &mut Criterion) {
+    let single = rayon::ThreadPoolBuilder::new()
+        .num_threads(1)
+        .build()
+        .expect("pool");
+    let mut group = c.benchmark_group("cpu_cull");
+    for preset in ["hmd", "cave"] {
+        let rig = Rig::preset(preset).expect("preset");
+        let displays: Vec<_> = (0..rig.displays.len())
+            .map(|d| {
+                let ctx = DisplayContext::new(&rig, d).expect("display");
+                (ctx.planes, ctx.views)
+            })
+            .collect();
+        for n in [100_000u32, 1_000_000] {
+            let layout = CullLayout::new(&Scene::procedural(n, 64, 1));
+            group.throughput(Throughput::Elements(n as u64 * displays.len() as u64));
+            group.bench_function(format!("{preset}/{n}/all_cores"), |b| {
+                b.iter(|| cpu::cull_many(&layout, &displays))
+            });
+            group.bench_function(format!("{preset}/{n}/one_core"), |b| {
+                b.iter(|| single.install(|| cpu::cull_many(&layout, &displays)))
+            });
+        }
+    }
+    group.finish();
+}
+
+criterion_group!(benches, cull);
+criterion_main!(benches);

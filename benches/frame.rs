@@ -1,0 +1,63 @@
+//! CPU cost of one frame (prepare + encode + submit) per stereo mode at 10k and 100k
+//! instances on `hmd`. Only the CPU side is timed: each frame is waited for untimed.
+
+use std::time::{Duration, Instant};
+
+use criterion::{Criterion, criterion_group, criterion_main};
+use stereocull::device::Gpu;
+use stereocull::renderer::{CullMode, Renderer, RendererOptions, StereoMode};
+use stereocull::rig::Rig;
+use stereocull::scene::Scene;
+
+fn frame(c: &mut Criterion) {
+    let gpu = Gpu::headless().expect("no adapter: install mesa-vulkan-drivers (lavapipe)");
+    eprintln!("adapter: {}", gpu.adapter_line());
+    let mut rig = Rig::preset("hmd").expect("preset");
+    rig.displays[0].resolution = [64, 64];
+    let mut group = c.benchmark_group("frame_cpu");
+    group.sample_size(10);
+    for n in [10_000u32, 100_000] {
+        let scene = Scene::procedural(n, 8, 1);
+        for mode in StereoMode::ALL {
+            for cull in [CullMode::Gpu, CullMode::Cpu] {
+                if mode.per_instance() && cull == CullMode::Gpu {
+                    continue;
+                }
+                let options = RendererOptions {
+                    cull,
+                    mode,
+                    ..Default::default()
+                };
+                let Ok(mut renderer) = Renderer::new(&gpu.device, &scene, &rig, options) else {
+                    eprintln!("{} unavailable on this adapter", mode.name());
+                    continue;
+                };
+                let targets = renderer.create_targets(&gpu.device);
+                let name = format!("{n}/{}/{cull:?}", mode.name()).to_lowercase();
+                group.bench_function(name, |b| {
+                    b.iter_custom(|iters| {
+                        let mut cpu = Duration::ZERO;
+                        for _ in 0..iters {
+                            let start = Instant::now();
+                            renderer.prepare(&gpu.queue, &rig).expect("prepare");
+                            let mut encoder =
+                                gpu.device.create_command_encoder(&Default::default());
+                            let views: Vec<_> = targets.iter().map(|t| t.views()).collect();
+                            renderer.encode(&mut encoder, &views, None).expect("encode");
+                            gpu.queue.submit([encoder.finish()]);
+                            cpu += start.elapsed();
+                            gpu.device
+                                .poll(wgpu::PollType::wait_indefinitely())
+                                .expect("poll");
+                        }
+                        cpu
+                    })
+                });
+            }
+        }
+    }
+    group.finish();
+}
+
+criterion_group!(benches, frame);
+criterion_main!(benches);

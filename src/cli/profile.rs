@@ -1,0 +1,457 @@
+//! `stereocull profile`: every stereo mode and cull mode at several instance counts, on
+//! one adapter in one run, so that the ratios between them mean something.
+
+use std::path::PathBuf;
+use std::time::Instant;
+
+use clap::Args;
+use indicatif::{ProgressBar, ProgressStyle};
+use serde::Serialize;
+
+use super::write_json;
+use crate::device::Gpu;
+use crate::error::{Error, Result};
+use crate::profiling::{GpuTimer, percentile};
+use crate::renderer::{CullMode, Renderer, RendererOptions, StereoMode};
+use crate::rig::Rig;
+use crate::scene::Scene;
+
+#[derive(Args)]
+pub struct ProfileArgs {
+    /// Instance counts (procedural scenes, seed 1).
+    #[arg(long, value_delimiter = ',', default_value = "1000,10000,100000")]
+    pub instances: Vec<u32>,
+    /// A preset or rig file.
+    #[arg(long, default_value = "hmd")]
+    pub rig: String,
+    #[arg(
+        long,
+        value_delimiter = ',',
+        value_enum,
+        default_value = "multi-camera,multi-pass,single-pass,instanced,multiview"
+    )]
+    pub modes: Vec<StereoMode>,
+    #[arg(long, value_delimiter = ',', value_enum, default_value = "gpu,cpu")]
+    pub cull: Vec<CullMode>,
+    #[arg(long, default_value = "profile")]
+    pub out: PathBuf,
+    /// Timed frames per configuration, after the warm-up.
+    #[arg(long, default_value_t = 10)]
+    pub frames: u32,
+    #[arg(long, default_value_t = 3)]
+    pub warmup: u32,
+    /// Per-eye resolution of every display (small keeps software rasterizers quick).
+    #[arg(long, default_value_t = 128)]
+    pub width: u32,
+    #[arg(long, default_value_t = 128)]
+    pub height: u32,
+    /// Built-in meshes in the procedural scenes.
+    #[arg(long, default_value_t = 8)]
+    pub meshes: u32,
+}
+
+/// One configuration's figures: the CSV columns first, then the details.
+#[derive(Clone, Debug, Serialize)]
+pub struct Row {
+    pub mode: StereoMode,
+    pub cull: CullMode,
+    pub rig: String,
+    pub instances: u32,
+    /// prepare + encode + submit.
+    pub cpu_ms_median: f64,
+    pub cpu_ms_p95: f64,
+    /// Sum of the timed passes; `None` without timestamp queries.
+    pub gpu_ms_median: Option<f64>,
+    pub gpu_ms_p95: Option<f64>,
+    pub draw_calls: u32,
+    pub dispatches: u32,
+    pub bytes_uploaded: u64,
+    pub adapter: String,
+    pub cull_ms_median: f64,
+    pub upload_ms_median: f64,
+    pub encode_ms_median: f64,
+    pub submit_ms_median: f64,
+    pub gpu_cull_ms_median: Option<f64>,
+    pub gpu_draw_ms_median: Option<f64>,
+    pub indirect_validation: bool,
+}
+
+pub fn profile(args: &ProfileArgs) -> Result<()> {
+    let gpu = Gpu::headless()?;
+    let mut rig = Rig::load(&args.rig)?;
+    for d in &mut rig.displays {
+        d.resolution = [args.width, args.height];
+    }
+    rig.validate(&args.rig)?;
+    let configs = configurations(&gpu, args);
+    let mut timer = GpuTimer::new(&gpu.device, &gpu.queue, 4 * rig.displays.len() as u32);
+    if timer.is_none() {
+        println!("GPU timings unavailable: the adapter has no TIMESTAMP_QUERY; CPU timings only");
+    }
+    let total = (args.instances.len() * configs.len()) as u64 * (args.frames + args.warmup) as u64;
+    let bar = ProgressBar::new(total);
+    bar.set_style(
+        ProgressStyle::with_template("{bar:40} {pos}/{len} frames {msg}")
+            .unwrap_or_else(|_| ProgressStyle::default_bar()),
+    );
+    let mut rows = Vec::new();
+    for &n in &args.instances {
+        let scene = Scene::procedural(n, args.meshes, 1);
+        for &(mode, cull) in &configs {
+            bar.set_message(format!("{n} {} {cull:?}", mode.name()));
+            rows.push(measure(
+                &gpu,
+                &scene,
+                &rig,
+                args,
+                (mode, cull),
+                timer.as_mut(),
+                &bar,
+            )?);
+        }
+    }
+    bar.finish_and_clear();
+    print_table(&rows);
+    std::fs::create_dir_all(&args.out).map_err(|e| Error::io(&args.out, e))?;
+    write_csv(&args.out.join("profile.csv"), &rows)?;
+    write_json(&args.out.join("profile.json"), &rows)?;
+    let chart = args.out.join("profile.svg");
+    std::fs::write(&chart, chart_svg(&rows)).map_err(|e| Error::io(&chart, e))?;
+    println!(
+        "wrote {}/profile.csv, profile.json, profile.svg",
+        args.out.display()
+    );
+    Ok(())
+}
+
+/// The requested (mode, cull) pairs this adapter can run; says why it skips any.
+fn configurations(gpu: &Gpu, args: &ProfileArgs) -> Vec<(StereoMode, CullMode)> {
+    let multiview = gpu.device.features().contains(wgpu::Features::MULTIVIEW);
+    let mut out = Vec::new();
+    for &mode in &args.modes {
+        for &cull in &args.cull {
+            if mode.per_instance() && cull == CullMode::Gpu {
+                println!(
+                    "skipped {} with GPU culling: it records a draw per visible instance, so it culls on the CPU",
+                    mode.name()
+                );
+            } else if mode == StereoMode::Multiview && !multiview {
+                println!("skipped multiview: the adapter has no MULTIVIEW");
+            } else {
+                out.push((mode, cull));
+            }
+        }
+    }
+    out.dedup();
+    out
+}
+
+fn measure(
+    gpu: &Gpu,
+    scene: &Scene,
+    rig: &Rig,
+    args: &ProfileArgs,
+    (mode, cull): (StereoMode, CullMode),
+    mut timer: Option<&mut GpuTimer>,
+    bar: &ProgressBar,
+) -> Result<Row> {
+    let options = RendererOptions {
+        cull,
+        mode,
+        ..Default::default()
+    };
+    let mut renderer = Renderer::new(&gpu.device, scene, rig, options)?;
+    let targets = renderer.create_targets(&gpu.device);
+    let views: Vec<_> = targets.iter().map(|t| t.views()).collect();
+    let mut samples = Samples::default();
+    for frame in 0..args.warmup + args.frames {
+        let start = Instant::now();
+        let prepared = renderer.prepare(&gpu.queue, rig)?;
+        let encode_start = Instant::now();
+        let mut encoder = gpu.device.create_command_encoder(&Default::default());
+        let recorded = renderer.encode(&mut encoder, &views, timer.as_deref_mut())?;
+        let submit_start = Instant::now();
+        gpu.queue.submit([encoder.finish()]);
+        let end = Instant::now();
+        gpu.device
+            .poll(wgpu::PollType::wait_indefinitely())
+            .map_err(|e| Error::Readback(e.to_string()))?;
+        let passes = match timer.as_deref_mut() {
+            Some(t) => Some(t.read(&gpu.device, &gpu.queue)?),
+            None => None,
+        };
+        bar.inc(1);
+        if frame < args.warmup {
+            continue;
+        }
+        let ms = |a: Instant, b: Instant| (b - a).as_secs_f64() * 1e3;
+        samples.cpu.push(ms(start, end));
+        samples.cull.push(prepared.cpu_cull.as_secs_f64() * 1e3);
+        samples.upload.push(prepared.cpu_upload.as_secs_f64() * 1e3);
+        samples.encode.push(ms(encode_start, submit_start));
+        samples.submit.push(ms(submit_start, end));
+        if let Some(p) = passes {
+            let of = |label| {
+                p.iter()
+                    .filter(|(l, _)| *l == label)
+                    .map(|(_, v)| v)
+                    .sum::<f64>()
+            };
+            samples.gpu_cull.push(of("cull"));
+            samples.gpu_draw.push(of("draw"));
+            samples.gpu.push(p.iter().map(|(_, v)| v).sum());
+        }
+        samples.last = (
+            recorded.draw_calls,
+            recorded.dispatches,
+            prepared.bytes_uploaded,
+        );
+    }
+    let med = |v: &[f64]| percentile(v, 0.5);
+    let gpu_med = |v: &[f64]| (!v.is_empty()).then(|| percentile(v, 0.5));
+    Ok(Row {
+        mode,
+        cull,
+        rig: args.rig.clone(),
+        instances: scene.instances.len() as u32,
+        cpu_ms_median: med(&samples.cpu),
+        cpu_ms_p95: percentile(&samples.cpu, 0.95),
+        gpu_ms_median: gpu_med(&samples.gpu),
+        gpu_ms_p95: (!samples.gpu.is_empty()).then(|| percentile(&samples.gpu, 0.95)),
+        draw_calls: samples.last.0,
+        dispatches: samples.last.1,
+        bytes_uploaded: samples.last.2,
+        adapter: gpu.adapter_line(),
+        cull_ms_median: med(&samples.cull),
+        upload_ms_median: med(&samples.upload),
+        encode_ms_median: med(&samples.encode),
+        submit_ms_median: med(&samples.submit),
+        gpu_cull_ms_median: gpu_med(&samples.gpu_cull),
+        gpu_draw_ms_median: gpu_med(&samples.gpu_draw),
+        indirect_validation: gpu.indirect_validation(),
+    })
+}
+
+#[derive(Default)]
+struct Samples {
+    cpu: Vec<f64>,
+    cull: Vec<f64>,
+    upload: Vec<f64>,
+    encode: Vec<f64>,
+    submit: Vec<f64>,
+    gpu: Vec<f64>,
+    gpu_cull: Vec<f64>,
+    gpu_draw: Vec<f64>,
+    /// Draw calls, dispatches and bytes uploaded of the last frame (the same every frame).
+    last: (u32, u32, u64),
+}
+
+fn opt(v: Option<f64>) -> String {
+    v.map_or("n/a".into(), |x| format!("{x:.3}"))
+}
+
+fn print_table(rows: &[Row]) {
+    if let Some(r) = rows.first() {
+        println!(
+            "adapter: {}; wgpu indirect validation: {}",
+            r.adapter,
+            if r.indirect_validation { "on" } else { "off" }
+        );
+    }
+    println!(
+        "{:>13} {:>4} {:>9} | {:>9} {:>9} | {:>9} {:>9} | {:>8} {:>8} {:>8} {:>8} | {:>9} {:>5} {:>10}",
+        "mode",
+        "cull",
+        "instances",
+        "cpu med",
+        "cpu p95",
+        "gpu med",
+        "gpu p95",
+        "cull",
+        "upload",
+        "encode",
+        "submit",
+        "draws",
+        "disp",
+        "uploaded"
+    );
+    for r in rows {
+        println!(
+            "{:>13} {:>4} {:>9} | {:>9.3} {:>9.3} | {:>9} {:>9} | {:>8.3} {:>8.3} {:>8.3} {:>8.3} | {:>9} {:>5} {:>10}",
+            r.mode.name(),
+            format!("{:?}", r.cull).to_lowercase(),
+            r.instances,
+            r.cpu_ms_median,
+            r.cpu_ms_p95,
+            opt(r.gpu_ms_median),
+            opt(r.gpu_ms_p95),
+            r.cull_ms_median,
+            r.upload_ms_median,
+            r.encode_ms_median,
+            r.submit_ms_median,
+            r.draw_calls,
+            r.dispatches,
+            r.bytes_uploaded
+        );
+    }
+}
+
+fn write_csv(path: &std::path::Path, rows: &[Row]) -> Result<()> {
+    let mut text = String::from(
+        "mode,cull,rig,instances,cpu_ms_median,cpu_ms_p95,gpu_ms_median,gpu_ms_p95,draw_calls,dispatches,bytes_uploaded,adapter\n",
+    );
+    let field = |v: Option<f64>| v.map_or(String::new(), |x| format!("{x:.4}"));
+    for r in rows {
+        text += &format!(
+            "{},{},{},{},{:.4},{:.4},{},{},{},{},{},\"{}\"\n",
+            r.mode.name(),
+            format!("{:?}", r.cull).to_lowercase(),
+            r.rig,
+            r.instances,
+            r.cpu_ms_median,
+            r.cpu_ms_p95,
+            field(r.gpu_ms_median),
+            field(r.gpu_ms_p95),
+            r.draw_calls,
+            r.dispatches,
+            r.bytes_uploaded,
+            r.adapter.replace('"', "'")
+        );
+    }
+    std::fs::write(path, text).map_err(|e| Error::io(path, e))
+}
+
+/// What a chart panel plots of a row.
+type Metric = fn(&Row) -> Option<f64>;
+
+const PALETTE: [&str; 10] = [
+    "#1f77b4", "#ff7f0e", "#2ca02c", "#d62728", "#9467bd", "#8c564b", "#e377c2", "#7f7f7f",
+    "#bcbd22", "#17becf",
+];
+
+/// Two log-log panels (CPU ms and GPU ms against instances), one line per mode and cull.
+/// Plain SVG: producing it needs no font; any viewer draws its text.
+pub fn chart_svg(rows: &[Row]) -> String {
+    let mut series: Vec<(String, Vec<&Row>)> = Vec::new();
+    for r in rows {
+        let name = format!("{} / {:?} cull", r.mode.name(), r.cull).to_lowercase();
+        match series.iter_mut().find(|(n, _)| *n == name) {
+            Some((_, v)) => v.push(r),
+            None => series.push((name, vec![r])),
+        }
+    }
+    let (w, h) = (460.0, 320.0);
+    let mut svg = format!(
+        "<svg xmlns=\"http://www.w3.org/2000/svg\" width=\"{}\" height=\"{}\" font-family=\"sans-serif\" font-size=\"11\">\n<rect width=\"100%\" height=\"100%\" fill=\"white\"/>\n",
+        2.0 * w + 200.0,
+        h + 20.0
+    );
+    let panels: [(&str, Metric); 2] = [
+        ("CPU ms per frame (prepare + encode + submit)", |r| {
+            Some(r.cpu_ms_median)
+        }),
+        ("GPU ms per frame (timestamps)", |r| r.gpu_ms_median),
+    ];
+    for (p, (title, value)) in panels.iter().enumerate() {
+        let x0 = p as f64 * w;
+        svg += &panel(x0, w, h, title, &series, *value);
+    }
+    for (i, (name, _)) in series.iter().enumerate() {
+        let y = 40.0 + 16.0 * i as f64;
+        let c = PALETTE[i % PALETTE.len()];
+        svg += &format!(
+            "<line x1=\"{0}\" y1=\"{y}\" x2=\"{1}\" y2=\"{y}\" stroke=\"{c}\" stroke-width=\"2\"/><text x=\"{2}\" y=\"{3}\">{name}</text>\n",
+            2.0 * w + 10.0,
+            2.0 * w + 30.0,
+            2.0 * w + 35.0,
+            y + 4.0
+        );
+    }
+    svg + "</svg>\n"
+}
+
+fn panel(
+    x0: f64,
+    w: f64,
+    h: f64,
+    title: &str,
+    series: &[(String, Vec<&Row>)],
+    value: fn(&Row) -> Option<f64>,
+) -> String {
+    let points: Vec<(f64, f64)> = series
+        .iter()
+        .flat_map(|(_, rows)| {
+            rows.iter()
+                .filter_map(|r| value(r).map(|v| (r.instances as f64, v)))
+        })
+        .filter(|&(x, y)| x > 0.0 && y > 0.0)
+        .collect();
+    let mut out = format!(
+        "<text x=\"{}\" y=\"16\" font-size=\"13\">{title}</text>\n",
+        x0 + 50.0
+    );
+    if points.is_empty() {
+        return out
+            + &format!(
+                "<text x=\"{}\" y=\"{}\">not measured on this adapter</text>\n",
+                x0 + 60.0,
+                h / 2.0
+            );
+    }
+    let decades = |f: fn(f64, f64) -> f64, init: f64, axis: fn(&(f64, f64)) -> f64| {
+        points.iter().map(axis).fold(init, f).log10()
+    };
+    let (lx0, lx1) = (
+        decades(f64::min, f64::MAX, |p| p.0).floor(),
+        decades(f64::max, 0.0, |p| p.0).ceil().max(1.0),
+    );
+    let (ly0, ly1) = (
+        decades(f64::min, f64::MAX, |p| p.1).floor(),
+        decades(f64::max, 0.0, |p| p.1).ceil(),
+    );
+    let (ly0, ly1) = (ly0, if ly1 <= ly0 { ly0 + 1.0 } else { ly1 });
+    let (left, right, top, bottom) = (x0 + 60.0, x0 + w - 20.0, 30.0, h - 30.0);
+    let px = |x: f64| left + (x.log10() - lx0) / (lx1 - lx0).max(1.0) * (right - left);
+    let py = |y: f64| bottom - (y.log10() - ly0) / (ly1 - ly0) * (bottom - top);
+    out += &format!(
+        "<rect x=\"{left}\" y=\"{top}\" width=\"{}\" height=\"{}\" fill=\"none\" stroke=\"#444\"/>\n",
+        right - left,
+        bottom - top
+    );
+    for d in lx0 as i32..=lx1 as i32 {
+        let x = px(10f64.powi(d));
+        out += &format!(
+            "<line x1=\"{x}\" y1=\"{top}\" x2=\"{x}\" y2=\"{bottom}\" stroke=\"#ddd\"/><text x=\"{x}\" y=\"{}\" text-anchor=\"middle\">1e{d}</text>\n",
+            bottom + 14.0
+        );
+    }
+    for d in ly0 as i32..=ly1 as i32 {
+        let y = py(10f64.powi(d));
+        out += &format!(
+            "<line x1=\"{left}\" y1=\"{y}\" x2=\"{right}\" y2=\"{y}\" stroke=\"#ddd\"/><text x=\"{}\" y=\"{}\" text-anchor=\"end\">1e{d}</text>\n",
+            left - 4.0,
+            y + 4.0
+        );
+    }
+    out += &format!(
+        "<text x=\"{}\" y=\"{}\" text-anchor=\"middle\">instances</text>\n",
+        (left + right) / 2.0,
+        h - 2.0
+    );
+    for (i, (_, rows)) in series.iter().enumerate() {
+        let pts: Vec<String> = rows
+            .iter()
+            .filter_map(|r| {
+                value(r)
+                    .filter(|v| *v > 0.0)
+                    .map(|v| format!("{:.1},{:.1}", px(r.instances as f64), py(v)))
+            })
+            .collect();
+        out += &format!(
+            "<polyline points=\"{}\" fill=\"none\" stroke=\"{}\" stroke-width=\"2\"/>\n",
+            pts.join(" "),
+            PALETTE[i % PALETTE.len()]
+        );
+    }
+    out
+}
