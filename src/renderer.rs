@@ -269,50 +269,65 @@ impl Renderer {
                 "the rig's displays differ from the renderer's",
             ));
         }
+        let contexts = (0..self.displays.len())
+            .map(|i| {
+                let mut ctx = DisplayContext::new(rig, i)?;
+                ctx.views = self.displays[i].cull_views;
+                Ok(ctx)
+            })
+            .collect::<Result<Vec<_>>>()?;
         let mut stats = FrameStats::default();
+        let start = Instant::now();
+        let mut culls = self.cpu_culls(rig, &contexts)?.into_iter();
+        stats.cpu_cull = start.elapsed();
+        let start = Instant::now();
         self.per_instance.clear();
-        for (i, state) in self.displays.iter().enumerate() {
-            let mut ctx = DisplayContext::new(rig, i)?;
-            ctx.views = state.cull_views;
-            let mut writes = vec![(&state.context, uniform_bytes(&ctx))];
+        for (state, ctx) in self.displays.iter().zip(&contexts) {
+            let mut writes = vec![(&state.context, uniform_bytes(ctx))];
             for (e, eye) in state.eyes.iter().enumerate() {
                 let one_eye = DisplayContext {
                     eye: [ctx.eye[e]; 2],
-                    ..ctx
+                    ..*ctx
                 };
                 writes.push((&eye.context, uniform_bytes(&one_eye)));
             }
-            let start = Instant::now();
-            let culls = self.cpu_culls(rig, i, &ctx)?;
-            stats.cpu_cull += start.elapsed();
-            let start = Instant::now();
             for (buffer, bytes) in writes {
                 queue.write_buffer(buffer, 0, &bytes);
                 stats.bytes_uploaded += bytes.len() as u64;
             }
-            stats.bytes_uploaded += self.upload_culls(queue, state, &culls);
-            stats.cpu_upload += start.elapsed();
+            let display_culls = culls.next().unwrap_or_default();
+            stats.bytes_uploaded += self.upload_culls(queue, state, &display_culls);
             if self.mode.per_instance() {
-                self.per_instance.push(culls);
+                self.per_instance.push(display_culls);
             }
         }
+        stats.cpu_upload = start.elapsed();
         Ok(stats)
     }
 
-    /// This display's CPU culls: none on the GPU path, one against the display frustum,
-    /// or one per eye frustum (multi-camera).
-    fn cpu_culls(&self, rig: &Rig, index: usize, ctx: &DisplayContext) -> Result<Vec<CullOutput>> {
+    /// This frame's CPU culls per display, all in one pass over the spheres: none on
+    /// the GPU path, one against each display frustum, or one per eye (multi-camera).
+    fn cpu_culls(&self, rig: &Rig, contexts: &[DisplayContext]) -> Result<Vec<Vec<CullOutput>>> {
         if self.cull_mode == CullMode::Gpu {
             return Ok(Vec::new());
         }
-        if self.mode == StereoMode::MultiCamera && !self.displays[index].eyes.is_empty() {
-            let eyes = rig.eyes(index)?;
-            return Ok(eyes
-                .iter()
-                .map(|e| cpu::cull(&self.layout, &e.frustum().planes, 1))
-                .collect());
+        let mut jobs = Vec::new();
+        let mut per_display = Vec::new();
+        for (i, ctx) in contexts.iter().enumerate() {
+            if self.mode == StereoMode::MultiCamera && !self.displays[i].eyes.is_empty() {
+                let eyes = rig.eyes(i)?;
+                jobs.extend(eyes.iter().map(|e| (e.frustum().planes, 1)));
+                per_display.push(eyes.len());
+            } else {
+                jobs.push((ctx.planes, ctx.views));
+                per_display.push(1);
+            }
         }
-        Ok(vec![cpu::cull(&self.layout, &ctx.planes, ctx.views)])
+        let mut outputs = cpu::cull_many(&self.layout, &jobs).into_iter();
+        Ok(per_display
+            .iter()
+            .map(|&k| outputs.by_ref().take(k).collect())
+            .collect())
     }
 
     /// Uploads CPU cull results where the draws read them; returns the bytes written.
