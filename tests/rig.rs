@@ -103,3 +103,16 @@ fn a_viewer_behind_a_cave_wall_is_an_error_not_a_wrong_frustum() {
     let msg = cave.display_view(0).unwrap_err().to_string();
     assert!(msg.contains("behind the screen"), "{msg}");
 }
+
+#[test]
+fn every_rig_file_in_assets_loads() {
+    let dir = std::path::Path::new(env!("CARGO_MANIFEST_DIR")).join("assets/rigs");
+    let mut count = 0;
+    for entry in std::fs::read_dir(&dir).unwrap() {
+        let path = entry.unwrap().path();
+        let rig = Rig::load(path.to_str().unwrap()).unwrap_or_else(|e| panic!("{e}"));
+        assert!(!rig.displays.is_empty());
+        count += 1;
+    }
+    assert!(count >= 7, "{count} rig files");
+}

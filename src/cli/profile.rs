@@ -21,9 +21,9 @@ pub struct ProfileArgs {
     /// Instance counts (procedural scenes, seed 1).
     #[arg(long, value_delimiter = ',', default_value = "1000,10000,100000")]
     pub instances: Vec<u32>,
-    /// A preset or rig file.
-    #[arg(long, default_value = "hmd")]
-    pub rig: String,
+    /// Presets or rig files (several compare rigs in one run: stereo against mono).
+    #[arg(long, value_delimiter = ',', default_value = "hmd")]
+    pub rig: Vec<String>,
     #[arg(
         long,
         value_delimiter = ',',
@@ -78,17 +78,30 @@ pub struct Row {
 
 pub fn profile(args: &ProfileArgs) -> Result<()> {
     let gpu = Gpu::headless()?;
-    let mut rig = Rig::load(&args.rig)?;
-    for d in &mut rig.displays {
-        d.resolution = [args.width, args.height];
-    }
-    rig.validate(&args.rig)?;
+    let rigs = args
+        .rig
+        .iter()
+        .map(|spec| {
+            let mut rig = Rig::load(spec)?;
+            for d in &mut rig.displays {
+                d.resolution = [args.width, args.height];
+            }
+            rig.validate(spec)?;
+            Ok((spec.as_str(), rig))
+        })
+        .collect::<Result<Vec<_>>>()?;
     let configs = configurations(&gpu, args);
-    let mut timer = GpuTimer::new(&gpu.device, &gpu.queue, 4 * rig.displays.len() as u32);
+    let most_displays = rigs
+        .iter()
+        .map(|(_, r)| r.displays.len())
+        .max()
+        .unwrap_or(1) as u32;
+    let mut timer = GpuTimer::new(&gpu.device, &gpu.queue, 4 * most_displays);
     if timer.is_none() {
         println!("GPU timings unavailable: the adapter has no TIMESTAMP_QUERY; CPU timings only");
     }
-    let total = (args.instances.len() * configs.len()) as u64 * (args.frames + args.warmup) as u64;
+    let total = (rigs.len() * args.instances.len() * configs.len()) as u64
+        * (args.frames + args.warmup) as u64;
     let bar = ProgressBar::new(total);
     bar.set_style(
         ProgressStyle::with_template("{bar:40} {pos}/{len} frames {msg}")
@@ -97,17 +110,17 @@ pub fn profile(args: &ProfileArgs) -> Result<()> {
     let mut rows = Vec::new();
     for &n in &args.instances {
         let scene = Scene::procedural(n, args.meshes, 1);
-        for &(mode, cull) in &configs {
-            bar.set_message(format!("{n} {} {cull:?}", mode.name()));
-            rows.push(measure(
-                &gpu,
-                &scene,
-                &rig,
-                args,
-                (mode, cull),
-                timer.as_mut(),
-                &bar,
-            )?);
+        for (spec, rig) in &rigs {
+            for &(mode, cull) in &configs {
+                bar.set_message(format!("{spec} {n} {} {cull:?}", mode.name()));
+                let config = Config {
+                    spec,
+                    rig,
+                    mode,
+                    cull,
+                };
+                rows.push(measure(&gpu, &scene, &config, args, timer.as_mut(), &bar)?);
+            }
         }
     }
     bar.finish_and_clear();
@@ -146,12 +159,24 @@ fn configurations(gpu: &Gpu, args: &ProfileArgs) -> Vec<(StereoMode, CullMode)> 
     out
 }
 
+/// One measured configuration.
+struct Config<'a> {
+    spec: &'a str,
+    rig: &'a Rig,
+    mode: StereoMode,
+    cull: CullMode,
+}
+
 fn measure(
     gpu: &Gpu,
     scene: &Scene,
-    rig: &Rig,
+    &Config {
+        spec,
+        rig,
+        mode,
+        cull,
+    }: &Config,
     args: &ProfileArgs,
-    (mode, cull): (StereoMode, CullMode),
     mut timer: Option<&mut GpuTimer>,
     bar: &ProgressBar,
 ) -> Result<Row> {
@@ -212,7 +237,7 @@ fn measure(
     Ok(Row {
         mode,
         cull,
-        rig: args.rig.clone(),
+        rig: spec.to_string(),
         instances: scene.instances.len() as u32,
         cpu_ms_median: med(&samples.cpu),
         cpu_ms_p95: percentile(&samples.cpu, 0.95),
@@ -252,14 +277,15 @@ fn opt(v: Option<f64>) -> String {
 
 fn print_table(rows: &[Row]) {
     if let Some(r) = rows.first() {
+        let validation = if r.indirect_validation { "on" } else { "off" };
         println!(
-            "adapter: {}; wgpu indirect validation: {}",
-            r.adapter,
-            if r.indirect_validation { "on" } else { "off" }
+            "adapter: {}; wgpu indirect validation: {validation}",
+            r.adapter
         );
     }
     println!(
-        "{:>13} {:>4} {:>9} | {:>9} {:>9} | {:>9} {:>9} | {:>8} {:>8} {:>8} {:>8} | {:>9} {:>5} {:>10}",
+        "{:>14} {:>13} {:>4} {:>9} | {:>9} {:>9} | {:>9} {:>9} | {:>8} {:>8} {:>8} {:>8} | {:>9} {:>5} {:>10}",
+        "rig",
         "mode",
         "cull",
         "instances",
@@ -276,8 +302,12 @@ fn print_table(rows: &[Row]) {
         "uploaded"
     );
     for r in rows {
+        let rig = std::path::Path::new(&r.rig)
+            .file_stem()
+            .map_or(r.rig.clone(), |s| s.to_string_lossy().into());
         println!(
-            "{:>13} {:>4} {:>9} | {:>9.3} {:>9.3} | {:>9} {:>9} | {:>8.3} {:>8.3} {:>8.3} {:>8.3} | {:>9} {:>5} {:>10}",
+            "{:>14} {:>13} {:>4} {:>9} | {:>9.3} {:>9.3} | {:>9} {:>9} | {:>8.3} {:>8.3} {:>8.3} {:>8.3} | {:>9} {:>5} {:>10}",
+            rig,
             r.mode.name(),
             format!("{:?}", r.cull).to_lowercase(),
             r.instances,
@@ -332,19 +362,39 @@ const PALETTE: [&str; 10] = [
 /// Two log-log panels (CPU ms and GPU ms against instances), one line per mode and cull.
 /// Plain SVG: producing it needs no font; any viewer draws its text.
 pub fn chart_svg(rows: &[Row]) -> String {
-    let mut series: Vec<(String, Vec<&Row>)> = Vec::new();
+    let mut rigs: Vec<&str> = Vec::new();
+    let mut kinds: Vec<(StereoMode, CullMode)> = Vec::new();
+    let mut series: Vec<Series> = Vec::new();
     for r in rows {
-        let name = format!("{} / {:?} cull", r.mode.name(), r.cull).to_lowercase();
-        match series.iter_mut().find(|(n, _)| *n == name) {
-            Some((_, v)) => v.push(r),
-            None => series.push((name, vec![r])),
+        let rig = rigs.iter().position(|x| *x == r.rig).unwrap_or_else(|| {
+            rigs.push(&r.rig);
+            rigs.len() - 1
+        });
+        let kind = kinds
+            .iter()
+            .position(|k| *k == (r.mode, r.cull))
+            .unwrap_or_else(|| {
+                kinds.push((r.mode, r.cull));
+                kinds.len() - 1
+            });
+        match series.iter_mut().find(|s| s.rig == rig && s.kind == kind) {
+            Some(s) => s.rows.push(r),
+            None => series.push(Series {
+                name: format!("{}: {} / {:?} cull", r.rig, r.mode.name(), r.cull).to_lowercase(),
+                rig,
+                kind,
+                rows: vec![r],
+            }),
         }
     }
-    let (w, h) = (460.0, 320.0);
+    for s in &mut series {
+        s.rows.sort_by_key(|r| r.instances);
+    }
+    let (w, h): (f64, f64) = (460.0, 320.0);
     let mut svg = format!(
         "<svg xmlns=\"http://www.w3.org/2000/svg\" width=\"{}\" height=\"{}\" font-family=\"sans-serif\" font-size=\"11\">\n<rect width=\"100%\" height=\"100%\" fill=\"white\"/>\n",
-        2.0 * w + 200.0,
-        h + 20.0
+        2.0 * w + 260.0,
+        (h + 20.0).max(60.0 + 16.0 * series.len() as f64)
     );
     let panels: [(&str, Metric); 2] = [
         ("CPU ms per frame (prepare + encode + submit)", |r| {
@@ -356,32 +406,45 @@ pub fn chart_svg(rows: &[Row]) -> String {
         let x0 = p as f64 * w;
         svg += &panel(x0, w, h, title, &series, *value);
     }
-    for (i, (name, _)) in series.iter().enumerate() {
+    for (i, s) in series.iter().enumerate() {
         let y = 40.0 + 16.0 * i as f64;
-        let c = PALETTE[i % PALETTE.len()];
         svg += &format!(
-            "<line x1=\"{0}\" y1=\"{y}\" x2=\"{1}\" y2=\"{y}\" stroke=\"{c}\" stroke-width=\"2\"/><text x=\"{2}\" y=\"{3}\">{name}</text>\n",
+            "<line x1=\"{0}\" y1=\"{y}\" x2=\"{1}\" y2=\"{y}\" {2}/><text x=\"{3}\" y=\"{4}\">{5}</text>\n",
             2.0 * w + 10.0,
             2.0 * w + 30.0,
+            s.stroke(),
             2.0 * w + 35.0,
-            y + 4.0
+            y + 4.0,
+            s.name
         );
     }
     svg + "</svg>\n"
 }
 
-fn panel(
-    x0: f64,
-    w: f64,
-    h: f64,
-    title: &str,
-    series: &[(String, Vec<&Row>)],
-    value: fn(&Row) -> Option<f64>,
-) -> String {
+struct Series<'a> {
+    name: String,
+    rig: usize,
+    kind: usize,
+    rows: Vec<&'a Row>,
+}
+
+impl Series<'_> {
+    /// Color by mode and cull, dash pattern by rig.
+    fn stroke(&self) -> String {
+        let dash = ["", "6,3", "2,2", "8,3,2,3"][self.rig % 4];
+        format!(
+            "stroke=\"{}\" stroke-width=\"2\" stroke-dasharray=\"{dash}\" fill=\"none\"",
+            PALETTE[self.kind % PALETTE.len()]
+        )
+    }
+}
+
+fn panel(x0: f64, w: f64, h: f64, title: &str, series: &[Series], value: Metric) -> String {
     let points: Vec<(f64, f64)> = series
         .iter()
-        .flat_map(|(_, rows)| {
-            rows.iter()
+        .flat_map(|s| {
+            s.rows
+                .iter()
                 .filter_map(|r| value(r).map(|v| (r.instances as f64, v)))
         })
         .filter(|&(x, y)| x > 0.0 && y > 0.0)
@@ -438,8 +501,9 @@ fn panel(
         (left + right) / 2.0,
         h - 2.0
     );
-    for (i, (_, rows)) in series.iter().enumerate() {
-        let pts: Vec<String> = rows
+    for s in series {
+        let pts: Vec<String> = s
+            .rows
             .iter()
             .filter_map(|r| {
                 value(r)
@@ -447,11 +511,7 @@ fn panel(
                     .map(|v| format!("{:.1},{:.1}", px(r.instances as f64), py(v)))
             })
             .collect();
-        out += &format!(
-            "<polyline points=\"{}\" fill=\"none\" stroke=\"{}\" stroke-width=\"2\"/>\n",
-            pts.join(" "),
-            PALETTE[i % PALETTE.len()]
-        );
+        out += &format!("<polyline points=\"{}\" {}/>\n", pts.join(" "), s.stroke());
     }
     out
 }
