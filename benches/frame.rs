@@ -39,12 +39,9 @@ fn frame(c: &mut Criterion) {
                         let mut cpu = Duration::ZERO;
                         for _ in 0..iters {
                             let start = Instant::now();
-                            renderer.prepare(&gpu.queue, &rig).expect("prepare");
-                            let mut encoder =
-                                gpu.device.create_command_encoder(&Default::default());
-                            let views: Vec<_> = targets.iter().map(|t| t.views()).collect();
-                            renderer.encode(&mut encoder, &views, None).expect("encode");
-                            gpu.queue.submit([encoder.finish()]);
+                            renderer
+                                .submit_frame(&gpu.device, &gpu.queue, &rig, &targets)
+                                .expect("frame");
                             cpu += start.elapsed();
                             gpu.device
                                 .poll(wgpu::PollType::wait_indefinitely())

@@ -462,6 +462,28 @@ impl Renderer {
         calls
     }
 
+    /// Headless convenience: [`Renderer::prepare`], [`Renderer::encode`] into a new encoder
+    /// and submit, rendering into `targets` (from [`Renderer::create_targets`]).
+    pub fn submit_frame(
+        &mut self,
+        device: &wgpu::Device,
+        queue: &wgpu::Queue,
+        rig: &Rig,
+        targets: &[DisplayTarget],
+    ) -> Result<FrameStats> {
+        let prepared = self.prepare(queue, rig)?;
+        let mut encoder = device.create_command_encoder(&Default::default());
+        let views: Vec<_> = targets.iter().map(DisplayTarget::views).collect();
+        let recorded = self.encode(&mut encoder, &views, None)?;
+        queue.submit([encoder.finish()]);
+        Ok(FrameStats {
+            bytes_uploaded: prepared.bytes_uploaded,
+            cpu_cull: prepared.cpu_cull,
+            cpu_upload: prepared.cpu_upload,
+            ..recorded
+        })
+    }
+
     /// Color (`RENDER_ATTACHMENT | COPY_SRC`) and depth textures for every display, shaped
     /// as [`TargetViews`] describes for this renderer's mode.
     pub fn create_targets(&self, device: &wgpu::Device) -> Vec<DisplayTarget> {

@@ -20,11 +20,9 @@ fn gpu() -> Gpu {
 fn compare(gpu: &Gpu, scene: &Scene, rig: &Rig, what: &str) -> Vec<usize> {
     let mut renderer = Renderer::new(&gpu.device, scene, rig, RendererOptions::default()).unwrap();
     let targets = renderer.create_targets(&gpu.device);
-    renderer.prepare(&gpu.queue, rig).unwrap();
-    let mut encoder = gpu.device.create_command_encoder(&Default::default());
-    let views: Vec<_> = targets.iter().map(|t| t.views()).collect();
-    renderer.encode(&mut encoder, &views, None).unwrap();
-    gpu.queue.submit([encoder.finish()]);
+    renderer
+        .submit_frame(&gpu.device, &gpu.queue, rig, &targets)
+        .unwrap();
     let layout = CullLayout::new(scene);
     (0..rig.displays.len())
         .map(|d| {

@@ -39,11 +39,9 @@ fn render_mode(
     };
     let mut renderer = Renderer::new(&gpu.device, scene, rig, options).unwrap();
     let targets = renderer.create_targets(&gpu.device);
-    renderer.prepare(&gpu.queue, rig).unwrap();
-    let mut encoder = gpu.device.create_command_encoder(&Default::default());
-    let views: Vec<_> = targets.iter().map(|t| t.views()).collect();
-    renderer.encode(&mut encoder, &views, None).unwrap();
-    gpu.queue.submit([encoder.finish()]);
+    renderer
+        .submit_frame(&gpu.device, &gpu.queue, rig, &targets)
+        .unwrap();
     targets
         .iter()
         .map(|t| read_rgba8(&gpu.device, &gpu.queue, &t.color).unwrap())

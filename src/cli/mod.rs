@@ -215,11 +215,7 @@ fn gpu_cull(rig: &Rig, scene: &Scene) -> Result<Vec<CullOutput>> {
     let gpu = Gpu::headless()?;
     let mut renderer = Renderer::new(&gpu.device, scene, rig, RendererOptions::default())?;
     let targets = renderer.create_targets(&gpu.device);
-    renderer.prepare(&gpu.queue, rig)?;
-    let mut encoder = gpu.device.create_command_encoder(&Default::default());
-    let views: Vec<_> = targets.iter().map(|t| t.views()).collect();
-    renderer.encode(&mut encoder, &views, None)?;
-    gpu.queue.submit([encoder.finish()]);
+    renderer.submit_frame(&gpu.device, &gpu.queue, rig, &targets)?;
     (0..rig.displays.len())
         .map(|i| renderer.read_cull(&gpu.device, &gpu.queue, i))
         .collect()

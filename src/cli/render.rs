@@ -61,18 +61,13 @@ impl Session {
     /// CPU time of prepare + encode + submit.
     pub fn frame(&mut self) -> Result<(FrameStats, f64)> {
         let start = Instant::now();
-        let prepared = self.renderer.prepare(&self.gpu.queue, &self.rig)?;
-        let mut encoder = self.gpu.device.create_command_encoder(&Default::default());
-        let views: Vec<_> = self.targets.iter().map(|t| t.views()).collect();
-        let recorded = self.renderer.encode(&mut encoder, &views, None)?;
-        self.gpu.queue.submit([encoder.finish()]);
-        let cpu_ms = start.elapsed().as_secs_f64() * 1e3;
-        let stats = FrameStats {
-            bytes_uploaded: prepared.bytes_uploaded,
-            cpu_cull: prepared.cpu_cull,
-            ..recorded
-        };
-        Ok((stats, cpu_ms))
+        let stats = self.renderer.submit_frame(
+            &self.gpu.device,
+            &self.gpu.queue,
+            &self.rig,
+            &self.targets,
+        )?;
+        Ok((stats, start.elapsed().as_secs_f64() * 1e3))
     }
 
     pub fn wait(&self) -> Result<()> {
