@@ -133,17 +133,11 @@ impl Frustum {
     pub fn contains_point(&self, p: Vec3) -> bool {
         self.planes.iter().all(|pl| pl.xyz().dot(p) + pl.w >= 0.0)
     }
-
-    /// Conservative sphere test; `sphere` is `(center, radius)`. The operation order is
-    /// the contract with `wgsl/shared/cull_math.wgsl`: same products, same sums, left to
-    /// right, no fused multiply-add, so CPU and GPU decide identically.
-    #[inline]
-    pub fn intersects_sphere(&self, sphere: Vec4) -> bool {
-        sphere_in_planes(&self.planes, sphere)
-    }
 }
 
-/// The CPU twin of `sphere_in_planes` in `wgsl/shared/cull_math.wgsl`.
+/// Conservative sphere test, `s` = (center, radius): the CPU twin of `sphere_in_planes`
+/// in `wgsl/shared/cull_math.wgsl`. The operation order is the contract: same products,
+/// same sums, left to right, no fused multiply-add, so CPU and GPU decide identically.
 #[inline]
 pub fn sphere_in_planes(planes: &[Vec4; 6], s: Vec4) -> bool {
     planes

@@ -6,7 +6,7 @@
 use std::path::Path;
 
 use bytemuck::{Pod, Zeroable};
-use glam::{Affine3A, Quat, Vec3, Vec4};
+use glam::{Affine3A, Mat4, Quat, Vec3, Vec4};
 use rand::{Rng, SeedableRng};
 use rand_pcg::Pcg64Mcg;
 
@@ -82,6 +82,11 @@ impl Scene {
             )?,
             None => crate::gltf_import::import(Path::new(spec))?,
         };
+        let mut scene = scene;
+        let dropped = scene.drop_non_finite_instances();
+        if dropped > 0 {
+            log::warn!("{spec}: dropped {dropped} instance(s) with non-finite transforms");
+        }
         if scene.instances.is_empty() {
             return Err(Error::SceneSpec {
                 spec: spec.into(),
@@ -89,6 +94,20 @@ impl Scene {
             });
         }
         Ok(scene)
+    }
+
+    /// Removes instances whose transform or world bounding sphere is not finite (NaN or
+    /// infinite entries): culling cannot place them, and a NaN sphere would be culled
+    /// differently by different hardware. Every other instance keeps its order; ids are
+    /// renumbered. Returns how many were dropped.
+    pub fn drop_non_finite_instances(&mut self) -> usize {
+        let before = self.instances.len();
+        let meshes = &self.meshes;
+        self.instances.retain(|inst| {
+            let finite = Mat4::from(inst.world_from_local).is_finite();
+            finite && world_sphere_of(meshes, inst).is_finite()
+        });
+        before - self.instances.len()
     }
 
     /// Appends a mesh and returns its id. The bounding sphere is centered on the
@@ -115,15 +134,7 @@ impl Scene {
     /// The instance's world bounding sphere: the local center transformed, the radius
     /// scaled by the largest axis scale (conservative under non-uniform scale).
     pub fn world_sphere(&self, instance: &Instance) -> Vec4 {
-        let local = self.meshes[instance.mesh as usize].bounds;
-        let m = instance.world_from_local.matrix3;
-        let scale_sq = m
-            .x_axis
-            .length_squared()
-            .max(m.y_axis.length_squared())
-            .max(m.z_axis.length_squared());
-        let center = instance.world_from_local.transform_point3(local.truncate());
-        center.extend(local.w * scale_sq.sqrt())
+        world_sphere_of(&self.meshes, instance)
     }
 
     /// `n` instances of `mesh_count` built-in meshes scattered in a ball around the
@@ -161,6 +172,18 @@ impl Scene {
             .collect();
         scene
     }
+}
+
+fn world_sphere_of(meshes: &[Mesh], instance: &Instance) -> Vec4 {
+    let local = meshes[instance.mesh as usize].bounds;
+    let m = instance.world_from_local.matrix3;
+    let scale_sq = m
+        .x_axis
+        .length_squared()
+        .max(m.y_axis.length_squared())
+        .max(m.z_axis.length_squared());
+    let center = instance.world_from_local.transform_point3(local.truncate());
+    center.extend(local.w * scale_sq.sqrt())
 }
 
 fn random_in_shell(rng: &mut Pcg64Mcg, inner: f32, outer: f32) -> Vec3 {

@@ -1,0 +1,137 @@
+//! Optional features forced off (the pipeline falls back or says clearly what it cannot
+//! do) and hostile transforms (dropped and counted, the rest untouched).
+
+use glam::{Affine3A, Vec3};
+use image::RgbaImage;
+use stereocull::Error;
+use stereocull::device::Gpu;
+use stereocull::profiling::GpuTimer;
+use stereocull::readback::read_rgba8;
+use stereocull::renderer::{CullMode, Renderer, RendererOptions, StereoMode};
+use stereocull::rig::Rig;
+use stereocull::scene::Scene;
+
+fn gpu_without(missing: wgpu::Features) -> Gpu {
+    let gpu = Gpu::headless_with(wgpu::Features::all() - missing)
+        .expect("no adapter: install mesa-vulkan-drivers (lavapipe)");
+    eprintln!("adapter: {}", gpu.adapter_line());
+    assert!(!gpu.device.features().intersects(missing));
+    gpu
+}
+
+fn rig() -> Rig {
+    let mut rig = Rig::preset("hmd").unwrap();
+    rig.displays[0].resolution = [160, 120];
+    rig
+}
+
+fn render(gpu: &Gpu, mode: StereoMode, cull: CullMode) -> Result<RgbaImage, Error> {
+    let scene = Scene::load("default")?;
+    let options = RendererOptions {
+        mode,
+        cull,
+        ..Default::default()
+    };
+    let mut renderer = Renderer::new(&gpu.device, &scene, &rig(), options)?;
+    let targets = renderer.create_targets(&gpu.device);
+    renderer.submit_frame(&gpu.device, &gpu.queue, &rig(), &targets)?;
+    read_rgba8(&gpu.device, &gpu.queue, &targets[0].color)
+}
+
+fn full() -> RgbaImage {
+    render(
+        &gpu_without(wgpu::Features::empty()),
+        StereoMode::Instanced,
+        CullMode::Gpu,
+    )
+    .unwrap()
+}
+
+#[test]
+fn without_indirect_count_the_fixed_count_draw_gives_the_same_image() {
+    let gpu = gpu_without(wgpu::Features::MULTI_DRAW_INDIRECT_COUNT);
+    let image = render(&gpu, StereoMode::Instanced, CullMode::Gpu).unwrap();
+    assert!(
+        image == full(),
+        "fixed-count multi-draw over zeroed draws differs"
+    );
+}
+
+#[test]
+fn without_first_instance_the_indirect_modes_say_so_and_the_classic_ones_still_draw() {
+    let gpu = gpu_without(wgpu::Features::INDIRECT_FIRST_INSTANCE);
+    let msg = render(&gpu, StereoMode::Instanced, CullMode::Gpu)
+        .unwrap_err()
+        .to_string();
+    assert!(msg.contains("INDIRECT_FIRST_INSTANCE"), "{msg}");
+    let image = render(&gpu, StereoMode::MultiPass, CullMode::Cpu).unwrap();
+    // Viewport versus clip-space remap: channels within 2 levels, as in tests/images.rs.
+    let far_off = image
+        .pixels()
+        .zip(full().pixels())
+        .filter(|(a, b)| (0..3).any(|c| a[c].abs_diff(b[c]) > 2))
+        .count();
+    assert_eq!(far_off, 0, "multi-pass differs from instanced");
+}
+
+#[test]
+fn without_multiview_that_mode_is_unavailable_with_a_clear_error() {
+    let gpu = gpu_without(wgpu::Features::MULTIVIEW);
+    let msg = render(&gpu, StereoMode::Multiview, CullMode::Gpu)
+        .unwrap_err()
+        .to_string();
+    assert!(msg.contains("multiview is unavailable"), "{msg}");
+}
+
+#[test]
+fn without_timestamps_there_is_no_gpu_timer() {
+    let gpu = gpu_without(wgpu::Features::TIMESTAMP_QUERY);
+    assert!(GpuTimer::new(&gpu.device, &gpu.queue, 4).is_none());
+}
+
+#[test]
+fn classic_modes_refuse_gpu_culling_with_a_reason() {
+    let gpu = gpu_without(wgpu::Features::empty());
+    let msg = render(&gpu, StereoMode::SinglePass, CullMode::Gpu)
+        .unwrap_err()
+        .to_string();
+    assert!(msg.contains("--cull cpu"), "{msg}");
+}
+
+#[test]
+fn non_finite_transforms_are_dropped_and_counted_and_the_rest_kept_in_order() {
+    let mut scene = Scene::procedural(50, 3, 7);
+    let kept: Vec<Vec3> = scene
+        .instances
+        .iter()
+        .enumerate()
+        .filter(|(i, _)| i % 10 != 3)
+        .map(|(_, inst)| inst.world_from_local.translation.into())
+        .collect();
+    for (i, inst) in scene.instances.iter_mut().enumerate() {
+        if i % 10 == 3 {
+            let bad = [f32::NAN, f32::INFINITY, f32::NEG_INFINITY][i % 3];
+            inst.world_from_local = Affine3A::from_translation(Vec3::new(bad, 0.0, 0.0));
+        }
+    }
+    assert_eq!(scene.drop_non_finite_instances(), 5);
+    let left: Vec<Vec3> = scene
+        .instances
+        .iter()
+        .map(|i| i.world_from_local.translation.into())
+        .collect();
+    assert_eq!(left, kept);
+}
+
+#[test]
+fn zero_scale_instances_cull_and_draw_without_nan() {
+    let mut scene = Scene::procedural(20, 2, 3);
+    scene.instances[0].world_from_local = Affine3A::from_scale(Vec3::ZERO);
+    assert_eq!(
+        scene.drop_non_finite_instances(),
+        0,
+        "zero scale is finite: kept"
+    );
+    let sphere = scene.world_sphere(&scene.instances[0]);
+    assert!(sphere.is_finite() && sphere.w == 0.0, "{sphere}");
+}
