@@ -10,12 +10,12 @@ pub const OPTIONAL_FEATURES: [(Features, &str, &str); 6] = [
     (
         Features::MULTI_DRAW_INDIRECT_COUNT,
         "multi_draw_indirect_count",
-        "fixed-count multi-draw; empty draws are skipped by the GPU",
+        "fixed-count multi-draw over zeroed draws (same image)",
     ),
     (
         Features::INDIRECT_FIRST_INSTANCE,
         "indirect_first_instance",
-        "GPU-driven drawing is unavailable (first_instance offsets)",
+        "instanced and multiview unavailable (per-mesh first_instance); the classic modes still draw",
     ),
     (
         Features::CLIP_DISTANCES,
