@@ -147,10 +147,11 @@ impl Rig {
 
     /// A preset name, or a `.json` / `.toml` rig file.
     pub fn load(spec: &str) -> Result<Rig> {
-        if PRESETS.contains(&spec) {
+        let path = Path::new(spec);
+        // A bare name that is no file is meant as a preset: say which ones exist.
+        if PRESETS.contains(&spec) || (path.extension().is_none() && !path.exists()) {
             return Rig::preset(spec);
         }
-        let path = Path::new(spec);
         let text = std::fs::read_to_string(path).map_err(|e| {
             Error::rig(
                 spec,
