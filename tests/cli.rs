@@ -89,17 +89,24 @@ fn cull_dumps_follow_the_contract_for_every_preset() {
     }
 }
 
-#[test]
-fn cull_dumps_the_shared_gltf_samples() {
+/// The shared Khronos samples (CI has them beside the clone): name and path.
+fn gltf_samples() -> Vec<(&'static str, String)> {
     let root = concat!(env!("CARGO_MANIFEST_DIR"), "/../shared/gltf-samples");
-    for name in [
+    [
         "Box",
         "BoxAnimated",
         "BoxTextured",
         "CesiumMilkTruck",
         "AlphaBlendModeTest",
-    ] {
-        let file = format!("{root}/{name}/{name}.glb");
+    ]
+    .into_iter()
+    .map(|name| (name, format!("{root}/{name}/{name}.glb")))
+    .collect()
+}
+
+#[test]
+fn cull_dumps_the_shared_gltf_samples() {
+    for (name, file) in gltf_samples() {
         // 5 m in front of each model, looking at it.
         let v = dump(&[
             "cull", "--scene", &file, "--rig", "hmd", "--viewer", "0,1,6",
@@ -216,16 +223,8 @@ fn render_writes_one_image_per_display_and_stats() {
 
 #[test]
 fn render_draws_the_shared_gltf_samples_in_both_eyes() {
-    let root = concat!(env!("CARGO_MANIFEST_DIR"), "/../shared/gltf-samples");
-    for name in [
-        "Box",
-        "BoxAnimated",
-        "BoxTextured",
-        "CesiumMilkTruck",
-        "AlphaBlendModeTest",
-    ] {
+    for (name, file) in gltf_samples() {
         let dir = tempfile::tempdir().unwrap();
-        let file = format!("{root}/{name}/{name}.glb");
         let args = [
             "render", "--scene", &file, "--viewer", "0,0.5,4", "--width", "64", "--height", "64",
         ];
