@@ -415,10 +415,12 @@ impl Renderer {
         };
         let writes = timer.as_deref_mut().and_then(|t| t.render("draw"));
         let mut pass = begin_pass(encoder, target, true, multiview, writes);
+        let counting = begin_statistics(timer, &mut pass);
         self.drawer
             .bind(&mut pass, key, &self.draw_scene, &state.draw_bind_group);
         self.drawer
             .draw_indirect(&mut pass, self.cull_scene.mesh_count, &state.cull);
+        GpuTimer::end_statistics(&mut pass, counting);
         1
     }
 
@@ -432,32 +434,36 @@ impl Renderer {
         timer: &mut Option<&mut GpuTimer>,
     ) -> u32 {
         let key = self.drawer.key(1);
-        if state.eyes.is_empty() {
+        if state.eyes.is_empty() || self.mode == StereoMode::SinglePass {
             let writes = timer.as_deref_mut().and_then(|t| t.render("draw"));
             let mut pass = begin_pass(encoder, target, true, false, writes);
-            self.drawer
-                .bind(&mut pass, key, &self.draw_scene, &state.draw_bind_group);
-            return instance_draws(&culls[0])
-                .map(|d| draw(&mut pass, d))
-                .count() as u32;
-        }
-        if self.mode == StereoMode::SinglePass {
-            let writes = timer.as_deref_mut().and_then(|t| t.render("draw"));
-            let mut pass = begin_pass(encoder, target, true, false, writes);
-            self.drawer
-                .bind(&mut pass, key, &self.draw_scene, &state.eyes[0].bind_group);
-            return single_pass_cadence(&mut pass, &culls[0], &state.eyes, state.eye_size);
+            let counting = begin_statistics(timer, &mut pass);
+            let calls = if state.eyes.is_empty() {
+                self.drawer
+                    .bind(&mut pass, key, &self.draw_scene, &state.draw_bind_group);
+                instance_draws(&culls[0])
+                    .map(|d| draw(&mut pass, d))
+                    .count() as u32
+            } else {
+                self.drawer
+                    .bind(&mut pass, key, &self.draw_scene, &state.eyes[0].bind_group);
+                single_pass_cadence(&mut pass, &culls[0], &state.eyes, state.eye_size)
+            };
+            GpuTimer::end_statistics(&mut pass, counting);
+            return calls;
         }
         let mut calls = 0;
         for (e, eye) in state.eyes.iter().enumerate() {
             let writes = timer.as_deref_mut().and_then(|t| t.render("draw"));
             let mut pass = begin_pass(encoder, target, e == 0, false, writes);
+            let counting = begin_statistics(timer, &mut pass);
             self.drawer
                 .bind(&mut pass, key, &self.draw_scene, &eye.bind_group);
             set_eye_viewport(&mut pass, e as u32, state.eye_size);
             calls += instance_draws(&culls[e.min(culls.len() - 1)])
                 .map(|d| draw(&mut pass, d))
                 .count() as u32;
+            GpuTimer::end_statistics(&mut pass, counting);
         }
         calls
     }
@@ -604,6 +610,12 @@ impl Renderer {
             })
             .collect()
     }
+}
+
+fn begin_statistics(timer: &mut Option<&mut GpuTimer>, pass: &mut wgpu::RenderPass) -> bool {
+    timer
+        .as_deref_mut()
+        .is_some_and(|t| t.begin_statistics(pass))
 }
 
 fn write(queue: &wgpu::Queue, buffer: &wgpu::Buffer, bytes: &[u8]) -> u64 {

@@ -73,6 +73,9 @@ pub struct Row {
     pub submit_ms_median: f64,
     pub gpu_cull_ms_median: Option<f64>,
     pub gpu_draw_ms_median: Option<f64>,
+    /// Pipeline statistics of the draw passes (last frame); `None` where unavailable.
+    pub vertex_invocations: Option<u64>,
+    pub clipper_primitives: Option<u64>,
     pub indirect_validation: bool,
 }
 
@@ -201,7 +204,7 @@ fn measure(
         gpu.device
             .poll(wgpu::PollType::wait_indefinitely())
             .map_err(|e| Error::Readback(e.to_string()))?;
-        let passes = match timer.as_deref_mut() {
+        let queries = match timer.as_deref_mut() {
             Some(t) => Some(t.read(&gpu.device, &gpu.queue)?),
             None => None,
         };
@@ -215,16 +218,18 @@ fn measure(
         samples.upload.push(prepared.cpu_upload.as_secs_f64() * 1e3);
         samples.encode.push(ms(encode_start, submit_start));
         samples.submit.push(ms(submit_start, end));
-        if let Some(p) = passes {
+        if let Some(q) = queries {
             let of = |label| {
-                p.iter()
+                q.passes
+                    .iter()
                     .filter(|(l, _)| *l == label)
                     .map(|(_, v)| v)
                     .sum::<f64>()
             };
             samples.gpu_cull.push(of("cull"));
             samples.gpu_draw.push(of("draw"));
-            samples.gpu.push(p.iter().map(|(_, v)| v).sum());
+            samples.gpu.push(q.passes.iter().map(|(_, v)| v).sum());
+            samples.statistics = q.vertex_invocations.zip(q.clipper_primitives);
         }
         samples.last = (
             recorded.draw_calls,
@@ -253,6 +258,8 @@ fn measure(
         submit_ms_median: med(&samples.submit),
         gpu_cull_ms_median: gpu_med(&samples.gpu_cull),
         gpu_draw_ms_median: gpu_med(&samples.gpu_draw),
+        vertex_invocations: samples.statistics.map(|s| s.0),
+        clipper_primitives: samples.statistics.map(|s| s.1),
         indirect_validation: gpu.indirect_validation(),
     })
 }
@@ -269,6 +276,8 @@ struct Samples {
     gpu_draw: Vec<f64>,
     /// Draw calls, dispatches and bytes uploaded of the last frame (the same every frame).
     last: (u32, u32, u64),
+    /// Vertex-shader invocations and clipped primitives of the last frame.
+    statistics: Option<(u64, u64)>,
 }
 
 fn opt(v: Option<f64>) -> String {
@@ -284,7 +293,7 @@ fn print_table(rows: &[Row]) {
         );
     }
     println!(
-        "{:>14} {:>13} {:>4} {:>9} | {:>9} {:>9} | {:>9} {:>9} | {:>8} {:>8} {:>8} {:>8} | {:>9} {:>5} {:>10}",
+        "{:>14} {:>13} {:>4} {:>9} | {:>9} {:>9} | {:>9} {:>9} | {:>8} {:>8} {:>8} {:>8} | {:>9} {:>5} {:>10} | {:>11} {:>11}",
         "rig",
         "mode",
         "cull",
@@ -299,14 +308,16 @@ fn print_table(rows: &[Row]) {
         "submit",
         "draws",
         "disp",
-        "uploaded"
+        "uploaded",
+        "vs invoc",
+        "clip prims"
     );
     for r in rows {
         let rig = std::path::Path::new(&r.rig)
             .file_stem()
             .map_or(r.rig.clone(), |s| s.to_string_lossy().into());
         println!(
-            "{:>14} {:>13} {:>4} {:>9} | {:>9.3} {:>9.3} | {:>9} {:>9} | {:>8.3} {:>8.3} {:>8.3} {:>8.3} | {:>9} {:>5} {:>10}",
+            "{:>14} {:>13} {:>4} {:>9} | {:>9.3} {:>9.3} | {:>9} {:>9} | {:>8.3} {:>8.3} {:>8.3} {:>8.3} | {:>9} {:>5} {:>10} | {:>11} {:>11}",
             rig,
             r.mode.name(),
             format!("{:?}", r.cull).to_lowercase(),
@@ -321,9 +332,15 @@ fn print_table(rows: &[Row]) {
             r.submit_ms_median,
             r.draw_calls,
             r.dispatches,
-            r.bytes_uploaded
+            r.bytes_uploaded,
+            count(r.vertex_invocations),
+            count(r.clipper_primitives)
         );
     }
+}
+
+fn count(v: Option<u64>) -> String {
+    v.map_or("n/a".into(), |x| x.to_string())
 }
 
 fn write_csv(path: &std::path::Path, rows: &[Row]) -> Result<()> {
