@@ -35,6 +35,7 @@ pub fn import_bytes(bytes: &[u8], base: Option<&Path>, origin: &Path) -> Result<
     let gltf = gltf::Gltf::from_slice(bytes).map_err(|e| fail(format!("not valid glTF: {e}")))?;
     let buffers = gltf::import_buffers(&gltf.document, base, gltf.blob.clone())
         .map_err(|e| fail(format!("buffer: {e}")))?;
+    check_images(&gltf.document, base).map_err(&fail)?;
     let mut importer = Importer {
         document: &gltf.document,
         buffers: &buffers,
@@ -221,6 +222,26 @@ impl Importer<'_> {
             .collect();
         Ok((vertices, indices))
     }
+}
+
+/// Images are not drawn (the color is `baseColorFactor`), but a file whose external
+/// images are missing is broken: say so rather than render it silently.
+fn check_images(document: &Document, base: Option<&Path>) -> Step<()> {
+    for image in document.images() {
+        if let gltf::image::Source::Uri { uri, .. } = image.source()
+            && !uri.starts_with("data:")
+        {
+            let path = base.unwrap_or(Path::new(".")).join(uri);
+            if !path.exists() {
+                return Err(format!(
+                    "image {}: {} does not exist",
+                    image.index(),
+                    path.display()
+                ));
+            }
+        }
+    }
+    Ok(())
 }
 
 /// Area-weighted vertex normals for primitives that carry none.

@@ -138,6 +138,17 @@ fn truncated_garbage_and_missing_buffers_give_typed_errors() {
     let msg = scene_error(&p);
     assert!(msg.contains("buffer"), "{msg}");
 
+    let p = dir.path().join("missing-image.gltf");
+    std::fs::write(dir.path().join("tri.bin"), [0u8; 72]).unwrap();
+    let json = gltf_json(r#""uri": "tri.bin""#, "").replacen(
+        "\"scene\": 0,",
+        "\"scene\": 0, \"images\": [{\"uri\": \"gone.png\"}],",
+        1,
+    );
+    std::fs::write(&p, json).unwrap();
+    let msg = scene_error(&p);
+    assert!(msg.contains("image 0") && msg.contains("gone.png"), "{msg}");
+
     let msg = scene_error(&dir.path().join("no-such-file.glb"));
     assert!(msg.contains("no-such-file.glb"), "{msg}");
 }

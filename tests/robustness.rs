@@ -135,3 +135,24 @@ fn zero_scale_instances_cull_and_draw_without_nan() {
     let sphere = scene.world_sphere(&scene.instances[0]);
     assert!(sphere.is_finite() && sphere.w == 0.0, "{sphere}");
 }
+
+#[test]
+fn more_instances_than_one_binding_holds_stop_up_front_with_the_numbers() {
+    let gpu = gpu_without(wgpu::Features::empty());
+    let limits = gpu.device.limits();
+    let max = limits
+        .max_storage_buffer_binding_size
+        .min(limits.max_buffer_size);
+    let mut scene = Scene::procedural(1, 1, 1);
+    let too_many = (max / 64 + 1) as usize;
+    scene.instances = vec![scene.instances[0]; too_many];
+    let err = Renderer::new(&gpu.device, &scene, &rig(), RendererOptions::default())
+        .err()
+        .expect("accepted");
+    let msg = err.to_string();
+    assert!(matches!(err, Error::Limits(_)), "{msg}");
+    assert!(
+        msg.contains(&max.to_string()) && msg.contains(&too_many.to_string()),
+        "{msg}"
+    );
+}

@@ -56,6 +56,10 @@ struct Summary {
     dispatches_per_frame: u32,
     bytes_uploaded_per_frame: u64,
     gpu_bytes_per_instance: u64,
+    /// Resident memory of this process after the first frame and after the last (Linux),
+    /// for soak runs: growth means a leak.
+    rss_kib_first_frame: Option<u64>,
+    rss_kib_last_frame: Option<u64>,
 }
 
 pub fn stress(args: &StressArgs) -> Result<()> {
@@ -71,6 +75,7 @@ pub fn stress(args: &StressArgs) -> Result<()> {
     );
     let base = session.rig.viewer;
     let mut records = Vec::new();
+    let mut rss = (None, None);
     for frame in 0..args.frames {
         // Look around and sway, so that culling sees a different view every frame.
         let phase = frame as f32 / args.frames.max(1) as f32 * std::f32::consts::TAU;
@@ -107,9 +112,17 @@ pub fn stress(args: &StressArgs) -> Result<()> {
         }
         bar.inc(1);
         records.push(record);
+        if frame == 0 {
+            rss.0 = resident_kib();
+        }
     }
     bar.finish_and_clear();
-    let summary = summarize(&session, args, &records);
+    rss.1 = resident_kib();
+    let summary = Summary {
+        rss_kib_first_frame: rss.0,
+        rss_kib_last_frame: rss.1,
+        ..summarize(&session, args, &records)
+    };
     if args.json {
         let all = serde_json::json!({ "frames": records, "summary": summary });
         println!("{all}");
@@ -147,7 +160,16 @@ fn summarize(session: &Session, args: &StressArgs, records: &[FrameRecord]) -> S
         dispatches_per_frame: last.map_or(0, |r| r.dispatches),
         bytes_uploaded_per_frame: last.map_or(0, |r| r.bytes_uploaded),
         gpu_bytes_per_instance: session.renderer.gpu_bytes_per_instance(),
+        rss_kib_first_frame: None,
+        rss_kib_last_frame: None,
     }
+}
+
+/// VmRSS from /proc/self/status; `None` where there is no such file.
+fn resident_kib() -> Option<u64> {
+    let status = std::fs::read_to_string("/proc/self/status").ok()?;
+    let line = status.lines().find(|l| l.starts_with("VmRSS:"))?;
+    line.split_whitespace().nth(1)?.parse().ok()
 }
 
 fn print_summary(s: &Summary) {
@@ -166,6 +188,9 @@ fn print_summary(s: &Summary) {
     );
     for (name, v) in s.displays.iter().zip(&s.visible_mean) {
         println!("  {name:>18}: {v:.0} visible on average");
+    }
+    if let (Some(a), Some(b)) = (s.rss_kib_first_frame, s.rss_kib_last_frame) {
+        println!("process memory (RSS): {a} KiB after the first frame, {b} KiB after the last");
     }
     println!(
         "per frame: {} draw calls, {} dispatches, {} bytes uploaded; GPU memory {} bytes per instance",
