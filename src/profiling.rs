@@ -2,7 +2,7 @@
 //! passes, and the percentiles the reports use.
 
 use crate::error::Result;
-use crate::readback::read_buffer;
+use crate::readback::read_pod;
 
 /// Timestamp pairs around passes, resolved once per frame. `None` from [`GpuTimer::new`]
 /// when the device has no `TIMESTAMP_QUERY`: reports then say so instead of printing zeros.
@@ -144,12 +144,7 @@ impl GpuTimer {
         let mut frame = FrameQueries::default();
         let used = 2 * self.labels.len() as u64;
         if used > 0 {
-            let ticks: Vec<u64> = bytemuck::pod_collect_to_vec(&read_buffer(
-                device,
-                queue,
-                &self.resolved,
-                8 * used,
-            )?);
+            let ticks: Vec<u64> = read_pod(device, queue, &self.resolved, 8 * used)?;
             for (label, pair) in self.labels.drain(..).zip(ticks.chunks_exact(2)) {
                 let ms = pair[1].saturating_sub(pair[0]) as f64 * self.period as f64 * 1e-6;
                 match frame.passes.iter_mut().find(|(l, _)| *l == label) {
@@ -161,12 +156,7 @@ impl GpuTimer {
         if let Some(s) = self.statistics.as_mut() {
             let counts: Vec<u64> = match s.used {
                 0 => Vec::new(),
-                n => bytemuck::pod_collect_to_vec(&read_buffer(
-                    device,
-                    queue,
-                    &s.resolved,
-                    16 * n as u64,
-                )?),
+                n => read_pod(device, queue, &s.resolved, 16 * n as u64)?,
             };
             frame.vertex_invocations = Some(counts.iter().step_by(2).sum());
             frame.clipper_primitives = Some(counts.iter().skip(1).step_by(2).sum());

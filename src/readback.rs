@@ -21,6 +21,18 @@ pub fn read_buffer(
     map(device, &staging, size)
 }
 
+/// [`read_buffer`], as a vector of `T` (`size` must be a multiple of its size).
+pub fn read_pod<T: bytemuck::Pod>(
+    device: &wgpu::Device,
+    queue: &wgpu::Queue,
+    buffer: &wgpu::Buffer,
+    size: u64,
+) -> Result<Vec<T>> {
+    Ok(bytemuck::pod_collect_to_vec(&read_buffer(
+        device, queue, buffer, size,
+    )?))
+}
+
 fn map(device: &wgpu::Device, staging: &wgpu::Buffer, size: u64) -> Result<Vec<u8>> {
     let (sender, receiver) = std::sync::mpsc::channel();
     staging.map_async(wgpu::MapMode::Read, .., move |r| {

@@ -32,14 +32,14 @@ use std::time::{Duration, Instant};
 use crate::contexts::{DisplayContext, uniform_bytes};
 use crate::cull::gpu::{COUNT_BYTES, CullScene, CullTargets, GpuCuller};
 use crate::cull::{CullOutput, cpu};
-use crate::draw::{DEPTH_FORMAT, DrawScene, Drawer, begin_pass, set_eye_viewport};
+use crate::draw::{DEPTH_FORMAT, DrawFeatures, DrawScene, Drawer, begin_pass, set_eye_viewport};
 use crate::error::{Error, Result};
 pub use crate::modes::StereoMode;
 use crate::profiling::GpuTimer;
-use crate::readback::read_buffer;
+use crate::readback::read_pod;
 use crate::records::{CullLayout, DrawArgs};
 use crate::rig::Rig;
-use crate::scene::Scene;
+use crate::scene::{Scene, Vertex};
 use crate::shaders::DrawKey;
 
 /// Where the per-display cull runs.
@@ -561,25 +561,16 @@ impl Renderer {
         index: usize,
     ) -> Result<CullOutput> {
         let cull = &self.displays[index].cull;
-        let count: Vec<u32> =
-            bytemuck::pod_collect_to_vec(&read_buffer(device, queue, &cull.count, COUNT_BYTES)?);
-        let visible = if count[1] == 0 {
-            Vec::new()
-        } else {
-            bytemuck::pod_collect_to_vec(&read_buffer(
-                device,
-                queue,
-                &cull.visible,
-                4 * count[1] as u64,
-            )?)
+        let [draw_count, visible_total] = read_counts(device, queue, cull)?;
+        let visible = match visible_total {
+            0 => Vec::new(),
+            n => read_pod(device, queue, &cull.visible, 4 * n as u64)?,
         };
         let draws_bytes = (size_of::<DrawArgs>() as u32 * self.cull_scene.mesh_count) as u64;
-        let draws =
-            bytemuck::pod_collect_to_vec(&read_buffer(device, queue, &cull.draws, draws_bytes)?);
         Ok(CullOutput {
             visible,
-            draws,
-            draw_count: count[0],
+            draws: read_pod(device, queue, &cull.draws, draws_bytes)?,
+            draw_count,
         })
     }
 
@@ -599,17 +590,15 @@ impl Renderer {
         }
         self.displays
             .iter()
-            .map(|d| {
-                let count: Vec<u32> = bytemuck::pod_collect_to_vec(&read_buffer(
-                    device,
-                    queue,
-                    &d.cull.count,
-                    COUNT_BYTES,
-                )?);
-                Ok(count[1])
-            })
+            .map(|d| Ok(read_counts(device, queue, &d.cull)?[1]))
             .collect()
     }
+}
+
+/// The count buffer: the draw count and the visible total.
+fn read_counts(device: &wgpu::Device, queue: &wgpu::Queue, cull: &CullTargets) -> Result<[u32; 2]> {
+    let counts: Vec<u32> = read_pod(device, queue, &cull.count, COUNT_BYTES)?;
+    Ok([counts[0], counts[1]])
 }
 
 fn begin_statistics(timer: &mut Option<&mut GpuTimer>, pass: &mut wgpu::RenderPass) -> bool {
@@ -668,7 +657,7 @@ fn single_pass_cadence(
 
 /// The draw variants a rig needs in a mode.
 fn draw_keys(device: &wgpu::Device, rig: &Rig, mode: StereoMode) -> Vec<DrawKey> {
-    let clip = device.features().contains(wgpu::Features::CLIP_DISTANCES);
+    let clip = DrawFeatures::of(device).clip_distances;
     let mut keys: Vec<DrawKey> = rig
         .displays
         .iter()
@@ -703,19 +692,25 @@ fn check_device(device: &wgpu::Device, scene: &Scene, options: RendererOptions) 
         ));
     }
     let limits = device.limits();
-    let largest = [
-        DrawScene::BYTES_PER_INSTANCE * scene.instances.len() as u64,
-        24 * scene.vertices.len() as u64,
-        4 * scene.indices.len() as u64,
+    let buffers = [
+        (
+            "instance records",
+            DrawScene::BYTES_PER_INSTANCE,
+            scene.instances.len(),
+        ),
+        ("vertices", size_of::<Vertex>() as u64, scene.vertices.len()),
+        ("indices", size_of::<u32>() as u64, scene.indices.len()),
     ];
     let max = limits
         .max_storage_buffer_binding_size
         .min(limits.max_buffer_size);
-    if let Some(big) = largest.iter().find(|&&b| b > max) {
-        return Err(Error::Limits(format!(
-            "the scene needs a {big}-byte buffer but the device allows {max} ({} instances)",
-            scene.instances.len()
-        )));
+    for (what, size, count) in buffers {
+        let bytes = size * count as u64;
+        if bytes > max {
+            return Err(Error::Limits(format!(
+                "the scene's {count} {what} need a {bytes}-byte buffer but the device allows {max}"
+            )));
+        }
     }
     Ok(())
 }
