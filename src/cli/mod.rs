@@ -188,13 +188,10 @@ fn cull(args: &CullArgs) -> Result<()> {
     let scene = Scene::load(&args.scene.scene)?;
     let outputs = match args.cull {
         CullMode::Cpu => {
-            let layout = CullLayout::new(&scene);
-            (0..rig.displays.len())
-                .map(|i| {
-                    let ctx = DisplayContext::new(&rig, i)?;
-                    Ok(cpu::cull(&layout, &ctx.planes, ctx.views))
-                })
-                .collect::<Result<Vec<_>>>()?
+            let displays = (0..rig.displays.len())
+                .map(|i| DisplayContext::new(&rig, i).map(|ctx| (ctx.planes, ctx.views)))
+                .collect::<Result<Vec<_>>>()?;
+            cpu::cull_many(&CullLayout::new(&scene), &displays)
         }
         CullMode::Gpu => gpu_cull(&rig, &scene)?,
     };

@@ -118,11 +118,7 @@ pub fn stress(args: &StressArgs) -> Result<()> {
     }
     bar.finish_and_clear();
     rss.1 = resident_kib();
-    let summary = Summary {
-        rss_kib_first_frame: rss.0,
-        rss_kib_last_frame: rss.1,
-        ..summarize(&session, args, &records)
-    };
+    let summary = summarize(&session, args, &records, rss);
     if args.json {
         let all = serde_json::json!({ "frames": records, "summary": summary });
         println!("{all}");
@@ -132,7 +128,12 @@ pub fn stress(args: &StressArgs) -> Result<()> {
     Ok(())
 }
 
-fn summarize(session: &Session, args: &StressArgs, records: &[FrameRecord]) -> Summary {
+fn summarize(
+    session: &Session,
+    args: &StressArgs,
+    records: &[FrameRecord],
+    (rss_kib_first_frame, rss_kib_last_frame): (Option<u64>, Option<u64>),
+) -> Summary {
     let cpu: Vec<f64> = records.iter().map(|r| r.cpu_ms).collect();
     let frame: Vec<f64> = records.iter().map(|r| r.frame_ms).collect();
     let displays = session.rig.displays.len();
@@ -160,8 +161,8 @@ fn summarize(session: &Session, args: &StressArgs, records: &[FrameRecord]) -> S
         dispatches_per_frame: last.map_or(0, |r| r.dispatches),
         bytes_uploaded_per_frame: last.map_or(0, |r| r.bytes_uploaded),
         gpu_bytes_per_instance: session.renderer.gpu_bytes_per_instance(),
-        rss_kib_first_frame: None,
-        rss_kib_last_frame: None,
+        rss_kib_first_frame,
+        rss_kib_last_frame,
     }
 }
 
