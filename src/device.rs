@@ -1,6 +1,8 @@
 //! A headless device for the CLI, tests and benches. Embedders bring their own
 //! `wgpu::Device` instead and never need this module.
 
+use std::sync::{Arc, Mutex};
+
 use wgpu::Features;
 
 use crate::error::{Error, Result};
@@ -10,22 +12,22 @@ pub const OPTIONAL_FEATURES: [(Features, &str, &str); 6] = [
     (
         Features::MULTI_DRAW_INDIRECT_COUNT,
         "multi_draw_indirect_count",
-        "fixed-count multi-draw over zeroed draws (same image)",
+        "fixed-count multi-draw over every mesh's draw, zeroed when culled: the GPU walks one draw per mesh each frame (same image)",
     ),
     (
         Features::INDIRECT_FIRST_INSTANCE,
         "indirect_first_instance",
-        "instanced and multiview unavailable (per-mesh first_instance); the classic modes still draw",
+        "instanced and multiview unavailable (they need per-mesh first_instance); the classic modes draw with one CPU call per instance",
     ),
     (
         Features::CLIP_DISTANCES,
         "clip_distances",
-        "eyes kept in their half by a fragment discard",
+        "eyes kept in their half by a fragment discard: triangles crossing the seam are shaded, then discarded (same image)",
     ),
     (
         Features::MULTIVIEW,
         "multiview",
-        "the multiview mode is unavailable",
+        "the multiview mode is unavailable (instanced draws both eyes anyway)",
     ),
     (
         Features::TIMESTAMP_QUERY,
@@ -39,6 +41,42 @@ pub const OPTIONAL_FEATURES: [(Features, &str, &str); 6] = [
     ),
 ];
 
+/// How much of the stereo pipeline a device runs as designed.
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+pub enum Tier {
+    /// Every drawing feature present: one indirect-count draw per display, hardware
+    /// clip distances at the seam, multiview available.
+    Full,
+    /// The GPU-driven instanced path runs, with one or more fallbacks.
+    GpuDriven,
+    /// No first-instance in indirect draws: only the classic per-eye modes run.
+    Classic,
+}
+
+impl Tier {
+    pub fn of(features: Features) -> Tier {
+        let drawing = Features::MULTI_DRAW_INDIRECT_COUNT
+            | Features::INDIRECT_FIRST_INSTANCE
+            | Features::CLIP_DISTANCES
+            | Features::MULTIVIEW;
+        if features.contains(drawing) {
+            Tier::Full
+        } else if features.contains(Features::INDIRECT_FIRST_INSTANCE) {
+            Tier::GpuDriven
+        } else {
+            Tier::Classic
+        }
+    }
+
+    pub fn name(self) -> &'static str {
+        match self {
+            Tier::Full => "full (GPU-driven stereo, no fallbacks)",
+            Tier::GpuDriven => "gpu-driven with fallbacks",
+            Tier::Classic => "classic (per-eye modes only)",
+        }
+    }
+}
+
 /// The adapter, device and queue that the CLI and tests use.
 pub struct Gpu {
     pub adapter: wgpu::Adapter,
@@ -48,6 +86,10 @@ pub struct Gpu {
     /// (`VALIDATION_INDIRECT_CALL`, on by default, off with
     /// `WGPU_VALIDATION_INDIRECT_CALL=0`) matters for GPU timings.
     pub flags: wgpu::InstanceFlags,
+    /// Keeps the instance alive for [`Gpu::live_resources`].
+    pub instance: wgpu::Instance,
+    /// Set by the device-lost callback: why the device was lost.
+    lost: Arc<Mutex<Option<String>>>,
 }
 
 impl Gpu {
@@ -55,17 +97,22 @@ impl Gpu {
     /// real GPUs over software ones, and opens a device with every optional feature the
     /// adapter has and the adapter's own limits (large scenes need large buffers).
     pub fn headless() -> Result<Gpu> {
-        pollster::block_on(Self::headless_async(Features::all()))
+        Self::headless_on(None, Features::all())
     }
 
     /// As [`Gpu::headless`], but never enables optional features outside `allowed`
     /// (to test the fallback tiers).
     pub fn headless_with(allowed: Features) -> Result<Gpu> {
-        pollster::block_on(Self::headless_async(allowed))
+        Self::headless_on(None, allowed)
     }
 
-    async fn headless_async(allowed: Features) -> Result<Gpu> {
-        let (adapter, flags) = find_adapter().await?;
+    /// As [`Gpu::headless_with`], on `backends` when given (else as `WGPU_BACKEND` says).
+    pub fn headless_on(backends: Option<wgpu::Backends>, allowed: Features) -> Result<Gpu> {
+        pollster::block_on(Self::headless_async(backends, allowed))
+    }
+
+    async fn headless_async(backends: Option<wgpu::Backends>, allowed: Features) -> Result<Gpu> {
+        let (instance, adapter, flags) = find_adapter(backends).await?;
         let optional = OPTIONAL_FEATURES
             .iter()
             .map(|(f, ..)| *f)
@@ -86,12 +133,49 @@ impl Gpu {
             info.backend,
             info.driver
         );
+        let lost = Arc::new(Mutex::new(None));
+        let sink = Arc::clone(&lost);
+        device.set_device_lost_callback(move |reason, message| {
+            if let Ok(mut lost) = sink.lock() {
+                *lost = Some(format!("{reason:?} {message}").trim_end().to_string());
+            }
+        });
         Ok(Gpu {
             adapter,
             device,
             queue,
             flags,
+            instance,
+            lost,
         })
+    }
+
+    /// `Err(Error::DeviceLost)` once the device has been lost (wgpu reports it at the
+    /// next poll): loops check it each frame so that a lost device ends the run with its
+    /// reason instead of drawing nothing forever.
+    pub fn check_lost(&self) -> Result<()> {
+        // The poll's own result says nothing new: a lost device polls as empty.
+        let _ = self.device.poll(wgpu::PollType::Poll);
+        match self.lost.lock().ok().and_then(|l| l.clone()) {
+            Some(reason) => Err(Error::DeviceLost(reason)),
+            None => Ok(()),
+        }
+    }
+
+    /// Live wgpu objects (buffers, textures, views, bind groups, query sets, command
+    /// buffers) held by this instance: the soak test's measure of GPU allocations, which
+    /// must not grow from frame to frame.
+    pub fn live_resources(&self) -> Option<usize> {
+        let hub = self.instance.generate_report()?.hub;
+        let kept = [
+            hub.buffers,
+            hub.textures,
+            hub.texture_views,
+            hub.bind_groups,
+            hub.query_sets,
+            hub.command_buffers,
+        ];
+        Some(kept.iter().map(|r| r.num_allocated).sum())
     }
 
     pub fn indirect_validation(&self) -> bool {
@@ -109,10 +193,12 @@ impl Gpu {
     }
 }
 
-/// `WGPU_BACKEND` when set; otherwise the primary backends, then GL only if they have
+/// `backends` or `WGPU_BACKEND` when set; otherwise the primary backends, then GL only if they have
 /// no adapter (probing EGL is slow and noisy where Vulkan works).
-async fn find_adapter() -> Result<(wgpu::Adapter, wgpu::InstanceFlags)> {
-    let from_env = wgpu::Backends::from_env();
+async fn find_adapter(
+    backends: Option<wgpu::Backends>,
+) -> Result<(wgpu::Instance, wgpu::Adapter, wgpu::InstanceFlags)> {
+    let from_env = backends.or_else(wgpu::Backends::from_env);
     let tries = match from_env {
         Some(b) => vec![b],
         None => vec![wgpu::Backends::PRIMARY, wgpu::Backends::GL],
@@ -125,7 +211,7 @@ async fn find_adapter() -> Result<(wgpu::Adapter, wgpu::InstanceFlags)> {
         let instance = wgpu::Instance::new(descriptor);
         match choose_adapter(instance.enumerate_adapters(backends).await, backends) {
             Err(Error::NoAdapter { .. }) => last = Some(backends),
-            other => return other.map(|a| (a, flags)),
+            other => return other.map(|a| (instance, a, flags)),
         }
     }
     Err(Error::NoAdapter {

@@ -46,6 +46,10 @@ pub enum Error {
     #[error("GPU readback failed: {0}")]
     Readback(String),
 
+    /// The device was lost (driver reset, removal, or destroyed).
+    #[error("the GPU device was lost: {0}")]
+    DeviceLost(String),
+
     /// wgpu reported a validation or out-of-memory error inside an error scope.
     #[error("wgpu: {0}")]
     Wgpu(#[from] wgpu::Error),
@@ -66,6 +70,16 @@ pub enum Error {
 }
 
 impl Error {
+    /// The message on one line: wgpu's errors span several ("Caused by: ...").
+    pub fn one_line(&self) -> String {
+        self.to_string()
+            .lines()
+            .map(str::trim)
+            .filter(|l| !l.is_empty())
+            .collect::<Vec<_>>()
+            .join(" ")
+    }
+
     pub(crate) fn rig(origin: impl Into<String>, message: impl Into<String>) -> Self {
         Error::Rig {
             origin: origin.into(),

@@ -3,7 +3,7 @@ fn main() -> std::process::ExitCode {
     match stereocull::cli::run() {
         Ok(()) => std::process::ExitCode::SUCCESS,
         Err(e) => {
-            eprintln!("stereocull: {e}");
+            eprintln!("stereocull: {}", e.one_line());
             std::process::ExitCode::FAILURE
         }
     }

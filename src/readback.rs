@@ -35,10 +35,17 @@ pub fn read_pod<T: bytemuck::Pod>(
 
 fn map(device: &wgpu::Device, staging: &wgpu::Buffer, size: u64) -> Result<Vec<u8>> {
     let (sender, receiver) = std::sync::mpsc::channel();
+    // On a lost device the staging buffer is invalid and map_async raises a validation
+    // error, which without a scope would reach the (by default panicking) uncaptured
+    // error handler: the scope turns it into this function's error.
+    let scope = device.push_error_scope(wgpu::ErrorFilter::Validation);
     staging.map_async(wgpu::MapMode::Read, .., move |r| {
         // The receiver outlives the poll below; a failed send cannot happen.
         let _ = sender.send(r);
     });
+    if let Some(e) = pollster::block_on(scope.pop()) {
+        return Err(Error::Readback(format!("{e} (was the device lost?)")));
+    }
     device
         .poll(wgpu::PollType::wait_indefinitely())
         .map_err(|e| Error::Readback(e.to_string()))?;

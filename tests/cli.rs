@@ -23,6 +23,31 @@ fn info_names_the_adapter() {
     );
     assert!(text.starts_with("adapter: ") && text.len() > 20, "{text}");
     assert!(text.contains("multi_draw_indirect_count"), "{text}");
+    assert!(
+        text.contains("\ntier: full"),
+        "lavapipe has every feature: {text}"
+    );
+}
+
+/// The GL backend lacks indirect count and multiview: `info` names the tier and costs.
+#[test]
+fn info_on_gl_names_the_fallback_tier_and_its_costs() {
+    let out = Command::new(env!("CARGO_BIN_EXE_stereocull"))
+        .arg("info")
+        .env("WGPU_BACKEND", "gl")
+        .output()
+        .unwrap();
+    let text = String::from_utf8_lossy(&out.stdout);
+    assert!(
+        out.status.success(),
+        "no GL adapter: CI must install libegl1 libgl1-mesa-dri"
+    );
+    assert!(text.contains("(Gl, "), "{text}");
+    assert!(text.contains("\ntier: gpu-driven with fallbacks"), "{text}");
+    assert!(
+        text.contains("multi_draw_indirect_count    no  (costs: "),
+        "{text}"
+    );
 }
 
 /// Checks one display's dump against the contract and returns its visible count.

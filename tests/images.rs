@@ -307,3 +307,51 @@ fn every_stereo_mode_agrees_with_instanced() {
         }
     }
 }
+
+/// wgpu's GL backend over Mesa's llvmpipe (needs `libegl1` and `libgl1-mesa-dri`, which
+/// `.ci/run` installs): no indirect count and no multiview there, so this also runs the
+/// fixed-count fallback on a second API. Every mode it has draws the Vulkan image.
+#[test]
+fn the_gl_backend_draws_the_vulkan_image() {
+    let gl = Gpu::headless_on(Some(wgpu::Backends::GL), wgpu::Features::all())
+        .expect("no GL adapter: install libegl1 and libgl1-mesa-dri");
+    eprintln!("GL adapter: {}", gl.adapter_line());
+    assert!(
+        !gl.device
+            .features()
+            .contains(wgpu::Features::MULTI_DRAW_INDIRECT_COUNT),
+        "GL has no indirect count, so the fixed-count fallback runs here"
+    );
+    let vulkan = gpu_with(wgpu::Features::all());
+    let scene = Scene::load("default").unwrap();
+    for preset in ["hmd", "cave"] {
+        let rig = sized(preset);
+        let reference = render(&vulkan, &scene, &rig, CullMode::Gpu);
+        let modes = StereoMode::ALL
+            .into_iter()
+            .filter(|m| *m != StereoMode::Multiview);
+        for mode in modes {
+            let cull = if mode.per_instance() {
+                CullMode::Cpu
+            } else {
+                CullMode::Gpu
+            };
+            let images = render_mode(&gl, &scene, &rig, cull, mode);
+            for (d, (actual, want)) in images.iter().zip(&reference).enumerate() {
+                let (count, diff) = differing(actual, want, LEVELS);
+                let share = count as f64 / (actual.width() * actual.height()) as f64;
+                eprintln!(
+                    "GL {preset} display {d} {}: {count} pixels differ",
+                    mode.name()
+                );
+                if share > EDGE_PIXELS {
+                    let name = format!("gl-{preset}-{d}-{}", mode.name());
+                    panic!(
+                        "{name}: {count} pixels differ; {}",
+                        save_failure(&name, actual, want, &diff)
+                    );
+                }
+            }
+        }
+    }
+}

@@ -11,7 +11,7 @@ use serde::Serialize;
 
 use crate::contexts::DisplayContext;
 use crate::cull::{CullOutput, cpu};
-use crate::device::{Gpu, OPTIONAL_FEATURES};
+use crate::device::{Gpu, OPTIONAL_FEATURES, Tier};
 use crate::error::{Error, Result};
 use crate::records::CullLayout;
 use crate::renderer::{CullMode, Renderer, RendererOptions};
@@ -131,11 +131,12 @@ fn info() -> Result<()> {
     let gpu = Gpu::headless()?;
     println!("adapter: {}", gpu.adapter_line());
     let features = gpu.device.features();
+    println!("tier: {}", Tier::of(features).name());
     for (feature, name, without) in OPTIONAL_FEATURES {
         if features.contains(feature) {
             println!("  {name:28} yes");
         } else {
-            println!("  {name:28} no  ({without})");
+            println!("  {name:28} no  (costs: {without})");
         }
     }
     Ok(())

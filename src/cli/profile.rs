@@ -204,6 +204,7 @@ fn measure(
         gpu.device
             .poll(wgpu::PollType::wait_indefinitely())
             .map_err(|e| Error::Readback(e.to_string()))?;
+        gpu.check_lost()?;
         let queries = match timer.as_deref_mut() {
             Some(t) => Some(t.read(&gpu.device, &gpu.queue)?),
             None => None,

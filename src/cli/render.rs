@@ -74,8 +74,8 @@ impl Session {
         self.gpu
             .device
             .poll(wgpu::PollType::wait_indefinitely())
-            .map(|_| ())
-            .map_err(|e| Error::Readback(e.to_string()))
+            .map_err(|e| Error::Readback(e.to_string()))?;
+        self.gpu.check_lost()
     }
 }
 
