@@ -5,7 +5,7 @@
 //! order; within a primitive, the `EXT_mesh_gpu_instancing` copies in order. One mesh
 //! record per glTF primitive, shared by every node that uses that mesh.
 
-use std::collections::HashMap;
+use std::collections::{HashMap, HashSet};
 use std::path::Path;
 
 use glam::{Affine3A, Mat4, Quat, Vec3, Vec4};
@@ -41,6 +41,7 @@ pub fn import_bytes(bytes: &[u8], base: Option<&Path>, origin: &Path) -> Result<
         buffers: &buffers,
         scene: Scene::default(),
         primitive_mesh: HashMap::new(),
+        visited: HashSet::new(),
         skipped: 0,
     };
     let root = gltf
@@ -49,7 +50,7 @@ pub fn import_bytes(bytes: &[u8], base: Option<&Path>, origin: &Path) -> Result<
         .or_else(|| gltf.document.scenes().next())
         .ok_or_else(|| fail("the file has no scene".into()))?;
     for node in root.nodes() {
-        importer.visit(node, Affine3A::IDENTITY).map_err(&fail)?;
+        importer.visit(node).map_err(&fail)?;
     }
     if importer.skipped > 0 {
         log::warn!(
@@ -67,39 +68,59 @@ struct Importer<'a> {
     scene: Scene,
     /// (glTF mesh, primitive) -> our mesh id, so shared meshes share one record.
     primitive_mesh: HashMap<(usize, usize), Option<u32>>,
+    /// Nodes already placed: glTF nodes form trees, and a node met twice (a cycle, or
+    /// two parents) would otherwise recurse forever or multiply instances.
+    visited: HashSet<usize>,
     skipped: usize,
 }
 
 type Step<T> = std::result::Result<T, String>;
 
 impl Importer<'_> {
-    fn visit(&mut self, node: gltf::Node, parent: Affine3A) -> Step<()> {
-        let local = Mat4::from_cols_array_2d(&node.transform().matrix());
-        let world = parent * Affine3A::from_mat4(local);
-        if let Some(mesh) = node.mesh() {
-            let copies = self.instancing_copies(&node)?;
-            for primitive in mesh.primitives() {
-                let Some(id) = self.mesh_id(&mesh, &primitive)? else {
-                    self.skipped += copies.len();
-                    continue;
-                };
-                let color = Vec4::from(
-                    primitive
-                        .material()
-                        .pbr_metallic_roughness()
-                        .base_color_factor(),
-                );
-                for copy in &copies {
-                    self.scene.instances.push(Instance {
-                        world_from_local: world * *copy,
-                        mesh: id,
-                        color,
-                    });
-                }
+    /// Places `root` and its descendants, depth first in child order (the documented
+    /// instance-id order), with an explicit stack: a file may nest nodes deeper than the
+    /// thread's stack would allow recursion.
+    fn visit(&mut self, root: gltf::Node) -> Step<()> {
+        let mut stack = vec![(root, Affine3A::IDENTITY)];
+        while let Some((node, parent)) = stack.pop() {
+            if !self.visited.insert(node.index()) {
+                return Err(format!(
+                    "nodes[{}] is reached twice (a cycle, or two parents); glTF nodes form trees",
+                    node.index()
+                ));
             }
+            let local = Mat4::from_cols_array_2d(&node.transform().matrix());
+            let world = parent * Affine3A::from_mat4(local);
+            self.place(&node, world)?;
+            let children: Vec<_> = node.children().collect();
+            stack.extend(children.into_iter().rev().map(|c| (c, world)));
         }
-        for child in node.children() {
-            self.visit(child, world)?;
+        Ok(())
+    }
+
+    fn place(&mut self, node: &gltf::Node, world: Affine3A) -> Step<()> {
+        let Some(mesh) = node.mesh() else {
+            return Ok(());
+        };
+        let copies = self.instancing_copies(node)?;
+        for primitive in mesh.primitives() {
+            let Some(id) = self.mesh_id(&mesh, &primitive)? else {
+                self.skipped += copies.len();
+                continue;
+            };
+            let color = Vec4::from(
+                primitive
+                    .material()
+                    .pbr_metallic_roughness()
+                    .base_color_factor(),
+            );
+            for copy in &copies {
+                self.scene.instances.push(Instance {
+                    world_from_local: world * *copy,
+                    mesh: id,
+                    color,
+                });
+            }
         }
         Ok(())
     }

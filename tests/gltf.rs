@@ -211,3 +211,51 @@ fn mesh_gpu_instancing_copies_follow_the_node_in_order() {
     // No normals in the file: they are computed, facing +Z for this triangle.
     assert_eq!(s.vertices[0].normal, [0.0, 0.0, 1.0]);
 }
+
+/// `gltf_json` with its `nodes` and scene roots replaced, written beside `tri.bin`.
+fn with_nodes(dir: &Path, nodes: serde_json::Value, roots: serde_json::Value) -> PathBuf {
+    let floats: [f32; 18] = [
+        0., 0., 0., 1., 0., 0., 0., 1., 0., 0., 0., 0., 0., 0., 0., 0., 0., 0.,
+    ];
+    std::fs::write(dir.join("tri.bin"), bytemuck::cast_slice(&floats)).unwrap();
+    let mut json: serde_json::Value =
+        serde_json::from_str(&gltf_json(r#""uri": "tri.bin""#, "")).unwrap();
+    json["nodes"] = nodes;
+    json["scenes"][0]["nodes"] = roots;
+    let p = dir.join("nodes.gltf");
+    std::fs::write(&p, json.to_string()).unwrap();
+    p
+}
+
+#[test]
+fn node_cycles_and_shared_children_are_errors_naming_the_node() {
+    let dir = tempfile::tempdir().unwrap();
+    let cycle = serde_json::json!([{"mesh": 0, "children": [1]}, {"mesh": 0, "children": [0]}]);
+    let msg = scene_error(&with_nodes(dir.path(), cycle, serde_json::json!([0])));
+    assert!(msg.contains("nodes[0] is reached twice"), "{msg}");
+    let two_parents = serde_json::json!([{"children": [2]}, {"children": [2]}, {"mesh": 0}]);
+    let msg = scene_error(&with_nodes(
+        dir.path(),
+        two_parents,
+        serde_json::json!([0, 1]),
+    ));
+    assert!(msg.contains("nodes[2] is reached twice"), "{msg}");
+}
+
+/// Nesting deeper than recursion on a test thread's stack would survive.
+#[test]
+fn a_deep_node_chain_imports_with_every_translation_summed() {
+    let dir = tempfile::tempdir().unwrap();
+    let depth = 100_000;
+    let nodes: Vec<_> = (0..depth)
+        .map(|i| match i + 1 < depth {
+            true => serde_json::json!({"children": [i + 1], "translation": [0.5, 0, 0]}),
+            false => serde_json::json!({"mesh": 0, "translation": [0.5, 0, 0]}),
+        })
+        .collect();
+    let p = with_nodes(dir.path(), nodes.into(), serde_json::json!([0]));
+    let s = Scene::load(p.to_str().unwrap()).unwrap();
+    assert_eq!(s.instances.len(), 1);
+    let x = s.instances[0].world_from_local.translation.x;
+    assert!((x - 0.5 * depth as f32).abs() < 1.0, "{x}");
+}
