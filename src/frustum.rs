@@ -3,7 +3,7 @@
 //! Conventions: right-handed, +Y up, a view looks down its own -Z, clip depth 0..1 (wgpu).
 //! Planes are `Vec4(n, d)` with `dot(n, p) + d >= 0` inside, `n` unit length.
 
-use glam::{Affine3A, Mat4, Quat, Vec3, Vec4, Vec4Swizzles};
+use glam::{Affine3A, Mat4, Quat, Vec3, Vec3A, Vec4, Vec4Swizzles};
 use serde::{Deserialize, Serialize};
 
 /// Field of view as tangents of the half-angles from the view axis to each edge.
@@ -95,10 +95,11 @@ impl View {
             (Vec3::Z, self.far),
         ];
         let apex = self.position();
+        let magnitude = apex.abs().element_sum();
         Frustum {
             planes: in_view.map(|(n, dist)| {
                 let n = self.world_from_view.transform_vector3(n.normalize());
-                n.extend(dist - n.dot(apex))
+                n.extend(dist - n.dot(apex) + ROUNDING_SLACK * (magnitude + dist.abs()))
             }),
         }
     }
@@ -107,6 +108,17 @@ impl View {
     /// upper-left, then the far ones in the same order (corner `i` and `i + 4` span
     /// one lateral edge).
     pub fn corners(&self) -> [Vec3; 8] {
+        self.corners_from(Vec3::ZERO)
+    }
+
+    /// [`View::corners`] relative to `origin`. Near the eye (a near plane 5 cm away)
+    /// corners need millimeters, which f32 world coordinates a million meters from the
+    /// world origin do not have; relative to a nearby origin they keep them.
+    pub fn corners_from(&self, origin: Vec3) -> [Vec3; 8] {
+        let relative = Affine3A {
+            translation: self.world_from_view.translation - Vec3A::from(origin),
+            ..self.world_from_view
+        };
         let Fov {
             left: l,
             right: r,
@@ -117,8 +129,7 @@ impl View {
         std::array::from_fn(|i| {
             let dist = if i < 4 { self.near } else { self.far };
             let (tx, ty) = window[i % 4];
-            self.world_from_view
-                .transform_point3(Vec3::new(tx * dist, ty * dist, -dist))
+            relative.transform_point3(Vec3::new(tx * dist, ty * dist, -dist))
         })
     }
 }
@@ -134,6 +145,13 @@ impl Frustum {
         self.planes.iter().all(|pl| pl.xyz().dot(p) + pl.w >= 0.0)
     }
 }
+
+/// Relative slack (16 units in the last place of f32) by which planes are pushed out
+/// and sphere radii grown ([`crate::scene::Scene::world_sphere`]): the plane test sums
+/// four products of magnitude |center| and |plane.w|, so its rounding error is a few
+/// ulps of those. With this slack no rounding, even a million meters from the origin,
+/// can cull a sphere that meets the true frustum (tests/properties.rs).
+pub const ROUNDING_SLACK: f32 = 1.0 / (1u32 << 20) as f32;
 
 /// Conservative sphere test, `s` = (center, radius): the CPU twin of `sphere_in_planes`
 /// in `wgsl/shared/cull_math.wgsl`. The operation order is the contract: same products,
@@ -151,7 +169,7 @@ pub fn sphere_in_planes(planes: &[Vec4; 6], s: Vec4) -> bool {
 const ENCLOSING_SLACK: f32 = 1e-5;
 
 /// The smallest-apex perspective view, oriented by `orientation`, that contains every
-/// given frustum (each as its 8 corners, see [`View::corners`]).
+/// given frustum (each as its 8 corners relative to `origin`, see [`View::corners_from`]).
 ///
 /// The chapter's Figure 1.2, generalised to asymmetric, canted and off-axis views: each
 /// side takes the widest lateral-edge tangent of the inputs, then the apex is placed
@@ -159,7 +177,7 @@ const ENCLOSING_SLACK: f32 = 1e-5;
 /// take the nearest and farthest input corners. For two parallel eyes this is exactly the
 /// chapter's construction (right plane = left eye's right plane moved to the right eye).
 /// `None` when the inputs span 180 degrees or more (no single frustum holds them: a CAVE).
-pub fn enclosing_view(orientation: Quat, frusta: &[[Vec3; 8]]) -> Option<View> {
+pub fn enclosing_view(orientation: Quat, origin: Vec3, frusta: &[[Vec3; 8]]) -> Option<View> {
     let to_basis = orientation.inverse();
     let local: Vec<[Vec3; 8]> = frusta.iter().map(|c| c.map(|p| to_basis * p)).collect();
     let fov = widest_fov(&local)?;
@@ -187,7 +205,7 @@ pub fn enclosing_view(orientation: Quat, frusta: &[[Vec3; 8]]) -> Option<View> {
     Some(View {
         world_from_view: Affine3A::from_rotation_translation(
             orientation,
-            orientation * Vec3::new(apex_x, apex_y, apex_z),
+            origin + orientation * Vec3::new(apex_x, apex_y, apex_z),
         ),
         fov,
         near,
@@ -257,7 +275,7 @@ mod tests {
     #[test]
     fn parallel_eyes_give_the_chapters_construction() {
         let (l, r) = (eye(-0.032), eye(0.032));
-        let d = enclosing_view(Quat::IDENTITY, &[l.corners(), r.corners()]).unwrap();
+        let d = enclosing_view(Quat::IDENTITY, Vec3::ZERO, &[l.corners(), r.corners()]).unwrap();
         // The apex lies behind the eyes where the two outer planes meet.
         let expected_z = 0.064 / (1.0 + 0.8);
         assert!(

@@ -234,12 +234,17 @@ impl Rig {
     /// only one culling ever uses (never per eye).
     pub fn display_view(&self, index: usize) -> Result<View> {
         let eyes = self.eyes(index)?;
-        let corners: Vec<_> = eyes.iter().map(View::corners).collect();
+        let origin = self.viewer.position();
+        let corners: Vec<_> = eyes.iter().map(|e| e.corners_from(origin)).collect();
         let orientation = Quat::from_mat3a(&eyes[0].world_from_view.matrix3);
         let combined = if let [mono] = eyes.as_slice() {
             Some(*mono)
         } else {
-            enclosing_view(display_orientation(self, index, orientation), &corners)
+            enclosing_view(
+                display_orientation(self, index, orientation),
+                origin,
+                &corners,
+            )
         };
         combined.ok_or_else(|| {
             Error::rig(
@@ -252,10 +257,11 @@ impl Rig {
     /// The frame frustum, holding every display frustum, or `None` when the displays
     /// surround the viewer (a CAVE) and no single frustum can.
     pub fn frame_view(&self) -> Result<Option<View>> {
+        let origin = self.viewer.position();
         let corners = (0..self.displays.len())
-            .map(|i| self.display_view(i).map(|v| v.corners()))
+            .map(|i| self.display_view(i).map(|v| v.corners_from(origin)))
             .collect::<Result<Vec<_>>>()?;
-        Ok(enclosing_view(self.viewer.orientation(), &corners))
+        Ok(enclosing_view(self.viewer.orientation(), origin, &corners))
     }
 }
 

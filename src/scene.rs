@@ -132,7 +132,8 @@ impl Scene {
     }
 
     /// The instance's world bounding sphere: the local center transformed, the radius
-    /// scaled by the largest axis scale (conservative under non-uniform scale).
+    /// scaled by the largest axis scale (conservative under non-uniform scale), grown by
+    /// [`crate::frustum::ROUNDING_SLACK`] of its magnitude so rounding never culls it.
     pub fn world_sphere(&self, instance: &Instance) -> Vec4 {
         world_sphere_of(&self.meshes, instance)
     }
@@ -183,7 +184,9 @@ fn world_sphere_of(meshes: &[Mesh], instance: &Instance) -> Vec4 {
         .max(m.y_axis.length_squared())
         .max(m.z_axis.length_squared());
     let center = instance.world_from_local.transform_point3(local.truncate());
-    center.extend(local.w * scale_sq.sqrt())
+    let radius = local.w * scale_sq.sqrt();
+    let slack = crate::frustum::ROUNDING_SLACK * (center.abs().element_sum() + radius);
+    center.extend(radius + slack)
 }
 
 fn random_in_shell(rng: &mut Pcg64Mcg, inner: f32, outer: f32) -> Vec3 {
