@@ -259,3 +259,21 @@ fn a_deep_node_chain_imports_with_every_translation_summed() {
     let x = s.instances[0].world_from_local.translation.x;
     assert!((x - 0.5 * depth as f32).abs() < 1.0, "{x}");
 }
+
+/// Found by the `gltf_import` fuzz target: the gltf crate's validator panicked here.
+#[test]
+fn a_position_accessor_out_of_range_is_an_error_naming_the_field() {
+    let path = Path::new(env!("CARGO_MANIFEST_DIR"))
+        .join("fuzz/regressions/gltf_import/position-accessor-out-of-range.glb");
+    let msg = scene_error(&path);
+    assert!(msg.contains("attributes.POSITION: accessor"), "{msg}");
+}
+
+/// Found by the `gltf_import` fuzz target: the gltf crate subtracted past zero here.
+#[test]
+fn a_glb_length_shorter_than_its_header_is_an_error() {
+    let path = Path::new(env!("CARGO_MANIFEST_DIR"))
+        .join("fuzz/regressions/gltf_import/glb-length-below-header.glb");
+    let msg = scene_error(&path);
+    assert!(msg.contains("GLB header: length"), "{msg}");
+}

@@ -1,0 +1,27 @@
+//! What the `gltf_import` fuzz target holds any input to, shared with `tests/fuzz_corpus.rs`, which
+//! replays the corpus and every past finding in CI.
+
+use std::path::Path;
+
+use stereocull::contexts::DisplayContext;
+use stereocull::cull::cpu;
+use stereocull::records::CullLayout;
+use stereocull::rig::Rig;
+
+/// Any bytes as a glTF or GLB file: an error, or a scene that the culler handles within
+/// the cull contract (non-finite instances dropped first, as `Scene::load` does).
+pub fn gltf_import(data: &[u8]) {
+    let Ok(mut scene) = stereocull::gltf_import::import_bytes(data, None, Path::new("fuzz.glb"))
+    else {
+        return;
+    };
+    scene.drop_non_finite_instances();
+    let layout = CullLayout::new(&scene);
+    let rig = Rig::preset("hmd").expect("the hmd preset");
+    let display = DisplayContext::new(&rig, 0).expect("the hmd display");
+    let out = cpu::cull(&layout, &display.planes, display.views);
+    let n = scene.instances.len();
+    assert!(out.visible.len() <= n && out.visible.iter().all(|&i| (i as usize) < n));
+    let drawn: u32 = out.draws.iter().map(|d| d.instance_count).sum();
+    assert_eq!(drawn as usize, out.visible.len() * display.views as usize);
+}
