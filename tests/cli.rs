@@ -296,12 +296,68 @@ fn stress_reports_per_frame_and_summary_figures() {
         "three per wall"
     );
     assert!(s["cpu_ms_median"].as_f64().unwrap() > 0.0);
+    assert_eq!(
+        s["memory"].as_array().unwrap().len(),
+        3,
+        "a sample after each frame"
+    );
     assert!(
         s["visible_mean"]
             .as_array()
             .unwrap()
             .iter()
             .all(|v| v.as_f64().unwrap() > 0.0)
+    );
+}
+
+/// The soak run, shortened for CI (the README's runs 10,000 frames): with the viewer
+/// moving every frame, the live wgpu objects and the device allocations stay exactly
+/// constant, and process memory does not grow past allocator noise after warm-up (a
+/// leak of one small buffer per frame would add tens of MiB here).
+#[test]
+fn stress_soak_holds_memory_and_gpu_allocations_constant() {
+    let out = stereocull(&[
+        "stress",
+        "--scene",
+        "procedural:1000",
+        "--rig",
+        "hmd",
+        "--frames",
+        "1000",
+        "--width",
+        "16",
+        "--height",
+        "16",
+        "--json",
+    ]);
+    assert!(
+        out.status.success(),
+        "{}",
+        String::from_utf8_lossy(&out.stderr)
+    );
+    let v: Value = serde_json::from_slice(&out.stdout).unwrap();
+    let memory = v["summary"]["memory"].as_array().unwrap();
+    eprintln!("{memory:?}");
+    assert_eq!(memory.len(), 11, "after frame 1 and every 100 frames");
+    let series =
+        |key: &str| -> Vec<Option<u64>> { memory.iter().map(|m| m[key].as_u64()).collect() };
+    let objects = series("wgpu_objects");
+    assert!(objects[0].is_some_and(|n| n > 0), "{objects:?}");
+    assert!(
+        objects.iter().all(|n| *n == objects[0]),
+        "wgpu objects changed: {objects:?}"
+    );
+    let allocated = series("gpu_allocated_bytes");
+    assert!(
+        allocated.iter().all(|n| *n == allocated[0]),
+        "device allocations changed: {allocated:?}"
+    );
+    let rss: Vec<u64> = series("rss_kib").into_iter().map(|r| r.unwrap()).collect();
+    let warm = rss[2];
+    let growth = rss.iter().max().unwrap().saturating_sub(warm);
+    assert!(
+        growth < 24 * 1024,
+        "RSS grew {growth} KiB after frame 200: {rss:?}"
     );
 }
 

@@ -56,10 +56,37 @@ struct Summary {
     dispatches_per_frame: u32,
     bytes_uploaded_per_frame: u64,
     gpu_bytes_per_instance: u64,
-    /// Resident memory of this process after the first frame and after the last (Linux),
-    /// for soak runs: growth means a leak.
-    rss_kib_first_frame: Option<u64>,
-    rss_kib_last_frame: Option<u64>,
+    /// Memory after the first frame, after every tenth of the run, and after the last:
+    /// in a soak run, growth after warm-up means a leak.
+    memory: Vec<MemorySample>,
+}
+
+#[derive(Serialize)]
+struct MemorySample {
+    /// Frames completed.
+    frame: u32,
+    /// Resident memory of this process (Linux; with a software driver it holds GPU
+    /// memory too).
+    rss_kib: Option<u64>,
+    /// Live wgpu buffers, textures, views, bind groups, query sets and command buffers.
+    wgpu_objects: Option<usize>,
+    /// Bytes wgpu's allocator holds on the device, where the backend reports it.
+    gpu_allocated_bytes: Option<u64>,
+}
+
+impl MemorySample {
+    fn take(session: &Session, frame: u32) -> MemorySample {
+        MemorySample {
+            frame,
+            rss_kib: resident_kib(),
+            wgpu_objects: session.gpu.live_resources(),
+            gpu_allocated_bytes: session
+                .gpu
+                .device
+                .generate_allocator_report()
+                .map(|r| r.total_allocated_bytes),
+        }
+    }
 }
 
 pub fn stress(args: &StressArgs) -> Result<()> {
@@ -75,7 +102,8 @@ pub fn stress(args: &StressArgs) -> Result<()> {
     );
     let base = session.rig.viewer;
     let mut records = Vec::new();
-    let mut rss = (None, None);
+    let mut memory = Vec::new();
+    let every = (args.frames / 10).max(1);
     for frame in 0..args.frames {
         // Look around and sway, so that culling sees a different view every frame.
         let phase = frame as f32 / args.frames.max(1) as f32 * std::f32::consts::TAU;
@@ -112,13 +140,14 @@ pub fn stress(args: &StressArgs) -> Result<()> {
         }
         bar.inc(1);
         records.push(record);
-        if frame == 0 {
-            rss.0 = resident_kib();
+        let done = frame + 1;
+        if done == 1 || done % every == 0 || done == args.frames {
+            memory.push(MemorySample::take(&session, done));
         }
     }
     bar.finish_and_clear();
-    rss.1 = resident_kib();
-    let summary = summarize(&session, args, &records, rss);
+    memory.dedup_by_key(|m| m.frame);
+    let summary = summarize(&session, args, &records, memory);
     if args.json {
         let all = serde_json::json!({ "frames": records, "summary": summary });
         println!("{all}");
@@ -132,7 +161,7 @@ fn summarize(
     session: &Session,
     args: &StressArgs,
     records: &[FrameRecord],
-    (rss_kib_first_frame, rss_kib_last_frame): (Option<u64>, Option<u64>),
+    memory: Vec<MemorySample>,
 ) -> Summary {
     let cpu: Vec<f64> = records.iter().map(|r| r.cpu_ms).collect();
     let frame: Vec<f64> = records.iter().map(|r| r.frame_ms).collect();
@@ -161,8 +190,7 @@ fn summarize(
         dispatches_per_frame: last.map_or(0, |r| r.dispatches),
         bytes_uploaded_per_frame: last.map_or(0, |r| r.bytes_uploaded),
         gpu_bytes_per_instance: session.renderer.gpu_bytes_per_instance(),
-        rss_kib_first_frame,
-        rss_kib_last_frame,
+        memory,
     }
 }
 
@@ -190,8 +218,19 @@ fn print_summary(s: &Summary) {
     for (name, v) in s.displays.iter().zip(&s.visible_mean) {
         println!("  {name:>18}: {v:.0} visible on average");
     }
-    if let (Some(a), Some(b)) = (s.rss_kib_first_frame, s.rss_kib_last_frame) {
-        println!("process memory (RSS): {a} KiB after the first frame, {b} KiB after the last");
+    if let (Some(first), Some(last)) = (s.memory.first(), s.memory.last()) {
+        let show = |v: Option<u64>| v.map_or("n/a".to_string(), |v| v.to_string());
+        println!(
+            "memory after frame {} / {}: RSS {} / {} KiB, wgpu objects {} / {}, GPU allocations {} / {} bytes",
+            first.frame,
+            last.frame,
+            show(first.rss_kib),
+            show(last.rss_kib),
+            show(first.wgpu_objects.map(|v| v as u64)),
+            show(last.wgpu_objects.map(|v| v as u64)),
+            show(first.gpu_allocated_bytes),
+            show(last.gpu_allocated_bytes),
+        );
     }
     println!(
         "per frame: {} draw calls, {} dispatches, {} bytes uploaded; GPU memory {} bytes per instance",
