@@ -37,7 +37,7 @@ use crate::error::{Error, Result};
 pub use crate::modes::StereoMode;
 use crate::profiling::GpuTimer;
 use crate::readback::read_pod;
-use crate::records::{CullLayout, DrawArgs};
+use crate::records::{CullLayout, DrawArgs, MeshRecord};
 use crate::rig::Rig;
 use crate::scene::{Scene, Vertex};
 use crate::shaders::DrawKey;
@@ -692,19 +692,38 @@ fn check_device(device: &wgpu::Device, scene: &Scene, options: RendererOptions) 
         ));
     }
     let limits = device.limits();
+    // Storage buffers are bound whole, so the binding limit holds for them; vertex and
+    // index buffers are not bindings and only need to fit one buffer.
+    let storage = limits
+        .max_storage_buffer_binding_size
+        .min(limits.max_buffer_size);
     let buffers = [
         (
             "instance records",
             DrawScene::BYTES_PER_INSTANCE,
             scene.instances.len(),
+            storage,
         ),
-        ("vertices", size_of::<Vertex>() as u64, scene.vertices.len()),
-        ("indices", size_of::<u32>() as u64, scene.indices.len()),
+        (
+            "mesh records",
+            size_of::<MeshRecord>() as u64,
+            scene.meshes.len(),
+            storage,
+        ),
+        (
+            "vertices",
+            size_of::<Vertex>() as u64,
+            scene.vertices.len(),
+            limits.max_buffer_size,
+        ),
+        (
+            "indices",
+            size_of::<u32>() as u64,
+            scene.indices.len(),
+            limits.max_buffer_size,
+        ),
     ];
-    let max = limits
-        .max_storage_buffer_binding_size
-        .min(limits.max_buffer_size);
-    for (what, size, count) in buffers {
+    for (what, size, count, max) in buffers {
         let bytes = size * count as u64;
         if bytes > max {
             return Err(Error::Limits(format!(

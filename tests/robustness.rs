@@ -238,3 +238,21 @@ fn the_tier_names_what_runs_as_designed() {
     // Profiling features change what is measured, not what is drawn.
     assert_eq!(Tier::of(all - F::TIMESTAMP_QUERY), Tier::Full);
 }
+
+/// Vertex and index buffers are not storage bindings: a mesh bigger than one binding
+/// (lavapipe: 128 MiB) still fits one buffer and draws.
+#[test]
+fn vertices_past_the_binding_size_are_accepted_up_to_the_buffer_size() {
+    let gpu = gpu_without(wgpu::Features::empty());
+    let limits = gpu.device.limits();
+    eprintln!(
+        "binding {} bytes, buffer {} bytes",
+        limits.max_storage_buffer_binding_size, limits.max_buffer_size
+    );
+    assert!(limits.max_buffer_size > limits.max_storage_buffer_binding_size);
+    let mut scene = Scene::procedural(1, 1, 1);
+    let vertices = (limits.max_storage_buffer_binding_size / 24 + 1) as usize;
+    scene.vertices.resize(vertices, scene.vertices[0]);
+    Renderer::new(&gpu.device, &scene, &rig(), RendererOptions::default())
+        .expect("a vertex buffer past the binding size fits one buffer");
+}
