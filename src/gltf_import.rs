@@ -9,6 +9,7 @@ use std::collections::{HashMap, HashSet};
 use std::path::Path;
 
 use glam::{Affine3A, Mat4, Quat, Vec3, Vec4};
+use gltf::accessor::{DataType, Dimensions};
 use gltf::buffer::Data;
 use gltf::{Document, Semantic};
 
@@ -253,15 +254,18 @@ impl Importer<'_> {
             }
         }
         if let Some(accessor) = primitive.indices() {
-            check_accessor(
-                &accessor,
-                accessor.data_type().size(),
-                &format!("{where_} indices"),
-            )?;
-            if accessor.dimensions() != gltf::accessor::Dimensions::Scalar {
+            let what = format!("{where_} indices");
+            check_accessor(&accessor, accessor.data_type().size(), &what)?;
+            let integer = matches!(
+                accessor.data_type(),
+                DataType::U8 | DataType::U16 | DataType::U32
+            );
+            if accessor.dimensions() != Dimensions::Scalar || !integer {
                 return Err(format!(
-                    "{where_} indices: accessors[{}] is not SCALAR",
-                    accessor.index()
+                    "{what}: accessors[{}] is {:?} {:?}, not unsigned integer SCALAR",
+                    accessor.index(),
+                    accessor.dimensions(),
+                    accessor.data_type()
                 ));
             }
         }

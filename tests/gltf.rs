@@ -277,3 +277,15 @@ fn a_glb_length_shorter_than_its_header_is_an_error() {
     let msg = scene_error(&path);
     assert!(msg.contains("GLB header: length"), "{msg}");
 }
+
+/// Found by the `gltf_import` fuzz target: float indices reached `unreachable!` in gltf.
+#[test]
+fn float_indices_are_an_error_naming_the_accessor() {
+    let path = Path::new(env!("CARGO_MANIFEST_DIR"))
+        .join("fuzz/regressions/gltf_import/float-indices.glb");
+    let msg = scene_error(&path);
+    assert!(
+        msg.contains("indices: accessors[") && msg.contains("not unsigned integer SCALAR"),
+        "{msg}"
+    );
+}
