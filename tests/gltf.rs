@@ -260,30 +260,33 @@ fn a_deep_node_chain_imports_with_every_translation_summed() {
     assert!((x - 0.5 * depth as f32).abs() < 1.0, "{x}");
 }
 
+/// The error for a file kept in `fuzz/regressions/gltf_import/`.
+fn regression_error(name: &str) -> String {
+    scene_error(
+        &Path::new(env!("CARGO_MANIFEST_DIR"))
+            .join("fuzz/regressions/gltf_import")
+            .join(name),
+    )
+}
+
 /// Found by the `gltf_import` fuzz target: the gltf crate's validator panicked here.
 #[test]
 fn a_position_accessor_out_of_range_is_an_error_naming_the_field() {
-    let path = Path::new(env!("CARGO_MANIFEST_DIR"))
-        .join("fuzz/regressions/gltf_import/position-accessor-out-of-range.glb");
-    let msg = scene_error(&path);
+    let msg = regression_error("position-accessor-out-of-range.glb");
     assert!(msg.contains("attributes.POSITION: accessor"), "{msg}");
 }
 
 /// Found by the `gltf_import` fuzz target: the gltf crate subtracted past zero here.
 #[test]
 fn a_glb_length_shorter_than_its_header_is_an_error() {
-    let path = Path::new(env!("CARGO_MANIFEST_DIR"))
-        .join("fuzz/regressions/gltf_import/glb-length-below-header.glb");
-    let msg = scene_error(&path);
+    let msg = regression_error("glb-length-below-header.glb");
     assert!(msg.contains("GLB header: length"), "{msg}");
 }
 
 /// Found by the `gltf_import` fuzz target: float indices reached `unreachable!` in gltf.
 #[test]
 fn float_indices_are_an_error_naming_the_accessor() {
-    let path = Path::new(env!("CARGO_MANIFEST_DIR"))
-        .join("fuzz/regressions/gltf_import/float-indices.glb");
-    let msg = scene_error(&path);
+    let msg = regression_error("float-indices.glb");
     assert!(
         msg.contains("indices: accessors[") && msg.contains("not unsigned integer SCALAR"),
         "{msg}"

@@ -270,6 +270,38 @@ fn a_near_object_sits_further_right_in_the_left_eye() {
 /// (measured: 0 pixels differ). Multiview gets 0.15 %: lavapipe's multiview path clips
 /// triangles that cross the near plane (the room's long side walls) a pixel differently
 /// along one edge (measured: 58 and 77 pixels of 96,000, on hmd and on hmd-peripheral).
+/// Renders `rig` in `mode` on `gpu` (CPU-culled where the mode draws per instance) and
+/// checks every display against `reference`: at most `allowed` of the pixels beyond
+/// [`LEVELS`]. `label` names the case in the log and the failure images.
+fn assert_mode_matches(
+    gpu: &Gpu,
+    scene: &Scene,
+    rig: &Rig,
+    mode: StereoMode,
+    reference: &[RgbaImage],
+    allowed: f64,
+    label: &str,
+) {
+    let cull = if mode.per_instance() {
+        CullMode::Cpu
+    } else {
+        CullMode::Gpu
+    };
+    let images = render_mode(gpu, scene, rig, cull, mode);
+    for (d, (actual, want)) in images.iter().zip(reference).enumerate() {
+        let (count, diff) = differing(actual, want, LEVELS);
+        let share = count as f64 / (actual.width() * actual.height()) as f64;
+        let name = format!("{label}-{d}-{}", mode.name());
+        eprintln!("{name}: {count} pixels differ");
+        if share > allowed {
+            panic!(
+                "{name}: {count} pixels differ; {}",
+                save_failure(&name, actual, want, &diff)
+            );
+        }
+    }
+}
+
 #[test]
 fn every_stereo_mode_agrees_with_instanced() {
     let gpu = gpu_with(wgpu::Features::all());
@@ -278,39 +310,21 @@ fn every_stereo_mode_agrees_with_instanced() {
         let rig = sized(preset);
         let reference = render(&gpu, &scene, &rig, CullMode::Gpu);
         for mode in StereoMode::ALL {
-            let cull = if mode.per_instance() {
-                CullMode::Cpu
+            let allowed = if mode == StereoMode::Multiview {
+                MULTIVIEW_PIXELS
             } else {
-                CullMode::Gpu
+                EDGE_PIXELS
             };
-            let images = render_mode(&gpu, &scene, &rig, cull, mode);
-            for (d, (actual, want)) in images.iter().zip(&reference).enumerate() {
-                let (count, diff) = differing(actual, want, LEVELS);
-                let share = count as f64 / (actual.width() * actual.height()) as f64;
-                eprintln!(
-                    "{preset} display {d} {}: {count} pixels differ",
-                    mode.name()
-                );
-                let allowed = if mode == StereoMode::Multiview {
-                    MULTIVIEW_PIXELS
-                } else {
-                    EDGE_PIXELS
-                };
-                if share > allowed {
-                    let name = format!("mode-{preset}-{d}-{}", mode.name());
-                    panic!(
-                        "{name}: {count} pixels differ; {}",
-                        save_failure(&name, actual, want, &diff)
-                    );
-                }
-            }
+            let label = format!("mode-{preset}");
+            assert_mode_matches(&gpu, &scene, &rig, mode, &reference, allowed, &label);
         }
     }
 }
 
 /// wgpu's GL backend over Mesa's llvmpipe (needs `libegl1` and `libgl1-mesa-dri`, which
 /// `.ci/run` installs): no indirect count and no multiview there, so this also runs the
-/// fixed-count fallback on a second API. Every mode it has draws the Vulkan image.
+/// fixed-count fallback on a second API. Every mode it has draws the Vulkan image
+/// (measured: 0 pixels differ).
 #[test]
 fn the_gl_backend_draws_the_vulkan_image() {
     let gl = Gpu::headless_on(Some(wgpu::Backends::GL), wgpu::Features::all())
@@ -331,27 +345,8 @@ fn the_gl_backend_draws_the_vulkan_image() {
             .into_iter()
             .filter(|m| *m != StereoMode::Multiview);
         for mode in modes {
-            let cull = if mode.per_instance() {
-                CullMode::Cpu
-            } else {
-                CullMode::Gpu
-            };
-            let images = render_mode(&gl, &scene, &rig, cull, mode);
-            for (d, (actual, want)) in images.iter().zip(&reference).enumerate() {
-                let (count, diff) = differing(actual, want, LEVELS);
-                let share = count as f64 / (actual.width() * actual.height()) as f64;
-                eprintln!(
-                    "GL {preset} display {d} {}: {count} pixels differ",
-                    mode.name()
-                );
-                if share > EDGE_PIXELS {
-                    let name = format!("gl-{preset}-{d}-{}", mode.name());
-                    panic!(
-                        "{name}: {count} pixels differ; {}",
-                        save_failure(&name, actual, want, &diff)
-                    );
-                }
-            }
+            let label = format!("gl-{preset}");
+            assert_mode_matches(&gl, &scene, &rig, mode, &reference, EDGE_PIXELS, &label);
         }
     }
 }
