@@ -150,6 +150,15 @@ impl Gpu {
         })
     }
 
+    /// Waits until the GPU has finished all submitted work, then [`Gpu::check_lost`]:
+    /// what every CLI frame loop does at the end of a frame.
+    pub fn wait(&self) -> Result<()> {
+        self.device
+            .poll(wgpu::PollType::wait_indefinitely())
+            .map_err(|e| Error::Readback(e.to_string()))?;
+        self.check_lost()
+    }
+
     /// `Err(Error::DeviceLost)` once the device has been lost (wgpu reports it at the
     /// next poll): loops check it each frame so that a lost device ends the run with its
     /// reason instead of drawing nothing forever.

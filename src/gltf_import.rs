@@ -84,9 +84,7 @@ fn parse(bytes: &[u8]) -> Step<gltf::Gltf> {
         for (p, primitive) in mesh.primitives.iter().enumerate() {
             let position = primitive
                 .attributes
-                .get(&gltf::json::validation::Checked::Valid(
-                    gltf::Semantic::Positions,
-                ));
+                .get(&gltf::json::validation::Checked::Valid(Semantic::Positions));
             if let Some(index) = position.filter(|i| i.value() >= json.accessors.len()) {
                 return Err(format!(
                     "meshes[{m}].primitives[{p}].attributes.POSITION: accessor {} does not exist",
@@ -248,9 +246,10 @@ impl Importer<'_> {
         key: (usize, usize),
     ) -> Step<(Vec<Vertex>, Vec<u32>)> {
         let where_ = format!("mesh {} primitive {}", key.0, key.1);
-        for (semantic, size) in [(Semantic::Positions, 12), (Semantic::Normals, 12)] {
+        for semantic in [Semantic::Positions, Semantic::Normals] {
             if let Some(accessor) = primitive.get(&semantic) {
-                check_accessor(&accessor, size, &format!("{where_} {semantic:?}"))?;
+                let vec3 = std::mem::size_of::<[f32; 3]>();
+                check_accessor(&accessor, vec3, &format!("{where_} {semantic:?}"))?;
             }
         }
         if let Some(accessor) = primitive.indices() {

@@ -201,10 +201,7 @@ fn measure(
         let submit_start = Instant::now();
         gpu.queue.submit([encoder.finish()]);
         let end = Instant::now();
-        gpu.device
-            .poll(wgpu::PollType::wait_indefinitely())
-            .map_err(|e| Error::Readback(e.to_string()))?;
-        gpu.check_lost()?;
+        gpu.wait()?;
         let queries = match timer.as_deref_mut() {
             Some(t) => Some(t.read(&gpu.device, &gpu.queue)?),
             None => None,

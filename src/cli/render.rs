@@ -69,14 +69,6 @@ impl Session {
         )?;
         Ok((stats, start.elapsed().as_secs_f64() * 1e3))
     }
-
-    pub fn wait(&self) -> Result<()> {
-        self.gpu
-            .device
-            .poll(wgpu::PollType::wait_indefinitely())
-            .map_err(|e| Error::Readback(e.to_string()))?;
-        self.gpu.check_lost()
-    }
 }
 
 #[derive(Serialize)]
@@ -93,7 +85,7 @@ pub fn render(args: &RenderArgs) -> Result<()> {
     let mut session = Session::open(&args.scene, args.cull, args.mode)?;
     let (stats, cpu_ms) = session.frame()?;
     let start = Instant::now();
-    session.wait()?;
+    session.gpu.wait()?;
     let gpu_wait_ms = start.elapsed().as_secs_f64() * 1e3;
     std::fs::create_dir_all(&args.out).map_err(|e| Error::io(&args.out, e))?;
     let visible = session

@@ -111,7 +111,7 @@ pub fn stress(args: &StressArgs) -> Result<()> {
         session.rig.viewer.position[0] = base.position[0] + 0.3 * (2.0 * phase).sin();
         let start = Instant::now();
         let (stats, cpu_ms) = session.frame()?;
-        session.wait()?;
+        session.gpu.wait()?;
         let frame_ms = start.elapsed().as_secs_f64() * 1e3;
         let visible = session
             .renderer
