@@ -30,6 +30,7 @@ fn info_names_the_adapter() {
 }
 
 /// The GL backend lacks indirect count and multiview: `info` names the tier and costs.
+#[cfg(feature = "gl")]
 #[test]
 fn info_on_gl_names_the_fallback_tier_and_its_costs() {
     let out = Command::new(env!("CARGO_BIN_EXE_stereocull"))
@@ -244,6 +245,26 @@ fn render_writes_one_image_per_display_and_stats() {
         );
         assert!(stats["adapter"].as_str().unwrap().len() > 3);
     }
+}
+
+/// On a machine without a display, Mesa's device-select layer used to print two
+/// `error: XDG_RUNTIME_DIR ...` lines before every successful run.
+#[test]
+fn a_successful_render_prints_no_error_line() {
+    let dir = tempfile::tempdir().unwrap();
+    let out = Command::new(env!("CARGO_BIN_EXE_stereocull"))
+        .args(["render", "--width", "32", "--height", "32", "--out"])
+        .arg(dir.path())
+        .env_remove("NODEVICE_SELECT")
+        .env_remove("XDG_RUNTIME_DIR")
+        .env_remove("WAYLAND_DISPLAY")
+        .env_remove("DISPLAY")
+        .output()
+        .unwrap();
+    let stderr = String::from_utf8_lossy(&out.stderr);
+    assert!(out.status.success(), "{stderr}");
+    let said = format!("{}{stderr}", String::from_utf8_lossy(&out.stdout));
+    assert!(!said.to_lowercase().contains("error"), "{said}");
 }
 
 #[test]

@@ -325,6 +325,7 @@ fn every_stereo_mode_agrees_with_instanced() {
 /// `.ci/run` installs): no indirect count and no multiview there, so this also runs the
 /// fixed-count fallback on a second API. Every mode it has draws the Vulkan image
 /// (measured: 0 pixels differ).
+#[cfg(feature = "gl")]
 #[test]
 fn the_gl_backend_draws_the_vulkan_image() {
     let gl = Gpu::headless_on(Some(wgpu::Backends::GL), wgpu::Features::all())
