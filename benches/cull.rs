@@ -2,11 +2,10 @@
 //! display (`hmd`) and five culled in one pass (`cave`), on all cores and on one.
 
 use criterion::{Criterion, Throughput, criterion_group, criterion_main};
-use stereocull::contexts::DisplayContext;
 use stereocull::cull::cpu;
+use stereocull::procedural;
 use stereocull::records::CullLayout;
 use stereocull::rig::Rig;
-use stereocull::scene::Scene;
 
 fn cull(c: &mut Criterion) {
     let single = rayon::ThreadPoolBuilder::new()
@@ -16,14 +15,9 @@ fn cull(c: &mut Criterion) {
     let mut group = c.benchmark_group("cpu_cull");
     for preset in ["hmd", "cave"] {
         let rig = Rig::preset(preset).expect("preset");
-        let displays: Vec<_> = (0..rig.displays.len())
-            .map(|d| {
-                let ctx = DisplayContext::new(&rig, d).expect("display");
-                (ctx.planes, ctx.views)
-            })
-            .collect();
+        let displays = rig.cull_jobs().expect("display frusta");
         for n in [100_000u32, 1_000_000] {
-            let layout = CullLayout::new(&Scene::procedural(n, 64, 1));
+            let layout = CullLayout::new(&procedural::scene(n, 64, 1));
             group.throughput(Throughput::Elements(n as u64 * displays.len() as u64));
             group.bench_function(format!("{preset}/{n}/all_cores"), |b| {
                 b.iter(|| cpu::cull_many(&layout, &displays))

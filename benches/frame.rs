@@ -5,9 +5,9 @@ use std::time::{Duration, Instant};
 
 use criterion::{Criterion, criterion_group, criterion_main};
 use stereocull::device::Gpu;
+use stereocull::procedural;
 use stereocull::renderer::{CullMode, Renderer, RendererOptions, StereoMode};
 use stereocull::rig::Rig;
-use stereocull::scene::Scene;
 
 fn frame(c: &mut Criterion) {
     let gpu = Gpu::headless().expect("no adapter: install mesa-vulkan-drivers (lavapipe)");
@@ -17,7 +17,7 @@ fn frame(c: &mut Criterion) {
     let mut group = c.benchmark_group("frame_cpu");
     group.sample_size(10);
     for n in [10_000u32, 100_000] {
-        let scene = Scene::procedural(n, 8, 1);
+        let scene = procedural::scene(n, 8, 1);
         for mode in StereoMode::ALL {
             for cull in [CullMode::Gpu, CullMode::Cpu] {
                 if mode.per_instance() && cull == CullMode::Gpu {

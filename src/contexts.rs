@@ -1,13 +1,12 @@
-//! Frame, display and eye contexts (the chapter's Listing 1.3): what is computed once per
-//! frame, once per display, and per eye. The WGSL twins live in
-//! `wgsl/shared/contexts.wgsl`; encase lays these out to match.
+//! Display and eye contexts (the chapter's Listing 1.3): what is computed once per
+//! display, and per eye. The WGSL twins live in `wgsl/shared/contexts.wgsl`; encase
+//! lays these out to match (`tests/shaders.rs` checks every member).
 
 use encase::ShaderType;
 use glam::{Mat4, Vec2, Vec3, Vec4};
 
-use crate::error::Result;
 use crate::frustum::View;
-use crate::rig::Rig;
+use crate::rig::ResolvedDisplay;
 
 /// One eye of a display: only what truly differs per eye.
 #[derive(Clone, Copy, Debug, PartialEq, ShaderType)]
@@ -24,7 +23,7 @@ impl EyeContext {
         let clip_from_view = v.clip_from_view();
         EyeContext {
             view_from_world: v.view_from_world(),
-            world_from_view: v.world_from_view.into(),
+            world_from_view: v.world_from_view_f32(),
             clip_from_view,
             view_from_clip: clip_from_view.inverse(),
             position: v.position(),
@@ -44,66 +43,41 @@ pub struct DisplayContext {
     pub position: Vec3,
     pub resolution: Vec2,
     pub planes: [Vec4; 6],
-    pub views: u32,
+    /// Instances drawn per visible object (the cull contract's V): 2 where one
+    /// multi-draw covers both eyes (`instanced` stereo), 1 for mono, for multiview
+    /// (the hardware repeats each instance per view) and for the per-eye classic modes.
+    pub instances_per_object: u32,
 }
 
 impl DisplayContext {
-    /// Builds display `index` of `rig`: the display frustum from its eyes, then the
-    /// eyes themselves.
-    pub fn new(rig: &Rig, index: usize) -> Result<DisplayContext> {
-        let display = &rig.displays[index];
-        let eyes = rig.eyes(index)?;
-        let combined = rig.display_view(index)?;
-        let eye_context = |e: usize| EyeContext::from_view(&eyes[e.min(eyes.len() - 1)]);
-        Ok(DisplayContext::from_views(
-            &combined,
-            [eye_context(0), eye_context(1)],
-            display.resolution,
-            display.views(),
-        ))
-    }
-
-    pub fn from_views(
-        combined: &View,
-        eye: [EyeContext; 2],
+    /// The context of a resolved display of `resolution` pixels per eye.
+    pub fn new(
+        display: &ResolvedDisplay,
         resolution: [u32; 2],
-        views: u32,
+        instances_per_object: u32,
     ) -> DisplayContext {
-        let display = EyeContext::from_view(combined);
+        let combined = EyeContext::from_view(&display.combined);
+        let eyes = &display.eyes;
+        let eye = |e: usize| EyeContext::from_view(&eyes[e.min(eyes.len() - 1)]);
         DisplayContext {
-            view_from_world: display.view_from_world,
-            world_from_view: display.world_from_view,
-            clip_from_view: display.clip_from_view,
-            view_from_clip: display.view_from_clip,
-            eye,
-            position: display.position,
+            view_from_world: combined.view_from_world,
+            world_from_view: combined.world_from_view,
+            clip_from_view: combined.clip_from_view,
+            view_from_clip: combined.view_from_clip,
+            eye: [eye(0), eye(1)],
+            position: combined.position,
             resolution: Vec2::new(resolution[0] as f32, resolution[1] as f32),
-            planes: combined.frustum().planes,
-            views,
+            planes: display.combined.frustum().planes,
+            instances_per_object,
         }
     }
-}
 
-/// Once per frame: the viewer, not any eye (LOD and animation use this).
-#[derive(Clone, Copy, Debug, PartialEq, ShaderType)]
-pub struct FrameContext {
-    pub view_from_world: Mat4,
-    pub world_from_view: Mat4,
-    pub viewer_position: Vec3,
-    pub viewer_direction: Vec3,
-    pub time: f32,
-}
-
-impl FrameContext {
-    pub fn new(rig: &Rig, time: f32) -> FrameContext {
-        let orientation = rig.viewer.orientation();
-        let world_from_view = Mat4::from_rotation_translation(orientation, rig.viewer.position());
-        FrameContext {
-            view_from_world: world_from_view.inverse(),
-            world_from_view,
-            viewer_position: rig.viewer.position(),
-            viewer_direction: orientation * -Vec3::Z,
-            time,
+    /// This context narrowed to eye `e`: both eye slots hold that eye (the classic
+    /// modes bind one eye at a time).
+    pub fn for_eye(&self, e: usize) -> DisplayContext {
+        DisplayContext {
+            eye: [self.eye[e]; 2],
+            ..*self
         }
     }
 }

@@ -1,17 +1,16 @@
-//! Drawing: render passes, the pipelines (`wgsl/draw*.wgsl`), the one multi-draw-indirect
-//! call of the GPU-driven path and the per-instance draws of the classic modes.
+//! Drawing: render passes, the pipelines (`wgsl/draw*.wgsl`) and the one
+//! multi-draw-indirect call of the GPU-driven path. The renderer decides what to draw
+//! (`renderer::indirect`, `renderer::classic`); this module knows how.
 
 use std::collections::HashMap;
 use std::num::NonZeroU32;
 
 use wgpu::util::DeviceExt;
 
-use crate::cull::CullOutput;
 use crate::cull::gpu::CullTargets;
 use crate::records::{InstanceRecord, instance_records};
-use crate::renderer::TargetViews;
 use crate::scene::{Scene, Vertex};
-use crate::shaders::DrawKey;
+use crate::shaders::{DRAW_BINDINGS, DrawKey, bind_group, bind_group_layout};
 
 pub const DEPTH_FORMAT: wgpu::TextureFormat = wgpu::TextureFormat::Depth32Float;
 /// Dark enough that any lit object stands out in tests.
@@ -94,7 +93,7 @@ impl Drawer {
         color_format: wgpu::TextureFormat,
         keys: &[DrawKey],
     ) -> Drawer {
-        let layout = bind_group_layout(device);
+        let layout = bind_group_layout(device, "stereocull.draw", &DRAW_BINDINGS);
         let pipeline_layout = device.create_pipeline_layout(&wgpu::PipelineLayoutDescriptor {
             label: Some("stereocull.draw"),
             bind_group_layouts: &[Some(&layout)],
@@ -124,19 +123,9 @@ impl Drawer {
         scene: &DrawScene,
         visible: &wgpu::Buffer,
     ) -> wgpu::BindGroup {
-        let entries = [display_context, &scene.instances, visible]
-            .iter()
-            .enumerate()
-            .map(|(i, b)| wgpu::BindGroupEntry {
-                binding: i as u32,
-                resource: b.as_entire_binding(),
-            })
-            .collect::<Vec<_>>();
-        device.create_bind_group(&wgpu::BindGroupDescriptor {
-            label: Some("stereocull.draw"),
-            layout: &self.layout,
-            entries: &entries,
-        })
+        // In DRAW_BINDINGS order.
+        let buffers = [display_context, &scene.instances, visible];
+        bind_group(device, "stereocull.draw", &self.layout, buffers)
     }
 
     /// Sets the pipeline, geometry and bindings on `pass`.
@@ -156,18 +145,18 @@ impl Drawer {
     /// The one multi-draw call of the GPU-driven path.
     pub fn draw_indirect(&self, pass: &mut wgpu::RenderPass, mesh_count: u32, cull: &CullTargets) {
         if self.features.indirect_count {
-            pass.multi_draw_indexed_indirect_count(&cull.draws, 0, &cull.count, 0, mesh_count);
+            pass.multi_draw_indexed_indirect_count(&cull.draws, 0, &cull.counts, 0, mesh_count);
         } else {
             pass.multi_draw_indexed_indirect(&cull.draws, 0, mesh_count);
         }
     }
 }
 
-/// Opens a render pass on `target`, clearing it or keeping what earlier passes drew;
-/// `multiview` renders both layers of a two-layer target.
+/// Opens a render pass on `color` and `depth`, clearing them or keeping what earlier
+/// passes drew; `multiview` renders both layers of two-layer targets.
 pub fn begin_pass<'e>(
     encoder: &'e mut wgpu::CommandEncoder,
-    target: &TargetViews,
+    (color, depth): (&wgpu::TextureView, &wgpu::TextureView),
     clear: bool,
     multiview: bool,
     timestamp_writes: Option<wgpu::RenderPassTimestampWrites>,
@@ -180,7 +169,7 @@ pub fn begin_pass<'e>(
     encoder.begin_render_pass(&wgpu::RenderPassDescriptor {
         label: Some("stereocull.draw"),
         color_attachments: &[Some(wgpu::RenderPassColorAttachment {
-            view: target.color,
+            view: color,
             depth_slice: None,
             resolve_target: None,
             ops: wgpu::Operations {
@@ -189,7 +178,7 @@ pub fn begin_pass<'e>(
             },
         })],
         depth_stencil_attachment: Some(wgpu::RenderPassDepthStencilAttachment {
-            view: target.depth,
+            view: depth,
             depth_ops: Some(wgpu::Operations {
                 load: depth_load,
                 store: wgpu::StoreOp::Store,
@@ -206,55 +195,11 @@ pub fn begin_pass<'e>(
     })
 }
 
-/// One draw call per visible instance of a one-view cull result (the classic modes).
-/// Returns the number of draw calls.
-pub fn draw_instances(pass: &mut wgpu::RenderPass, out: &CullOutput) -> u32 {
-    let mut calls = 0;
-    for d in &out.draws[..out.draw_count as usize] {
-        let indices = d.first_index..d.first_index + d.index_count;
-        for slot in d.first_instance..d.first_instance + d.instance_count {
-            pass.draw_indexed(indices.clone(), d.base_vertex, slot..slot + 1);
-            calls += 1;
-        }
-    }
-    calls
-}
-
 /// Restricts drawing to eye `eye`'s half of a double-wide target of per-eye size `eye_size`.
 pub fn set_eye_viewport(pass: &mut wgpu::RenderPass, eye: u32, eye_size: (u32, u32)) {
     let (w, h) = eye_size;
     pass.set_viewport((eye * w) as f32, 0.0, w as f32, h as f32, 0.0, 1.0);
     pass.set_scissor_rect(eye * w, 0, w, h);
-}
-
-fn bind_group_layout(device: &wgpu::Device) -> wgpu::BindGroupLayout {
-    let storage = |binding| wgpu::BindGroupLayoutEntry {
-        binding,
-        visibility: wgpu::ShaderStages::VERTEX,
-        ty: wgpu::BindingType::Buffer {
-            ty: wgpu::BufferBindingType::Storage { read_only: true },
-            has_dynamic_offset: false,
-            min_binding_size: None,
-        },
-        count: None,
-    };
-    device.create_bind_group_layout(&wgpu::BindGroupLayoutDescriptor {
-        label: Some("stereocull.draw"),
-        entries: &[
-            wgpu::BindGroupLayoutEntry {
-                binding: 0,
-                visibility: wgpu::ShaderStages::VERTEX_FRAGMENT,
-                ty: wgpu::BindingType::Buffer {
-                    ty: wgpu::BufferBindingType::Uniform,
-                    has_dynamic_offset: false,
-                    min_binding_size: None,
-                },
-                count: None,
-            },
-            storage(1),
-            storage(2),
-        ],
-    })
 }
 
 fn pipeline(

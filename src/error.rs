@@ -42,6 +42,10 @@ pub enum Error {
     #[error("{0}")]
     Limits(String),
 
+    /// `encode` was given a different number of targets than the renderer has displays.
+    #[error("{targets} targets for {displays} displays: pass one target per display")]
+    TargetCount { targets: usize, displays: usize },
+
     /// Reading results back from the GPU failed (device lost, map failure).
     #[error("GPU readback failed: {0}")]
     Readback(String),

@@ -2,8 +2,13 @@
 //!
 //! Conventions: right-handed, +Y up, a view looks down its own -Z, clip depth 0..1 (wgpu).
 //! Planes are `Vec4(n, d)` with `dot(n, p) + d >= 0` inside, `n` unit length.
+//!
+//! Views are posed and their frusta built in f64, then rounded once (outwards) to the
+//! f32 planes the culler tests: a viewer kilometers from the origin has no f32 eye
+//! position to spare, and at a grazing angle one f32 ulp of the eye tilts a side plane
+//! by meters at a few kilometers' distance.
 
-use glam::{Affine3A, Mat4, Quat, Vec3, Vec3A, Vec4, Vec4Swizzles};
+use glam::{DAffine3, DQuat, DVec3, Mat4, Vec3, Vec4, Vec4Swizzles};
 use serde::{Deserialize, Serialize};
 
 /// Field of view as tangents of the half-angles from the view axis to each edge.
@@ -30,6 +35,11 @@ impl Fov {
 
     /// A window that has area and stays in front of the eye (each tangent finite, so
     /// every half-angle is below 90 degrees and the whole angle below 180).
+    /// Left, right, up, down in f64, for building frusta.
+    pub fn tangents(&self) -> [f64; 4] {
+        [self.left, self.right, self.up, self.down].map(f64::from)
+    }
+
     pub fn is_valid(&self) -> bool {
         let t = [self.left, self.right, self.up, self.down];
         t.iter().all(|v| v.is_finite()) && self.left + self.right > 0.0 && self.up + self.down > 0.0
@@ -39,20 +49,25 @@ impl Fov {
 /// One center of projection: an eye, or the apex of a combined frustum.
 #[derive(Clone, Copy, Debug, PartialEq)]
 pub struct View {
-    /// Rigid pose (rotation and translation only); its translation is the apex.
-    pub world_from_view: Affine3A,
+    /// Rigid pose (rotation and translation only), in f64; its translation is the apex.
+    pub world_from_view: DAffine3,
     pub fov: Fov,
     pub near: f32,
     pub far: f32,
 }
 
 impl View {
+    /// The apex, rounded to f32 (what shaders get).
     pub fn position(&self) -> Vec3 {
-        self.world_from_view.translation.into()
+        self.world_from_view.translation.as_vec3()
     }
 
     pub fn view_from_world(&self) -> Mat4 {
-        Mat4::from(self.world_from_view.inverse())
+        glam::DMat4::from(self.world_from_view.inverse()).as_mat4()
+    }
+
+    pub fn world_from_view_f32(&self) -> Mat4 {
+        glam::DMat4::from(self.world_from_view).as_mat4()
     }
 
     /// Off-axis perspective projection with depth 0 at `near` and 1 at `far`.
@@ -78,28 +93,27 @@ impl View {
 
     /// The six planes, built from the pose and tangents rather than extracted from
     /// the projection matrix: extraction loses about a meter at 1 km in f32 when
-    /// far / near is 2e4, this stays within float rounding of the true planes.
+    /// far / near is 2e4. Built in f64, then pushed out by [`ROUNDING_SLACK`] of their
+    /// magnitude and rounded to f32.
     pub fn frustum(&self) -> Frustum {
-        let Fov {
-            left: l,
-            right: r,
-            up: u,
-            down: d,
-        } = self.fov;
+        let [l, r, u, d] = self.fov.tangents();
+        let (near, far) = (self.near as f64, self.far as f64);
         let in_view = [
-            (Vec3::new(1.0, 0.0, -l), 0.0),
-            (Vec3::new(-1.0, 0.0, -r), 0.0),
-            (Vec3::new(0.0, 1.0, -d), 0.0),
-            (Vec3::new(0.0, -1.0, -u), 0.0),
-            (Vec3::NEG_Z, -self.near),
-            (Vec3::Z, self.far),
+            (DVec3::new(1.0, 0.0, -l), 0.0),
+            (DVec3::new(-1.0, 0.0, -r), 0.0),
+            (DVec3::new(0.0, 1.0, -d), 0.0),
+            (DVec3::new(0.0, -1.0, -u), 0.0),
+            (DVec3::NEG_Z, -near),
+            (DVec3::Z, far),
         ];
-        let apex = self.position();
+        let apex = self.world_from_view.translation;
         let magnitude = apex.abs().element_sum();
+        let slack = ROUNDING_SLACK as f64;
         Frustum {
             planes: in_view.map(|(n, dist)| {
                 let n = self.world_from_view.transform_vector3(n.normalize());
-                n.extend(dist - n.dot(apex) + ROUNDING_SLACK * (magnitude + dist.abs()))
+                let w = dist - n.dot(apex) + slack * (magnitude + dist.abs());
+                n.as_vec3().extend(w as f32)
             }),
         }
     }
@@ -107,29 +121,23 @@ impl View {
     /// The 8 corners in world space: near lower-left, lower-right, upper-right,
     /// upper-left, then the far ones in the same order (corner `i` and `i + 4` span
     /// one lateral edge).
-    pub fn corners(&self) -> [Vec3; 8] {
-        self.corners_from(Vec3::ZERO)
+    pub fn corners(&self) -> [DVec3; 8] {
+        self.corners_from(DVec3::ZERO)
     }
 
-    /// [`View::corners`] relative to `origin`. Near the eye (a near plane 5 cm away)
-    /// corners need millimeters, which f32 world coordinates a million meters from the
-    /// world origin do not have; relative to a nearby origin they keep them.
-    pub fn corners_from(&self, origin: Vec3) -> [Vec3; 8] {
-        let relative = Affine3A {
-            translation: self.world_from_view.translation - Vec3A::from(origin),
+    /// [`View::corners`] relative to `origin` (the viewer): what combined frusta are
+    /// built from, so that they keep millimeters near eyes far from the world origin.
+    pub fn corners_from(&self, origin: DVec3) -> [DVec3; 8] {
+        let relative = DAffine3 {
+            translation: self.world_from_view.translation - origin,
             ..self.world_from_view
         };
-        let Fov {
-            left: l,
-            right: r,
-            up: u,
-            down: d,
-        } = self.fov;
+        let [l, r, u, d] = self.fov.tangents();
         let window = [(-l, -d), (r, -d), (r, u), (-l, u)];
         std::array::from_fn(|i| {
-            let dist = if i < 4 { self.near } else { self.far };
+            let dist = if i < 4 { self.near } else { self.far } as f64;
             let (tx, ty) = window[i % 4];
-            relative.transform_point3(Vec3::new(tx * dist, ty * dist, -dist))
+            relative.transform_point3(DVec3::new(tx * dist, ty * dist, -dist))
         })
     }
 }
@@ -164,9 +172,8 @@ pub fn sphere_in_planes(planes: &[Vec4; 6], s: Vec4) -> bool {
 }
 
 /// How far (meters) every side of a combined frustum is pushed out beyond the exact
-/// bound, so that float rounding in plane extraction can never make it smaller than
-/// the views it must contain.
-const ENCLOSING_SLACK: f32 = 1e-5;
+/// bound, so that rounding can never make it smaller than the views it must contain.
+const ENCLOSING_SLACK: f64 = 1e-5;
 
 /// The smallest-apex perspective view, oriented by `orientation`, that contains every
 /// given frustum (each as its 8 corners relative to `origin`, see [`View::corners_from`]).
@@ -177,35 +184,36 @@ const ENCLOSING_SLACK: f32 = 1e-5;
 /// take the nearest and farthest input corners. For two parallel eyes this is exactly the
 /// chapter's construction (right plane = left eye's right plane moved to the right eye).
 /// `None` when the inputs span 180 degrees or more (no single frustum holds them: a CAVE).
-pub fn enclosing_view(orientation: Quat, origin: Vec3, frusta: &[[Vec3; 8]]) -> Option<View> {
+pub fn enclosing_view(orientation: DQuat, origin: DVec3, frusta: &[[DVec3; 8]]) -> Option<View> {
     let to_basis = orientation.inverse();
-    let local: Vec<[Vec3; 8]> = frusta.iter().map(|c| c.map(|p| to_basis * p)).collect();
+    let local: Vec<[DVec3; 8]> = frusta.iter().map(|c| c.map(|p| to_basis * p)).collect();
     let fov = widest_fov(&local)?;
+    let [left, right, up, down] = fov.tangents();
     let corners = || local.iter().flatten().copied();
     let reach =
-        |f: &dyn Fn(Vec3) -> f32| corners().map(f).fold(f32::MIN, f32::max) + ENCLOSING_SLACK;
-    let c_right = reach(&|p| p.x + fov.right * p.z);
-    let c_left = reach(&|p| -p.x + fov.left * p.z);
-    let c_up = reach(&|p| p.y + fov.up * p.z);
-    let c_down = reach(&|p| -p.y + fov.down * p.z);
-    let apex_z = f32::max(
-        (c_right + c_left) / (fov.left + fov.right),
-        (c_up + c_down) / (fov.up + fov.down),
+        |f: &dyn Fn(DVec3) -> f64| corners().map(f).fold(f64::MIN, f64::max) + ENCLOSING_SLACK;
+    let c_right = reach(&|p| p.x + right * p.z);
+    let c_left = reach(&|p| -p.x + left * p.z);
+    let c_up = reach(&|p| p.y + up * p.z);
+    let c_down = reach(&|p| -p.y + down * p.z);
+    let apex_z = f64::max(
+        (c_right + c_left) / (left + right),
+        (c_up + c_down) / (up + down),
     );
     // Any x in [c_right - r z, l z - c_left] works; the middle keeps slack on both sides.
-    let apex_x = 0.5 * ((c_right - fov.right * apex_z) + (fov.left * apex_z - c_left));
-    let apex_y = 0.5 * ((c_up - fov.up * apex_z) + (fov.down * apex_z - c_down));
-    let z_nearest = corners().map(|p| p.z).fold(f32::MIN, f32::max);
-    let z_farthest = corners().map(|p| p.z).fold(f32::MAX, f32::min);
-    let near = apex_z - z_nearest;
-    let far = apex_z - z_farthest + ENCLOSING_SLACK;
+    let apex_x = 0.5 * ((c_right - right * apex_z) + (left * apex_z - c_left));
+    let apex_y = 0.5 * ((c_up - up * apex_z) + (down * apex_z - c_down));
+    let z_nearest = corners().map(|p| p.z).fold(f64::MIN, f64::max);
+    let z_farthest = corners().map(|p| p.z).fold(f64::MAX, f64::min);
+    let near = round_down(apex_z - z_nearest);
+    let far = round_up(apex_z - z_farthest + ENCLOSING_SLACK);
     if !(near > 0.0 && far > near && apex_z.is_finite()) {
         return None;
     }
     Some(View {
-        world_from_view: Affine3A::from_rotation_translation(
+        world_from_view: DAffine3::from_rotation_translation(
             orientation,
-            origin + orientation * Vec3::new(apex_x, apex_y, apex_z),
+            origin + orientation * DVec3::new(apex_x, apex_y, apex_z),
         ),
         fov,
         near,
@@ -213,14 +221,10 @@ pub fn enclosing_view(orientation: Quat, origin: Vec3, frusta: &[[Vec3; 8]]) -> 
     })
 }
 
-/// Widest tangent per side over all lateral edges, in the basis the corners are given in.
-fn widest_fov(local: &[[Vec3; 8]]) -> Option<Fov> {
-    let mut fov = Fov {
-        left: f32::MIN,
-        right: f32::MIN,
-        up: f32::MIN,
-        down: f32::MIN,
-    };
+/// Widest tangent per side over all lateral edges, in the basis the corners are given
+/// in, rounded outwards to f32.
+fn widest_fov(local: &[[DVec3; 8]]) -> Option<Fov> {
+    let mut widest = [f64::MIN; 4];
     for c in local {
         for i in 0..4 {
             let e = c[i + 4] - c[i];
@@ -229,22 +233,42 @@ fn widest_fov(local: &[[Vec3; 8]]) -> Option<Fov> {
             if depth <= 1e-3 * e.length() {
                 return None;
             }
-            fov.right = fov.right.max(e.x / depth);
-            fov.left = fov.left.max(-e.x / depth);
-            fov.up = fov.up.max(e.y / depth);
-            fov.down = fov.down.max(-e.y / depth);
+            let [right, left, up, down] = &mut widest;
+            *right = right.max(e.x / depth);
+            *left = left.max(-e.x / depth);
+            *up = up.max(e.y / depth);
+            *down = down.max(-e.y / depth);
         }
     }
+    let [right, left, up, down] = widest.map(round_up);
+    let fov = Fov {
+        left,
+        right,
+        up,
+        down,
+    };
     fov.is_valid().then_some(fov)
+}
+
+/// The smallest f32 not below `x`.
+fn round_up(x: f64) -> f32 {
+    let r = x as f32;
+    if (r as f64) < x { r.next_up() } else { r }
+}
+
+/// The largest f32 not above `x`.
+fn round_down(x: f64) -> f32 {
+    let r = x as f32;
+    if (r as f64) > x { r.next_down() } else { r }
 }
 
 #[cfg(test)]
 mod tests {
     use super::*;
 
-    fn eye(x: f32) -> View {
+    fn eye(x: f64) -> View {
         View {
-            world_from_view: Affine3A::from_translation(Vec3::new(x, 0.0, 0.0)),
+            world_from_view: DAffine3::from_translation(DVec3::new(x, 0.0, 0.0)),
             fov: Fov {
                 left: 1.0,
                 right: 0.8,
@@ -262,7 +286,7 @@ mod tests {
         let m = v.clip_from_world();
         let ndc = [(-1.0, -1.0), (1.0, -1.0), (1.0, 1.0), (-1.0, 1.0)];
         for (i, c) in v.corners().iter().enumerate() {
-            let p = m.project_point3(*c);
+            let p = m.project_point3(c.as_vec3());
             let (x, y) = ndc[i % 4];
             let z = if i < 4 { 0.0 } else { 1.0 };
             assert!(
@@ -275,7 +299,7 @@ mod tests {
     #[test]
     fn parallel_eyes_give_the_chapters_construction() {
         let (l, r) = (eye(-0.032), eye(0.032));
-        let d = enclosing_view(Quat::IDENTITY, Vec3::ZERO, &[l.corners(), r.corners()]).unwrap();
+        let d = enclosing_view(DQuat::IDENTITY, DVec3::ZERO, &[l.corners(), r.corners()]).unwrap();
         // The apex lies behind the eyes where the two outer planes meet.
         let expected_z = 0.064 / (1.0 + 0.8);
         assert!(

@@ -15,19 +15,20 @@
 pub mod cli;
 pub mod contexts;
 pub mod cull;
-pub mod default_scene;
 pub mod device;
 pub mod draw;
 pub mod error;
 pub mod frustum;
 pub mod gltf_import;
 pub mod modes;
+pub mod procedural;
 pub mod profiling;
 pub mod readback;
 pub mod records;
 pub mod renderer;
 pub mod rig;
 pub mod scene;
+pub mod scene_spec;
 pub mod shaders;
 pub mod shapes;
 

@@ -6,9 +6,10 @@
 
 use std::path::Path;
 
-use glam::{Affine3A, EulerRot, Mat3, Quat, Vec3};
+use glam::{DAffine3, DMat3, DQuat, DVec3, EulerRot};
 use serde::{Deserialize, Serialize};
 
+use crate::cull::CullJob;
 use crate::error::{Error, Result};
 use crate::frustum::{Fov, View, enclosing_view};
 
@@ -34,22 +35,17 @@ fn default_ipd() -> f32 {
 }
 
 impl Viewer {
-    pub fn orientation(&self) -> Quat {
-        Quat::from_euler(
-            EulerRot::YXZ,
-            self.yaw_deg.to_radians(),
-            self.pitch_deg.to_radians(),
-            self.roll_deg.to_radians(),
-        )
+    pub fn orientation(&self) -> DQuat {
+        euler(self.yaw_deg, self.pitch_deg, self.roll_deg)
     }
 
-    pub fn position(&self) -> Vec3 {
-        Vec3::from(self.position)
+    pub fn position(&self) -> DVec3 {
+        DVec3::from(self.position.map(f64::from))
     }
 
     /// Eye centers: left then right for stereo, the cyclopean point for mono.
-    pub fn eye_positions(&self, views: u32) -> Vec<Vec3> {
-        let right = self.orientation() * Vec3::X * (0.5 * self.ipd);
+    pub fn eye_positions(&self, views: u32) -> Vec<DVec3> {
+        let right = self.orientation() * DVec3::X * (0.5 * self.ipd as f64);
         match views {
             1 => vec![self.position()],
             _ => vec![self.position() - right, self.position() + right],
@@ -86,23 +82,81 @@ pub struct Screen {
     pub upper_left: [f32; 3],
 }
 
+/// Where a display's image is fixed: to the head, or in the world.
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub enum Mount {
+    /// An HMD panel: moves with the viewer's head.
+    Head(HeadFixed),
+    /// A CAVE wall: fixed in tracking space, seen off-axis from each eye.
+    Screen(Screen),
+}
+
 #[derive(Clone, Debug, PartialEq, Serialize, Deserialize)]
-#[serde(deny_unknown_fields)]
+#[serde(try_from = "DisplayFile", into = "DisplayFile")]
 pub struct Display {
     pub name: String,
     /// Two views (left, right) when true, one otherwise.
     pub stereo: bool,
     /// Pixels per eye: the stereo target is twice as wide.
     pub resolution: [u32; 2],
-    #[serde(default)]
-    pub head: Option<HeadFixed>,
-    #[serde(default)]
-    pub screen: Option<Screen>,
+    pub mount: Mount,
 }
 
 impl Display {
     pub fn views(&self) -> u32 {
         if self.stereo { 2 } else { 1 }
+    }
+}
+
+/// A display as rig files spell it: the mount is a `head` or a `screen` table.
+#[derive(Serialize, Deserialize)]
+#[serde(deny_unknown_fields)]
+struct DisplayFile {
+    name: String,
+    stereo: bool,
+    resolution: [u32; 2],
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    head: Option<HeadFixed>,
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    screen: Option<Screen>,
+}
+
+impl TryFrom<DisplayFile> for Display {
+    type Error = String;
+
+    fn try_from(f: DisplayFile) -> std::result::Result<Display, String> {
+        let mount = match (f.head, f.screen) {
+            (Some(h), None) => Mount::Head(h),
+            (None, Some(s)) => Mount::Screen(s),
+            _ => {
+                return Err(format!(
+                    "display {:?} needs exactly one of `head` or `screen`",
+                    f.name
+                ));
+            }
+        };
+        Ok(Display {
+            name: f.name,
+            stereo: f.stereo,
+            resolution: f.resolution,
+            mount,
+        })
+    }
+}
+
+impl From<Display> for DisplayFile {
+    fn from(d: Display) -> DisplayFile {
+        let (head, screen) = match d.mount {
+            Mount::Head(h) => (Some(h), None),
+            Mount::Screen(s) => (None, Some(s)),
+        };
+        DisplayFile {
+            name: d.name,
+            stereo: d.stereo,
+            resolution: d.resolution,
+            head,
+            screen,
+        }
     }
 }
 
@@ -199,92 +253,115 @@ impl Rig {
         })
     }
 
-    /// The views of display `index`: left then right for stereo, one for mono.
-    pub fn eyes(&self, index: usize) -> Result<Vec<View>> {
-        let d = &self.displays[index];
-        let positions = self.viewer.eye_positions(d.views());
-        positions
-            .iter()
-            .enumerate()
-            .map(|(e, &p)| self.eye_view(d, e, p))
-            .collect::<std::result::Result<_, String>>()
-            .map_err(|m| Error::rig(&d.name, m))
-    }
-
-    fn eye_view(
-        &self,
-        d: &Display,
-        eye: usize,
-        position: Vec3,
-    ) -> std::result::Result<View, String> {
-        let (orientation, fov) = match (&d.head, &d.screen) {
-            (Some(h), _) => head_fixed_basis(&self.viewer, h, eye, d.views()),
-            (None, Some(s)) => screen_basis(s, position)?,
-            (None, None) => return Err("has neither `head` nor `screen`".into()),
-        };
-        Ok(View {
-            world_from_view: Affine3A::from_rotation_translation(orientation, position),
-            fov,
-            near: self.near,
-            far: self.far,
-        })
-    }
-
-    /// The display frustum's view: one frustum holding every eye of the display, the
-    /// only one culling ever uses (never per eye).
-    pub fn display_view(&self, index: usize) -> Result<View> {
-        let eyes = self.eyes(index)?;
+    /// This frame's views, resolved once: every display's eyes and display frustum,
+    /// and the frame frustum. Validates first, so that what is built from the result
+    /// (contexts, cull jobs) cannot fail.
+    pub fn resolve(&self) -> Result<ResolvedRig> {
+        self.validate("(this frame's pose)")?;
         let origin = self.viewer.position();
-        let corners: Vec<_> = eyes.iter().map(|e| e.corners_from(origin)).collect();
-        let orientation = Quat::from_mat3a(&eyes[0].world_from_view.matrix3);
-        let combined = if let [mono] = eyes.as_slice() {
-            Some(*mono)
-        } else {
-            enclosing_view(
-                display_orientation(self, index, orientation),
-                origin,
-                &corners,
-            )
-        };
-        combined.ok_or_else(|| {
-            Error::rig(
-                &self.displays[index].name,
-                "the eyes' frusta span 180 degrees or more; no display frustum holds them",
-            )
-        })
+        let displays = self
+            .displays
+            .iter()
+            .map(|d| self.resolve_display(d).map_err(|m| Error::rig(&d.name, m)))
+            .collect::<Result<Vec<_>>>()?;
+        let corners: Vec<_> = displays
+            .iter()
+            .map(|d| d.combined.corners_from(origin))
+            .collect();
+        let frame = enclosing_view(self.viewer.orientation(), origin, &corners);
+        Ok(ResolvedRig { displays, frame })
     }
 
+    /// Every display's cull against its display frustum, as the `instanced` mode culls
+    /// (each visible object drawn once per view): the CPU reference of the cull dump.
+    pub fn cull_jobs(&self) -> Result<Vec<CullJob>> {
+        let resolved = self.resolve()?;
+        Ok(self
+            .displays
+            .iter()
+            .zip(&resolved.displays)
+            .map(|(d, r)| r.cull_job(d.views()))
+            .collect())
+    }
+
+    fn resolve_display(&self, d: &Display) -> std::result::Result<ResolvedDisplay, String> {
+        let eyes = self
+            .viewer
+            .eye_positions(d.views())
+            .into_iter()
+            .enumerate()
+            .map(|(e, position)| {
+                let (orientation, fov) = match &d.mount {
+                    Mount::Head(h) => head_fixed_basis(&self.viewer, h, e, d.views()),
+                    Mount::Screen(s) => screen_basis(s, position)?,
+                };
+                Ok(View {
+                    world_from_view: DAffine3::from_rotation_translation(orientation, position),
+                    fov,
+                    near: self.near,
+                    far: self.far,
+                })
+            })
+            .collect::<std::result::Result<Vec<View>, String>>()?;
+        let combined = match (eyes.as_slice(), &d.mount) {
+            ([mono], _) => Some(*mono),
+            (_, mount) => {
+                let orientation = match mount {
+                    Mount::Head(h) => head_panel_orientation(&self.viewer, h),
+                    Mount::Screen(_) => DQuat::from_mat3(&eyes[0].world_from_view.matrix3),
+                };
+                let origin = self.viewer.position();
+                let corners: Vec<_> = eyes.iter().map(|e| e.corners_from(origin)).collect();
+                enclosing_view(orientation, origin, &corners)
+            }
+        };
+        let combined = combined
+            .ok_or("the eyes' frusta span 180 degrees or more; no display frustum holds them")?;
+        Ok(ResolvedDisplay { eyes, combined })
+    }
+}
+
+/// One frame's views of a rig: what [`Rig::resolve`] builds once per frame.
+#[derive(Clone, Debug, PartialEq)]
+pub struct ResolvedRig {
+    /// In the rig's display order.
+    pub displays: Vec<ResolvedDisplay>,
     /// The frame frustum, holding every display frustum, or `None` when the displays
     /// surround the viewer (a CAVE) and no single frustum can.
-    pub fn frame_view(&self) -> Result<Option<View>> {
-        let origin = self.viewer.position();
-        let corners = (0..self.displays.len())
-            .map(|i| self.display_view(i).map(|v| v.corners_from(origin)))
-            .collect::<Result<Vec<_>>>()?;
-        Ok(enclosing_view(self.viewer.orientation(), origin, &corners))
+    pub frame: Option<View>,
+}
+
+/// One display's views for a frame.
+#[derive(Clone, Debug, PartialEq)]
+pub struct ResolvedDisplay {
+    /// Left then right for stereo; the one eye for mono.
+    pub eyes: Vec<View>,
+    /// The display frustum's view: one frustum holding every eye of the display, the
+    /// only one culling ever uses (never per eye).
+    pub combined: View,
+}
+
+impl ResolvedDisplay {
+    /// Culling against the display frustum, each visible object drawn
+    /// `instances_per_object` times.
+    pub fn cull_job(&self, instances_per_object: u32) -> CullJob {
+        CullJob {
+            planes: self.combined.frustum().planes,
+            instances_per_object,
+        }
     }
 }
 
-/// The display's own basis: the panel's facing for head-fixed displays (the eyes'
-/// bases without cant), the screen's basis for world-fixed ones.
-fn display_orientation(rig: &Rig, index: usize, first_eye: Quat) -> Quat {
-    match &rig.displays[index].head {
-        Some(h) => head_panel_orientation(&rig.viewer, h),
-        None => first_eye,
-    }
+fn euler(yaw_deg: f32, pitch_deg: f32, roll_deg: f32) -> DQuat {
+    let rad = |deg: f32| (deg as f64).to_radians();
+    DQuat::from_euler(EulerRot::YXZ, rad(yaw_deg), rad(pitch_deg), rad(roll_deg))
 }
 
-fn head_panel_orientation(viewer: &Viewer, h: &HeadFixed) -> Quat {
-    viewer.orientation()
-        * Quat::from_euler(
-            EulerRot::YXZ,
-            h.yaw_deg.to_radians(),
-            h.pitch_deg.to_radians(),
-            0.0,
-        )
+fn head_panel_orientation(viewer: &Viewer, h: &HeadFixed) -> DQuat {
+    viewer.orientation() * euler(h.yaw_deg, h.pitch_deg, 0.0)
 }
 
-fn head_fixed_basis(viewer: &Viewer, h: &HeadFixed, eye: usize, views: u32) -> (Quat, Fov) {
+fn head_fixed_basis(viewer: &Viewer, h: &HeadFixed, eye: usize, views: u32) -> (DQuat, Fov) {
     let panel = head_panel_orientation(viewer, h);
     if views == 1 {
         return (panel, h.fov);
@@ -296,31 +373,34 @@ fn head_fixed_basis(viewer: &Viewer, h: &HeadFixed, eye: usize, views: u32) -> (
     } else {
         h.fov_right.unwrap_or(h.fov.mirrored())
     };
-    (panel * Quat::from_rotation_y(cant.to_radians()), fov)
+    (panel * euler(cant, 0.0, 0.0), fov)
 }
 
 /// Kooima's generalized perspective projection: the view looks along the screen's
 /// inward normal and its window is the screen rectangle seen from `eye`.
-fn screen_basis(s: &Screen, eye: Vec3) -> std::result::Result<(Quat, Fov), String> {
-    let (pa, pb, pc) = (
-        Vec3::from(s.lower_left),
-        Vec3::from(s.lower_right),
-        Vec3::from(s.upper_left),
-    );
-    let (vr, vu) = ((pb - pa).normalize(), (pc - pa).normalize());
-    let vn = vr.cross(vu).normalize();
+///
+/// The rectangle is the screen's completion: the lower edge as given, the up direction
+/// made perpendicular to it (Gram-Schmidt), and the height of `upper_left` above the
+/// lower edge. Validation allows corners a hair off a right angle; this is then the
+/// rectangle both the projection and the culling frustum use.
+fn screen_basis(s: &Screen, eye: DVec3) -> std::result::Result<(DQuat, Fov), String> {
+    let [pa, pb, pc] =
+        [s.lower_left, s.lower_right, s.upper_left].map(|p| DVec3::from(p.map(f64::from)));
+    let vr = (pb - pa).normalize();
+    let vu = (pc - pa).reject_from_normalized(vr).normalize();
+    let vn = vr.cross(vu);
     let (va, vb, vc) = (pa - eye, pb - eye, pc - eye);
     let dist = -va.dot(vn);
     if dist <= 1e-4 {
         return Err(format!("the eye at {eye} is on or behind the screen"));
     }
     let fov = Fov {
-        left: -vr.dot(va) / dist,
-        right: vr.dot(vb) / dist,
-        up: vu.dot(vc) / dist,
-        down: -vu.dot(va) / dist,
+        left: (-vr.dot(va) / dist) as f32,
+        right: (vr.dot(vb) / dist) as f32,
+        up: (vu.dot(vc) / dist) as f32,
+        down: (-vu.dot(va) / dist) as f32,
     };
-    Ok((Quat::from_mat3(&Mat3::from_cols(vr, vu, vn)), fov))
+    Ok((DQuat::from_mat3(&DMat3::from_cols(vr, vu, vn)), fov))
 }
 
 fn validate_display(d: &Display) -> std::result::Result<(), String> {
@@ -330,10 +410,9 @@ fn validate_display(d: &Display) -> std::result::Result<(), String> {
             d.resolution
         ));
     }
-    match (&d.head, &d.screen) {
-        (Some(h), None) => validate_head(h),
-        (None, Some(s)) => validate_screen(s),
-        _ => Err("needs exactly one of `head` or `screen`".into()),
+    match &d.mount {
+        Mount::Head(h) => validate_head(h),
+        Mount::Screen(s) => validate_screen(s),
     }
 }
 
@@ -359,11 +438,8 @@ fn validate_screen(s: &Screen) -> std::result::Result<(), String> {
     if !pts.iter().flatten().all(|x| x.is_finite()) {
         return Err("screen: corners must be finite".into());
     }
-    let (pa, pb, pc) = (
-        Vec3::from(s.lower_left),
-        Vec3::from(s.lower_right),
-        Vec3::from(s.upper_left),
-    );
+    let [pa, pb, pc] =
+        [s.lower_left, s.lower_right, s.upper_left].map(|p| DVec3::from(p.map(f64::from)));
     let (w, h) = (pb - pa, pc - pa);
     if w.length() < 1e-4 || h.length() < 1e-4 {
         return Err("screen: degenerate corners (an edge shorter than 0.1 mm)".into());
@@ -393,7 +469,7 @@ fn hmd() -> Rig {
             stereo: true,
             resolution: [1440, 1600],
             // Outer half-angle wider than the nasal one, like shipping headsets.
-            head: Some(HeadFixed {
+            mount: Mount::Head(HeadFixed {
                 fov: Fov {
                     left: 1.19,
                     right: 0.84,
@@ -405,7 +481,6 @@ fn hmd() -> Rig {
                 pitch_deg: 0.0,
                 cant_deg: 0.0,
             }),
-            screen: None,
         }],
     }
 }
@@ -417,8 +492,7 @@ fn cave() -> Rig {
         name: name.into(),
         stereo: true,
         resolution: [1024, 1024],
-        head: None,
-        screen: Some(Screen {
+        mount: Mount::Screen(Screen {
             lower_left: ll,
             lower_right: lr,
             upper_left: ul,
@@ -457,16 +531,15 @@ fn hmd_peripheral() -> Rig {
         up: 1.0,
         down: 1.0,
     };
-    rig.displays[0].head = Some(HeadFixed {
-        fov: center,
-        ..rig.displays[0].head.expect("hmd preset is head-fixed")
-    });
+    if let Mount::Head(h) = &mut rig.displays[0].mount {
+        h.fov = center;
+    }
     rig.displays[0].name = "center".into();
     let side = |name: &str, yaw_deg: f32| Display {
         name: name.into(),
         stereo: false,
         resolution: [480, 800],
-        head: Some(HeadFixed {
+        mount: Mount::Head(HeadFixed {
             fov: Fov {
                 left: 0.58,
                 right: 0.58,
@@ -478,7 +551,6 @@ fn hmd_peripheral() -> Rig {
             pitch_deg: 0.0,
             cant_deg: 0.0,
         }),
-        screen: None,
     };
     rig.displays.push(side("peripheral-left", 45.0));
     rig.displays.push(side("peripheral-right", -45.0));

@@ -1,17 +1,12 @@
-//! Scenes: meshes packed into one vertex and one index buffer, and instances of them.
+//! Scenes, as data: meshes packed into one vertex and one index buffer, and instances of
+//! them. Where scenes come from sits above this module: [`crate::gltf_import`],
+//! [`crate::procedural`], and [`crate::scene_spec`] choosing between them by name.
 //!
 //! An instance's id is its index in [`Scene::instances`]. For glTF files the order is
 //! defined in `gltf_import`; for procedural scenes it is generation order.
 
-use std::path::Path;
-
 use bytemuck::{Pod, Zeroable};
-use glam::{Affine3A, Mat4, Quat, Vec3, Vec4};
-use rand::{Rng, SeedableRng};
-use rand_pcg::Pcg64Mcg;
-
-use crate::error::{Error, Result};
-use crate::shapes::{self, Shape};
+use glam::{Affine3A, Mat4, Vec3, Vec4};
 
 /// One vertex as the draw pipeline reads it (`wgsl/draw.wgsl`, locations 0 and 1).
 #[repr(C)]
@@ -57,45 +52,7 @@ pub struct Scene {
     pub instances: Vec<Instance>,
 }
 
-/// The scene spec naming the built-in room (`assets/room.glb`).
-pub const DEFAULT_SCENE: &str = "default";
-/// Meshes a `procedural:N` scene uses when no count is given.
-pub const DEFAULT_PROCEDURAL_MESHES: u32 = 8;
-/// Seed a `procedural:N` scene uses when none is given.
-pub const DEFAULT_PROCEDURAL_SEED: u64 = 1;
-
 impl Scene {
-    /// `default` (the built-in room), `procedural:N[:MESHES[:SEED]]`, or a path to a
-    /// `.gltf` / `.glb` file.
-    /// An empty scene is an error: there would be nothing to cull or draw, and GPU
-    /// buffers cannot be empty.
-    pub fn load(spec: &str) -> Result<Scene> {
-        let scene = match spec.strip_prefix("procedural:") {
-            Some(rest) => {
-                let (n, meshes, seed) = parse_procedural(spec, rest)?;
-                Scene::procedural(n, meshes, seed)
-            }
-            None if spec == DEFAULT_SCENE => crate::gltf_import::import_bytes(
-                crate::default_scene::ROOM_GLB,
-                None,
-                Path::new("assets/room.glb"),
-            )?,
-            None => crate::gltf_import::import(Path::new(spec))?,
-        };
-        let mut scene = scene;
-        let dropped = scene.drop_non_finite_instances();
-        if dropped > 0 {
-            log::warn!("{spec}: dropped {dropped} instance(s) with non-finite transforms");
-        }
-        if scene.instances.is_empty() {
-            return Err(Error::SceneSpec {
-                spec: spec.into(),
-                message: "the scene has no mesh instances to draw".into(),
-            });
-        }
-        Ok(scene)
-    }
-
     /// Removes instances whose transform or world bounding sphere is not finite (NaN or
     /// infinite entries): culling cannot place them, and a NaN sphere would be culled
     /// differently by different hardware. Every other instance keeps its order; ids are
@@ -137,42 +94,6 @@ impl Scene {
     pub fn world_sphere(&self, instance: &Instance) -> Vec4 {
         world_sphere_of(&self.meshes, instance)
     }
-
-    /// `n` instances of `mesh_count` built-in meshes scattered in a ball around the
-    /// origin (where every preset's viewer stands), at real scale: objects of 0.1 m to
-    /// 1.5 m, spread so that density stays near a few per cubic meter at any `n`.
-    pub fn procedural(n: u32, mesh_count: u32, seed: u64) -> Scene {
-        let mut scene = Scene::default();
-        for k in 0..mesh_count.max(1) {
-            let Shape { vertices, indices } = shapes::family(k);
-            scene.add_mesh(format!("shape{k}"), &vertices, &indices);
-        }
-        let mut rng = Pcg64Mcg::seed_from_u64(seed);
-        let radius = 4.0 + (n as f32).cbrt() * 0.8;
-        let center = Vec3::new(0.0, 1.5, 0.0);
-        scene.instances = (0..n)
-            .map(|_| {
-                let offset = random_in_shell(&mut rng, 1.0, radius);
-                let rotation = Quat::from_euler(
-                    glam::EulerRot::YXZ,
-                    rng.random_range(0.0..std::f32::consts::TAU),
-                    rng.random_range(-0.5..0.5),
-                    0.0,
-                );
-                let scale = rng.random_range(0.25..1.5);
-                Instance {
-                    world_from_local: Affine3A::from_scale_rotation_translation(
-                        Vec3::splat(scale),
-                        rotation,
-                        center + offset,
-                    ),
-                    mesh: rng.random_range(0..scene.meshes.len() as u32),
-                    color: Vec4::new(rng.random(), rng.random(), rng.random(), 1.0),
-                }
-            })
-            .collect();
-        scene
-    }
 }
 
 fn world_sphere_of(meshes: &[Mesh], instance: &Instance) -> Vec4 {
@@ -189,20 +110,6 @@ fn world_sphere_of(meshes: &[Mesh], instance: &Instance) -> Vec4 {
     center.extend(radius + slack)
 }
 
-fn random_in_shell(rng: &mut Pcg64Mcg, inner: f32, outer: f32) -> Vec3 {
-    loop {
-        let p = Vec3::new(
-            rng.random_range(-1.0..1.0),
-            rng.random_range(-1.0..1.0),
-            rng.random_range(-1.0..1.0),
-        ) * outer;
-        let d = p.length();
-        if (inner..=outer).contains(&d) {
-            return p;
-        }
-    }
-}
-
 fn bounding_sphere(vertices: &[Vertex]) -> Vec4 {
     let positions = || vertices.iter().map(|v| Vec3::from(v.position));
     let min = positions().fold(Vec3::splat(f32::MAX), Vec3::min);
@@ -214,32 +121,4 @@ fn bounding_sphere(vertices: &[Vertex]) -> Vec4 {
     let radius = positions().map(|p| p.distance(center)).fold(0.0, f32::max);
     // Rounding in the distance can leave the farthest vertex a hair outside.
     center.extend(radius * (1.0 + 1e-6))
-}
-
-fn parse_procedural(spec: &str, rest: &str) -> Result<(u32, u32, u64)> {
-    let fail = |message: &str| Error::SceneSpec {
-        spec: spec.into(),
-        message: format!("{message}; expected procedural:N[:MESHES[:SEED]]"),
-    };
-    let mut parts = rest.split(':');
-    let n = parts
-        .next()
-        .and_then(|s| s.parse().ok())
-        .ok_or_else(|| fail("N is not a count"))?;
-    let meshes = match parts.next() {
-        Some(s) => s
-            .parse()
-            .ok()
-            .filter(|&m: &u32| m > 0)
-            .ok_or_else(|| fail("MESHES is not a positive count"))?,
-        None => DEFAULT_PROCEDURAL_MESHES,
-    };
-    let seed = match parts.next() {
-        Some(s) => s.parse().map_err(|_| fail("SEED is not an integer"))?,
-        None => DEFAULT_PROCEDURAL_SEED,
-    };
-    if parts.next().is_some() {
-        return Err(fail("too many fields"));
-    }
-    Ok((n, meshes, seed))
 }

@@ -1,5 +1,7 @@
 //! WGSL composition, in one place: every pipeline's source is its file in `wgsl/` after
-//! the shared includes and the constants injected from Rust.
+//! the shared includes, the constants injected from Rust, and the binding declarations
+//! generated from the one binding list per pipeline family ([`CULL_BINDINGS`],
+//! [`DRAW_BINDINGS`]), from which the bind-group layouts are built too.
 
 /// Invocations per cull workgroup: one instance each, and the scan's shared array holds
 /// one entry per invocation. 256 is the largest size every WebGPU adapter must support.
@@ -13,6 +15,170 @@ const DRAW_NO_CLIP_DISTANCES: &str = include_str!("../wgsl/shared/draw_no_clip_d
 const DRAW_COMMON: &str = include_str!("../wgsl/shared/draw_common.wgsl");
 const DRAW: &str = include_str!("../wgsl/draw.wgsl");
 const DRAW_MULTIVIEW: &str = include_str!("../wgsl/draw_multiview.wgsl");
+
+/// One buffer binding of group 0: its WGSL declaration and its layout entry both come
+/// from here; its binding number is its position in the list.
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+pub struct Binding {
+    pub name: &'static str,
+    pub access: Access,
+    pub wgsl_type: &'static str,
+    pub stages: wgpu::ShaderStages,
+}
+
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+pub enum Access {
+    Uniform,
+    StorageRead,
+    StorageReadWrite,
+}
+
+const fn binding(
+    name: &'static str,
+    access: Access,
+    wgsl_type: &'static str,
+    stages: wgpu::ShaderStages,
+) -> Binding {
+    Binding {
+        name,
+        access,
+        wgsl_type,
+        stages,
+    }
+}
+
+const COMPUTE: wgpu::ShaderStages = wgpu::ShaderStages::COMPUTE;
+
+/// Every cull pass's bindings: per display its context and outputs, the scene data
+/// uploaded once, and scratch shared by all displays.
+pub const CULL_BINDINGS: [Binding; 10] = [
+    binding("display", Access::Uniform, "DisplayContext", COMPUTE),
+    binding("params", Access::Uniform, "CullParams", COMPUTE),
+    // World bounding spheres in cull order.
+    binding("spheres", Access::StorageRead, "array<vec4<f32>>", COMPUTE),
+    // Instance id at each cull position.
+    binding("order", Access::StorageRead, "array<u32>", COMPUTE),
+    binding("meshes", Access::StorageRead, "array<MeshRecord>", COMPUTE),
+    // Per instance: visibility bit and prefix within the workgroup.
+    binding(
+        "local_prefix",
+        Access::StorageReadWrite,
+        "array<u32>",
+        COMPUTE,
+    ),
+    // Per workgroup: its total, then (after the draws pass) its prefix.
+    binding(
+        "block_sums",
+        Access::StorageReadWrite,
+        "array<u32>",
+        COMPUTE,
+    ),
+    binding("visible", Access::StorageReadWrite, "array<u32>", COMPUTE),
+    binding(
+        "draws",
+        Access::StorageReadWrite,
+        "array<DrawArgs>",
+        COMPUTE,
+    ),
+    // The draw count (what multi_draw_indexed_indirect_count reads), visible total.
+    binding("counts", Access::StorageReadWrite, "array<u32, 2>", COMPUTE),
+];
+
+/// Every draw pipeline's bindings.
+pub const DRAW_BINDINGS: [Binding; 3] = [
+    binding(
+        "display",
+        Access::Uniform,
+        "DisplayContext",
+        wgpu::ShaderStages::VERTEX_FRAGMENT,
+    ),
+    binding(
+        "instances",
+        Access::StorageRead,
+        "array<InstanceRecord>",
+        wgpu::ShaderStages::VERTEX,
+    ),
+    binding(
+        "visible",
+        Access::StorageRead,
+        "array<u32>",
+        wgpu::ShaderStages::VERTEX,
+    ),
+];
+
+/// The WGSL declarations of `bindings`, in group 0.
+fn declarations(bindings: &[Binding]) -> String {
+    bindings
+        .iter()
+        .enumerate()
+        .map(|(i, b)| {
+            let space = match b.access {
+                Access::Uniform => "uniform",
+                Access::StorageRead => "storage, read",
+                Access::StorageReadWrite => "storage, read_write",
+            };
+            format!(
+                "@group(0) @binding({i}) var<{space}> {}: {};\n",
+                b.name, b.wgsl_type
+            )
+        })
+        .collect()
+}
+
+/// The bind-group layout of `bindings`.
+pub fn bind_group_layout(
+    device: &wgpu::Device,
+    label: &str,
+    bindings: &[Binding],
+) -> wgpu::BindGroupLayout {
+    let entries: Vec<_> = bindings
+        .iter()
+        .enumerate()
+        .map(|(i, b)| wgpu::BindGroupLayoutEntry {
+            binding: i as u32,
+            visibility: b.stages,
+            ty: wgpu::BindingType::Buffer {
+                ty: match b.access {
+                    Access::Uniform => wgpu::BufferBindingType::Uniform,
+                    Access::StorageRead => wgpu::BufferBindingType::Storage { read_only: true },
+                    Access::StorageReadWrite => {
+                        wgpu::BufferBindingType::Storage { read_only: false }
+                    }
+                },
+                has_dynamic_offset: false,
+                min_binding_size: None,
+            },
+            count: None,
+        })
+        .collect();
+    device.create_bind_group_layout(&wgpu::BindGroupLayoutDescriptor {
+        label: Some(label),
+        entries: &entries,
+    })
+}
+
+/// A bind group with `buffers[i]` whole at binding `i`: the buffers in the order of
+/// the binding list `layout` was made from.
+pub fn bind_group<const N: usize>(
+    device: &wgpu::Device,
+    label: &str,
+    layout: &wgpu::BindGroupLayout,
+    buffers: [&wgpu::Buffer; N],
+) -> wgpu::BindGroup {
+    let entries: Vec<_> = buffers
+        .iter()
+        .enumerate()
+        .map(|(i, b)| wgpu::BindGroupEntry {
+            binding: i as u32,
+            resource: b.as_entire_binding(),
+        })
+        .collect();
+    device.create_bind_group(&wgpu::BindGroupDescriptor {
+        label: Some(label),
+        layout,
+        entries: &entries,
+    })
+}
 
 /// The three per-display cull passes, in dispatch order.
 #[derive(Clone, Copy, Debug, PartialEq, Eq)]
@@ -50,7 +216,8 @@ impl CullPass {
             CullPass::Draws => include_str!("../wgsl/cull_draws.wgsl"),
             CullPass::Compact => include_str!("../wgsl/cull_compact.wgsl"),
         };
-        [&constants(2), CONTEXTS, RECORDS, CULL_MATH, body].concat()
+        let bindings = declarations(&CULL_BINDINGS);
+        [&constants(), CONTEXTS, RECORDS, &bindings, CULL_MATH, body].concat()
     }
 }
 
@@ -90,6 +257,12 @@ impl DrawKey {
         }
     }
 
+    /// Instances per visible object in this variant's draws: 2 when one draw covers
+    /// both eyes by doubled instances, else 1.
+    pub fn instances_per_object(self) -> u32 {
+        if self.multiview { 1 } else { self.views }
+    }
+
     pub fn label(self) -> String {
         let seam = if self.clip_distances {
             "clip"
@@ -110,11 +283,14 @@ impl DrawKey {
             DRAW_NO_CLIP_DISTANCES
         };
         let entry = if self.multiview { DRAW_MULTIVIEW } else { DRAW };
+        let views = format!("const VIEWS: u32 = {}u;\n", self.views);
         [
             prelude,
-            &constants(self.views),
+            &constants(),
+            &views,
             CONTEXTS,
             RECORDS,
+            &declarations(&DRAW_BINDINGS),
             DRAW_COMMON,
             entry,
         ]
@@ -122,8 +298,8 @@ impl DrawKey {
     }
 }
 
-fn constants(views: u32) -> String {
-    format!("\nconst WORKGROUP_SIZE: u32 = {WORKGROUP_SIZE}u;\nconst VIEWS: u32 = {views}u;\n")
+fn constants() -> String {
+    format!("\nconst WORKGROUP_SIZE: u32 = {WORKGROUP_SIZE}u;\n")
 }
 
 /// Every shader variant the crate can build, with its label.

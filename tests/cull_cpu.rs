@@ -1,35 +1,23 @@
 //! The CPU reference culler on hand-made cases, and against a naive loop on random
 //! scenes (fixed seeds).
 
-use glam::{Affine3A, Vec3, Vec4, Vec4Swizzles};
-use stereocull::contexts::DisplayContext;
-use stereocull::cull::{CullOutput, cpu};
+mod support;
+
+use glam::{Vec3, Vec4Swizzles};
+use stereocull::cull::{CullJob, CullOutput, cpu};
+use stereocull::procedural;
 use stereocull::records::{CullLayout, DrawArgs};
 use stereocull::rig::Rig;
-use stereocull::scene::{Instance, Scene};
-use stereocull::shapes;
+use stereocull::scene::Scene;
+use support::cubes;
 
 /// Three cube meshes of half-size 0.5 (bounding radius sqrt(3)/2).
 fn scene_with(instances: &[(Vec3, u32)]) -> Scene {
-    let mut s = Scene::default();
-    for k in 0..3 {
-        let c = shapes::cuboid(Vec3::splat(0.5));
-        s.add_mesh(format!("cube{k}"), &c.vertices, &c.indices);
-    }
-    s.instances = instances
-        .iter()
-        .map(|&(p, mesh)| Instance {
-            world_from_local: Affine3A::from_translation(p),
-            mesh,
-            color: Vec4::ONE,
-        })
-        .collect();
-    s
+    cubes(instances, 3)
 }
 
 fn cull(scene: &Scene, rig: &Rig, display: usize) -> CullOutput {
-    let ctx = DisplayContext::new(rig, display).unwrap();
-    cpu::cull(&CullLayout::new(scene), &ctx.planes, ctx.views)
+    support::reference_culls(scene, rig).remove(display)
 }
 
 /// The viewer of `hmd` stands at (0, 1.6, 2) looking down -Z.
@@ -82,10 +70,10 @@ fn empty_meshes_are_skipped_and_draws_packed_at_the_front() {
 #[test]
 fn spheres_straddling_a_plane_are_visible_and_those_beyond_are_not() {
     let rig = hmd();
-    let ctx = DisplayContext::new(&rig, 0).unwrap();
+    let job = rig.cull_jobs().unwrap()[0];
     let radius = 3f32.sqrt() * 0.5;
     // A point on the left plane, 4 m ahead.
-    let left = ctx.planes[0];
+    let left = job.planes[0];
     let ahead = Vec3::new(0.0, 1.6, -2.0);
     let on_plane = ahead - left.xyz() * (left.xyz().dot(ahead) + left.w);
     let outward = -left.xyz();
@@ -126,7 +114,8 @@ fn mono_displays_do_not_double() {
 }
 
 /// What the contract says, written as plainly as possible.
-fn naive(scene: &Scene, planes: &[Vec4; 6], views: u32) -> CullOutput {
+fn naive(scene: &Scene, job: &CullJob) -> CullOutput {
+    let (planes, views) = (&job.planes, job.instances_per_object);
     let mut per_mesh = vec![Vec::new(); scene.meshes.len()];
     for (id, inst) in scene.instances.iter().enumerate() {
         let s = scene.world_sphere(inst);
@@ -163,13 +152,12 @@ fn naive(scene: &Scene, planes: &[Vec4; 6], views: u32) -> CullOutput {
 #[test]
 fn matches_the_naive_contract_on_random_scenes() {
     for (n, meshes, seed) in [(1, 1, 1), (63, 5, 2), (50_001, 40, 3), (70_000, 300, 4)] {
-        let scene = Scene::procedural(n, meshes, seed);
+        let scene = procedural::scene(n, meshes, seed);
         for preset in ["hmd", "cave", "hmd-peripheral"] {
             let rig = Rig::preset(preset).unwrap();
-            for d in 0..rig.displays.len() {
-                let ctx = DisplayContext::new(&rig, d).unwrap();
-                let got = cpu::cull(&CullLayout::new(&scene), &ctx.planes, ctx.views);
-                let want = naive(&scene, &ctx.planes, ctx.views);
+            for (d, job) in rig.cull_jobs().unwrap().iter().enumerate() {
+                let got = cpu::cull(&CullLayout::new(&scene), job);
+                let want = naive(&scene, job);
                 assert_eq!(got, want, "n={n} meshes={meshes} {preset} display {d}");
             }
         }

@@ -1,20 +1,15 @@
 //! GPU culling against the CPU reference, byte for byte: random scenes (fixed seeds) on
 //! every preset, up to 200k instances and 300 meshes, and the edge cases.
 
-use glam::{Affine3A, Vec3, Vec4};
-use stereocull::contexts::DisplayContext;
-use stereocull::cull::cpu;
+mod support;
+
+use glam::Vec3;
 use stereocull::device::Gpu;
-use stereocull::records::CullLayout;
+use stereocull::procedural;
 use stereocull::renderer::{Renderer, RendererOptions};
 use stereocull::rig::Rig;
-use stereocull::scene::{Instance, Scene};
-
-fn gpu() -> Gpu {
-    let gpu = Gpu::headless().expect("no adapter: install mesa-vulkan-drivers (lavapipe)");
-    eprintln!("adapter: {}", gpu.adapter_line());
-    gpu
-}
+use stereocull::scene::Scene;
+use support::{cubes, gpu, reference_culls};
 
 /// Runs one GPU-culled frame and compares every display's buffers with the CPU's.
 fn compare(gpu: &Gpu, scene: &Scene, rig: &Rig, what: &str) -> Vec<usize> {
@@ -23,11 +18,10 @@ fn compare(gpu: &Gpu, scene: &Scene, rig: &Rig, what: &str) -> Vec<usize> {
     renderer
         .submit_frame(&gpu.device, &gpu.queue, rig, &targets)
         .unwrap();
-    let layout = CullLayout::new(scene);
-    (0..rig.displays.len())
-        .map(|d| {
-            let ctx = DisplayContext::new(rig, d).unwrap();
-            let want = cpu::cull(&layout, &ctx.planes, ctx.views);
+    reference_culls(scene, rig)
+        .into_iter()
+        .enumerate()
+        .map(|(d, want)| {
             let got = renderer.read_cull(&gpu.device, &gpu.queue, d).unwrap();
             assert_eq!(
                 got.draw_count, want.draw_count,
@@ -45,11 +39,7 @@ fn compare(gpu: &Gpu, scene: &Scene, rig: &Rig, what: &str) -> Vec<usize> {
 
 /// Reduced display resolution: these tests are about buffers, not pixels.
 fn small(preset: &str) -> Rig {
-    let mut rig = Rig::preset(preset).unwrap();
-    for d in &mut rig.displays {
-        d.resolution = [64, 64];
-    }
-    rig
+    support::sized(preset, 64, 64)
 }
 
 #[test]
@@ -63,7 +53,7 @@ fn gpu_matches_cpu_on_random_scenes_and_every_preset() {
         (200_000, 300, 5),
     ];
     for (n, meshes, seed) in cases {
-        let scene = Scene::procedural(n, meshes, seed);
+        let scene = procedural::scene(n, meshes, seed);
         for preset in ["hmd", "cave", "hmd-peripheral"] {
             let counts = compare(
                 &gpu,
@@ -74,19 +64,6 @@ fn gpu_matches_cpu_on_random_scenes_and_every_preset() {
             eprintln!("n={n} meshes={meshes} {preset}: visible {counts:?}");
         }
     }
-}
-
-fn cubes(positions: &[(Vec3, u32)], meshes: u32) -> Scene {
-    let mut s = Scene::procedural(0, meshes, 1);
-    s.instances = positions
-        .iter()
-        .map(|&(p, mesh)| Instance {
-            world_from_local: Affine3A::from_translation(p),
-            mesh,
-            color: Vec4::ONE,
-        })
-        .collect();
-    s
 }
 
 #[test]
@@ -115,7 +92,7 @@ fn gpu_matches_cpu_on_edge_cases() {
         .collect();
     compare(&gpu, &cubes(&one, 8), &rig, "one mesh holds all");
     // Spheres straddling the display frustum's planes, at distances from inside to out.
-    let planes = DisplayContext::new(&rig, 0).unwrap().planes;
+    let planes = rig.cull_jobs().unwrap()[0].planes;
     let mut straddling = Vec::new();
     for (k, p) in planes.iter().take(4).enumerate() {
         let n = p.truncate();

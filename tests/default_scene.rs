@@ -1,8 +1,10 @@
-//! The built-in room: the committed asset is what `default_scene::room` authors, and it
+//! The built-in room: the committed asset is what `support::room` authors, and it
 //! imports back to the same instances. `STEREOCULL_RECORD=1` rewrites the asset.
 
-use stereocull::default_scene::{ROOM_GLB, room, to_glb};
-use stereocull::scene::Scene;
+mod support;
+
+use stereocull::scene_spec::{self, ROOM_GLB};
+use support::room::{room, to_glb};
 
 #[test]
 fn default_scene_asset_is_current() {
@@ -24,7 +26,7 @@ fn default_scene_asset_is_current() {
 #[test]
 fn default_scene_round_trips_through_the_importer() {
     let authored = room();
-    let loaded = Scene::load("default").unwrap();
+    let loaded = scene_spec::load("default").unwrap();
     assert_eq!(loaded.instances.len(), authored.instances.len());
     for (a, b) in authored.instances.iter().zip(&loaded.instances) {
         assert!(a.world_from_local.abs_diff_eq(b.world_from_local, 1e-6));

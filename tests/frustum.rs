@@ -1,20 +1,21 @@
 //! Property tests of the eye, display and frame frusta on every preset, with random
 //! viewer poses (fixed seeds).
 
-use glam::{Vec3, Vec4Swizzles};
+use glam::{DVec3, Vec3, Vec4Swizzles};
 use rand::{Rng, SeedableRng};
 use rand_pcg::Pcg64Mcg;
 use stereocull::frustum::{Frustum, View};
-use stereocull::rig::{PRESETS, Rig};
+use stereocull::rig::{Mount, PRESETS, Rig};
 
 /// A point uniformly distributed in the volume of `v`'s frustum.
 fn point_in(v: &View, rng: &mut Pcg64Mcg) -> Vec3 {
     let (n3, f3) = (v.near.powi(3), v.far.powi(3));
-    let dist = (rng.random::<f32>() * (f3 - n3) + n3).cbrt();
-    let tx = rng.random_range(-v.fov.left..=v.fov.right);
-    let ty = rng.random_range(-v.fov.down..=v.fov.up);
+    let dist = (rng.random::<f32>() * (f3 - n3) + n3).cbrt() as f64;
+    let tx = rng.random_range(-v.fov.left..=v.fov.right) as f64;
+    let ty = rng.random_range(-v.fov.down..=v.fov.up) as f64;
     v.world_from_view
-        .transform_point3(Vec3::new(tx * dist, ty * dist, -dist))
+        .transform_point3(DVec3::new(tx * dist, ty * dist, -dist))
+        .as_vec3()
 }
 
 /// Inside, allowing float error that grows with distance from `origin`.
@@ -42,7 +43,7 @@ fn random_rigs(seed: u64) -> Vec<(String, Rig)> {
             v.pitch_deg = rng.random_range(-60.0..60.0);
             v.roll_deg = rng.random_range(-20.0..20.0);
             v.ipd = rng.random_range(0.05..0.075);
-            if let Some(h) = rig.displays[0].head.as_mut() {
+            if let Mount::Head(h) = &mut rig.displays[0].mount {
                 h.cant_deg = if k % 2 == 0 {
                     0.0
                 } else {
@@ -60,10 +61,9 @@ fn random_rigs(seed: u64) -> Vec<(String, Rig)> {
 fn points_inside_any_eye_are_inside_its_display_frustum() {
     let mut rng = Pcg64Mcg::seed_from_u64(7);
     for (name, rig) in random_rigs(1) {
-        for d in 0..rig.displays.len() {
-            let display = rig.display_view(d).unwrap();
-            let planes = display.frustum();
-            for (e, eye) in rig.eyes(d).unwrap().iter().enumerate() {
+        for (d, resolved) in rig.resolve().unwrap().displays.iter().enumerate() {
+            let planes = resolved.combined.frustum();
+            for (e, eye) in resolved.eyes.iter().enumerate() {
                 for _ in 0..2000 {
                     let p = point_in(eye, &mut rng);
                     assert!(
@@ -79,8 +79,9 @@ fn points_inside_any_eye_are_inside_its_display_frustum() {
 /// Volume of the display frustum over the volume of the union of its eye frusta,
 /// estimated by sampling the display frustum uniformly.
 fn volume_factor(rig: &Rig, d: usize, rng: &mut Pcg64Mcg) -> f64 {
-    let display = rig.display_view(d).unwrap();
-    let eyes: Vec<Frustum> = rig.eyes(d).unwrap().iter().map(View::frustum).collect();
+    let resolved = &rig.resolve().unwrap().displays[d];
+    let display = resolved.combined;
+    let eyes: Vec<Frustum> = resolved.eyes.iter().map(View::frustum).collect();
     let samples = 20_000;
     let hits = (0..samples)
         .filter(|_| {
@@ -108,7 +109,10 @@ fn display_frustum_is_not_much_larger_than_the_union_of_its_eyes() {
                 "{name} {}: display / union volume = {factor:.4}",
                 rig.displays[d].name
             );
-            let cant = rig.displays[d].head.map_or(0.0, |h| h.cant_deg);
+            let cant = match rig.displays[d].mount {
+                Mount::Head(h) => h.cant_deg,
+                Mount::Screen(_) => 0.0,
+            };
             let worst = if cant > 0.0 {
                 &mut canted
             } else {
@@ -134,15 +138,18 @@ fn off_axis_screen_corners_project_to_ndc_corners() {
         .into_iter()
         .filter(|(n, _)| n.starts_with("cave"))
     {
-        for (d, display) in rig.displays.iter().enumerate() {
-            let s = display.screen.unwrap();
+        let resolved = rig.resolve().unwrap();
+        for (display, r) in rig.displays.iter().zip(&resolved.displays) {
+            let Mount::Screen(s) = display.mount else {
+                panic!("a cave wall is a screen")
+            };
             let (ll, lr, ul) = (
                 Vec3::from(s.lower_left),
                 Vec3::from(s.lower_right),
                 Vec3::from(s.upper_left),
             );
             let ur = lr + ul - ll;
-            for eye in rig.eyes(d).unwrap() {
+            for eye in &r.eyes {
                 let m = eye.clip_from_world();
                 for (corner, want) in [
                     (ll, (-1.0, -1.0)),
@@ -166,7 +173,8 @@ fn off_axis_screen_corners_project_to_ndc_corners() {
 fn frame_frustum_holds_every_display_frustum_or_is_absent_for_the_cave() {
     let mut rng = Pcg64Mcg::seed_from_u64(5);
     for (name, rig) in random_rigs(4) {
-        let frame = rig.frame_view().unwrap();
+        let resolved = rig.resolve().unwrap();
+        let frame = resolved.frame;
         if name.starts_with("cave") {
             assert!(
                 frame.is_none(),
@@ -176,8 +184,8 @@ fn frame_frustum_holds_every_display_frustum_or_is_absent_for_the_cave() {
         }
         let frame = frame.unwrap_or_else(|| panic!("{name}: no frame frustum"));
         let planes = frame.frustum();
-        for d in 0..rig.displays.len() {
-            let display = rig.display_view(d).unwrap();
+        for r in &resolved.displays {
+            let display = r.combined;
             for _ in 0..2000 {
                 let p = point_in(&display, &mut rng);
                 assert!(
@@ -194,13 +202,17 @@ fn stereo_display_apex_lies_behind_the_eyes() {
     for (name, rig) in random_rigs(6) {
         // Head-fixed panels only: CAVE eyes can sit at different depths from a wall,
         // where the apex need only lie behind the nearest eye's near plane.
-        for d in (0..rig.displays.len()).filter(|&d| rig.displays[d].head.is_some()) {
-            let eyes = rig.eyes(d).unwrap();
-            if eyes.len() < 2 {
+        let resolved = rig.resolve().unwrap();
+        for (d, r) in resolved.displays.iter().enumerate() {
+            let eyes = &r.eyes;
+            if eyes.len() < 2 || !matches!(rig.displays[d].mount, Mount::Head(_)) {
                 continue;
             }
-            let display = rig.display_view(d).unwrap();
-            let forward = display.world_from_view.transform_vector3(-Vec3::Z);
+            let display = r.combined;
+            let forward = display
+                .world_from_view
+                .transform_vector3(-DVec3::Z)
+                .as_vec3();
             let behind = eyes
                 .iter()
                 .all(|e| (e.position() - display.position()).dot(forward) > 0.0);

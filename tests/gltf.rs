@@ -9,6 +9,7 @@ use std::path::{Path, PathBuf};
 use glam::{Affine3A, Mat4, Quat, Vec3, Vec4};
 use stereocull::Error;
 use stereocull::scene::Scene;
+use stereocull::scene_spec;
 
 fn sample(name: &str) -> PathBuf {
     Path::new(env!("CARGO_MANIFEST_DIR")).join(format!("../shared/gltf-samples/{name}/{name}.glb"))
@@ -21,7 +22,7 @@ fn load(name: &str) -> Scene {
         "{} is missing: CI needs ../shared beside the clone",
         path.display()
     );
-    Scene::load(path.to_str().unwrap()).unwrap_or_else(|e| panic!("{name}: {e}"))
+    scene_spec::load(path.to_str().unwrap()).unwrap_or_else(|e| panic!("{name}: {e}"))
 }
 
 fn assert_close(a: Mat4, b: Mat4, what: &str) {
@@ -109,7 +110,7 @@ fn alpha_blend_mode_test_has_nine_instances() {
 }
 
 fn scene_error(path: &Path) -> String {
-    match Scene::load(path.to_str().unwrap()) {
+    match scene_spec::load(path.to_str().unwrap()) {
         Err(e @ Error::Scene { .. }) => e.to_string(),
         Err(other) => panic!("{}: wrong error kind: {other}", path.display()),
         Ok(_) => panic!("{}: loaded a broken file", path.display()),
@@ -192,7 +193,7 @@ fn mesh_gpu_instancing_copies_follow_the_node_in_order() {
     let p = dir.path().join("instanced.gltf");
     let ext = r#", "extensions": {"EXT_mesh_gpu_instancing": {"attributes": {"TRANSLATION": 1}}}"#;
     std::fs::write(&p, gltf_json(r#""uri": "tri.bin""#, ext)).unwrap();
-    let s = Scene::load(p.to_str().unwrap()).unwrap();
+    let s = scene_spec::load(p.to_str().unwrap()).unwrap();
     assert_eq!(s.meshes.len(), 1);
     let t: Vec<Vec3> = s
         .instances
@@ -254,7 +255,7 @@ fn a_deep_node_chain_imports_with_every_translation_summed() {
         })
         .collect();
     let p = with_nodes(dir.path(), nodes.into(), serde_json::json!([0]));
-    let s = Scene::load(p.to_str().unwrap()).unwrap();
+    let s = scene_spec::load(p.to_str().unwrap()).unwrap();
     assert_eq!(s.instances.len(), 1);
     let x = s.instances[0].world_from_local.translation.x;
     assert!((x - 0.5 * depth as f32).abs() < 1.0, "{x}");

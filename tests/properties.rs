@@ -2,17 +2,19 @@
 //! the GPU culler equals the CPU reference byte for byte, with coordinates from a tenth of
 //! a millimeter to a million meters.
 
+mod support;
+
 use std::sync::OnceLock;
 
 use glam::{Affine3A, DVec3, Quat, Vec3, Vec4Swizzles};
 use proptest::prelude::*;
 use rand::{Rng, SeedableRng};
-use stereocull::contexts::DisplayContext;
 use stereocull::cull::cpu;
 use stereocull::device::Gpu;
+use stereocull::procedural;
 use stereocull::records::CullLayout;
 use stereocull::renderer::{Renderer, RendererOptions};
-use stereocull::rig::Rig;
+use stereocull::rig::{Mount, Rig};
 use stereocull::scene::Scene;
 
 const PRESETS: [&str; 3] = ["hmd", "cave", "hmd-peripheral"];
@@ -42,7 +44,7 @@ fn rig_strategy() -> impl Strategy<Value = Rig> {
             rig.far = far;
             for d in &mut rig.displays {
                 d.resolution = [64, 64];
-                if let Some(s) = d.screen.as_mut() {
+                if let Mount::Screen(s) = &mut d.mount {
                     for corner in [&mut s.lower_left, &mut s.lower_right, &mut s.upper_left] {
                         *corner = (Vec3::from(*corner) + moved).into();
                     }
@@ -55,7 +57,7 @@ fn rig_strategy() -> impl Strategy<Value = Rig> {
 /// A point of display `d`'s eye `e` frustum, from window coordinates in [0, 1] and a
 /// depth fraction (log-spaced from near to far), computed in f64.
 fn point_in_eye(rig: &Rig, d: usize, e: usize, window: (f64, f64), depth: f64) -> DVec3 {
-    let view = rig.eyes(d).unwrap()[e];
+    let view = rig.resolve().unwrap().displays[d].eyes[e];
     let f = view.fov;
     let lerp = |a: f32, b: f32, t: f64| a as f64 + (b as f64 - a as f64) * t;
     let z = view.near as f64 * (view.far as f64 / view.near as f64).powf(depth);
@@ -64,12 +66,7 @@ fn point_in_eye(rig: &Rig, d: usize, e: usize, window: (f64, f64), depth: f64) -
         lerp(-f.down, f.up, window.1) * z,
         -z,
     );
-    let m = view.world_from_view;
-    let axis = |v: glam::Vec3A| DVec3::new(v.x as f64, v.y as f64, v.z as f64);
-    axis(m.matrix3.x_axis) * local.x
-        + axis(m.matrix3.y_axis) * local.y
-        + axis(m.matrix3.z_axis) * local.z
-        + axis(m.translation)
+    view.world_from_view.transform_point3(local)
 }
 
 proptest! {
@@ -92,7 +89,7 @@ proptest! {
         let radius = 10f32.powf(radius_exp);
         let direction = Vec3::new(offset.0, offset.1, offset.2).normalize_or(Vec3::X);
         let center = p.as_vec3() + direction * (offset.3 * radius);
-        let mut scene = Scene::procedural(1, 1, 7);
+        let mut scene = procedural::scene(1, 1, 7);
         let bounds = scene.meshes[0].bounds;
         let scale = radius / bounds.w;
         scene.instances[0].world_from_local = Affine3A::from_scale_rotation_translation(
@@ -104,21 +101,21 @@ proptest! {
         // point says anything.
         let s = scene.world_sphere(&scene.instances[0]);
         prop_assume!(s.xyz().as_dvec3().distance(p) <= s.w as f64);
-        let ctx = DisplayContext::new(&rig, d).unwrap();
-        let out = cpu::cull(&CullLayout::new(&scene), &ctx.planes, ctx.views);
+        let job = rig.cull_jobs().unwrap()[d];
+        let out = cpu::cull(&CullLayout::new(&scene), &job);
         prop_assert_eq!(out.visible, vec![0], "display {} eye {} point {} sphere {}", d, e, p, s);
     }
 }
 
 fn gpu() -> &'static Gpu {
     static GPU: OnceLock<Gpu> = OnceLock::new();
-    GPU.get_or_init(|| Gpu::headless().expect("no adapter: install mesa-vulkan-drivers (lavapipe)"))
+    GPU.get_or_init(support::gpu)
 }
 
 /// `n` instances of `meshes` meshes around the viewer, at distances from 10 cm to two
 /// thousand kilometers and sizes from a tenth of a millimeter to a hundred meters.
 fn extreme_scene(rig: &Rig, n: u32, meshes: u32, seed: u64) -> Scene {
-    let mut scene = Scene::procedural(n, meshes, seed);
+    let mut scene = procedural::scene(n, meshes, seed);
     let mut rng = rand_pcg::Pcg64::seed_from_u64(seed);
     let around = Vec3::from(rig.viewer.position);
     for inst in &mut scene.instances {
@@ -160,10 +157,7 @@ proptest! {
         let mut renderer = Renderer::new(&gpu.device, &scene, &rig, RendererOptions::default()).unwrap();
         let targets = renderer.create_targets(&gpu.device);
         renderer.submit_frame(&gpu.device, &gpu.queue, &rig, &targets).unwrap();
-        let layout = CullLayout::new(&scene);
-        for d in 0..rig.displays.len() {
-            let ctx = DisplayContext::new(&rig, d).unwrap();
-            let want = cpu::cull(&layout, &ctx.planes, ctx.views);
+        for (d, want) in support::reference_culls(&scene, &rig).into_iter().enumerate() {
             let got = renderer.read_cull(&gpu.device, &gpu.queue, d).unwrap();
             prop_assert_eq!(got, want, "display {}", d);
         }

@@ -1,6 +1,6 @@
 //! Rig presets, the example rig files, and what a user sees for a bad rig.
 
-use stereocull::rig::{PRESETS, Rig};
+use stereocull::rig::{Mount, PRESETS, Rig};
 
 fn assets(name: &str) -> std::path::PathBuf {
     std::path::Path::new(env!("CARGO_MANIFEST_DIR"))
@@ -72,20 +72,27 @@ fn out_of_range_values_are_refused_with_the_field_named() {
     check(&|r| r.near = 2000.0, "near");
     check(&|r| r.far = f32::INFINITY, "far");
     check(&|r| r.displays[0].resolution = [0, 100], "resolution");
-    check(
-        &|r| r.displays[0].head.as_mut().unwrap().fov.left = f32::INFINITY,
-        "fov",
-    );
-    check(
-        &|r| r.displays[0].head.as_mut().unwrap().fov.right = -2.0,
-        "fov",
-    );
+    let fov =
+        |r: &mut Rig, f: &dyn Fn(&mut stereocull::frustum::Fov)| match &mut r.displays[0].mount {
+            Mount::Head(h) => f(&mut h.fov),
+            Mount::Screen(_) => panic!("hmd is head-fixed"),
+        };
+    check(&|r| fov(r, &|f| f.left = f32::INFINITY), "fov");
+    check(&|r| fov(r, &|f| f.right = -2.0), "fov");
     check(&|r| r.displays.clear(), "at least one display");
-    check(&|r| r.displays[0].head = None, "exactly one");
     check(&|r| r.viewer.position[0] = f32::NAN, "finite");
+    // A display with neither mount, or both, cannot be built; a file can say it.
+    let mut neither: serde_json::Value = serde_json::from_str(&hmd_json()).unwrap();
+    neither["displays"][0]
+        .as_object_mut()
+        .unwrap()
+        .remove("head");
+    let msg = error_of(&neither.to_string(), "json");
+    assert!(msg.contains("exactly one"), "{msg}");
     let mut cave = Rig::preset("cave").unwrap();
-    cave.displays[0].screen.as_mut().unwrap().lower_right =
-        cave.displays[0].screen.unwrap().lower_left;
+    if let Mount::Screen(s) = &mut cave.displays[0].mount {
+        s.lower_right = s.lower_left;
+    }
     let msg = cave.validate("cave").unwrap_err().to_string();
     assert!(msg.contains("degenerate") && msg.contains("front"), "{msg}");
 }
@@ -100,7 +107,7 @@ fn unknown_presets_list_the_known_ones() {
 fn a_viewer_behind_a_cave_wall_is_an_error_not_a_wrong_frustum() {
     let mut cave = Rig::preset("cave").unwrap();
     cave.viewer.position = [0.0, 1.6, -2.0];
-    let msg = cave.display_view(0).unwrap_err().to_string();
+    let msg = cave.resolve().unwrap_err().to_string();
     assert!(msg.contains("behind the screen"), "{msg}");
 }
 

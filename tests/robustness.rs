@@ -1,6 +1,8 @@
 //! Optional features forced off (the pipeline falls back or says clearly what it cannot
 //! do) and hostile transforms (dropped and counted, the rest untouched).
 
+mod support;
+
 use glam::{Affine3A, Vec3};
 use image::RgbaImage;
 use stereocull::Error;
@@ -9,34 +11,35 @@ use stereocull::profiling::GpuTimer;
 use stereocull::readback::read_rgba8;
 use stereocull::renderer::{CullMode, Renderer, RendererOptions, StereoMode};
 use stereocull::rig::Rig;
-use stereocull::scene::Scene;
+use stereocull::{procedural, scene_spec};
+use support::{Tolerance, assert_images_match};
 
 fn gpu_without(missing: wgpu::Features) -> Gpu {
-    let gpu = Gpu::headless_with(wgpu::Features::all() - missing)
-        .expect("no adapter: install mesa-vulkan-drivers (lavapipe)");
-    eprintln!("adapter: {}", gpu.adapter_line());
+    let gpu = support::gpu_with(wgpu::Features::all() - missing);
     assert!(!gpu.device.features().intersects(missing));
     gpu
 }
 
 fn rig() -> Rig {
-    let mut rig = Rig::preset("hmd").unwrap();
-    rig.displays[0].resolution = [160, 120];
-    rig
+    support::sized("hmd", 160, 120)
 }
 
 fn render(gpu: &Gpu, mode: StereoMode, cull: CullMode) -> Result<RgbaImage, Error> {
-    let scene = Scene::load("default")?;
+    let scene = scene_spec::load("default")?;
     let options = RendererOptions {
         mode,
         cull,
         ..Default::default()
     };
-    let mut renderer = Renderer::new(&gpu.device, &scene, &rig(), options)?;
-    let targets = renderer.create_targets(&gpu.device);
-    renderer.submit_frame(&gpu.device, &gpu.queue, &rig(), &targets)?;
-    read_rgba8(&gpu.device, &gpu.queue, &targets[0].color)
+    Ok(support::render(gpu, &scene, &rig(), options)?.remove(0))
 }
+
+/// The image tests' tolerance (see `tests/images.rs`): channels within 2 levels, at most
+/// 0.05 % of pixels beyond.
+const EDGES: Tolerance = Tolerance {
+    levels: 2,
+    share: 0.0005,
+};
 
 fn full() -> RgbaImage {
     render(
@@ -54,35 +57,14 @@ fn full() -> RgbaImage {
 fn without_clip_distances_the_discard_fallback_gives_the_same_image() {
     let gpu = gpu_without(wgpu::Features::CLIP_DISTANCES);
     let image = render(&gpu, StereoMode::Instanced, CullMode::Gpu).unwrap();
-    let reference = full();
-    let worst = |a: &image::Rgba<u8>, b: &image::Rgba<u8>| {
-        (0..3).map(|c| a[c].abs_diff(b[c])).max().unwrap_or(0)
-    };
-    let levels: Vec<u8> = image
-        .enumerate_pixels()
-        .map(|(x, y, p)| worst(p, reference.get_pixel(x, y)))
-        .filter(|d| *d > 0)
-        .collect();
-    eprintln!(
-        "{} pixels differ, by at most {:?} levels",
-        levels.len(),
-        levels.iter().max()
-    );
-    let beyond = levels.iter().filter(|d| **d > 2).count();
-    assert!(
-        beyond * 2000 <= (image.width() * image.height()) as usize,
-        "{beyond} beyond 2 levels"
-    );
+    assert_images_match("discard-fallback", &image, &full(), EDGES);
 }
 
 #[test]
 fn without_indirect_count_the_fixed_count_draw_gives_the_same_image() {
     let gpu = gpu_without(wgpu::Features::MULTI_DRAW_INDIRECT_COUNT);
     let image = render(&gpu, StereoMode::Instanced, CullMode::Gpu).unwrap();
-    assert!(
-        image == full(),
-        "fixed-count multi-draw over zeroed draws differs"
-    );
+    assert_images_match("fixed-count", &image, &full(), Tolerance::EXACT);
 }
 
 #[test]
@@ -94,12 +76,11 @@ fn without_first_instance_the_indirect_modes_say_so_and_the_classic_ones_still_d
     assert!(msg.contains("INDIRECT_FIRST_INSTANCE"), "{msg}");
     let image = render(&gpu, StereoMode::MultiPass, CullMode::Cpu).unwrap();
     // Viewport versus clip-space remap: channels within 2 levels, as in tests/images.rs.
-    let far_off = image
-        .pixels()
-        .zip(full().pixels())
-        .filter(|(a, b)| (0..3).any(|c| a[c].abs_diff(b[c]) > 2))
-        .count();
-    assert_eq!(far_off, 0, "multi-pass differs from instanced");
+    let within_two_levels = Tolerance {
+        levels: 2,
+        share: 0.0,
+    };
+    assert_images_match("no-first-instance", &image, &full(), within_two_levels);
 }
 
 #[test]
@@ -128,7 +109,7 @@ fn classic_modes_refuse_gpu_culling_with_a_reason() {
 
 #[test]
 fn non_finite_transforms_are_dropped_and_counted_and_the_rest_kept_in_order() {
-    let mut scene = Scene::procedural(50, 3, 7);
+    let mut scene = procedural::scene(50, 3, 7);
     let kept: Vec<Vec3> = scene
         .instances
         .iter()
@@ -153,7 +134,7 @@ fn non_finite_transforms_are_dropped_and_counted_and_the_rest_kept_in_order() {
 
 #[test]
 fn zero_scale_instances_cull_and_draw_without_nan() {
-    let mut scene = Scene::procedural(20, 2, 3);
+    let mut scene = procedural::scene(20, 2, 3);
     scene.instances[0].world_from_local = Affine3A::from_scale(Vec3::ZERO);
     assert_eq!(
         scene.drop_non_finite_instances(),
@@ -171,7 +152,7 @@ fn more_instances_than_one_binding_holds_stop_up_front_with_the_numbers() {
     let max = limits
         .max_storage_buffer_binding_size
         .min(limits.max_buffer_size);
-    let mut scene = Scene::procedural(1, 1, 1);
+    let mut scene = procedural::scene(1, 1, 1);
     let too_many = (max / 64 + 1) as usize;
     scene.instances = vec![scene.instances[0]; too_many];
     let err = Renderer::new(&gpu.device, &scene, &rig(), RendererOptions::default())
@@ -191,7 +172,7 @@ fn more_instances_than_one_binding_holds_stop_up_front_with_the_numbers() {
 #[test]
 fn a_lost_device_is_reported_not_a_hang() {
     let gpu = gpu_without(wgpu::Features::empty());
-    let scene = Scene::load("default").unwrap();
+    let scene = scene_spec::load("default").unwrap();
     let mut renderer = Renderer::new(&gpu.device, &scene, &rig(), Default::default()).unwrap();
     let targets = renderer.create_targets(&gpu.device);
     let started = std::time::Instant::now();
@@ -250,7 +231,7 @@ fn vertices_past_the_binding_size_are_accepted_up_to_the_buffer_size() {
         limits.max_storage_buffer_binding_size, limits.max_buffer_size
     );
     assert!(limits.max_buffer_size > limits.max_storage_buffer_binding_size);
-    let mut scene = Scene::procedural(1, 1, 1);
+    let mut scene = procedural::scene(1, 1, 1);
     let vertices = (limits.max_storage_buffer_binding_size / 24 + 1) as usize;
     scene.vertices.resize(vertices, scene.vertices[0]);
     Renderer::new(&gpu.device, &scene, &rig(), RendererOptions::default())

@@ -5,9 +5,12 @@ use std::mem::{offset_of, size_of};
 
 use glam::{Mat4, Vec2, Vec3, Vec4};
 use naga::{Module, TypeInner};
-use stereocull::contexts::{DisplayContext, EyeContext, FrameContext, uniform_bytes};
+use stereocull::contexts::{DisplayContext, EyeContext, uniform_bytes};
+use stereocull::cull::gpu::CullParams;
 use stereocull::records::{DrawArgs, InstanceRecord, MeshRecord};
-use stereocull::shaders::{CullPass, all_sources};
+use stereocull::shaders::{
+    Access, Binding, CULL_BINDINGS, CullPass, DRAW_BINDINGS, DrawKey, all_sources,
+};
 
 fn parse(label: &str, source: &str) -> Module {
     naga::front::wgsl::parse_str(source)
@@ -162,7 +165,7 @@ fn contexts_match_wgsl() {
         position: Vec3::new(5.0, 5.1, 5.2),
         resolution: Vec2::new(6.0, 6.1),
         planes: std::array::from_fn(|i| Vec4::splat(7.0 + i as f32)),
-        views: 2,
+        instances_per_object: 2,
     };
     let bytes = uniform_bytes(&d);
     check_uniform(
@@ -177,7 +180,7 @@ fn contexts_match_wgsl() {
             ("position", 5.0),
             ("resolution", 6.0),
             ("planes", 7.0),
-            ("views", f32::from_bits(2)),
+            ("instances_per_object", f32::from_bits(2)),
         ],
     );
     // The second eye sits one EyeContext span after the first, and the last plane five
@@ -189,22 +192,58 @@ fn contexts_match_wgsl() {
     assert_eq!(f32_at(&bytes, at("eye") + eye_span + 4 * 64), 24.0);
     assert_eq!(f32_at(&bytes, at("planes") + 5 * 16), 12.0);
 
-    let f = FrameContext {
-        view_from_world: distinct_mat(1.0),
-        world_from_view: distinct_mat(2.0),
-        viewer_position: Vec3::new(3.0, 3.1, 3.2),
-        viewer_direction: Vec3::new(4.0, 4.1, 4.2),
-        time: 5.0,
+    let params = CullParams {
+        instance_count: 3,
+        mesh_count: 5,
+        groups_x: 7,
     };
     check_uniform(
-        "FrameContext",
-        &uniform_bytes(&f),
+        "CullParams",
+        &uniform_bytes(&params),
         &[
-            ("view_from_world", 1.0),
-            ("world_from_view", 2.0),
-            ("viewer_position", 3.0),
-            ("viewer_direction", 4.0),
-            ("time", 5.0),
+            ("instance_count", f32::from_bits(3)),
+            ("mesh_count", f32::from_bits(5)),
+            ("groups_x", f32::from_bits(7)),
         ],
     );
+}
+
+/// Every pass declares exactly its family's binding list: each global at binding `i`
+/// is `list[i]`, with its name, address space and access.
+#[test]
+fn every_pass_binds_what_its_list_declares() {
+    let passes = CullPass::ALL
+        .map(|p| (p.label().to_string(), p.source(), &CULL_BINDINGS[..]))
+        .into_iter()
+        .chain(DrawKey::ALL.map(|k| (k.label(), k.source(), &DRAW_BINDINGS[..])));
+    for (label, source, list) in passes {
+        let module = parse(&label, &source);
+        let mut seen = Vec::new();
+        for (_, var) in module.global_variables.iter() {
+            let Some(binding) = &var.binding else {
+                continue;
+            };
+            assert_eq!(binding.group, 0, "{label}");
+            let want: &Binding = list
+                .get(binding.binding as usize)
+                .unwrap_or_else(|| panic!("{label}: binding {} not in its list", binding.binding));
+            let name = var.name.as_deref().unwrap_or_default();
+            assert_eq!(name, want.name, "{label}: binding {}", binding.binding);
+            let access = match var.space {
+                naga::AddressSpace::Uniform => Access::Uniform,
+                naga::AddressSpace::Storage { access }
+                    if access.contains(naga::StorageAccess::STORE) =>
+                {
+                    Access::StorageReadWrite
+                }
+                naga::AddressSpace::Storage { .. } => Access::StorageRead,
+                other => panic!("{label}: {name} in {other:?}"),
+            };
+            assert_eq!(access, want.access, "{label}: {name}");
+            seen.push(binding.binding);
+        }
+        seen.sort();
+        let all: Vec<u32> = (0..list.len() as u32).collect();
+        assert_eq!(seen, all, "{label}: bindings");
+    }
 }

@@ -1,11 +1,6 @@
 // Pass 3 of 3 per display: every visible instance writes its id to its slot. Slots
 // ascend with cull position, so each mesh's ids are contiguous and ascending.
-
-@group(0) @binding(1) var<uniform> params: CullParams;
-@group(0) @binding(3) var<storage, read> order: array<u32>;
-@group(0) @binding(5) var<storage, read_write> local_prefix: array<u32>;
-@group(0) @binding(6) var<storage, read_write> block_sums: array<u32>;
-@group(0) @binding(7) var<storage, read_write> visible: array<u32>;
+// Bindings (all cull passes share them): CULL_BINDINGS in src/shaders.rs.
 
 @compute @workgroup_size(WORKGROUP_SIZE)
 fn compact(@builtin(workgroup_id) wid: vec3<u32>, @builtin(local_invocation_index) local: u32) {

@@ -1,15 +1,7 @@
 // Pass 2 of 3 per display, one workgroup: turn the block sums into block prefixes,
 // then build one draw per mesh with visible instances, packed in ascending mesh id,
-// zero the rest, and write the draw count. Deterministic: no atomics anywhere.
-
-@group(0) @binding(0) var<uniform> display: DisplayContext;
-@group(0) @binding(1) var<uniform> params: CullParams;
-@group(0) @binding(4) var<storage, read> meshes: array<MeshRecord>;
-@group(0) @binding(5) var<storage, read_write> local_prefix: array<u32>;
-@group(0) @binding(6) var<storage, read_write> block_sums: array<u32>;
-@group(0) @binding(8) var<storage, read_write> draws: array<DrawArgs>;
-// [0]: the draw count multi_draw_indexed_indirect_count reads; [1]: visible instances.
-@group(0) @binding(9) var<storage, read_write> draw_count: array<u32, 2>;
+// zero the rest, and write the counts. Deterministic: no atomics anywhere.
+// Bindings (all cull passes share them): CULL_BINDINGS in src/shaders.rs.
 
 // Visible instances before cull position `pos` (pos may equal the instance count).
 fn visible_before(pos: u32, total: u32) -> u32 {
@@ -53,10 +45,10 @@ fn draws_main(@builtin(local_invocation_index) local: u32) {
             let mesh = meshes[m];
             draws[packed + scan.x] = DrawArgs(
                 mesh.index_count,
-                display.views * count,
+                display.instances_per_object * count,
                 mesh.first_index,
                 mesh.base_vertex,
-                display.views * offset,
+                display.instances_per_object * offset,
             );
         }
         packed += scan.y;
@@ -65,7 +57,7 @@ fn draws_main(@builtin(local_invocation_index) local: u32) {
         draws[d] = DrawArgs(0u, 0u, 0u, 0, 0u);
     }
     if (local == 0u) {
-        draw_count[0] = packed;
-        draw_count[1] = total;
+        counts[0] = packed;
+        counts[1] = total;
     }
 }

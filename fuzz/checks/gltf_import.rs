@@ -3,13 +3,12 @@
 
 use std::path::Path;
 
-use stereocull::contexts::DisplayContext;
 use stereocull::cull::cpu;
 use stereocull::records::CullLayout;
 use stereocull::rig::Rig;
 
 /// Any bytes as a glTF or GLB file: an error, or a scene that the culler handles within
-/// the cull contract (non-finite instances dropped first, as `Scene::load` does).
+/// the cull contract (non-finite instances dropped first, as `scene_spec::load` does).
 pub fn gltf_import(data: &[u8]) {
     let Ok(mut scene) = stereocull::gltf_import::import_bytes(data, None, Path::new("fuzz.glb"))
     else {
@@ -18,10 +17,13 @@ pub fn gltf_import(data: &[u8]) {
     scene.drop_non_finite_instances();
     let layout = CullLayout::new(&scene);
     let rig = Rig::preset("hmd").expect("the hmd preset");
-    let display = DisplayContext::new(&rig, 0).expect("the hmd display");
-    let out = cpu::cull(&layout, &display.planes, display.views);
+    let job = rig.cull_jobs().expect("the hmd display")[0];
+    let out = cpu::cull(&layout, &job);
     let n = scene.instances.len();
     assert!(out.visible.len() <= n && out.visible.iter().all(|&i| (i as usize) < n));
     let drawn: u32 = out.draws.iter().map(|d| d.instance_count).sum();
-    assert_eq!(drawn as usize, out.visible.len() * display.views as usize);
+    assert_eq!(
+        drawn as usize,
+        out.visible.len() * job.instances_per_object as usize
+    );
 }

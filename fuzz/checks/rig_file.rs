@@ -1,11 +1,11 @@
 //! What the `rig_file` fuzz target holds any input to, shared with `tests/fuzz_corpus.rs`, which
 //! replays the corpus and every past finding in CI.
 
-use stereocull::contexts::DisplayContext;
 use stereocull::rig::Rig;
 
 /// Any bytes as a rig file (the first byte picks TOML or JSON): an error, or a rig
-/// whose every display frustum is finite (or a typed error saying why none exists).
+/// whose every display frustum, and the frame frustum, is finite (or a typed error
+/// saying why none exists).
 pub fn rig_file(data: &[u8]) {
     let Some((&kind, rest)) = data.split_first() else {
         return;
@@ -20,11 +20,15 @@ pub fn rig_file(data: &[u8]) {
     if rig.validate("fuzz").is_err() {
         return;
     }
-    for index in 0..rig.displays.len() {
-        if let Ok(display) = DisplayContext::new(&rig, index) {
-            let finite = display.planes.iter().all(|p| p.is_finite());
-            assert!(finite, "display {index}: planes {:?}", display.planes);
-        }
+    let Ok(resolved) = rig.resolve() else {
+        return;
+    };
+    let displays = resolved.displays.iter().map(|d| d.combined);
+    for (index, view) in displays.chain(resolved.frame).enumerate() {
+        let planes = view.frustum().planes;
+        assert!(
+            planes.iter().all(|p| p.is_finite()),
+            "frustum {index}: planes {planes:?}"
+        );
     }
-    let _ = rig.frame_view();
 }

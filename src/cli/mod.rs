@@ -9,14 +9,14 @@ use std::path::{Path, PathBuf};
 use clap::{Args, Parser, Subcommand};
 use serde::Serialize;
 
-use crate::contexts::DisplayContext;
 use crate::cull::{CullOutput, cpu};
 use crate::device::{Gpu, OPTIONAL_FEATURES, Tier};
 use crate::error::{Error, Result};
 use crate::records::CullLayout;
 use crate::renderer::{CullMode, Renderer, RendererOptions};
 use crate::rig::Rig;
-use crate::scene::{DEFAULT_SCENE, Scene};
+use crate::scene::Scene;
+use crate::scene_spec::{self, DEFAULT_SCENE};
 
 #[derive(Parser)]
 #[command(
@@ -186,14 +186,9 @@ pub fn display_dump(name: &str, views: u32, out: &CullOutput, scene: &Scene) -> 
 
 fn cull(args: &CullArgs) -> Result<()> {
     let rig = args.scene.load_rig()?;
-    let scene = Scene::load(&args.scene.scene)?;
+    let scene = scene_spec::load(&args.scene.scene)?;
     let outputs = match args.cull {
-        CullMode::Cpu => {
-            let displays = (0..rig.displays.len())
-                .map(|i| DisplayContext::new(&rig, i).map(|ctx| (ctx.planes, ctx.views)))
-                .collect::<Result<Vec<_>>>()?;
-            cpu::cull_many(&CullLayout::new(&scene), &displays)
-        }
+        CullMode::Cpu => cpu::cull_many(&CullLayout::new(&scene), &rig.cull_jobs()?),
         CullMode::Gpu => gpu_cull(&rig, &scene)?,
     };
     let displays: Vec<_> = rig

@@ -11,6 +11,7 @@ use serde::Serialize;
 use super::write_json;
 use crate::device::Gpu;
 use crate::error::{Error, Result};
+use crate::procedural;
 use crate::profiling::{GpuTimer, percentile};
 use crate::renderer::{CullMode, Renderer, RendererOptions, StereoMode};
 use crate::rig::Rig;
@@ -112,7 +113,7 @@ pub fn profile(args: &ProfileArgs) -> Result<()> {
     );
     let mut rows = Vec::new();
     for &n in &args.instances {
-        let scene = Scene::procedural(n, args.meshes, 1);
+        let scene = procedural::scene(n, args.meshes, 1);
         for (spec, rig) in &rigs {
             for &(mode, cull) in &configs {
                 bar.set_message(format!("{spec} {n} {} {cull:?}", mode.name()));

@@ -13,6 +13,7 @@ use crate::readback::read_rgba8;
 use crate::renderer::{CullMode, DisplayTarget, FrameStats, Renderer, RendererOptions, StereoMode};
 use crate::rig::Rig;
 use crate::scene::Scene;
+use crate::scene_spec;
 
 #[derive(Parser)]
 pub struct RenderArgs {
@@ -39,7 +40,7 @@ pub struct Session {
 impl Session {
     pub fn open(args: &SceneArgs, cull: CullMode, mode: StereoMode) -> Result<Session> {
         let rig = args.load_rig()?;
-        let scene = Scene::load(&args.scene)?;
+        let scene = scene_spec::load(&args.scene)?;
         let gpu = Gpu::headless()?;
         let options = RendererOptions {
             cull,

@@ -5,30 +5,28 @@
 //! bitmask per display (every display at once, so each sphere is read once) and counts
 //! per chunk, one that compacts, then per-mesh counts from the bitmask.
 
-use glam::Vec4;
 use rayon::prelude::*;
 
-use super::CullOutput;
+use super::{CullJob, CullOutput};
 use crate::records::{CullLayout, DrawArgs};
 
 /// Instances per parallel task: large enough to amortise scheduling, a multiple of 64.
 const CHUNK: usize = 1 << 14;
 const WORDS_PER_CHUNK: usize = CHUNK / 64;
 
-/// Culls every instance against `planes` and builds the draws for a display of
-/// `views` views (2 stereo, 1 mono).
-pub fn cull(layout: &CullLayout, planes: &[Vec4; 6], views: u32) -> CullOutput {
-    cull_many(layout, &[(*planes, views)]).remove(0)
+/// Culls every instance for one job and builds its draws.
+pub fn cull(layout: &CullLayout, job: &CullJob) -> CullOutput {
+    cull_many(layout, std::slice::from_ref(job)).remove(0)
 }
 
-/// Culls for several displays (or eyes) at once, each `(planes, views)`: every sphere
-/// is read once for all of them, which is what a frame with several displays wants.
-pub fn cull_many(layout: &CullLayout, displays: &[([Vec4; 6], u32)]) -> Vec<CullOutput> {
+/// Culls for several displays (or eyes) at once: every sphere is read once for all of
+/// them, which is what a frame with several displays wants.
+pub fn cull_many(layout: &CullLayout, displays: &[CullJob]) -> Vec<CullOutput> {
     let n = layout.spheres.len();
     let words = n.div_ceil(64);
     let planes: Vec<[[f32; 4]; 6]> = displays
         .iter()
-        .map(|(p, _)| p.map(|v| v.to_array()))
+        .map(|job| job.planes.map(|v| v.to_array()))
         .collect();
     // One mask per display, chunk-interleaved so each task writes one contiguous run.
     let mut masks = vec![0u64; words * displays.len()];
@@ -40,7 +38,7 @@ pub fn cull_many(layout: &CullLayout, displays: &[([Vec4; 6], u32)]) -> Vec<Cull
     displays
         .iter()
         .enumerate()
-        .map(|(d, &(_, views))| {
+        .map(|(d, job)| {
             let mask: Vec<u64> = masks
                 .chunks(WORDS_PER_CHUNK * displays.len())
                 .flat_map(|c| {
@@ -49,7 +47,7 @@ pub fn cull_many(layout: &CullLayout, displays: &[([Vec4; 6], u32)]) -> Vec<Cull
                 })
                 .collect();
             let chunk_counts: Vec<u32> = counts.iter().map(|c| c[d]).collect();
-            build_output(layout, &mask, &chunk_counts, views)
+            build_output(layout, &mask, &chunk_counts, job.instances_per_object)
         })
         .collect()
 }
@@ -129,7 +127,12 @@ fn test_lanes_portable(planes: &[[f32; 4]; 6], [x, y, z, neg_r]: [&[f32; 64]; 4]
 }
 
 /// The contract's buffers from one display's visibility bits.
-fn build_output(layout: &CullLayout, mask: &[u64], counts: &[u32], views: u32) -> CullOutput {
+fn build_output(
+    layout: &CullLayout,
+    mask: &[u64],
+    counts: &[u32],
+    instances_per_object: u32,
+) -> CullOutput {
     let chunk_start = exclusive_prefix(counts);
     let total = chunk_start.last().copied().unwrap_or(0) as usize;
     let mut visible = vec![0u32; total];
@@ -166,10 +169,10 @@ fn build_output(layout: &CullLayout, mask: &[u64], counts: &[u32], views: u32) -
         if count > 0 {
             draws[draw_count] = DrawArgs {
                 index_count: m.index_count,
-                instance_count: views * count,
+                instance_count: instances_per_object * count,
                 first_index: m.first_index,
                 base_vertex: m.base_vertex,
-                first_instance: views * offset,
+                first_instance: instances_per_object * offset,
             };
             draw_count += 1;
         }

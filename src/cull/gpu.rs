@@ -4,22 +4,22 @@
 
 use wgpu::util::DeviceExt;
 
+use crate::contexts::uniform_bytes;
 use crate::records::{CullLayout, DrawArgs};
-use crate::shaders::{CullPass, WORKGROUP_SIZE};
+use crate::shaders::{CULL_BINDINGS, CullPass, WORKGROUP_SIZE, bind_group, bind_group_layout};
 
-/// The uniform the cull passes read besides the display context (`CullParams` in WGSL).
-#[repr(C)]
-#[derive(Clone, Copy, Debug, bytemuck::Pod, bytemuck::Zeroable)]
+/// The uniform the cull passes read besides the display context (`CullParams` in
+/// `wgsl/shared/records.wgsl`); encase lays it out as WGSL does.
+#[derive(Clone, Copy, Debug, PartialEq, Eq, encase::ShaderType)]
 pub struct CullParams {
     pub instance_count: u32,
     pub mesh_count: u32,
+    /// Workgroups along x in the cull and compact dispatches (y carries the rest).
     pub groups_x: u32,
-    /// Pads the uniform to 16 bytes.
-    pub reserved: u32,
 }
 
-/// Bytes of the count buffer: the draw count, then the visible total.
-pub const COUNT_BYTES: u64 = 8;
+/// Bytes of the counts buffer: the draw count, then the visible total.
+pub const COUNTS_BYTES: u64 = 8;
 
 /// The cull pipelines and their shared bind-group layout.
 pub struct GpuCuller {
@@ -45,8 +45,9 @@ pub struct CullScene {
 pub struct CullTargets {
     pub visible: wgpu::Buffer,
     pub draws: wgpu::Buffer,
-    /// [`COUNT_BYTES`]: draw count, visible total.
-    pub count: wgpu::Buffer,
+    /// [`COUNTS_BYTES`]: the draw count (what `multi_draw_indexed_indirect_count`
+    /// reads), then the visible total (for statistics without reading `visible`).
+    pub counts: wgpu::Buffer,
 }
 
 impl CullScene {
@@ -60,7 +61,6 @@ impl CullScene {
             instance_count: n,
             mesh_count: layout.meshes.len() as u32,
             groups_x: groups.0,
-            reserved: 0,
         };
         let init = |label: &str, contents: &[u8], usage| {
             device.create_buffer_init(&wgpu::util::BufferInitDescriptor {
@@ -76,7 +76,7 @@ impl CullScene {
             groups,
             params: init(
                 "stereocull.cull_params",
-                bytemuck::bytes_of(&params),
+                &uniform_bytes(&params),
                 wgpu::BufferUsages::UNIFORM,
             ),
             spheres: init(
@@ -123,7 +123,7 @@ impl CullTargets {
                 (size_of::<DrawArgs>() as u32 * mesh_count) as u64,
                 indirect,
             ),
-            count: storage_buffer(device, "stereocull.draw_count", COUNT_BYTES, indirect),
+            counts: storage_buffer(device, "stereocull.counts", COUNTS_BYTES, indirect),
         }
     }
 }
@@ -150,37 +150,7 @@ fn dispatch_size(groups: u32, max_per_dimension: u32) -> (u32, u32) {
 
 impl GpuCuller {
     pub fn new(device: &wgpu::Device) -> GpuCuller {
-        let entry = |binding, ty| wgpu::BindGroupLayoutEntry {
-            binding,
-            visibility: wgpu::ShaderStages::COMPUTE,
-            ty,
-            count: None,
-        };
-        let uniform = wgpu::BindingType::Buffer {
-            ty: wgpu::BufferBindingType::Uniform,
-            has_dynamic_offset: false,
-            min_binding_size: None,
-        };
-        let storage = |read_only| wgpu::BindingType::Buffer {
-            ty: wgpu::BufferBindingType::Storage { read_only },
-            has_dynamic_offset: false,
-            min_binding_size: None,
-        };
-        let layout = device.create_bind_group_layout(&wgpu::BindGroupLayoutDescriptor {
-            label: Some("stereocull.cull"),
-            entries: &[
-                entry(0, uniform),
-                entry(1, uniform),
-                entry(2, storage(true)),
-                entry(3, storage(true)),
-                entry(4, storage(true)),
-                entry(5, storage(false)),
-                entry(6, storage(false)),
-                entry(7, storage(false)),
-                entry(8, storage(false)),
-                entry(9, storage(false)),
-            ],
-        });
+        let layout = bind_group_layout(device, "stereocull.cull", &CULL_BINDINGS);
         let pipeline_layout = device.create_pipeline_layout(&wgpu::PipelineLayoutDescriptor {
             label: Some("stereocull.cull"),
             bind_group_layouts: &[Some(&layout)],
@@ -214,6 +184,7 @@ impl GpuCuller {
         display_context: &wgpu::Buffer,
         targets: &CullTargets,
     ) -> wgpu::BindGroup {
+        // In CULL_BINDINGS order.
         let buffers = [
             display_context,
             &scene.params,
@@ -224,21 +195,9 @@ impl GpuCuller {
             &scene.block_sums,
             &targets.visible,
             &targets.draws,
-            &targets.count,
+            &targets.counts,
         ];
-        let entries: Vec<_> = buffers
-            .iter()
-            .enumerate()
-            .map(|(i, b)| wgpu::BindGroupEntry {
-                binding: i as u32,
-                resource: b.as_entire_binding(),
-            })
-            .collect();
-        device.create_bind_group(&wgpu::BindGroupDescriptor {
-            label: Some("stereocull.cull"),
-            layout: &self.layout,
-            entries: &entries,
-        })
+        bind_group(device, "stereocull.cull", &self.layout, buffers)
     }
 
     /// Records the three dispatches for one display: a fixed count, whatever the

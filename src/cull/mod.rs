@@ -4,12 +4,25 @@
 //! - one draw per mesh with at least one visible instance, in ascending mesh id, packed
 //!   at the front of `draws`; the rest of `draws` is zero; `draw_count` is their number;
 //! - within a draw, visible instance ids ascend;
-//! - `instance_count = views * visible_in_mesh`, `first_instance = views * offset`.
+//! - `instance_count = V * visible_in_mesh`, `first_instance = V * offset`, where V is
+//!   [`CullJob::instances_per_object`].
 
 pub mod cpu;
 pub mod gpu;
 
+use glam::Vec4;
+
 use crate::records::DrawArgs;
+
+/// One cull: a display's frustum planes and how many instances each visible object
+/// becomes in its draws.
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub struct CullJob {
+    /// Left, right, bottom, top, near, far; inside when `dot(n, p) + d >= 0`.
+    pub planes: [Vec4; 6],
+    /// 2 for instanced stereo (counts doubled), else 1.
+    pub instances_per_object: u32,
+}
 
 /// One display's cull result, as the draw pass consumes it.
 #[derive(Clone, Debug, PartialEq, Eq)]
@@ -24,10 +37,17 @@ pub struct CullOutput {
 
 impl CullOutput {
     /// The mesh each packed draw draws, recovered from its first visible instance.
-    pub fn draw_meshes(&self, views: u32, instance_mesh: impl Fn(u32) -> u32) -> Vec<u32> {
+    pub fn draw_meshes(
+        &self,
+        instances_per_object: u32,
+        instance_mesh: impl Fn(u32) -> u32,
+    ) -> Vec<u32> {
         self.draws[..self.draw_count as usize]
             .iter()
-            .map(|d| instance_mesh(self.visible[(d.first_instance / views) as usize]))
+            .map(|d| {
+                let slot = d.first_instance / instances_per_object;
+                instance_mesh(self.visible[slot as usize])
+            })
             .collect()
     }
 }

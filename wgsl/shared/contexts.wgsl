@@ -1,4 +1,4 @@
-// The chapter's Listing 1.3 contexts. Mirrored by src/contexts.rs (encase); the test
+// The chapter's Listing 1.3 display and eye contexts. Mirrored by src/contexts.rs (encase); the test
 // `contexts_match_wgsl` compares the two layouts member by member.
 // Names read like the math: view_from_world is the chapter's mLocation,
 // clip_from_view its mProjection, and the *_inverse twins are the other direction.
@@ -25,14 +25,7 @@ struct DisplayContext {
     // Display frustum planes (left, right, bottom, top, near, far), inside when
     // dot(n, p) + d >= 0: what the cull pass tests.
     planes: array<vec4<f32>, 6>,
-    // 2 for stereo, 1 for mono: the instance-count multiplier.
-    views: u32,
-}
-
-struct FrameContext {
-    view_from_world: mat4x4<f32>,
-    world_from_view: mat4x4<f32>,
-    viewer_position: vec3<f32>,
-    viewer_direction: vec3<f32>,
-    time: f32,
+    // Instances drawn per visible object (the cull contract's V): 2 for instanced
+    // stereo (instance_index >> 1 the object, & 1 the eye), else 1.
+    instances_per_object: u32,
 }

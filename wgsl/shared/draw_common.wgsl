@@ -1,8 +1,5 @@
-// Shared by every draw pipeline: bindings, the vertex transform and the shading.
-
-@group(0) @binding(0) var<uniform> display: DisplayContext;
-@group(0) @binding(1) var<storage, read> instances: array<InstanceRecord>;
-@group(0) @binding(2) var<storage, read> visible: array<u32>;
+// Shared by every draw pipeline: the vertex transform and the shading. Bindings:
+// DRAW_BINDINGS in src/shaders.rs.
 
 struct VertexInput {
     @location(0) position: vec3<f32>,

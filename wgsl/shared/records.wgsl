@@ -30,6 +30,7 @@ struct DrawArgs {
     first_instance: u32,
 }
 
+// Uniform; mirrored by CullParams in src/cull/gpu.rs (encase).
 struct CullParams {
     instance_count: u32,
     mesh_count: u32,

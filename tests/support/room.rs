@@ -1,16 +1,12 @@
-//! The built-in default scene: a furnished room at real scale, with objects from an arm's
-//! length to ten meters away so that stereo depth reads. Authored here, written to
-//! `assets/room.glb` (the test `default_scene_asset_is_current` keeps the two equal),
-//! and embedded in the binary so that `--scene default` works from any directory.
+//! The authoring of the built-in room: a furnished room at real scale, with objects
+//! from an arm's length to ten meters away so that stereo depth reads. The library only
+//! embeds the written file (`assets/room.glb`); `tests/default_scene.rs` checks that the
+//! file is what this writes (`STEREOCULL_RECORD=1` rewrites it).
 
 use glam::{Affine3A, Quat, Vec3, Vec4};
 use serde_json::json;
-
-use crate::scene::{Instance, Scene};
-use crate::shapes::{self, Shape};
-
-/// The committed asset, loaded by `Scene::load("default")`.
-pub const ROOM_GLB: &[u8] = include_bytes!("../assets/room.glb");
+use stereocull::scene::{Instance, Scene};
+use stereocull::shapes::{self, Shape};
 
 const CUBE: u32 = 0;
 const SPHERE: u32 = 1;

@@ -1,0 +1,294 @@
+//! The classic stereo modes (`multi-camera`, `multi-pass`, `single-pass`): the CPU culls,
+//! then one draw call per visible instance and eye, the way engines drew stereo before
+//! GPU-driven submission. They draw the same images as the indirect path, so that each
+//! can be profiled against it.
+
+use std::time::Instant;
+
+use super::{FrameStats, RendererOptions, TargetViews, begin_statistics, context_buffer, write};
+use crate::contexts::{DisplayContext, uniform_bytes};
+use crate::cull::{CullJob, CullOutput, cpu};
+use crate::draw::{DrawFeatures, DrawScene, Drawer, begin_pass, set_eye_viewport};
+use crate::modes::StereoMode;
+use crate::profiling::GpuTimer;
+use crate::records::CullLayout;
+use crate::rig::{ResolvedRig, Rig};
+use crate::scene::Scene;
+use crate::shaders::DrawKey;
+
+/// One eye of a stereo display: its own context (that eye in both eye slots) and, for
+/// multi-camera, its own visible list.
+struct EyeState {
+    context: wgpu::Buffer,
+    visible: Option<wgpu::Buffer>,
+    bind_group: wgpu::BindGroup,
+}
+
+struct ClassicDisplay {
+    context: wgpu::Buffer,
+    /// The display's visible list (multi-camera: unused by stereo displays' eyes).
+    visible: wgpu::Buffer,
+    /// Mono displays draw with this; stereo ones with their eyes'.
+    bind_group: wgpu::BindGroup,
+    /// Two for stereo displays, none for mono.
+    eyes: Vec<EyeState>,
+    eye_size: (u32, u32),
+}
+
+pub(super) struct ClassicPath {
+    mode: StereoMode,
+    layout: CullLayout,
+    drawer: Drawer,
+    draw_scene: DrawScene,
+    displays: Vec<ClassicDisplay>,
+    /// This frame's CPU culls per display: one, or one per eye (multi-camera).
+    culls: Vec<Vec<CullOutput>>,
+}
+
+impl ClassicPath {
+    pub(super) fn new(
+        device: &wgpu::Device,
+        scene: &Scene,
+        rig: &Rig,
+        options: RendererOptions,
+    ) -> ClassicPath {
+        let clip = DrawFeatures::of(device).clip_distances;
+        let drawer = Drawer::new(device, options.color_format, &[DrawKey::new(1, clip)]);
+        let draw_scene = DrawScene::new(device, scene);
+        let n = scene.instances.len() as u64;
+        let visible_list = || visible_buffer(device, n);
+        let displays = rig
+            .displays
+            .iter()
+            .map(|d| {
+                let context = context_buffer(device);
+                let visible = visible_list();
+                let eyes = (0..if d.stereo { 2 } else { 0 })
+                    .map(|_| {
+                        let context = context_buffer(device);
+                        let own = (options.mode == StereoMode::MultiCamera).then(visible_list);
+                        let list = own.as_ref().unwrap_or(&visible);
+                        EyeState {
+                            bind_group: drawer.bind_group(device, &context, &draw_scene, list),
+                            context,
+                            visible: own,
+                        }
+                    })
+                    .collect();
+                ClassicDisplay {
+                    bind_group: drawer.bind_group(device, &context, &draw_scene, &visible),
+                    context,
+                    visible,
+                    eyes,
+                    eye_size: (d.resolution[0], d.resolution[1]),
+                }
+            })
+            .collect();
+        ClassicPath {
+            mode: options.mode,
+            layout: CullLayout::new(scene),
+            drawer,
+            draw_scene,
+            displays,
+            culls: Vec::new(),
+        }
+    }
+
+    /// Culls on the CPU (all displays and eyes in one pass over the spheres), writes the
+    /// contexts and uploads the visible lists the draws index.
+    pub(super) fn prepare(
+        &mut self,
+        queue: &wgpu::Queue,
+        rig: &Rig,
+        resolved: &ResolvedRig,
+    ) -> FrameStats {
+        let contexts: Vec<DisplayContext> = rig
+            .displays
+            .iter()
+            .zip(&resolved.displays)
+            .map(|(d, r)| DisplayContext::new(r, d.resolution, 1))
+            .collect();
+        let mut stats = FrameStats::default();
+        let start = Instant::now();
+        self.culls = self.cull(resolved);
+        stats.cpu_cull = start.elapsed();
+        let start = Instant::now();
+        for ((state, ctx), culls) in self.displays.iter().zip(&contexts).zip(&self.culls) {
+            stats.bytes_uploaded += write(queue, &state.context, &uniform_bytes(ctx));
+            for (e, eye) in state.eyes.iter().enumerate() {
+                stats.bytes_uploaded += write(queue, &eye.context, &uniform_bytes(&ctx.for_eye(e)));
+            }
+            let lists = match (culls.as_slice(), state.eyes.as_slice()) {
+                ([left, right], [l, r]) => {
+                    vec![(left, l.visible.as_ref()), (right, r.visible.as_ref())]
+                }
+                (all, _) => vec![(&all[0], None)],
+            };
+            for (out, own) in lists {
+                let buffer = own.unwrap_or(&state.visible);
+                stats.bytes_uploaded += write(queue, buffer, bytemuck::cast_slice(&out.visible));
+            }
+        }
+        stats.cpu_upload = start.elapsed();
+        stats
+    }
+
+    /// Per display one cull against the display frustum; multi-camera culls each eye of
+    /// a stereo display against that eye's own frustum instead.
+    fn cull(&self, resolved: &ResolvedRig) -> Vec<Vec<CullOutput>> {
+        let mut jobs = Vec::new();
+        let mut per_display = Vec::new();
+        for r in &resolved.displays {
+            if self.mode == StereoMode::MultiCamera && r.eyes.len() == 2 {
+                jobs.extend(r.eyes.iter().map(|e| CullJob {
+                    planes: e.frustum().planes,
+                    instances_per_object: 1,
+                }));
+                per_display.push(2);
+            } else {
+                jobs.push(r.cull_job(1));
+                per_display.push(1);
+            }
+        }
+        let mut outputs = cpu::cull_many(&self.layout, &jobs).into_iter();
+        per_display
+            .iter()
+            .map(|&k| outputs.by_ref().take(k).collect())
+            .collect()
+    }
+
+    pub(super) fn encode(
+        &self,
+        encoder: &mut wgpu::CommandEncoder,
+        targets: &[TargetViews],
+        timer: &mut Option<&mut GpuTimer>,
+    ) -> FrameStats {
+        let mut stats = FrameStats::default();
+        for ((state, target), culls) in self.displays.iter().zip(targets).zip(&self.culls) {
+            stats.draw_calls += match (self.mode, state.eyes.is_empty()) {
+                (_, true) => self.encode_mono(encoder, target, state, &culls[0], timer),
+                (StereoMode::SinglePass, false) => {
+                    self.encode_single_pass(encoder, target, state, &culls[0], timer)
+                }
+                (_, false) => self.encode_pass_per_eye(encoder, target, state, culls, timer),
+            };
+        }
+        stats
+    }
+
+    fn encode_mono(
+        &self,
+        encoder: &mut wgpu::CommandEncoder,
+        target: &TargetViews,
+        state: &ClassicDisplay,
+        out: &CullOutput,
+        timer: &mut Option<&mut GpuTimer>,
+    ) -> u32 {
+        let writes = timer.as_deref_mut().and_then(|t| t.render("draw"));
+        let mut pass = begin_pass(encoder, target.pair(), true, false, writes);
+        let counting = begin_statistics(timer, &mut pass);
+        self.bind(&mut pass, &state.bind_group);
+        let calls = instance_draws(out).map(|d| draw(&mut pass, d)).count() as u32;
+        GpuTimer::end_statistics(&mut pass, counting);
+        calls
+    }
+
+    /// Single-pass stereo: one pass; each instance drawn for both eyes in the left,
+    /// right, right, left cadence so that the eye (viewport and binding) switches once
+    /// per instance, not twice.
+    fn encode_single_pass(
+        &self,
+        encoder: &mut wgpu::CommandEncoder,
+        target: &TargetViews,
+        state: &ClassicDisplay,
+        out: &CullOutput,
+        timer: &mut Option<&mut GpuTimer>,
+    ) -> u32 {
+        let writes = timer.as_deref_mut().and_then(|t| t.render("draw"));
+        let mut pass = begin_pass(encoder, target.pair(), true, false, writes);
+        let counting = begin_statistics(timer, &mut pass);
+        self.bind(&mut pass, &state.eyes[0].bind_group);
+        let mut current = usize::MAX;
+        let mut calls = 0;
+        for (k, d) in instance_draws(out).enumerate() {
+            let order = if k % 2 == 0 { [0, 1] } else { [1, 0] };
+            for e in order {
+                if e != current {
+                    pass.set_bind_group(0, &state.eyes[e].bind_group, &[]);
+                    set_eye_viewport(&mut pass, e as u32, state.eye_size);
+                    current = e;
+                }
+                draw(&mut pass, d.clone());
+                calls += 1;
+            }
+        }
+        GpuTimer::end_statistics(&mut pass, counting);
+        calls
+    }
+
+    /// Multi-pass and multi-camera: one pass per eye into its half, each with a draw
+    /// call per visible instance (of the shared cull, or of that eye's own).
+    fn encode_pass_per_eye(
+        &self,
+        encoder: &mut wgpu::CommandEncoder,
+        target: &TargetViews,
+        state: &ClassicDisplay,
+        culls: &[CullOutput],
+        timer: &mut Option<&mut GpuTimer>,
+    ) -> u32 {
+        let mut calls = 0;
+        for (e, eye) in state.eyes.iter().enumerate() {
+            let writes = timer.as_deref_mut().and_then(|t| t.render("draw"));
+            let mut pass = begin_pass(encoder, target.pair(), e == 0, false, writes);
+            let counting = begin_statistics(timer, &mut pass);
+            self.bind(&mut pass, &eye.bind_group);
+            set_eye_viewport(&mut pass, e as u32, state.eye_size);
+            let out = &culls[e.min(culls.len() - 1)];
+            calls += instance_draws(out).map(|d| draw(&mut pass, d)).count() as u32;
+            GpuTimer::end_statistics(&mut pass, counting);
+        }
+        calls
+    }
+
+    fn bind(&self, pass: &mut wgpu::RenderPass, bind_group: &wgpu::BindGroup) {
+        let key = self.drawer.key(1);
+        self.drawer.bind(pass, key, &self.draw_scene, bind_group);
+    }
+
+    /// This frame's cull of display `index` (multi-camera: its left eye's).
+    pub(super) fn cull_output(&self, index: usize) -> CullOutput {
+        self.culls[index][0].clone()
+    }
+
+    pub(super) fn visible_counts(&self) -> Vec<u32> {
+        self.culls
+            .iter()
+            .map(|c| c[0].visible.len() as u32)
+            .collect()
+    }
+}
+
+fn visible_buffer(device: &wgpu::Device, instances: u64) -> wgpu::Buffer {
+    device.create_buffer(&wgpu::BufferDescriptor {
+        label: Some("stereocull.visible"),
+        size: (4 * instances).max(4),
+        usage: wgpu::BufferUsages::STORAGE | wgpu::BufferUsages::COPY_DST,
+        mapped_at_creation: false,
+    })
+}
+
+/// One per-instance draw: index range, base vertex, and the slot in the visible list.
+type InstanceDraw = (std::ops::Range<u32>, i32, u32);
+
+/// The per-instance draws of a one-view cull result, in visible-list order.
+fn instance_draws(out: &CullOutput) -> impl Iterator<Item = InstanceDraw> + '_ {
+    out.draws[..out.draw_count as usize].iter().flat_map(|d| {
+        let indices = d.first_index..d.first_index + d.index_count;
+        (d.first_instance..d.first_instance + d.instance_count)
+            .map(move |slot| (indices.clone(), d.base_vertex, slot))
+    })
+}
+
+fn draw(pass: &mut wgpu::RenderPass, (indices, base_vertex, slot): InstanceDraw) {
+    pass.draw_indexed(indices, base_vertex, slot..slot + 1);
+}

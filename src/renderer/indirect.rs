@@ -1,0 +1,235 @@
+//! The GPU-driven path (`instanced` and `multiview`): per display, culling into a
+//! visible list and per-mesh draws (three compute dispatches, or the CPU culler and an
+//! upload), then one render pass with one multi-draw-indirect call.
+//!
+//! Per frame on the GPU-culled path the CPU writes one display context per display and
+//! records a fixed number of commands: its cost does not depend on the instance count.
+
+use std::time::Instant;
+
+use super::{
+    CullMode, FrameStats, RendererOptions, TargetViews, begin_statistics, context_buffer, write,
+};
+use crate::contexts::{DisplayContext, uniform_bytes};
+use crate::cull::gpu::{COUNTS_BYTES, CullScene, CullTargets, GpuCuller};
+use crate::cull::{CullOutput, cpu};
+use crate::draw::{DrawFeatures, DrawScene, Drawer, begin_pass};
+use crate::error::Result;
+use crate::modes::StereoMode;
+use crate::profiling::GpuTimer;
+use crate::readback::read_pod;
+use crate::records::{CullLayout, DrawArgs};
+use crate::rig::{ResolvedRig, Rig};
+use crate::scene::Scene;
+use crate::shaders::DrawKey;
+
+/// Where the visible lists and draws come from.
+enum Culling {
+    /// Three compute dispatches per display over scene data uploaded once.
+    Gpu { culler: GpuCuller, scene: CullScene },
+    /// The CPU culler over its own copy of the cull layout; results are uploaded.
+    Cpu { layout: CullLayout },
+}
+
+/// One display's buffers and bindings.
+struct IndirectDisplay {
+    context: wgpu::Buffer,
+    /// Filled by the cull passes or by the CPU upload; read by the draw.
+    cull: CullTargets,
+    /// GPU culling only.
+    cull_bind_group: Option<wgpu::BindGroup>,
+    draw_bind_group: wgpu::BindGroup,
+    key: DrawKey,
+    instances_per_object: u32,
+}
+
+pub(super) struct IndirectPath {
+    culling: Culling,
+    drawer: Drawer,
+    draw_scene: DrawScene,
+    mesh_count: u32,
+    displays: Vec<IndirectDisplay>,
+}
+
+impl IndirectPath {
+    pub(super) fn new(
+        device: &wgpu::Device,
+        scene: &Scene,
+        rig: &Rig,
+        options: RendererOptions,
+    ) -> IndirectPath {
+        let multiview = options.mode == StereoMode::Multiview;
+        let layout = CullLayout::new(scene);
+        let culling = match options.cull {
+            CullMode::Gpu => Culling::Gpu {
+                culler: GpuCuller::new(device),
+                scene: CullScene::new(device, &layout),
+            },
+            CullMode::Cpu => Culling::Cpu { layout },
+        };
+        let clip = DrawFeatures::of(device).clip_distances;
+        let keys: Vec<DrawKey> = rig
+            .displays
+            .iter()
+            .map(|d| match (d.stereo, multiview) {
+                (true, true) => DrawKey::MULTIVIEW,
+                (true, false) => DrawKey::new(2, clip),
+                (false, _) => DrawKey::new(1, clip),
+            })
+            .collect();
+        let drawer = Drawer::new(device, options.color_format, &keys);
+        let draw_scene = DrawScene::new(device, scene);
+        let (instances, meshes) = (scene.instances.len() as u32, scene.meshes.len() as u32);
+        let displays = keys
+            .iter()
+            .map(|&key| {
+                let context = context_buffer(device);
+                let cull = CullTargets::new(device, instances, meshes);
+                let cull_bind_group = match &culling {
+                    Culling::Gpu { culler, scene } => {
+                        Some(culler.bind_group(device, scene, &context, &cull))
+                    }
+                    Culling::Cpu { .. } => None,
+                };
+                IndirectDisplay {
+                    draw_bind_group: drawer.bind_group(
+                        device,
+                        &context,
+                        &draw_scene,
+                        &cull.visible,
+                    ),
+                    context,
+                    cull,
+                    cull_bind_group,
+                    key,
+                    instances_per_object: key.instances_per_object(),
+                }
+            })
+            .collect();
+        IndirectPath {
+            culling,
+            drawer,
+            draw_scene,
+            mesh_count: meshes,
+            displays,
+        }
+    }
+
+    /// Writes each display's context and, culling on the CPU, its cull results.
+    pub(super) fn prepare(
+        &mut self,
+        queue: &wgpu::Queue,
+        rig: &Rig,
+        resolved: &ResolvedRig,
+    ) -> FrameStats {
+        let contexts: Vec<DisplayContext> = self
+            .displays
+            .iter()
+            .zip(rig.displays.iter().zip(&resolved.displays))
+            .map(|(state, (d, r))| DisplayContext::new(r, d.resolution, state.instances_per_object))
+            .collect();
+        let mut stats = FrameStats::default();
+        let start = Instant::now();
+        let culls = match &self.culling {
+            Culling::Gpu { .. } => Vec::new(),
+            Culling::Cpu { layout } => {
+                let jobs: Vec<_> = self
+                    .displays
+                    .iter()
+                    .zip(&resolved.displays)
+                    .map(|(state, r)| r.cull_job(state.instances_per_object))
+                    .collect();
+                cpu::cull_many(layout, &jobs)
+            }
+        };
+        stats.cpu_cull = start.elapsed();
+        let start = Instant::now();
+        for (state, ctx) in self.displays.iter().zip(&contexts) {
+            stats.bytes_uploaded += write(queue, &state.context, &uniform_bytes(ctx));
+        }
+        for (state, out) in self.displays.iter().zip(&culls) {
+            let counts = [out.draw_count, out.visible.len() as u32];
+            let cull = &state.cull;
+            stats.bytes_uploaded += write(queue, &cull.visible, bytemuck::cast_slice(&out.visible))
+                + write(queue, &cull.draws, bytemuck::cast_slice(&out.draws))
+                + write(queue, &cull.counts, bytemuck::cast_slice(&counts));
+        }
+        stats.cpu_upload = start.elapsed();
+        stats
+    }
+
+    /// Per display: the cull dispatches (GPU culling), then one pass with one draw call.
+    pub(super) fn encode(
+        &self,
+        encoder: &mut wgpu::CommandEncoder,
+        targets: &[TargetViews],
+        timer: &mut Option<&mut GpuTimer>,
+    ) -> FrameStats {
+        let mut stats = FrameStats::default();
+        for (state, target) in self.displays.iter().zip(targets) {
+            if let (Culling::Gpu { culler, scene }, Some(bind_group)) =
+                (&self.culling, &state.cull_bind_group)
+            {
+                let mut pass = encoder.begin_compute_pass(&wgpu::ComputePassDescriptor {
+                    label: Some("stereocull.cull"),
+                    timestamp_writes: timer.as_deref_mut().and_then(|t| t.compute("cull")),
+                });
+                culler.encode(&mut pass, scene, bind_group);
+                stats.dispatches += GpuCuller::DISPATCHES_PER_DISPLAY;
+            }
+            let writes = timer.as_deref_mut().and_then(|t| t.render("draw"));
+            let mut pass = begin_pass(encoder, target.pair(), true, state.key.multiview, writes);
+            let counting = begin_statistics(timer, &mut pass);
+            self.drawer.bind(
+                &mut pass,
+                state.key,
+                &self.draw_scene,
+                &state.draw_bind_group,
+            );
+            self.drawer
+                .draw_indirect(&mut pass, self.mesh_count, &state.cull);
+            GpuTimer::end_statistics(&mut pass, counting);
+            stats.draw_calls += 1;
+        }
+        stats
+    }
+
+    /// Display `index`'s cull buffers, read back after the frame was submitted.
+    pub(super) fn read_cull(
+        &self,
+        device: &wgpu::Device,
+        queue: &wgpu::Queue,
+        index: usize,
+    ) -> Result<CullOutput> {
+        let cull = &self.displays[index].cull;
+        let [draw_count, visible_total] = read_counts(device, queue, cull)?;
+        let visible = match visible_total {
+            0 => Vec::new(),
+            n => read_pod(device, queue, &cull.visible, 4 * n as u64)?,
+        };
+        let draws_bytes = (size_of::<DrawArgs>() as u32 * self.mesh_count) as u64;
+        Ok(CullOutput {
+            visible,
+            draws: read_pod(device, queue, &cull.draws, draws_bytes)?,
+            draw_count,
+        })
+    }
+
+    /// Every display's visible total, from its counts buffer.
+    pub(super) fn visible_counts(
+        &self,
+        device: &wgpu::Device,
+        queue: &wgpu::Queue,
+    ) -> Result<Vec<u32>> {
+        self.displays
+            .iter()
+            .map(|d| Ok(read_counts(device, queue, &d.cull)?[1]))
+            .collect()
+    }
+}
+
+/// The counts buffer: the draw count and the visible total.
+fn read_counts(device: &wgpu::Device, queue: &wgpu::Queue, cull: &CullTargets) -> Result<[u32; 2]> {
+    let counts: Vec<u32> = read_pod(device, queue, &cull.counts, COUNTS_BYTES)?;
+    Ok([counts[0], counts[1]])
+}

@@ -1,0 +1,350 @@
+//! The embedding API: a [`Renderer`] takes the caller's device, queue and encoder,
+//! renders into the caller's texture views (or targets it makes for them), and owns no
+//! window and no global state.
+//!
+//! ```no_run
+//! # fn demo(device: &wgpu::Device, queue: &wgpu::Queue) -> stereocull::Result<()> {
+//! use stereocull::renderer::{Renderer, RendererOptions};
+//! use stereocull::{rig::Rig, scene_spec};
+//!
+//! let scene = scene_spec::load("procedural:10000")?;
+//! let mut rig = Rig::preset("hmd")?;
+//! let mut renderer = Renderer::new(device, &scene, &rig, RendererOptions::default())?;
+//! let targets = renderer.create_targets(device); // or views of your own textures
+//! // Each frame: move the viewer, write the contexts, record, submit.
+//! rig.viewer.yaw_deg += 1.0;
+//! renderer.prepare(queue, &rig)?;
+//! let mut encoder = device.create_command_encoder(&Default::default());
+//! let views: Vec<_> = targets.iter().map(|t| t.views()).collect();
+//! renderer.encode(&mut encoder, &views, None)?; // or Some(&mut timer) for GPU timings
+//! queue.submit([encoder.finish()]);
+//! # Ok(()) }
+//! ```
+//!
+//! The path is chosen once, in [`Renderer::new`]: the GPU-driven one (`indirect.rs`:
+//! `instanced`, `multiview`; per display three cull dispatches, or the CPU culler's
+//! upload, and one multi-draw-indirect call) or the classic per-instance modes
+//! (`classic.rs`). Each frame, [`Renderer::prepare`] resolves the rig once
+//! ([`Rig::resolve`]) and builds every context and cull job from that.
+
+use std::time::Duration;
+
+use crate::contexts::DisplayContext;
+use crate::cull::CullOutput;
+use crate::cull::gpu::CullScene;
+use crate::draw::DrawScene;
+use crate::error::{Error, Result};
+pub use crate::modes::StereoMode;
+use crate::profiling::GpuTimer;
+use crate::records::MeshRecord;
+use crate::rig::Rig;
+use crate::scene::{Scene, Vertex};
+
+mod classic;
+mod indirect;
+mod targets;
+
+use classic::ClassicPath;
+use indirect::IndirectPath;
+pub use targets::{DisplayTarget, TargetShape, TargetViews};
+
+/// Where the per-display cull runs.
+#[derive(Clone, Copy, Debug, Default, PartialEq, Eq, Hash, clap::ValueEnum, serde::Serialize)]
+#[serde(rename_all = "lowercase")]
+pub enum CullMode {
+    /// Compute passes on the GPU; nothing per instance crosses the bus each frame.
+    #[default]
+    Gpu,
+    /// The rayon culler, then an upload of its results.
+    Cpu,
+}
+
+#[derive(Clone, Copy, Debug)]
+pub struct RendererOptions {
+    pub color_format: wgpu::TextureFormat,
+    pub cull: CullMode,
+    pub mode: StereoMode,
+}
+
+impl Default for RendererOptions {
+    fn default() -> Self {
+        RendererOptions {
+            color_format: wgpu::TextureFormat::Rgba8UnormSrgb,
+            cull: CullMode::Gpu,
+            mode: StereoMode::Instanced,
+        }
+    }
+}
+
+/// What one frame recorded and uploaded, and the CPU time of its phases.
+#[derive(Clone, Copy, Debug, Default, PartialEq, serde::Serialize)]
+pub struct FrameStats {
+    pub draw_calls: u32,
+    pub dispatches: u32,
+    pub bytes_uploaded: u64,
+    /// CPU culling (zero on the GPU path).
+    #[serde(skip)]
+    pub cpu_cull: Duration,
+    /// Writing contexts and cull results into buffers.
+    #[serde(skip)]
+    pub cpu_upload: Duration,
+}
+
+/// The path chosen in [`Renderer::new`].
+enum Path {
+    Indirect(IndirectPath),
+    Classic(ClassicPath),
+}
+
+pub struct Renderer {
+    options: RendererOptions,
+    path: Path,
+    /// Per display, as made: what targets must look like and what `prepare` checks.
+    shapes: Vec<TargetShape>,
+}
+
+impl Renderer {
+    /// Uploads the scene once and builds the chosen path's pipelines and per-display
+    /// buffers (and nothing the other path would need).
+    pub fn new(
+        device: &wgpu::Device,
+        scene: &Scene,
+        rig: &Rig,
+        options: RendererOptions,
+    ) -> Result<Renderer> {
+        check_device(device, scene, options)?;
+        let scope = device.push_error_scope(wgpu::ErrorFilter::Validation);
+        let path = match options.mode.per_instance() {
+            false => Path::Indirect(IndirectPath::new(device, scene, rig, options)),
+            true => Path::Classic(ClassicPath::new(device, scene, rig, options)),
+        };
+        if let Some(e) = pollster::block_on(scope.pop()) {
+            return Err(Error::Wgpu(e));
+        }
+        let shapes = rig
+            .displays
+            .iter()
+            .map(|d| TargetShape {
+                eye_size: (d.resolution[0], d.resolution[1]),
+                views: d.views(),
+                layered: options.mode == StereoMode::Multiview && d.stereo,
+            })
+            .collect();
+        Ok(Renderer {
+            options,
+            path,
+            shapes,
+        })
+    }
+
+    pub fn mode(&self) -> StereoMode {
+        self.options.mode
+    }
+
+    pub fn cull_mode(&self) -> CullMode {
+        self.options.cull
+    }
+
+    /// GPU bytes per instance: the 64-byte instance record, the GPU culler's layout and
+    /// scratch (GPU culling only), and 4 bytes of visible list per display.
+    pub fn gpu_bytes_per_instance(&self) -> u64 {
+        let culling = match self.options.cull {
+            CullMode::Gpu => CullScene::BYTES_PER_INSTANCE,
+            CullMode::Cpu => 0,
+        };
+        DrawScene::BYTES_PER_INSTANCE + culling + 4 * self.shapes.len() as u64
+    }
+
+    /// Writes this frame's contexts (and, culling on the CPU, the cull results), all
+    /// from one resolution of `rig`, which must have the displays the renderer was made
+    /// with; only poses may change.
+    pub fn prepare(&mut self, queue: &wgpu::Queue, rig: &Rig) -> Result<FrameStats> {
+        let same = rig.displays.len() == self.shapes.len()
+            && rig
+                .displays
+                .iter()
+                .zip(&self.shapes)
+                .all(|(d, s)| d.views() == s.views);
+        if !same {
+            return Err(Error::rig(
+                "prepare",
+                "the rig's displays differ from the renderer's",
+            ));
+        }
+        let resolved = rig.resolve()?;
+        Ok(match &mut self.path {
+            Path::Indirect(p) => p.prepare(queue, rig, &resolved),
+            Path::Classic(p) => p.prepare(queue, rig, &resolved),
+        })
+    }
+
+    /// Records every display into `targets[i]` for display `i`: its cull dispatches (GPU
+    /// culling) and its passes. With a timer, each pass is timed as `cull` or `draw`.
+    pub fn encode(
+        &self,
+        encoder: &mut wgpu::CommandEncoder,
+        targets: &[TargetViews],
+        mut timer: Option<&mut GpuTimer>,
+    ) -> Result<FrameStats> {
+        if targets.len() != self.shapes.len() {
+            return Err(Error::TargetCount {
+                targets: targets.len(),
+                displays: self.shapes.len(),
+            });
+        }
+        let stats = match &self.path {
+            Path::Indirect(p) => p.encode(encoder, targets, &mut timer),
+            Path::Classic(p) => p.encode(encoder, targets, &mut timer),
+        };
+        if let Some(t) = timer {
+            t.resolve(encoder);
+        }
+        Ok(stats)
+    }
+
+    /// Headless convenience: [`Renderer::prepare`], [`Renderer::encode`] into a new encoder
+    /// and submit, rendering into `targets` (from [`Renderer::create_targets`]).
+    pub fn submit_frame(
+        &mut self,
+        device: &wgpu::Device,
+        queue: &wgpu::Queue,
+        rig: &Rig,
+        targets: &[DisplayTarget],
+    ) -> Result<FrameStats> {
+        let prepared = self.prepare(queue, rig)?;
+        let mut encoder = device.create_command_encoder(&Default::default());
+        let views: Vec<_> = targets.iter().map(DisplayTarget::views).collect();
+        let recorded = self.encode(&mut encoder, &views, None)?;
+        queue.submit([encoder.finish()]);
+        Ok(FrameStats {
+            bytes_uploaded: prepared.bytes_uploaded,
+            cpu_cull: prepared.cpu_cull,
+            cpu_upload: prepared.cpu_upload,
+            ..recorded
+        })
+    }
+
+    /// Color (`RENDER_ATTACHMENT | COPY_SRC`) and depth textures for every display, shaped
+    /// as [`TargetViews`] describes for this renderer's mode.
+    pub fn create_targets(&self, device: &wgpu::Device) -> Vec<DisplayTarget> {
+        self.shapes
+            .iter()
+            .map(|s| s.create(device, self.options.color_format))
+            .collect()
+    }
+
+    /// Display `index`'s cull result of the last frame: on the indirect path its buffers
+    /// read back (after the frame was submitted: the visible list up to the visible
+    /// total, all draws, the draw count); in the classic modes the CPU cull they drew
+    /// from (multi-camera: the left eye's).
+    pub fn read_cull(
+        &self,
+        device: &wgpu::Device,
+        queue: &wgpu::Queue,
+        index: usize,
+    ) -> Result<CullOutput> {
+        match &self.path {
+            Path::Indirect(p) => p.read_cull(device, queue, index),
+            Path::Classic(p) => Ok(p.cull_output(index)),
+        }
+    }
+
+    /// Visible totals of every display: read back from the counts buffers on the
+    /// indirect path, taken from this frame's CPU culls in the classic modes.
+    pub fn read_visible_counts(
+        &self,
+        device: &wgpu::Device,
+        queue: &wgpu::Queue,
+    ) -> Result<Vec<u32>> {
+        match &self.path {
+            Path::Indirect(p) => p.visible_counts(device, queue),
+            Path::Classic(p) => Ok(p.visible_counts()),
+        }
+    }
+}
+
+/// A uniform buffer for one [`DisplayContext`].
+fn context_buffer(device: &wgpu::Device) -> wgpu::Buffer {
+    device.create_buffer(&wgpu::BufferDescriptor {
+        label: Some("stereocull.display_context"),
+        size: <DisplayContext as encase::ShaderType>::min_size().get(),
+        usage: wgpu::BufferUsages::UNIFORM | wgpu::BufferUsages::COPY_DST,
+        mapped_at_creation: false,
+    })
+}
+
+fn begin_statistics(timer: &mut Option<&mut GpuTimer>, pass: &mut wgpu::RenderPass) -> bool {
+    timer
+        .as_deref_mut()
+        .is_some_and(|t| t.begin_statistics(pass))
+}
+
+/// Writes `bytes` at the start of `buffer` (nothing for none); returns the bytes written.
+fn write(queue: &wgpu::Queue, buffer: &wgpu::Buffer, bytes: &[u8]) -> u64 {
+    if !bytes.is_empty() {
+        queue.write_buffer(buffer, 0, bytes);
+    }
+    bytes.len() as u64
+}
+
+/// What a mode cannot do without, said before anything is built.
+fn check_device(device: &wgpu::Device, scene: &Scene, options: RendererOptions) -> Result<()> {
+    let features = device.features();
+    let mode = options.mode.name();
+    if options.mode.per_instance() && options.cull == CullMode::Gpu {
+        return Err(Error::Unsupported(format!(
+            "{mode} records a draw call per visible instance, so it culls on the CPU: use --cull cpu"
+        )));
+    }
+    if !options.mode.per_instance() && !features.contains(wgpu::Features::INDIRECT_FIRST_INSTANCE) {
+        return Err(Error::Unsupported(format!(
+            "{mode} needs INDIRECT_FIRST_INSTANCE (per-mesh offsets in indirect draws), which this device lacks"
+        )));
+    }
+    if options.mode == StereoMode::Multiview && !features.contains(wgpu::Features::MULTIVIEW) {
+        return Err(Error::Unsupported(
+            "multiview is unavailable: the device lacks MULTIVIEW".into(),
+        ));
+    }
+    let limits = device.limits();
+    // Storage buffers are bound whole, so the binding limit holds for them; vertex and
+    // index buffers are not bindings and only need to fit one buffer.
+    let storage = limits
+        .max_storage_buffer_binding_size
+        .min(limits.max_buffer_size);
+    let buffers = [
+        (
+            "instance records",
+            DrawScene::BYTES_PER_INSTANCE,
+            scene.instances.len(),
+            storage,
+        ),
+        (
+            "mesh records",
+            size_of::<MeshRecord>() as u64,
+            scene.meshes.len(),
+            storage,
+        ),
+        (
+            "vertices",
+            size_of::<Vertex>() as u64,
+            scene.vertices.len(),
+            limits.max_buffer_size,
+        ),
+        (
+            "indices",
+            size_of::<u32>() as u64,
+            scene.indices.len(),
+            limits.max_buffer_size,
+        ),
+    ];
+    for (what, size, count, max) in buffers {
+        let bytes = size * count as u64;
+        if bytes > max {
+            return Err(Error::Limits(format!(
+                "the scene's {count} {what} need a {bytes}-byte buffer but the device allows {max}"
+            )));
+        }
+    }
+    Ok(())
+}

@@ -1,0 +1,107 @@
+//! Display targets: the color and depth views each display renders into, and textures
+//! of the right shape for callers that have none.
+
+use crate::draw::DEPTH_FORMAT;
+
+/// The color and depth views one display renders into: `2W x H` for stereo, `W x H`
+/// for mono, where `W x H` is the display's per-eye resolution; in multiview a stereo
+/// display's views are `W x H` with two array layers (left, right).
+#[derive(Clone, Copy)]
+pub struct TargetViews<'a> {
+    pub color: &'a wgpu::TextureView,
+    pub depth: &'a wgpu::TextureView,
+}
+
+impl<'a> TargetViews<'a> {
+    pub(crate) fn pair(&self) -> (&'a wgpu::TextureView, &'a wgpu::TextureView) {
+        (self.color, self.depth)
+    }
+}
+
+/// Textures made by `Renderer::create_targets` for callers that have none.
+pub struct DisplayTarget {
+    pub color: wgpu::Texture,
+    pub depth: wgpu::Texture,
+    color_view: wgpu::TextureView,
+    depth_view: wgpu::TextureView,
+}
+
+impl DisplayTarget {
+    pub fn views(&self) -> TargetViews<'_> {
+        TargetViews {
+            color: &self.color_view,
+            depth: &self.depth_view,
+        }
+    }
+}
+
+/// The shape of one display's target, fixed when the renderer is made.
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+pub struct TargetShape {
+    /// Pixels per eye.
+    pub eye_size: (u32, u32),
+    /// 2 for stereo, 1 for mono.
+    pub views: u32,
+    /// Stereo as two array layers (multiview) instead of two halves side by side.
+    pub layered: bool,
+}
+
+impl TargetShape {
+    fn extent(self) -> wgpu::Extent3d {
+        let (w, h) = self.eye_size;
+        match self.layered {
+            true => wgpu::Extent3d {
+                width: w,
+                height: h,
+                depth_or_array_layers: 2,
+            },
+            false => wgpu::Extent3d {
+                width: w * self.views,
+                height: h,
+                depth_or_array_layers: 1,
+            },
+        }
+    }
+
+    /// Color (`RENDER_ATTACHMENT | COPY_SRC`) and depth textures of this shape.
+    pub fn create(self, device: &wgpu::Device, color_format: wgpu::TextureFormat) -> DisplayTarget {
+        let texture = |label, format, usage| {
+            device.create_texture(&wgpu::TextureDescriptor {
+                label: Some(label),
+                size: self.extent(),
+                mip_level_count: 1,
+                sample_count: 1,
+                dimension: wgpu::TextureDimension::D2,
+                format,
+                usage,
+                view_formats: &[],
+            })
+        };
+        let color = texture(
+            "stereocull.color",
+            color_format,
+            wgpu::TextureUsages::RENDER_ATTACHMENT | wgpu::TextureUsages::COPY_SRC,
+        );
+        let depth = texture(
+            "stereocull.depth",
+            DEPTH_FORMAT,
+            wgpu::TextureUsages::RENDER_ATTACHMENT,
+        );
+        let dimension = match self.layered {
+            true => wgpu::TextureViewDimension::D2Array,
+            false => wgpu::TextureViewDimension::D2,
+        };
+        let view = |t: &wgpu::Texture| {
+            t.create_view(&wgpu::TextureViewDescriptor {
+                dimension: Some(dimension),
+                ..Default::default()
+            })
+        };
+        DisplayTarget {
+            color_view: view(&color),
+            depth_view: view(&depth),
+            color,
+            depth,
+        }
+    }
+}

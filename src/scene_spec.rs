@@ -1,0 +1,77 @@
+//! Scenes by name, above the importers: `default` (the built-in room),
+//! `procedural:N[:MESHES[:SEED]]`, or a `.gltf` / `.glb` file.
+
+use std::path::Path;
+
+use crate::error::{Error, Result};
+use crate::scene::Scene;
+use crate::{gltf_import, procedural};
+
+/// The scene spec naming the built-in room (`assets/room.glb`).
+pub const DEFAULT_SCENE: &str = "default";
+/// Meshes a `procedural:N` scene uses when no count is given.
+pub const DEFAULT_PROCEDURAL_MESHES: u32 = 8;
+/// Seed a `procedural:N` scene uses when none is given.
+pub const DEFAULT_PROCEDURAL_SEED: u64 = 1;
+/// The built-in room (a furnished room at real scale, objects from an arm's length to
+/// ten meters away), embedded so that `--scene default` works from any directory. Its
+/// authoring code lives with the tests (`tests/support/room.rs`), which check that this
+/// file is what it writes.
+pub const ROOM_GLB: &[u8] = include_bytes!("../assets/room.glb");
+
+/// `default` (the built-in room), `procedural:N[:MESHES[:SEED]]`, or a path to a
+/// `.gltf` / `.glb` file.
+/// An empty scene is an error: there would be nothing to cull or draw, and GPU
+/// buffers cannot be empty.
+pub fn load(spec: &str) -> Result<Scene> {
+    let scene = match spec.strip_prefix("procedural:") {
+        Some(rest) => {
+            let (n, meshes, seed) = parse_procedural(spec, rest)?;
+            procedural::scene(n, meshes, seed)
+        }
+        None if spec == DEFAULT_SCENE => {
+            gltf_import::import_bytes(ROOM_GLB, None, Path::new("assets/room.glb"))?
+        }
+        None => gltf_import::import(Path::new(spec))?,
+    };
+    let mut scene = scene;
+    let dropped = scene.drop_non_finite_instances();
+    if dropped > 0 {
+        log::warn!("{spec}: dropped {dropped} instance(s) with non-finite transforms");
+    }
+    if scene.instances.is_empty() {
+        return Err(Error::SceneSpec {
+            spec: spec.into(),
+            message: "the scene has no mesh instances to draw".into(),
+        });
+    }
+    Ok(scene)
+}
+
+fn parse_procedural(spec: &str, rest: &str) -> Result<(u32, u32, u64)> {
+    let fail = |message: &str| Error::SceneSpec {
+        spec: spec.into(),
+        message: format!("{message}; expected procedural:N[:MESHES[:SEED]]"),
+    };
+    let mut parts = rest.split(':');
+    let n = parts
+        .next()
+        .and_then(|s| s.parse().ok())
+        .ok_or_else(|| fail("N is not a count"))?;
+    let meshes = match parts.next() {
+        Some(s) => s
+            .parse()
+            .ok()
+            .filter(|&m: &u32| m > 0)
+            .ok_or_else(|| fail("MESHES is not a positive count"))?,
+        None => DEFAULT_PROCEDURAL_MESHES,
+    };
+    let seed = match parts.next() {
+        Some(s) => s.parse().map_err(|_| fail("SEED is not an integer"))?,
+        None => DEFAULT_PROCEDURAL_SEED,
+    };
+    if parts.next().is_some() {
+        return Err(fail("too many fields"));
+    }
+    Ok((n, meshes, seed))
+}

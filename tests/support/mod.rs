@@ -1,0 +1,165 @@
+//! The one test harness every GPU and culling test shares: a headless device, rigs and
+//! scenes of test size, the CPU reference cull, rendering, and one image comparison
+//! with a stated tolerance that writes the images on failure.
+//!
+//! Each test binary uses part of it.
+#![allow(dead_code)]
+
+pub mod room;
+
+use std::path::PathBuf;
+
+use glam::{Affine3A, Vec3, Vec4};
+use image::{Rgba, RgbaImage};
+use stereocull::cull::{CullOutput, cpu};
+use stereocull::device::Gpu;
+use stereocull::readback::read_rgba8;
+use stereocull::records::CullLayout;
+use stereocull::renderer::{Renderer, RendererOptions};
+use stereocull::rig::Rig;
+use stereocull::scene::{Instance, Scene};
+use stereocull::shapes;
+
+/// The adapter the measured figures in these tests come from (tolerances, feature
+/// expectations): Mesa's lavapipe, which CI installs.
+pub const ASSUMED_ADAPTER: &str = "llvmpipe";
+
+/// A headless device with every optional feature the adapter has. Never skips: no
+/// adapter is a failure that says what to install.
+pub fn gpu() -> Gpu {
+    gpu_with(wgpu::Features::all())
+}
+
+/// As [`gpu`], with optional features limited to `allowed` (to test fallbacks).
+pub fn gpu_with(allowed: wgpu::Features) -> Gpu {
+    gpu_on(None, allowed)
+}
+
+/// As [`gpu_with`], on `backends` (else as `WGPU_BACKEND` says).
+pub fn gpu_on(backends: Option<wgpu::Backends>, allowed: wgpu::Features) -> Gpu {
+    let gpu = Gpu::headless_on(backends, allowed).unwrap_or_else(|e| {
+        panic!("{e}: install mesa-vulkan-drivers (lavapipe), and libegl1 libgl1-mesa-dri for GL")
+    });
+    eprintln!("adapter: {}", gpu.adapter_line());
+    gpu
+}
+
+/// Whether `gpu` is the adapter whose measured figures a test states; tests print
+/// what they skip of their adapter-specific part elsewhere.
+pub fn is_assumed_adapter(gpu: &Gpu) -> bool {
+    let yes = gpu.adapter.get_info().name.contains(ASSUMED_ADAPTER);
+    if !yes {
+        eprintln!("not {ASSUMED_ADAPTER}: adapter-specific expectations not checked");
+    }
+    yes
+}
+
+/// A preset with every display at `width x height` pixels per eye.
+pub fn sized(preset: &str, width: u32, height: u32) -> Rig {
+    let mut rig = Rig::preset(preset).unwrap();
+    for d in &mut rig.displays {
+        d.resolution = [width, height];
+    }
+    rig
+}
+
+/// `meshes` cube meshes of half-size 0.5 (bounding radius sqrt(3)/2), and one unscaled
+/// instance per `(position, mesh)`.
+pub fn cubes(instances: &[(Vec3, u32)], meshes: u32) -> Scene {
+    let mut s = Scene::default();
+    for k in 0..meshes {
+        let c = shapes::cuboid(Vec3::splat(0.5));
+        s.add_mesh(format!("cube{k}"), &c.vertices, &c.indices);
+    }
+    s.instances = instances
+        .iter()
+        .map(|&(p, mesh)| Instance {
+            world_from_local: Affine3A::from_translation(p),
+            mesh,
+            color: Vec4::ONE,
+        })
+        .collect();
+    s
+}
+
+/// The CPU reference cull of every display of `rig`, as the `instanced` mode culls.
+pub fn reference_culls(scene: &Scene, rig: &Rig) -> Vec<CullOutput> {
+    cpu::cull_many(&CullLayout::new(scene), &rig.cull_jobs().unwrap())
+}
+
+/// One frame of `scene` seen by `rig`, every display read back.
+pub fn render(
+    gpu: &Gpu,
+    scene: &Scene,
+    rig: &Rig,
+    options: RendererOptions,
+) -> stereocull::Result<Vec<RgbaImage>> {
+    let mut renderer = Renderer::new(&gpu.device, scene, rig, options)?;
+    let targets = renderer.create_targets(&gpu.device);
+    renderer.submit_frame(&gpu.device, &gpu.queue, rig, &targets)?;
+    targets
+        .iter()
+        .map(|t| read_rgba8(&gpu.device, &gpu.queue, &t.color))
+        .collect()
+}
+
+/// How far two images may differ: a pixel differs when a channel differs by more
+/// than `levels`; at most `share` of the pixels may differ.
+#[derive(Clone, Copy, Debug)]
+pub struct Tolerance {
+    pub levels: u8,
+    pub share: f64,
+}
+
+impl Tolerance {
+    pub const EXACT: Tolerance = Tolerance {
+        levels: 0,
+        share: 0.0,
+    };
+}
+
+/// Compares `actual` with `reference`; on failure writes `<name>-actual.png`,
+/// `-reference.png` and `-difference.png` under `target/test-images/` and panics naming
+/// them. Returns the number of differing pixels.
+pub fn assert_images_match(
+    name: &str,
+    actual: &RgbaImage,
+    reference: &RgbaImage,
+    tolerance: Tolerance,
+) -> usize {
+    assert_eq!(actual.dimensions(), reference.dimensions(), "{name}: sizes");
+    let mut diff = RgbaImage::new(actual.width(), actual.height());
+    let mut count = 0;
+    for (x, y, a) in actual.enumerate_pixels() {
+        let b = reference.get_pixel(x, y);
+        let d = (0..3).map(|c| a[c].abs_diff(b[c])).max().unwrap_or(0);
+        count += usize::from(d > tolerance.levels);
+        let shade = d.saturating_mul(8);
+        diff.put_pixel(x, y, Rgba([shade, shade, shade, 255]));
+    }
+    let share = count as f64 / (actual.width() * actual.height()) as f64;
+    eprintln!(
+        "{name}: {count} pixels differ by more than {} levels",
+        tolerance.levels
+    );
+    if share > tolerance.share {
+        let dir = PathBuf::from(env!("CARGO_MANIFEST_DIR")).join("target/test-images");
+        std::fs::create_dir_all(&dir).unwrap();
+        for (suffix, image) in [
+            ("actual", actual),
+            ("reference", reference),
+            ("difference", &diff),
+        ] {
+            image
+                .save(dir.join(format!("{name}-{suffix}.png")))
+                .unwrap();
+        }
+        panic!(
+            "{name}: {count} pixels differ ({:.4} %, allowed {:.4} %); images in {}",
+            100.0 * share,
+            100.0 * tolerance.share,
+            dir.display()
+        );
+    }
+    count
+}
