@@ -5,6 +5,10 @@ use glam::{DVec3, Vec3, Vec4Swizzles};
 use rand::{Rng, SeedableRng};
 use rand_pcg::Pcg64Mcg;
 use stereocull::frustum::{Frustum, View};
+
+fn dvec(a: [f32; 3]) -> DVec3 {
+    DVec3::from(a.map(f64::from))
+}
 use stereocull::rig::{Mount, PRESETS, Rig};
 
 /// A point uniformly distributed in the volume of `v`'s frustum.
@@ -221,6 +225,51 @@ fn stereo_display_apex_lies_behind_the_eyes() {
                 "{name} display {d}: apex {} not behind the eyes",
                 display.position()
             );
+        }
+    }
+}
+
+/// Screen corners a hair off a right angle (validation allows a cosine up to 1e-3) are
+/// projected as their completion: the lower edge as given, the up direction made
+/// perpendicular to it, the height of `upper_left` above the lower edge. That
+/// rectangle's corners land on the NDC corners, and its eye frusta lie inside the
+/// display frustum that culls for them.
+#[test]
+fn skewed_screen_corners_project_and_cull_as_their_completed_rectangle() {
+    let mut rng = Pcg64Mcg::seed_from_u64(8);
+    for (name, mut rig) in random_rigs(9)
+        .into_iter()
+        .filter(|(n, _)| n.starts_with("cave"))
+    {
+        let mut completed = Vec::new();
+        for display in &mut rig.displays {
+            let Mount::Screen(s) = &mut display.mount else {
+                panic!("{name}: a cave wall is a screen")
+            };
+            let [ll, lr, ul] = [s.lower_left, s.lower_right, s.upper_left].map(dvec);
+            let across = (lr - ll).normalize();
+            let skew = rng.random_range(-9e-4..9e-4) * (ul - ll).length();
+            s.upper_left = (ul + across * skew).as_vec3().into();
+            let up = (dvec(s.upper_left) - ll).reject_from_normalized(across);
+            completed.push([ll, lr, lr + up, ll + up]);
+        }
+        rig.validate(&name).unwrap();
+        let resolved = rig.resolve().unwrap();
+        for (r, corners) in resolved.displays.iter().zip(&completed) {
+            let planes = r.combined.frustum();
+            for eye in &r.eyes {
+                let m = eye.clip_from_world();
+                let ndc = [(-1.0, -1.0), (1.0, -1.0), (1.0, 1.0), (-1.0, 1.0)];
+                for (corner, want) in corners.iter().zip(ndc) {
+                    let p = m.project_point3(corner.as_vec3());
+                    let off = (p.x - want.0).abs().max((p.y - want.1).abs());
+                    assert!(off < 1e-4, "{name}: corner {corner} -> {p}, want {want:?}");
+                }
+                for _ in 0..500 {
+                    let p = point_in(eye, &mut rng);
+                    assert!(inside(&planes, p, eye.position()), "{name}: {p} outside");
+                }
+            }
         }
     }
 }
