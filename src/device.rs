@@ -8,7 +8,7 @@ use wgpu::Features;
 use crate::error::{Error, Result};
 
 /// Optional features the pipeline uses when present, with what it does without them.
-pub const OPTIONAL_FEATURES: [(Features, &str, &str); 6] = [
+pub const OPTIONAL_FEATURES: [(Features, &str, &str); 7] = [
     (
         Features::MULTI_DRAW_INDIRECT_COUNT,
         "multi_draw_indirect_count",
@@ -33,6 +33,11 @@ pub const OPTIONAL_FEATURES: [(Features, &str, &str); 6] = [
         Features::TIMESTAMP_QUERY,
         "timestamp_query",
         "CPU timings only",
+    ),
+    (
+        Features::TIMESTAMP_QUERY_INSIDE_ENCODERS,
+        "timestamp_query_inside_encoders",
+        "traces time each pass but not each display's whole scope",
     ),
     (
         Features::PIPELINE_STATISTICS_QUERY,

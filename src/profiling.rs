@@ -1,26 +1,32 @@
-//! Measurement: GPU timestamps around each pass, pipeline statistics over the draw
-//! passes, and the percentiles the reports use.
+//! Measurement: GPU timestamps around each pass (wgpu-profiler: one scope per display,
+//! a nested scope per pass, and a Chrome trace of a frame for free), pipeline
+//! statistics over the draw passes (which wgpu-profiler does not gather), and the
+//! percentiles the reports use.
 
-use crate::error::Result;
+use std::path::Path;
+
+use wgpu_profiler::{GpuProfiler, GpuProfilerQuery, GpuProfilerSettings, GpuTimerQueryResult};
+
+use crate::error::{Error, Result};
 use crate::readback::read_pod;
 
-/// Timestamp pairs around passes, resolved once per frame. `None` from [`GpuTimer::new`]
+/// Timestamp scopes around passes, resolved once per frame. `None` from [`GpuTimer::new`]
 /// when the device has no `TIMESTAMP_QUERY`: reports then say so instead of printing zeros.
 pub struct GpuTimer {
-    queries: wgpu::QuerySet,
-    resolved: wgpu::Buffer,
-    capacity: u32,
-    labels: Vec<&'static str>,
+    profiler: GpuProfiler,
     /// Nanoseconds per timestamp tick.
     period: f32,
     /// Vertex-shader invocations and clipper primitives per draw pass, where the
     /// device has `PIPELINE_STATISTICS_QUERY`.
     statistics: Option<Statistics>,
+    /// The last frame read, as wgpu-profiler's scope tree (for traces).
+    last: Vec<GpuTimerQueryResult>,
 }
 
 struct Statistics {
     queries: wgpu::QuerySet,
     resolved: wgpu::Buffer,
+    capacity: u32,
     used: u32,
 }
 
@@ -28,7 +34,7 @@ struct Statistics {
 #[derive(Clone, Debug, Default, PartialEq)]
 pub struct FrameQueries {
     /// Milliseconds per pass label (`cull`, `draw`), summed over displays.
-    pub passes: Vec<(&'static str, f64)>,
+    pub passes: Vec<(String, f64)>,
     /// Summed over the draw passes; `None` without pipeline statistics.
     pub vertex_invocations: Option<u64>,
     pub clipper_primitives: Option<u64>,
@@ -40,52 +46,73 @@ const STATISTICS: wgpu::PipelineStatisticsTypes =
         .union(wgpu::PipelineStatisticsTypes::CLIPPER_PRIMITIVES_OUT);
 
 impl GpuTimer {
-    /// Room for `passes` timed passes per frame.
+    /// Room for pipeline statistics over `passes` draw passes per frame (timestamps
+    /// grow as needed).
     pub fn new(device: &wgpu::Device, queue: &wgpu::Queue, passes: u32) -> Option<GpuTimer> {
         if !device.features().contains(wgpu::Features::TIMESTAMP_QUERY) {
             return None;
         }
-        let capacity = 2 * passes;
-        Some(GpuTimer {
-            queries: device.create_query_set(&wgpu::QuerySetDescriptor {
-                label: Some("stereocull.timestamps"),
-                ty: wgpu::QueryType::Timestamp,
-                count: capacity,
-            }),
-            resolved: device.create_buffer(&wgpu::BufferDescriptor {
-                label: Some("stereocull.timestamps"),
-                size: 8 * capacity as u64,
-                usage: wgpu::BufferUsages::QUERY_RESOLVE | wgpu::BufferUsages::COPY_SRC,
-                mapped_at_creation: false,
-            }),
-            capacity,
-            labels: Vec::new(),
-            period: queue.get_timestamp_period(),
-            statistics: device
-                .features()
-                .contains(wgpu::Features::PIPELINE_STATISTICS_QUERY)
-                .then(|| Statistics {
-                    queries: device.create_query_set(&wgpu::QuerySetDescriptor {
-                        label: Some("stereocull.pipeline_statistics"),
-                        ty: wgpu::QueryType::PipelineStatistics(STATISTICS),
-                        count: passes,
-                    }),
-                    resolved: device.create_buffer(&wgpu::BufferDescriptor {
-                        label: Some("stereocull.pipeline_statistics"),
-                        size: 16 * passes as u64,
-                        usage: wgpu::BufferUsages::QUERY_RESOLVE | wgpu::BufferUsages::COPY_SRC,
-                        mapped_at_creation: false,
-                    }),
-                    used: 0,
+        let settings = GpuProfilerSettings {
+            // One frame is read back before the next is recorded.
+            max_num_pending_frames: 1,
+            enable_debug_groups: false,
+            ..Default::default()
+        };
+        let profiler = GpuProfiler::new(device, settings).ok()?;
+        let statistics = device
+            .features()
+            .contains(wgpu::Features::PIPELINE_STATISTICS_QUERY)
+            .then(|| Statistics {
+                queries: device.create_query_set(&wgpu::QuerySetDescriptor {
+                    label: Some("stereocull.pipeline_statistics"),
+                    ty: wgpu::QueryType::PipelineStatistics(STATISTICS),
+                    count: passes,
                 }),
+                resolved: device.create_buffer(&wgpu::BufferDescriptor {
+                    label: Some("stereocull.pipeline_statistics"),
+                    size: 16 * passes as u64,
+                    usage: wgpu::BufferUsages::QUERY_RESOLVE | wgpu::BufferUsages::COPY_SRC,
+                    mapped_at_creation: false,
+                }),
+                capacity: passes,
+                used: 0,
+            });
+        Some(GpuTimer {
+            profiler,
+            period: queue.get_timestamp_period(),
+            statistics,
+            last: Vec::new(),
         })
+    }
+
+    /// Opens a scope on the encoder (one display), for passes to nest in; close it
+    /// with [`GpuTimer::end`].
+    pub fn scope(&self, label: &str, encoder: &mut wgpu::CommandEncoder) -> GpuProfilerQuery {
+        self.profiler.begin_query(label, encoder)
+    }
+
+    /// A scope for one pass inside `parent`: its timestamp writes go into the pass
+    /// descriptor; close it with [`GpuTimer::end`] after the pass.
+    pub fn pass(
+        &self,
+        label: &str,
+        parent: &GpuProfilerQuery,
+        encoder: &mut wgpu::CommandEncoder,
+    ) -> GpuProfilerQuery {
+        self.profiler
+            .begin_pass_query(label, encoder)
+            .with_parent(Some(parent))
+    }
+
+    pub fn end(&self, encoder: &mut wgpu::CommandEncoder, query: GpuProfilerQuery) {
+        self.profiler.end_query(encoder, query);
     }
 
     /// Starts counting vertex invocations and clipped primitives in `pass`; returns
     /// whether it did (then [`GpuTimer::end_statistics`] must follow in the same pass).
     pub fn begin_statistics(&mut self, pass: &mut wgpu::RenderPass) -> bool {
         match self.statistics.as_mut() {
-            Some(s) if s.used < self.capacity / 2 => {
+            Some(s) if s.used < s.capacity => {
                 pass.begin_pipeline_statistics_query(&s.queries, s.used);
                 s.used += 1;
                 true
@@ -100,59 +127,31 @@ impl GpuTimer {
         }
     }
 
-    /// The next pair of query indices, or `None` once the frame's capacity is used.
-    fn next(&mut self, label: &'static str) -> Option<(u32, u32)> {
-        let first = 2 * self.labels.len() as u32;
-        (first + 1 < self.capacity).then(|| {
-            self.labels.push(label);
-            (first, first + 1)
-        })
-    }
-
-    pub fn compute(&mut self, label: &'static str) -> Option<wgpu::ComputePassTimestampWrites<'_>> {
-        let (begin, end) = self.next(label)?;
-        Some(wgpu::ComputePassTimestampWrites {
-            query_set: &self.queries,
-            beginning_of_pass_write_index: Some(begin),
-            end_of_pass_write_index: Some(end),
-        })
-    }
-
-    pub fn render(&mut self, label: &'static str) -> Option<wgpu::RenderPassTimestampWrites<'_>> {
-        let (begin, end) = self.next(label)?;
-        Some(wgpu::RenderPassTimestampWrites {
-            query_set: &self.queries,
-            beginning_of_pass_write_index: Some(begin),
-            end_of_pass_write_index: Some(end),
-        })
-    }
-
     /// Records the resolve of this frame's queries; call once, after the last pass.
-    pub fn resolve(&self, encoder: &mut wgpu::CommandEncoder) {
-        let used = 2 * self.labels.len() as u32;
-        if used > 0 {
-            encoder.resolve_query_set(&self.queries, 0..used, &self.resolved, 0);
-        }
+    pub fn resolve(&mut self, encoder: &mut wgpu::CommandEncoder) {
+        self.profiler.resolve_queries(encoder);
         if let Some(s) = self.statistics.as_ref().filter(|s| s.used > 0) {
             encoder.resolve_query_set(&s.queries, 0..s.used, &s.resolved, 0);
         }
     }
 
     /// The submitted frame's pass times (summed by label) and statistics; resets for the
-    /// next frame.
+    /// next frame. Call after the frame's submission.
     pub fn read(&mut self, device: &wgpu::Device, queue: &wgpu::Queue) -> Result<FrameQueries> {
+        self.profiler
+            .end_frame()
+            .map_err(|e| Error::Readback(format!("GPU timer: {e}")))?;
+        device
+            .poll(wgpu::PollType::wait_indefinitely())
+            .map_err(|e| Error::Readback(e.to_string()))?;
+        self.last = self
+            .profiler
+            .process_finished_frame(self.period)
+            .ok_or_else(|| {
+                Error::Readback("GPU timer: the frame's timestamps did not map".into())
+            })?;
         let mut frame = FrameQueries::default();
-        let used = 2 * self.labels.len() as u64;
-        if used > 0 {
-            let ticks: Vec<u64> = read_pod(device, queue, &self.resolved, 8 * used)?;
-            for (label, pair) in self.labels.drain(..).zip(ticks.chunks_exact(2)) {
-                let ms = pair[1].saturating_sub(pair[0]) as f64 * self.period as f64 * 1e-6;
-                match frame.passes.iter_mut().find(|(l, _)| *l == label) {
-                    Some((_, t)) => *t += ms,
-                    None => frame.passes.push((label, ms)),
-                }
-            }
-        }
+        sum_passes(&self.last, &mut frame.passes);
         if let Some(s) = self.statistics.as_mut() {
             let counts: Vec<u64> = match s.used {
                 0 => Vec::new(),
@@ -163,6 +162,56 @@ impl GpuTimer {
             s.used = 0;
         }
         Ok(frame)
+    }
+
+    /// The scopes of the last frame read: one per display, its passes nested.
+    pub fn last_frame(&self) -> &[GpuTimerQueryResult] {
+        &self.last
+    }
+}
+
+/// Writes frames as one Chrome trace (`chrome://tracing`, Perfetto): each frame a scope
+/// named by its label, spanning its displays' scopes and their passes.
+pub fn write_trace(path: &Path, frames: Vec<(String, Vec<GpuTimerQueryResult>)>) -> Result<()> {
+    let scopes: Vec<_> = frames
+        .into_iter()
+        .map(|(label, nested)| {
+            let (start, end) = span(&nested, (f64::MAX, f64::MIN));
+            GpuTimerQueryResult {
+                label,
+                pid: std::process::id(),
+                tid: std::thread::current().id(),
+                time: (start <= end).then_some(start..end),
+                nested_queries: nested,
+            }
+        })
+        .collect();
+    wgpu_profiler::chrometrace::write_chrometrace(path, &scopes).map_err(|e| Error::io(path, e))
+}
+
+/// The earliest start and latest end of `scopes` and everything nested in them.
+fn span(scopes: &[GpuTimerQueryResult], mut range: (f64, f64)) -> (f64, f64) {
+    for scope in scopes {
+        if let Some(t) = &scope.time {
+            range = (range.0.min(t.start), range.1.max(t.end));
+        }
+        range = span(&scope.nested_queries, range);
+    }
+    range
+}
+
+/// Milliseconds of the leaf scopes (the passes), summed by label.
+fn sum_passes(scopes: &[GpuTimerQueryResult], out: &mut Vec<(String, f64)>) {
+    for scope in scopes {
+        if !scope.nested_queries.is_empty() {
+            sum_passes(&scope.nested_queries, out);
+            continue;
+        }
+        let ms = scope.time.as_ref().map_or(0.0, |t| (t.end - t.start) * 1e3);
+        match out.iter_mut().find(|(l, _)| *l == scope.label) {
+            Some((_, t)) => *t += ms,
+            None => out.push((scope.label.clone(), ms)),
+        }
     }
 }
 

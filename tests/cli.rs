@@ -401,6 +401,8 @@ fn profile_writes_table_csv_json_and_chart() {
         "16",
         "--out",
         dir.path().to_str().unwrap(),
+        "--trace",
+        dir.path().join("trace.json").to_str().unwrap(),
     ]);
     let text = String::from_utf8_lossy(&out.stdout);
     assert!(
@@ -409,6 +411,18 @@ fn profile_writes_table_csv_json_and_chart() {
         String::from_utf8_lossy(&out.stderr)
     );
     assert!(text.contains("indirect validation"), "{text}");
+    // The trace: per configuration a frame scope, the display inside, its passes inside.
+    let trace: Value =
+        serde_json::from_slice(&std::fs::read(dir.path().join("trace.json")).unwrap()).unwrap();
+    let names: Vec<&str> = trace["traceEvents"]
+        .as_array()
+        .unwrap()
+        .iter()
+        .map(|e| e["name"].as_str().unwrap())
+        .collect();
+    assert_eq!(names[..4], ["hmd multi-camera cpu 300", "hmd", "draw", "draw"]);
+    let instanced = names.iter().position(|n| *n == "hmd instanced gpu 900").unwrap();
+    assert_eq!(names[instanced + 1..instanced + 4], ["hmd", "cull", "draw"]);
     let csv = std::fs::read_to_string(dir.path().join("profile.csv")).unwrap();
     let mut lines = csv.lines();
     assert_eq!(

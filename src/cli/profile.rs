@@ -12,10 +12,11 @@ use super::write_json;
 use crate::device::Gpu;
 use crate::error::{Error, Result};
 use crate::procedural;
-use crate::profiling::{GpuTimer, percentile};
+use crate::profiling::{GpuTimer, percentile, write_trace};
 use crate::renderer::{CullMode, Renderer, RendererOptions, StereoMode};
 use crate::rig::Rig;
 use crate::scene::Scene;
+use wgpu_profiler::GpuTimerQueryResult;
 
 #[derive(Args)]
 pub struct ProfileArgs {
@@ -49,6 +50,10 @@ pub struct ProfileArgs {
     /// Built-in meshes in the procedural scenes.
     #[arg(long, default_value_t = 8)]
     pub meshes: u32,
+    /// Also write a Chrome trace (chrome://tracing, Perfetto) of the last timed frame of
+    /// every configuration: per display a scope, per pass (`cull`, `draw`) one inside it.
+    #[arg(long)]
+    pub trace: Option<PathBuf>,
 }
 
 /// One configuration's figures: the CSV columns first, then the details.
@@ -78,6 +83,9 @@ pub struct Row {
     pub vertex_invocations: Option<u64>,
     pub clipper_primitives: Option<u64>,
     pub indirect_validation: bool,
+    /// The last timed frame's GPU scopes, for `--trace`.
+    #[serde(skip)]
+    pub trace: Vec<GpuTimerQueryResult>,
 }
 
 pub fn profile(args: &ProfileArgs) -> Result<()> {
@@ -134,6 +142,18 @@ pub fn profile(args: &ProfileArgs) -> Result<()> {
     write_json(&args.out.join("profile.json"), &rows)?;
     let chart = args.out.join("profile.svg");
     std::fs::write(&chart, chart_svg(&rows)).map_err(|e| Error::io(&chart, e))?;
+    if let Some(path) = &args.trace {
+        let frames = rows
+            .iter()
+            .map(|r| {
+                let cull = format!("{:?}", r.cull).to_lowercase();
+                let label = format!("{} {} {cull} {}", r.rig, r.mode.name(), r.instances);
+                (label, r.trace.clone())
+            })
+            .collect();
+        write_trace(path, frames)?;
+        println!("wrote {}", path.display());
+    }
     println!(
         "wrote {}/profile.csv, profile.json, profile.svg",
         args.out.display()
@@ -260,6 +280,7 @@ fn measure(
         vertex_invocations: samples.statistics.map(|s| s.0),
         clipper_primitives: samples.statistics.map(|s| s.1),
         indirect_validation: gpu.indirect_validation(),
+        trace: timer.map(|t| t.last_frame().to_vec()).unwrap_or_default(),
     })
 }
 

@@ -5,7 +5,10 @@
 
 use std::time::Instant;
 
-use super::{FrameStats, RendererOptions, TargetViews, begin_statistics, context_buffer, write};
+use super::{
+    FrameStats, RendererOptions, TargetViews, begin_statistics, close, context_buffer,
+    open_display, open_pass, write,
+};
 use crate::contexts::{DisplayContext, uniform_bytes};
 use crate::cull::{CullJob, CullOutput, cpu};
 use crate::draw::{DrawFeatures, DrawScene, Drawer, begin_pass, set_eye_viewport};
@@ -15,6 +18,7 @@ use crate::records::CullLayout;
 use crate::rig::{ResolvedRig, Rig};
 use crate::scene::Scene;
 use crate::shaders::DrawKey;
+use wgpu_profiler::GpuProfilerQuery;
 
 /// One eye of a stereo display: its own context (that eye in both eye slots) and, for
 /// multi-camera, its own visible list.
@@ -25,6 +29,7 @@ struct EyeState {
 }
 
 struct ClassicDisplay {
+    name: String,
     context: wgpu::Buffer,
     /// The display's visible list (multi-camera: unused by stereo displays' eyes).
     visible: wgpu::Buffer,
@@ -76,6 +81,7 @@ impl ClassicPath {
                     })
                     .collect();
                 ClassicDisplay {
+                    name: d.name.clone(),
                     bind_group: drawer.bind_group(device, &context, &draw_scene, &visible),
                     context,
                     visible,
@@ -165,13 +171,20 @@ impl ClassicPath {
     ) -> FrameStats {
         let mut stats = FrameStats::default();
         for ((state, target), culls) in self.displays.iter().zip(targets).zip(&self.culls) {
-            stats.draw_calls += match (self.mode, state.eyes.is_empty()) {
-                (_, true) => self.encode_mono(encoder, target, state, &culls[0], timer),
-                (StereoMode::SinglePass, false) => {
-                    self.encode_single_pass(encoder, target, state, &culls[0], timer)
-                }
-                (_, false) => self.encode_pass_per_eye(encoder, target, state, culls, timer),
+            let display = open_display(timer, &state.name, encoder);
+            let frame = DisplayFrame {
+                target,
+                state,
+                display: &display,
             };
+            stats.draw_calls += match (self.mode, state.eyes.is_empty()) {
+                (_, true) => self.encode_mono(encoder, &frame, &culls[0], timer),
+                (StereoMode::SinglePass, false) => {
+                    self.encode_single_pass(encoder, &frame, &culls[0], timer)
+                }
+                (_, false) => self.encode_pass_per_eye(encoder, &frame, culls, timer),
+            };
+            close(timer, encoder, display);
         }
         stats
     }
@@ -179,17 +192,21 @@ impl ClassicPath {
     fn encode_mono(
         &self,
         encoder: &mut wgpu::CommandEncoder,
-        target: &TargetViews,
-        state: &ClassicDisplay,
+        frame: &DisplayFrame,
         out: &CullOutput,
         timer: &mut Option<&mut GpuTimer>,
     ) -> u32 {
-        let writes = timer.as_deref_mut().and_then(|t| t.render("draw"));
-        let mut pass = begin_pass(encoder, target.pair(), true, false, writes);
+        let scope = open_pass(timer, "draw", frame.display, encoder);
+        let writes = scope
+            .as_ref()
+            .and_then(|q| q.render_pass_timestamp_writes());
+        let mut pass = begin_pass(encoder, frame.target.pair(), true, false, writes);
         let counting = begin_statistics(timer, &mut pass);
-        self.bind(&mut pass, &state.bind_group);
+        self.bind(&mut pass, &frame.state.bind_group);
         let calls = instance_draws(out).map(|d| draw(&mut pass, d)).count() as u32;
         GpuTimer::end_statistics(&mut pass, counting);
+        drop(pass);
+        close(timer, encoder, scope);
         calls
     }
 
@@ -199,13 +216,16 @@ impl ClassicPath {
     fn encode_single_pass(
         &self,
         encoder: &mut wgpu::CommandEncoder,
-        target: &TargetViews,
-        state: &ClassicDisplay,
+        frame: &DisplayFrame,
         out: &CullOutput,
         timer: &mut Option<&mut GpuTimer>,
     ) -> u32 {
-        let writes = timer.as_deref_mut().and_then(|t| t.render("draw"));
-        let mut pass = begin_pass(encoder, target.pair(), true, false, writes);
+        let state = frame.state;
+        let scope = open_pass(timer, "draw", frame.display, encoder);
+        let writes = scope
+            .as_ref()
+            .and_then(|q| q.render_pass_timestamp_writes());
+        let mut pass = begin_pass(encoder, frame.target.pair(), true, false, writes);
         let counting = begin_statistics(timer, &mut pass);
         self.bind(&mut pass, &state.eyes[0].bind_group);
         let mut current = usize::MAX;
@@ -223,6 +243,8 @@ impl ClassicPath {
             }
         }
         GpuTimer::end_statistics(&mut pass, counting);
+        drop(pass);
+        close(timer, encoder, scope);
         calls
     }
 
@@ -231,21 +253,25 @@ impl ClassicPath {
     fn encode_pass_per_eye(
         &self,
         encoder: &mut wgpu::CommandEncoder,
-        target: &TargetViews,
-        state: &ClassicDisplay,
+        frame: &DisplayFrame,
         culls: &[CullOutput],
         timer: &mut Option<&mut GpuTimer>,
     ) -> u32 {
         let mut calls = 0;
-        for (e, eye) in state.eyes.iter().enumerate() {
-            let writes = timer.as_deref_mut().and_then(|t| t.render("draw"));
-            let mut pass = begin_pass(encoder, target.pair(), e == 0, false, writes);
+        for (e, eye) in frame.state.eyes.iter().enumerate() {
+            let scope = open_pass(timer, "draw", frame.display, encoder);
+            let writes = scope
+                .as_ref()
+                .and_then(|q| q.render_pass_timestamp_writes());
+            let mut pass = begin_pass(encoder, frame.target.pair(), e == 0, false, writes);
             let counting = begin_statistics(timer, &mut pass);
             self.bind(&mut pass, &eye.bind_group);
-            set_eye_viewport(&mut pass, e as u32, state.eye_size);
+            set_eye_viewport(&mut pass, e as u32, frame.state.eye_size);
             let out = &culls[e.min(culls.len() - 1)];
             calls += instance_draws(out).map(|d| draw(&mut pass, d)).count() as u32;
             GpuTimer::end_statistics(&mut pass, counting);
+            drop(pass);
+            close(timer, encoder, scope);
         }
         calls
     }
@@ -266,6 +292,13 @@ impl ClassicPath {
             .map(|c| c[0].visible.len() as u32)
             .collect()
     }
+}
+
+/// What a display's passes record into, and the timer scope they nest in.
+struct DisplayFrame<'a> {
+    target: &'a TargetViews<'a>,
+    state: &'a ClassicDisplay,
+    display: &'a Option<GpuProfilerQuery>,
 }
 
 fn visible_buffer(device: &wgpu::Device, instances: u64) -> wgpu::Buffer {

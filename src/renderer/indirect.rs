@@ -8,7 +8,8 @@
 use std::time::Instant;
 
 use super::{
-    CullMode, FrameStats, RendererOptions, TargetViews, begin_statistics, context_buffer, write,
+    CullMode, FrameStats, RendererOptions, TargetViews, begin_statistics, close, context_buffer,
+    open_display, open_pass, write,
 };
 use crate::contexts::{DisplayContext, uniform_bytes};
 use crate::cull::gpu::{COUNTS_BYTES, CullScene, CullTargets, GpuCuller};
@@ -33,6 +34,7 @@ enum Culling {
 
 /// One display's buffers and bindings.
 struct IndirectDisplay {
+    name: String,
     context: wgpu::Buffer,
     /// Filled by the cull passes or by the CPU upload; read by the draw.
     cull: CullTargets,
@@ -82,7 +84,8 @@ impl IndirectPath {
         let (instances, meshes) = (scene.instances.len() as u32, scene.meshes.len() as u32);
         let displays = keys
             .iter()
-            .map(|&key| {
+            .zip(&rig.displays)
+            .map(|(&key, display)| {
                 let context = context_buffer(device);
                 let cull = CullTargets::new(device, instances, meshes);
                 let cull_bind_group = match &culling {
@@ -92,6 +95,7 @@ impl IndirectPath {
                     Culling::Cpu { .. } => None,
                 };
                 IndirectDisplay {
+                    name: display.name.clone(),
                     draw_bind_group: drawer.bind_group(
                         device,
                         &context,
@@ -167,17 +171,27 @@ impl IndirectPath {
     ) -> FrameStats {
         let mut stats = FrameStats::default();
         for (state, target) in self.displays.iter().zip(targets) {
+            let display = open_display(timer, &state.name, encoder);
             if let (Culling::Gpu { culler, scene }, Some(bind_group)) =
                 (&self.culling, &state.cull_bind_group)
             {
+                let scope = open_pass(timer, "cull", &display, encoder);
+                let writes = scope
+                    .as_ref()
+                    .and_then(|q| q.compute_pass_timestamp_writes());
                 let mut pass = encoder.begin_compute_pass(&wgpu::ComputePassDescriptor {
                     label: Some("stereocull.cull"),
-                    timestamp_writes: timer.as_deref_mut().and_then(|t| t.compute("cull")),
+                    timestamp_writes: writes,
                 });
                 culler.encode(&mut pass, scene, bind_group);
+                drop(pass);
+                close(timer, encoder, scope);
                 stats.dispatches += GpuCuller::DISPATCHES_PER_DISPLAY;
             }
-            let writes = timer.as_deref_mut().and_then(|t| t.render("draw"));
+            let scope = open_pass(timer, "draw", &display, encoder);
+            let writes = scope
+                .as_ref()
+                .and_then(|q| q.render_pass_timestamp_writes());
             let mut pass = begin_pass(encoder, target.pair(), true, state.key.multiview, writes);
             let counting = begin_statistics(timer, &mut pass);
             self.drawer.bind(
@@ -189,6 +203,9 @@ impl IndirectPath {
             self.drawer
                 .draw_indirect(&mut pass, self.mesh_count, &state.cull);
             GpuTimer::end_statistics(&mut pass, counting);
+            drop(pass);
+            close(timer, encoder, scope);
+            close(timer, encoder, display);
             stats.draw_calls += 1;
         }
         stats

@@ -39,6 +39,7 @@ use crate::profiling::GpuTimer;
 use crate::records::MeshRecord;
 use crate::rig::Rig;
 use crate::scene::{Scene, Vertex};
+use wgpu_profiler::GpuProfilerQuery;
 
 mod classic;
 mod indirect;
@@ -179,7 +180,8 @@ impl Renderer {
     }
 
     /// Records every display into `targets[i]` for display `i`: its cull dispatches (GPU
-    /// culling) and its passes. With a timer, each pass is timed as `cull` or `draw`.
+    /// culling) and its passes. With a timer, each display is a scope named after it and
+    /// each pass a scope within it, `cull` or `draw`.
     pub fn encode(
         &self,
         encoder: &mut wgpu::CommandEncoder,
@@ -277,6 +279,39 @@ fn begin_statistics(timer: &mut Option<&mut GpuTimer>, pass: &mut wgpu::RenderPa
     timer
         .as_deref_mut()
         .is_some_and(|t| t.begin_statistics(pass))
+}
+
+/// Opens display `name`'s timer scope, when timing.
+fn open_display(
+    timer: &Option<&mut GpuTimer>,
+    name: &str,
+    encoder: &mut wgpu::CommandEncoder,
+) -> Option<GpuProfilerQuery> {
+    timer.as_deref().map(|t| t.scope(name, encoder))
+}
+
+/// Opens a pass scope inside a display's, when timing; its timestamp writes go into
+/// the pass descriptor.
+fn open_pass(
+    timer: &Option<&mut GpuTimer>,
+    label: &str,
+    display: &Option<GpuProfilerQuery>,
+    encoder: &mut wgpu::CommandEncoder,
+) -> Option<GpuProfilerQuery> {
+    match (timer.as_deref(), display) {
+        (Some(t), Some(parent)) => Some(t.pass(label, parent, encoder)),
+        _ => None,
+    }
+}
+
+fn close(
+    timer: &Option<&mut GpuTimer>,
+    encoder: &mut wgpu::CommandEncoder,
+    scope: Option<GpuProfilerQuery>,
+) {
+    if let (Some(t), Some(scope)) = (timer.as_deref(), scope) {
+        t.end(encoder, scope);
+    }
 }
 
 /// Writes `bytes` at the start of `buffer` (nothing for none); returns the bytes written.
