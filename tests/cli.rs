@@ -286,28 +286,23 @@ fn render_draws_the_shared_gltf_samples_in_both_eyes() {
     }
 }
 
-#[test]
-fn stress_reports_per_frame_and_summary_figures() {
+/// `stress --json` at 16x16 pixels per eye, its report parsed.
+fn stress_json(scene: &str, rig: &str, frames: &str) -> Value {
     let out = stereocull(&[
-        "stress",
-        "--scene",
-        "procedural:20000",
-        "--rig",
-        "cave",
-        "--frames",
-        "3",
-        "--width",
-        "16",
-        "--height",
-        "16",
-        "--json",
+        "stress", "--scene", scene, "--rig", rig, "--frames", frames, "--width", "16", "--height",
+        "16", "--json",
     ]);
     assert!(
         out.status.success(),
         "{}",
         String::from_utf8_lossy(&out.stderr)
     );
-    let v: Value = serde_json::from_slice(&out.stdout).unwrap();
+    serde_json::from_slice(&out.stdout).unwrap()
+}
+
+#[test]
+fn stress_reports_per_frame_and_summary_figures() {
+    let v = stress_json("procedural:20000", "cave", "3");
     assert_eq!(v["frames"].as_array().unwrap().len(), 3);
     let s = &v["summary"];
     assert_eq!(s["draw_calls_per_frame"].as_u64(), Some(5), "one per wall");
@@ -337,26 +332,7 @@ fn stress_reports_per_frame_and_summary_figures() {
 /// leak of one small buffer per frame would add tens of MiB here).
 #[test]
 fn stress_soak_holds_memory_and_gpu_allocations_constant() {
-    let out = stereocull(&[
-        "stress",
-        "--scene",
-        "procedural:1000",
-        "--rig",
-        "hmd",
-        "--frames",
-        "1000",
-        "--width",
-        "16",
-        "--height",
-        "16",
-        "--json",
-    ]);
-    assert!(
-        out.status.success(),
-        "{}",
-        String::from_utf8_lossy(&out.stderr)
-    );
-    let v: Value = serde_json::from_slice(&out.stdout).unwrap();
+    let v = stress_json("procedural:1000", "hmd", "1000");
     let memory = v["summary"]["memory"].as_array().unwrap();
     eprintln!("{memory:?}");
     assert_eq!(memory.len(), 11, "after frame 1 and every 100 frames");
@@ -420,8 +396,14 @@ fn profile_writes_table_csv_json_and_chart() {
         .iter()
         .map(|e| e["name"].as_str().unwrap())
         .collect();
-    assert_eq!(names[..4], ["hmd multi-camera cpu 300", "hmd", "draw", "draw"]);
-    let instanced = names.iter().position(|n| *n == "hmd instanced gpu 900").unwrap();
+    assert_eq!(
+        names[..4],
+        ["hmd multi-camera cpu 300", "hmd", "draw", "draw"]
+    );
+    let instanced = names
+        .iter()
+        .position(|n| *n == "hmd instanced gpu 900")
+        .unwrap();
     assert_eq!(names[instanced + 1..instanced + 4], ["hmd", "cull", "draw"]);
     let csv = std::fs::read_to_string(dir.path().join("profile.csv")).unwrap();
     let mut lines = csv.lines();

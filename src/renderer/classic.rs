@@ -6,19 +6,18 @@
 use std::time::Instant;
 
 use super::{
-    FrameStats, RendererOptions, TargetViews, begin_statistics, close, context_buffer,
-    open_display, open_pass, write,
+    FrameStats, RendererOptions, TargetViews, close, context_buffer, display_contexts, draw_pass,
+    open_display, write,
 };
-use crate::contexts::{DisplayContext, uniform_bytes};
+use crate::contexts::uniform_bytes;
 use crate::cull::{CullJob, CullOutput, cpu};
-use crate::draw::{DrawFeatures, DrawScene, Drawer, begin_pass, set_eye_viewport};
+use crate::draw::{DrawFeatures, DrawScene, Drawer, set_eye_viewport};
 use crate::modes::StereoMode;
 use crate::profiling::GpuTimer;
 use crate::records::CullLayout;
 use crate::rig::{ResolvedRig, Rig};
 use crate::scene::Scene;
 use crate::shaders::DrawKey;
-use wgpu_profiler::GpuProfilerQuery;
 
 /// One eye of a stereo display: its own context (that eye in both eye slots) and, for
 /// multi-camera, its own visible list.
@@ -108,12 +107,7 @@ impl ClassicPath {
         rig: &Rig,
         resolved: &ResolvedRig,
     ) -> FrameStats {
-        let contexts: Vec<DisplayContext> = rig
-            .displays
-            .iter()
-            .zip(&resolved.displays)
-            .map(|(d, r)| DisplayContext::new(r, d.resolution, 1))
-            .collect();
+        let contexts = display_contexts(rig, resolved, |_| 1);
         let mut stats = FrameStats::default();
         let start = Instant::now();
         self.culls = self.cull(resolved);
@@ -172,108 +166,34 @@ impl ClassicPath {
         let mut stats = FrameStats::default();
         for ((state, target), culls) in self.displays.iter().zip(targets).zip(&self.culls) {
             let display = open_display(timer, &state.name, encoder);
-            let frame = DisplayFrame {
-                target,
-                state,
-                display: &display,
-            };
-            stats.draw_calls += match (self.mode, state.eyes.is_empty()) {
-                (_, true) => self.encode_mono(encoder, &frame, &culls[0], timer),
-                (StereoMode::SinglePass, false) => {
-                    self.encode_single_pass(encoder, &frame, &culls[0], timer)
+            stats.draw_calls += match (self.mode, state.eyes.as_slice()) {
+                (_, []) => draw_pass(encoder, target, true, false, timer, &display, |pass| {
+                    self.bind(pass, &state.bind_group);
+                    instance_draws(&culls[0]).map(|d| draw(pass, d)).count() as u32
+                }),
+                (StereoMode::SinglePass, eyes) => {
+                    draw_pass(encoder, target, true, false, timer, &display, |pass| {
+                        self.bind(pass, &eyes[0].bind_group);
+                        single_pass_cadence(pass, &culls[0], eyes, state.eye_size)
+                    })
                 }
-                (_, false) => self.encode_pass_per_eye(encoder, &frame, culls, timer),
+                (_, eyes) => {
+                    let mut calls = 0;
+                    for (e, eye) in eyes.iter().enumerate() {
+                        let out = &culls[e.min(culls.len() - 1)];
+                        calls +=
+                            draw_pass(encoder, target, e == 0, false, timer, &display, |pass| {
+                                self.bind(pass, &eye.bind_group);
+                                set_eye_viewport(pass, e as u32, state.eye_size);
+                                instance_draws(out).map(|d| draw(pass, d)).count() as u32
+                            });
+                    }
+                    calls
+                }
             };
             close(timer, encoder, display);
         }
         stats
-    }
-
-    fn encode_mono(
-        &self,
-        encoder: &mut wgpu::CommandEncoder,
-        frame: &DisplayFrame,
-        out: &CullOutput,
-        timer: &mut Option<&mut GpuTimer>,
-    ) -> u32 {
-        let scope = open_pass(timer, "draw", frame.display, encoder);
-        let writes = scope
-            .as_ref()
-            .and_then(|q| q.render_pass_timestamp_writes());
-        let mut pass = begin_pass(encoder, frame.target.pair(), true, false, writes);
-        let counting = begin_statistics(timer, &mut pass);
-        self.bind(&mut pass, &frame.state.bind_group);
-        let calls = instance_draws(out).map(|d| draw(&mut pass, d)).count() as u32;
-        GpuTimer::end_statistics(&mut pass, counting);
-        drop(pass);
-        close(timer, encoder, scope);
-        calls
-    }
-
-    /// Single-pass stereo: one pass; each instance drawn for both eyes in the left,
-    /// right, right, left cadence so that the eye (viewport and binding) switches once
-    /// per instance, not twice.
-    fn encode_single_pass(
-        &self,
-        encoder: &mut wgpu::CommandEncoder,
-        frame: &DisplayFrame,
-        out: &CullOutput,
-        timer: &mut Option<&mut GpuTimer>,
-    ) -> u32 {
-        let state = frame.state;
-        let scope = open_pass(timer, "draw", frame.display, encoder);
-        let writes = scope
-            .as_ref()
-            .and_then(|q| q.render_pass_timestamp_writes());
-        let mut pass = begin_pass(encoder, frame.target.pair(), true, false, writes);
-        let counting = begin_statistics(timer, &mut pass);
-        self.bind(&mut pass, &state.eyes[0].bind_group);
-        let mut current = usize::MAX;
-        let mut calls = 0;
-        for (k, d) in instance_draws(out).enumerate() {
-            let order = if k % 2 == 0 { [0, 1] } else { [1, 0] };
-            for e in order {
-                if e != current {
-                    pass.set_bind_group(0, &state.eyes[e].bind_group, &[]);
-                    set_eye_viewport(&mut pass, e as u32, state.eye_size);
-                    current = e;
-                }
-                draw(&mut pass, d.clone());
-                calls += 1;
-            }
-        }
-        GpuTimer::end_statistics(&mut pass, counting);
-        drop(pass);
-        close(timer, encoder, scope);
-        calls
-    }
-
-    /// Multi-pass and multi-camera: one pass per eye into its half, each with a draw
-    /// call per visible instance (of the shared cull, or of that eye's own).
-    fn encode_pass_per_eye(
-        &self,
-        encoder: &mut wgpu::CommandEncoder,
-        frame: &DisplayFrame,
-        culls: &[CullOutput],
-        timer: &mut Option<&mut GpuTimer>,
-    ) -> u32 {
-        let mut calls = 0;
-        for (e, eye) in frame.state.eyes.iter().enumerate() {
-            let scope = open_pass(timer, "draw", frame.display, encoder);
-            let writes = scope
-                .as_ref()
-                .and_then(|q| q.render_pass_timestamp_writes());
-            let mut pass = begin_pass(encoder, frame.target.pair(), e == 0, false, writes);
-            let counting = begin_statistics(timer, &mut pass);
-            self.bind(&mut pass, &eye.bind_group);
-            set_eye_viewport(&mut pass, e as u32, frame.state.eye_size);
-            let out = &culls[e.min(culls.len() - 1)];
-            calls += instance_draws(out).map(|d| draw(&mut pass, d)).count() as u32;
-            GpuTimer::end_statistics(&mut pass, counting);
-            drop(pass);
-            close(timer, encoder, scope);
-        }
-        calls
     }
 
     fn bind(&self, pass: &mut wgpu::RenderPass, bind_group: &wgpu::BindGroup) {
@@ -294,11 +214,30 @@ impl ClassicPath {
     }
 }
 
-/// What a display's passes record into, and the timer scope they nest in.
-struct DisplayFrame<'a> {
-    target: &'a TargetViews<'a>,
-    state: &'a ClassicDisplay,
-    display: &'a Option<GpuProfilerQuery>,
+/// Single-pass stereo: each instance drawn for both eyes in the left, right, right,
+/// left cadence so that the eye (viewport and binding) switches once per instance, not
+/// twice. Multi-pass and multi-camera instead draw one pass per eye into its half.
+fn single_pass_cadence(
+    pass: &mut wgpu::RenderPass,
+    out: &CullOutput,
+    eyes: &[EyeState],
+    eye_size: (u32, u32),
+) -> u32 {
+    let mut current = usize::MAX;
+    let mut calls = 0;
+    for (k, d) in instance_draws(out).enumerate() {
+        let order = if k % 2 == 0 { [0, 1] } else { [1, 0] };
+        for e in order {
+            if e != current {
+                pass.set_bind_group(0, &eyes[e].bind_group, &[]);
+                set_eye_viewport(pass, e as u32, eye_size);
+                current = e;
+            }
+            draw(pass, d.clone());
+            calls += 1;
+        }
+    }
+    calls
 }
 
 fn visible_buffer(device: &wgpu::Device, instances: u64) -> wgpu::Buffer {

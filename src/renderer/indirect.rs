@@ -8,13 +8,13 @@
 use std::time::Instant;
 
 use super::{
-    CullMode, FrameStats, RendererOptions, TargetViews, begin_statistics, close, context_buffer,
-    open_display, open_pass, write,
+    CullMode, FrameStats, RendererOptions, TargetViews, close, context_buffer, display_contexts,
+    draw_pass, open_display, open_pass, write,
 };
-use crate::contexts::{DisplayContext, uniform_bytes};
+use crate::contexts::uniform_bytes;
 use crate::cull::gpu::{COUNTS_BYTES, CullScene, CullTargets, GpuCuller};
 use crate::cull::{CullOutput, cpu};
-use crate::draw::{DrawFeatures, DrawScene, Drawer, begin_pass};
+use crate::draw::{DrawFeatures, DrawScene, Drawer};
 use crate::error::Result;
 use crate::modes::StereoMode;
 use crate::profiling::GpuTimer;
@@ -126,12 +126,7 @@ impl IndirectPath {
         rig: &Rig,
         resolved: &ResolvedRig,
     ) -> FrameStats {
-        let contexts: Vec<DisplayContext> = self
-            .displays
-            .iter()
-            .zip(rig.displays.iter().zip(&resolved.displays))
-            .map(|(state, (d, r))| DisplayContext::new(r, d.resolution, state.instances_per_object))
-            .collect();
+        let contexts = display_contexts(rig, resolved, |i| self.displays[i].instances_per_object);
         let mut stats = FrameStats::default();
         let start = Instant::now();
         let culls = match &self.culling {
@@ -188,25 +183,16 @@ impl IndirectPath {
                 close(timer, encoder, scope);
                 stats.dispatches += GpuCuller::DISPATCHES_PER_DISPLAY;
             }
-            let scope = open_pass(timer, "draw", &display, encoder);
-            let writes = scope
-                .as_ref()
-                .and_then(|q| q.render_pass_timestamp_writes());
-            let mut pass = begin_pass(encoder, target.pair(), true, state.key.multiview, writes);
-            let counting = begin_statistics(timer, &mut pass);
-            self.drawer.bind(
-                &mut pass,
-                state.key,
-                &self.draw_scene,
-                &state.draw_bind_group,
-            );
-            self.drawer
-                .draw_indirect(&mut pass, self.mesh_count, &state.cull);
-            GpuTimer::end_statistics(&mut pass, counting);
-            drop(pass);
-            close(timer, encoder, scope);
+            let multiview = state.key.multiview;
+            stats.draw_calls +=
+                draw_pass(encoder, target, true, multiview, timer, &display, |pass| {
+                    let (key, bind_group) = (state.key, &state.draw_bind_group);
+                    self.drawer.bind(pass, key, &self.draw_scene, bind_group);
+                    self.drawer
+                        .draw_indirect(pass, self.mesh_count, &state.cull);
+                    1
+                });
             close(timer, encoder, display);
-            stats.draw_calls += 1;
         }
         stats
     }

@@ -33,11 +33,12 @@ use crate::contexts::DisplayContext;
 use crate::cull::CullOutput;
 use crate::cull::gpu::CullScene;
 use crate::draw::DrawScene;
+use crate::draw::begin_pass;
 use crate::error::{Error, Result};
 pub use crate::modes::StereoMode;
 use crate::profiling::GpuTimer;
 use crate::records::MeshRecord;
-use crate::rig::Rig;
+use crate::rig::{ResolvedRig, Rig};
 use crate::scene::{Scene, Vertex};
 use wgpu_profiler::GpuProfilerQuery;
 
@@ -275,10 +276,45 @@ fn context_buffer(device: &wgpu::Device) -> wgpu::Buffer {
     })
 }
 
-fn begin_statistics(timer: &mut Option<&mut GpuTimer>, pass: &mut wgpu::RenderPass) -> bool {
-    timer
+/// The display contexts of a frame, `instances_per_object[i]` for display `i`.
+fn display_contexts(
+    rig: &Rig,
+    resolved: &ResolvedRig,
+    instances_per_object: impl Fn(usize) -> u32,
+) -> Vec<DisplayContext> {
+    rig.displays
+        .iter()
+        .zip(&resolved.displays)
+        .enumerate()
+        .map(|(i, (d, r))| DisplayContext::new(r, d.resolution, instances_per_object(i)))
+        .collect()
+}
+
+/// Records one draw pass into `target`, clearing it or not: a `draw` timer scope inside
+/// `display`'s and pipeline statistics around what `record` draws (it returns its
+/// draw calls).
+fn draw_pass(
+    encoder: &mut wgpu::CommandEncoder,
+    target: &TargetViews,
+    clear: bool,
+    multiview: bool,
+    timer: &mut Option<&mut GpuTimer>,
+    display: &Option<GpuProfilerQuery>,
+    record: impl FnOnce(&mut wgpu::RenderPass) -> u32,
+) -> u32 {
+    let scope = open_pass(timer, "draw", display, encoder);
+    let writes = scope
+        .as_ref()
+        .and_then(|q| q.render_pass_timestamp_writes());
+    let mut pass = begin_pass(encoder, target.pair(), clear, multiview, writes);
+    let counting = timer
         .as_deref_mut()
-        .is_some_and(|t| t.begin_statistics(pass))
+        .is_some_and(|t| t.begin_statistics(&mut pass));
+    let calls = record(&mut pass);
+    GpuTimer::end_statistics(&mut pass, counting);
+    drop(pass);
+    close(timer, encoder, scope);
+    calls
 }
 
 /// Opens display `name`'s timer scope, when timing.
