@@ -81,12 +81,3 @@ impl DisplayContext {
         }
     }
 }
-
-/// Serializes a context into the uniform-buffer bytes the WGSL struct expects.
-pub fn uniform_bytes<T: ShaderType + encase::internal::WriteInto>(value: &T) -> Vec<u8> {
-    let mut buffer = encase::UniformBuffer::new(Vec::new());
-    buffer
-        .write(value)
-        .expect("writing into a growable Vec cannot fail");
-    buffer.into_inner()
-}

@@ -1,5 +1,6 @@
 //! The storage-buffer records the GPU reads and writes (`#[repr(C)]` + bytemuck),
-//! mirrored in `wgsl/shared/records.wgsl`; `records_match_wgsl` checks every offset.
+//! mirrored in `wgsl/shared/records.wgsl` (`records_match_wgsl` checks every offset),
+//! and the serialization of uniforms (encase) into the bytes WGSL expects.
 
 use bytemuck::{Pod, Zeroable};
 use glam::Vec4;
@@ -131,4 +132,14 @@ pub fn instance_records(scene: &Scene) -> Vec<InstanceRecord> {
 pub fn pack_unorm4x8(c: Vec4) -> u32 {
     let b = (c.clamp(Vec4::ZERO, Vec4::ONE) * 255.0).round();
     (b.x as u32) | (b.y as u32) << 8 | (b.z as u32) << 16 | (b.w as u32) << 24
+}
+
+/// Serializes a uniform (a context, the cull parameters) into the bytes the WGSL
+/// struct expects.
+pub fn uniform_bytes<T: encase::ShaderType + encase::internal::WriteInto>(value: &T) -> Vec<u8> {
+    let mut buffer = encase::UniformBuffer::new(Vec::new());
+    buffer
+        .write(value)
+        .expect("writing into a growable Vec cannot fail");
+    buffer.into_inner()
 }

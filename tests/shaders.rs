@@ -5,8 +5,9 @@ use std::mem::{offset_of, size_of};
 
 use glam::{Mat4, Vec2, Vec3, Vec4};
 use naga::{Module, TypeInner};
-use stereocull::contexts::{DisplayContext, EyeContext, uniform_bytes};
+use stereocull::contexts::{DisplayContext, EyeContext};
 use stereocull::cull::gpu::CullParams;
+use stereocull::records::uniform_bytes;
 use stereocull::records::{DrawArgs, InstanceRecord, MeshRecord};
 use stereocull::shaders::{
     Access, Binding, CULL_BINDINGS, CullPass, DRAW_BINDINGS, DrawKey, all_sources,

@@ -4,7 +4,7 @@
 
 use wgpu::util::DeviceExt;
 
-use crate::contexts::uniform_bytes;
+use crate::records::uniform_bytes;
 use crate::records::{CullLayout, DrawArgs};
 use crate::shaders::{CULL_BINDINGS, CullPass, WORKGROUP_SIZE, bind_group, bind_group_layout};
 

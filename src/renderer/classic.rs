@@ -9,12 +9,12 @@ use super::{
     FrameStats, RendererOptions, TargetViews, close, context_buffer, display_contexts, draw_pass,
     open_display, write,
 };
-use crate::contexts::uniform_bytes;
 use crate::cull::{CullJob, CullOutput, cpu};
 use crate::draw::{DrawFeatures, DrawScene, Drawer, set_eye_viewport};
 use crate::modes::StereoMode;
 use crate::profiling::GpuTimer;
 use crate::records::CullLayout;
+use crate::records::uniform_bytes;
 use crate::rig::{ResolvedRig, Rig};
 use crate::scene::Scene;
 use crate::shaders::DrawKey;

@@ -11,7 +11,6 @@ use super::{
     CullMode, FrameStats, RendererOptions, TargetViews, close, context_buffer, display_contexts,
     draw_pass, open_display, open_pass, write,
 };
-use crate::contexts::uniform_bytes;
 use crate::cull::gpu::{COUNTS_BYTES, CullScene, CullTargets, GpuCuller};
 use crate::cull::{CullOutput, cpu};
 use crate::draw::{DrawFeatures, DrawScene, Drawer};
@@ -19,6 +18,7 @@ use crate::error::Result;
 use crate::modes::StereoMode;
 use crate::profiling::GpuTimer;
 use crate::readback::read_pod;
+use crate::records::uniform_bytes;
 use crate::records::{CullLayout, DrawArgs};
 use crate::rig::{ResolvedRig, Rig};
 use crate::scene::Scene;
