@@ -1,16 +1,19 @@
 //! stereocull: scene submission for stereo and multi-display rendering on wgpu.
 //!
 //! The work of a frame is split the way the chapter *Efficient Stereo and VR Rendering*
-//! splits it: the **frame** context (once per frame: the viewer), the **display**
-//! context (once per display: culling against the combined frustum of both eyes and
-//! building the multi-draw-indirect buffers), and the **eye** context (only what truly
-//! differs per eye: the projection, and the eye position for specular).
+//! splits it: the **frame** (once per frame: the rig resolved into every eye, display
+//! and frame frustum), the **display** context (once per display: culling against the
+//! combined frustum of both eyes and building the multi-draw-indirect buffers), and the
+//! **eye** context (only what truly differs per eye: the projection, and the eye
+//! position for specular).
 //!
-//! Modules, in the order data flows: [`rig`] (viewer and displays) ->
-//! [`frustum`] (eye, display and frame frusta) -> [`contexts`] (what shaders read) ->
-//! [`scene`] / [`gltf_import`] (what is drawn) -> [`records`] (GPU layouts) ->
-//! [`cull`] (visible lists and draw arguments, CPU or GPU) -> [`draw`] (one indirect
-//! pass per display). [`renderer::Renderer`] ties them together for embedders.
+//! Modules, in the order data flows: [`rig`] (viewer and displays, resolved once per
+//! frame) -> [`frustum`] (eye, display and frame frusta, in f64) -> [`contexts`] (what
+//! shaders read per display and eye) -> [`scene`] (what is drawn; filled by
+//! [`gltf_import`] or [`procedural`], chosen by name in [`scene_spec`]) -> [`records`]
+//! (GPU layouts) -> [`cull`] (visible lists and draw arguments, CPU or GPU) -> [`draw`]
+//! (pipelines, passes, the one indirect call). [`renderer::Renderer`] ties them together
+//! for embedders; [`shaders`] composes the WGSL and declares every binding once.
 
 pub mod cli;
 pub mod contexts;

@@ -1,5 +1,6 @@
 //! The stereo techniques, all drawing the same scene into the same images, so that each
-//! can be profiled against the others (see the Unity article in `seeds/003`).
+//! can be profiled against the others (the modes Unity names multi-camera, multi-pass,
+//! single-pass, single-pass instanced and multiview).
 
 use serde::Serialize;
 
@@ -40,14 +41,6 @@ impl StereoMode {
             self,
             StereoMode::MultiCamera | StereoMode::MultiPass | StereoMode::SinglePass
         )
-    }
-
-    /// Instances per visible object in a stereo display's cull contract.
-    pub fn stereo_views(self) -> u32 {
-        match self {
-            StereoMode::Instanced => 2,
-            _ => 1,
-        }
     }
 
     pub fn name(self) -> &'static str {

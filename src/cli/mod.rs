@@ -47,7 +47,7 @@ enum Command {
 /// Where the scene and viewer come from; shared by every command that draws.
 #[derive(Args, Clone, Debug)]
 pub struct SceneArgs {
-    /// `default` (the built-in room), a .gltf/.glb file, or procedural:N[:MESHES[:SEED]].
+    /// `default` (the built-in room), a .gltf/.glb file, or `procedural:N[:MESHES[:SEED]]`.
     #[arg(long, default_value = DEFAULT_SCENE)]
     pub scene: String,
     /// A preset (hmd, cave, hmd-peripheral) or a .json/.toml rig file.

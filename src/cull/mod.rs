@@ -1,5 +1,5 @@
 //! Per-display frustum culling into draw lists, on the CPU ([`cpu`]) or the GPU
-//! ([`gpu`]). Both honour one contract, byte for byte (see `DESIGN.md`):
+//! ([`gpu`]). Both honour one contract, byte for byte (the README's cull contract):
 //!
 //! - one draw per mesh with at least one visible instance, in ascending mesh id, packed
 //!   at the front of `draws`; the rest of `draws` is zero; `draw_count` is their number;

@@ -143,10 +143,6 @@ impl Renderer {
         self.options.mode
     }
 
-    pub fn cull_mode(&self) -> CullMode {
-        self.options.cull
-    }
-
     /// GPU bytes per instance: the 64-byte instance record, the GPU culler's layout and
     /// scratch (GPU culling only), and 4 bytes of visible list per display.
     pub fn gpu_bytes_per_instance(&self) -> u64 {
