@@ -253,23 +253,21 @@ impl Rig {
         })
     }
 
-    /// This frame's views, resolved once: every display's eyes and display frustum,
-    /// and the frame frustum. Validates first, so that what is built from the result
-    /// (contexts, cull jobs) cannot fail.
+    /// This frame's views, resolved once: every display's eyes and display frustum (and
+    /// from them, on demand, the frame frustum). Validates first, so that what is built
+    /// from the result (contexts, cull jobs) cannot fail.
     pub fn resolve(&self) -> Result<ResolvedRig> {
         self.validate("(this frame's pose)")?;
-        let origin = self.viewer.position();
         let displays = self
             .displays
             .iter()
             .map(|d| self.resolve_display(d).map_err(|m| Error::rig(&d.name, m)))
             .collect::<Result<Vec<_>>>()?;
-        let corners: Vec<_> = displays
-            .iter()
-            .map(|d| d.combined.corners_from(origin))
-            .collect();
-        let frame = enclosing_view(self.viewer.orientation(), origin, &corners);
-        Ok(ResolvedRig { displays, frame })
+        Ok(ResolvedRig {
+            displays,
+            viewer_position: self.viewer.position(),
+            viewer_orientation: self.viewer.orientation(),
+        })
     }
 
     /// Every display's cull against its display frustum, as the `instanced` mode culls
@@ -326,9 +324,23 @@ impl Rig {
 pub struct ResolvedRig {
     /// In the rig's display order.
     pub displays: Vec<ResolvedDisplay>,
-    /// The frame frustum, holding every display frustum, or `None` when the displays
-    /// surround the viewer (a CAVE) and no single frustum can.
-    pub frame: Option<View>,
+    viewer_position: DVec3,
+    viewer_orientation: DQuat,
+}
+
+impl ResolvedRig {
+    /// The frame frustum, holding every display frustum (oriented as the viewer), or
+    /// `None` when the displays surround the viewer (a CAVE) and no single frustum can.
+    /// Built on demand: no per-frame pass uses it yet.
+    pub fn frame(&self) -> Option<View> {
+        let origin = self.viewer_position;
+        let corners: Vec<_> = self
+            .displays
+            .iter()
+            .map(|d| d.combined.corners_from(origin))
+            .collect();
+        enclosing_view(self.viewer_orientation, origin, &corners)
+    }
 }
 
 /// One display's views for a frame.

@@ -178,7 +178,7 @@ fn frame_frustum_holds_every_display_frustum_or_is_absent_for_the_cave() {
     let mut rng = Pcg64Mcg::seed_from_u64(5);
     for (name, rig) in random_rigs(4) {
         let resolved = rig.resolve().unwrap();
-        let frame = resolved.frame;
+        let frame = resolved.frame();
         if name.starts_with("cave") {
             assert!(
                 frame.is_none(),

@@ -24,7 +24,7 @@ pub fn rig_file(data: &[u8]) {
         return;
     };
     let displays = resolved.displays.iter().map(|d| d.combined);
-    for (index, view) in displays.chain(resolved.frame).enumerate() {
+    for (index, view) in displays.chain(resolved.frame()).enumerate() {
         let planes = view.frustum().planes;
         assert!(
             planes.iter().all(|p| p.is_finite()),
