@@ -21,6 +21,11 @@ pub const CLEAR_COLOR: wgpu::Color = wgpu::Color {
     a: 1.0,
 };
 
+/// How the draw pipelines read a [`Vertex`]: `VertexInput` in
+/// `wgsl/shared/draw_common.wgsl` (`tests/shaders.rs` checks both sides).
+pub const VERTEX_ATTRIBUTES: [wgpu::VertexAttribute; 2] =
+    wgpu::vertex_attr_array![0 => Float32x3, 1 => Float32x3];
+
 /// The scene's geometry and instance records on the GPU, uploaded once.
 pub struct DrawScene {
     pub vertices: wgpu::Buffer,
@@ -223,7 +228,7 @@ fn pipeline(
             buffers: &[Some(wgpu::VertexBufferLayout {
                 array_stride: size_of::<Vertex>() as u64,
                 step_mode: wgpu::VertexStepMode::Vertex,
-                attributes: &wgpu::vertex_attr_array![0 => Float32x3, 1 => Float32x3],
+                attributes: &VERTEX_ATTRIBUTES,
             })],
         },
         // No back-face culling: glTF double-sided materials and open shapes.

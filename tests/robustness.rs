@@ -230,7 +230,10 @@ fn vertices_past_the_binding_size_are_accepted_up_to_the_buffer_size() {
         "binding {} bytes, buffer {} bytes",
         limits.max_storage_buffer_binding_size, limits.max_buffer_size
     );
-    assert!(limits.max_buffer_size > limits.max_storage_buffer_binding_size);
+    assert!(
+        limits.max_buffer_size > limits.max_storage_buffer_binding_size,
+        "assumes lavapipe: 128 MiB bindings, larger buffers"
+    );
     let mut scene = procedural::scene(1, 1, 1);
     let vertices = (limits.max_storage_buffer_binding_size / 24 + 1) as usize;
     scene.vertices.resize(vertices, scene.vertices[0]);

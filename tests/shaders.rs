@@ -7,8 +7,10 @@ use glam::{Mat4, Vec2, Vec3, Vec4};
 use naga::{Module, TypeInner};
 use stereocull::contexts::{DisplayContext, EyeContext};
 use stereocull::cull::gpu::CullParams;
+use stereocull::draw::VERTEX_ATTRIBUTES;
 use stereocull::records::uniform_bytes;
 use stereocull::records::{DrawArgs, InstanceRecord, MeshRecord};
+use stereocull::scene::Vertex;
 use stereocull::shaders::{
     Access, Binding, CULL_BINDINGS, CullPass, DRAW_BINDINGS, DrawKey, all_sources,
 };
@@ -106,6 +108,10 @@ fn records_match_wgsl() {
         ],
     );
     // wgpu reads indirect draws with exactly this layout.
+    assert_eq!(
+        size_of::<DrawArgs>(),
+        size_of::<wgpu::util::DrawIndexedIndirectArgs>()
+    );
     assert_eq!(size_of::<DrawArgs>(), 20);
     assert_eq!(size_of::<InstanceRecord>(), 64);
 }
@@ -247,4 +253,46 @@ fn every_pass_binds_what_its_list_declares() {
         let all: Vec<u32> = (0..list.len() as u32).collect();
         assert_eq!(seen, all, "{label}: bindings");
     }
+}
+
+/// The vertex buffer: each attribute's location, format and offset match `VertexInput`
+/// in WGSL and the Rust `Vertex`, and the stride is the Rust size.
+#[test]
+fn vertex_layout_matches_wgsl() {
+    let module = parse("draw", &DrawKey::ALL[0].source());
+    let ty = module
+        .types
+        .iter()
+        .find(|(_, t)| t.name.as_deref() == Some("VertexInput"))
+        .expect("VertexInput in WGSL")
+        .1;
+    let TypeInner::Struct { members, .. } = &ty.inner else {
+        panic!("VertexInput is not a struct")
+    };
+    let rust = [
+        ("position", offset_of!(Vertex, position)),
+        ("normal", offset_of!(Vertex, normal)),
+    ];
+    assert_eq!(members.len(), rust.len());
+    for ((member, (name, offset)), attribute) in members.iter().zip(rust).zip(VERTEX_ATTRIBUTES) {
+        assert_eq!(member.name.as_deref(), Some(name));
+        let Some(naga::Binding::Location { location, .. }) = member.binding else {
+            panic!("{name} has no location")
+        };
+        assert_eq!(location, attribute.shader_location, "{name}");
+        assert_eq!(attribute.offset as usize, offset, "{name} offset");
+        assert_eq!(attribute.format, wgpu::VertexFormat::Float32x3, "{name}");
+        let member_ty = &module.types[member.ty].inner;
+        assert!(
+            matches!(
+                member_ty,
+                TypeInner::Vector {
+                    size: naga::VectorSize::Tri,
+                    scalar: naga::Scalar::F32
+                }
+            ),
+            "{name}: {member_ty:?}"
+        );
+    }
+    assert_eq!(size_of::<Vertex>(), 24);
 }

@@ -18,8 +18,7 @@ use crate::error::Result;
 use crate::modes::StereoMode;
 use crate::profiling::GpuTimer;
 use crate::readback::read_pod;
-use crate::records::uniform_bytes;
-use crate::records::{CullLayout, DrawArgs};
+use crate::records::{CullLayout, DrawArgs, uniform_bytes};
 use crate::rig::{ResolvedRig, Rig};
 use crate::scene::Scene;
 use crate::shaders::DrawKey;
@@ -41,8 +40,8 @@ struct IndirectDisplay {
     /// GPU culling only.
     cull_bind_group: Option<wgpu::BindGroup>,
     draw_bind_group: wgpu::BindGroup,
+    /// The pipeline variant, which also fixes the instances per visible object.
     key: DrawKey,
-    instances_per_object: u32,
 }
 
 pub(super) struct IndirectPath {
@@ -106,7 +105,6 @@ impl IndirectPath {
                     cull,
                     cull_bind_group,
                     key,
-                    instances_per_object: key.instances_per_object(),
                 }
             })
             .collect();
@@ -121,12 +119,14 @@ impl IndirectPath {
 
     /// Writes each display's context and, culling on the CPU, its cull results.
     pub(super) fn prepare(
-        &mut self,
+        &self,
         queue: &wgpu::Queue,
         rig: &Rig,
         resolved: &ResolvedRig,
     ) -> FrameStats {
-        let contexts = display_contexts(rig, resolved, |i| self.displays[i].instances_per_object);
+        let contexts = display_contexts(rig, resolved, |i| {
+            self.displays[i].key.instances_per_object()
+        });
         let mut stats = FrameStats::default();
         let start = Instant::now();
         let culls = match &self.culling {
@@ -136,7 +136,7 @@ impl IndirectPath {
                     .displays
                     .iter()
                     .zip(&resolved.displays)
-                    .map(|(state, r)| r.cull_job(state.instances_per_object))
+                    .map(|(state, r)| r.cull_job(state.key.instances_per_object()))
                     .collect();
                 cpu::cull_many(layout, &jobs)
             }

@@ -20,10 +20,6 @@ use stereocull::rig::Rig;
 use stereocull::scene::{Instance, Scene};
 use stereocull::shapes;
 
-/// The adapter the measured figures in these tests come from (tolerances, feature
-/// expectations): Mesa's lavapipe, which CI installs.
-pub const ASSUMED_ADAPTER: &str = "llvmpipe";
-
 /// A headless device with every optional feature the adapter has. Never skips: no
 /// adapter is a failure that says what to install.
 pub fn gpu() -> Gpu {
@@ -42,16 +38,6 @@ pub fn gpu_on(backends: Option<wgpu::Backends>, allowed: wgpu::Features) -> Gpu 
     });
     eprintln!("adapter: {}", gpu.adapter_line());
     gpu
-}
-
-/// Whether `gpu` is the adapter whose measured figures a test states; tests print
-/// what they skip of their adapter-specific part elsewhere.
-pub fn is_assumed_adapter(gpu: &Gpu) -> bool {
-    let yes = gpu.adapter.get_info().name.contains(ASSUMED_ADAPTER);
-    if !yes {
-        eprintln!("not {ASSUMED_ADAPTER}: adapter-specific expectations not checked");
-    }
-    yes
 }
 
 /// A preset with every display at `width x height` pixels per eye.
