@@ -40,7 +40,7 @@ fn frame(c: &mut Criterion) {
                         for _ in 0..iters {
                             let start = Instant::now();
                             renderer
-                                .submit_frame(&gpu.device, &gpu.queue, &rig, &targets)
+                                .submit_frame(&gpu.device, &gpu.queue, &rig, 0.0, &targets)
                                 .expect("frame");
                             cpu += start.elapsed();
                             gpu.device

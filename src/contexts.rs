@@ -1,12 +1,35 @@
-//! Display and eye contexts (the chapter's Listing 1.3): what is computed once per
-//! display, and per eye. The WGSL twins live in `wgsl/shared/contexts.wgsl`; encase
-//! lays these out to match (`tests/shaders.rs` checks every member).
+//! Frame, display and eye contexts (the chapter's Listing 1.3): what is computed once
+//! per frame, once per display, and per eye. The WGSL twins live in
+//! `wgsl/shared/contexts.wgsl`; encase lays these out to match (`tests/shaders.rs`
+//! checks every member).
 
 use encase::ShaderType;
 use glam::{Mat4, Vec2, Vec3, Vec4};
 
 use crate::frustum::View;
-use crate::rig::ResolvedDisplay;
+use crate::rig::{ResolvedDisplay, Viewer};
+
+/// Once per frame: the viewer (not any eye) and the time, bound to the cull and draw
+/// pipelines. The draw pass animates instances from `time` ([`crate::scene::Animation`]).
+#[derive(Clone, Copy, Debug, PartialEq, ShaderType)]
+pub struct FrameContext {
+    pub viewer_position: Vec3,
+    /// Seconds on the caller's clock.
+    pub time: f32,
+    /// Where the viewer looks (unit length).
+    pub viewer_direction: Vec3,
+}
+
+impl FrameContext {
+    pub fn new(viewer: &Viewer, time: f32) -> FrameContext {
+        let orientation = viewer.orientation();
+        FrameContext {
+            viewer_position: viewer.position().as_vec3(),
+            time,
+            viewer_direction: (orientation * -glam::DVec3::Z).as_vec3(),
+        }
+    }
+}
 
 /// One eye of a display: only what truly differs per eye.
 #[derive(Clone, Copy, Debug, PartialEq, ShaderType)]

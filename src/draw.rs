@@ -120,16 +120,16 @@ impl Drawer {
         DrawKey::new(views, self.features.clip_distances)
     }
 
-    /// Binds a display context, the instances and a visible list.
+    /// Binds the frame and a display context, the instances and a visible list.
     pub fn bind_group(
         &self,
         device: &wgpu::Device,
-        display_context: &wgpu::Buffer,
+        [frame_context, display_context]: [&wgpu::Buffer; 2],
         scene: &DrawScene,
         visible: &wgpu::Buffer,
     ) -> wgpu::BindGroup {
         // In DRAW_BINDINGS order.
-        let buffers = [display_context, &scene.instances, visible];
+        let buffers = [frame_context, display_context, &scene.instances, visible];
         bind_group(device, "stereocull.draw", &self.layout, buffers)
     }
 

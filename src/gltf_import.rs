@@ -14,7 +14,7 @@ use gltf::buffer::Data;
 use gltf::{Document, Semantic};
 
 use crate::error::{Error, Result};
-use crate::scene::{Instance, Scene, Vertex};
+use crate::scene::{Animation, Instance, Scene, Vertex};
 
 const INSTANCING: &str = "EXT_mesh_gpu_instancing";
 
@@ -157,6 +157,7 @@ impl Importer<'_> {
                     world_from_local: world * *copy,
                     mesh: id,
                     color,
+                    animation: Animation::NONE,
                 });
             }
         }

@@ -5,7 +5,7 @@ use glam::{Affine3A, Quat, Vec3, Vec4};
 use rand::{Rng, SeedableRng};
 use rand_pcg::Pcg64Mcg;
 
-use crate::scene::{Instance, Scene};
+use crate::scene::{Animation, Instance, Scene};
 use crate::shapes::{self, Shape};
 
 /// `n` instances of `mesh_count` built-in meshes scattered in a ball around the
@@ -38,6 +38,7 @@ pub fn scene(n: u32, mesh_count: u32, seed: u64) -> Scene {
                 ),
                 mesh: rng.random_range(0..scene.meshes.len() as u32),
                 color: Vec4::new(rng.random(), rng.random(), rng.random(), 1.0),
+                animation: Animation::NONE,
             }
         })
         .collect();

@@ -16,8 +16,10 @@ pub struct InstanceRecord {
     /// RGBA8 unorm, linear.
     pub color: u32,
     pub mesh: u32,
-    /// Keeps the record at 64 bytes, the stride WGSL gives a struct holding `vec4`s.
-    pub reserved: [u32; 2],
+    /// [`crate::scene::Animation::spin`]: radians per second about local +Y.
+    pub spin: f32,
+    /// [`crate::scene::Animation::bob`]: meters along world +Y.
+    pub bob: f32,
 }
 
 /// A mesh's index range, and its range in the cull order (written once at upload).
@@ -122,7 +124,8 @@ pub fn instance_records(scene: &Scene) -> Vec<InstanceRecord> {
                 world_from_local: [m.row(0).into(), m.row(1).into(), m.row(2).into()],
                 color: pack_unorm4x8(inst.color),
                 mesh: inst.mesh,
-                reserved: [0; 2],
+                spin: inst.animation.spin,
+                bob: inst.animation.bob,
             }
         })
         .collect()

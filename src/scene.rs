@@ -42,6 +42,29 @@ pub struct Instance {
     pub mesh: u32,
     /// Linear RGBA.
     pub color: Vec4,
+    /// Motion the GPU evaluates from the frame context's time, with no CPU work per frame.
+    pub animation: Animation,
+}
+
+/// Per-instance motion, evaluated in the vertex shader (`wgsl/shared/draw_common.wgsl`)
+/// from the frame's time `t` in seconds: the mesh turns about its local +Y axis (through
+/// the local origin) by `spin * t` radians, then is placed by `world_from_local`, then
+/// lifted along world +Y by `bob * sin(pi * t)` meters (a two-second period). Culling
+/// uses a sphere that holds every pose ([`Scene::world_sphere`]).
+#[derive(Clone, Copy, Debug, Default, PartialEq)]
+pub struct Animation {
+    /// Radians per second about the local +Y axis.
+    pub spin: f32,
+    /// Amplitude in meters along world +Y.
+    pub bob: f32,
+}
+
+impl Animation {
+    /// A still instance.
+    pub const NONE: Animation = Animation {
+        spin: 0.0,
+        bob: 0.0,
+    };
 }
 
 #[derive(Clone, Debug, Default)]
@@ -53,15 +76,17 @@ pub struct Scene {
 }
 
 impl Scene {
-    /// Removes instances whose transform or world bounding sphere is not finite (NaN or
-    /// infinite entries): culling cannot place them, and a NaN sphere would be culled
-    /// differently by different hardware. Every other instance keeps its order; ids are
+    /// Removes instances whose transform, animation or world bounding sphere is not
+    /// finite (NaN or infinite entries): culling cannot place them, and a NaN sphere would
+    /// be culled differently by different hardware. Every other instance keeps its order; ids are
     /// renumbered. Returns how many were dropped.
     pub fn drop_non_finite_instances(&mut self) -> usize {
         let before = self.instances.len();
         let meshes = &self.meshes;
         self.instances.retain(|inst| {
-            let finite = Mat4::from(inst.world_from_local).is_finite();
+            let finite = Mat4::from(inst.world_from_local).is_finite()
+                && inst.animation.spin.is_finite()
+                && inst.animation.bob.is_finite();
             finite && world_sphere_of(meshes, inst).is_finite()
         });
         before - self.instances.len()
@@ -89,8 +114,11 @@ impl Scene {
     }
 
     /// The instance's world bounding sphere: the local center transformed, the radius
-    /// scaled by the largest axis scale (conservative under non-uniform scale), grown by
-    /// [`crate::frustum::ROUNDING_SLACK`] of its magnitude so rounding never culls it.
+    /// scaled by the largest axis scale (conservative under non-uniform scale), grown to
+    /// hold every pose of its [`Animation`] (a spinning mesh's points stay within twice
+    /// the local center's distance from the spin axis of where they start; a bob within
+    /// its amplitude), and by [`crate::frustum::ROUNDING_SLACK`] of its magnitude so
+    /// rounding never culls it.
     pub fn world_sphere(&self, instance: &Instance) -> Vec4 {
         world_sphere_of(&self.meshes, instance)
     }
@@ -105,7 +133,13 @@ fn world_sphere_of(meshes: &[Mesh], instance: &Instance) -> Vec4 {
         .max(m.y_axis.length_squared())
         .max(m.z_axis.length_squared());
     let center = instance.world_from_local.transform_point3(local.truncate());
-    let radius = local.w * scale_sq.sqrt();
+    let animation = instance.animation;
+    let orbit = if animation.spin == 0.0 {
+        0.0
+    } else {
+        2.0 * local.x.hypot(local.z)
+    };
+    let radius = (local.w + orbit) * scale_sq.sqrt() + animation.bob.abs();
     let slack = crate::frustum::ROUNDING_SLACK * (center.abs().element_sum() + radius);
     center.extend(radius + slack)
 }

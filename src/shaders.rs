@@ -49,9 +49,10 @@ const fn binding(
 
 const COMPUTE: wgpu::ShaderStages = wgpu::ShaderStages::COMPUTE;
 
-/// Every cull pass's bindings: per display its context and outputs, the scene data
-/// uploaded once, and scratch shared by all displays.
-pub const CULL_BINDINGS: [Binding; 10] = [
+/// Every cull pass's bindings: the frame context, per display its context and outputs,
+/// the scene data uploaded once, and scratch shared by all displays.
+pub const CULL_BINDINGS: [Binding; 11] = [
+    binding("frame", Access::Uniform, "FrameContext", COMPUTE),
     binding("display", Access::Uniform, "DisplayContext", COMPUTE),
     binding("params", Access::Uniform, "CullParams", COMPUTE),
     // World bounding spheres in cull order.
@@ -85,7 +86,8 @@ pub const CULL_BINDINGS: [Binding; 10] = [
 ];
 
 /// Every draw pipeline's bindings.
-pub const DRAW_BINDINGS: [Binding; 3] = [
+pub const DRAW_BINDINGS: [Binding; 4] = [
+    binding("frame", Access::Uniform, "FrameContext", wgpu::ShaderStages::VERTEX),
     binding(
         "display",
         Access::Uniform,

@@ -16,7 +16,7 @@ fn compare(gpu: &Gpu, scene: &Scene, rig: &Rig, what: &str) -> Vec<usize> {
     let mut renderer = Renderer::new(&gpu.device, scene, rig, RendererOptions::default()).unwrap();
     let targets = renderer.create_targets(&gpu.device);
     renderer
-        .submit_frame(&gpu.device, &gpu.queue, rig, &targets)
+        .submit_frame(&gpu.device, &gpu.queue, rig, 0.0, &targets)
         .unwrap();
     reference_culls(scene, rig)
         .into_iter()

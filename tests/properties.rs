@@ -156,7 +156,7 @@ proptest! {
         let scene = extreme_scene(&rig, n, meshes, seed);
         let mut renderer = Renderer::new(&gpu.device, &scene, &rig, RendererOptions::default()).unwrap();
         let targets = renderer.create_targets(&gpu.device);
-        renderer.submit_frame(&gpu.device, &gpu.queue, &rig, &targets).unwrap();
+        renderer.submit_frame(&gpu.device, &gpu.queue, &rig, 0.0, &targets).unwrap();
         for (d, want) in support::reference_culls(&scene, &rig).into_iter().enumerate() {
             let got = renderer.read_cull(&gpu.device, &gpu.queue, d).unwrap();
             prop_assert_eq!(got, want, "display {}", d);
@@ -292,6 +292,7 @@ fn spheres_at(points: &[DVec3], radius: f32) -> Scene {
             ),
             mesh: 0,
             color: glam::Vec4::ONE,
+            animation: stereocull::scene::Animation::NONE,
         })
         .collect();
     scene

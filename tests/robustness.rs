@@ -182,7 +182,7 @@ fn a_lost_device_is_reported_not_a_hang() {
             gpu.device.destroy();
         }
         let frame = renderer
-            .submit_frame(&gpu.device, &gpu.queue, &rig(), &targets)
+            .submit_frame(&gpu.device, &gpu.queue, &rig(), 0.0, &targets)
             .and_then(|_| read_rgba8(&gpu.device, &gpu.queue, &targets[0].color))
             .and_then(|_| gpu.check_lost());
         match frame {

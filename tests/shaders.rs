@@ -5,7 +5,7 @@ use std::mem::{offset_of, size_of};
 
 use glam::{Mat4, Vec2, Vec3, Vec4};
 use naga::{Module, TypeInner};
-use stereocull::contexts::{DisplayContext, EyeContext};
+use stereocull::contexts::{DisplayContext, EyeContext, FrameContext};
 use stereocull::cull::gpu::CullParams;
 use stereocull::draw::VERTEX_ATTRIBUTES;
 use stereocull::records::uniform_bytes;
@@ -82,7 +82,8 @@ fn records_match_wgsl() {
             ),
             ("color", offset_of!(InstanceRecord, color)),
             ("mesh", offset_of!(InstanceRecord, mesh)),
-            ("reserved", offset_of!(InstanceRecord, reserved)),
+            ("spin", offset_of!(InstanceRecord, spin)),
+            ("bob", offset_of!(InstanceRecord, bob)),
         ],
     );
     check(
@@ -199,6 +200,20 @@ fn contexts_match_wgsl() {
     assert_eq!(f32_at(&bytes, at("eye") + eye_span + 4 * 64), 24.0);
     assert_eq!(f32_at(&bytes, at("planes") + 5 * 16), 12.0);
 
+    let f = FrameContext {
+        viewer_position: Vec3::new(1.0, 1.1, 1.2),
+        time: 2.0,
+        viewer_direction: Vec3::new(3.0, 3.1, 3.2),
+    };
+    check_uniform(
+        "FrameContext",
+        &uniform_bytes(&f),
+        &[
+            ("viewer_position", 1.0),
+            ("time", 2.0),
+            ("viewer_direction", 3.0),
+        ],
+    );
     let params = CullParams {
         instance_count: 3,
         mesh_count: 5,

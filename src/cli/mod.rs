@@ -18,6 +18,9 @@ use crate::rig::Rig;
 use crate::scene::Scene;
 use crate::scene_spec::{self, DEFAULT_SCENE};
 
+/// The clock of `stress` and `profile`: frames of a 90 Hz headset.
+pub const FRAME_SECONDS: f32 = 1.0 / 90.0;
+
 #[derive(Parser)]
 #[command(
     name = "stereocull",
@@ -208,7 +211,7 @@ fn gpu_cull(rig: &Rig, scene: &Scene) -> Result<Vec<CullOutput>> {
     let gpu = Gpu::headless()?;
     let mut renderer = Renderer::new(&gpu.device, scene, rig, RendererOptions::default())?;
     let targets = renderer.create_targets(&gpu.device);
-    renderer.submit_frame(&gpu.device, &gpu.queue, rig, &targets)?;
+    renderer.submit_frame(&gpu.device, &gpu.queue, rig, 0.0, &targets)?;
     (0..rig.displays.len())
         .map(|i| renderer.read_cull(&gpu.device, &gpu.queue, i))
         .collect()

@@ -8,7 +8,7 @@ use clap::Args;
 use indicatif::{ProgressBar, ProgressStyle};
 use serde::Serialize;
 
-use super::write_json;
+use super::{FRAME_SECONDS, write_json};
 use crate::device::Gpu;
 use crate::error::{Error, Result};
 use crate::procedural;
@@ -215,7 +215,7 @@ fn measure(
     let mut samples = Samples::default();
     for frame in 0..args.warmup + args.frames {
         let start = Instant::now();
-        let prepared = renderer.prepare(&gpu.queue, rig)?;
+        let prepared = renderer.prepare(&gpu.queue, rig, frame as f32 * FRAME_SECONDS)?;
         let encode_start = Instant::now();
         let mut encoder = gpu.device.create_command_encoder(&Default::default());
         let recorded = renderer.encode(&mut encoder, &views, timer.as_deref_mut())?;

@@ -26,6 +26,9 @@ pub struct RenderArgs {
     pub cull: CullMode,
     #[arg(long, value_enum, default_value = "instanced")]
     pub mode: StereoMode,
+    /// The frame's time in seconds (animated instances are drawn at it).
+    #[arg(long, default_value_t = 0.0)]
+    pub time: f32,
 }
 
 /// Everything a command needs to draw frames.
@@ -58,14 +61,15 @@ impl Session {
         })
     }
 
-    /// Writes the contexts, records and submits one frame; returns its stats with the
-    /// CPU time of prepare + encode + submit.
-    pub fn frame(&mut self) -> Result<(FrameStats, f64)> {
+    /// Writes the contexts for `time` (seconds), records and submits one frame; returns
+    /// its stats with the CPU time of prepare + encode + submit.
+    pub fn frame(&mut self, time: f32) -> Result<(FrameStats, f64)> {
         let start = Instant::now();
         let stats = self.renderer.submit_frame(
             &self.gpu.device,
             &self.gpu.queue,
             &self.rig,
+            time,
             &self.targets,
         )?;
         Ok((stats, start.elapsed().as_secs_f64() * 1e3))
@@ -84,7 +88,7 @@ struct DisplayStats {
 
 pub fn render(args: &RenderArgs) -> Result<()> {
     let mut session = Session::open(&args.scene, args.cull, args.mode)?;
-    let (stats, cpu_ms) = session.frame()?;
+    let (stats, cpu_ms) = session.frame(args.time)?;
     let start = Instant::now();
     session.gpu.wait()?;
     let gpu_wait_ms = start.elapsed().as_secs_f64() * 1e3;

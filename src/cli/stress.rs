@@ -6,7 +6,7 @@ use clap::Args;
 use indicatif::{ProgressBar, ProgressStyle};
 use serde::Serialize;
 
-use super::SceneArgs;
+use super::{FRAME_SECONDS, SceneArgs};
 use super::render::Session;
 use crate::error::Result;
 use crate::profiling::percentile;
@@ -110,7 +110,7 @@ pub fn stress(args: &StressArgs) -> Result<()> {
         session.rig.viewer.yaw_deg = base.yaw_deg + 40.0 * phase.sin();
         session.rig.viewer.position[0] = base.position[0] + 0.3 * (2.0 * phase).sin();
         let start = Instant::now();
-        let (stats, cpu_ms) = session.frame()?;
+        let (stats, cpu_ms) = session.frame(frame as f32 * FRAME_SECONDS)?;
         session.gpu.wait()?;
         let frame_ms = start.elapsed().as_secs_f64() * 1e3;
         let visible = session

@@ -176,16 +176,18 @@ impl GpuCuller {
         GpuCuller { layout, pipelines }
     }
 
-    /// The bind group for one display: shared scene data plus its own outputs.
+    /// The bind group for one display: the frame context, shared scene data, and the
+    /// display's context and outputs.
     pub fn bind_group(
         &self,
         device: &wgpu::Device,
         scene: &CullScene,
-        display_context: &wgpu::Buffer,
+        [frame_context, display_context]: [&wgpu::Buffer; 2],
         targets: &CullTargets,
     ) -> wgpu::BindGroup {
         // In CULL_BINDINGS order.
         let buffers = [
+            frame_context,
             display_context,
             &scene.params,
             &scene.spheres,

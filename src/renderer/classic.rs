@@ -54,6 +54,7 @@ impl ClassicPath {
         device: &wgpu::Device,
         scene: &Scene,
         rig: &Rig,
+        frame: &wgpu::Buffer,
         options: RendererOptions,
     ) -> ClassicPath {
         let clip = DrawFeatures::of(device).clip_distances;
@@ -73,7 +74,7 @@ impl ClassicPath {
                         let own = (options.mode == StereoMode::MultiCamera).then(visible_list);
                         let list = own.as_ref().unwrap_or(&visible);
                         EyeState {
-                            bind_group: drawer.bind_group(device, &context, &draw_scene, list),
+                            bind_group: drawer.bind_group(device, [frame, &context], &draw_scene, list),
                             context,
                             visible: own,
                         }
@@ -81,7 +82,7 @@ impl ClassicPath {
                     .collect();
                 ClassicDisplay {
                     name: d.name.clone(),
-                    bind_group: drawer.bind_group(device, &context, &draw_scene, &visible),
+                    bind_group: drawer.bind_group(device, [frame, &context], &draw_scene, &visible),
                     context,
                     visible,
                     eyes,

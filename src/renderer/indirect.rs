@@ -57,6 +57,7 @@ impl IndirectPath {
         device: &wgpu::Device,
         scene: &Scene,
         rig: &Rig,
+        frame: &wgpu::Buffer,
         options: RendererOptions,
     ) -> IndirectPath {
         let multiview = options.mode == StereoMode::Multiview;
@@ -89,7 +90,7 @@ impl IndirectPath {
                 let cull = CullTargets::new(device, instances, meshes);
                 let cull_bind_group = match &culling {
                     Culling::Gpu { culler, scene } => {
-                        Some(culler.bind_group(device, scene, &context, &cull))
+                        Some(culler.bind_group(device, scene, [frame, &context], &cull))
                     }
                     Culling::Cpu { .. } => None,
                 };
@@ -97,7 +98,7 @@ impl IndirectPath {
                     name: display.name.clone(),
                     draw_bind_group: drawer.bind_group(
                         device,
-                        &context,
+                        [frame, &context],
                         &draw_scene,
                         &cull.visible,
                     ),

@@ -13,7 +13,8 @@
 //! let targets = renderer.create_targets(device); // or views of your own textures
 //! // Each frame: move the viewer, write the contexts, record, submit.
 //! rig.viewer.yaw_deg += 1.0;
-//! renderer.prepare(queue, &rig)?;
+//! let seconds = 1.0 / 90.0; // your clock: animated instances move with it
+//! renderer.prepare(queue, &rig, seconds)?;
 //! let mut encoder = device.create_command_encoder(&Default::default());
 //! let views: Vec<_> = targets.iter().map(|t| t.views()).collect();
 //! renderer.encode(&mut encoder, &views, None)?; // or Some(&mut timer) for GPU timings
@@ -29,7 +30,7 @@
 
 use std::time::Duration;
 
-use crate::contexts::DisplayContext;
+use crate::contexts::{DisplayContext, FrameContext};
 use crate::cull::CullOutput;
 use crate::cull::gpu::CullScene;
 use crate::draw::DrawScene;
@@ -37,7 +38,7 @@ use crate::draw::begin_pass;
 use crate::error::{Error, Result};
 pub use crate::modes::StereoMode;
 use crate::profiling::GpuTimer;
-use crate::records::MeshRecord;
+use crate::records::{MeshRecord, uniform_bytes};
 use crate::rig::{ResolvedRig, Rig};
 use crate::scene::{Scene, Vertex};
 use wgpu_profiler::GpuProfilerQuery;
@@ -100,6 +101,8 @@ enum Path {
 
 pub struct Renderer {
     options: RendererOptions,
+    /// The frame context's uniform, written once per frame, bound by every pass.
+    frame: wgpu::Buffer,
     path: Path,
     /// Per display, as made: what targets must look like and what `prepare` checks.
     shapes: Vec<TargetShape>,
@@ -116,9 +119,10 @@ impl Renderer {
     ) -> Result<Renderer> {
         check_device(device, scene, options)?;
         let scope = device.push_error_scope(wgpu::ErrorFilter::Validation);
+        let frame = uniform_buffer::<FrameContext>(device, "stereocull.frame_context");
         let path = match options.mode.per_instance() {
-            false => Path::Indirect(IndirectPath::new(device, scene, rig, options)),
-            true => Path::Classic(ClassicPath::new(device, scene, rig, options)),
+            false => Path::Indirect(IndirectPath::new(device, scene, rig, &frame, options)),
+            true => Path::Classic(ClassicPath::new(device, scene, rig, &frame, options)),
         };
         if let Some(e) = pollster::block_on(scope.pop()) {
             return Err(Error::Wgpu(e));
@@ -134,6 +138,7 @@ impl Renderer {
             .collect();
         Ok(Renderer {
             options,
+            frame,
             path,
             shapes,
         })
@@ -155,8 +160,9 @@ impl Renderer {
 
     /// Writes this frame's contexts (and, culling on the CPU, the cull results), all
     /// from one resolution of `rig`, which must have the displays the renderer was made
-    /// with; only poses may change.
-    pub fn prepare(&mut self, queue: &wgpu::Queue, rig: &Rig) -> Result<FrameStats> {
+    /// with; only poses may change. `time` (seconds on the caller's clock) goes into the
+    /// frame context, from which the GPU animates instances.
+    pub fn prepare(&mut self, queue: &wgpu::Queue, rig: &Rig, time: f32) -> Result<FrameStats> {
         let same = rig.displays.len() == self.shapes.len()
             && rig
                 .displays
@@ -170,10 +176,14 @@ impl Renderer {
             ));
         }
         let resolved = rig.resolve()?;
-        Ok(match &mut self.path {
+        let frame = uniform_bytes(&FrameContext::new(&rig.viewer, time));
+        let frame_bytes = write(queue, &self.frame, &frame);
+        let mut stats = match &mut self.path {
             Path::Indirect(p) => p.prepare(queue, rig, &resolved),
             Path::Classic(p) => p.prepare(queue, rig, &resolved),
-        })
+        };
+        stats.bytes_uploaded += frame_bytes;
+        Ok(stats)
     }
 
     /// Records every display into `targets[i]` for display `i`: its cull dispatches (GPU
@@ -208,9 +218,10 @@ impl Renderer {
         device: &wgpu::Device,
         queue: &wgpu::Queue,
         rig: &Rig,
+        time: f32,
         targets: &[DisplayTarget],
     ) -> Result<FrameStats> {
-        let prepared = self.prepare(queue, rig)?;
+        let prepared = self.prepare(queue, rig, time)?;
         let mut encoder = device.create_command_encoder(&Default::default());
         let views: Vec<_> = targets.iter().map(DisplayTarget::views).collect();
         let recorded = self.encode(&mut encoder, &views, None)?;
@@ -262,14 +273,19 @@ impl Renderer {
     }
 }
 
-/// A uniform buffer for one [`DisplayContext`].
-fn context_buffer(device: &wgpu::Device) -> wgpu::Buffer {
+/// A uniform buffer for one `T`.
+fn uniform_buffer<T: encase::ShaderType>(device: &wgpu::Device, label: &str) -> wgpu::Buffer {
     device.create_buffer(&wgpu::BufferDescriptor {
-        label: Some("stereocull.display_context"),
-        size: <DisplayContext as encase::ShaderType>::min_size().get(),
+        label: Some(label),
+        size: T::min_size().get(),
         usage: wgpu::BufferUsages::UNIFORM | wgpu::BufferUsages::COPY_DST,
         mapped_at_creation: false,
     })
+}
+
+/// A uniform buffer for one [`DisplayContext`].
+fn context_buffer(device: &wgpu::Device) -> wgpu::Buffer {
+    uniform_buffer::<DisplayContext>(device, "stereocull.display_context")
 }
 
 /// The display contexts of a frame, `instances_per_object[i]` for display `i`.

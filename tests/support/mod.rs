@@ -17,7 +17,7 @@ use stereocull::readback::read_rgba8;
 use stereocull::records::CullLayout;
 use stereocull::renderer::{Renderer, RendererOptions};
 use stereocull::rig::Rig;
-use stereocull::scene::{Instance, Scene};
+use stereocull::scene::{Animation, Instance, Scene};
 use stereocull::shapes;
 
 /// A headless device with every optional feature the adapter has. Never skips: no
@@ -63,6 +63,7 @@ pub fn cubes(instances: &[(Vec3, u32)], meshes: u32) -> Scene {
             world_from_local: Affine3A::from_translation(p),
             mesh,
             color: Vec4::ONE,
+            animation: Animation::NONE,
         })
         .collect();
     s
@@ -73,16 +74,27 @@ pub fn reference_culls(scene: &Scene, rig: &Rig) -> Vec<CullOutput> {
     cpu::cull_many(&CullLayout::new(scene), &rig.cull_jobs().unwrap())
 }
 
-/// One frame of `scene` seen by `rig`, every display read back.
+/// One frame of `scene` seen by `rig` at time 0, every display read back.
 pub fn render(
     gpu: &Gpu,
     scene: &Scene,
     rig: &Rig,
     options: RendererOptions,
 ) -> stereocull::Result<Vec<RgbaImage>> {
+    render_at(gpu, scene, rig, options, 0.0)
+}
+
+/// [`render`] at `time` seconds (animated instances move with it).
+pub fn render_at(
+    gpu: &Gpu,
+    scene: &Scene,
+    rig: &Rig,
+    options: RendererOptions,
+    time: f32,
+) -> stereocull::Result<Vec<RgbaImage>> {
     let mut renderer = Renderer::new(&gpu.device, scene, rig, options)?;
     let targets = renderer.create_targets(&gpu.device);
-    renderer.submit_frame(&gpu.device, &gpu.queue, rig, &targets)?;
+    renderer.submit_frame(&gpu.device, &gpu.queue, rig, time, &targets)?;
     targets
         .iter()
         .map(|t| read_rgba8(&gpu.device, &gpu.queue, &t.color))

@@ -5,7 +5,7 @@
 
 use glam::{Affine3A, Quat, Vec3, Vec4};
 use serde_json::json;
-use stereocull::scene::{Instance, Scene};
+use stereocull::scene::{Animation, Instance, Scene};
 use stereocull::shapes::{self, Shape};
 
 const CUBE: u32 = 0;
@@ -30,6 +30,7 @@ pub fn room() -> Scene {
             world_from_local: Affine3A::from_scale_rotation_translation(scale, rotation, at),
             mesh,
             color: Vec4::new(rgb[0], rgb[1], rgb[2], 1.0),
+            animation: Animation::NONE,
         });
     };
     let q = Quat::IDENTITY;

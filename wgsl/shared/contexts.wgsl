@@ -1,4 +1,4 @@
-// The chapter's Listing 1.3 display and eye contexts. Mirrored by src/contexts.rs (encase); the test
+// The chapter's Listing 1.3 frame, display and eye contexts. Mirrored by src/contexts.rs (encase); the test
 // `contexts_match_wgsl` compares the two layouts member by member.
 // Names read like the math: view_from_world is the chapter's mLocation,
 // clip_from_view its mProjection, and the *_inverse twins are the other direction.
@@ -28,4 +28,11 @@ struct DisplayContext {
     // Instances drawn per visible object (the cull contract's V): 2 for instanced
     // stereo (instance_index >> 1 the object, & 1 the eye), else 1.
     instances_per_object: u32,
+}
+
+// Once per frame: the viewer (not any eye) and the time in seconds.
+struct FrameContext {
+    viewer_position: vec3<f32>,
+    time: f32,
+    viewer_direction: vec3<f32>,
 }

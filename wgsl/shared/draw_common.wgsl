@@ -14,13 +14,24 @@ fn world_normal(rows: array<vec4<f32>, 3>, n: vec3<f32>) -> vec3<f32> {
     return sign(dot(m[0], cross(m[1], m[2]))) * (cofactor * n);
 }
 
-// Transforms visible slot `slot` for eye `eye`; `double_wide` remaps x into that eye's
-// half of a 2W-wide target.
+const PI: f32 = 3.14159265358979;
+
+// Rotation by `angle` radians about +Y (the instance's spin, in its local space).
+fn spin(angle: f32) -> mat3x3<f32> {
+    let c = cos(angle);
+    let s = sin(angle);
+    return mat3x3(vec3(c, 0.0, -s), vec3(0.0, 1.0, 0.0), vec3(s, 0.0, c));
+}
+
+// Transforms visible slot `slot` for eye `eye`, animated by the frame's time;
+// `double_wide` remaps x into that eye's half of a 2W-wide target.
 fn vertex(v: VertexInput, slot: u32, eye: u32, double_wide: bool) -> VertexOutput {
     let inst = instances[visible[slot]];
-    let local = vec4(v.position, 1.0);
+    let spun = spin(inst.spin * frame.time);
+    let local = vec4(spun * v.position, 1.0);
     let rows = inst.world_from_local;
-    let world = vec3(dot(rows[0], local), dot(rows[1], local), dot(rows[2], local));
+    var world = vec3(dot(rows[0], local), dot(rows[1], local), dot(rows[2], local));
+    world.y += inst.bob * sin(PI * frame.time);
     let e = display.eye[eye];
     var clip = e.clip_from_view * (e.view_from_world * vec4(world, 1.0));
 
@@ -33,7 +44,7 @@ fn vertex(v: VertexInput, slot: u32, eye: u32, double_wide: bool) -> VertexOutpu
     }
     out.position = clip;
     out.world_position = world;
-    out.normal = world_normal(rows, v.normal);
+    out.normal = world_normal(rows, spun * v.normal);
     out.color = unpack4x8unorm(inst.color);
     out.eye = eye;
     return out;

@@ -7,7 +7,10 @@ struct InstanceRecord {
     // RGBA8 unorm (unpack4x8unorm), linear.
     color: u32,
     mesh: u32,
-    reserved: vec2<u32>,
+    // Animation from the frame's time: radians per second about local +Y, and meters
+    // of bob along world +Y (see vertex() in draw_common.wgsl).
+    spin: f32,
+    bob: f32,
 }
 
 struct MeshRecord {
