@@ -87,7 +87,12 @@ pub const CULL_BINDINGS: [Binding; 11] = [
 
 /// Every draw pipeline's bindings.
 pub const DRAW_BINDINGS: [Binding; 4] = [
-    binding("frame", Access::Uniform, "FrameContext", wgpu::ShaderStages::VERTEX),
+    binding(
+        "frame",
+        Access::Uniform,
+        "FrameContext",
+        wgpu::ShaderStages::VERTEX,
+    ),
     binding(
         "display",
         Access::Uniform,

@@ -9,7 +9,7 @@ use stereocull::device::Gpu;
 use stereocull::frustum::Fov;
 use stereocull::renderer::{CullMode, RendererOptions, StereoMode};
 use stereocull::rig::{Mount, Rig};
-use stereocull::scene::Scene;
+use stereocull::scene::{Animation, Scene};
 use stereocull::scene_spec;
 use support::{Tolerance, assert_images_match, gpu_with};
 
@@ -274,4 +274,51 @@ fn the_gl_backend_draws_the_vulkan_image() {
             assert_mode_matches(&gl, &scene, &rig, mode, &reference, EDGES, &label);
         }
     }
+}
+
+/// An instance animated on the GPU (spin and bob from the frame context's time) draws
+/// where a still instance posed on the CPU at that time draws: same pixels within the
+/// edge tolerance (sin and cos are the GPU's there, glam's here). At time 0 the pose
+/// differs, so the comparison sees the motion.
+#[test]
+fn an_animated_instance_draws_where_its_pose_at_that_time_does() {
+    let gpu = gpu_with(wgpu::Features::all());
+    let rig = sized("hmd");
+    let mut animated = scene_spec::load("procedural:1:8:3").unwrap();
+    let motion = Animation {
+        spin: 1.3,
+        bob: 0.4,
+    };
+    {
+        let inst = &mut animated.instances[0];
+        inst.mesh = 4; // a box with three different sides: no spin symmetry
+        inst.world_from_local = glam::Affine3A::from_scale_rotation_translation(
+            Vec3::splat(0.8),
+            glam::Quat::from_rotation_x(0.4),
+            Vec3::new(0.2, 1.3, -1.0),
+        );
+        inst.animation = motion;
+    }
+    let t = 0.7;
+    let mut posed = animated.clone();
+    let inst = &mut posed.instances[0];
+    let lift =
+        glam::Affine3A::from_translation(Vec3::Y * motion.bob * (std::f32::consts::PI * t).sin());
+    let spin = glam::Affine3A::from_rotation_y(motion.spin * t);
+    inst.world_from_local = lift * inst.world_from_local * spin;
+    inst.animation = Animation::NONE;
+    let options = RendererOptions::default();
+    let moving = support::render_at(&gpu, &animated, &rig, options, t).unwrap();
+    let still = support::render_at(&gpu, &posed, &rig, options, t).unwrap();
+    assert_images_match("animated-at-t", &moving[0], &still[0], EDGES);
+    let at_zero = support::render_at(&gpu, &animated, &rig, options, 0.0).unwrap();
+    let moved = at_zero[0]
+        .pixels()
+        .zip(still[0].pixels())
+        .filter(|(a, b)| a != b)
+        .count();
+    assert!(
+        moved > 200,
+        "the pose at t = {t} should differ from t = 0: {moved} px"
+    );
 }

@@ -297,3 +297,52 @@ fn spheres_at(points: &[DVec3], radius: f32) -> Scene {
         .collect();
     scene
 }
+
+/// Culling stays conservative for animated instances: every vertex of every pose (any
+/// time) lies inside the world sphere the culler tests, for random shapes, transforms,
+/// spins and bobs (fixed seed).
+#[test]
+fn animated_instances_stay_inside_their_culling_sphere() {
+    let mut rng = rand_pcg::Pcg64Mcg::seed_from_u64(21);
+    let mut scene = procedural::scene(300, 12, 5);
+    // A mesh off its local origin orbits the spin axis instead of turning in place.
+    let mut off_center = stereocull::shapes::family(4);
+    for v in &mut off_center.vertices {
+        v.position = (Vec3::from(v.position) + Vec3::new(1.5, 0.3, -0.8)).into();
+    }
+    let orbiting = scene.add_mesh("off-center", &off_center.vertices, &off_center.indices);
+    for (k, inst) in scene.instances.iter_mut().enumerate() {
+        inst.animation = stereocull::scene::Animation {
+            spin: rng.random_range(-6.0..6.0),
+            bob: rng.random_range(-2.0..2.0),
+        };
+        if k % 2 == 0 {
+            inst.mesh = orbiting;
+        }
+    }
+    let mut checked = 0;
+    for inst in &scene.instances {
+        let sphere = scene.world_sphere(inst);
+        let mesh = &scene.meshes[inst.mesh as usize];
+        let range = mesh.first_index as usize..(mesh.first_index + mesh.index_count) as usize;
+        for _ in 0..20 {
+            let t: f32 = rng.random_range(0.0..100.0);
+            let a = inst.animation;
+            let lift = Vec3::Y * a.bob * (std::f32::consts::PI * t).sin();
+            let pose = Affine3A::from_translation(lift)
+                * inst.world_from_local
+                * Affine3A::from_rotation_y(a.spin * t);
+            for &i in &scene.indices[range.clone()] {
+                let v = scene.vertices[mesh.base_vertex as usize + i as usize];
+                let p = pose.transform_point3(Vec3::from(v.position));
+                let outside = p.distance(sphere.xyz()) - sphere.w;
+                assert!(
+                    outside <= 0.0,
+                    "{p} is {outside} m outside {sphere} at t = {t}"
+                );
+                checked += 1;
+            }
+        }
+    }
+    assert!(checked > 100_000, "{checked} vertices");
+}

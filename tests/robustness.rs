@@ -133,6 +133,16 @@ fn non_finite_transforms_are_dropped_and_counted_and_the_rest_kept_in_order() {
 }
 
 #[test]
+fn non_finite_animation_is_dropped_like_a_non_finite_transform() {
+    let mut scene = procedural::scene(4, 2, 3);
+    scene.instances[1].animation.spin = f32::NAN;
+    scene.instances[2].animation.bob = f32::INFINITY;
+    let kept = [scene.instances[0], scene.instances[3]];
+    assert_eq!(scene.drop_non_finite_instances(), 2);
+    assert_eq!(scene.instances, kept);
+}
+
+#[test]
 fn zero_scale_instances_cull_and_draw_without_nan() {
     let mut scene = procedural::scene(20, 2, 3);
     scene.instances[0].world_from_local = Affine3A::from_scale(Vec3::ZERO);

@@ -6,8 +6,8 @@ use clap::Args;
 use indicatif::{ProgressBar, ProgressStyle};
 use serde::Serialize;
 
-use super::{FRAME_SECONDS, SceneArgs};
 use super::render::Session;
+use super::{FRAME_SECONDS, SceneArgs};
 use crate::error::Result;
 use crate::profiling::percentile;
 use crate::renderer::{CullMode, StereoMode};

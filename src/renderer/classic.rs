@@ -74,7 +74,12 @@ impl ClassicPath {
                         let own = (options.mode == StereoMode::MultiCamera).then(visible_list);
                         let list = own.as_ref().unwrap_or(&visible);
                         EyeState {
-                            bind_group: drawer.bind_group(device, [frame, &context], &draw_scene, list),
+                            bind_group: drawer.bind_group(
+                                device,
+                                [frame, &context],
+                                &draw_scene,
+                                list,
+                            ),
                             context,
                             visible: own,
                         }
