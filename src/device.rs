@@ -5,10 +5,11 @@ use std::sync::{Arc, Mutex};
 
 use wgpu::Features;
 
+use crate::draw::DEPTH_FORMAT;
 use crate::error::{Error, Result};
 
 /// Optional features the pipeline uses when present, with what it does without them.
-pub const OPTIONAL_FEATURES: [(Features, &str, &str); 7] = [
+pub const OPTIONAL_FEATURES: [(Features, &str, &str); 9] = [
     (
         Features::MULTI_DRAW_INDIRECT_COUNT,
         "multi_draw_indirect_count",
@@ -30,6 +31,16 @@ pub const OPTIONAL_FEATURES: [(Features, &str, &str); 7] = [
         "the multiview mode is unavailable (instanced draws both eyes anyway)",
     ),
     (
+        Features::TEXTURE_ADAPTER_SPECIFIC_FORMAT_FEATURES,
+        "texture_adapter_specific_format_features",
+        "MSAA at 1x and 4x only (WebGPU's guarantee), not the adapter's other counts",
+    ),
+    (
+        Features::MULTISAMPLE_ARRAY,
+        "multisample_array",
+        "no MSAA in the multiview mode (it needs multisampled two-layer targets)",
+    ),
+    (
         Features::TIMESTAMP_QUERY,
         "timestamp_query",
         "CPU timings only",
@@ -45,6 +56,23 @@ pub const OPTIONAL_FEATURES: [(Features, &str, &str); 7] = [
         "no vertex-invocation counts",
     ),
 ];
+
+/// Sample counts WebGPU guarantees for rendering `color_format` with the depth format
+/// (what every device has without `TEXTURE_ADAPTER_SPECIFIC_FORMAT_FEATURES`).
+pub fn guaranteed_sample_counts(features: Features, color_format: wgpu::TextureFormat) -> Vec<u32> {
+    let color = color_format.guaranteed_format_features(features).flags;
+    let depth = DEPTH_FORMAT.guaranteed_format_features(features).flags;
+    (color & depth).supported_sample_counts()
+}
+
+/// `1, 4`: counts for messages.
+pub fn list_counts(counts: &[u32]) -> String {
+    counts
+        .iter()
+        .map(u32::to_string)
+        .collect::<Vec<_>>()
+        .join(", ")
+}
 
 /// How much of the stereo pipeline a device runs as designed.
 #[derive(Clone, Copy, Debug, PartialEq, Eq)]
@@ -190,6 +218,18 @@ impl Gpu {
             hub.command_buffers,
         ];
         Some(kept.iter().map(|r| r.num_allocated).sum())
+    }
+
+    /// MSAA sample counts this device can render `color_format` (and depth) at: the
+    /// adapter's when the device has `TEXTURE_ADAPTER_SPECIFIC_FORMAT_FEATURES`, else
+    /// WebGPU's guarantee.
+    pub fn sample_counts(&self, color_format: wgpu::TextureFormat) -> Vec<u32> {
+        let features = self.device.features();
+        if !features.contains(Features::TEXTURE_ADAPTER_SPECIFIC_FORMAT_FEATURES) {
+            return guaranteed_sample_counts(features, color_format);
+        }
+        let flags = |f| self.adapter.get_texture_format_features(f).flags;
+        (flags(color_format) & flags(DEPTH_FORMAT)).supported_sample_counts()
     }
 
     pub fn indirect_validation(&self) -> bool {

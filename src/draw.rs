@@ -92,10 +92,11 @@ pub struct Drawer {
 }
 
 impl Drawer {
-    /// Builds the pipelines for the given variants.
+    /// Builds the pipelines for the given variants, rendering `color_format` at
+    /// `sample_count` samples per pixel.
     pub fn new(
         device: &wgpu::Device,
-        color_format: wgpu::TextureFormat,
+        (color_format, sample_count): (wgpu::TextureFormat, u32),
         keys: &[DrawKey],
     ) -> Drawer {
         let layout = bind_group_layout(device, "stereocull.draw", &DRAW_BINDINGS);
@@ -106,7 +107,10 @@ impl Drawer {
         });
         let pipelines = keys
             .iter()
-            .map(|&key| (key, pipeline(device, &pipeline_layout, key, color_format)))
+            .map(|&key| {
+                let target = (color_format, sample_count);
+                (key, pipeline(device, &pipeline_layout, key, target))
+            })
             .collect();
         Drawer {
             layout,
@@ -157,11 +161,21 @@ impl Drawer {
     }
 }
 
-/// Opens a render pass on `color` and `depth`, clearing them or keeping what earlier
-/// passes drew; `multiview` renders both layers of two-layer targets.
+/// What a draw pass renders into.
+#[derive(Clone, Copy)]
+pub struct Attachments<'a> {
+    pub color: &'a wgpu::TextureView,
+    pub depth: &'a wgpu::TextureView,
+    /// Where a multisampled `color` is resolved at the end of the pass.
+    pub resolve: Option<&'a wgpu::TextureView>,
+}
+
+/// Opens a render pass on `target`, clearing it or keeping what earlier passes drew
+/// (multisampled color is kept too, then resolved again); `multiview` renders both
+/// layers of two-layer targets.
 pub fn begin_pass<'e>(
     encoder: &'e mut wgpu::CommandEncoder,
-    (color, depth): (&wgpu::TextureView, &wgpu::TextureView),
+    target: Attachments,
     clear: bool,
     multiview: bool,
     timestamp_writes: Option<wgpu::RenderPassTimestampWrites>,
@@ -174,16 +188,16 @@ pub fn begin_pass<'e>(
     encoder.begin_render_pass(&wgpu::RenderPassDescriptor {
         label: Some("stereocull.draw"),
         color_attachments: &[Some(wgpu::RenderPassColorAttachment {
-            view: color,
+            view: target.color,
             depth_slice: None,
-            resolve_target: None,
+            resolve_target: target.resolve,
             ops: wgpu::Operations {
                 load: color_load,
                 store: wgpu::StoreOp::Store,
             },
         })],
         depth_stencil_attachment: Some(wgpu::RenderPassDepthStencilAttachment {
-            view: depth,
+            view: target.depth,
             depth_ops: Some(wgpu::Operations {
                 load: depth_load,
                 store: wgpu::StoreOp::Store,
@@ -211,7 +225,7 @@ fn pipeline(
     device: &wgpu::Device,
     layout: &wgpu::PipelineLayout,
     key: DrawKey,
-    color_format: wgpu::TextureFormat,
+    (color_format, sample_count): (wgpu::TextureFormat, u32),
 ) -> wgpu::RenderPipeline {
     let label = key.label();
     let module = device.create_shader_module(wgpu::ShaderModuleDescriptor {
@@ -240,7 +254,10 @@ fn pipeline(
             stencil: Default::default(),
             bias: Default::default(),
         }),
-        multisample: Default::default(),
+        multisample: wgpu::MultisampleState {
+            count: sample_count,
+            ..Default::default()
+        },
         fragment: Some(wgpu::FragmentState {
             module: &module,
             entry_point: Some("fs_main"),

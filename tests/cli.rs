@@ -46,7 +46,7 @@ fn info_on_gl_names_the_fallback_tier_and_its_costs() {
     assert!(text.contains("(Gl, "), "{text}");
     assert!(text.contains("\ntier: gpu-driven with fallbacks"), "{text}");
     assert!(
-        text.contains("multi_draw_indirect_count    no  (costs: "),
+        text.contains(&format!("{:40} no  (costs: ", "multi_draw_indirect_count")),
         "{text}"
     );
 }
@@ -265,6 +265,30 @@ fn a_successful_render_prints_no_error_line() {
     assert!(out.status.success(), "{stderr}");
     let said = format!("{}{stderr}", String::from_utf8_lossy(&out.stdout));
     assert!(!said.to_lowercase().contains("error"), "{said}");
+}
+
+#[test]
+fn render_takes_msaa_and_names_the_counts_it_lacks() {
+    let dir = tempfile::tempdir().unwrap();
+    let args = ["render", "--width", "32", "--height", "24", "--out"];
+    let out = stereocull(&[&args[..], &[dir.path().to_str().unwrap(), "--msaa", "4"]].concat());
+    assert!(
+        out.status.success(),
+        "{}",
+        String::from_utf8_lossy(&out.stderr)
+    );
+    assert_eq!(
+        image::image_dimensions(dir.path().join("hmd.png")).unwrap(),
+        (64, 24)
+    );
+    let out = stereocull(&[&args[..], &[dir.path().to_str().unwrap(), "--msaa", "3"]].concat());
+    let err = String::from_utf8_lossy(&out.stderr);
+    assert!(!out.status.success());
+    assert_eq!(err.lines().count(), 1, "{err}");
+    assert!(
+        err.contains("--msaa 3") && err.contains("1, 4"),
+        "assumes lavapipe: {err}"
+    );
 }
 
 #[test]

@@ -18,22 +18,16 @@ const W: u32 = 240;
 const H: u32 = 200;
 
 fn render(gpu: &Gpu, scene: &Scene, rig: &Rig, cull: CullMode) -> Vec<RgbaImage> {
-    render_mode(gpu, scene, rig, cull, StereoMode::Instanced)
+    support::render(gpu, scene, rig, options(cull, StereoMode::Instanced, 1)).unwrap()
 }
 
-fn render_mode(
-    gpu: &Gpu,
-    scene: &Scene,
-    rig: &Rig,
-    cull: CullMode,
-    mode: StereoMode,
-) -> Vec<RgbaImage> {
-    let options = RendererOptions {
+fn options(cull: CullMode, mode: StereoMode, sample_count: u32) -> RendererOptions {
+    RendererOptions {
         cull,
         mode,
+        sample_count,
         ..Default::default()
-    };
-    support::render(gpu, scene, rig, options).unwrap()
+    }
 }
 
 fn sized(preset: &str) -> Rig {
@@ -74,16 +68,31 @@ const MULTIVIEW: Tolerance = Tolerance {
 
 #[test]
 fn each_half_equals_that_eye_rendered_alone() {
+    assert_halves_are_single_eyes(&["hmd", "cave", "hmd-peripheral"], 1);
+}
+
+/// MSAA keeps the seam exact: no sample of one eye lands in the other half, so each
+/// half still equals that eye rendered alone (at the same sample count).
+#[test]
+fn each_half_equals_that_eye_rendered_alone_under_msaa() {
+    assert_halves_are_single_eyes(&["hmd", "cave"], 4);
+}
+
+fn assert_halves_are_single_eyes(presets: &[&str], samples: u32) {
     let gpu = gpu_with(wgpu::Features::all());
     let scene = scene_spec::load("default").unwrap();
-    for preset in ["hmd", "cave", "hmd-peripheral"] {
+    let draw = |rig: &Rig| {
+        let options = options(CullMode::Gpu, StereoMode::Instanced, samples);
+        support::render(&gpu, &scene, rig, options).unwrap()
+    };
+    for preset in presets {
         let rig = sized(preset);
-        let stereo = render(&gpu, &scene, &rig, CullMode::Gpu);
+        let stereo = draw(&rig);
         for (d, display) in rig.displays.iter().enumerate().filter(|(_, d)| d.stereo) {
             for e in 0..2 {
-                let alone = render(&gpu, &scene, &single_eye(&rig, d, e), CullMode::Gpu).remove(0);
+                let alone = draw(&single_eye(&rig, d, e)).remove(0);
                 let actual = half(&stereo[d], e as u32);
-                let name = format!("half-{preset}-{}-eye{e}", display.name);
+                let name = format!("half-{preset}-{}-eye{e}-msaa{samples}", display.name);
                 assert_images_match(&name, &actual, &alone, EDGES);
             }
         }
@@ -114,8 +123,17 @@ fn leak_rig() -> (Scene, Rig) {
 }
 
 fn assert_no_leak(gpu: &Gpu, label: &str) {
+    for samples in [1, 4] {
+        assert_no_leak_at(gpu, &format!("{label}-msaa{samples}"), samples);
+    }
+}
+
+fn assert_no_leak_at(gpu: &Gpu, label: &str, samples: u32) {
     let (scene, rig) = leak_rig();
-    let image = render(gpu, &scene, &rig, CullMode::Gpu).remove(0);
+    let options = options(CullMode::Gpu, StereoMode::Instanced, samples);
+    let image = support::render(gpu, &scene, &rig, options)
+        .unwrap()
+        .remove(0);
     let clear = *image.get_pixel(2 * W - 1, 0);
     let left_drawn = half(&image, 0).pixels().filter(|p| **p != clear).count();
     assert!(
@@ -209,9 +227,8 @@ fn a_near_object_sits_further_right_in_the_left_eye() {
 /// in the log and the failure images.
 fn assert_mode_matches(
     gpu: &Gpu,
-    scene: &Scene,
-    rig: &Rig,
-    mode: StereoMode,
+    (scene, rig): (&Scene, &Rig),
+    (mode, samples): (StereoMode, u32),
     reference: &[RgbaImage],
     tolerance: Tolerance,
     label: &str,
@@ -221,7 +238,7 @@ fn assert_mode_matches(
     } else {
         CullMode::Gpu
     };
-    let images = render_mode(gpu, scene, rig, cull, mode);
+    let images = support::render(gpu, scene, rig, options(cull, mode, samples)).unwrap();
     for (d, (actual, want)) in images.iter().zip(reference).enumerate() {
         let name = format!("{label}-{d}-{}", mode.name());
         assert_images_match(&name, actual, want, tolerance);
@@ -242,7 +259,8 @@ fn every_stereo_mode_agrees_with_instanced() {
                 EDGES
             };
             let label = format!("mode-{preset}");
-            assert_mode_matches(&gpu, &scene, &rig, mode, &reference, tolerance, &label);
+            let case = (&scene, &rig);
+            assert_mode_matches(&gpu, case, (mode, 1), &reference, tolerance, &label);
         }
     }
 }
@@ -271,7 +289,7 @@ fn the_gl_backend_draws_the_vulkan_image() {
             .filter(|m| *m != StereoMode::Multiview);
         for mode in modes {
             let label = format!("gl-{preset}");
-            assert_mode_matches(&gl, &scene, &rig, mode, &reference, EDGES, &label);
+            assert_mode_matches(&gl, (&scene, &rig), (mode, 1), &reference, EDGES, &label);
         }
     }
 }
@@ -320,5 +338,55 @@ fn an_animated_instance_draws_where_its_pose_at_that_time_does() {
     assert!(
         moved > 200,
         "the pose at t = {t} should differ from t = 0: {moved} px"
+    );
+}
+
+/// Under 4x MSAA every stereo mode still draws the `instanced` image on stereo and mono
+/// displays (multiview on multisampled two-layer targets, multi-pass resolving after
+/// each eye's pass), and the image is antialiased: it differs from the 1x image only
+/// along edges.
+#[test]
+fn every_stereo_mode_agrees_with_instanced_under_msaa() {
+    let gpu = gpu_with(wgpu::Features::all());
+    let scene = scene_spec::load("default").unwrap();
+    for preset in ["hmd", "hmd-peripheral"] {
+        assert_modes_agree_under_msaa(&gpu, &scene, &sized(preset), preset);
+    }
+}
+
+/// Every mode against `instanced` at 4x on `rig`, and 4x against 1x on display 0.
+fn assert_modes_agree_under_msaa(gpu: &Gpu, scene: &Scene, rig: &Rig, label: &str) {
+    let draw = |mode, samples| {
+        let cull = if mode == StereoMode::Instanced {
+            CullMode::Gpu
+        } else {
+            CullMode::Cpu
+        };
+        support::render(gpu, scene, rig, options(cull, mode, samples)).unwrap()
+    };
+    let reference = draw(StereoMode::Instanced, 4);
+    for mode in StereoMode::ALL {
+        let tolerance = if mode == StereoMode::Multiview {
+            MULTIVIEW
+        } else {
+            EDGES
+        };
+        let name = format!("msaa-{label}");
+        assert_mode_matches(gpu, (scene, rig), (mode, 4), &reference, tolerance, &name);
+    }
+    let aliased = draw(StereoMode::Instanced, 1).remove(0);
+    let edges = reference[0]
+        .pixels()
+        .zip(aliased.pixels())
+        .filter(|(a, b)| a != b)
+        .count();
+    let share = edges as f64 / (aliased.width() * aliased.height()) as f64;
+    eprintln!(
+        "4x MSAA changes {edges} pixels ({:.2} %) of the 1x image",
+        100.0 * share
+    );
+    assert!(
+        edges > 500 && share < 0.15,
+        "{edges} pixels changed by MSAA"
     );
 }

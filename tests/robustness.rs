@@ -92,6 +92,47 @@ fn without_multiview_that_mode_is_unavailable_with_a_clear_error() {
     assert!(msg.contains("multiview is unavailable"), "{msg}");
 }
 
+/// MSAA counts: without adapter-specific format features only WebGPU's 1x and 4x exist,
+/// and the error names them; multiview MSAA needs multisampled arrays; a count the
+/// adapter lacks is a typed error even where the renderer cannot know the adapter.
+#[test]
+fn unsupported_msaa_is_a_clear_error() {
+    let msaa = |gpu: &Gpu, mode, sample_count| {
+        let options = RendererOptions {
+            mode,
+            sample_count,
+            ..Default::default()
+        };
+        let scene = scene_spec::load("default").unwrap();
+        Renderer::new(&gpu.device, &scene, &rig(), options).err()
+    };
+    let webgpu = gpu_without(wgpu::Features::TEXTURE_ADAPTER_SPECIFIC_FORMAT_FEATURES);
+    assert_eq!(
+        webgpu.sample_counts(RendererOptions::default().color_format),
+        [1, 4]
+    );
+    let msg = msaa(&webgpu, StereoMode::Instanced, 8)
+        .expect("8x accepted")
+        .to_string();
+    assert!(msg.contains("8x MSAA") && msg.contains("has 1, 4"), "{msg}");
+    assert!(msaa(&webgpu, StereoMode::Instanced, 4).is_none());
+    let flat = gpu_without(wgpu::Features::MULTISAMPLE_ARRAY);
+    let msg = msaa(&flat, StereoMode::Multiview, 4)
+        .expect("accepted")
+        .to_string();
+    assert!(msg.contains("MULTISAMPLE_ARRAY"), "{msg}");
+    let full = gpu_without(wgpu::Features::empty());
+    let lacking = [2, 8, 16].into_iter().find(|n| {
+        !full
+            .sample_counts(RendererOptions::default().color_format)
+            .contains(n)
+    });
+    if let Some(n) = lacking {
+        let err = msaa(&full, StereoMode::Instanced, n).expect("a count the adapter lacks");
+        assert!(matches!(err, Error::Wgpu(_)), "{n}x: {err}");
+    }
+}
+
 #[test]
 fn without_timestamps_there_is_no_gpu_timer() {
     let gpu = gpu_without(wgpu::Features::TIMESTAMP_QUERY);

@@ -137,9 +137,9 @@ fn info() -> Result<()> {
     println!("tier: {}", Tier::of(features).name());
     for (feature, name, without) in OPTIONAL_FEATURES {
         if features.contains(feature) {
-            println!("  {name:28} yes");
+            println!("  {name:40} yes");
         } else {
-            println!("  {name:28} no  (costs: {without})");
+            println!("  {name:40} no  (costs: {without})");
         }
     }
     Ok(())

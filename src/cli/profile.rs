@@ -9,7 +9,7 @@ use indicatif::{ProgressBar, ProgressStyle};
 use serde::Serialize;
 
 use super::{FRAME_SECONDS, write_json};
-use crate::device::Gpu;
+use crate::device::{Gpu, list_counts};
 use crate::error::{Error, Result};
 use crate::procedural;
 use crate::profiling::{GpuTimer, percentile, write_trace};
@@ -50,6 +50,9 @@ pub struct ProfileArgs {
     /// Built-in meshes in the procedural scenes.
     #[arg(long, default_value_t = 8)]
     pub meshes: u32,
+    /// MSAA samples per pixel (1: none).
+    #[arg(long, default_value_t = 1)]
+    pub msaa: u32,
     /// Also write a Chrome trace (chrome://tracing, Perfetto) of the last timed frame of
     /// every configuration: per display a scope, per pass (`cull`, `draw`) one inside it.
     #[arg(long)]
@@ -102,6 +105,14 @@ pub fn profile(args: &ProfileArgs) -> Result<()> {
             Ok((spec.as_str(), rig))
         })
         .collect::<Result<Vec<_>>>()?;
+    let counts = gpu.sample_counts(RendererOptions::default().color_format);
+    if !counts.contains(&args.msaa) {
+        return Err(Error::Unsupported(format!(
+            "--msaa {}: this adapter renders at {} samples per pixel",
+            args.msaa,
+            list_counts(&counts)
+        )));
+    }
     let configs = configurations(&gpu, args);
     let most_displays = rigs
         .iter()
@@ -207,6 +218,7 @@ fn measure(
     let options = RendererOptions {
         cull,
         mode,
+        sample_count: args.msaa,
         ..Default::default()
     };
     let mut renderer = Renderer::new(&gpu.device, scene, rig, options)?;

@@ -7,7 +7,7 @@ use clap::Parser;
 use serde::Serialize;
 
 use super::{SceneArgs, write_json};
-use crate::device::Gpu;
+use crate::device::{Gpu, list_counts};
 use crate::error::{Error, Result};
 use crate::readback::read_rgba8;
 use crate::renderer::{CullMode, DisplayTarget, FrameStats, Renderer, RendererOptions, StereoMode};
@@ -29,6 +29,9 @@ pub struct RenderArgs {
     /// The frame's time in seconds (animated instances are drawn at it).
     #[arg(long, default_value_t = 0.0)]
     pub time: f32,
+    /// MSAA samples per pixel (1: none); `stereocull info` lists the adapter's counts.
+    #[arg(long, default_value_t = 1)]
+    pub msaa: u32,
 }
 
 /// Everything a command needs to draw frames.
@@ -41,15 +44,29 @@ pub struct Session {
 }
 
 impl Session {
-    pub fn open(args: &SceneArgs, cull: CullMode, mode: StereoMode) -> Result<Session> {
+    /// Loads the rig and scene and opens the device, then the renderer with `cull`,
+    /// `mode` and `msaa` samples per pixel (checked against the adapter's counts).
+    pub fn open(
+        args: &SceneArgs,
+        (cull, mode, msaa): (CullMode, StereoMode, u32),
+    ) -> Result<Session> {
         let rig = args.load_rig()?;
         let scene = scene_spec::load(&args.scene)?;
         let gpu = Gpu::headless()?;
         let options = RendererOptions {
             cull,
             mode,
+            sample_count: msaa,
             ..Default::default()
         };
+        let counts = gpu.sample_counts(options.color_format);
+        if !counts.contains(&msaa) {
+            return Err(Error::Unsupported(format!(
+                "--msaa {msaa}: this adapter renders {:?} at {} samples per pixel",
+                options.color_format,
+                list_counts(&counts)
+            )));
+        }
         let renderer = Renderer::new(&gpu.device, &scene, &rig, options)?;
         let targets = renderer.create_targets(&gpu.device);
         Ok(Session {
@@ -87,7 +104,7 @@ struct DisplayStats {
 }
 
 pub fn render(args: &RenderArgs) -> Result<()> {
-    let mut session = Session::open(&args.scene, args.cull, args.mode)?;
+    let mut session = Session::open(&args.scene, (args.cull, args.mode, args.msaa))?;
     let (stats, cpu_ms) = session.frame(args.time)?;
     let start = Instant::now();
     session.gpu.wait()?;

@@ -22,6 +22,9 @@ pub struct StressArgs {
     pub cull: CullMode,
     #[arg(long, value_enum, default_value = "instanced")]
     pub mode: StereoMode,
+    /// MSAA samples per pixel (1: none).
+    #[arg(long, default_value_t = 1)]
+    pub msaa: u32,
     /// Print per-frame and summary figures as one JSON object instead of text.
     #[arg(long)]
     pub json: bool,
@@ -90,7 +93,7 @@ impl MemorySample {
 }
 
 pub fn stress(args: &StressArgs) -> Result<()> {
-    let mut session = Session::open(&args.scene, args.cull, args.mode)?;
+    let mut session = Session::open(&args.scene, (args.cull, args.mode, args.msaa))?;
     let bar = if args.json {
         ProgressBar::hidden()
     } else {

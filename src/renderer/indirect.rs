@@ -79,7 +79,7 @@ impl IndirectPath {
                 (false, _) => DrawKey::new(1, clip),
             })
             .collect();
-        let drawer = Drawer::new(device, options.color_format, &keys);
+        let drawer = Drawer::new(device, (options.color_format, options.sample_count), &keys);
         let draw_scene = DrawScene::new(device, scene);
         let (instances, meshes) = (scene.instances.len() as u32, scene.meshes.len() as u32);
         let displays = keys

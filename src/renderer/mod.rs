@@ -65,6 +65,10 @@ pub enum CullMode {
 #[derive(Clone, Copy, Debug)]
 pub struct RendererOptions {
     pub color_format: wgpu::TextureFormat,
+    /// MSAA samples per pixel of the color and depth attachments (1: none). Every device
+    /// has 1 and 4; 2, 8 and 16 where the adapter has them and the device was opened with
+    /// `TEXTURE_ADAPTER_SPECIFIC_FORMAT_FEATURES` ([`crate::device::sample_counts`]).
+    pub sample_count: u32,
     pub cull: CullMode,
     pub mode: StereoMode,
 }
@@ -73,6 +77,7 @@ impl Default for RendererOptions {
     fn default() -> Self {
         RendererOptions {
             color_format: wgpu::TextureFormat::Rgba8UnormSrgb,
+            sample_count: 1,
             cull: CullMode::Gpu,
             mode: StereoMode::Instanced,
         }
@@ -134,6 +139,7 @@ impl Renderer {
                 eye_size: (d.resolution[0], d.resolution[1]),
                 views: d.views(),
                 layered: options.mode == StereoMode::Multiview && d.stereo,
+                samples: options.sample_count,
             })
             .collect();
         Ok(Renderer {
@@ -318,7 +324,7 @@ fn draw_pass(
     let writes = scope
         .as_ref()
         .and_then(|q| q.render_pass_timestamp_writes());
-    let mut pass = begin_pass(encoder, target.pair(), clear, multiview, writes);
+    let mut pass = begin_pass(encoder, target.attachments(), clear, multiview, writes);
     let counting = timer
         .as_deref_mut()
         .is_some_and(|t| t.begin_statistics(&mut pass));
@@ -370,10 +376,39 @@ fn write(queue: &wgpu::Queue, buffer: &wgpu::Buffer, bytes: &[u8]) -> u64 {
     bytes.len() as u64
 }
 
+/// MSAA the device can do for the options' color format and the depth format. Without
+/// `TEXTURE_ADAPTER_SPECIFIC_FORMAT_FEATURES` that is WebGPU's guarantee (1 and 4);
+/// with it the adapter decides, which only the adapter knows: wgpu then checks.
+fn check_sample_count(features: wgpu::Features, options: RendererOptions) -> Result<()> {
+    let n = options.sample_count;
+    let specific = features.contains(wgpu::Features::TEXTURE_ADAPTER_SPECIFIC_FORMAT_FEATURES);
+    let counts = match specific {
+        true => vec![1, 2, 4, 8, 16],
+        false => crate::device::guaranteed_sample_counts(features, options.color_format),
+    };
+    if !counts.contains(&n) {
+        return Err(Error::Unsupported(format!(
+            "{n}x MSAA is not available for {:?}; this device has {}",
+            options.color_format,
+            crate::device::list_counts(&counts)
+        )));
+    }
+    if n > 1
+        && options.mode == StereoMode::Multiview
+        && !features.contains(wgpu::Features::MULTISAMPLE_ARRAY)
+    {
+        return Err(Error::Unsupported(
+            "multiview with MSAA needs MULTISAMPLE_ARRAY (multisampled two-layer targets), which this device lacks".into(),
+        ));
+    }
+    Ok(())
+}
+
 /// What a mode cannot do without, said before anything is built.
 fn check_device(device: &wgpu::Device, scene: &Scene, options: RendererOptions) -> Result<()> {
     let features = device.features();
     let mode = options.mode.name();
+    check_sample_count(features, options)?;
     if options.mode.per_instance() && options.cull == CullMode::Gpu {
         return Err(Error::Unsupported(format!(
             "{mode} records a draw call per visible instance, so it culls on the CPU: use --cull cpu"

@@ -1,36 +1,54 @@
 //! Display targets: the color and depth views each display renders into, and textures
 //! of the right shape for callers that have none.
 
-use crate::draw::DEPTH_FORMAT;
+use crate::draw::{Attachments, DEPTH_FORMAT};
 
-/// The color and depth views one display renders into: `2W x H` for stereo, `W x H`
-/// for mono, where `W x H` is the display's per-eye resolution; in multiview a stereo
-/// display's views are `W x H` with two array layers (left, right).
+/// The views one display renders into: `2W x H` for stereo, `W x H` for mono, where
+/// `W x H` is the display's per-eye resolution; in multiview a stereo display's views are
+/// `W x H` with two array layers (left, right). With MSAA, `color` and `depth` have the
+/// renderer's sample count and `resolve` is the single-sampled view that receives the
+/// image; without, `resolve` is `None`.
 #[derive(Clone, Copy)]
 pub struct TargetViews<'a> {
     pub color: &'a wgpu::TextureView,
     pub depth: &'a wgpu::TextureView,
+    pub resolve: Option<&'a wgpu::TextureView>,
 }
 
 impl<'a> TargetViews<'a> {
-    pub(crate) fn pair(&self) -> (&'a wgpu::TextureView, &'a wgpu::TextureView) {
-        (self.color, self.depth)
+    pub(crate) fn attachments(&self) -> Attachments<'a> {
+        Attachments {
+            color: self.color,
+            depth: self.depth,
+            resolve: self.resolve,
+        }
     }
 }
 
 /// Textures made by `Renderer::create_targets` for callers that have none.
 pub struct DisplayTarget {
+    /// The image: single-sampled, `COPY_SRC` (the resolve target under MSAA).
     pub color: wgpu::Texture,
     pub depth: wgpu::Texture,
     color_view: wgpu::TextureView,
     depth_view: wgpu::TextureView,
+    /// The multisampled color attachment, under MSAA.
+    multisampled: Option<wgpu::TextureView>,
 }
 
 impl DisplayTarget {
     pub fn views(&self) -> TargetViews<'_> {
-        TargetViews {
-            color: &self.color_view,
-            depth: &self.depth_view,
+        match &self.multisampled {
+            Some(samples) => TargetViews {
+                color: samples,
+                depth: &self.depth_view,
+                resolve: Some(&self.color_view),
+            },
+            None => TargetViews {
+                color: &self.color_view,
+                depth: &self.depth_view,
+                resolve: None,
+            },
         }
     }
 }
@@ -44,6 +62,8 @@ pub struct TargetShape {
     pub views: u32,
     /// Stereo as two array layers (multiview) instead of two halves side by side.
     pub layered: bool,
+    /// Samples per pixel of the color and depth attachments.
+    pub samples: u32,
 }
 
 impl TargetShape {
@@ -63,30 +83,37 @@ impl TargetShape {
         }
     }
 
-    /// Color (`RENDER_ATTACHMENT | COPY_SRC`) and depth textures of this shape.
+    /// Color (`RENDER_ATTACHMENT | COPY_SRC`) and depth textures of this shape, and the
+    /// multisampled color under MSAA.
     pub fn create(self, device: &wgpu::Device, color_format: wgpu::TextureFormat) -> DisplayTarget {
-        let texture = |label, format, usage| {
+        let texture = |label, format, usage, sample_count| {
             device.create_texture(&wgpu::TextureDescriptor {
                 label: Some(label),
                 size: self.extent(),
                 mip_level_count: 1,
-                sample_count: 1,
+                sample_count,
                 dimension: wgpu::TextureDimension::D2,
                 format,
                 usage,
                 view_formats: &[],
             })
         };
+        let attachment = wgpu::TextureUsages::RENDER_ATTACHMENT;
         let color = texture(
             "stereocull.color",
             color_format,
-            wgpu::TextureUsages::RENDER_ATTACHMENT | wgpu::TextureUsages::COPY_SRC,
+            attachment | wgpu::TextureUsages::COPY_SRC,
+            1,
         );
-        let depth = texture(
-            "stereocull.depth",
-            DEPTH_FORMAT,
-            wgpu::TextureUsages::RENDER_ATTACHMENT,
-        );
+        let depth = texture("stereocull.depth", DEPTH_FORMAT, attachment, self.samples);
+        let multisampled = (self.samples > 1).then(|| {
+            texture(
+                "stereocull.color_msaa",
+                color_format,
+                attachment,
+                self.samples,
+            )
+        });
         let dimension = match self.layered {
             true => wgpu::TextureViewDimension::D2Array,
             false => wgpu::TextureViewDimension::D2,
@@ -100,6 +127,7 @@ impl TargetShape {
         DisplayTarget {
             color_view: view(&color),
             depth_view: view(&depth),
+            multisampled: multisampled.as_ref().map(view),
             color,
             depth,
         }
