@@ -57,12 +57,14 @@ pub const OPTIONAL_FEATURES: [(Features, &str, &str); 9] = [
     ),
 ];
 
-/// Sample counts WebGPU guarantees for rendering `color_format` with the depth format
-/// (what every device has without `TEXTURE_ADAPTER_SPECIFIC_FORMAT_FEATURES`).
-pub fn guaranteed_sample_counts(features: Features, color_format: wgpu::TextureFormat) -> Vec<u32> {
-    let color = color_format.guaranteed_format_features(features).flags;
-    let depth = DEPTH_FORMAT.guaranteed_format_features(features).flags;
-    (color & depth).supported_sample_counts()
+/// Sample counts WebGPU guarantees for rendering `color` with `depth` (what every
+/// device has without `TEXTURE_ADAPTER_SPECIFIC_FORMAT_FEATURES`).
+pub fn guaranteed_sample_counts(
+    features: Features,
+    (color, depth): (wgpu::TextureFormat, wgpu::TextureFormat),
+) -> Vec<u32> {
+    let flags = |f: wgpu::TextureFormat| f.guaranteed_format_features(features).flags;
+    (flags(color) & flags(depth)).supported_sample_counts()
 }
 
 /// `1, 4`: counts for messages.
@@ -220,13 +222,14 @@ impl Gpu {
         Some(kept.iter().map(|r| r.num_allocated).sum())
     }
 
-    /// MSAA sample counts this device can render `color_format` (and depth) at: the
+    /// MSAA sample counts this device can render `color_format` (with the renderer's own
+    /// depth format) at: the
     /// adapter's when the device has `TEXTURE_ADAPTER_SPECIFIC_FORMAT_FEATURES`, else
     /// WebGPU's guarantee.
     pub fn sample_counts(&self, color_format: wgpu::TextureFormat) -> Vec<u32> {
         let features = self.device.features();
         if !features.contains(Features::TEXTURE_ADAPTER_SPECIFIC_FORMAT_FEATURES) {
-            return guaranteed_sample_counts(features, color_format);
+            return guaranteed_sample_counts(features, (color_format, DEPTH_FORMAT));
         }
         let flags = |f| self.adapter.get_texture_format_features(f).flags;
         (flags(color_format) & flags(DEPTH_FORMAT)).supported_sample_counts()

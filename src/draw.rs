@@ -12,7 +12,16 @@ use crate::records::{InstanceRecord, instance_records};
 use crate::scene::{Scene, Vertex};
 use crate::shaders::{DRAW_BINDINGS, DrawKey, bind_group, bind_group_layout};
 
+/// The depth format of the renderer's own targets, unless the options name another.
 pub const DEPTH_FORMAT: wgpu::TextureFormat = wgpu::TextureFormat::Depth32Float;
+
+/// The attachment formats and sample count the draw pipelines are built for.
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+pub struct TargetFormat {
+    pub color: wgpu::TextureFormat,
+    pub depth: wgpu::TextureFormat,
+    pub samples: u32,
+}
 /// Dark enough that any lit object stands out in tests.
 pub const CLEAR_COLOR: wgpu::Color = wgpu::Color {
     r: 0.02,
@@ -92,13 +101,8 @@ pub struct Drawer {
 }
 
 impl Drawer {
-    /// Builds the pipelines for the given variants, rendering `color_format` at
-    /// `sample_count` samples per pixel.
-    pub fn new(
-        device: &wgpu::Device,
-        (color_format, sample_count): (wgpu::TextureFormat, u32),
-        keys: &[DrawKey],
-    ) -> Drawer {
+    /// Builds the pipelines for the given variants, rendering into `target`.
+    pub fn new(device: &wgpu::Device, target: TargetFormat, keys: &[DrawKey]) -> Drawer {
         let layout = bind_group_layout(device, "stereocull.draw", &DRAW_BINDINGS);
         let pipeline_layout = device.create_pipeline_layout(&wgpu::PipelineLayoutDescriptor {
             label: Some("stereocull.draw"),
@@ -107,10 +111,7 @@ impl Drawer {
         });
         let pipelines = keys
             .iter()
-            .map(|&key| {
-                let target = (color_format, sample_count);
-                (key, pipeline(device, &pipeline_layout, key, target))
-            })
+            .map(|&key| (key, pipeline(device, &pipeline_layout, key, target)))
             .collect();
         Drawer {
             layout,
@@ -225,7 +226,7 @@ fn pipeline(
     device: &wgpu::Device,
     layout: &wgpu::PipelineLayout,
     key: DrawKey,
-    (color_format, sample_count): (wgpu::TextureFormat, u32),
+    target: TargetFormat,
 ) -> wgpu::RenderPipeline {
     let label = key.label();
     let module = device.create_shader_module(wgpu::ShaderModuleDescriptor {
@@ -248,21 +249,21 @@ fn pipeline(
         // No back-face culling: glTF double-sided materials and open shapes.
         primitive: wgpu::PrimitiveState::default(),
         depth_stencil: Some(wgpu::DepthStencilState {
-            format: DEPTH_FORMAT,
+            format: target.depth,
             depth_write_enabled: Some(true),
             depth_compare: Some(wgpu::CompareFunction::Less),
             stencil: Default::default(),
             bias: Default::default(),
         }),
         multisample: wgpu::MultisampleState {
-            count: sample_count,
+            count: target.samples,
             ..Default::default()
         },
         fragment: Some(wgpu::FragmentState {
             module: &module,
             entry_point: Some("fs_main"),
             compilation_options: Default::default(),
-            targets: &[Some(color_format.into())],
+            targets: &[Some(target.color.into())],
         }),
         multiview_mask: if key.multiview {
             NonZeroU32::new(0b11)

@@ -42,6 +42,10 @@ pub enum Error {
     #[error("{0}")]
     Limits(String),
 
+    /// A display index past the renderer's displays.
+    #[error("display {index} does not exist: the renderer has {displays} displays")]
+    NoSuchDisplay { index: usize, displays: usize },
+
     /// `encode` was given a different number of targets than the renderer has displays.
     #[error("{targets} targets for {displays} displays: pass one target per display")]
     TargetCount { targets: usize, displays: usize },

@@ -58,11 +58,7 @@ impl ClassicPath {
         options: RendererOptions,
     ) -> ClassicPath {
         let clip = DrawFeatures::of(device).clip_distances;
-        let drawer = Drawer::new(
-            device,
-            (options.color_format, options.sample_count),
-            &[DrawKey::new(1, clip)],
-        );
+        let drawer = Drawer::new(device, options.target_format(), &[DrawKey::new(1, clip)]);
         let draw_scene = DrawScene::new(device, scene);
         let n = scene.instances.len() as u64;
         let visible_list = || visible_buffer(device, n);
@@ -174,36 +170,51 @@ impl ClassicPath {
         timer: &mut Option<&mut GpuTimer>,
     ) -> FrameStats {
         let mut stats = FrameStats::default();
-        for ((state, target), culls) in self.displays.iter().zip(targets).zip(&self.culls) {
+        for (i, (state, target)) in self.displays.iter().zip(targets).enumerate() {
             let display = open_display(timer, &state.name, encoder);
-            stats.draw_calls += match (self.mode, state.eyes.as_slice()) {
-                (_, []) => draw_pass(encoder, target, true, false, timer, &display, |pass| {
-                    self.bind(pass, &state.bind_group);
-                    instance_draws(&culls[0]).map(|d| draw(pass, d)).count() as u32
-                }),
-                (StereoMode::SinglePass, eyes) => {
-                    draw_pass(encoder, target, true, false, timer, &display, |pass| {
-                        self.bind(pass, &eyes[0].bind_group);
-                        single_pass_cadence(pass, &culls[0], eyes, state.eye_size)
+            stats.draw_calls += match (self.mode, state.eyes.len()) {
+                (StereoMode::MultiCamera | StereoMode::MultiPass, 2) => (0..2)
+                    .map(|e| {
+                        draw_pass(encoder, target, e == 0, false, timer, &display, |pass| {
+                            self.draw_eye(pass, i, e)
+                        })
                     })
-                }
-                (_, eyes) => {
-                    let mut calls = 0;
-                    for (e, eye) in eyes.iter().enumerate() {
-                        let out = &culls[e.min(culls.len() - 1)];
-                        calls +=
-                            draw_pass(encoder, target, e == 0, false, timer, &display, |pass| {
-                                self.bind(pass, &eye.bind_group);
-                                set_eye_viewport(pass, e as u32, state.eye_size);
-                                instance_draws(out).map(|d| draw(pass, d)).count() as u32
-                            });
-                    }
-                    calls
-                }
+                    .sum(),
+                _ => draw_pass(encoder, target, true, false, timer, &display, |pass| {
+                    self.draw(pass, i)
+                }),
             };
             close(timer, encoder, display);
         }
         stats
+    }
+
+    /// Display `index` into one pass: a mono display's instances; a stereo display's in
+    /// the single-pass cadence, or (multi-pass, multi-camera) each eye in turn in its
+    /// half. Returns the draw calls.
+    pub(super) fn draw(&self, pass: &mut wgpu::RenderPass, index: usize) -> u32 {
+        let (state, culls) = (&self.displays[index], &self.culls[index]);
+        match (self.mode, state.eyes.as_slice()) {
+            (_, []) => {
+                self.bind(pass, &state.bind_group);
+                instance_draws(&culls[0]).map(|d| draw(pass, d)).count() as u32
+            }
+            (StereoMode::SinglePass, eyes) => {
+                self.bind(pass, &eyes[0].bind_group);
+                single_pass_cadence(pass, &culls[0], eyes, state.eye_size)
+            }
+            (_, eyes) => (0..eyes.len()).map(|e| self.draw_eye(pass, index, e)).sum(),
+        }
+    }
+
+    /// Eye `e` of stereo display `index` into its half, from its cull (multi-camera) or
+    /// the display's.
+    fn draw_eye(&self, pass: &mut wgpu::RenderPass, index: usize, e: usize) -> u32 {
+        let (state, culls) = (&self.displays[index], &self.culls[index]);
+        self.bind(pass, &state.eyes[e].bind_group);
+        set_eye_viewport(pass, e as u32, state.eye_size);
+        let out = &culls[e.min(culls.len() - 1)];
+        instance_draws(out).map(|d| draw(pass, d)).count() as u32
     }
 
     fn bind(&self, pass: &mut wgpu::RenderPass, bind_group: &wgpu::BindGroup) {

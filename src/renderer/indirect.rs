@@ -22,6 +22,7 @@ use crate::records::{CullLayout, DrawArgs, uniform_bytes};
 use crate::rig::{ResolvedRig, Rig};
 use crate::scene::Scene;
 use crate::shaders::DrawKey;
+use wgpu_profiler::GpuProfilerQuery;
 
 /// Where the visible lists and draws come from.
 enum Culling {
@@ -79,7 +80,7 @@ impl IndirectPath {
                 (false, _) => DrawKey::new(1, clip),
             })
             .collect();
-        let drawer = Drawer::new(device, (options.color_format, options.sample_count), &keys);
+        let drawer = Drawer::new(device, options.target_format(), &keys);
         let draw_scene = DrawScene::new(device, scene);
         let (instances, meshes) = (scene.instances.len() as u32, scene.meshes.len() as u32);
         let displays = keys
@@ -166,36 +167,60 @@ impl IndirectPath {
         timer: &mut Option<&mut GpuTimer>,
     ) -> FrameStats {
         let mut stats = FrameStats::default();
-        for (state, target) in self.displays.iter().zip(targets) {
+        for (i, (state, target)) in self.displays.iter().zip(targets).enumerate() {
             let display = open_display(timer, &state.name, encoder);
-            if let (Culling::Gpu { culler, scene }, Some(bind_group)) =
-                (&self.culling, &state.cull_bind_group)
-            {
-                let scope = open_pass(timer, "cull", &display, encoder);
-                let writes = scope
-                    .as_ref()
-                    .and_then(|q| q.compute_pass_timestamp_writes());
-                let mut pass = encoder.begin_compute_pass(&wgpu::ComputePassDescriptor {
-                    label: Some("stereocull.cull"),
-                    timestamp_writes: writes,
-                });
-                culler.encode(&mut pass, scene, bind_group);
-                drop(pass);
-                close(timer, encoder, scope);
-                stats.dispatches += GpuCuller::DISPATCHES_PER_DISPLAY;
-            }
+            stats.dispatches += self.encode_cull(encoder, i, timer, &display);
             let multiview = state.key.multiview;
             stats.draw_calls +=
                 draw_pass(encoder, target, true, multiview, timer, &display, |pass| {
-                    let (key, bind_group) = (state.key, &state.draw_bind_group);
-                    self.drawer.bind(pass, key, &self.draw_scene, bind_group);
-                    self.drawer
-                        .draw_indirect(pass, self.mesh_count, &state.cull);
-                    1
+                    self.draw(pass, i)
                 });
             close(timer, encoder, display);
         }
         stats
+    }
+
+    /// Display `index`'s cull dispatches, timed inside `display` (none when culling on
+    /// the CPU: `prepare` uploaded the results). Returns the dispatches recorded.
+    pub(super) fn encode_cull(
+        &self,
+        encoder: &mut wgpu::CommandEncoder,
+        index: usize,
+        timer: &mut Option<&mut GpuTimer>,
+        display: &Option<GpuProfilerQuery>,
+    ) -> u32 {
+        let state = &self.displays[index];
+        let (Culling::Gpu { culler, scene }, Some(bind_group)) =
+            (&self.culling, &state.cull_bind_group)
+        else {
+            return 0;
+        };
+        let scope = open_pass(timer, "cull", display, encoder);
+        let writes = scope
+            .as_ref()
+            .and_then(|q| q.compute_pass_timestamp_writes());
+        let mut pass = encoder.begin_compute_pass(&wgpu::ComputePassDescriptor {
+            label: Some("stereocull.cull"),
+            timestamp_writes: writes,
+        });
+        culler.encode(&mut pass, scene, bind_group);
+        drop(pass);
+        close(timer, encoder, scope);
+        GpuCuller::DISPATCHES_PER_DISPLAY
+    }
+
+    pub(super) fn display_name(&self, index: usize) -> &str {
+        &self.displays[index].name
+    }
+
+    /// Display `index`'s one multi-draw-indirect call into `pass`.
+    pub(super) fn draw(&self, pass: &mut wgpu::RenderPass, index: usize) -> u32 {
+        let state = &self.displays[index];
+        self.drawer
+            .bind(pass, state.key, &self.draw_scene, &state.draw_bind_group);
+        self.drawer
+            .draw_indirect(pass, self.mesh_count, &state.cull);
+        1
     }
 
     /// Display `index`'s cull buffers, read back after the frame was submitted.

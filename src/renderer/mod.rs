@@ -34,7 +34,7 @@ use crate::contexts::{DisplayContext, FrameContext};
 use crate::cull::CullOutput;
 use crate::cull::gpu::CullScene;
 use crate::draw::DrawScene;
-use crate::draw::begin_pass;
+use crate::draw::{DEPTH_FORMAT, TargetFormat, begin_pass};
 use crate::error::{Error, Result};
 pub use crate::modes::StereoMode;
 use crate::profiling::GpuTimer;
@@ -67,10 +67,23 @@ pub struct RendererOptions {
     pub color_format: wgpu::TextureFormat,
     /// MSAA samples per pixel of the color and depth attachments (1: none). Every device
     /// has 1 and 4; 2, 8 and 16 where the adapter has them and the device was opened with
-    /// `TEXTURE_ADAPTER_SPECIFIC_FORMAT_FEATURES` ([`crate::device::sample_counts`]).
+    /// `TEXTURE_ADAPTER_SPECIFIC_FORMAT_FEATURES` (`device::Gpu::sample_counts`).
     pub sample_count: u32,
+    /// The depth attachment's format (the caller's, when drawing into its passes).
+    pub depth_format: wgpu::TextureFormat,
     pub cull: CullMode,
     pub mode: StereoMode,
+}
+
+impl RendererOptions {
+    /// The attachments the draw pipelines are built for.
+    pub fn target_format(&self) -> TargetFormat {
+        TargetFormat {
+            color: self.color_format,
+            depth: self.depth_format,
+            samples: self.sample_count,
+        }
+    }
 }
 
 impl Default for RendererOptions {
@@ -78,6 +91,7 @@ impl Default for RendererOptions {
         RendererOptions {
             color_format: wgpu::TextureFormat::Rgba8UnormSrgb,
             sample_count: 1,
+            depth_format: DEPTH_FORMAT,
             cull: CullMode::Gpu,
             mode: StereoMode::Instanced,
         }
@@ -139,7 +153,6 @@ impl Renderer {
                 eye_size: (d.resolution[0], d.resolution[1]),
                 views: d.views(),
                 layered: options.mode == StereoMode::Multiview && d.stereo,
-                samples: options.sample_count,
             })
             .collect();
         Ok(Renderer {
@@ -217,6 +230,48 @@ impl Renderer {
         Ok(stats)
     }
 
+    /// For drawing into the caller's own render passes: records this frame's culls
+    /// (GPU culling: each display's dispatches, timed as `cull` inside a scope per
+    /// display; CPU culling: nothing, `prepare` uploaded them). Then, in passes the
+    /// caller begins, [`Renderer::draw_display`] for each display.
+    pub fn encode_culls(
+        &self,
+        encoder: &mut wgpu::CommandEncoder,
+        mut timer: Option<&mut GpuTimer>,
+    ) -> FrameStats {
+        let mut stats = FrameStats::default();
+        if let Path::Indirect(p) = &self.path {
+            for i in 0..self.shapes.len() {
+                let display = open_display(&timer, p.display_name(i), encoder);
+                stats.dispatches += p.encode_cull(encoder, i, &mut timer, &display);
+                close(&timer, encoder, display);
+            }
+        }
+        if let Some(t) = timer {
+            t.resolve(encoder);
+        }
+        stats
+    }
+
+    /// Draws display `index` into a render pass the caller began, after
+    /// [`Renderer::encode_culls`] was recorded for this frame. The pass must render into
+    /// that display's target shape ([`TargetViews`]) with the formats and sample count of
+    /// [`RendererOptions`], and with `multiview_mask` `0b11` for a stereo display in
+    /// multiview. Its load and store operations, and whatever the caller draws before and
+    /// after (sky, UI, transparent geometry), are the caller's. Returns the draw calls.
+    pub fn draw_display(&self, pass: &mut wgpu::RenderPass, index: usize) -> Result<u32> {
+        if index >= self.shapes.len() {
+            return Err(Error::NoSuchDisplay {
+                index,
+                displays: self.shapes.len(),
+            });
+        }
+        Ok(match &self.path {
+            Path::Indirect(p) => p.draw(pass, index),
+            Path::Classic(p) => p.draw(pass, index),
+        })
+    }
+
     /// Headless convenience: [`Renderer::prepare`], [`Renderer::encode`] into a new encoder
     /// and submit, rendering into `targets` (from [`Renderer::create_targets`]).
     pub fn submit_frame(
@@ -245,7 +300,7 @@ impl Renderer {
     pub fn create_targets(&self, device: &wgpu::Device) -> Vec<DisplayTarget> {
         self.shapes
             .iter()
-            .map(|s| s.create(device, self.options.color_format))
+            .map(|s| s.create(device, self.options.target_format()))
             .collect()
     }
 
@@ -384,7 +439,10 @@ fn check_sample_count(features: wgpu::Features, options: RendererOptions) -> Res
     let specific = features.contains(wgpu::Features::TEXTURE_ADAPTER_SPECIFIC_FORMAT_FEATURES);
     let counts = match specific {
         true => vec![1, 2, 4, 8, 16],
-        false => crate::device::guaranteed_sample_counts(features, options.color_format),
+        false => crate::device::guaranteed_sample_counts(
+            features,
+            (options.color_format, options.depth_format),
+        ),
     };
     if !counts.contains(&n) {
         return Err(Error::Unsupported(format!(

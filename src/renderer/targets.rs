@@ -1,7 +1,7 @@
 //! Display targets: the color and depth views each display renders into, and textures
 //! of the right shape for callers that have none.
 
-use crate::draw::{Attachments, DEPTH_FORMAT};
+use crate::draw::{Attachments, TargetFormat};
 
 /// The views one display renders into: `2W x H` for stereo, `W x H` for mono, where
 /// `W x H` is the display's per-eye resolution; in multiview a stereo display's views are
@@ -62,8 +62,6 @@ pub struct TargetShape {
     pub views: u32,
     /// Stereo as two array layers (multiview) instead of two halves side by side.
     pub layered: bool,
-    /// Samples per pixel of the color and depth attachments.
-    pub samples: u32,
 }
 
 impl TargetShape {
@@ -83,9 +81,9 @@ impl TargetShape {
         }
     }
 
-    /// Color (`RENDER_ATTACHMENT | COPY_SRC`) and depth textures of this shape, and the
-    /// multisampled color under MSAA.
-    pub fn create(self, device: &wgpu::Device, color_format: wgpu::TextureFormat) -> DisplayTarget {
+    /// Color (`RENDER_ATTACHMENT | COPY_SRC`) and depth textures of this shape in
+    /// `format`, and the multisampled color under MSAA.
+    pub fn create(self, device: &wgpu::Device, format: TargetFormat) -> DisplayTarget {
         let texture = |label, format, usage, sample_count| {
             device.create_texture(&wgpu::TextureDescriptor {
                 label: Some(label),
@@ -101,17 +99,17 @@ impl TargetShape {
         let attachment = wgpu::TextureUsages::RENDER_ATTACHMENT;
         let color = texture(
             "stereocull.color",
-            color_format,
+            format.color,
             attachment | wgpu::TextureUsages::COPY_SRC,
             1,
         );
-        let depth = texture("stereocull.depth", DEPTH_FORMAT, attachment, self.samples);
-        let multisampled = (self.samples > 1).then(|| {
+        let depth = texture("stereocull.depth", format.depth, attachment, format.samples);
+        let multisampled = (format.samples > 1).then(|| {
             texture(
                 "stereocull.color_msaa",
-                color_format,
+                format.color,
                 attachment,
-                self.samples,
+                format.samples,
             )
         });
         let dimension = match self.layered {

@@ -1,0 +1,240 @@
+//! Drawing into the caller's render passes, as an engine does: the culls recorded into
+//! its encoder, each display drawn into a pass it began, with its own passes before
+//! (a sky) and after (a UI panel) on the same targets.
+
+mod support;
+
+use std::num::NonZeroU32;
+
+use image::RgbaImage;
+use stereocull::device::Gpu;
+use stereocull::draw::CLEAR_COLOR;
+use stereocull::readback::read_rgba8;
+use stereocull::renderer::{CullMode, DisplayTarget, Renderer, RendererOptions, StereoMode};
+use stereocull::rig::Rig;
+use stereocull::scene::Scene;
+use stereocull::scene_spec;
+use support::{Tolerance, assert_images_match, gpu, sized};
+
+const SKY: wgpu::Color = wgpu::Color {
+    r: 0.2,
+    g: 0.4,
+    b: 0.9,
+    a: 1.0,
+};
+
+/// A pass on display `index`'s target: color cleared to `clear` or loaded, depth cleared.
+fn begin<'e>(
+    encoder: &'e mut wgpu::CommandEncoder,
+    target: &DisplayTarget,
+    clear: Option<wgpu::Color>,
+    multiview: bool,
+) -> wgpu::RenderPass<'e> {
+    let views = target.views();
+    encoder.begin_render_pass(&wgpu::RenderPassDescriptor {
+        label: Some("engine"),
+        color_attachments: &[Some(wgpu::RenderPassColorAttachment {
+            view: views.color,
+            depth_slice: None,
+            resolve_target: views.resolve,
+            ops: wgpu::Operations {
+                load: clear.map_or(wgpu::LoadOp::Load, wgpu::LoadOp::Clear),
+                store: wgpu::StoreOp::Store,
+            },
+        })],
+        depth_stencil_attachment: Some(wgpu::RenderPassDepthStencilAttachment {
+            view: views.depth,
+            depth_ops: Some(wgpu::Operations {
+                load: wgpu::LoadOp::Clear(1.0),
+                store: wgpu::StoreOp::Store,
+            }),
+            stencil_ops: None,
+        }),
+        timestamp_writes: None,
+        occlusion_query_set: None,
+        multiview_mask: multiview.then(|| NonZeroU32::new(0b11)).flatten(),
+    })
+}
+
+/// One frame drawn into the caller's passes: `before` (if any) clears each target to
+/// the sky, then the display is drawn in a pass of the caller's (clearing to
+/// stereocull's clear color unless the sky is there), then `after` runs on the encoder.
+fn draw_in_engine_passes(
+    gpu: &Gpu,
+    (scene, rig): (&Scene, &Rig),
+    options: RendererOptions,
+    sky: bool,
+    after: impl Fn(&mut wgpu::CommandEncoder, &DisplayTarget),
+) -> Vec<RgbaImage> {
+    let mut renderer = Renderer::new(&gpu.device, scene, rig, options).unwrap();
+    let targets = renderer.create_targets(&gpu.device);
+    renderer.prepare(&gpu.queue, rig, 0.0).unwrap();
+    let mut encoder = gpu.device.create_command_encoder(&Default::default());
+    renderer.encode_culls(&mut encoder, None);
+    for (i, target) in targets.iter().enumerate() {
+        let multiview = options.mode == StereoMode::Multiview && rig.displays[i].stereo;
+        if sky {
+            drop(begin(&mut encoder, target, Some(SKY), multiview));
+        }
+        let clear = (!sky).then_some(CLEAR_COLOR);
+        let mut pass = begin(&mut encoder, target, clear, multiview);
+        assert!(renderer.draw_display(&mut pass, i).unwrap() > 0);
+        drop(pass);
+        after(&mut encoder, target);
+    }
+    gpu.queue.submit([encoder.finish()]);
+    targets
+        .iter()
+        .map(|t| read_rgba8(&gpu.device, &gpu.queue, &t.color).unwrap())
+        .collect()
+}
+
+/// In a pass of the caller's, every mode draws what its own `encode` draws, on stereo
+/// and mono displays (multi-pass and multi-camera draw both eyes in turn in the one
+/// pass), with and without MSAA.
+#[test]
+fn every_mode_draws_into_the_callers_pass_what_it_draws_itself() {
+    let gpu = gpu();
+    let scene = scene_spec::load("default").unwrap();
+    let rig = sized("hmd-peripheral", 96, 80);
+    for samples in [1, 4] {
+        for mode in StereoMode::ALL {
+            let cull = match mode.per_instance() {
+                true => CullMode::Cpu,
+                false => CullMode::Gpu,
+            };
+            let options = RendererOptions {
+                cull,
+                mode,
+                sample_count: samples,
+                ..Default::default()
+            };
+            let own = support::render(&gpu, &scene, &rig, options).unwrap();
+            let engine = draw_in_engine_passes(&gpu, (&scene, &rig), options, false, |_, _| {});
+            for (d, (a, b)) in engine.iter().zip(&own).enumerate() {
+                let name = format!("engine-pass-{}-{d}-msaa{samples}", mode.name());
+                assert_images_match(&name, a, b, Tolerance::EXACT);
+            }
+        }
+    }
+}
+
+/// A sky pass before and a UI panel after, on the same targets: the sky shows where
+/// nothing is drawn, the scene where it is, and the panel over both.
+#[test]
+fn engine_passes_before_and_after_share_the_targets() {
+    let gpu = gpu();
+    let scene = scene_spec::load("default").unwrap();
+    let rig = sized("hmd", 120, 100);
+    let options = RendererOptions::default();
+    let plain = support::render(&gpu, &scene, &rig, options)
+        .unwrap()
+        .remove(0);
+    let ui = UiPanel::new(&gpu.device, options.color_format);
+    let panel = (10, 10, 40, 20);
+    let framed = draw_in_engine_passes(&gpu, (&scene, &rig), options, true, |encoder, target| {
+        ui.draw(encoder, target, panel)
+    })
+    .remove(0);
+    let background = *plain.get_pixel(0, 0);
+    let sky = *framed.get_pixel(plain.width() - 1, 0);
+    assert_ne!(sky, background, "the sky pass shows");
+    let (mut scene_px, mut sky_px) = (0, 0);
+    for (x, y, p) in framed.enumerate_pixels() {
+        let in_panel =
+            (panel.0..panel.0 + panel.2).contains(&x) && (panel.1..panel.1 + panel.3).contains(&y);
+        let want = match (in_panel, *plain.get_pixel(x, y) == background) {
+            (true, _) => image::Rgba(UiPanel::COLOR_SRGB),
+            (false, true) => sky,
+            (false, false) => *plain.get_pixel(x, y),
+        };
+        assert_eq!(*p, want, "pixel ({x}, {y}), panel {in_panel}");
+        if !in_panel {
+            if want == sky {
+                sky_px += 1
+            } else {
+                scene_px += 1
+            }
+        }
+    }
+    assert!(
+        scene_px > 1000 && sky_px > 1000,
+        "scene {scene_px} px, sky {sky_px} px"
+    );
+}
+
+/// The engine's own pipeline: a solid panel, scissored to a rectangle.
+struct UiPanel {
+    pipeline: wgpu::RenderPipeline,
+}
+
+impl UiPanel {
+    /// (255, 128, 0) in sRGB: what the linear color below stores in an sRGB target.
+    const COLOR_SRGB: [u8; 4] = [255, 128, 0, 255];
+
+    fn new(device: &wgpu::Device, format: wgpu::TextureFormat) -> UiPanel {
+        let module = device.create_shader_module(wgpu::ShaderModuleDescriptor {
+            label: Some("ui"),
+            source: wgpu::ShaderSource::Wgsl(
+                "@vertex fn vs(@builtin(vertex_index) i: u32) -> @builtin(position) vec4<f32> {
+                     let p = vec2(f32(i & 1u) * 4.0 - 1.0, f32(i >> 1u) * 4.0 - 1.0);
+                     return vec4(p, 0.0, 1.0);
+                 }
+                 @fragment fn fs() -> @location(0) vec4<f32> {
+                     return vec4(1.0, 0.21586050, 0.0, 1.0);
+                 }"
+                .into(),
+            ),
+        });
+        let pipeline = device.create_render_pipeline(&wgpu::RenderPipelineDescriptor {
+            label: Some("ui"),
+            layout: None,
+            vertex: wgpu::VertexState {
+                module: &module,
+                entry_point: Some("vs"),
+                compilation_options: Default::default(),
+                buffers: &[],
+            },
+            primitive: Default::default(),
+            depth_stencil: None,
+            multisample: Default::default(),
+            fragment: Some(wgpu::FragmentState {
+                module: &module,
+                entry_point: Some("fs"),
+                compilation_options: Default::default(),
+                targets: &[Some(format.into())],
+            }),
+            multiview_mask: None,
+            cache: None,
+        });
+        UiPanel { pipeline }
+    }
+
+    fn draw(
+        &self,
+        encoder: &mut wgpu::CommandEncoder,
+        target: &DisplayTarget,
+        (x, y, w, h): (u32, u32, u32, u32),
+    ) {
+        let view = target.views().resolve.unwrap_or(target.views().color);
+        let mut pass = encoder.begin_render_pass(&wgpu::RenderPassDescriptor {
+            label: Some("ui"),
+            color_attachments: &[Some(wgpu::RenderPassColorAttachment {
+                view,
+                depth_slice: None,
+                resolve_target: None,
+                ops: wgpu::Operations {
+                    load: wgpu::LoadOp::Load,
+                    store: wgpu::StoreOp::Store,
+                },
+            })],
+            depth_stencil_attachment: None,
+            timestamp_writes: None,
+            occlusion_query_set: None,
+            multiview_mask: None,
+        });
+        pass.set_pipeline(&self.pipeline);
+        pass.set_scissor_rect(x, y, w, h);
+        pass.draw(0..3, 0..1);
+    }
+}
