@@ -22,6 +22,44 @@
 //! # Ok(()) }
 //! ```
 //!
+//! An engine that owns its passes records the culls into its encoder, then draws each
+//! display inside a pass it began, between its own passes (sky before, UI after):
+//!
+//! ```no_run
+//! # fn demo(device: &wgpu::Device, queue: &wgpu::Queue, renderer: &mut stereocull::renderer::Renderer,
+//! #         rig: &stereocull::rig::Rig, color: &wgpu::TextureView, depth: &wgpu::TextureView)
+//! #         -> stereocull::Result<()> {
+//! renderer.prepare(queue, rig, 0.0)?;
+//! let mut encoder = device.create_command_encoder(&Default::default());
+//! renderer.encode_culls(&mut encoder, None);
+//! // ... the engine's sky pass on `color` ...
+//! let mut pass = encoder.begin_render_pass(&wgpu::RenderPassDescriptor {
+//!     label: Some("engine opaque"),
+//!     color_attachments: &[Some(wgpu::RenderPassColorAttachment {
+//!         view: color, // 2W x H for a stereo display: both eyes, one draw call
+//!         depth_slice: None,
+//!         resolve_target: None,
+//!         ops: wgpu::Operations { load: wgpu::LoadOp::Load, store: wgpu::StoreOp::Store },
+//!     })],
+//!     depth_stencil_attachment: Some(wgpu::RenderPassDepthStencilAttachment {
+//!         view: depth,
+//!         depth_ops: Some(wgpu::Operations {
+//!             load: wgpu::LoadOp::Clear(1.0),
+//!             store: wgpu::StoreOp::Store,
+//!         }),
+//!         stencil_ops: None,
+//!     }),
+//!     timestamp_writes: None,
+//!     occlusion_query_set: None,
+//!     multiview_mask: None,
+//! });
+//! renderer.draw_display(&mut pass, 0)?;
+//! drop(pass);
+//! // ... the engine's transparent and UI passes ...
+//! queue.submit([encoder.finish()]);
+//! # Ok(()) }
+//! ```
+//!
 //! The path is chosen once, in [`Renderer::new`]: the GPU-driven one (`indirect.rs`:
 //! `instanced`, `multiview`; per display three cull dispatches, or the CPU culler's
 //! upload, and one multi-draw-indirect call) or the classic per-instance modes
