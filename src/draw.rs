@@ -101,6 +101,11 @@ pub struct Drawer {
 }
 
 impl Drawer {
+    /// Group 0's layout ([`crate::shaders::DRAW_BINDINGS`]).
+    pub fn layout(&self) -> &wgpu::BindGroupLayout {
+        &self.layout
+    }
+
     /// Builds the pipelines for the given variants, rendering into `target`.
     pub fn new(device: &wgpu::Device, target: TargetFormat, keys: &[DrawKey]) -> Drawer {
         let layout = bind_group_layout(device, "stereocull.draw", &DRAW_BINDINGS);
@@ -147,6 +152,15 @@ impl Drawer {
         bind_group: &wgpu::BindGroup,
     ) {
         pass.set_pipeline(&self.pipelines[&key]);
+        Drawer::bind_resources(pass, scene, bind_group);
+    }
+
+    /// The geometry and group 0 on `pass`, for whatever pipeline it has.
+    pub fn bind_resources(
+        pass: &mut wgpu::RenderPass,
+        scene: &DrawScene,
+        bind_group: &wgpu::BindGroup,
+    ) {
         pass.set_bind_group(0, bind_group, &[]);
         pass.set_vertex_buffer(0, scene.vertices.slice(..));
         pass.set_index_buffer(scene.indices.slice(..), wgpu::IndexFormat::Uint32);

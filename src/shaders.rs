@@ -12,6 +12,7 @@ const RECORDS: &str = include_str!("../wgsl/shared/records.wgsl");
 const CULL_MATH: &str = include_str!("../wgsl/shared/cull_math.wgsl");
 const DRAW_CLIP_DISTANCES: &str = include_str!("../wgsl/shared/draw_clip_distances.wgsl");
 const DRAW_NO_CLIP_DISTANCES: &str = include_str!("../wgsl/shared/draw_no_clip_distances.wgsl");
+const DECODE: &str = include_str!("../wgsl/shared/decode.wgsl");
 const DRAW_COMMON: &str = include_str!("../wgsl/shared/draw_common.wgsl");
 const DRAW: &str = include_str!("../wgsl/draw.wgsl");
 const DRAW_MULTIVIEW: &str = include_str!("../wgsl/draw_multiview.wgsl");
@@ -290,19 +291,19 @@ impl DrawKey {
             DRAW_NO_CLIP_DISTANCES
         };
         let entry = if self.multiview { DRAW_MULTIVIEW } else { DRAW };
-        let views = format!("const VIEWS: u32 = {}u;\n", self.views);
-        [
-            prelude,
-            &constants(),
-            &views,
-            CONTEXTS,
-            RECORDS,
-            &declarations(&DRAW_BINDINGS),
-            DRAW_COMMON,
-            entry,
-        ]
-        .concat()
+        [prelude, &decode_source(self.views), DRAW_COMMON, entry].concat()
     }
+}
+
+/// The stereo decode for a pipeline of the caller's own that draws the cull outputs
+/// (`Renderer::draw_display_with_own_pipeline`): the contexts and records, group 0's
+/// bindings ([`DRAW_BINDINGS`]), `const VIEWS` (`views`: 2 for one draw covering both
+/// eyes, else 1) and `decode_instance`, `decode` and their `Decoded`
+/// (`wgsl/shared/decode.wgsl`). Append entry points and compile.
+pub fn decode_source(views: u32) -> String {
+    let views = format!("const VIEWS: u32 = {views}u;\n");
+    let bindings = declarations(&DRAW_BINDINGS);
+    [&constants(), &views, CONTEXTS, RECORDS, &bindings, DECODE].concat()
 }
 
 fn constants() -> String {

@@ -238,3 +238,114 @@ impl UiPanel {
         pass.draw(0..3, 0..1);
     }
 }
+
+/// Bring your own pipeline: a pipeline written here, on stereocull's decode
+/// (`shaders::decode_source`) and group 0 layout, drawing the cull outputs with the one
+/// indirect call, gives the built-in image. Both keep the eyes apart by a fragment
+/// discard here (clip distances off), so the comparison is exact.
+#[test]
+fn a_pipeline_of_the_callers_own_draws_the_built_in_image() {
+    let gpu = support::gpu_with(wgpu::Features::all() - wgpu::Features::CLIP_DISTANCES);
+    let scene = scene_spec::load("default").unwrap();
+    let rig = sized("hmd", 120, 100);
+    let options = RendererOptions::default();
+    let built_in = support::render(&gpu, &scene, &rig, options)
+        .unwrap()
+        .remove(0);
+
+    let mut renderer = Renderer::new(&gpu.device, &scene, &rig, options).unwrap();
+    let pipeline = own_pipeline(&gpu.device, &renderer, options);
+    let targets = renderer.create_targets(&gpu.device);
+    renderer.prepare(&gpu.queue, &rig, 0.0).unwrap();
+    let mut encoder = gpu.device.create_command_encoder(&Default::default());
+    renderer.encode_culls(&mut encoder, None);
+    let mut pass = begin(&mut encoder, &targets[0], Some(CLEAR_COLOR), false);
+    pass.set_pipeline(&pipeline);
+    renderer
+        .draw_display_with_own_pipeline(&mut pass, 0)
+        .unwrap();
+    drop(pass);
+    gpu.queue.submit([encoder.finish()]);
+    let own = read_rgba8(&gpu.device, &gpu.queue, &targets[0].color).unwrap();
+    assert_images_match("own-pipeline", &own, &built_in, Tolerance::EXACT);
+    assert!(
+        own.pixels().any(|p| *p != *own.get_pixel(0, 0)),
+        "something is drawn"
+    );
+}
+
+/// The test's own stereo pipeline: stereocull's decode, then shading written here.
+fn own_pipeline(
+    device: &wgpu::Device,
+    renderer: &Renderer,
+    options: RendererOptions,
+) -> wgpu::RenderPipeline {
+    let source = stereocull::shaders::decode_source(2)
+        + "
+        struct Out {
+            @builtin(position) position: vec4<f32>,
+            @location(0) world: vec3<f32>,
+            @location(1) normal: vec3<f32>,
+            @location(2) color: vec4<f32>,
+            @location(3) @interpolate(flat) eye: u32,
+        }
+        @vertex fn vs(v: VertexInput, @builtin(instance_index) i: u32) -> Out {
+            let at = decode_instance(i, VIEWS);
+            let d = decode(v, at.x, at.y, true);
+            return Out(d.clip, d.world_position, d.world_normal, d.color, d.eye);
+        }
+        const LIGHT: vec3<f32> = vec3(0.37139068, 0.74278135, 0.55708601);
+        @fragment fn fs(in: Out) -> @location(0) vec4<f32> {
+            if ((in.position.x < display.resolution.x) != (in.eye == 0u)) {
+                discard;
+            }
+            let to_eye = normalize(display.eye[in.eye].position - in.world);
+            var n = normalize(in.normal);
+            if (dot(n, to_eye) < 0.0) {
+                n = -n;
+            }
+            let diffuse = max(dot(n, LIGHT), 0.0);
+            let specular = 0.3 * pow(max(dot(n, normalize(LIGHT + to_eye)), 0.0), 48.0);
+            return vec4(in.color.rgb * (0.25 + 0.75 * diffuse) + vec3(specular), 1.0);
+        }";
+    let module = device.create_shader_module(wgpu::ShaderModuleDescriptor {
+        label: Some("own"),
+        source: wgpu::ShaderSource::Wgsl(source.into()),
+    });
+    let layout = device.create_pipeline_layout(&wgpu::PipelineLayoutDescriptor {
+        label: Some("own"),
+        bind_group_layouts: &[renderer.bind_group_layout()],
+        immediate_size: 0,
+    });
+    device.create_render_pipeline(&wgpu::RenderPipelineDescriptor {
+        label: Some("own"),
+        layout: Some(&layout),
+        vertex: wgpu::VertexState {
+            module: &module,
+            entry_point: Some("vs"),
+            compilation_options: Default::default(),
+            buffers: &[Some(wgpu::VertexBufferLayout {
+                array_stride: size_of::<stereocull::scene::Vertex>() as u64,
+                step_mode: wgpu::VertexStepMode::Vertex,
+                attributes: &stereocull::draw::VERTEX_ATTRIBUTES,
+            })],
+        },
+        primitive: Default::default(),
+        depth_stencil: Some(wgpu::DepthStencilState {
+            format: options.depth_format,
+            depth_write_enabled: Some(true),
+            depth_compare: Some(wgpu::CompareFunction::Less),
+            stencil: Default::default(),
+            bias: Default::default(),
+        }),
+        multisample: Default::default(),
+        fragment: Some(wgpu::FragmentState {
+            module: &module,
+            entry_point: Some("fs"),
+            compilation_options: Default::default(),
+            targets: &[Some(options.color_format.into())],
+        }),
+        multiview_mask: None,
+        cache: None,
+    })
+}

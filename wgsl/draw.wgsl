@@ -5,5 +5,6 @@
 
 @vertex
 fn vs_main(v: VertexInput, @builtin(instance_index) instance_index: u32) -> VertexOutput {
-    return vertex(v, instance_index / VIEWS, instance_index % VIEWS, VIEWS == 2u);
+    let at = decode_instance(instance_index, VIEWS);
+    return vertex(v, at.x, at.y, VIEWS == 2u);
 }

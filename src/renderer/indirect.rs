@@ -213,6 +213,23 @@ impl IndirectPath {
         &self.displays[index].name
     }
 
+    /// Display `index`'s one multi-draw-indirect call into `pass`, whose pipeline the
+    /// caller set (built on [`Drawer::layout`] and the decode).
+    pub(super) fn draw_with_own_pipeline(&self, pass: &mut wgpu::RenderPass, index: usize) {
+        let state = &self.displays[index];
+        Drawer::bind_resources(pass, &self.draw_scene, &state.draw_bind_group);
+        self.drawer
+            .draw_indirect(pass, self.mesh_count, &state.cull);
+    }
+
+    pub(super) fn bind_group_layout(&self) -> &wgpu::BindGroupLayout {
+        self.drawer.layout()
+    }
+
+    pub(super) fn cull_targets(&self, index: usize) -> &CullTargets {
+        &self.displays[index].cull
+    }
+
     /// Display `index`'s one multi-draw-indirect call into `pass`.
     pub(super) fn draw(&self, pass: &mut wgpu::RenderPass, index: usize) -> u32 {
         let state = &self.displays[index];

@@ -70,7 +70,7 @@ use std::time::Duration;
 
 use crate::contexts::{DisplayContext, FrameContext};
 use crate::cull::CullOutput;
-use crate::cull::gpu::CullScene;
+use crate::cull::gpu::{CullScene, CullTargets};
 use crate::draw::DrawScene;
 use crate::draw::{DEPTH_FORMAT, TargetFormat, begin_pass};
 use crate::error::{Error, Result};
@@ -308,6 +308,50 @@ impl Renderer {
             Path::Indirect(p) => p.draw(pass, index),
             Path::Classic(p) => p.draw(pass, index),
         })
+    }
+
+    /// For an engine's own draw pipeline (the indirect modes): group 0's layout, to
+    /// build its pipeline layout on (its own bind groups from group 1), with
+    /// [`crate::shaders::decode_source`] as the shader's start. `None` in the classic
+    /// modes.
+    pub fn bind_group_layout(&self) -> Option<&wgpu::BindGroupLayout> {
+        match &self.path {
+            Path::Indirect(p) => Some(p.bind_group_layout()),
+            Path::Classic(_) => None,
+        }
+    }
+
+    /// Display `index`'s cull outputs on the GPU (the indirect modes): the visible list,
+    /// the draws and the counts, per the README's cull contract.
+    pub fn cull_buffers(&self, index: usize) -> Option<&CullTargets> {
+        match &self.path {
+            Path::Indirect(p) if index < self.shapes.len() => Some(p.cull_targets(index)),
+            _ => None,
+        }
+    }
+
+    /// Display `index`'s one multi-draw-indirect call, in a pass the caller began with a
+    /// pipeline of its own already set (layout from [`Renderer::bind_group_layout`]):
+    /// binds group 0, the vertex and index buffers, and draws. The indirect modes only.
+    pub fn draw_display_with_own_pipeline(
+        &self,
+        pass: &mut wgpu::RenderPass,
+        index: usize,
+    ) -> Result<()> {
+        match &self.path {
+            Path::Indirect(p) if index < self.shapes.len() => {
+                p.draw_with_own_pipeline(pass, index);
+                Ok(())
+            }
+            Path::Indirect(_) => Err(Error::NoSuchDisplay {
+                index,
+                displays: self.shapes.len(),
+            }),
+            Path::Classic(_) => Err(Error::Unsupported(format!(
+                "{} draws per instance; pipelines of the caller's own draw the indirect modes",
+                self.options.mode.name()
+            ))),
+        }
     }
 
     /// Headless convenience: [`Renderer::prepare`], [`Renderer::encode`] into a new encoder

@@ -1,0 +1,74 @@
+// The stereo decode, public for engines that draw the cull outputs with pipelines of
+// their own (Renderer::draw_display_with_own_pipeline): which instance and eye an
+// instance_index means, the instance's animated world transform, the eye's clip
+// position remapped into its half of a double-wide target, and the seam distance.
+// Bindings: DRAW_BINDINGS in src/shaders.rs (group 0).
+
+struct VertexInput {
+    @location(0) position: vec3<f32>,
+    @location(1) normal: vec3<f32>,
+}
+
+// Normals transform by the cofactor matrix (inverse transpose times determinant),
+// sign-corrected so that mirroring transforms keep normals outward.
+fn world_normal(rows: array<vec4<f32>, 3>, n: vec3<f32>) -> vec3<f32> {
+    let m = transpose(mat3x3(rows[0].xyz, rows[1].xyz, rows[2].xyz));
+    let cofactor = mat3x3(cross(m[1], m[2]), cross(m[2], m[0]), cross(m[0], m[1]));
+    return sign(dot(m[0], cross(m[1], m[2]))) * (cofactor * n);
+}
+
+const PI: f32 = 3.14159265358979;
+
+// Rotation by `angle` radians about +Y (the instance's spin, in its local space).
+fn spin(angle: f32) -> mat3x3<f32> {
+    let c = cos(angle);
+    let s = sin(angle);
+    return mat3x3(vec3(c, 0.0, -s), vec3(0.0, 1.0, 0.0), vec3(s, 0.0, c));
+}
+
+// (slot in the visible list, eye) of an instance_index: with `views` = 2 (one draw
+// for both eyes) instance_index >> 1 is the slot and instance_index & 1 the eye.
+fn decode_instance(instance_index: u32, views: u32) -> vec2<u32> {
+    if (views == 2u) {
+        return vec2(instance_index >> 1u, instance_index & 1u);
+    }
+    return vec2(instance_index, 0u);
+}
+
+struct Decoded {
+    // The eye's clip position; in a double-wide target already in that eye's half.
+    clip: vec4<f32>,
+    // Distance inside the eye's half (>= 0 keeps the vertex's side), for
+    // @builtin(clip_distances)[0]; 1 when not double-wide.
+    seam: f32,
+    world_position: vec3<f32>,
+    world_normal: vec3<f32>,
+    // The instance record's color, unpacked.
+    color: vec4<f32>,
+    // The instance id (its slot).
+    instance: u32,
+    eye: u32,
+}
+
+// Visible slot `slot` for eye `eye`, animated by the frame's time; `double_wide`
+// remaps x into that eye's half of a 2W-wide target.
+fn decode(v: VertexInput, slot: u32, eye: u32, double_wide: bool) -> Decoded {
+    let id = visible[slot];
+    let inst = instances[id];
+    let spun = spin(inst.spin * frame.time);
+    let local = vec4(spun * v.position, 1.0);
+    let rows = inst.world_from_local;
+    var world = vec3(dot(rows[0], local), dot(rows[1], local), dot(rows[2], local));
+    world.y += inst.bob * sin(PI * frame.time);
+    let e = display.eye[eye];
+    var clip = e.clip_from_view * (e.view_from_world * vec4(world, 1.0));
+    var seam = 1.0;
+    if (double_wide) {
+        // Exact two-viewport remap: x' = x/2 -+ w/2 lands where a W-wide viewport would.
+        let x_eye = clip.x;
+        clip.x = 0.5 * clip.x + select(0.5, -0.5, eye == 0u) * clip.w;
+        seam = select(clip.w + x_eye, clip.w - x_eye, eye == 0u);
+    }
+    let normal = world_normal(rows, spun * v.normal);
+    return Decoded(clip, seam, world, normal, unpack4x8unorm(inst.color), id, eye);
+}
