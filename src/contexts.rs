@@ -70,6 +70,9 @@ pub struct DisplayContext {
     /// multi-draw covers both eyes (`instanced` stereo), 1 for mono, for multiview
     /// (the hardware repeats each instance per view) and for the per-eye classic modes.
     pub instances_per_object: u32,
+    /// Which eye `eye[0]` is: 0, or 1 in the per-eye contexts of the classic modes
+    /// (which hold one eye in both slots), so that shaders see the true eye index.
+    pub first_eye: u32,
 }
 
 impl DisplayContext {
@@ -92,14 +95,16 @@ impl DisplayContext {
             resolution: Vec2::new(resolution[0] as f32, resolution[1] as f32),
             planes: display.combined.frustum().planes,
             instances_per_object,
+            first_eye: 0,
         }
     }
 
     /// This context narrowed to eye `e`: both eye slots hold that eye (the classic
-    /// modes bind one eye at a time).
+    /// modes bind one eye at a time), and `first_eye` says which it is.
     pub fn for_eye(&self, e: usize) -> DisplayContext {
         DisplayContext {
             eye: [self.eye[e]; 2],
+            first_eye: e as u32,
             ..*self
         }
     }

@@ -106,8 +106,14 @@ impl Drawer {
         &self.layout
     }
 
-    /// Builds the pipelines for the given variants, rendering into `target`.
-    pub fn new(device: &wgpu::Device, target: TargetFormat, keys: &[DrawKey]) -> Drawer {
+    /// Builds the pipelines for the given variants, rendering into `target`, shaded by
+    /// `material` (see [`DrawKey::source_with`]) or the built-in shading.
+    pub fn new(
+        device: &wgpu::Device,
+        target: TargetFormat,
+        keys: &[DrawKey],
+        material: Option<&str>,
+    ) -> Drawer {
         let layout = bind_group_layout(device, "stereocull.draw", &DRAW_BINDINGS);
         let pipeline_layout = device.create_pipeline_layout(&wgpu::PipelineLayoutDescriptor {
             label: Some("stereocull.draw"),
@@ -116,7 +122,13 @@ impl Drawer {
         });
         let pipelines = keys
             .iter()
-            .map(|&key| (key, pipeline(device, &pipeline_layout, key, target)))
+            .map(|&key| {
+                let source = key.source_with(material);
+                (
+                    key,
+                    pipeline(device, &pipeline_layout, (key, &source), target),
+                )
+            })
             .collect();
         Drawer {
             layout,
@@ -239,13 +251,13 @@ pub fn set_eye_viewport(pass: &mut wgpu::RenderPass, eye: u32, eye_size: (u32, u
 fn pipeline(
     device: &wgpu::Device,
     layout: &wgpu::PipelineLayout,
-    key: DrawKey,
+    (key, source): (DrawKey, &str),
     target: TargetFormat,
 ) -> wgpu::RenderPipeline {
     let label = key.label();
     let module = device.create_shader_module(wgpu::ShaderModuleDescriptor {
         label: Some(&label),
-        source: wgpu::ShaderSource::Wgsl(key.source().into()),
+        source: wgpu::ShaderSource::Wgsl(source.into()),
     });
     device.create_render_pipeline(&wgpu::RenderPipelineDescriptor {
         label: Some(&label),

@@ -284,14 +284,34 @@ impl DrawKey {
         }
     }
 
+    /// The variant's source with the built-in shading.
     pub fn source(self) -> String {
+        self.source_with(None)
+    }
+
+    /// The variant's source; `material` (WGSL defining `fn material(s: Surface) ->
+    /// vec4<f32>`, see `wgsl/shared/draw_common.wgsl`) replaces the built-in shading.
+    pub fn source_with(self, material: Option<&str>) -> String {
         let prelude = if self.clip_distances {
             DRAW_CLIP_DISTANCES
         } else {
             DRAW_NO_CLIP_DISTANCES
         };
         let entry = if self.multiview { DRAW_MULTIVIEW } else { DRAW };
-        [prelude, &decode_source(self.views), DRAW_COMMON, entry].concat()
+        let shading = match material {
+            Some(m) => format!(
+                "{m}\nfn surface_color(s: Surface) -> vec4<f32> {{ return material(s); }}\n"
+            ),
+            None => "fn surface_color(s: Surface) -> vec4<f32> { return shade(s); }\n".into(),
+        };
+        [
+            prelude,
+            &decode_source(self.views),
+            DRAW_COMMON,
+            &shading,
+            entry,
+        ]
+        .concat()
     }
 }
 

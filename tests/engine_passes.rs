@@ -349,3 +349,73 @@ fn own_pipeline(
         cache: None,
     })
 }
+
+/// The material hook: a caller's WGSL `material` compiled into every mode's pipeline.
+/// Re-implementing the built-in shading gives the built-in image; a material that
+/// paints by eye paints exactly the two halves (left red, right green).
+#[test]
+fn a_material_hook_shades_every_mode() {
+    const SAME_AS_BUILT_IN: &str = "
+        const L: vec3<f32> = vec3(0.37139068, 0.74278135, 0.55708601);
+        fn material(s: Surface) -> vec4<f32> {
+            let to_eye = normalize(display.eye[s.eye].position - s.world_position);
+            var n = normalize(s.normal);
+            if (dot(n, to_eye) < 0.0) {
+                n = -n;
+            }
+            let diffuse = max(dot(n, L), 0.0);
+            let specular = 0.3 * pow(max(dot(n, normalize(L + to_eye)), 0.0), 48.0);
+            return vec4(s.color.rgb * (0.25 + 0.75 * diffuse) + vec3(specular), 1.0);
+        }";
+    const BY_EYE: &str = "
+        fn material(s: Surface) -> vec4<f32> {
+            return select(vec4(1.0, 0.0, 0.0, 1.0), vec4(0.0, 1.0, 0.0, 1.0), s.eye == 1u);
+        }";
+    let gpu = gpu();
+    let scene = scene_spec::load("default").unwrap();
+    let rig = sized("hmd", 120, 100);
+    for mode in StereoMode::ALL {
+        let cull = match mode.per_instance() {
+            true => CullMode::Cpu,
+            false => CullMode::Gpu,
+        };
+        let with = |material| RendererOptions {
+            cull,
+            mode,
+            material,
+            ..Default::default()
+        };
+        let draw = |options| {
+            support::render(&gpu, &scene, &rig, options)
+                .unwrap()
+                .remove(0)
+        };
+        let built_in = draw(with(None));
+        let name = format!("material-{}", mode.name());
+        assert_images_match(
+            &name,
+            &draw(with(Some(SAME_AS_BUILT_IN))),
+            &built_in,
+            Tolerance::EXACT,
+        );
+        let by_eye = draw(with(Some(BY_EYE)));
+        let background = *built_in.get_pixel(0, 0);
+        let half = by_eye.width() / 2;
+        let mut painted = [0, 0];
+        for (x, y, p) in by_eye.enumerate_pixels() {
+            let eye = usize::from(x >= half);
+            let drawn = *built_in.get_pixel(x, y) != background;
+            let want = match (drawn, eye) {
+                (false, _) => background,
+                (true, 0) => image::Rgba([255, 0, 0, 255]),
+                (true, _) => image::Rgba([0, 255, 0, 255]),
+            };
+            assert_eq!(*p, want, "{name}: pixel ({x}, {y})");
+            painted[eye] += usize::from(drawn);
+        }
+        assert!(
+            painted[0] > 1000 && painted[1] > 1000,
+            "{name}: {painted:?}"
+        );
+    }
+}

@@ -174,6 +174,7 @@ fn contexts_match_wgsl() {
         resolution: Vec2::new(6.0, 6.1),
         planes: std::array::from_fn(|i| Vec4::splat(7.0 + i as f32)),
         instances_per_object: 2,
+        first_eye: 1,
     };
     let bytes = uniform_bytes(&d);
     check_uniform(
@@ -189,6 +190,7 @@ fn contexts_match_wgsl() {
             ("resolution", 6.0),
             ("planes", 7.0),
             ("instances_per_object", f32::from_bits(2)),
+            ("first_eye", f32::from_bits(1)),
         ],
     );
     // The second eye sits one EyeContext span after the first, and the last plane five

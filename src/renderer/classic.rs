@@ -58,7 +58,12 @@ impl ClassicPath {
         options: RendererOptions,
     ) -> ClassicPath {
         let clip = DrawFeatures::of(device).clip_distances;
-        let drawer = Drawer::new(device, options.target_format(), &[DrawKey::new(1, clip)]);
+        let drawer = Drawer::new(
+            device,
+            options.target_format(),
+            &[DrawKey::new(1, clip)],
+            options.material,
+        );
         let draw_scene = DrawScene::new(device, scene);
         let n = scene.instances.len() as u64;
         let visible_list = || visible_buffer(device, n);

@@ -80,7 +80,7 @@ impl IndirectPath {
                 (false, _) => DrawKey::new(1, clip),
             })
             .collect();
-        let drawer = Drawer::new(device, options.target_format(), &keys);
+        let drawer = Drawer::new(device, options.target_format(), &keys, options.material);
         let draw_scene = DrawScene::new(device, scene);
         let (instances, meshes) = (scene.instances.len() as u32, scene.meshes.len() as u32);
         let displays = keys

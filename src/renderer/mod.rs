@@ -109,6 +109,12 @@ pub struct RendererOptions {
     pub sample_count: u32,
     /// The depth attachment's format (the caller's, when drawing into its passes).
     pub depth_format: wgpu::TextureFormat,
+    /// The caller's shading, compiled into every draw pipeline (which keep the instance
+    /// decode, the eye routing and the seam): WGSL defining `fn material(s: Surface) ->
+    /// vec4<f32>`, with `Surface` (world position, normal, color, eye, instance) and the
+    /// bindings `frame` and `display` (`display.eye[s.eye]` is the eye's context) in
+    /// scope. `None`: the built-in shading.
+    pub material: Option<&'static str>,
     pub cull: CullMode,
     pub mode: StereoMode,
 }
@@ -130,6 +136,7 @@ impl Default for RendererOptions {
             color_format: wgpu::TextureFormat::Rgba8UnormSrgb,
             sample_count: 1,
             depth_format: DEPTH_FORMAT,
+            material: None,
             cull: CullMode::Gpu,
             mode: StereoMode::Instanced,
         }

@@ -28,6 +28,9 @@ struct DisplayContext {
     // Instances drawn per visible object (the cull contract's V): 2 for instanced
     // stereo (instance_index >> 1 the object, & 1 the eye), else 1.
     instances_per_object: u32,
+    // Which eye eye[0] is: 1 in the classic modes' right-eye contexts (both slots hold
+    // that eye), else 0.
+    first_eye: u32,
 }
 
 // Once per frame: the viewer (not any eye) and the time in seconds.

@@ -47,6 +47,7 @@ struct Decoded {
     color: vec4<f32>,
     // The instance id (its slot).
     instance: u32,
+    // The eye: 0 left, 1 right (display.eye[eye] is its context).
     eye: u32,
 }
 
@@ -70,5 +71,6 @@ fn decode(v: VertexInput, slot: u32, eye: u32, double_wide: bool) -> Decoded {
         seam = select(clip.w + x_eye, clip.w - x_eye, eye == 0u);
     }
     let normal = world_normal(rows, spun * v.normal);
-    return Decoded(clip, seam, world, normal, unpack4x8unorm(inst.color), id, eye);
+    let true_eye = eye + display.first_eye;
+    return Decoded(clip, seam, world, normal, unpack4x8unorm(inst.color), id, true_eye);
 }

@@ -9,6 +9,7 @@ struct VertexOutput {
     @location(1) normal: vec3<f32>,
     @location(2) color: vec4<f32>,
     @location(3) @interpolate(flat) eye: u32,
+    @location(4) @interpolate(flat) instance: u32,
 }
 
 fn set_seam_distance(out: ptr<function, VertexOutput>, distance: f32) {

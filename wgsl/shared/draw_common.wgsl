@@ -12,6 +12,7 @@ fn vertex(v: VertexInput, slot: u32, eye: u32, double_wide: bool) -> VertexOutpu
     out.normal = d.world_normal;
     out.color = d.color;
     out.eye = d.eye;
+    out.instance = d.instance;
     return out;
 }
 
@@ -22,6 +23,20 @@ struct FragmentInput {
     @location(1) normal: vec3<f32>,
     @location(2) color: vec4<f32>,
     @location(3) @interpolate(flat) eye: u32,
+    @location(4) @interpolate(flat) instance: u32,
+}
+
+// What a material sees of one fragment: a caller's `fn material(s: Surface) ->
+// vec4<f32>` (RendererOptions::material) replaces `shade` below; `display.eye[s.eye]`
+// is the eye's context, `frame` the frame's.
+struct Surface {
+    world_position: vec3<f32>,
+    // Interpolated, not normalized.
+    normal: vec3<f32>,
+    // The instance record's color.
+    color: vec4<f32>,
+    eye: u32,
+    instance: u32,
 }
 
 const LIGHT_DIRECTION: vec3<f32> = vec3(0.37139068, 0.74278135, 0.55708601);
@@ -31,14 +46,20 @@ fn fs_main(in: FragmentInput) -> @location(0) vec4<f32> {
     if (DISCARD_OTHER_HALF && ((in.position.x < display.resolution.x) != (in.eye == 0u))) {
         discard;
     }
-    // Specular from this eye's own position, not the viewer's: the eye context.
-    let to_eye = normalize(display.eye[in.eye].position - in.world_position);
-    var n = normalize(in.normal);
+    let s = Surface(in.world_position, in.normal, in.color, in.eye, in.instance);
+    return surface_color(s);
+}
+
+// The built-in shading: diffuse from one light, specular from this eye's own position
+// (not the viewer's: the eye context).
+fn shade(s: Surface) -> vec4<f32> {
+    let to_eye = normalize(display.eye[s.eye].position - s.world_position);
+    var n = normalize(s.normal);
     if (dot(n, to_eye) < 0.0) {
         n = -n;
     }
     let diffuse = max(dot(n, LIGHT_DIRECTION), 0.0);
     let half_vector = normalize(LIGHT_DIRECTION + to_eye);
     let specular = 0.3 * pow(max(dot(n, half_vector), 0.0), 48.0);
-    return vec4(in.color.rgb * (0.25 + 0.75 * diffuse) + vec3(specular), 1.0);
+    return vec4(s.color.rgb * (0.25 + 0.75 * diffuse) + vec3(specular), 1.0);
 }
