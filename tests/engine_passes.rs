@@ -274,6 +274,20 @@ fn a_pipeline_of_the_callers_own_draws_the_built_in_image() {
     );
 }
 
+/// The built-in shading, restated here: one light's diffuse plus specular from the eye.
+const LIT: &str = "
+    fn lit(world: vec3<f32>, normal: vec3<f32>, color: vec4<f32>, eye: u32) -> vec4<f32> {
+        let light = vec3(0.37139068, 0.74278135, 0.55708601);
+        let to_eye = normalize(display.eye[eye].position - world);
+        var n = normalize(normal);
+        if (dot(n, to_eye) < 0.0) {
+            n = -n;
+        }
+        let diffuse = max(dot(n, light), 0.0);
+        let specular = 0.3 * pow(max(dot(n, normalize(light + to_eye)), 0.0), 48.0);
+        return vec4(color.rgb * (0.25 + 0.75 * diffuse) + vec3(specular), 1.0);
+    }";
+
 /// The test's own stereo pipeline: stereocull's decode, then shading written here.
 fn own_pipeline(
     device: &wgpu::Device,
@@ -294,20 +308,13 @@ fn own_pipeline(
             let d = decode(v, at.x, at.y, true);
             return Out(d.clip, d.world_position, d.world_normal, d.color, d.eye);
         }
-        const LIGHT: vec3<f32> = vec3(0.37139068, 0.74278135, 0.55708601);
         @fragment fn fs(in: Out) -> @location(0) vec4<f32> {
             if ((in.position.x < display.resolution.x) != (in.eye == 0u)) {
                 discard;
             }
-            let to_eye = normalize(display.eye[in.eye].position - in.world);
-            var n = normalize(in.normal);
-            if (dot(n, to_eye) < 0.0) {
-                n = -n;
-            }
-            let diffuse = max(dot(n, LIGHT), 0.0);
-            let specular = 0.3 * pow(max(dot(n, normalize(LIGHT + to_eye)), 0.0), 48.0);
-            return vec4(in.color.rgb * (0.25 + 0.75 * diffuse) + vec3(specular), 1.0);
-        }";
+            return lit(in.world, in.normal, in.color, in.eye);
+        }"
+        + LIT;
     let module = device.create_shader_module(wgpu::ShaderModuleDescriptor {
         label: Some("own"),
         source: wgpu::ShaderSource::Wgsl(source.into()),
@@ -355,18 +362,12 @@ fn own_pipeline(
 /// paints by eye paints exactly the two halves (left red, right green).
 #[test]
 fn a_material_hook_shades_every_mode() {
-    const SAME_AS_BUILT_IN: &str = "
-        const L: vec3<f32> = vec3(0.37139068, 0.74278135, 0.55708601);
-        fn material(s: Surface) -> vec4<f32> {
-            let to_eye = normalize(display.eye[s.eye].position - s.world_position);
-            var n = normalize(s.normal);
-            if (dot(n, to_eye) < 0.0) {
-                n = -n;
-            }
-            let diffuse = max(dot(n, L), 0.0);
-            let specular = 0.3 * pow(max(dot(n, normalize(L + to_eye)), 0.0), 48.0);
-            return vec4(s.color.rgb * (0.25 + 0.75 * diffuse) + vec3(specular), 1.0);
-        }";
+    let same_as_built_in: &'static str = format!(
+        "{LIT}\nfn material(s: Surface) -> vec4<f32> {{
+            return lit(s.world_position, s.normal, s.color, s.eye);
+        }}"
+    )
+    .leak();
     const BY_EYE: &str = "
         fn material(s: Surface) -> vec4<f32> {
             return select(vec4(1.0, 0.0, 0.0, 1.0), vec4(0.0, 1.0, 0.0, 1.0), s.eye == 1u);
@@ -394,7 +395,7 @@ fn a_material_hook_shades_every_mode() {
         let name = format!("material-{}", mode.name());
         assert_images_match(
             &name,
-            &draw(with(Some(SAME_AS_BUILT_IN))),
+            &draw(with(Some(same_as_built_in))),
             &built_in,
             Tolerance::EXACT,
         );
