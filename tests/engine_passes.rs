@@ -420,3 +420,37 @@ fn a_material_hook_shades_every_mode() {
         );
     }
 }
+
+/// MSAA antialiases: with a flat material (left eye red, right eye green) the 1x image
+/// holds only the background and the two flat colors, while at 4x the edges blend into
+/// intermediate values.
+#[test]
+fn msaa_blends_edges_that_1x_leaves_hard() {
+    const FLAT: &str = "
+        fn material(s: Surface) -> vec4<f32> {
+            return select(vec4(1.0, 0.0, 0.0, 1.0), vec4(0.0, 1.0, 0.0, 1.0), s.eye == 1u);
+        }";
+    let gpu = gpu();
+    let scene = scene_spec::load("default").unwrap();
+    let rig = sized("hmd", 120, 100);
+    let blended = |sample_count| {
+        let options = RendererOptions {
+            sample_count,
+            material: Some(FLAT),
+            ..Default::default()
+        };
+        let image = support::render(&gpu, &scene, &rig, options)
+            .unwrap()
+            .remove(0);
+        let flat = [
+            *image.get_pixel(0, 0),
+            image::Rgba([255, 0, 0, 255]),
+            image::Rgba([0, 255, 0, 255]),
+        ];
+        image.pixels().filter(|p| !flat.contains(p)).count()
+    };
+    assert_eq!(blended(1), 0, "1x has hard edges");
+    let at_4x = blended(4);
+    eprintln!("4x: {at_4x} edge pixels blended");
+    assert!(at_4x > 100, "4x blends edges: {at_4x} pixels (199 on lavapipe)");
+}
