@@ -5,6 +5,7 @@
 mod support;
 
 use std::num::NonZeroU32;
+use std::sync::Arc;
 
 use image::RgbaImage;
 use stereocull::device::Gpu;
@@ -66,13 +67,14 @@ fn draw_in_engine_passes(
     sky: bool,
     after: impl Fn(&mut wgpu::CommandEncoder, &DisplayTarget),
 ) -> Vec<RgbaImage> {
+    let mode = options.mode;
     let mut renderer = Renderer::new(&gpu.device, scene, rig, options).unwrap();
     let targets = renderer.create_targets(&gpu.device);
     renderer.prepare(&gpu.queue, rig, 0.0).unwrap();
     let mut encoder = gpu.device.create_command_encoder(&Default::default());
     renderer.encode_culls(&mut encoder, None);
     for (i, target) in targets.iter().enumerate() {
-        let multiview = options.mode == StereoMode::Multiview && rig.displays[i].stereo;
+        let multiview = mode == StereoMode::Multiview && rig.displays[i].stereo;
         if sky {
             drop(begin(&mut encoder, target, Some(SKY), multiview));
         }
@@ -109,8 +111,9 @@ fn every_mode_draws_into_the_callers_pass_what_it_draws_itself() {
                 sample_count: samples,
                 ..Default::default()
             };
-            let own = support::render(&gpu, &scene, &rig, options).unwrap();
-            let engine = draw_in_engine_passes(&gpu, (&scene, &rig), options, false, |_, _| {});
+            let own = support::render(&gpu, &scene, &rig, options.clone()).unwrap();
+            let engine =
+                draw_in_engine_passes(&gpu, (&scene, &rig), options.clone(), false, |_, _| {});
             for (d, (a, b)) in engine.iter().zip(&own).enumerate() {
                 let name = format!("engine-pass-{}-{d}-msaa{samples}", mode.name());
                 assert_images_match(&name, a, b, Tolerance::EXACT);
@@ -127,14 +130,18 @@ fn engine_passes_before_and_after_share_the_targets() {
     let scene = scene_spec::load("default").unwrap();
     let rig = sized("hmd", 120, 100);
     let options = RendererOptions::default();
-    let plain = support::render(&gpu, &scene, &rig, options)
+    let plain = support::render(&gpu, &scene, &rig, options.clone())
         .unwrap()
         .remove(0);
     let ui = UiPanel::new(&gpu.device, options.color_format);
     let panel = (10, 10, 40, 20);
-    let framed = draw_in_engine_passes(&gpu, (&scene, &rig), options, true, |encoder, target| {
-        ui.draw(encoder, target, panel)
-    })
+    let framed = draw_in_engine_passes(
+        &gpu,
+        (&scene, &rig),
+        options.clone(),
+        true,
+        |encoder, target| ui.draw(encoder, target, panel),
+    )
     .remove(0);
     let background = *plain.get_pixel(0, 0);
     let sky = *framed.get_pixel(plain.width() - 1, 0);
@@ -249,11 +256,11 @@ fn a_pipeline_of_the_callers_own_draws_the_built_in_image() {
     let scene = scene_spec::load("default").unwrap();
     let rig = sized("hmd", 120, 100);
     let options = RendererOptions::default();
-    let built_in = support::render(&gpu, &scene, &rig, options)
+    let built_in = support::render(&gpu, &scene, &rig, options.clone())
         .unwrap()
         .remove(0);
 
-    let mut renderer = Renderer::new(&gpu.device, &scene, &rig, options).unwrap();
+    let mut renderer = Renderer::new(&gpu.device, &scene, &rig, options.clone()).unwrap();
     let pipeline = own_pipeline(&gpu.device, &renderer, options);
     let targets = renderer.create_targets(&gpu.device);
     renderer.prepare(&gpu.queue, &rig, 0.0).unwrap();
@@ -362,12 +369,12 @@ fn own_pipeline(
 /// paints by eye paints exactly the two halves (left red, right green).
 #[test]
 fn a_material_hook_shades_every_mode() {
-    let same_as_built_in: &'static str = format!(
+    let same_as_built_in: Arc<str> = format!(
         "{LIT}\nfn material(s: Surface) -> vec4<f32> {{
             return lit(s.world_position, s.normal, s.color, s.eye);
         }}"
     )
-    .leak();
+    .into();
     const BY_EYE: &str = "
         fn material(s: Surface) -> vec4<f32> {
             return select(vec4(1.0, 0.0, 0.0, 1.0), vec4(0.0, 1.0, 0.0, 1.0), s.eye == 1u);
@@ -386,7 +393,7 @@ fn a_material_hook_shades_every_mode() {
             material,
             ..Default::default()
         };
-        let draw = |options| {
+        let draw = |options: RendererOptions| {
             support::render(&gpu, &scene, &rig, options)
                 .unwrap()
                 .remove(0)
@@ -395,11 +402,11 @@ fn a_material_hook_shades_every_mode() {
         let name = format!("material-{}", mode.name());
         assert_images_match(
             &name,
-            &draw(with(Some(same_as_built_in))),
+            &draw(with(Some(same_as_built_in.clone()))),
             &built_in,
             Tolerance::EXACT,
         );
-        let by_eye = draw(with(Some(BY_EYE)));
+        let by_eye = draw(with(Some(BY_EYE.into())));
         let background = *built_in.get_pixel(0, 0);
         let half = by_eye.width() / 2;
         let mut painted = [0, 0];
@@ -436,10 +443,10 @@ fn msaa_blends_edges_that_1x_leaves_hard() {
     let blended = |sample_count| {
         let options = RendererOptions {
             sample_count,
-            material: Some(FLAT),
+            material: Some(FLAT.into()),
             ..Default::default()
         };
-        let image = support::render(&gpu, &scene, &rig, options)
+        let image = support::render(&gpu, &scene, &rig, options.clone())
             .unwrap()
             .remove(0);
         let flat = [
@@ -452,5 +459,8 @@ fn msaa_blends_edges_that_1x_leaves_hard() {
     assert_eq!(blended(1), 0, "1x has hard edges");
     let at_4x = blended(4);
     eprintln!("4x: {at_4x} edge pixels blended");
-    assert!(at_4x > 100, "4x blends edges: {at_4x} pixels (199 on lavapipe)");
+    assert!(
+        at_4x > 100,
+        "4x blends edges: {at_4x} pixels (199 on lavapipe)"
+    );
 }

@@ -83,7 +83,7 @@ fn assert_halves_are_single_eyes(presets: &[&str], samples: u32) {
     let scene = scene_spec::load("default").unwrap();
     let draw = |rig: &Rig| {
         let options = options(CullMode::Gpu, StereoMode::Instanced, samples);
-        support::render(&gpu, &scene, rig, options).unwrap()
+        support::render(&gpu, &scene, rig, options.clone()).unwrap()
     };
     for preset in presets {
         let rig = sized(preset);
@@ -131,7 +131,7 @@ fn assert_no_leak(gpu: &Gpu, label: &str) {
 fn assert_no_leak_at(gpu: &Gpu, label: &str, samples: u32) {
     let (scene, rig) = leak_rig();
     let options = options(CullMode::Gpu, StereoMode::Instanced, samples);
-    let image = support::render(gpu, &scene, &rig, options)
+    let image = support::render(gpu, &scene, &rig, options.clone())
         .unwrap()
         .remove(0);
     let clear = *image.get_pixel(2 * W - 1, 0);
@@ -326,10 +326,10 @@ fn an_animated_instance_draws_where_its_pose_at_that_time_does() {
     inst.world_from_local = lift * inst.world_from_local * spin;
     inst.animation = Animation::NONE;
     let options = RendererOptions::default();
-    let moving = support::render_at(&gpu, &animated, &rig, options, t).unwrap();
-    let still = support::render_at(&gpu, &posed, &rig, options, t).unwrap();
+    let moving = support::render_at(&gpu, &animated, &rig, options.clone(), t).unwrap();
+    let still = support::render_at(&gpu, &posed, &rig, options.clone(), t).unwrap();
     assert_images_match("animated-at-t", &moving[0], &still[0], EDGES);
-    let at_zero = support::render_at(&gpu, &animated, &rig, options, 0.0).unwrap();
+    let at_zero = support::render_at(&gpu, &animated, &rig, options.clone(), 0.0).unwrap();
     let moved = at_zero[0]
         .pixels()
         .zip(still[0].pixels())

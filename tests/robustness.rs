@@ -31,7 +31,7 @@ fn render(gpu: &Gpu, mode: StereoMode, cull: CullMode) -> Result<RgbaImage, Erro
         cull,
         ..Default::default()
     };
-    Ok(support::render(gpu, &scene, &rig(), options)?.remove(0))
+    Ok(support::render(gpu, &scene, &rig(), options.clone())?.remove(0))
 }
 
 /// The image tests' tolerance (see `tests/images.rs`): channels within 2 levels, at most

@@ -55,14 +55,14 @@ impl ClassicPath {
         scene: &Scene,
         rig: &Rig,
         frame: &wgpu::Buffer,
-        options: RendererOptions,
+        options: &RendererOptions,
     ) -> ClassicPath {
         let clip = DrawFeatures::of(device).clip_distances;
         let drawer = Drawer::new(
             device,
             options.target_format(),
             &[DrawKey::new(1, clip)],
-            options.material,
+            options.material.as_deref(),
         );
         let draw_scene = DrawScene::new(device, scene);
         let n = scene.instances.len() as u64;

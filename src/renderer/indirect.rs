@@ -59,7 +59,7 @@ impl IndirectPath {
         scene: &Scene,
         rig: &Rig,
         frame: &wgpu::Buffer,
-        options: RendererOptions,
+        options: &RendererOptions,
     ) -> IndirectPath {
         let multiview = options.mode == StereoMode::Multiview;
         let layout = CullLayout::new(scene);
@@ -80,7 +80,12 @@ impl IndirectPath {
                 (false, _) => DrawKey::new(1, clip),
             })
             .collect();
-        let drawer = Drawer::new(device, options.target_format(), &keys, options.material);
+        let drawer = Drawer::new(
+            device,
+            options.target_format(),
+            &keys,
+            options.material.as_deref(),
+        );
         let draw_scene = DrawScene::new(device, scene);
         let (instances, meshes) = (scene.instances.len() as u32, scene.meshes.len() as u32);
         let displays = keys

@@ -66,6 +66,7 @@
 //! (`classic.rs`). Each frame, [`Renderer::prepare`] resolves the rig once
 //! ([`Rig::resolve`]) and builds every context and cull job from that.
 
+use std::sync::Arc;
 use std::time::Duration;
 
 use crate::contexts::{DisplayContext, FrameContext};
@@ -100,7 +101,7 @@ pub enum CullMode {
     Cpu,
 }
 
-#[derive(Clone, Copy, Debug)]
+#[derive(Clone, Debug)]
 pub struct RendererOptions {
     pub color_format: wgpu::TextureFormat,
     /// MSAA samples per pixel of the color and depth attachments (1: none). Every device
@@ -114,7 +115,7 @@ pub struct RendererOptions {
     /// vec4<f32>`, with `Surface` (world position, normal, color, eye, instance) and the
     /// bindings `frame` and `display` (`display.eye[s.eye]` is the eye's context) in
     /// scope. `None`: the built-in shading.
-    pub material: Option<&'static str>,
+    pub material: Option<Arc<str>>,
     pub cull: CullMode,
     pub mode: StereoMode,
 }
@@ -181,12 +182,12 @@ impl Renderer {
         rig: &Rig,
         options: RendererOptions,
     ) -> Result<Renderer> {
-        check_device(device, scene, options)?;
+        check_device(device, scene, &options)?;
         let scope = device.push_error_scope(wgpu::ErrorFilter::Validation);
         let frame = uniform_buffer::<FrameContext>(device, "stereocull.frame_context");
         let path = match options.mode.per_instance() {
-            false => Path::Indirect(IndirectPath::new(device, scene, rig, &frame, options)),
-            true => Path::Classic(ClassicPath::new(device, scene, rig, &frame, options)),
+            false => Path::Indirect(IndirectPath::new(device, scene, rig, &frame, &options)),
+            true => Path::Classic(ClassicPath::new(device, scene, rig, &frame, &options)),
         };
         if let Some(e) = pollster::block_on(scope.pop()) {
             return Err(Error::Wgpu(e));
@@ -523,7 +524,7 @@ fn write(queue: &wgpu::Queue, buffer: &wgpu::Buffer, bytes: &[u8]) -> u64 {
 /// MSAA the device can do for the options' color format and the depth format. Without
 /// `TEXTURE_ADAPTER_SPECIFIC_FORMAT_FEATURES` that is WebGPU's guarantee (1 and 4);
 /// with it the adapter decides, which only the adapter knows: wgpu then checks.
-fn check_sample_count(features: wgpu::Features, options: RendererOptions) -> Result<()> {
+fn check_sample_count(features: wgpu::Features, options: &RendererOptions) -> Result<()> {
     let n = options.sample_count;
     let specific = features.contains(wgpu::Features::TEXTURE_ADAPTER_SPECIFIC_FORMAT_FEATURES);
     let counts = match specific {
@@ -552,7 +553,7 @@ fn check_sample_count(features: wgpu::Features, options: RendererOptions) -> Res
 }
 
 /// What a mode cannot do without, said before anything is built.
-fn check_device(device: &wgpu::Device, scene: &Scene, options: RendererOptions) -> Result<()> {
+fn check_device(device: &wgpu::Device, scene: &Scene, options: &RendererOptions) -> Result<()> {
     let features = device.features();
     let mode = options.mode.name();
     check_sample_count(features, options)?;
