@@ -5,9 +5,13 @@
 //! ```no_run
 //! # fn demo(device: &wgpu::Device, queue: &wgpu::Queue) -> stereocull::Result<()> {
 //! use stereocull::renderer::{Renderer, RendererOptions};
-//! use stereocull::{rig::Rig, scene_spec};
+//! use stereocull::{rig::Rig, scene::Animation, scene_spec};
 //!
-//! let scene = scene_spec::load("procedural:10000")?;
+//! let mut scene = scene_spec::load("procedural:10000")?;
+//! // Every tenth instance turns and bobs on the GPU, from the frame's time alone.
+//! for instance in scene.instances.iter_mut().step_by(10) {
+//!     instance.animation = Animation { spin: 1.5, bob: 0.1 };
+//! }
 //! let mut rig = Rig::preset("hmd")?;
 //! let mut renderer = Renderer::new(device, &scene, &rig, RendererOptions::default())?;
 //! let targets = renderer.create_targets(device); // or views of your own textures
