@@ -5,10 +5,8 @@
 
 use std::time::Instant;
 
-use super::{
-    FrameStats, RendererOptions, TargetViews, close, context_buffer, display_contexts, draw_pass,
-    open_display, write,
-};
+use super::passes::draw_pass;
+use super::{FrameStats, RendererOptions, TargetViews, context_buffer, display_contexts, write};
 use crate::cull::{CullJob, CullOutput, cpu};
 use crate::draw::{DrawFeatures, DrawScene, Drawer, set_eye_viewport};
 use crate::modes::StereoMode;
@@ -18,6 +16,7 @@ use crate::records::uniform_bytes;
 use crate::rig::{ResolvedRig, Rig};
 use crate::scene::Scene;
 use crate::shaders::DrawKey;
+use wgpu_profiler::GpuProfilerQuery;
 
 /// One eye of a stereo display: its own context (that eye in both eye slots) and, for
 /// multi-camera, its own visible list.
@@ -28,7 +27,6 @@ struct EyeState {
 }
 
 struct ClassicDisplay {
-    name: String,
     context: wgpu::Buffer,
     /// The display's visible list (multi-camera: unused by stereo displays' eyes).
     visible: wgpu::Buffer,
@@ -91,7 +89,6 @@ impl ClassicPath {
                     })
                     .collect();
                 ClassicDisplay {
-                    name: d.name.clone(),
                     bind_group: drawer.bind_group(device, [frame, &context], &draw_scene, &visible),
                     context,
                     visible,
@@ -168,30 +165,32 @@ impl ClassicPath {
             .collect()
     }
 
-    pub(super) fn encode(
+    /// Display `index` into its own passes, timed inside `display`: one per eye for a
+    /// stereo display in multi-pass and multi-camera, else one.
+    pub(super) fn encode_display(
         &self,
         encoder: &mut wgpu::CommandEncoder,
-        targets: &[TargetViews],
+        (index, target): (usize, &TargetViews),
         timer: &mut Option<&mut GpuTimer>,
+        display: &Option<GpuProfilerQuery>,
     ) -> FrameStats {
-        let mut stats = FrameStats::default();
-        for (i, (state, target)) in self.displays.iter().zip(targets).enumerate() {
-            let display = open_display(timer, &state.name, encoder);
-            stats.draw_calls += match (self.mode, state.eyes.len()) {
-                (StereoMode::MultiCamera | StereoMode::MultiPass, 2) => (0..2)
-                    .map(|e| {
-                        draw_pass(encoder, target, e == 0, false, timer, &display, |pass| {
-                            self.draw_eye(pass, i, e)
-                        })
+        let stereo = self.displays[index].eyes.len() == 2;
+        let draw_calls = match self.mode {
+            StereoMode::MultiCamera | StereoMode::MultiPass if stereo => (0..2)
+                .map(|e| {
+                    draw_pass(encoder, target, e == 0, false, timer, display, |pass| {
+                        self.draw_eye(pass, index, e)
                     })
-                    .sum(),
-                _ => draw_pass(encoder, target, true, false, timer, &display, |pass| {
-                    self.draw(pass, i)
-                }),
-            };
-            close(timer, encoder, display);
+                })
+                .sum(),
+            _ => draw_pass(encoder, target, true, false, timer, display, |pass| {
+                self.draw(pass, index)
+            }),
+        };
+        FrameStats {
+            draw_calls,
+            ..Default::default()
         }
-        stats
     }
 
     /// Display `index` into one pass: a mono display's instances; a stereo display's in

@@ -7,9 +7,9 @@
 
 use std::time::Instant;
 
+use super::passes::{close, draw_pass, open_pass};
 use super::{
-    CullMode, FrameStats, RendererOptions, TargetViews, close, context_buffer, display_contexts,
-    draw_pass, open_display, open_pass, write,
+    CullMode, FrameStats, RendererOptions, TargetViews, context_buffer, display_contexts, write,
 };
 use crate::cull::gpu::{COUNTS_BYTES, CullScene, CullTargets, GpuCuller};
 use crate::cull::{CullOutput, cpu};
@@ -34,7 +34,6 @@ enum Culling {
 
 /// One display's buffers and bindings.
 struct IndirectDisplay {
-    name: String,
     context: wgpu::Buffer,
     /// Filled by the cull passes or by the CPU upload; read by the draw.
     cull: CullTargets,
@@ -90,8 +89,7 @@ impl IndirectPath {
         let (instances, meshes) = (scene.instances.len() as u32, scene.meshes.len() as u32);
         let displays = keys
             .iter()
-            .zip(&rig.displays)
-            .map(|(&key, display)| {
+            .map(|&key| {
                 let context = context_buffer(device);
                 let cull = CullTargets::new(device, instances, meshes);
                 let cull_bind_group = match &culling {
@@ -101,7 +99,6 @@ impl IndirectPath {
                     Culling::Cpu { .. } => None,
                 };
                 IndirectDisplay {
-                    name: display.name.clone(),
                     draw_bind_group: drawer.bind_group(
                         device,
                         [frame, &context],
@@ -164,25 +161,25 @@ impl IndirectPath {
         stats
     }
 
-    /// Per display: the cull dispatches (GPU culling), then one pass with one draw call.
-    pub(super) fn encode(
+    /// Display `index`: its cull dispatches (GPU culling), then one pass with one draw
+    /// call, timed inside `display`.
+    pub(super) fn encode_display(
         &self,
         encoder: &mut wgpu::CommandEncoder,
-        targets: &[TargetViews],
+        (index, target): (usize, &TargetViews),
         timer: &mut Option<&mut GpuTimer>,
+        display: &Option<GpuProfilerQuery>,
     ) -> FrameStats {
-        let mut stats = FrameStats::default();
-        for (i, (state, target)) in self.displays.iter().zip(targets).enumerate() {
-            let display = open_display(timer, &state.name, encoder);
-            stats.dispatches += self.encode_cull(encoder, i, timer, &display);
-            let multiview = state.key.multiview;
-            stats.draw_calls +=
-                draw_pass(encoder, target, true, multiview, timer, &display, |pass| {
-                    self.draw(pass, i)
-                });
-            close(timer, encoder, display);
+        let dispatches = self.encode_cull(encoder, index, timer, display);
+        let multiview = self.displays[index].key.multiview;
+        let draw_calls = draw_pass(encoder, target, true, multiview, timer, display, |pass| {
+            self.draw(pass, index)
+        });
+        FrameStats {
+            draw_calls,
+            dispatches,
+            ..Default::default()
         }
-        stats
     }
 
     /// Display `index`'s cull dispatches, timed inside `display` (none when culling on
@@ -212,10 +209,6 @@ impl IndirectPath {
         drop(pass);
         close(timer, encoder, scope);
         GpuCuller::DISPATCHES_PER_DISPLAY
-    }
-
-    pub(super) fn display_name(&self, index: usize) -> &str {
-        &self.displays[index].name
     }
 
     /// Display `index`'s one multi-draw-indirect call into `pass`, whose pipeline the

@@ -77,21 +77,22 @@ use crate::contexts::{DisplayContext, FrameContext};
 use crate::cull::CullOutput;
 use crate::cull::gpu::{CullScene, CullTargets};
 use crate::draw::DrawScene;
-use crate::draw::{DEPTH_FORMAT, TargetFormat, begin_pass};
+use crate::draw::{DEPTH_FORMAT, TargetFormat};
 use crate::error::{Error, Result};
 pub use crate::modes::StereoMode;
 use crate::profiling::GpuTimer;
 use crate::records::{MeshRecord, uniform_bytes};
 use crate::rig::{ResolvedRig, Rig};
 use crate::scene::{Scene, Vertex};
-use wgpu_profiler::GpuProfilerQuery;
 
 mod classic;
 mod indirect;
+mod passes;
 mod targets;
 
 use classic::ClassicPath;
 use indirect::IndirectPath;
+use passes::{close, open_display};
 pub use targets::{DisplayTarget, TargetShape, TargetViews};
 
 /// Where the per-display cull runs.
@@ -175,6 +176,8 @@ pub struct Renderer {
     path: Path,
     /// Per display, as made: what targets must look like and what `prepare` checks.
     shapes: Vec<TargetShape>,
+    /// Per display: the rig's name, for timer scopes.
+    names: Vec<String>,
 }
 
 impl Renderer {
@@ -210,6 +213,7 @@ impl Renderer {
             frame,
             path,
             shapes,
+            names: rig.displays.iter().map(|d| d.name.clone()).collect(),
         })
     }
 
@@ -270,10 +274,17 @@ impl Renderer {
                 displays: self.shapes.len(),
             });
         }
-        let stats = match &self.path {
-            Path::Indirect(p) => p.encode(encoder, targets, &mut timer),
-            Path::Classic(p) => p.encode(encoder, targets, &mut timer),
-        };
+        let mut stats = FrameStats::default();
+        for (i, target) in targets.iter().enumerate() {
+            let display = open_display(&timer, &self.names[i], encoder);
+            let recorded = match &self.path {
+                Path::Indirect(p) => p.encode_display(encoder, (i, target), &mut timer, &display),
+                Path::Classic(p) => p.encode_display(encoder, (i, target), &mut timer, &display),
+            };
+            stats.draw_calls += recorded.draw_calls;
+            stats.dispatches += recorded.dispatches;
+            close(&timer, encoder, display);
+        }
         if let Some(t) = timer {
             t.resolve(encoder);
         }
@@ -292,7 +303,7 @@ impl Renderer {
         let mut stats = FrameStats::default();
         if let Path::Indirect(p) = &self.path {
             for i in 0..self.shapes.len() {
-                let display = open_display(&timer, p.display_name(i), encoder);
+                let display = open_display(&timer, &self.names[i], encoder);
                 stats.dispatches += p.encode_cull(encoder, i, &mut timer, &display);
                 close(&timer, encoder, display);
             }
@@ -455,66 +466,6 @@ fn display_contexts(
         .enumerate()
         .map(|(i, (d, r))| DisplayContext::new(r, d.resolution, instances_per_object(i)))
         .collect()
-}
-
-/// Records one draw pass into `target`, clearing it or not: a `draw` timer scope inside
-/// `display`'s and pipeline statistics around what `record` draws (it returns its
-/// draw calls).
-fn draw_pass(
-    encoder: &mut wgpu::CommandEncoder,
-    target: &TargetViews,
-    clear: bool,
-    multiview: bool,
-    timer: &mut Option<&mut GpuTimer>,
-    display: &Option<GpuProfilerQuery>,
-    record: impl FnOnce(&mut wgpu::RenderPass) -> u32,
-) -> u32 {
-    let scope = open_pass(timer, "draw", display, encoder);
-    let writes = scope
-        .as_ref()
-        .and_then(|q| q.render_pass_timestamp_writes());
-    let mut pass = begin_pass(encoder, target.attachments(), clear, multiview, writes);
-    let counting = timer
-        .as_deref_mut()
-        .is_some_and(|t| t.begin_statistics(&mut pass));
-    let calls = record(&mut pass);
-    GpuTimer::end_statistics(&mut pass, counting);
-    drop(pass);
-    close(timer, encoder, scope);
-    calls
-}
-
-/// Opens display `name`'s timer scope, when timing.
-fn open_display(
-    timer: &Option<&mut GpuTimer>,
-    name: &str,
-    encoder: &mut wgpu::CommandEncoder,
-) -> Option<GpuProfilerQuery> {
-    timer.as_deref().map(|t| t.scope(name, encoder))
-}
-
-/// Opens a pass scope inside a display's, when timing; its timestamp writes go into
-/// the pass descriptor.
-fn open_pass(
-    timer: &Option<&mut GpuTimer>,
-    label: &str,
-    display: &Option<GpuProfilerQuery>,
-    encoder: &mut wgpu::CommandEncoder,
-) -> Option<GpuProfilerQuery> {
-    match (timer.as_deref(), display) {
-        (Some(t), Some(parent)) => Some(t.pass(label, parent, encoder)),
-        _ => None,
-    }
-}
-
-fn close(
-    timer: &Option<&mut GpuTimer>,
-    encoder: &mut wgpu::CommandEncoder,
-    scope: Option<GpuProfilerQuery>,
-) {
-    if let (Some(t), Some(scope)) = (timer.as_deref(), scope) {
-        t.end(encoder, scope);
-    }
 }
 
 /// Writes `bytes` at the start of `buffer` (nothing for none); returns the bytes written.
