@@ -11,7 +11,7 @@ use image::RgbaImage;
 use stereocull::device::Gpu;
 use stereocull::draw::CLEAR_COLOR;
 use stereocull::readback::read_rgba8;
-use stereocull::renderer::{CullMode, DisplayTarget, Renderer, RendererOptions, StereoMode};
+use stereocull::renderer::{DisplayTarget, Renderer, RendererOptions, StereoMode};
 use stereocull::rig::Rig;
 use stereocull::scene::Scene;
 use stereocull::scene_spec;
@@ -101,10 +101,7 @@ fn every_mode_draws_into_the_callers_pass_what_it_draws_itself() {
     let rig = sized("hmd-peripheral", 96, 80);
     for samples in [1, 4] {
         for mode in StereoMode::ALL {
-            let cull = match mode.per_instance() {
-                true => CullMode::Cpu,
-                false => CullMode::Gpu,
-            };
+            let cull = support::cull_for(mode);
             let options = RendererOptions {
                 cull,
                 mode,
@@ -383,10 +380,7 @@ fn a_material_hook_shades_every_mode() {
     let scene = scene_spec::load("default").unwrap();
     let rig = sized("hmd", 120, 100);
     for mode in StereoMode::ALL {
-        let cull = match mode.per_instance() {
-            true => CullMode::Cpu,
-            false => CullMode::Gpu,
-        };
+        let cull = support::cull_for(mode);
         let with = |material| RendererOptions {
             cull,
             mode,

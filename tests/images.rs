@@ -233,11 +233,7 @@ fn assert_mode_matches(
     tolerance: Tolerance,
     label: &str,
 ) {
-    let cull = if mode.per_instance() {
-        CullMode::Cpu
-    } else {
-        CullMode::Gpu
-    };
+    let cull = support::cull_for(mode);
     let images = support::render(gpu, scene, rig, options(cull, mode, samples)).unwrap();
     for (d, (actual, want)) in images.iter().zip(reference).enumerate() {
         let name = format!("{label}-{d}-{}", mode.name());

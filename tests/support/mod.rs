@@ -15,7 +15,7 @@ use stereocull::cull::{CullOutput, cpu};
 use stereocull::device::Gpu;
 use stereocull::readback::read_rgba8;
 use stereocull::records::CullLayout;
-use stereocull::renderer::{Renderer, RendererOptions};
+use stereocull::renderer::{CullMode, Renderer, RendererOptions, StereoMode};
 use stereocull::rig::Rig;
 use stereocull::scene::{Animation, Instance, Scene};
 use stereocull::shapes;
@@ -72,6 +72,16 @@ pub fn cubes(instances: &[(Vec3, u32)], meshes: u32) -> Scene {
 /// The CPU reference cull of every display of `rig`, as the `instanced` mode culls.
 pub fn reference_culls(scene: &Scene, rig: &Rig) -> Vec<CullOutput> {
     cpu::cull_many(&CullLayout::new(scene), &rig.cull_jobs().unwrap())
+}
+
+/// The cull each mode runs: the classic modes draw per instance from a CPU cull; the
+/// indirect modes cull on the GPU.
+pub fn cull_for(mode: StereoMode) -> CullMode {
+    if mode.per_instance() {
+        CullMode::Cpu
+    } else {
+        CullMode::Gpu
+    }
 }
 
 /// One frame of `scene` seen by `rig` at time 0, every display read back.
