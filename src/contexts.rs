@@ -93,7 +93,7 @@ impl DisplayContext {
             eye: [eye(0), eye(1)],
             position: combined.position,
             resolution: Vec2::new(resolution[0] as f32, resolution[1] as f32),
-            planes: display.combined.frustum().planes,
+            planes: display.planes,
             instances_per_object,
             first_eye: 0,
         }

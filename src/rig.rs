@@ -6,7 +6,7 @@
 
 use std::path::Path;
 
-use glam::{DAffine3, DMat3, DQuat, DVec3, EulerRot};
+use glam::{DAffine3, DMat3, DQuat, DVec3, EulerRot, Vec4};
 use serde::{Deserialize, Serialize};
 
 use crate::cull::CullJob;
@@ -315,7 +315,12 @@ impl Rig {
         };
         let combined = combined
             .ok_or("the eyes' frusta span 180 degrees or more; no display frustum holds them")?;
-        Ok(ResolvedDisplay { eyes, combined })
+        let planes = combined.frustum().planes;
+        Ok(ResolvedDisplay {
+            eyes,
+            combined,
+            planes,
+        })
     }
 }
 
@@ -351,6 +356,8 @@ pub struct ResolvedDisplay {
     /// The display frustum's view: one frustum holding every eye of the display, the
     /// only one culling ever uses (never per eye).
     pub combined: View,
+    /// `combined`'s planes, built once for the context and the cull of this frame.
+    pub planes: [Vec4; 6],
 }
 
 impl ResolvedDisplay {
@@ -358,7 +365,7 @@ impl ResolvedDisplay {
     /// `instances_per_object` times.
     pub fn cull_job(&self, instances_per_object: u32) -> CullJob {
         CullJob {
-            planes: self.combined.frustum().planes,
+            planes: self.planes,
             instances_per_object,
         }
     }
