@@ -1,0 +1,174 @@
+//! Resolving a rig for one frame: each display's eyes (head-fixed panels, or off-axis
+//! views through world-fixed screens) and its display frustum, in f64, once.
+
+use glam::{DAffine3, DMat3, DQuat, DVec3, Vec4};
+
+use super::{Display, HeadFixed, Mount, Rig, Screen, Viewer, euler};
+use crate::cull::CullJob;
+use crate::error::{Error, Result};
+use crate::frustum::{Fov, View, enclosing_view};
+
+impl Rig {
+    /// This frame's views, resolved once: every display's eyes and display frustum (and
+    /// from them, on demand, the frame frustum). Validates first, so that what is built
+    /// from the result (contexts, cull jobs) cannot fail.
+    pub fn resolve(&self) -> Result<ResolvedRig> {
+        self.validate("(this frame's pose)")?;
+        let displays = self
+            .displays
+            .iter()
+            .map(|d| self.resolve_display(d).map_err(|m| Error::rig(&d.name, m)))
+            .collect::<Result<Vec<_>>>()?;
+        Ok(ResolvedRig {
+            displays,
+            viewer_position: self.viewer.position(),
+            viewer_orientation: self.viewer.orientation(),
+        })
+    }
+
+    /// Every display's cull against its display frustum, as the `instanced` mode culls
+    /// (each visible object drawn once per view): the CPU reference of the cull dump.
+    pub fn cull_jobs(&self) -> Result<Vec<CullJob>> {
+        let resolved = self.resolve()?;
+        Ok(self
+            .displays
+            .iter()
+            .zip(&resolved.displays)
+            .map(|(d, r)| r.cull_job(d.views()))
+            .collect())
+    }
+
+    fn resolve_display(&self, d: &Display) -> std::result::Result<ResolvedDisplay, String> {
+        let eyes = self
+            .viewer
+            .eye_positions(d.views())
+            .into_iter()
+            .enumerate()
+            .map(|(e, position)| {
+                let (orientation, fov) = match &d.mount {
+                    Mount::Head(h) => head_fixed_basis(&self.viewer, h, e, d.views()),
+                    Mount::Screen(s) => screen_basis(s, position)?,
+                };
+                Ok(View {
+                    world_from_view: DAffine3::from_rotation_translation(orientation, position),
+                    fov,
+                    near: self.near,
+                    far: self.far,
+                })
+            })
+            .collect::<std::result::Result<Vec<View>, String>>()?;
+        let combined = match (eyes.as_slice(), &d.mount) {
+            ([mono], _) => Some(*mono),
+            (_, mount) => {
+                let orientation = match mount {
+                    Mount::Head(h) => head_panel_orientation(&self.viewer, h),
+                    Mount::Screen(_) => DQuat::from_mat3(&eyes[0].world_from_view.matrix3),
+                };
+                let origin = self.viewer.position();
+                let corners: Vec<_> = eyes.iter().map(|e| e.corners_from(origin)).collect();
+                enclosing_view(orientation, origin, &corners)
+            }
+        };
+        let combined = combined
+            .ok_or("the eyes' frusta span 180 degrees or more; no display frustum holds them")?;
+        let planes = combined.frustum().planes;
+        Ok(ResolvedDisplay {
+            eyes,
+            combined,
+            planes,
+        })
+    }
+}
+
+/// One frame's views of a rig: what [`Rig::resolve`] builds once per frame.
+#[derive(Clone, Debug, PartialEq)]
+pub struct ResolvedRig {
+    /// In the rig's display order.
+    pub displays: Vec<ResolvedDisplay>,
+    viewer_position: DVec3,
+    viewer_orientation: DQuat,
+}
+
+impl ResolvedRig {
+    /// The frame frustum, holding every display frustum (oriented as the viewer), or
+    /// `None` when the displays surround the viewer (a CAVE) and no single frustum can.
+    /// Built on demand: no per-frame pass uses it yet.
+    pub fn frame(&self) -> Option<View> {
+        let origin = self.viewer_position;
+        let corners: Vec<_> = self
+            .displays
+            .iter()
+            .map(|d| d.combined.corners_from(origin))
+            .collect();
+        enclosing_view(self.viewer_orientation, origin, &corners)
+    }
+}
+
+/// One display's views for a frame.
+#[derive(Clone, Debug, PartialEq)]
+pub struct ResolvedDisplay {
+    /// Left then right for stereo; the one eye for mono.
+    pub eyes: Vec<View>,
+    /// The display frustum's view: one frustum holding every eye of the display, the
+    /// only one culling ever uses (never per eye).
+    pub combined: View,
+    /// `combined`'s planes, built once for the context and the cull of this frame.
+    pub planes: [Vec4; 6],
+}
+
+impl ResolvedDisplay {
+    /// Culling against the display frustum, each visible object drawn
+    /// `instances_per_object` times.
+    pub fn cull_job(&self, instances_per_object: u32) -> CullJob {
+        CullJob {
+            planes: self.planes,
+            instances_per_object,
+        }
+    }
+}
+
+fn head_panel_orientation(viewer: &Viewer, h: &HeadFixed) -> DQuat {
+    viewer.orientation() * euler(h.yaw_deg, h.pitch_deg, 0.0)
+}
+
+fn head_fixed_basis(viewer: &Viewer, h: &HeadFixed, eye: usize, views: u32) -> (DQuat, Fov) {
+    let panel = head_panel_orientation(viewer, h);
+    if views == 1 {
+        return (panel, h.fov);
+    }
+    // Left eye turns left (+yaw), right eye right.
+    let cant = if eye == 0 { h.cant_deg } else { -h.cant_deg };
+    let fov = if eye == 0 {
+        h.fov
+    } else {
+        h.fov_right.unwrap_or(h.fov.mirrored())
+    };
+    (panel * euler(cant, 0.0, 0.0), fov)
+}
+
+/// Kooima's generalized perspective projection: the view looks along the screen's
+/// inward normal and its window is the screen rectangle seen from `eye`.
+///
+/// The rectangle is the screen's completion: the lower edge as given, the up direction
+/// made perpendicular to it (Gram-Schmidt), and the height of `upper_left` above the
+/// lower edge. Validation allows corners a hair off a right angle; this is then the
+/// rectangle both the projection and the culling frustum use.
+fn screen_basis(s: &Screen, eye: DVec3) -> std::result::Result<(DQuat, Fov), String> {
+    let [pa, pb, pc] =
+        [s.lower_left, s.lower_right, s.upper_left].map(|p| DVec3::from(p.map(f64::from)));
+    let vr = (pb - pa).normalize();
+    let vu = (pc - pa).reject_from_normalized(vr).normalize();
+    let vn = vr.cross(vu);
+    let (va, vb, vc) = (pa - eye, pb - eye, pc - eye);
+    let dist = -va.dot(vn);
+    if dist <= 1e-4 {
+        return Err(format!("the eye at {eye} is on or behind the screen"));
+    }
+    let fov = Fov {
+        left: (-vr.dot(va) / dist) as f32,
+        right: (vr.dot(vb) / dist) as f32,
+        up: (vu.dot(vc) / dist) as f32,
+        down: (-vu.dot(va) / dist) as f32,
+    };
+    Ok((DQuat::from_mat3(&DMat3::from_cols(vr, vu, vn)), fov))
+}
