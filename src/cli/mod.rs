@@ -1,5 +1,6 @@
 //! The `stereocull` command line.
 
+mod chart;
 mod profile;
 mod render;
 mod stress;
