@@ -128,7 +128,8 @@ impl CullTargets {
     }
 }
 
-fn storage_buffer(
+/// A buffer of `size` bytes (at least 4: wgpu refuses empty bindings).
+pub(crate) fn storage_buffer(
     device: &wgpu::Device,
     label: &str,
     size: u64,

@@ -7,12 +7,12 @@ use std::time::Instant;
 
 use super::passes::draw_pass;
 use super::{FrameStats, RendererOptions, TargetViews, context_buffer, display_contexts, write};
+use crate::cull::gpu::storage_buffer;
 use crate::cull::{CullJob, CullOutput, cpu};
 use crate::draw::{DrawFeatures, DrawScene, Drawer, set_eye_viewport};
 use crate::modes::StereoMode;
 use crate::profiling::GpuTimer;
-use crate::records::CullLayout;
-use crate::records::uniform_bytes;
+use crate::records::{CullLayout, uniform_bytes};
 use crate::rig::{ResolvedRig, Rig};
 use crate::scene::Scene;
 use crate::shaders::DrawKey;
@@ -64,7 +64,8 @@ impl ClassicPath {
         );
         let draw_scene = DrawScene::new(device, scene);
         let n = scene.instances.len() as u64;
-        let visible_list = || visible_buffer(device, n);
+        let usage = wgpu::BufferUsages::STORAGE | wgpu::BufferUsages::COPY_DST;
+        let visible_list = || storage_buffer(device, "stereocull.visible", 4 * n, usage);
         let displays = rig
             .displays
             .iter()
@@ -263,15 +264,6 @@ fn single_pass_cadence(
         }
     }
     calls
-}
-
-fn visible_buffer(device: &wgpu::Device, instances: u64) -> wgpu::Buffer {
-    device.create_buffer(&wgpu::BufferDescriptor {
-        label: Some("stereocull.visible"),
-        size: (4 * instances).max(4),
-        usage: wgpu::BufferUsages::STORAGE | wgpu::BufferUsages::COPY_DST,
-        mapped_at_creation: false,
-    })
 }
 
 /// One per-instance draw: index range, base vertex, and the slot in the visible list.
