@@ -278,6 +278,12 @@ fn a_pipeline_of_the_callers_own_draws_the_built_in_image() {
     );
 }
 
+/// A flat material by eye: the left eye red, the right green.
+const BY_EYE: &str = "
+    fn material(s: Surface) -> vec4<f32> {
+        return select(vec4(1.0, 0.0, 0.0, 1.0), vec4(0.0, 1.0, 0.0, 1.0), s.eye == 1u);
+    }";
+
 /// The built-in shading, restated here: one light's diffuse plus specular from the eye.
 const LIT: &str = "
     fn lit(world: vec3<f32>, normal: vec3<f32>, color: vec4<f32>, eye: u32) -> vec4<f32> {
@@ -372,10 +378,6 @@ fn a_material_hook_shades_every_mode() {
         }}"
     )
     .into();
-    const BY_EYE: &str = "
-        fn material(s: Surface) -> vec4<f32> {
-            return select(vec4(1.0, 0.0, 0.0, 1.0), vec4(0.0, 1.0, 0.0, 1.0), s.eye == 1u);
-        }";
     let gpu = gpu();
     let scene = scene_spec::load("default").unwrap();
     let rig = sized("hmd", 120, 100);
@@ -427,17 +429,13 @@ fn a_material_hook_shades_every_mode() {
 /// intermediate values.
 #[test]
 fn msaa_blends_edges_that_1x_leaves_hard() {
-    const FLAT: &str = "
-        fn material(s: Surface) -> vec4<f32> {
-            return select(vec4(1.0, 0.0, 0.0, 1.0), vec4(0.0, 1.0, 0.0, 1.0), s.eye == 1u);
-        }";
     let gpu = gpu();
     let scene = scene_spec::load("default").unwrap();
     let rig = sized("hmd", 120, 100);
     let blended = |sample_count| {
         let options = RendererOptions {
             sample_count,
-            material: Some(FLAT.into()),
+            material: Some(BY_EYE.into()),
             ..Default::default()
         };
         let image = support::render(&gpu, &scene, &rig, options.clone())
