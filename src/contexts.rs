@@ -38,6 +38,7 @@ pub struct EyeContext {
     pub world_from_view: Mat4,
     pub clip_from_view: Mat4,
     pub view_from_clip: Mat4,
+    pub clip_from_world: Mat4,
     pub position: Vec3,
 }
 
@@ -49,6 +50,7 @@ impl EyeContext {
             world_from_view: v.world_from_view_f32(),
             clip_from_view,
             view_from_clip: clip_from_view.inverse(),
+            clip_from_world: v.clip_from_world(),
             position: v.position(),
         }
     }

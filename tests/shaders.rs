@@ -128,7 +128,8 @@ fn eye(seed: f32) -> EyeContext {
         world_from_view: distinct_mat(seed + 1.0),
         clip_from_view: distinct_mat(seed + 2.0),
         view_from_clip: distinct_mat(seed + 3.0),
-        position: Vec3::new(seed + 4.0, seed + 4.1, seed + 4.2),
+        clip_from_world: distinct_mat(seed + 4.0),
+        position: Vec3::new(seed + 5.0, seed + 5.1, seed + 5.2),
     }
 }
 
@@ -161,7 +162,8 @@ fn contexts_match_wgsl() {
             ("world_from_view", 11.0),
             ("clip_from_view", 12.0),
             ("view_from_clip", 13.0),
-            ("position", 14.0),
+            ("clip_from_world", 14.0),
+            ("position", 15.0),
         ],
     );
     let d = DisplayContext {

@@ -8,6 +8,8 @@ struct EyeContext {
     world_from_view: mat4x4<f32>,
     clip_from_view: mat4x4<f32>,
     view_from_clip: mat4x4<f32>,
+    // clip_from_view * view_from_world, composed in f64 on the CPU: what vertices use.
+    clip_from_world: mat4x4<f32>,
     // The eyeball: apex of this eye's frustum, used for specular.
     position: vec3<f32>,
 }

@@ -56,13 +56,19 @@ struct Decoded {
 fn decode(v: VertexInput, slot: u32, eye: u32, double_wide: bool) -> Decoded {
     let id = visible[slot];
     let inst = instances[id];
-    let spun = spin(inst.spin * frame.time);
+    // Most instances do not animate: the branches spare them a sin and cos per vertex.
+    var spun = mat3x3(vec3(1.0, 0.0, 0.0), vec3(0.0, 1.0, 0.0), vec3(0.0, 0.0, 1.0));
+    if (inst.spin != 0.0) {
+        spun = spin(inst.spin * frame.time);
+    }
     let local = vec4(spun * v.position, 1.0);
     let rows = inst.world_from_local;
     var world = vec3(dot(rows[0], local), dot(rows[1], local), dot(rows[2], local));
-    world.y += inst.bob * sin(PI * frame.time);
+    if (inst.bob != 0.0) {
+        world.y += inst.bob * sin(PI * frame.time);
+    }
     let e = display.eye[eye];
-    var clip = e.clip_from_view * (e.view_from_world * vec4(world, 1.0));
+    var clip = e.clip_from_world * vec4(world, 1.0);
     var seam = 1.0;
     if (double_wide) {
         // Exact two-viewport remap: x' = x/2 -+ w/2 lands where a W-wide viewport would.
