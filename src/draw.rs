@@ -5,9 +5,7 @@
 use std::collections::HashMap;
 use std::num::NonZeroU32;
 
-use wgpu::util::DeviceExt;
-
-use crate::cull::gpu::CullTargets;
+use crate::cull::gpu::{CullTargets, init_buffer};
 use crate::records::{InstanceRecord, instance_records};
 use crate::scene::{Scene, Vertex};
 use crate::shaders::{DRAW_BINDINGS, DrawKey, bind_group, bind_group_layout};
@@ -45,13 +43,8 @@ pub struct DrawScene {
 
 impl DrawScene {
     pub fn new(device: &wgpu::Device, scene: &Scene) -> DrawScene {
-        let init = |label: &str, contents: &[u8], usage| {
-            device.create_buffer_init(&wgpu::util::BufferInitDescriptor {
-                label: Some(label),
-                contents,
-                usage,
-            })
-        };
+        let init =
+            |label: &str, contents: &[u8], usage| init_buffer(device, label, contents, usage);
         DrawScene {
             vertices: init(
                 "stereocull.vertices",
@@ -272,8 +265,10 @@ fn pipeline(
                 attributes: &VERTEX_ATTRIBUTES,
             })],
         },
-        // No back-face culling: glTF double-sided materials and open shapes.
-        primitive: wgpu::PrimitiveState::default(),
+        primitive: wgpu::PrimitiveState {
+            cull_mode: key.face_culling(),
+            ..Default::default()
+        },
         depth_stencil: Some(wgpu::DepthStencilState {
             format: target.depth,
             depth_write_enabled: Some(true),

@@ -14,7 +14,7 @@ use gltf::buffer::Data;
 use gltf::{Document, Semantic};
 
 use crate::error::{Error, Result};
-use crate::scene::{Animation, Instance, Scene, Vertex};
+use crate::scene::{Animation, Instance, Scene, Vertex, both_windings};
 
 const INSTANCING: &str = "EXT_mesh_gpu_instancing";
 
@@ -43,6 +43,7 @@ pub fn import_bytes(bytes: &[u8], base: Option<&Path>, origin: &Path) -> Result<
         scene: Scene::default(),
         primitive_mesh: HashMap::new(),
         visited: HashSet::new(),
+        mirrored: HashMap::new(),
         skipped: 0,
     };
     let root = gltf
@@ -109,6 +110,8 @@ struct Importer<'a> {
     /// Nodes already placed: glTF nodes form trees, and a node met twice (a cycle, or
     /// two parents) would otherwise recurse forever or multiply instances.
     visited: HashSet<usize>,
+    /// Mesh id -> its reversed-winding twin, for nodes that mirror.
+    mirrored: HashMap<u32, u32>,
     skipped: usize,
 }
 
@@ -153,9 +156,15 @@ impl Importer<'_> {
                     .base_color_factor(),
             );
             for copy in &copies {
+                let world_from_local = world * *copy;
+                let mirrored = world_from_local.matrix3.determinant() < 0.0;
+                let mesh = match mirrored {
+                    false => id,
+                    true => self.mirrored_mesh_id(id, &primitive),
+                };
                 self.scene.instances.push(Instance {
-                    world_from_local: world * *copy,
-                    mesh: id,
+                    world_from_local,
+                    mesh,
                     color,
                     animation: Animation::NONE,
                 });
@@ -241,6 +250,20 @@ impl Importer<'_> {
         Ok(id)
     }
 
+    /// The mesh with reversed winding for mirroring transforms (created on first use), or
+    /// the mesh itself when it is double-sided already.
+    fn mirrored_mesh_id(&mut self, id: u32, primitive: &gltf::Primitive) -> u32 {
+        if primitive.material().double_sided() {
+            return id;
+        }
+        if let Some(&mirrored) = self.mirrored.get(&id) {
+            return mirrored;
+        }
+        let mirrored = self.scene.add_mirrored_mesh(id);
+        self.mirrored.insert(id, mirrored);
+        mirrored
+    }
+
     fn triangles(
         &self,
         primitive: &gltf::Primitive,
@@ -303,6 +326,10 @@ impl Importer<'_> {
             .zip(&normals)
             .map(|(&p, &n)| Vertex::new(p, n))
             .collect();
+        let indices = match primitive.material().double_sided() {
+            true => both_windings(&indices),
+            false => indices,
+        };
         Ok((vertices, indices))
     }
 }

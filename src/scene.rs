@@ -26,6 +26,13 @@ impl Vertex {
 }
 
 /// A mesh's slice of the shared buffers and its local bounding sphere.
+///
+/// Triangles are front-facing when counter-clockwise as seen after the instance's
+/// transform, and back faces are culled. A surface seen from both sides lists its
+/// triangles in both windings ([`both_windings`]); an instance whose transform mirrors
+/// (negative determinant) needs a mesh with the winding reversed
+/// ([`Scene::add_mirrored_mesh`]).
+/// The glTF import does both (`doubleSided` materials, mirroring nodes).
 #[derive(Clone, Debug, PartialEq)]
 pub struct Mesh {
     pub name: String,
@@ -113,6 +120,22 @@ impl Scene {
         self.meshes.len() as u32 - 1
     }
 
+    /// Appends a twin of mesh `id` with its triangles' winding reversed, sharing its
+    /// vertices, and returns its id: the mesh for instances whose transform mirrors.
+    pub fn add_mirrored_mesh(&mut self, id: u32) -> u32 {
+        let mesh = &self.meshes[id as usize];
+        let first = mesh.first_index as usize;
+        let indices = reversed_winding(&self.indices[first..first + mesh.index_count as usize]);
+        let twin = Mesh {
+            name: format!("{} (mirrored)", mesh.name),
+            first_index: self.indices.len() as u32,
+            ..mesh.clone()
+        };
+        self.indices.extend(indices);
+        self.meshes.push(twin);
+        self.meshes.len() as u32 - 1
+    }
+
     /// The instance's world bounding sphere: the local center transformed, the radius
     /// scaled by the largest axis scale (conservative under non-uniform scale), grown to
     /// hold every pose of its [`Animation`] (a spinning mesh's points stay within twice
@@ -142,6 +165,20 @@ fn world_sphere_of(meshes: &[Mesh], instance: &Instance) -> Vec4 {
     let radius = (local.w + orbit) * scale_sq.sqrt() + animation.bob.abs();
     let slack = crate::frustum::ROUNDING_SLACK * (center.abs().element_sum() + radius);
     center.extend(radius + slack)
+}
+
+fn reversed_winding(indices: &[u32]) -> Vec<u32> {
+    indices
+        .chunks_exact(3)
+        .flat_map(|t| [t[0], t[2], t[1]])
+        .collect()
+}
+
+/// The triangles of `indices` in both windings: a surface drawn from either side.
+pub fn both_windings(indices: &[u32]) -> Vec<u32> {
+    let mut both = indices.to_vec();
+    both.extend(reversed_winding(indices));
+    both
 }
 
 fn bounding_sphere(vertices: &[Vertex]) -> Vec4 {

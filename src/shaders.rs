@@ -255,6 +255,14 @@ impl DrawKey {
         multiview: true,
     };
 
+    /// Back faces are culled (counter-clockwise is front, in world space: see
+    /// [`crate::scene::Mesh`]), which halves the triangles that reach rasterization,
+    /// except in multiview: lavapipe (Mesa 22.3) then drops front faces of the second
+    /// view (the floor vanishes from the right eye in `every_stereo_mode_agrees_with_instanced`).
+    pub fn face_culling(&self) -> Option<wgpu::Face> {
+        (!self.multiview).then_some(wgpu::Face::Back)
+    }
+
     /// The variant for `views` on a device with or without clip distances (one view
     /// never needs them).
     pub const fn new(views: u32, clip_distances_available: bool) -> DrawKey {

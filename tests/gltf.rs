@@ -293,3 +293,41 @@ fn float_indices_are_an_error_naming_the_accessor() {
         "{msg}"
     );
 }
+
+/// Back faces are culled, so the import keeps what the author meant: a node that mirrors
+/// gets the mesh's reversed twin (shared by every mirroring node), a `doubleSided`
+/// material both windings.
+#[test]
+fn mirroring_nodes_and_double_sided_materials_keep_their_faces() {
+    let dir = tempfile::tempdir().unwrap();
+    let nodes = serde_json::json!([
+        {"mesh": 0},
+        {"mesh": 0, "scale": [-1, 1, 1]},
+        {"mesh": 0, "scale": [1, -2, 1]},
+        {"mesh": 0, "scale": [-1, -1, 1]}
+    ]);
+    let p = with_nodes(dir.path(), nodes, serde_json::json!([0, 1, 2, 3]));
+    let s = scene_spec::load(p.to_str().unwrap()).unwrap();
+    let meshes: Vec<u32> = s.instances.iter().map(|i| i.mesh).collect();
+    assert_eq!(
+        meshes,
+        [0, 1, 1, 0],
+        "the two mirroring nodes share one twin"
+    );
+    let triangle = |m: usize| {
+        let first = s.meshes[m].first_index as usize;
+        s.indices[first..first + s.meshes[m].index_count as usize].to_vec()
+    };
+    assert_eq!(triangle(0), [0, 1, 2]);
+    assert_eq!(triangle(1), [0, 2, 1]);
+    assert_eq!(s.meshes[1].base_vertex, s.meshes[0].base_vertex);
+
+    let mut json: serde_json::Value =
+        serde_json::from_str(&std::fs::read_to_string(&p).unwrap()).unwrap();
+    json["materials"] = serde_json::json!([{"doubleSided": true}]);
+    json["meshes"][0]["primitives"][0]["material"] = serde_json::json!(0);
+    std::fs::write(&p, json.to_string()).unwrap();
+    let s = scene_spec::load(p.to_str().unwrap()).unwrap();
+    assert_eq!(s.meshes.len(), 1, "double-sided: no twin needed");
+    assert_eq!(s.indices, [0, 1, 2, 0, 2, 1]);
+}

@@ -62,13 +62,8 @@ impl CullScene {
             mesh_count: layout.meshes.len() as u32,
             groups_x: groups.0,
         };
-        let init = |label: &str, contents: &[u8], usage| {
-            device.create_buffer_init(&wgpu::util::BufferInitDescriptor {
-                label: Some(label),
-                contents,
-                usage,
-            })
-        };
+        let init =
+            |label: &str, contents: &[u8], usage| init_buffer(device, label, contents, usage);
         let storage = wgpu::BufferUsages::STORAGE;
         CullScene {
             instance_count: n,
@@ -128,7 +123,33 @@ impl CullTargets {
     }
 }
 
-/// A buffer of `size` bytes (at least 4: wgpu refuses empty bindings).
+/// The smallest buffer we create: wgpu refuses empty bindings and slices, and 64 bytes
+/// hold one element of any record we bind, so an empty scene draws nothing instead of
+/// failing.
+const MIN_BUFFER: usize = 64;
+
+/// A buffer holding `contents`, padded with zeros to at least [`MIN_BUFFER`] bytes.
+pub(crate) fn init_buffer(
+    device: &wgpu::Device,
+    label: &str,
+    contents: &[u8],
+    usage: wgpu::BufferUsages,
+) -> wgpu::Buffer {
+    let padded;
+    let contents = if contents.len() < MIN_BUFFER {
+        padded = [contents, &[0; MIN_BUFFER][contents.len()..]].concat();
+        &padded[..]
+    } else {
+        contents
+    };
+    device.create_buffer_init(&wgpu::util::BufferInitDescriptor {
+        label: Some(label),
+        contents,
+        usage,
+    })
+}
+
+/// A buffer of `size` bytes (at least [`MIN_BUFFER`]).
 pub(crate) fn storage_buffer(
     device: &wgpu::Device,
     label: &str,
@@ -137,7 +158,7 @@ pub(crate) fn storage_buffer(
 ) -> wgpu::Buffer {
     device.create_buffer(&wgpu::BufferDescriptor {
         label: Some(label),
-        size: size.max(4),
+        size: size.max(MIN_BUFFER as u64),
         usage,
         mapped_at_creation: false,
     })
