@@ -6,6 +6,8 @@ use std::collections::HashMap;
 use std::num::NonZeroU32;
 
 use crate::cull::gpu::{CullTargets, init_buffer};
+use crate::error::Result;
+use crate::materials::{self, GpuMaterials};
 use crate::records::{InstanceRecord, instance_records};
 use crate::scene::{Scene, Vertex};
 use crate::shaders::{DRAW_BINDINGS, DrawKey, bind_group, bind_group_layout};
@@ -30,22 +32,25 @@ pub const CLEAR_COLOR: wgpu::Color = wgpu::Color {
 
 /// How the draw pipelines read a [`Vertex`]: `VertexInput` in
 /// `wgsl/shared/draw_common.wgsl` (`tests/shaders.rs` checks both sides).
-pub const VERTEX_ATTRIBUTES: [wgpu::VertexAttribute; 2] =
-    wgpu::vertex_attr_array![0 => Float32x3, 1 => Float32x3];
+pub const VERTEX_ATTRIBUTES: [wgpu::VertexAttribute; 4] =
+    wgpu::vertex_attr_array![0 => Float32x3, 1 => Float32x3, 2 => Float32x2, 3 => Uint32];
 
-/// The scene's geometry and instance records on the GPU, uploaded once.
+/// The scene's geometry, instance records and materials on the GPU, uploaded once.
 pub struct DrawScene {
     pub vertices: wgpu::Buffer,
     pub indices: wgpu::Buffer,
     pub instances: wgpu::Buffer,
+    pub materials: GpuMaterials,
     pub mesh_count: u32,
 }
 
 impl DrawScene {
-    pub fn new(device: &wgpu::Device, scene: &Scene) -> DrawScene {
+    /// Fails when the scene's materials do not fit together or exceed the device.
+    pub fn new(device: &wgpu::Device, drawer: &Drawer, scene: &Scene) -> Result<DrawScene> {
         let init =
             |label: &str, contents: &[u8], usage| init_buffer(device, label, contents, usage);
-        DrawScene {
+        Ok(DrawScene {
+            materials: GpuMaterials::new(device, &drawer.materials_layout, scene)?,
             vertices: init(
                 "stereocull.vertices",
                 bytemuck::cast_slice(&scene.vertices),
@@ -62,7 +67,7 @@ impl DrawScene {
                 wgpu::BufferUsages::STORAGE,
             ),
             mesh_count: scene.meshes.len() as u32,
-        }
+        })
     }
 
     pub const BYTES_PER_INSTANCE: u64 = size_of::<InstanceRecord>() as u64;
@@ -89,6 +94,7 @@ impl DrawFeatures {
 /// Draw pipelines by variant, for one color format.
 pub struct Drawer {
     layout: wgpu::BindGroupLayout,
+    materials_layout: wgpu::BindGroupLayout,
     pipelines: HashMap<DrawKey, wgpu::RenderPipeline>,
     pub features: DrawFeatures,
 }
@@ -108,9 +114,10 @@ impl Drawer {
         material: Option<&str>,
     ) -> Drawer {
         let layout = bind_group_layout(device, "stereocull.draw", &DRAW_BINDINGS);
+        let materials_layout = materials::bind_group_layout(device);
         let pipeline_layout = device.create_pipeline_layout(&wgpu::PipelineLayoutDescriptor {
             label: Some("stereocull.draw"),
-            bind_group_layouts: &[Some(&layout)],
+            bind_group_layouts: &[Some(&layout), Some(&materials_layout)],
             immediate_size: 0,
         });
         let pipelines = keys
@@ -125,6 +132,7 @@ impl Drawer {
             .collect();
         Drawer {
             layout,
+            materials_layout,
             pipelines,
             features: DrawFeatures::of(device),
         }
@@ -158,6 +166,7 @@ impl Drawer {
     ) {
         pass.set_pipeline(&self.pipelines[&key]);
         Drawer::bind_resources(pass, scene, bind_group);
+        pass.set_bind_group(1, &scene.materials.bind_group, &[]);
     }
 
     /// The geometry and group 0 on `pass`, for whatever pipeline it has.

@@ -30,6 +30,11 @@ pub enum Error {
     #[error("scene {path}: {message}")]
     Scene { path: PathBuf, message: String },
 
+    /// A scene's parts do not fit together (e.g. a vertex naming a material the scene
+    /// lacks).
+    #[error("scene: {0}")]
+    InvalidScene(String),
+
     /// A `procedural:N[:M]` scene specification is malformed.
     #[error("scene {spec:?}: {message}")]
     SceneSpec { spec: String, message: String },

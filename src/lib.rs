@@ -23,6 +23,7 @@ pub mod draw;
 pub mod error;
 pub mod frustum;
 pub mod gltf_import;
+pub mod materials;
 pub mod modes;
 pub mod procedural;
 pub mod profiling;

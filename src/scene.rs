@@ -8,21 +8,44 @@
 use bytemuck::{Pod, Zeroable};
 use glam::{Affine3A, Mat4, Vec3, Vec4};
 
-/// One vertex as the draw pipeline reads it (`wgsl/draw.wgsl`, locations 0 and 1).
+/// One vertex as the draw pipeline reads it (`VertexInput` in `wgsl/shared/decode.wgsl`).
 #[repr(C)]
 #[derive(Clone, Copy, Debug, PartialEq, Pod, Zeroable)]
 pub struct Vertex {
     pub position: [f32; 3],
     pub normal: [f32; 3],
+    /// Texture coordinates of the base color texture.
+    pub uv: [f32; 2],
+    /// Index into [`Scene::materials`]. Per vertex because glTF gives each primitive (our
+    /// mesh) one material: the vertex stage then needs no extra load to find it.
+    pub material: u32,
 }
 
 impl Vertex {
+    /// An untextured vertex of material 0.
     pub fn new(position: Vec3, normal: Vec3) -> Vertex {
         Vertex {
             position: position.into(),
             normal: normal.into(),
+            uv: [0.0; 2],
+            material: 0,
         }
     }
+}
+
+/// What a surface is made of, beyond the instance's color (which multiplies it).
+#[derive(Clone, Debug, Default, PartialEq)]
+pub struct Material {
+    pub name: String,
+    /// Index into [`Scene::textures`], sampled at the vertices' `uv`.
+    pub base_color_texture: Option<u32>,
+}
+
+/// A base color image: sRGB-encoded RGBA, straight alpha.
+#[derive(Clone, Debug, PartialEq)]
+pub struct Texture {
+    pub name: String,
+    pub image: image::RgbaImage,
 }
 
 /// A mesh's slice of the shared buffers and its local bounding sphere.
@@ -80,6 +103,9 @@ pub struct Scene {
     pub indices: Vec<u32>,
     pub meshes: Vec<Mesh>,
     pub instances: Vec<Instance>,
+    /// May be empty: material 0 is then untextured.
+    pub materials: Vec<Material>,
+    pub textures: Vec<Texture>,
 }
 
 impl Scene {

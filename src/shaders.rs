@@ -315,6 +315,7 @@ impl DrawKey {
         [
             prelude,
             &decode_source(self.views),
+            crate::materials::DECLARATIONS,
             DRAW_COMMON,
             &shading,
             entry,

@@ -8,6 +8,7 @@ use naga::{Module, TypeInner};
 use stereocull::contexts::{DisplayContext, EyeContext, FrameContext};
 use stereocull::cull::gpu::CullParams;
 use stereocull::draw::VERTEX_ATTRIBUTES;
+use stereocull::materials::MaterialRecord;
 use stereocull::records::uniform_bytes;
 use stereocull::records::{DrawArgs, InstanceRecord, MeshRecord};
 use stereocull::scene::Vertex;
@@ -96,6 +97,14 @@ fn records_match_wgsl() {
             ("cull_start", offset_of!(MeshRecord, cull_start)),
             ("cull_count", offset_of!(MeshRecord, cull_count)),
         ],
+    );
+    check(
+        "MaterialRecord",
+        size_of::<MaterialRecord>(),
+        &[(
+            "base_color_layer",
+            offset_of!(MaterialRecord, base_color_layer),
+        )],
     );
     check(
         "DrawArgs",
@@ -245,15 +254,20 @@ fn every_pass_binds_what_its_list_declares() {
     for (label, source, list) in passes {
         let module = parse(&label, &source);
         let mut seen = Vec::new();
+        let mut materials = Vec::new();
         for (_, var) in module.global_variables.iter() {
             let Some(binding) = &var.binding else {
                 continue;
             };
+            let name = var.name.as_deref().unwrap_or_default();
+            if binding.group == 1 {
+                materials.push((binding.binding, name.to_string()));
+                continue;
+            }
             assert_eq!(binding.group, 0, "{label}");
             let want: &Binding = list
                 .get(binding.binding as usize)
                 .unwrap_or_else(|| panic!("{label}: binding {} not in its list", binding.binding));
-            let name = var.name.as_deref().unwrap_or_default();
             assert_eq!(name, want.name, "{label}: binding {}", binding.binding);
             let access = match var.space {
                 naga::AddressSpace::Uniform => Access::Uniform,
@@ -271,6 +285,18 @@ fn every_pass_binds_what_its_list_declares() {
         seen.sort();
         let all: Vec<u32> = (0..list.len() as u32).collect();
         assert_eq!(seen, all, "{label}: bindings");
+        // Group 1, the draw pipelines' materials (stereocull::materials::bind_group_layout).
+        materials.sort();
+        let want: &[(u32, String)] = if label.starts_with("stereocull.draw") {
+            &[
+                (0, "base_color_textures".into()),
+                (1, "base_color_sampler".into()),
+                (2, "materials".into()),
+            ]
+        } else {
+            &[]
+        };
+        assert_eq!(materials, want, "{label}: group 1");
     }
 }
 
@@ -291,6 +317,8 @@ fn vertex_layout_matches_wgsl() {
     let rust = [
         ("position", offset_of!(Vertex, position)),
         ("normal", offset_of!(Vertex, normal)),
+        ("uv", offset_of!(Vertex, uv)),
+        ("material", offset_of!(Vertex, material)),
     ];
     assert_eq!(members.len(), rust.len());
     for ((member, (name, offset)), attribute) in members.iter().zip(rust).zip(VERTEX_ATTRIBUTES) {
@@ -300,18 +328,20 @@ fn vertex_layout_matches_wgsl() {
         };
         assert_eq!(location, attribute.shader_location, "{name}");
         assert_eq!(attribute.offset as usize, offset, "{name} offset");
-        assert_eq!(attribute.format, wgpu::VertexFormat::Float32x3, "{name}");
         let member_ty = &module.types[member.ty].inner;
-        assert!(
-            matches!(
-                member_ty,
-                TypeInner::Vector {
-                    size: naga::VectorSize::Tri,
-                    scalar: naga::Scalar::F32
-                }
-            ),
-            "{name}: {member_ty:?}"
-        );
+        let wgsl_format = match member_ty {
+            TypeInner::Vector {
+                size: naga::VectorSize::Tri,
+                scalar: naga::Scalar::F32,
+            } => wgpu::VertexFormat::Float32x3,
+            TypeInner::Vector {
+                size: naga::VectorSize::Bi,
+                scalar: naga::Scalar::F32,
+            } => wgpu::VertexFormat::Float32x2,
+            TypeInner::Scalar(naga::Scalar::U32) => wgpu::VertexFormat::Uint32,
+            other => panic!("{name}: {other:?}"),
+        };
+        assert_eq!(attribute.format, wgsl_format, "{name}");
     }
-    assert_eq!(size_of::<Vertex>(), 24);
+    assert_eq!(size_of::<Vertex>(), 36);
 }

@@ -8,3 +8,8 @@ fn vs_main(v: VertexInput, @builtin(instance_index) instance_index: u32) -> Vert
     let at = decode_instance(instance_index, VIEWS);
     return vertex(v, at.x, at.y, VIEWS == 2u);
 }
+
+@fragment
+fn fs_main(in: FragmentInput) -> @location(0) vec4<f32> {
+    return fragment(in, in.ids.x);
+}

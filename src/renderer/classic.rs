@@ -10,6 +10,7 @@ use super::{FrameStats, RendererOptions, TargetViews, context_buffer, display_co
 use crate::cull::gpu::storage_buffer;
 use crate::cull::{CullJob, CullOutput, cpu};
 use crate::draw::{DrawFeatures, DrawScene, Drawer, set_eye_viewport};
+use crate::error::Result;
 use crate::modes::StereoMode;
 use crate::profiling::GpuTimer;
 use crate::records::{CullLayout, uniform_bytes};
@@ -41,7 +42,7 @@ pub(super) struct ClassicPath {
     mode: StereoMode,
     layout: CullLayout,
     drawer: Drawer,
-    draw_scene: DrawScene,
+    pub(super) draw_scene: DrawScene,
     displays: Vec<ClassicDisplay>,
     /// This frame's CPU culls per display: one, or one per eye (multi-camera).
     culls: Vec<Vec<CullOutput>>,
@@ -54,7 +55,7 @@ impl ClassicPath {
         rig: &Rig,
         frame: &wgpu::Buffer,
         options: &RendererOptions,
-    ) -> ClassicPath {
+    ) -> Result<ClassicPath> {
         let clip = DrawFeatures::of(device).clip_distances;
         let drawer = Drawer::new(
             device,
@@ -62,7 +63,7 @@ impl ClassicPath {
             &[DrawKey::new(1, clip)],
             options.material.as_deref(),
         );
-        let draw_scene = DrawScene::new(device, scene);
+        let draw_scene = DrawScene::new(device, &drawer, scene)?;
         let n = scene.instances.len() as u64;
         let usage = wgpu::BufferUsages::STORAGE | wgpu::BufferUsages::COPY_DST;
         let visible_list = || storage_buffer(device, "stereocull.visible", 4 * n, usage);
@@ -98,14 +99,14 @@ impl ClassicPath {
                 }
             })
             .collect();
-        ClassicPath {
+        Ok(ClassicPath {
             mode: options.mode,
             layout: CullLayout::new(scene),
             drawer,
             draw_scene,
             displays,
             culls: Vec::new(),
-        }
+        })
     }
 
     /// Culls on the CPU (all displays and eyes in one pass over the spheres), writes the

@@ -47,7 +47,7 @@ struct IndirectDisplay {
 pub(super) struct IndirectPath {
     culling: Culling,
     drawer: Drawer,
-    draw_scene: DrawScene,
+    pub(super) draw_scene: DrawScene,
     mesh_count: u32,
     displays: Vec<IndirectDisplay>,
 }
@@ -59,7 +59,7 @@ impl IndirectPath {
         rig: &Rig,
         frame: &wgpu::Buffer,
         options: &RendererOptions,
-    ) -> IndirectPath {
+    ) -> Result<IndirectPath> {
         let multiview = options.mode == StereoMode::Multiview;
         let layout = CullLayout::new(scene);
         let culling = match options.cull {
@@ -85,7 +85,7 @@ impl IndirectPath {
             &keys,
             options.material.as_deref(),
         );
-        let draw_scene = DrawScene::new(device, scene);
+        let draw_scene = DrawScene::new(device, &drawer, scene)?;
         let (instances, meshes) = (scene.instances.len() as u32, scene.meshes.len() as u32);
         let displays = keys
             .iter()
@@ -112,13 +112,13 @@ impl IndirectPath {
                 }
             })
             .collect();
-        IndirectPath {
+        Ok(IndirectPath {
             culling,
             drawer,
             draw_scene,
             mesh_count: meshes,
             displays,
-        }
+        })
     }
 
     /// Writes each display's context and, culling on the CPU, its cull results.

@@ -169,6 +169,15 @@ enum Path {
     Classic(ClassicPath),
 }
 
+impl Path {
+    fn draw_scene(&mut self) -> &mut DrawScene {
+        match self {
+            Path::Indirect(p) => &mut p.draw_scene,
+            Path::Classic(p) => &mut p.draw_scene,
+        }
+    }
+}
+
 pub struct Renderer {
     options: RendererOptions,
     /// The frame context's uniform, written once per frame, bound by every pass.
@@ -193,8 +202,8 @@ impl Renderer {
         let scope = device.push_error_scope(wgpu::ErrorFilter::Validation);
         let frame = uniform_buffer::<FrameContext>(device, "stereocull.frame_context");
         let path = match options.mode.per_instance() {
-            false => Path::Indirect(IndirectPath::new(device, scene, rig, &frame, &options)),
-            true => Path::Classic(ClassicPath::new(device, scene, rig, &frame, &options)),
+            false => Path::Indirect(IndirectPath::new(device, scene, rig, &frame, &options)?),
+            true => Path::Classic(ClassicPath::new(device, scene, rig, &frame, &options)?),
         };
         if let Some(e) = pollster::block_on(scope.pop()) {
             return Err(Error::Wgpu(e));
@@ -255,7 +264,8 @@ impl Renderer {
             Path::Indirect(p) => p.prepare(queue, rig, &resolved),
             Path::Classic(p) => p.prepare(queue, rig, &resolved),
         };
-        stats.bytes_uploaded += frame_bytes;
+        // Texels go up with the first frame: `new` has no queue.
+        stats.bytes_uploaded += frame_bytes + self.path.draw_scene().materials.upload(queue);
         Ok(stats)
     }
 

@@ -7,6 +7,9 @@
 struct VertexInput {
     @location(0) position: vec3<f32>,
     @location(1) normal: vec3<f32>,
+    @location(2) uv: vec2<f32>,
+    // The mesh's material (MaterialRecord index).
+    @location(3) material: u32,
 }
 
 // Normals transform by the cofactor matrix (inverse transpose times determinant),
@@ -49,6 +52,8 @@ struct Decoded {
     instance: u32,
     // The eye: 0 left, 1 right (display.eye[eye] is its context).
     eye: u32,
+    uv: vec2<f32>,
+    material: u32,
 }
 
 // Visible slot `slot` for eye `eye`, animated by the frame's time; `double_wide`
@@ -78,5 +83,6 @@ fn decode(v: VertexInput, slot: u32, eye: u32, double_wide: bool) -> Decoded {
     }
     let normal = world_normal(rows, spun * v.normal);
     let true_eye = eye + display.first_eye;
-    return Decoded(clip, seam, world, normal, unpack4x8unorm(inst.color), id, true_eye);
+    let color = unpack4x8unorm(inst.color);
+    return Decoded(clip, seam, world, normal, color, id, true_eye, v.uv, v.material);
 }

@@ -11,8 +11,8 @@ fn vertex(v: VertexInput, slot: u32, eye: u32, double_wide: bool) -> VertexOutpu
     out.world_position = d.world_position;
     out.normal = d.world_normal;
     out.color = d.color;
-    out.eye = d.eye;
-    out.instance = d.instance;
+    out.ids = vec3(d.eye, d.instance, d.material);
+    out.uv = d.uv;
     return out;
 }
 
@@ -22,8 +22,10 @@ struct FragmentInput {
     @location(0) world_position: vec3<f32>,
     @location(1) normal: vec3<f32>,
     @location(2) color: vec4<f32>,
-    @location(3) @interpolate(flat) eye: u32,
-    @location(4) @interpolate(flat) instance: u32,
+    // (eye, instance, material) in one location: lavapipe's multiview misroutes
+    // clipped triangles as varyings grow past five locations.
+    @location(3) @interpolate(flat) ids: vec3<u32>,
+    @location(4) uv: vec2<f32>,
 }
 
 // What a material sees of one fragment: a caller's `fn material(s: Surface) ->
@@ -33,20 +35,35 @@ struct Surface {
     world_position: vec3<f32>,
     // Interpolated, not normalized.
     normal: vec3<f32>,
-    // The instance record's color.
+    // The instance record's color (for glTF, the material's base color factor);
+    // base_color(s) multiplies in the base color texture.
     color: vec4<f32>,
     eye: u32,
     instance: u32,
+    // Texture coordinates, and the material (materials[s.material]).
+    uv: vec2<f32>,
+    material: u32,
+}
+
+// The surface's color times its material's base color texture, if any. Sampled
+// unconditionally (layer 0 stands in for untextured materials) to keep control flow
+// uniform, as implicit-derivative sampling requires.
+fn base_color(s: Surface) -> vec4<f32> {
+    let layer = materials[s.material].base_color_layer;
+    let textured = layer != 0xffffffffu;
+    let texel = textureSample(base_color_textures, base_color_sampler, s.uv, select(0u, layer, textured));
+    return s.color * select(vec4(1.0), texel, textured);
 }
 
 const LIGHT_DIRECTION: vec3<f32> = vec3(0.37139068, 0.74278135, 0.55708601);
 
-@fragment
-fn fs_main(in: FragmentInput) -> @location(0) vec4<f32> {
-    if (DISCARD_OTHER_HALF && ((in.position.x < display.resolution.x) != (in.eye == 0u))) {
+// The fragment stage of every built-in pipeline, for eye `eye` (its entry point says
+// where the eye comes from).
+fn fragment(in: FragmentInput, eye: u32) -> vec4<f32> {
+    if (DISCARD_OTHER_HALF && ((in.position.x < display.resolution.x) != (eye == 0u))) {
         discard;
     }
-    let s = Surface(in.world_position, in.normal, in.color, in.eye, in.instance);
+    let s = Surface(in.world_position, in.normal, in.color, eye, in.ids.y, in.uv, in.ids.z);
     return surface_color(s);
 }
 
@@ -61,5 +78,5 @@ fn shade(s: Surface) -> vec4<f32> {
     let diffuse = max(dot(n, LIGHT_DIRECTION), 0.0);
     let half_vector = normalize(LIGHT_DIRECTION + to_eye);
     let specular = 0.3 * pow(max(dot(n, half_vector), 0.0), 48.0);
-    return vec4(s.color.rgb * (0.25 + 0.75 * diffuse) + vec3(specular), 1.0);
+    return vec4(base_color(s).rgb * (0.25 + 0.75 * diffuse) + vec3(specular), 1.0);
 }

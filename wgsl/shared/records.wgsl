@@ -22,6 +22,12 @@ struct MeshRecord {
     cull_count: u32,
 }
 
+// Mirrored by MaterialRecord in src/materials.rs (bytemuck).
+struct MaterialRecord {
+    // Layer of base_color_textures, or 0xffffffff: untextured.
+    base_color_layer: u32,
+}
+
 // Written whole by the draws pass every frame: see DrawArgs in src/records.rs.
 struct DrawArgs {
     index_count: u32,
