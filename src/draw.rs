@@ -5,7 +5,8 @@
 use std::collections::HashMap;
 use std::num::NonZeroU32;
 
-use crate::cull::gpu::{CullTargets, init_buffer};
+use crate::buffers::init_buffer;
+use crate::cull::gpu::CullTargets;
 use crate::error::Result;
 use crate::materials::{self, GpuMaterials};
 use crate::records::{InstanceRecord, instance_records};

@@ -8,13 +8,16 @@
 use std::collections::{HashMap, HashSet};
 use std::path::Path;
 
+use base64::Engine;
+use base64::engine::general_purpose::STANDARD as BASE64;
 use glam::{Affine3A, Mat4, Quat, Vec3, Vec4};
 use gltf::accessor::{DataType, Dimensions};
 use gltf::buffer::Data;
 use gltf::{Document, Semantic};
+use image::RgbaImage;
 
 use crate::error::{Error, Result};
-use crate::scene::{Animation, Instance, Scene, Vertex, both_windings};
+use crate::scene::{Animation, Instance, Material, Scene, Texture, Vertex, both_windings};
 
 const INSTANCING: &str = "EXT_mesh_gpu_instancing";
 
@@ -44,6 +47,9 @@ pub fn import_bytes(bytes: &[u8], base: Option<&Path>, origin: &Path) -> Result<
         primitive_mesh: HashMap::new(),
         visited: HashSet::new(),
         mirrored: HashMap::new(),
+        materials: HashMap::new(),
+        textures: HashMap::new(),
+        base,
         skipped: 0,
     };
     let root = gltf
@@ -112,6 +118,12 @@ struct Importer<'a> {
     visited: HashSet<usize>,
     /// Mesh id -> its reversed-winding twin, for nodes that mirror.
     mirrored: HashMap<u32, u32>,
+    /// glTF material (None: the default material) -> our material id.
+    materials: HashMap<Option<usize>, u32>,
+    /// glTF image -> our texture id.
+    textures: HashMap<usize, u32>,
+    /// Where external images resolve.
+    base: Option<&'a Path>,
     skipped: usize,
 }
 
@@ -264,8 +276,120 @@ impl Importer<'_> {
         mirrored
     }
 
+    /// The texture coordinates the base color texture reads (its `texCoord` set), or
+    /// zeros for untextured materials.
+    fn uvs(&self, primitive: &gltf::Primitive, where_: &str, count: usize) -> Step<Vec<[f32; 2]>> {
+        let Some(info) = primitive
+            .material()
+            .pbr_metallic_roughness()
+            .base_color_texture()
+        else {
+            return Ok(vec![[0.0; 2]; count]);
+        };
+        let set = info.tex_coord();
+        if let Some(accessor) = primitive.get(&Semantic::TexCoords(set)) {
+            check_accessor(
+                &accessor,
+                accessor.size(),
+                &format!("{where_} TEXCOORD_{set}"),
+            )?;
+        }
+        let buffers = self.buffers;
+        let uvs: Vec<[f32; 2]> = primitive
+            .reader(|b| buffers.get(b.index()).map(|d| &d.0[..]))
+            .read_tex_coords(set)
+            .ok_or_else(|| format!("{where_}: its material's base color texture reads TEXCOORD_{set}, which it lacks"))?
+            .into_f32()
+            .collect();
+        if uvs.len() != count {
+            return Err(format!(
+                "{where_}: TEXCOORD_{set} and POSITION differ in count"
+            ));
+        }
+        Ok(uvs)
+    }
+
+    /// Our material for a glTF material, created on first use (with its base color
+    /// texture decoded).
+    fn material_id(&mut self, material: &gltf::Material) -> Step<u32> {
+        if let Some(&id) = self.materials.get(&material.index()) {
+            return Ok(id);
+        }
+        let base_color_texture = match material.pbr_metallic_roughness().base_color_texture() {
+            Some(info) => Some(self.texture_id(info.texture().source())?),
+            None => None,
+        };
+        let name = match material.index() {
+            Some(i) => material
+                .name()
+                .map_or_else(|| format!("material {i}"), str::to_string),
+            None => "default".into(),
+        };
+        self.scene.materials.push(Material {
+            name,
+            base_color_texture,
+        });
+        let id = self.scene.materials.len() as u32 - 1;
+        self.materials.insert(material.index(), id);
+        Ok(id)
+    }
+
+    fn texture_id(&mut self, image: gltf::Image) -> Step<u32> {
+        if let Some(&id) = self.textures.get(&image.index()) {
+            return Ok(id);
+        }
+        let name = image
+            .name()
+            .map_or_else(|| format!("image {}", image.index()), str::to_string);
+        let decoded = self
+            .decode(&image)
+            .map_err(|e| format!("image {} ({name}): {e}", image.index()))?;
+        self.scene.textures.push(Texture {
+            name,
+            image: decoded,
+        });
+        let id = self.scene.textures.len() as u32 - 1;
+        self.textures.insert(image.index(), id);
+        Ok(id)
+    }
+
+    /// The image's pixels as sRGB RGBA8, from a buffer view, a data URI or a file.
+    fn decode(&self, image: &gltf::Image) -> Step<RgbaImage> {
+        let owned;
+        let bytes: &[u8] = match image.source() {
+            gltf::image::Source::View { view, .. } => {
+                let buffer = self.buffers.get(view.buffer().index()).map(|d| &d.0[..]);
+                buffer
+                    .and_then(|b| b.get(view.offset()..view.offset() + view.length()))
+                    .ok_or_else(|| {
+                        format!("bufferViews[{}] lies outside its buffer", view.index())
+                    })?
+            }
+            gltf::image::Source::Uri { uri, .. } => {
+                owned = match uri.strip_prefix("data:") {
+                    Some(data) => {
+                        let (_, payload) = data
+                            .split_once(";base64,")
+                            .ok_or("a data URI that is not base64")?;
+                        BASE64.decode(payload).map_err(|e| e.to_string())?
+                    }
+                    None => {
+                        let base = self
+                            .base
+                            .ok_or("an external file, but the scene has no directory")?;
+                        let path = base.join(uri);
+                        std::fs::read(&path).map_err(|e| format!("{}: {e}", path.display()))?
+                    }
+                };
+                &owned
+            }
+        };
+        let decoded = image::load_from_memory(bytes).map_err(|e| e.to_string())?;
+        Ok(decoded.to_rgba8())
+    }
+
     fn triangles(
-        &self,
+        &mut self,
         primitive: &gltf::Primitive,
         key: (usize, usize),
     ) -> Step<(Vec<Vertex>, Vec<u32>)> {
@@ -292,7 +416,8 @@ impl Importer<'_> {
                 ));
             }
         }
-        let reader = primitive.reader(|b| self.buffers.get(b.index()).map(|d| &d.0[..]));
+        let buffers = self.buffers;
+        let reader = primitive.reader(|b| buffers.get(b.index()).map(|d| &d.0[..]));
         let positions: Vec<Vec3> = reader
             .read_positions()
             .ok_or_else(|| format!("{where_}: no POSITION"))?
@@ -321,10 +446,17 @@ impl Importer<'_> {
         if normals.len() != positions.len() {
             return Err(format!("{where_}: NORMAL and POSITION differ in count"));
         }
+        let material = self.material_id(&primitive.material())?;
+        let uvs = self.uvs(primitive, &where_, positions.len())?;
         let vertices = positions
             .iter()
             .zip(&normals)
-            .map(|(&p, &n)| Vertex::new(p, n))
+            .zip(uvs)
+            .map(|((&p, &n), uv)| Vertex {
+                uv,
+                material,
+                ..Vertex::new(p, n)
+            })
             .collect();
         let indices = match primitive.material().double_sided() {
             true => both_windings(&indices),

@@ -15,6 +15,7 @@
 //! (pipelines, passes, the one indirect call). [`renderer::Renderer`] ties them together
 //! for embedders; [`shaders`] composes the WGSL and declares every binding once.
 
+mod buffers;
 pub mod cli;
 pub mod contexts;
 pub mod cull;

@@ -10,7 +10,7 @@ use bytemuck::{Pod, Zeroable};
 use image::RgbaImage;
 use image::imageops::FilterType;
 
-use crate::cull::gpu::init_buffer;
+use crate::buffers::init_buffer;
 use crate::error::{Error, Result};
 use crate::scene::Scene;
 

@@ -331,3 +331,34 @@ fn mirroring_nodes_and_double_sided_materials_keep_their_faces() {
     assert_eq!(s.meshes.len(), 1, "double-sided: no twin needed");
     assert_eq!(s.indices, [0, 1, 2, 0, 2, 1]);
 }
+
+/// A textured material whose image does not decode, or whose primitive lacks the UV set
+/// its texture reads, is an error naming the image or the set.
+#[test]
+fn broken_base_color_textures_are_errors_naming_what_is_wrong() {
+    let dir = tempfile::tempdir().unwrap();
+    let p = with_nodes(
+        dir.path(),
+        serde_json::json!([{"mesh": 0}]),
+        serde_json::json!([0]),
+    );
+    let mut json: serde_json::Value =
+        serde_json::from_str(&std::fs::read_to_string(&p).unwrap()).unwrap();
+    json["images"] = serde_json::json!([{"uri": "data:image/png;base64,AAAA"}]);
+    json["textures"] = serde_json::json!([{"source": 0}]);
+    json["materials"] =
+        serde_json::json!([{"pbrMetallicRoughness": {"baseColorTexture": {"index": 0}}}]);
+    json["meshes"][0]["primitives"][0]["material"] = serde_json::json!(0);
+    std::fs::write(&p, json.to_string()).unwrap();
+    let msg = scene_error(&p);
+    assert!(msg.contains("image 0"), "{msg}");
+
+    let png = dir.path().join("red.png");
+    image::RgbaImage::from_pixel(2, 2, image::Rgba([200, 10, 10, 255]))
+        .save(&png)
+        .unwrap();
+    json["images"] = serde_json::json!([{"uri": "red.png"}]);
+    std::fs::write(&p, json.to_string()).unwrap();
+    let msg = scene_error(&p);
+    assert!(msg.contains("TEXCOORD_0"), "{msg}");
+}

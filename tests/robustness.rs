@@ -291,3 +291,36 @@ fn vertices_past_the_binding_size_are_accepted_up_to_the_buffer_size() {
     Renderer::new(&gpu.device, &scene, &rig(), RendererOptions::default())
         .expect("a vertex buffer past the binding size fits one buffer");
 }
+
+/// Materials that do not fit the scene are typed errors when the renderer is made, in
+/// every mode: a vertex naming a material the scene lacks, a material naming a texture
+/// it lacks.
+#[test]
+fn materials_naming_what_the_scene_lacks_are_errors() {
+    let gpu = support::gpu();
+    let mut scene = procedural::scene(20, 2, 7);
+    scene.vertices[3].material = 1;
+    let make = |scene: &stereocull::scene::Scene| {
+        StereoMode::ALL.map(|mode| {
+            let options = RendererOptions {
+                mode,
+                cull: support::cull_for(mode),
+                ..Default::default()
+            };
+            Renderer::new(&gpu.device, scene, &rig(), options).err()
+        })
+    };
+    for err in make(&scene) {
+        let msg = err.expect("a vertex naming material 1 of 1").to_string();
+        assert!(msg.contains("material 1 of 1"), "{msg}");
+    }
+    scene.vertices[3].material = 0;
+    scene.materials = vec![stereocull::scene::Material {
+        name: "stone".into(),
+        base_color_texture: Some(0),
+    }];
+    for err in make(&scene) {
+        let msg = err.expect("a material naming texture 0 of 0").to_string();
+        assert!(msg.contains("\"stone\" names texture 0 of 0"), "{msg}");
+    }
+}

@@ -7,7 +7,7 @@ use std::time::Instant;
 
 use super::passes::draw_pass;
 use super::{FrameStats, RendererOptions, TargetViews, context_buffer, display_contexts, write};
-use crate::cull::gpu::storage_buffer;
+use crate::buffers::storage_buffer;
 use crate::cull::{CullJob, CullOutput, cpu};
 use crate::draw::{DrawFeatures, DrawScene, Drawer, set_eye_viewport};
 use crate::error::Result;

@@ -202,12 +202,14 @@ impl Renderer {
         let scope = device.push_error_scope(wgpu::ErrorFilter::Validation);
         let frame = uniform_buffer::<FrameContext>(device, "stereocull.frame_context");
         let path = match options.mode.per_instance() {
-            false => Path::Indirect(IndirectPath::new(device, scene, rig, &frame, &options)?),
-            true => Path::Classic(ClassicPath::new(device, scene, rig, &frame, &options)?),
+            false => IndirectPath::new(device, scene, rig, &frame, &options).map(Path::Indirect),
+            true => ClassicPath::new(device, scene, rig, &frame, &options).map(Path::Classic),
         };
+        // Popped before returning any error, so the caller's device keeps its scopes.
         if let Some(e) = pollster::block_on(scope.pop()) {
             return Err(Error::Wgpu(e));
         }
+        let path = path?;
         let shapes = rig
             .displays
             .iter()
