@@ -281,6 +281,12 @@ fn render_takes_msaa_and_names_the_counts_it_lacks() {
         image::image_dimensions(dir.path().join("hmd.png")).unwrap(),
         (64, 24)
     );
+    // Without --msaa, render antialiases at 4x where the adapter can (lavapipe can).
+    let out = stereocull(&[&args[..], &[dir.path().to_str().unwrap()]].concat());
+    assert!(out.status.success());
+    let stats: serde_json::Value =
+        serde_json::from_slice(&std::fs::read(dir.path().join("stats.json")).unwrap()).unwrap();
+    assert_eq!(stats["msaa"], 4, "assumes lavapipe");
     let out = stereocull(&[&args[..], &[dir.path().to_str().unwrap(), "--msaa", "3"]].concat());
     let err = String::from_utf8_lossy(&out.stderr);
     assert!(!out.status.success());

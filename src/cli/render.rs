@@ -30,8 +30,17 @@ pub struct RenderArgs {
     #[arg(long, default_value_t = 0.0)]
     pub time: f32,
     /// MSAA samples per pixel (1: none); `stereocull info` lists the adapter's counts.
-    #[arg(long, default_value_t = 1)]
-    pub msaa: u32,
+    /// Default: 4 where the adapter has it for this mode, else 1.
+    #[arg(long)]
+    pub msaa: Option<u32>,
+}
+
+/// 4x MSAA (VR practice, and what lavapipe has) where the adapter renders the color
+/// format at 4 samples and, in multiview, has multisampled two-layer targets; else 1.
+pub fn default_msaa(gpu: &Gpu, mode: StereoMode, counts: &[u32]) -> u32 {
+    let layered = mode != StereoMode::Multiview
+        || gpu.device.features().contains(wgpu::Features::MULTISAMPLE_ARRAY);
+    if counts.contains(&4) && layered { 4 } else { 1 }
 }
 
 /// Everything a command needs to draw frames.
@@ -45,21 +54,23 @@ pub struct Session {
 
 impl Session {
     /// Loads the rig and scene and opens the device, then the renderer with `cull`,
-    /// `mode` and `msaa` samples per pixel (checked against the adapter's counts).
+    /// `mode` and `msaa` samples per pixel (checked against the adapter's counts; `None`:
+    /// [`default_msaa`]).
     pub fn open(
         args: &SceneArgs,
-        (cull, mode, msaa): (CullMode, StereoMode, u32),
+        (cull, mode, msaa): (CullMode, StereoMode, Option<u32>),
     ) -> Result<Session> {
         let rig = args.load_rig()?;
         let scene = scene_spec::load(&args.scene)?;
         let gpu = Gpu::headless()?;
-        let options = RendererOptions {
+        let mut options = RendererOptions {
             cull,
             mode,
-            sample_count: msaa,
             ..Default::default()
         };
         let counts = gpu.sample_counts(options.color_format);
+        let msaa = msaa.unwrap_or_else(|| default_msaa(&gpu, mode, &counts));
+        options.sample_count = msaa;
         if !counts.contains(&msaa) {
             return Err(Error::Unsupported(format!(
                 "--msaa {msaa}: this adapter renders {:?} at {} samples per pixel",
@@ -145,10 +156,11 @@ pub fn render(args: &RenderArgs) -> Result<()> {
         });
     }
     println!(
-        "{} instances, {} with cull {:?}: {} draw calls, {} dispatches, {} bytes uploaded, CPU {cpu_ms:.2} ms, GPU wait {gpu_wait_ms:.1} ms",
+        "{} instances, {} with cull {:?}, {}x MSAA: {} draw calls, {} dispatches, {} bytes uploaded, CPU {cpu_ms:.2} ms, GPU wait {gpu_wait_ms:.1} ms",
         session.scene.instances.len(),
         args.mode.name(),
         args.cull,
+        session.renderer.options().sample_count,
         stats.draw_calls,
         stats.dispatches,
         stats.bytes_uploaded
@@ -162,6 +174,7 @@ pub fn render(args: &RenderArgs) -> Result<()> {
             "rig": args.scene.rig,
             "cull": args.cull,
             "mode": args.mode,
+            "msaa": session.renderer.options().sample_count,
             "instances": session.scene.instances.len(),
             "gpu_bytes_per_instance": session.renderer.gpu_bytes_per_instance(),
             "frame": stats,

@@ -93,7 +93,7 @@ impl MemorySample {
 }
 
 pub fn stress(args: &StressArgs) -> Result<()> {
-    let mut session = Session::open(&args.scene, (args.cull, args.mode, args.msaa))?;
+    let mut session = Session::open(&args.scene, (args.cull, args.mode, Some(args.msaa)))?;
     let bar = if args.json {
         ProgressBar::hidden()
     } else {

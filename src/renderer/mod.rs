@@ -228,6 +228,11 @@ impl Renderer {
         })
     }
 
+    /// The options the renderer was made with.
+    pub fn options(&self) -> &RendererOptions {
+        &self.options
+    }
+
     pub fn mode(&self) -> StereoMode {
         self.options.mode
     }
