@@ -5,7 +5,7 @@ use glam::{Affine3A, Quat, Vec3, Vec4};
 use rand::{Rng, SeedableRng};
 use rand_pcg::Pcg64Mcg;
 
-use crate::scene::{Animation, Instance, Scene};
+use crate::scene::{Animation, Instance, Material, Scene, Texture};
 use crate::shapes::{self, Shape};
 
 /// `n` instances of `mesh_count` built-in meshes scattered in a ball around the
@@ -43,6 +43,37 @@ pub fn scene(n: u32, mesh_count: u32, seed: u64) -> Scene {
         })
         .collect();
     scene
+}
+
+/// Gives every mesh of `scene` one base color texture (a generated 256 x 256 pattern of
+/// colored tiles and stripes, so that filtering and mipmaps have work to do).
+pub fn texture(scene: &mut Scene) {
+    let image = image::RgbaImage::from_fn(256, 256, |x, y| {
+        let tile = ((x / 32) + (y / 32)) % 2;
+        let stripe = u8::from((x + y) % 16 < 3);
+        let base = if tile == 0 {
+            [230, 200, 120]
+        } else {
+            [90, 140, 210]
+        };
+        image::Rgba([
+            base[0] - 60 * stripe,
+            base[1] - 60 * stripe,
+            base[2] - 60 * stripe,
+            255,
+        ])
+    });
+    scene.textures = vec![Texture {
+        name: "procedural tiles".into(),
+        image,
+    }];
+    scene.materials = vec![Material {
+        name: "tiled".into(),
+        base_color_texture: Some(0),
+    }];
+    for v in &mut scene.vertices {
+        v.material = 0;
+    }
 }
 
 fn random_in_shell(rng: &mut Pcg64Mcg, inner: f32, outer: f32) -> Vec3 {

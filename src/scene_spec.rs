@@ -1,5 +1,5 @@
 //! Scenes by name, above the importers: `default` (the built-in room),
-//! `procedural:N[:MESHES[:SEED]]`, or a `.gltf` / `.glb` file.
+//! `procedural:N[:MESHES[:SEED[:textured]]]`, or a `.gltf` / `.glb` file.
 
 use std::path::Path;
 
@@ -19,15 +19,20 @@ pub const DEFAULT_PROCEDURAL_SEED: u64 = 1;
 /// file is what it writes.
 pub const ROOM_GLB: &[u8] = include_bytes!("../assets/room.glb");
 
-/// `default` (the built-in room), `procedural:N[:MESHES[:SEED]]`, or a path to a
-/// `.gltf` / `.glb` file.
+/// `default` (the built-in room), `procedural:N[:MESHES[:SEED[:textured]]]` (`textured`:
+/// every mesh samples one generated base color texture), or a path to a `.gltf` /
+/// `.glb` file.
 /// An empty scene is an error: there would be nothing to cull or draw, and GPU
 /// buffers cannot be empty.
 pub fn load(spec: &str) -> Result<Scene> {
     let scene = match spec.strip_prefix("procedural:") {
         Some(rest) => {
-            let (n, meshes, seed) = parse_procedural(spec, rest)?;
-            procedural::scene(n, meshes, seed)
+            let (n, meshes, seed, textured) = parse_procedural(spec, rest)?;
+            let mut scene = procedural::scene(n, meshes, seed);
+            if textured {
+                procedural::texture(&mut scene);
+            }
+            scene
         }
         None if spec == DEFAULT_SCENE => {
             gltf_import::import_bytes(ROOM_GLB, None, Path::new("assets/room.glb"))?
@@ -48,10 +53,10 @@ pub fn load(spec: &str) -> Result<Scene> {
     Ok(scene)
 }
 
-fn parse_procedural(spec: &str, rest: &str) -> Result<(u32, u32, u64)> {
+fn parse_procedural(spec: &str, rest: &str) -> Result<(u32, u32, u64, bool)> {
     let fail = |message: &str| Error::SceneSpec {
         spec: spec.into(),
-        message: format!("{message}; expected procedural:N[:MESHES[:SEED]]"),
+        message: format!("{message}; expected procedural:N[:MESHES[:SEED[:textured]]]"),
     };
     let mut parts = rest.split(':');
     let n = parts
@@ -70,8 +75,13 @@ fn parse_procedural(spec: &str, rest: &str) -> Result<(u32, u32, u64)> {
         Some(s) => s.parse().map_err(|_| fail("SEED is not an integer"))?,
         None => DEFAULT_PROCEDURAL_SEED,
     };
+    let textured = match parts.next() {
+        Some("textured") => true,
+        Some(_) => return Err(fail("the fourth field can only be `textured`")),
+        None => false,
+    };
     if parts.next().is_some() {
         return Err(fail("too many fields"));
     }
-    Ok((n, meshes, seed))
+    Ok((n, meshes, seed, textured))
 }

@@ -37,7 +37,10 @@ pub fn cuboid(half: Vec3) -> Shape {
             let v = n.cross(u);
             let base = s.vertices.len() as u32;
             for (a, b) in [(-1.0, -1.0), (1.0, -1.0), (1.0, 1.0), (-1.0, 1.0)] {
-                s.vertices.push(Vertex::new((n + u * a + v * b) * half, n));
+                s.vertices.push(Vertex {
+                    uv: [0.5 + 0.5 * a, 0.5 - 0.5 * b],
+                    ..Vertex::new((n + u * a + v * b) * half, n)
+                });
             }
             s.indices.extend([0, 1, 2, 0, 2, 3].map(|i| base + i));
         }
@@ -45,14 +48,18 @@ pub fn cuboid(half: Vec3) -> Shape {
     s
 }
 
-/// A grid of `(columns + 1) x (rows + 1)` vertices from `f(u, v)` (both in 0..=1)
-/// returning position and normal, stitched into quads.
+/// A grid of `(columns + 1) x (rows + 1)` vertices from `f(u, v)` (both in 0..=1, also
+/// the texture coordinates) returning position and normal, stitched into quads.
 fn grid(columns: u32, rows: u32, f: impl Fn(f32, f32) -> (Vec3, Vec3)) -> Shape {
     let mut vertices = Vec::new();
     for r in 0..=rows {
         for c in 0..=columns {
-            let (p, n) = f(c as f32 / columns as f32, r as f32 / rows as f32);
-            vertices.push(Vertex::new(p, n));
+            let (u, v) = (c as f32 / columns as f32, r as f32 / rows as f32);
+            let (p, n) = f(u, v);
+            vertices.push(Vertex {
+                uv: [u, 1.0 - v],
+                ..Vertex::new(p, n)
+            });
         }
     }
     let mut indices = Vec::new();
@@ -74,13 +81,18 @@ pub fn sphere(radius: f32, segments: u32, rings: u32) -> Shape {
     })
 }
 
-/// An open tube: enough for a stress scene, and its normals are smooth.
+/// An open tube, seen from inside too (both windings: back faces are culled): enough for
+/// a stress scene, and its normals are smooth.
 pub fn cylinder(radius: f32, height: f32, segments: u32) -> Shape {
-    grid(segments, 1, |u, v| {
+    let tube = grid(segments, 1, |u, v| {
         let theta = u * TAU;
         let n = Vec3::new(theta.sin(), 0.0, theta.cos());
         (n * radius + Vec3::Y * (v - 0.5) * height, n)
-    })
+    });
+    Shape {
+        indices: crate::scene::both_windings(&tube.indices),
+        ..tube
+    }
 }
 
 pub fn torus(major: f32, minor: f32, segments: u32, sides: u32) -> Shape {

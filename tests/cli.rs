@@ -163,6 +163,13 @@ fn bad_input_prints_one_line_and_fails() {
         vec![
             "cull",
             "--scene",
+            "procedural:10:2:3:shiny",
+            "--dump-visible",
+            "/tmp/x.json",
+        ],
+        vec![
+            "cull",
+            "--scene",
             "/nonexistent.glb",
             "--dump-visible",
             "/tmp/x.json",

@@ -64,6 +64,17 @@ fn render(scene: &Scene, material: &str, color_format: wgpu::TextureFormat) -> R
         .remove(0)
 }
 
+/// `procedural:N:M:SEED:textured`: the same scene, every mesh sampling one texture.
+#[test]
+fn a_textured_procedural_scene_is_the_plain_one_with_a_texture() {
+    let plain = scene_spec::load("procedural:50:4:9").unwrap();
+    let textured = scene_spec::load("procedural:50:4:9:textured").unwrap();
+    assert_eq!(textured.instances, plain.instances);
+    assert_eq!((textured.materials.len(), textured.textures.len()), (1, 1));
+    assert_eq!(textured.materials[0].base_color_texture, Some(0));
+    assert!(plain.materials.is_empty() && plain.textures.is_empty());
+}
+
 fn uv_of(p: &Rgba<u8>) -> [f32; 2] {
     let coordinate = |hi: u8, lo: u8| f32::from(u16::from(hi) << 8 | u16::from(lo)) / 65535.0;
     [coordinate(p[0], p[1]), coordinate(p[2], p[3])]

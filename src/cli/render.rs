@@ -39,7 +39,10 @@ pub struct RenderArgs {
 /// format at 4 samples and, in multiview, has multisampled two-layer targets; else 1.
 pub fn default_msaa(gpu: &Gpu, mode: StereoMode, counts: &[u32]) -> u32 {
     let layered = mode != StereoMode::Multiview
-        || gpu.device.features().contains(wgpu::Features::MULTISAMPLE_ARRAY);
+        || gpu
+            .device
+            .features()
+            .contains(wgpu::Features::MULTISAMPLE_ARRAY);
     if counts.contains(&4) && layered { 4 } else { 1 }
 }
 
