@@ -14,9 +14,22 @@ pub(crate) fn init_buffer(
     contents: &[u8],
     usage: wgpu::BufferUsages,
 ) -> wgpu::Buffer {
+    init_buffer_with_room(device, label, contents, 0, usage)
+}
+
+/// A buffer of at least `size` bytes (and [`MIN_BUFFER`]) starting with `contents`: room
+/// for a scene to grow into without reallocating.
+pub(crate) fn init_buffer_with_room(
+    device: &wgpu::Device,
+    label: &str,
+    contents: &[u8],
+    size: u64,
+    usage: wgpu::BufferUsages,
+) -> wgpu::Buffer {
+    let size = (size as usize).max(contents.len()).max(MIN_BUFFER);
     let padded;
-    let contents = if contents.len() < MIN_BUFFER {
-        padded = [contents, &[0; MIN_BUFFER][contents.len()..]].concat();
+    let contents = if size > contents.len() {
+        padded = [contents, &vec![0; size - contents.len()]].concat();
         &padded[..]
     } else {
         contents
@@ -37,7 +50,7 @@ pub(crate) fn storage_buffer(
 ) -> wgpu::Buffer {
     device.create_buffer(&wgpu::BufferDescriptor {
         label: Some(label),
-        size: size.max(MIN_BUFFER as u64),
+        size: size.max(MIN_BUFFER as u64).next_multiple_of(4),
         usage,
         mapped_at_creation: false,
     })

@@ -5,7 +5,7 @@
 use std::collections::HashMap;
 use std::num::NonZeroU32;
 
-use crate::buffers::init_buffer;
+use crate::buffers::{init_buffer, init_buffer_with_room};
 use crate::cull::gpu::CullTargets;
 use crate::error::Result;
 use crate::materials::{self, GpuMaterials};
@@ -46,8 +46,14 @@ pub struct DrawScene {
 }
 
 impl DrawScene {
-    /// Fails when the scene's materials do not fit together or exceed the device.
-    pub fn new(device: &wgpu::Device, drawer: &Drawer, scene: &Scene) -> Result<DrawScene> {
+    /// Uploads `scene` with room for `slots` instance records. Fails when the scene's
+    /// materials do not fit together or exceed the device.
+    pub fn new(
+        device: &wgpu::Device,
+        drawer: &Drawer,
+        scene: &Scene,
+        slots: u32,
+    ) -> Result<DrawScene> {
         let init =
             |label: &str, contents: &[u8], usage| init_buffer(device, label, contents, usage);
         Ok(DrawScene {
@@ -62,10 +68,12 @@ impl DrawScene {
                 bytemuck::cast_slice(&scene.indices),
                 wgpu::BufferUsages::INDEX,
             ),
-            instances: init(
+            instances: init_buffer_with_room(
+                device,
                 "stereocull.instances",
                 bytemuck::cast_slice(&instance_records(scene)),
-                wgpu::BufferUsages::STORAGE,
+                DrawScene::BYTES_PER_INSTANCE * slots as u64,
+                wgpu::BufferUsages::STORAGE | wgpu::BufferUsages::COPY_DST,
             ),
             mesh_count: scene.meshes.len() as u32,
         })

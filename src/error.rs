@@ -35,6 +35,14 @@ pub enum Error {
     #[error("scene: {0}")]
     InvalidScene(String),
 
+    /// A handle to an instance that was removed, or that this scene never issued.
+    #[error("bad handle: {0}")]
+    BadHandle(String),
+
+    /// An edit with a NaN or infinite value; nothing was changed.
+    #[error("{0} is not finite (NaN or infinite); nothing was changed")]
+    NonFinite(String),
+
     /// A `procedural:N[:M]` scene specification is malformed.
     #[error("scene {spec:?}: {message}")]
     SceneSpec { spec: String, message: String },

@@ -5,7 +5,7 @@
 use bytemuck::{Pod, Zeroable};
 use glam::Vec4;
 
-use crate::scene::Scene;
+use crate::scene::{Instance, Scene};
 
 /// What the vertex shader reads per instance, indexed by instance id (64 bytes).
 #[repr(C)]
@@ -53,7 +53,8 @@ pub struct DrawArgs {
     pub first_instance: u32,
 }
 
-/// The scene as culling sees it: instances grouped by mesh, ascending id within a mesh.
+/// The scene as culling sees it: instances grouped by mesh, ascending id within a mesh
+/// (vacant slots of a [`crate::live::LiveScene`] left out).
 /// With this order one prefix sum over visibility flags gives every visible instance its
 /// slot, already grouped by draw and sorted: the contract falls out of the storage order.
 #[derive(Clone, Debug, PartialEq)]
@@ -65,14 +66,26 @@ pub struct CullLayout {
     pub columns: [Vec<f32>; 4],
     /// Instance id at each cull position.
     pub order: Vec<u32>,
+    /// Cull position of each instance id ([`CullLayout::VACANT`] for vacant slots):
+    /// where a moved instance's sphere goes.
+    pub positions: Vec<u32>,
     pub meshes: Vec<MeshRecord>,
 }
 
 impl CullLayout {
     /// A stable counting sort by mesh: O(instances + meshes).
+    pub const VACANT: u32 = u32::MAX;
+
     pub fn new(scene: &Scene) -> CullLayout {
+        let occupied = || {
+            scene
+                .instances
+                .iter()
+                .enumerate()
+                .filter(|(_, i)| i.mesh != crate::live::LiveScene::VACANT)
+        };
         let mut starts = vec![0u32; scene.meshes.len() + 1];
-        for inst in &scene.instances {
+        for (_, inst) in occupied() {
             starts[inst.mesh as usize + 1] += 1;
         }
         for m in 0..scene.meshes.len() {
@@ -90,14 +103,17 @@ impl CullLayout {
                 cull_count: starts[m + 1] - starts[m],
             })
             .collect();
-        let mut order = vec![0u32; scene.instances.len()];
-        let mut spheres = vec![Vec4::ZERO; scene.instances.len()];
+        let count = starts[scene.meshes.len()] as usize;
+        let mut order = vec![0u32; count];
+        let mut spheres = vec![Vec4::ZERO; count];
+        let mut positions = vec![CullLayout::VACANT; scene.instances.len()];
         let mut cursor = starts;
-        for (id, inst) in scene.instances.iter().enumerate() {
-            let slot = &mut cursor[inst.mesh as usize];
-            order[*slot as usize] = id as u32;
-            spheres[*slot as usize] = scene.world_sphere(inst);
-            *slot += 1;
+        for (id, inst) in occupied() {
+            let at = &mut cursor[inst.mesh as usize];
+            order[*at as usize] = id as u32;
+            spheres[*at as usize] = scene.world_sphere(inst);
+            positions[id] = *at;
+            *at += 1;
         }
         let column = |f: fn(&Vec4) -> f32| spheres.iter().map(f).collect();
         CullLayout {
@@ -109,26 +125,33 @@ impl CullLayout {
             ],
             spheres,
             order,
+            positions,
             meshes,
         }
+    }
+
+    /// Replaces the sphere at cull position `at` (an instance moved).
+    pub fn set_sphere(&mut self, at: u32, sphere: Vec4) {
+        let at = at as usize;
+        self.spheres[at] = sphere;
+        let [x, y, z, minus_r] = &mut self.columns;
+        (x[at], y[at], z[at], minus_r[at]) = (sphere.x, sphere.y, sphere.z, -sphere.w);
     }
 }
 
 pub fn instance_records(scene: &Scene) -> Vec<InstanceRecord> {
-    scene
-        .instances
-        .iter()
-        .map(|inst| {
-            let m = glam::Mat4::from(inst.world_from_local);
-            InstanceRecord {
-                world_from_local: [m.row(0).into(), m.row(1).into(), m.row(2).into()],
-                color: pack_unorm4x8(inst.color),
-                mesh: inst.mesh,
-                spin: inst.animation.spin,
-                bob: inst.animation.bob,
-            }
-        })
-        .collect()
+    scene.instances.iter().map(instance_record).collect()
+}
+
+pub fn instance_record(inst: &Instance) -> InstanceRecord {
+    let m = glam::Mat4::from(inst.world_from_local);
+    InstanceRecord {
+        world_from_local: [m.row(0).into(), m.row(1).into(), m.row(2).into()],
+        color: pack_unorm4x8(inst.color),
+        mesh: inst.mesh,
+        spin: inst.animation.spin,
+        bob: inst.animation.bob,
+    }
 }
 
 /// Same rounding as WGSL's `pack4x8unorm`.

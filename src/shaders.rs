@@ -114,6 +114,34 @@ pub const DRAW_BINDINGS: [Binding; 4] = [
     ),
 ];
 
+/// The scatter pass's bindings (`wgsl/scatter.wgsl`): the frame's edits, and where
+/// they go.
+pub const SCATTER_BINDINGS: [Binding; 4] = [
+    binding("edits", Access::StorageRead, "array<u32>", COMPUTE),
+    binding(
+        "instances",
+        Access::StorageReadWrite,
+        "array<InstanceRecord>",
+        COMPUTE,
+    ),
+    // World bounding spheres in cull order (the GPU culler's; a stand-in otherwise).
+    binding(
+        "spheres",
+        Access::StorageReadWrite,
+        "array<vec4<f32>>",
+        COMPUTE,
+    ),
+    // Cull position of each slot.
+    binding("positions", Access::StorageRead, "array<u32>", COMPUTE),
+];
+
+/// The scatter pass's source.
+pub fn scatter_source() -> String {
+    let bindings = declarations(&SCATTER_BINDINGS);
+    let body = include_str!("../wgsl/scatter.wgsl");
+    [RECORDS, &bindings, body].concat()
+}
+
 /// The WGSL declarations of `bindings`, in group 0.
 fn declarations(bindings: &[Binding]) -> String {
     bindings
@@ -343,5 +371,6 @@ fn constants() -> String {
 pub fn all_sources() -> Vec<(String, String)> {
     let cull = CullPass::ALL.map(|p| (p.label().to_string(), p.source()));
     let draw = DrawKey::ALL.map(|k| (k.label(), k.source()));
-    cull.into_iter().chain(draw).collect()
+    let scatter = ("stereocull.scatter".to_string(), scatter_source());
+    cull.into_iter().chain(draw).chain([scatter]).collect()
 }

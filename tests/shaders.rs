@@ -13,7 +13,8 @@ use stereocull::records::uniform_bytes;
 use stereocull::records::{DrawArgs, InstanceRecord, MeshRecord};
 use stereocull::scene::Vertex;
 use stereocull::shaders::{
-    Access, Binding, CULL_BINDINGS, CullPass, DRAW_BINDINGS, DrawKey, all_sources,
+    Access, Binding, CULL_BINDINGS, CullPass, DRAW_BINDINGS, DrawKey, SCATTER_BINDINGS,
+    all_sources, scatter_source,
 };
 
 fn parse(label: &str, source: &str) -> Module {
@@ -250,7 +251,12 @@ fn every_pass_binds_what_its_list_declares() {
     let passes = CullPass::ALL
         .map(|p| (p.label().to_string(), p.source(), &CULL_BINDINGS[..]))
         .into_iter()
-        .chain(DrawKey::ALL.map(|k| (k.label(), k.source(), &DRAW_BINDINGS[..])));
+        .chain(DrawKey::ALL.map(|k| (k.label(), k.source(), &DRAW_BINDINGS[..])))
+        .chain([(
+            "stereocull.scatter".to_string(),
+            scatter_source(),
+            &SCATTER_BINDINGS[..],
+        )]);
     for (label, source, list) in passes {
         let module = parse(&label, &source);
         let mut seen = Vec::new();

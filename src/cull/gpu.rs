@@ -2,7 +2,7 @@
 //! `cull_draws.wgsl`, `cull_compact.wgsl`) that write the visible list, the draws and the
 //! draw count per the contract in [`super`], byte-identical to [`super::cpu`].
 
-use crate::buffers::{init_buffer, storage_buffer};
+use crate::buffers::{init_buffer, init_buffer_with_room, storage_buffer};
 
 use crate::records::uniform_bytes;
 use crate::records::{CullLayout, DrawArgs};
@@ -33,9 +33,11 @@ pub struct CullScene {
     pub instance_count: u32,
     pub mesh_count: u32,
     groups: (u32, u32),
+    max_groups: u32,
     params: wgpu::Buffer,
     spheres: wgpu::Buffer,
     order: wgpu::Buffer,
+    positions: wgpu::Buffer,
     meshes: wgpu::Buffer,
     local_prefix: wgpu::Buffer,
     block_sums: wgpu::Buffer,
@@ -51,56 +53,84 @@ pub struct CullTargets {
 }
 
 impl CullScene {
-    pub fn new(device: &wgpu::Device, layout: &CullLayout) -> CullScene {
-        let n = layout.spheres.len() as u32;
-        let groups = dispatch_size(
-            n.div_ceil(WORKGROUP_SIZE),
-            device.limits().max_compute_workgroups_per_dimension,
-        );
-        let params = CullParams {
-            instance_count: n,
-            mesh_count: layout.meshes.len() as u32,
-            groups_x: groups.0,
+    /// Uploads `layout`, with room for `slots` instances (a live scene's capacity).
+    pub fn new(device: &wgpu::Device, layout: &CullLayout, slots: u32) -> CullScene {
+        let slots = slots.max(layout.positions.len() as u32);
+        let max_groups = device.limits().max_compute_workgroups_per_dimension;
+        let (params, groups) = cull_params(layout, max_groups);
+        let room = |label: &str, contents: &[u8], per_slot: u64| {
+            let usage = wgpu::BufferUsages::STORAGE | wgpu::BufferUsages::COPY_DST;
+            init_buffer_with_room(device, label, contents, per_slot * slots as u64, usage)
         };
-        let init =
-            |label: &str, contents: &[u8], usage| init_buffer(device, label, contents, usage);
-        let storage = wgpu::BufferUsages::STORAGE;
+        let scratch = wgpu::BufferUsages::STORAGE;
+        let most_groups = dispatch_size(slots.div_ceil(WORKGROUP_SIZE), max_groups);
         CullScene {
-            instance_count: n,
+            instance_count: params.instance_count,
             mesh_count: params.mesh_count,
             groups,
-            params: init(
+            max_groups,
+            params: init_buffer(
+                device,
                 "stereocull.cull_params",
                 &uniform_bytes(&params),
-                wgpu::BufferUsages::UNIFORM,
+                wgpu::BufferUsages::UNIFORM | wgpu::BufferUsages::COPY_DST,
             ),
-            spheres: init(
+            spheres: room(
                 "stereocull.spheres",
                 bytemuck::cast_slice(&layout.spheres),
-                storage,
+                16,
             ),
-            order: init(
-                "stereocull.order",
-                bytemuck::cast_slice(&layout.order),
-                storage,
+            order: room("stereocull.order", bytemuck::cast_slice(&layout.order), 4),
+            positions: room(
+                "stereocull.positions",
+                bytemuck::cast_slice(&layout.positions),
+                4,
             ),
-            meshes: init(
-                "stereocull.meshes",
-                bytemuck::cast_slice(&layout.meshes),
-                storage,
+            meshes: room("stereocull.meshes", bytemuck::cast_slice(&layout.meshes), 0),
+            local_prefix: storage_buffer(
+                device,
+                "stereocull.local_prefix",
+                4 * slots as u64,
+                scratch,
             ),
-            local_prefix: storage_buffer(device, "stereocull.local_prefix", 4 * n as u64, storage),
             block_sums: storage_buffer(
                 device,
                 "stereocull.block_sums",
-                4 * (groups.0 * groups.1) as u64,
-                storage,
+                4 * (most_groups.0 * most_groups.1) as u64,
+                scratch,
             ),
         }
     }
 
-    /// Bytes on the GPU per instance for culling (spheres, order, scratch).
-    pub const BYTES_PER_INSTANCE: u64 = 16 + 4 + 4;
+    /// Writes a new `layout` (instances inserted or removed) into the buffers, which must
+    /// have room for it (same meshes, no more slots than made for); returns the bytes.
+    pub fn reload(&mut self, queue: &wgpu::Queue, layout: &CullLayout) -> u64 {
+        let (params, groups) = cull_params(layout, self.max_groups);
+        (self.instance_count, self.groups) = (params.instance_count, groups);
+        let writes: [(&wgpu::Buffer, &[u8]); 5] = [
+            (&self.params, &uniform_bytes(&params)),
+            (&self.spheres, bytemuck::cast_slice(&layout.spheres)),
+            (&self.order, bytemuck::cast_slice(&layout.order)),
+            (&self.positions, bytemuck::cast_slice(&layout.positions)),
+            (&self.meshes, bytemuck::cast_slice(&layout.meshes)),
+        ];
+        writes
+            .iter()
+            .map(|(buffer, bytes)| {
+                queue.write_buffer(buffer, 0, bytes);
+                bytes.len() as u64
+            })
+            .sum()
+    }
+
+    /// Where the scatter pass writes moved instances' spheres: the spheres in cull
+    /// order, and each slot's position.
+    pub fn scatter_targets(&self) -> [&wgpu::Buffer; 2] {
+        [&self.spheres, &self.positions]
+    }
+
+    /// Bytes on the GPU per instance for culling (spheres, order, positions, scratch).
+    pub const BYTES_PER_INSTANCE: u64 = 16 + 4 + 4 + 4;
 }
 
 impl CullTargets {
@@ -121,6 +151,17 @@ impl CullTargets {
             counts: storage_buffer(device, "stereocull.counts", COUNTS_BYTES, indirect),
         }
     }
+}
+
+fn cull_params(layout: &CullLayout, max_groups: u32) -> (CullParams, (u32, u32)) {
+    let n = layout.spheres.len() as u32;
+    let groups = dispatch_size(n.div_ceil(WORKGROUP_SIZE), max_groups);
+    let params = CullParams {
+        instance_count: n,
+        mesh_count: layout.meshes.len() as u32,
+        groups_x: groups.0,
+    };
+    (params, groups)
 }
 
 /// Splits `groups` workgroups into x * y with x within the per-dimension limit.

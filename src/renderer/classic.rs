@@ -40,7 +40,7 @@ struct ClassicDisplay {
 
 pub(super) struct ClassicPath {
     mode: StereoMode,
-    layout: CullLayout,
+    pub(super) layout: CullLayout,
     drawer: Drawer,
     pub(super) draw_scene: DrawScene,
     displays: Vec<ClassicDisplay>,
@@ -54,7 +54,7 @@ impl ClassicPath {
         scene: &Scene,
         rig: &Rig,
         frame: &wgpu::Buffer,
-        options: &RendererOptions,
+        (options, slots): (&RendererOptions, u32),
     ) -> Result<ClassicPath> {
         let clip = DrawFeatures::of(device).clip_distances;
         let drawer = Drawer::new(
@@ -63,8 +63,8 @@ impl ClassicPath {
             &[DrawKey::new(1, clip)],
             options.material.as_deref(),
         );
-        let draw_scene = DrawScene::new(device, &drawer, scene)?;
-        let n = scene.instances.len() as u64;
+        let draw_scene = DrawScene::new(device, &drawer, scene, slots)?;
+        let n = slots as u64;
         let usage = wgpu::BufferUsages::STORAGE | wgpu::BufferUsages::COPY_DST;
         let visible_list = || storage_buffer(device, "stereocull.visible", 4 * n, usage);
         let displays = rig

@@ -9,7 +9,8 @@ use std::time::Instant;
 
 use super::passes::{close, draw_pass, open_pass};
 use super::{
-    CullMode, FrameStats, RendererOptions, TargetViews, context_buffer, display_contexts, write,
+    CullMode, CullState, FrameStats, RendererOptions, TargetViews, context_buffer,
+    display_contexts, write,
 };
 use crate::cull::gpu::{COUNTS_BYTES, CullScene, CullTargets, GpuCuller};
 use crate::cull::{CullOutput, cpu};
@@ -58,14 +59,14 @@ impl IndirectPath {
         scene: &Scene,
         rig: &Rig,
         frame: &wgpu::Buffer,
-        options: &RendererOptions,
+        (options, slots): (&RendererOptions, u32),
     ) -> Result<IndirectPath> {
         let multiview = options.mode == StereoMode::Multiview;
         let layout = CullLayout::new(scene);
         let culling = match options.cull {
             CullMode::Gpu => Culling::Gpu {
                 culler: GpuCuller::new(device),
-                scene: CullScene::new(device, &layout),
+                scene: CullScene::new(device, &layout, slots),
             },
             CullMode::Cpu => Culling::Cpu { layout },
         };
@@ -85,13 +86,13 @@ impl IndirectPath {
             &keys,
             options.material.as_deref(),
         );
-        let draw_scene = DrawScene::new(device, &drawer, scene)?;
-        let (instances, meshes) = (scene.instances.len() as u32, scene.meshes.len() as u32);
+        let draw_scene = DrawScene::new(device, &drawer, scene, slots)?;
+        let meshes = scene.meshes.len() as u32;
         let displays = keys
             .iter()
             .map(|&key| {
                 let context = context_buffer(device);
-                let cull = CullTargets::new(device, instances, meshes);
+                let cull = CullTargets::new(device, slots, meshes);
                 let cull_bind_group = match &culling {
                     Culling::Gpu { culler, scene } => {
                         Some(culler.bind_group(device, scene, [frame, &context], &cull))
@@ -119,6 +120,15 @@ impl IndirectPath {
             mesh_count: meshes,
             displays,
         })
+    }
+
+    /// What edits change: the instance records and the culling state.
+    pub(super) fn edit_targets(&mut self) -> (&wgpu::Buffer, CullState<'_>) {
+        let culling = match &mut self.culling {
+            Culling::Gpu { scene, .. } => CullState::Gpu(scene),
+            Culling::Cpu { layout } => CullState::Cpu(layout),
+        };
+        (&self.draw_scene.instances, culling)
     }
 
     /// Writes each display's context and, culling on the CPU, its cull results.

@@ -79,10 +79,12 @@ use crate::cull::gpu::{CullScene, CullTargets};
 use crate::draw::DrawScene;
 use crate::draw::{DEPTH_FORMAT, TargetFormat};
 use crate::error::{Error, Result};
+use crate::live::LiveScene;
 pub use crate::modes::StereoMode;
 use crate::profiling::GpuTimer;
-use crate::records::{MeshRecord, uniform_bytes};
+use crate::records::{CullLayout, MeshRecord, instance_record, instance_records, uniform_bytes};
 use crate::rig::{ResolvedRig, Rig};
+use crate::scatter::{Scatter, ScatterTargets};
 use crate::scene::{Scene, Vertex};
 
 mod classic;
@@ -170,12 +172,61 @@ enum Path {
 }
 
 impl Path {
+    fn new(
+        device: &wgpu::Device,
+        scene: &Scene,
+        (rig, frame): (&Rig, &wgpu::Buffer),
+        (options, slots): (&RendererOptions, u32),
+    ) -> Result<Path> {
+        let scope = device.push_error_scope(wgpu::ErrorFilter::Validation);
+        let path = match options.mode.per_instance() {
+            false => {
+                IndirectPath::new(device, scene, rig, frame, (options, slots)).map(Path::Indirect)
+            }
+            true => {
+                ClassicPath::new(device, scene, rig, frame, (options, slots)).map(Path::Classic)
+            }
+        };
+        // Popped before returning any error, so the caller's device keeps its scopes.
+        if let Some(e) = pollster::block_on(scope.pop()) {
+            return Err(Error::Wgpu(e));
+        }
+        path
+    }
+
     fn draw_scene(&mut self) -> &mut DrawScene {
         match self {
             Path::Indirect(p) => &mut p.draw_scene,
             Path::Classic(p) => &mut p.draw_scene,
         }
     }
+
+    /// The instance records and the culling state: what edits change.
+    fn edit_targets(&mut self) -> (&wgpu::Buffer, CullState<'_>) {
+        match self {
+            Path::Indirect(p) => p.edit_targets(),
+            Path::Classic(p) => (&p.draw_scene.instances, CullState::Cpu(&mut p.layout)),
+        }
+    }
+}
+
+/// What edits change in the culling: the GPU culler's buffers, or the CPU culler's layout.
+enum CullState<'a> {
+    Gpu(&'a mut CullScene),
+    Cpu(&'a mut CullLayout),
+}
+
+/// What [`Renderer::sync`] did.
+#[derive(Clone, Copy, Debug, Default, PartialEq, Eq, serde::Serialize)]
+pub struct SyncStats {
+    pub bytes_uploaded: u64,
+    /// Instances whose transform went up sparsely (one scatter edit each).
+    pub moved: u32,
+    /// The cull order was written again (instances inserted or removed): O(instances).
+    pub reloaded: bool,
+    /// The scene outgrew the buffers (or gained meshes): everything was uploaded again,
+    /// with room to grow by half.
+    pub reallocated: bool,
 }
 
 pub struct Renderer {
@@ -187,6 +238,12 @@ pub struct Renderer {
     shapes: Vec<TargetShape>,
     /// Per display: the rig's name, for timer scopes.
     names: Vec<String>,
+    /// Moved instances, staged by `sync`, dispatched by the next `encode`.
+    scatter: Scatter,
+    /// Instance slots the buffers have room for.
+    slots: u32,
+    /// The rig as made: the displays a reallocation rebuilds for.
+    rig: Rig,
 }
 
 impl Renderer {
@@ -199,17 +256,9 @@ impl Renderer {
         options: RendererOptions,
     ) -> Result<Renderer> {
         check_device(device, scene, &options)?;
-        let scope = device.push_error_scope(wgpu::ErrorFilter::Validation);
         let frame = uniform_buffer::<FrameContext>(device, "stereocull.frame_context");
-        let path = match options.mode.per_instance() {
-            false => IndirectPath::new(device, scene, rig, &frame, &options).map(Path::Indirect),
-            true => ClassicPath::new(device, scene, rig, &frame, &options).map(Path::Classic),
-        };
-        // Popped before returning any error, so the caller's device keeps its scopes.
-        if let Some(e) = pollster::block_on(scope.pop()) {
-            return Err(Error::Wgpu(e));
-        }
-        let path = path?;
+        let slots = scene.instances.len() as u32;
+        let path = Path::new(device, scene, (rig, &frame), (&options, slots))?;
         let shapes = rig
             .displays
             .iter()
@@ -225,7 +274,110 @@ impl Renderer {
             path,
             shapes,
             names: rig.displays.iter().map(|d| d.name.clone()).collect(),
+            scatter: Scatter::new(device),
+            slots,
+            rig: rig.clone(),
         })
+    }
+
+    /// Brings the GPU copy of `live` up to date with its changes since the last sync,
+    /// paying for what changed: moved instances go up as scatter edits (68 bytes each,
+    /// applied by one dispatch in the next `encode`); inserts and removes rewrite the cull
+    /// order and records (O(instances)); a scene that outgrew its buffers, or gained
+    /// meshes, is uploaded again with room to grow by half. Call it before `prepare`.
+    pub fn sync(
+        &mut self,
+        device: &wgpu::Device,
+        queue: &wgpu::Queue,
+        live: &mut LiveScene,
+    ) -> Result<SyncStats> {
+        let changes = live.take_changes();
+        let scene = live.scene();
+        let slots = scene.instances.len() as u32;
+        if changes.geometry || slots > self.slots {
+            check_device(device, scene, &self.options)?;
+            let room = slots + slots / 2;
+            self.path = Path::new(
+                device,
+                scene,
+                (&self.rig, &self.frame),
+                (&self.options, room),
+            )?;
+            self.slots = room;
+            self.scatter.reset();
+            let bytes =
+                (scene.instances.len() * size_of::<crate::records::InstanceRecord>()) as u64;
+            return Ok(SyncStats {
+                bytes_uploaded: bytes,
+                reloaded: true,
+                reallocated: true,
+                ..SyncStats::default()
+            });
+        }
+        if changes.restructured {
+            return Ok(self.reload(queue, scene));
+        }
+        let mut stats = self.stage_moves(device, queue, scene, &changes.moved);
+        let (instances, _) = self.path.edit_targets();
+        for &slot in &changes.recolored {
+            let record = instance_record(&scene.instances[slot as usize]);
+            let offset = slot as u64 * DrawScene::BYTES_PER_INSTANCE;
+            queue.write_buffer(instances, offset, bytemuck::bytes_of(&record));
+            stats.bytes_uploaded += DrawScene::BYTES_PER_INSTANCE;
+        }
+        Ok(stats)
+    }
+
+    /// Writes the whole scene into the existing buffers: records, cull order, spheres.
+    fn reload(&mut self, queue: &wgpu::Queue, scene: &Scene) -> SyncStats {
+        self.scatter.reset();
+        let records = instance_records(scene);
+        let (instances, culling) = self.path.edit_targets();
+        queue.write_buffer(instances, 0, bytemuck::cast_slice(&records));
+        let layout = CullLayout::new(scene);
+        let layout_bytes = match culling {
+            CullState::Gpu(cull) => cull.reload(queue, &layout),
+            CullState::Cpu(cpu) => {
+                *cpu = layout;
+                0
+            }
+        };
+        SyncStats {
+            bytes_uploaded: std::mem::size_of_val(&records[..]) as u64 + layout_bytes,
+            reloaded: true,
+            ..SyncStats::default()
+        }
+    }
+
+    /// Stages the moved instances' edits; a CPU culler's layout takes their new spheres.
+    fn stage_moves(
+        &mut self,
+        device: &wgpu::Device,
+        queue: &wgpu::Queue,
+        scene: &Scene,
+        moved: &[u32],
+    ) -> SyncStats {
+        if moved.is_empty() {
+            return SyncStats::default();
+        }
+        let (instances, culling) = self.path.edit_targets();
+        let spheres = match &culling {
+            CullState::Gpu(cull) => Some(cull.scatter_targets()),
+            CullState::Cpu(_) => None,
+        };
+        let targets = ScatterTargets { instances, spheres };
+        let (new_spheres, bytes) = self.scatter.stage(device, queue, (scene, moved), targets);
+        if let CullState::Cpu(layout) = culling {
+            for (&slot, &sphere) in moved.iter().zip(&new_spheres) {
+                let at = layout.positions[slot as usize];
+                layout.set_sphere(at, sphere);
+            }
+        }
+        SyncStats {
+            bytes_uploaded: bytes,
+            moved: moved.len() as u32,
+            ..SyncStats::default()
+        }
     }
 
     /// The options the renderer was made with.
@@ -280,7 +432,7 @@ impl Renderer {
     /// culling) and its passes. With a timer, each display is a scope named after it and
     /// each pass a scope within it, `cull` or `draw`.
     pub fn encode(
-        &self,
+        &mut self,
         encoder: &mut wgpu::CommandEncoder,
         targets: &[TargetViews],
         mut timer: Option<&mut GpuTimer>,
@@ -291,7 +443,10 @@ impl Renderer {
                 displays: self.shapes.len(),
             });
         }
-        let mut stats = FrameStats::default();
+        let mut stats = FrameStats {
+            dispatches: self.scatter.encode(encoder),
+            ..FrameStats::default()
+        };
         for (i, target) in targets.iter().enumerate() {
             let display = open_display(&timer, &self.names[i], encoder);
             let recorded = match &self.path {
@@ -313,11 +468,14 @@ impl Renderer {
     /// display; CPU culling: nothing, `prepare` uploaded them). Then, in passes the
     /// caller begins, [`Renderer::draw_display`] for each display.
     pub fn encode_culls(
-        &self,
+        &mut self,
         encoder: &mut wgpu::CommandEncoder,
         mut timer: Option<&mut GpuTimer>,
     ) -> FrameStats {
-        let mut stats = FrameStats::default();
+        let mut stats = FrameStats {
+            dispatches: self.scatter.encode(encoder),
+            ..FrameStats::default()
+        };
         if let Path::Indirect(p) = &self.path {
             for i in 0..self.shapes.len() {
                 let display = open_display(&timer, &self.names[i], encoder);

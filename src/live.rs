@@ -1,0 +1,246 @@
+//! A scene that changes between frames: instances inserted, moved, recolored and removed
+//! through stable [`Handle`]s, and meshes added, with the changes since the last
+//! [`crate::renderer::Renderer::sync`] kept so that only they cross the bus.
+//!
+//! An instance lives in a slot, and its slot is its instance id everywhere (the cull
+//! contract's visible ids, `Surface.instance`). A removed instance's slot is vacant until
+//! an insert reuses it, lowest vacant slot first; the slot's generation then moves on,
+//! so handles to the removed instance stay invalid.
+
+use glam::{Affine3A, Mat4, Vec4};
+
+use crate::error::{Error, Result};
+use crate::scene::{Instance, Scene, Vertex};
+
+/// A stable reference to one inserted instance.
+#[derive(Clone, Copy, Debug, PartialEq, Eq, Hash)]
+pub struct Handle {
+    slot: u32,
+    generation: u32,
+}
+
+impl Handle {
+    /// The instance id: its slot.
+    pub fn slot(self) -> u32 {
+        self.slot
+    }
+}
+
+/// What changed since the last sync.
+#[derive(Clone, Debug, Default, PartialEq, Eq)]
+pub struct Changes {
+    /// Slots whose transform changed (each once, in first-change order).
+    pub moved: Vec<u32>,
+    /// Slots whose record changed otherwise (color), each once.
+    pub recolored: Vec<u32>,
+    /// Instances were inserted or removed: the cull order changes.
+    pub restructured: bool,
+    /// Meshes were added: geometry grows.
+    pub geometry: bool,
+}
+
+impl Changes {
+    pub fn is_empty(&self) -> bool {
+        *self == Changes::default()
+    }
+}
+
+/// A [`Scene`] whose instances sit in slots. Vacant slots hold an instance of mesh
+/// [`LiveScene::VACANT`], which culling skips.
+#[derive(Clone, Debug)]
+pub struct LiveScene {
+    scene: Scene,
+    generations: Vec<u32>,
+    /// Vacant slots, lowest first.
+    vacant: std::collections::BTreeSet<u32>,
+    /// Per slot: already listed in `changes.moved` / `changes.recolored`.
+    listed: Vec<u8>,
+    changes: Changes,
+}
+
+const MOVED: u8 = 1;
+const RECOLORED: u8 = 2;
+
+impl LiveScene {
+    /// The mesh id of a vacant slot.
+    pub const VACANT: u32 = u32::MAX;
+
+    /// What a vacant slot holds.
+    pub const VACANT_INSTANCE: Instance = Instance {
+        world_from_local: Affine3A::IDENTITY,
+        mesh: LiveScene::VACANT,
+        color: Vec4::ZERO,
+        animation: crate::scene::Animation::NONE,
+    };
+
+    /// Takes `scene` with its instances in slots `0..n` (their ids so far); the handles
+    /// of those instances are [`LiveScene::handles`].
+    pub fn new(scene: Scene) -> LiveScene {
+        let n = scene.instances.len();
+        LiveScene {
+            scene,
+            generations: vec![0; n],
+            vacant: Default::default(),
+            listed: vec![0; n],
+            changes: Changes::default(),
+        }
+    }
+
+    /// The scene as the renderer uploads it: every slot, vacant ones included.
+    pub fn scene(&self) -> &Scene {
+        &self.scene
+    }
+
+    /// Handles of the instances in their slots, in slot order.
+    pub fn handles(&self) -> Vec<Handle> {
+        (0..self.slot_count())
+            .filter(|&s| self.occupied(s))
+            .map(|slot| Handle {
+                slot,
+                generation: self.generations[slot as usize],
+            })
+            .collect()
+    }
+
+    pub fn slot_count(&self) -> u32 {
+        self.scene.instances.len() as u32
+    }
+
+    pub fn occupied(&self, slot: u32) -> bool {
+        self.scene
+            .instances
+            .get(slot as usize)
+            .is_some_and(|i| i.mesh != LiveScene::VACANT)
+    }
+
+    /// Instances present (slots minus vacant ones).
+    pub fn len(&self) -> usize {
+        self.scene.instances.len() - self.vacant.len()
+    }
+
+    pub fn is_empty(&self) -> bool {
+        self.len() == 0
+    }
+
+    pub fn get(&self, handle: Handle) -> Result<&Instance> {
+        self.check(handle)?;
+        Ok(&self.scene.instances[handle.slot as usize])
+    }
+
+    /// Inserts `instance` into the lowest vacant slot (or a new one) and returns its
+    /// handle. Its mesh must exist and its transform and animation be finite.
+    pub fn insert(&mut self, instance: Instance) -> Result<Handle> {
+        if instance.mesh as usize >= self.scene.meshes.len() {
+            return Err(Error::InvalidScene(format!(
+                "insert: mesh {} of {}",
+                instance.mesh,
+                self.scene.meshes.len()
+            )));
+        }
+        check_finite(&instance.world_from_local)?;
+        if !(instance.animation.spin.is_finite() && instance.animation.bob.is_finite()) {
+            return Err(Error::NonFinite("the animation".into()));
+        }
+        let slot = match self.vacant.pop_first() {
+            Some(slot) => {
+                self.scene.instances[slot as usize] = instance;
+                slot
+            }
+            None => {
+                self.scene.instances.push(instance);
+                self.generations.push(0);
+                self.listed.push(0);
+                self.slot_count() - 1
+            }
+        };
+        self.changes.restructured = true;
+        Ok(Handle {
+            slot,
+            generation: self.generations[slot as usize],
+        })
+    }
+
+    /// Moves an instance: only its record and sphere are uploaded at the next sync.
+    pub fn set_transform(&mut self, handle: Handle, world_from_local: Affine3A) -> Result<()> {
+        self.check(handle)?;
+        check_finite(&world_from_local)?;
+        let slot = handle.slot as usize;
+        self.scene.instances[slot].world_from_local = world_from_local;
+        self.list(slot, MOVED);
+        Ok(())
+    }
+
+    pub fn set_color(&mut self, handle: Handle, color: Vec4) -> Result<()> {
+        self.check(handle)?;
+        if !color.is_finite() {
+            return Err(Error::NonFinite("the color".into()));
+        }
+        let slot = handle.slot as usize;
+        self.scene.instances[slot].color = color;
+        self.list(slot, RECOLORED);
+        Ok(())
+    }
+
+    /// Removes an instance and returns it; its slot becomes vacant.
+    pub fn remove(&mut self, handle: Handle) -> Result<Instance> {
+        self.check(handle)?;
+        let slot = handle.slot as usize;
+        let removed =
+            std::mem::replace(&mut self.scene.instances[slot], LiveScene::VACANT_INSTANCE);
+        self.generations[slot] = self.generations[slot].wrapping_add(1);
+        self.vacant.insert(handle.slot);
+        self.changes.restructured = true;
+        Ok(removed)
+    }
+
+    /// Appends a mesh (see [`Scene::add_mesh`]) and returns its id.
+    pub fn add_mesh(
+        &mut self,
+        name: impl Into<String>,
+        vertices: &[Vertex],
+        indices: &[u32],
+    ) -> u32 {
+        self.changes.geometry = true;
+        self.scene.add_mesh(name, vertices, indices)
+    }
+
+    /// The changes since the last call, which forgets them.
+    pub fn take_changes(&mut self) -> Changes {
+        for &slot in self.changes.moved.iter().chain(&self.changes.recolored) {
+            self.listed[slot as usize] = 0;
+        }
+        std::mem::take(&mut self.changes)
+    }
+
+    fn list(&mut self, slot: usize, kind: u8) {
+        if self.listed[slot] & kind == 0 {
+            self.listed[slot] |= kind;
+            match kind {
+                MOVED => self.changes.moved.push(slot as u32),
+                _ => self.changes.recolored.push(slot as u32),
+            }
+        }
+    }
+
+    fn check(&self, handle: Handle) -> Result<()> {
+        let slot = handle.slot as usize;
+        match self.generations.get(slot) {
+            None => Err(Error::BadHandle(format!(
+                "slot {} was never issued ({} slots)",
+                handle.slot,
+                self.generations.len()
+            ))),
+            Some(&g) if g != handle.generation || !self.occupied(handle.slot) => Err(
+                Error::BadHandle(format!("the instance in slot {} was removed", handle.slot)),
+            ),
+            Some(_) => Ok(()),
+        }
+    }
+}
+
+fn check_finite(t: &Affine3A) -> Result<()> {
+    match Mat4::from(*t).is_finite() {
+        true => Ok(()),
+        false => Err(Error::NonFinite("the transform".into())),
+    }
+}

@@ -1,0 +1,326 @@
+//! Live scenes: random edit sequences (fixed seeds) against a plain model of the scene,
+//! with GPU and CPU culling checked byte for byte against the CPU reference of the model
+//! every few frames; typed errors for bad handles and non-finite edits; and a moved
+//! instance drawn exactly where a freshly built scene draws it.
+
+mod support;
+
+use glam::{Affine3A, Quat, Vec3, Vec4};
+use rand::{Rng, SeedableRng};
+use rand_pcg::Pcg64Mcg;
+use stereocull::Error;
+use stereocull::device::Gpu;
+use stereocull::live::{Handle, LiveScene};
+use stereocull::readback::read_rgba8;
+use stereocull::renderer::{CullMode, Renderer, RendererOptions, StereoMode, SyncStats};
+use stereocull::rig::Rig;
+use stereocull::scene::{Animation, Instance, Scene};
+use stereocull::shapes;
+use support::{Tolerance, assert_images_match, gpu, reference_culls};
+
+const MESHES: u32 = 5;
+
+const VACANT: Instance = LiveScene::VACANT_INSTANCE;
+
+fn empty_scene() -> Scene {
+    let mut scene = Scene::default();
+    for k in 0..MESHES {
+        let s = shapes::family(k);
+        scene.add_mesh(format!("shape{k}"), &s.vertices, &s.indices);
+    }
+    scene
+}
+
+/// Somewhere within a few meters of the hmd viewer at (0, 1.6, 2), in view or not.
+fn random_instance(rng: &mut Pcg64Mcg, mesh: u32) -> Instance {
+    Instance {
+        world_from_local: random_transform(rng),
+        mesh,
+        color: Vec4::new(rng.random(), rng.random(), rng.random(), 1.0),
+        animation: Animation::NONE,
+    }
+}
+
+fn random_transform(rng: &mut Pcg64Mcg) -> Affine3A {
+    let at = Vec3::new(
+        rng.random_range(-8.0..8.0),
+        rng.random_range(-2.0..5.0),
+        rng.random_range(-10.0..6.0),
+    );
+    let turn = Quat::from_rotation_y(rng.random_range(0.0..6.3));
+    Affine3A::from_scale_rotation_translation(Vec3::splat(rng.random_range(0.2..1.5)), turn, at)
+}
+
+/// The model: what each slot holds, kept by the test without stereocull.
+struct Model {
+    slots: Vec<Option<Instance>>,
+    handles: Vec<Option<Handle>>,
+}
+
+impl Model {
+    fn scene(&self, meshes: &Scene) -> Scene {
+        let mut scene = meshes.clone();
+        scene.instances = self.slots.iter().map(|s| s.unwrap_or(VACANT)).collect();
+        scene
+    }
+
+    fn live(&self) -> Vec<usize> {
+        (0..self.slots.len())
+            .filter(|&s| self.slots[s].is_some())
+            .collect()
+    }
+}
+
+/// One random edit on both the live scene and the model; `moves` only moves and
+/// recolors.
+fn edit(rng: &mut Pcg64Mcg, live: &mut LiveScene, model: &mut Model, moves: bool) {
+    let present = model.live();
+    let kind = match moves {
+        true => rng.random_range(3..8),
+        false => rng.random_range(0..10),
+    };
+    match kind {
+        // Inserts (more likely while the scene is small): into the lowest vacant slot.
+        0..=2 => {
+            let mesh = rng.random_range(0..MESHES);
+            let inst = random_instance(rng, mesh);
+            let h = live.insert(inst).unwrap();
+            let slot = h.slot() as usize;
+            let lowest_vacant = model.slots.iter().position(Option::is_none);
+            assert_eq!(Some(slot), lowest_vacant.or(Some(model.slots.len())));
+            if slot == model.slots.len() {
+                model.slots.push(None);
+                model.handles.push(None);
+            }
+            model.slots[slot] = Some(inst);
+            model.handles[slot] = Some(h);
+        }
+        3..=6 if !present.is_empty() => {
+            let slot = present[rng.random_range(0..present.len())];
+            let t = random_transform(rng);
+            live.set_transform(model.handles[slot].unwrap(), t).unwrap();
+            model.slots[slot].as_mut().unwrap().world_from_local = t;
+        }
+        7 if !present.is_empty() => {
+            let slot = present[rng.random_range(0..present.len())];
+            let c = Vec4::new(rng.random(), 0.5, 0.25, 1.0);
+            live.set_color(model.handles[slot].unwrap(), c).unwrap();
+            model.slots[slot].as_mut().unwrap().color = c;
+        }
+        8..=9 if !present.is_empty() => {
+            let slot = present[rng.random_range(0..present.len())];
+            let h = model.handles[slot].take().unwrap();
+            let removed = live.remove(h).unwrap();
+            assert_eq!(Some(removed), model.slots[slot].take());
+            // The handle is dead now, and stays dead after its slot is reused.
+            assert!(matches!(live.get(h), Err(Error::BadHandle(_))));
+        }
+        _ => {}
+    }
+}
+
+/// Culls one frame with `renderer` after syncing `live`, and compares every display's
+/// buffers with the CPU reference culling of the model.
+fn check(
+    gpu: &Gpu,
+    renderer: &mut Renderer,
+    live: &mut LiveScene,
+    want: &Scene,
+    what: &str,
+) -> SyncStats {
+    let rig = Rig::preset("hmd").unwrap();
+    let synced = renderer.sync(&gpu.device, &gpu.queue, live).unwrap();
+    assert_eq!(
+        live.scene().instances,
+        want.instances,
+        "{what}: the live scene is the model"
+    );
+    let targets = renderer.create_targets(&gpu.device);
+    renderer
+        .submit_frame(&gpu.device, &gpu.queue, &rig, 0.0, &targets)
+        .unwrap();
+    for (d, reference) in reference_culls(want, &rig).into_iter().enumerate() {
+        let got = renderer.read_cull(&gpu.device, &gpu.queue, d).unwrap();
+        assert_eq!(got.draw_count, reference.draw_count, "{what}: draw count");
+        assert_eq!(got.draws, reference.draws, "{what}: draws");
+        assert!(got.visible == reference.visible, "{what}: visible ids");
+    }
+    synced
+}
+
+/// Random edit sequences from an empty scene: inserts into it, moves, recolors, removes
+/// (also of a mesh's last instance), slots reused after removal. Every third frame, a
+/// GPU-culled and a CPU-culled renderer sync the same changes and must both match the
+/// model's reference cull.
+#[test]
+fn edit_sequences_keep_gpu_and_cpu_culls_identical_to_the_model() {
+    let gpu = gpu();
+    let meshes = empty_scene();
+    let rig = support::sized("hmd", 32, 32);
+    for seed in 0..4u64 {
+        let mut rng = Pcg64Mcg::seed_from_u64(seed);
+        let mut model = Model {
+            slots: Vec::new(),
+            handles: Vec::new(),
+        };
+        let mut live = LiveScene::new(meshes.clone());
+        let mut renderers = [CullMode::Gpu, CullMode::Cpu].map(|cull| {
+            let options = RendererOptions {
+                cull,
+                ..Default::default()
+            };
+            Renderer::new(&gpu.device, &meshes, &rig, options).unwrap()
+        });
+        for frame in 0..24 {
+            for _ in 0..rng.random_range(1..40) {
+                edit(&mut rng, &mut live, &mut model, false);
+            }
+            if frame % 3 != 2 {
+                continue;
+            }
+            // Inserts and removes, then moves alone: both ways of syncing.
+            for moves in [false, true] {
+                if moves {
+                    for _ in 0..rng.random_range(1..30) {
+                        edit(&mut rng, &mut live, &mut model, true);
+                    }
+                }
+                let want = model.scene(&meshes);
+                let mut copy = live.clone();
+                let pairs = renderers.iter_mut().zip([&mut live, &mut copy]);
+                for (k, (renderer, scene)) in pairs.enumerate() {
+                    let what = format!("seed {seed} frame {frame} moves {moves} renderer {k}");
+                    let synced = check(&gpu, renderer, scene, &want, &what);
+                    if moves && !model.live().is_empty() {
+                        assert!(!synced.reloaded && synced.moved > 0, "{what}: {synced:?}");
+                    }
+                }
+            }
+        }
+        assert!(
+            !model.live().is_empty(),
+            "seed {seed}: the sequence ends with instances"
+        );
+    }
+}
+
+/// Bad handles (removed, or from another scene) and non-finite edits are typed errors,
+/// and nothing changes: the scene and its pending changes are as before.
+#[test]
+fn bad_handles_and_non_finite_edits_are_errors_that_change_nothing() {
+    let mut live = LiveScene::new(empty_scene());
+    let mut rng = Pcg64Mcg::seed_from_u64(7);
+    let kept = live.insert(random_instance(&mut rng, 1)).unwrap();
+    let gone = live.insert(random_instance(&mut rng, 2)).unwrap();
+    live.remove(gone).unwrap();
+    let _ = live.take_changes();
+    let mut other = LiveScene::new(empty_scene());
+    let foreign = (0..3)
+        .map(|_| other.insert(random_instance(&mut rng, 0)).unwrap())
+        .last()
+        .unwrap();
+    let before = live.scene().instances.clone();
+    let t = random_transform(&mut rng);
+    for bad in [gone, foreign] {
+        assert!(matches!(
+            live.set_transform(bad, t),
+            Err(Error::BadHandle(_))
+        ));
+        assert!(matches!(
+            live.set_color(bad, Vec4::ONE),
+            Err(Error::BadHandle(_))
+        ));
+        assert!(matches!(live.remove(bad), Err(Error::BadHandle(_))));
+        assert!(matches!(live.get(bad), Err(Error::BadHandle(_))));
+    }
+    let mut nan = t;
+    nan.translation.y = f32::NAN;
+    let mut infinite = t;
+    infinite.matrix3.x_axis.x = f32::INFINITY;
+    for broken in [nan, infinite] {
+        assert!(matches!(
+            live.set_transform(kept, broken),
+            Err(Error::NonFinite(_))
+        ));
+        let inst = Instance {
+            world_from_local: broken,
+            ..random_instance(&mut rng, 0)
+        };
+        assert!(matches!(live.insert(inst), Err(Error::NonFinite(_))));
+    }
+    let nan_color = Vec4::new(f32::NAN, 0.0, 0.0, 1.0);
+    assert!(matches!(
+        live.set_color(kept, nan_color),
+        Err(Error::NonFinite(_))
+    ));
+    let bad_mesh = random_instance(&mut rng, MESHES);
+    assert!(matches!(live.insert(bad_mesh), Err(Error::InvalidScene(_))));
+    assert_eq!(live.scene().instances, before);
+    assert!(live.take_changes().is_empty(), "nothing pending");
+    // The removed slot is reused by the next insert; the old handle stays dead.
+    let reused = live.insert(random_instance(&mut rng, 3)).unwrap();
+    assert_eq!(reused.slot(), gone.slot());
+    assert!(matches!(live.get(gone), Err(Error::BadHandle(_))));
+    assert!(live.get(reused).is_ok());
+}
+
+/// An instance moved between two frames is drawn exactly where a scene built fresh with
+/// it at the new place draws it; a frame with no edits uploads nothing per instance.
+#[test]
+fn a_moved_instance_renders_like_a_fresh_scene_with_it_there() {
+    let gpu = gpu();
+    let rig = support::sized("hmd", 120, 100);
+    let mut rng = Pcg64Mcg::seed_from_u64(3);
+    let mut scene = empty_scene();
+    scene.instances = (0..40)
+        .map(|k| random_instance(&mut rng, k % MESHES))
+        .collect();
+    let ahead = Affine3A::from_translation(Vec3::new(0.2, 1.5, -1.5));
+    for mode in [StereoMode::Instanced, StereoMode::MultiPass] {
+        let options = RendererOptions {
+            mode,
+            cull: support::cull_for(mode),
+            ..Default::default()
+        };
+        let mut live = LiveScene::new(scene.clone());
+        let handles = live.handles();
+        let mut renderer = Renderer::new(&gpu.device, &scene, &rig, options.clone()).unwrap();
+        let targets = renderer.create_targets(&gpu.device);
+        renderer
+            .submit_frame(&gpu.device, &gpu.queue, &rig, 0.0, &targets)
+            .unwrap();
+        live.set_transform(handles[7], ahead).unwrap();
+        let synced = renderer.sync(&gpu.device, &gpu.queue, &mut live).unwrap();
+        assert_eq!((synced.moved, synced.bytes_uploaded), (1, 16 + 68));
+        let frame = renderer
+            .submit_frame(&gpu.device, &gpu.queue, &rig, 0.0, &targets)
+            .unwrap();
+        let moved = read_rgba8(&gpu.device, &gpu.queue, &targets[0].color).unwrap();
+        let mut fresh = scene.clone();
+        fresh.instances[7].world_from_local = ahead;
+        let want = support::render(&gpu, &fresh, &rig, options)
+            .unwrap()
+            .remove(0);
+        assert_images_match(
+            &format!("moved-{}", mode.name()),
+            &moved,
+            &want,
+            Tolerance::EXACT,
+        );
+        // Nothing changed since: the sync uploads nothing, the frame only its contexts.
+        let idle = renderer.sync(&gpu.device, &gpu.queue, &mut live).unwrap();
+        assert_eq!(idle, SyncStats::default());
+        let still = renderer
+            .submit_frame(&gpu.device, &gpu.queue, &rig, 0.0, &targets)
+            .unwrap();
+        assert_eq!(
+            still.dispatches + 1,
+            frame.dispatches,
+            "the scatter dispatch is gone"
+        );
+        if mode == StereoMode::Instanced {
+            // The frame and display contexts, nothing per instance.
+            assert_eq!(still.bytes_uploaded, 32 + 1072, "{still:?}");
+        }
+    }
+}

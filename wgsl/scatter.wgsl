@@ -1,0 +1,29 @@
+// Moved instances into place, once per frame with edits, before any cull: each edit
+// (17 words after the 4-word header, see src/scatter.rs) is a slot, the instance's new
+// transform rows and its world bounding sphere, computed on the CPU so that the GPU and
+// the CPU culler test the very same sphere.
+// Bindings: SCATTER_BINDINGS in src/shaders.rs.
+
+const HEADER: u32 = 4u;
+const WORDS_PER_EDIT: u32 = 17u;
+const SCATTER_GROUP: u32 = 64u;
+
+fn edit_vec4(at: u32) -> vec4<f32> {
+    return bitcast<vec4<f32>>(vec4(edits[at], edits[at + 1u], edits[at + 2u], edits[at + 3u]));
+}
+
+@compute @workgroup_size(SCATTER_GROUP)
+fn scatter(@builtin(workgroup_id) wid: vec3<u32>, @builtin(local_invocation_index) local: u32) {
+    // Header: edit count, spheres too (GPU culling), workgroups along x.
+    let i = (wid.y * edits[2] + wid.x) * SCATTER_GROUP + local;
+    if (i >= edits[0]) {
+        return;
+    }
+    let at = HEADER + i * WORDS_PER_EDIT;
+    let slot = edits[at];
+    instances[slot].world_from_local =
+        array(edit_vec4(at + 1u), edit_vec4(at + 5u), edit_vec4(at + 9u));
+    if (edits[1] != 0u) {
+        spheres[positions[slot]] = edit_vec4(at + 13u);
+    }
+}
