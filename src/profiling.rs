@@ -37,13 +37,17 @@ pub struct FrameQueries {
     pub passes: Vec<(String, f64)>,
     /// Summed over the draw passes; `None` without pipeline statistics.
     pub vertex_invocations: Option<u64>,
+    /// Primitives that reached the clipper: the triangles submitted.
+    pub triangles_submitted: Option<u64>,
     pub clipper_primitives: Option<u64>,
 }
 
-/// The statistics gathered, in the order the query results list them.
+/// The statistics gathered; query results list them in bit order.
 const STATISTICS: wgpu::PipelineStatisticsTypes =
     wgpu::PipelineStatisticsTypes::VERTEX_SHADER_INVOCATIONS
+        .union(wgpu::PipelineStatisticsTypes::CLIPPER_INVOCATIONS)
         .union(wgpu::PipelineStatisticsTypes::CLIPPER_PRIMITIVES_OUT);
+const STATISTICS_PER_QUERY: usize = 3;
 
 impl GpuTimer {
     /// Room for pipeline statistics over `passes` draw passes per frame (timestamps
@@ -70,7 +74,7 @@ impl GpuTimer {
                 }),
                 resolved: device.create_buffer(&wgpu::BufferDescriptor {
                     label: Some("stereocull.pipeline_statistics"),
-                    size: 16 * passes as u64,
+                    size: (8 * STATISTICS_PER_QUERY) as u64 * passes as u64,
                     usage: wgpu::BufferUsages::QUERY_RESOLVE | wgpu::BufferUsages::COPY_SRC,
                     mapped_at_creation: false,
                 }),
@@ -155,10 +159,17 @@ impl GpuTimer {
         if let Some(s) = self.statistics.as_mut() {
             let counts: Vec<u64> = match s.used {
                 0 => Vec::new(),
-                n => read_pod(device, queue, &s.resolved, 16 * n as u64)?,
+                n => read_pod(
+                    device,
+                    queue,
+                    &s.resolved,
+                    (8 * STATISTICS_PER_QUERY) as u64 * n as u64,
+                )?,
             };
-            frame.vertex_invocations = Some(counts.iter().step_by(2).sum());
-            frame.clipper_primitives = Some(counts.iter().skip(1).step_by(2).sum());
+            let sum = |k: usize| Some(counts.iter().skip(k).step_by(STATISTICS_PER_QUERY).sum());
+            frame.vertex_invocations = sum(0);
+            frame.triangles_submitted = sum(1);
+            frame.clipper_primitives = sum(2);
             s.used = 0;
         }
         Ok(frame)

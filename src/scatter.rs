@@ -10,12 +10,9 @@
 //! bit and flip a decision at a tangent; 16 bytes more per edit keep GPU and CPU culls
 //! byte-identical.
 
-use std::collections::HashMap;
-
 use glam::Vec4;
 
 use crate::buffers::storage_buffer;
-use crate::records::instance_record;
 use crate::scene::Scene;
 use crate::shaders::{SCATTER_BINDINGS, bind_group, bind_group_layout, scatter_source};
 
@@ -30,10 +27,10 @@ pub struct Scatter {
     layout: wgpu::BindGroupLayout,
     edits: wgpu::Buffer,
     bind_group: Option<wgpu::BindGroup>,
-    /// Staged edits (17 words each) and each staged slot's index: a slot moved twice
-    /// before a dispatch keeps one edit, the last.
+    /// Staged edits (17 words each) and, per slot, 1 + its edit's index (0: none): a
+    /// slot moved twice before a dispatch keeps one edit, the last.
     staged: Vec<u32>,
-    index: HashMap<u32, usize>,
+    index: Vec<u32>,
     spheres_too: bool,
     max_groups: u32,
 }
@@ -71,7 +68,7 @@ impl Scatter {
             edits: edits_buffer(device, 0),
             bind_group: None,
             staged: Vec::new(),
-            index: HashMap::new(),
+            index: Vec::new(),
             spheres_too: false,
             max_groups: device.limits().max_compute_workgroups_per_dimension,
         }
@@ -82,32 +79,43 @@ impl Scatter {
         self.staged.len() / WORDS_PER_EDIT
     }
 
-    /// Stages the moved `slots` of `scene` and uploads every staged edit; returns the
-    /// new spheres (in `slots` order, for a CPU culler's layout) and the bytes written.
+    /// Stages the moved `slots` of `scene` (each listed once) and uploads every staged
+    /// edit; returns the bytes written.
     pub fn stage(
         &mut self,
         device: &wgpu::Device,
         queue: &wgpu::Queue,
         (scene, slots): (&Scene, &[u32]),
         targets: ScatterTargets,
-    ) -> (Vec<Vec4>, u64) {
-        let spheres: Vec<Vec4> = slots
-            .iter()
-            .map(|&slot| {
-                let instance = &scene.instances[slot as usize];
-                let sphere = scene.world_sphere(instance);
-                let at = *self.index.entry(slot).or_insert_with(|| {
-                    self.staged.resize(self.staged.len() + WORDS_PER_EDIT, 0);
-                    self.staged.len() - WORDS_PER_EDIT
-                });
-                let edit = &mut self.staged[at..at + WORDS_PER_EDIT];
-                edit[0] = slot;
-                let rows = instance_record(instance).world_from_local;
-                edit[1..13].copy_from_slice(bytemuck::cast_slice(&rows));
-                edit[13..].copy_from_slice(bytemuck::cast_slice(&sphere.to_array()));
-                sphere
-            })
-            .collect();
+    ) -> u64 {
+        self.index
+            .resize(self.index.len().max(scene.instances.len()), 0);
+        // Slots not staged yet get new edits at the end; those staged by an earlier sync
+        // of this frame are overwritten in place.
+        let split;
+        let (fresh, again): (&[u32], &[u32]) = match self.staged.is_empty() {
+            true => (slots, &[]),
+            false => {
+                split = slots
+                    .iter()
+                    .partition::<Vec<u32>, _>(|&&s| self.index[s as usize] == 0);
+                (&split.0, &split.1)
+            }
+        };
+        let first = self.staged.len();
+        // Into the staged vector's kept capacity, on every core: no allocation, no page
+        // faults in the steady state.
+        self.staged.reserve(fresh.len() * WORDS_PER_EDIT);
+        for &slot in fresh {
+            self.staged.extend_from_slice(&make_edit(scene, slot));
+        }
+        for (k, &slot) in fresh.iter().enumerate() {
+            self.index[slot as usize] = (first / WORDS_PER_EDIT + k + 1) as u32;
+        }
+        for &slot in again {
+            let at = (self.index[slot as usize] as usize - 1) * WORDS_PER_EDIT;
+            self.staged[at..at + WORDS_PER_EDIT].copy_from_slice(&make_edit(scene, slot));
+        }
         self.spheres_too = targets.spheres.is_some();
         let needed = self.bytes();
         if needed > self.edits.size() {
@@ -121,14 +129,20 @@ impl Scatter {
         queue.write_buffer(&self.edits, 0, bytemuck::cast_slice(&header));
         let body = 4 * HEADER_WORDS as u64;
         queue.write_buffer(&self.edits, body, bytemuck::cast_slice(&self.staged));
-        (spheres, needed)
+        needed
+    }
+
+    /// The staged world sphere of `slot` (which must be staged).
+    pub fn staged_sphere(&self, slot: u32) -> Vec4 {
+        let at = (self.index[slot as usize] as usize - 1) * WORDS_PER_EDIT;
+        let words: [u32; 4] = std::array::from_fn(|k| self.staged[at + 13 + k]);
+        Vec4::from_array(words.map(f32::from_bits))
     }
 
     /// Drops the staged edits and the bind group: the scene was uploaded whole again
     /// (its buffers may be new, and its cull positions are).
     pub fn reset(&mut self) {
-        self.staged.clear();
-        self.index.clear();
+        self.clear();
         self.bind_group = None;
     }
 
@@ -148,9 +162,15 @@ impl Scatter {
         pass.set_bind_group(0, bind_group, &[]);
         let (x, y) = self.groups();
         pass.dispatch_workgroups(x, y, 1);
-        self.staged.clear();
-        self.index.clear();
+        self.clear();
         1
+    }
+
+    fn clear(&mut self) {
+        for edit in self.staged.chunks_exact(WORDS_PER_EDIT) {
+            self.index[edit[0] as usize] = 0;
+        }
+        self.staged.clear();
     }
 
     fn bytes(&self) -> u64 {
@@ -185,6 +205,26 @@ impl Scatter {
         let buffers = [&self.edits, targets.instances, s, p];
         bind_group(device, "stereocull.scatter", &self.layout, buffers)
     }
+}
+
+/// One edit: the slot, its transform's rows, its world sphere.
+fn make_edit(scene: &Scene, slot: u32) -> [u32; WORDS_PER_EDIT] {
+    let instance = &scene.instances[slot as usize];
+    let m = instance.world_from_local;
+    let (x, y, z, t) = (
+        m.matrix3.x_axis,
+        m.matrix3.y_axis,
+        m.matrix3.z_axis,
+        m.translation,
+    );
+    let sphere = scene.world_sphere(instance);
+    let floats = [
+        x.x, y.x, z.x, t.x, x.y, y.y, z.y, t.y, x.z, y.z, z.z, t.z, sphere.x, sphere.y, sphere.z,
+        sphere.w,
+    ];
+    let mut edit = [slot; WORDS_PER_EDIT];
+    edit[1..].copy_from_slice(&floats.map(f32::to_bits));
+    edit
 }
 
 fn edits_buffer(device: &wgpu::Device, size: u64) -> wgpu::Buffer {

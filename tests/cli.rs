@@ -447,7 +447,7 @@ fn profile_writes_table_csv_json_and_chart() {
     assert_eq!(
         lines.next(),
         Some(
-            "mode,cull,rig,instances,cpu_ms_median,cpu_ms_p95,gpu_ms_median,gpu_ms_p95,draw_calls,dispatches,bytes_uploaded,adapter"
+            "mode,cull,rig,instances,cpu_ms_median,cpu_ms_p95,gpu_ms_median,gpu_ms_p95,draw_calls,dispatches,bytes_uploaded,adapter,moving_percent,churn_percent,sync_ms_median,triangles_submitted"
         )
     );
     // 3 classic modes (CPU cull only) + instanced and multiview with both culls, per count.
@@ -474,4 +474,85 @@ fn profile_writes_table_csv_json_and_chart() {
     assert!(
         svg.starts_with("<svg") && svg.contains("polyline") && svg.contains("instanced / gpu cull")
     );
+}
+
+/// `cull --frames N --moving P --churn P`: the GPU's buffers after N frames of seeded
+/// edits equal the CPU reference's, and the edits changed what is visible.
+#[test]
+fn cull_after_edits_dumps_the_same_buffers_from_gpu_and_cpu() {
+    let dir = tempfile::tempdir().unwrap();
+    let dump = |cull: &str, frames: &str, moving: &str| {
+        let path = dir.path().join(format!("{cull}-{frames}-{moving}.json"));
+        let args = [
+            "cull",
+            "--scene",
+            "procedural:6000:12",
+            "--rig",
+            "cave",
+            "--cull",
+            cull,
+            "--frames",
+            frames,
+            "--moving",
+            moving,
+            "--churn",
+            "2",
+            "--dump-visible",
+            path.to_str().unwrap(),
+        ];
+        let out = stereocull(&args);
+        assert!(
+            out.status.success(),
+            "{}",
+            String::from_utf8_lossy(&out.stderr)
+        );
+        std::fs::read(path).unwrap()
+    };
+    let gpu = dump("gpu", "6", "20");
+    assert!(
+        gpu == dump("cpu", "6", "20"),
+        "GPU and CPU dumps differ after edits"
+    );
+    assert!(gpu != dump("cpu", "1", "0"), "the edits changed nothing");
+}
+
+/// `stress --moving --churn --json`: per-frame sync figures, the scatter dispatch, the
+/// bytes that moves cost, triangles submitted named in the summary.
+#[test]
+fn stress_with_moving_instances_reports_what_they_cost() {
+    let args = [
+        "stress",
+        "--scene",
+        "procedural:5000",
+        "--frames",
+        "3",
+        "--width",
+        "16",
+        "--height",
+        "16",
+        "--moving",
+        "10",
+        "--json",
+    ];
+    let out = stereocull(&args);
+    assert!(
+        out.status.success(),
+        "{}",
+        String::from_utf8_lossy(&out.stderr)
+    );
+    let v: Value = serde_json::from_slice(&out.stdout).unwrap();
+    let frame = &v["frames"][2];
+    assert_eq!(frame["moved"], 500);
+    assert_eq!(
+        frame["dispatches"], 4,
+        "the scatter, then three cull passes"
+    );
+    // 16 bytes of header, 68 per moved instance, then the frame and display contexts.
+    assert_eq!(frame["bytes_uploaded"], 16 + 68 * 500 + 1104);
+    let summary = &v["summary"];
+    assert!(
+        summary["triangles_submitted_median"].as_f64().unwrap() > 1000.0,
+        "{summary}"
+    );
+    assert_eq!(summary["moving_percent"], 10.0);
 }

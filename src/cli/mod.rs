@@ -1,6 +1,7 @@
 //! The `stereocull` command line.
 
 mod chart;
+mod edits;
 mod profile;
 mod render;
 mod stress;
@@ -13,6 +14,7 @@ use serde::Serialize;
 use crate::cull::{CullOutput, cpu};
 use crate::device::{Gpu, OPTIONAL_FEATURES, Tier};
 use crate::error::{Error, Result};
+use crate::live::LiveScene;
 use crate::records::CullLayout;
 use crate::renderer::{CullMode, Renderer, RendererOptions};
 use crate::rig::Rig;
@@ -107,6 +109,11 @@ struct CullArgs {
     /// Cull on the CPU (the reference) or on the GPU (buffers read back).
     #[arg(long, value_enum, default_value = "cpu")]
     cull: CullMode,
+    /// Frames of edits (`--moving`, `--churn`) before the dump, which shows the last.
+    #[arg(long, default_value_t = 1)]
+    frames: u32,
+    #[command(flatten)]
+    edits: edits::EditArgs,
 }
 
 fn parse_vec3(s: &str) -> std::result::Result<[f32; 3], String> {
@@ -190,11 +197,18 @@ pub fn display_dump(name: &str, views: u32, out: &CullOutput, scene: &Scene) -> 
 
 fn cull(args: &CullArgs) -> Result<()> {
     let rig = args.scene.load_rig()?;
-    let scene = scene_spec::load(&args.scene.scene)?;
+    let mut live = LiveScene::new(scene_spec::load(&args.scene.scene)?);
+    let mut driver = edits::EditDriver::new(&live, &args.edits)?;
     let outputs = match args.cull {
-        CullMode::Cpu => cpu::cull_many(&CullLayout::new(&scene), &rig.cull_jobs()?),
-        CullMode::Gpu => gpu_cull(&rig, &scene)?,
+        CullMode::Cpu => {
+            for frame in 0..args.frames {
+                driver.apply(&mut live, frame)?;
+            }
+            cpu::cull_many(&CullLayout::new(live.scene()), &rig.cull_jobs()?)
+        }
+        CullMode::Gpu => gpu_cull(&rig, &mut live, (&mut driver, args.frames))?,
     };
+    let scene = live.scene();
     let displays: Vec<_> = rig
         .displays
         .iter()
@@ -207,12 +221,22 @@ fn cull(args: &CullArgs) -> Result<()> {
     )
 }
 
-/// One GPU-culled frame, its cull buffers read back.
-fn gpu_cull(rig: &Rig, scene: &Scene) -> Result<Vec<CullOutput>> {
+/// `frames` GPU-culled frames, each after its edits are synced; the last frame's cull
+/// buffers read back.
+fn gpu_cull(
+    rig: &Rig,
+    live: &mut LiveScene,
+    (driver, frames): (&mut edits::EditDriver, u32),
+) -> Result<Vec<CullOutput>> {
     let gpu = Gpu::headless()?;
-    let mut renderer = Renderer::new(&gpu.device, scene, rig, RendererOptions::default())?;
+    let options = RendererOptions::default();
+    let mut renderer = Renderer::new(&gpu.device, live.scene(), rig, options)?;
     let targets = renderer.create_targets(&gpu.device);
-    renderer.submit_frame(&gpu.device, &gpu.queue, rig, 0.0, &targets)?;
+    for frame in 0..frames {
+        driver.apply(live, frame)?;
+        renderer.sync(&gpu.device, &gpu.queue, live)?;
+        renderer.submit_frame(&gpu.device, &gpu.queue, rig, 0.0, &targets)?;
+    }
     (0..rig.displays.len())
         .map(|i| renderer.read_cull(&gpu.device, &gpu.queue, i))
         .collect()

@@ -8,12 +8,14 @@ use clap::Args;
 use indicatif::{ProgressBar, ProgressStyle};
 use serde::Serialize;
 
+use super::edits::{EditArgs, EditDriver};
 use super::{FRAME_SECONDS, chart, write_json};
 use crate::device::{Gpu, list_counts};
 use crate::error::{Error, Result};
+use crate::live::LiveScene;
 use crate::procedural;
 use crate::profiling::{GpuTimer, percentile, write_trace};
-use crate::renderer::{CullMode, Renderer, RendererOptions, StereoMode};
+use crate::renderer::{CullMode, Renderer, RendererOptions, StereoMode, SyncStats};
 use crate::rig::Rig;
 use crate::scene::Scene;
 use wgpu_profiler::GpuTimerQueryResult;
@@ -53,6 +55,13 @@ pub struct ProfileArgs {
     /// MSAA samples per pixel (1: none).
     #[arg(long, default_value_t = 1)]
     pub msaa: u32,
+    /// Percents of instances moved every frame, one configuration each (`0,1,10`
+    /// measures what moves cost against the static scene in one run).
+    #[arg(long, value_delimiter = ',', default_value = "0")]
+    pub moving: Vec<f64>,
+    /// Percent of instances removed and inserted again every frame.
+    #[arg(long, default_value_t = 0.0)]
+    pub churn: f64,
     /// Also write a Chrome trace (chrome://tracing, Perfetto) of the last timed frame of
     /// every configuration: per display a scope, per pass (`cull`, `draw`) one inside it.
     #[arg(long)]
@@ -86,6 +95,12 @@ pub struct Row {
     pub vertex_invocations: Option<u64>,
     pub clipper_primitives: Option<u64>,
     pub indirect_validation: bool,
+    pub moving_percent: f64,
+    pub churn_percent: f64,
+    /// Of `cpu_ms_median`'s frames, the median sync of the frame's edits.
+    pub sync_ms_median: f64,
+    /// Primitives reaching the clipper in the draw passes (last frame).
+    pub triangles_submitted: Option<u64>,
     /// The last timed frame's GPU scopes, for `--trace`.
     #[serde(skip)]
     pub trace: Vec<GpuTimerQueryResult>,
@@ -123,7 +138,7 @@ pub fn profile(args: &ProfileArgs) -> Result<()> {
     if timer.is_none() {
         println!("GPU timings unavailable: the adapter has no TIMESTAMP_QUERY; CPU timings only");
     }
-    let total = (rigs.len() * args.instances.len() * configs.len()) as u64
+    let total = (rigs.len() * args.instances.len() * configs.len() * args.moving.len()) as u64
         * (args.frames + args.warmup) as u64;
     let bar = ProgressBar::new(total);
     bar.set_style(
@@ -134,13 +149,23 @@ pub fn profile(args: &ProfileArgs) -> Result<()> {
     for &n in &args.instances {
         let scene = procedural::scene(n, args.meshes, 1);
         for (spec, rig) in &rigs {
-            for &(mode, cull) in &configs {
-                bar.set_message(format!("{spec} {n} {} {cull:?}", mode.name()));
+            for (&(mode, cull), &moving) in configs
+                .iter()
+                .flat_map(|c| args.moving.iter().map(move |m| (c, m)))
+            {
+                bar.set_message(format!(
+                    "{spec} {n} {} {cull:?} {moving} % moving",
+                    mode.name()
+                ));
                 let config = Config {
                     spec,
                     rig,
                     mode,
                     cull,
+                    edits: EditArgs {
+                        moving,
+                        churn: args.churn,
+                    },
                 };
                 rows.push(measure(&gpu, &scene, &config, args, timer.as_mut(), &bar)?);
             }
@@ -200,6 +225,7 @@ struct Config<'a> {
     rig: &'a Rig,
     mode: StereoMode,
     cull: CullMode,
+    edits: EditArgs,
 }
 
 fn measure(
@@ -210,6 +236,7 @@ fn measure(
         rig,
         mode,
         cull,
+        edits,
     }: &Config,
     args: &ProfileArgs,
     mut timer: Option<&mut GpuTimer>,
@@ -225,8 +252,25 @@ fn measure(
     let targets = renderer.create_targets(&gpu.device);
     let views: Vec<_> = targets.iter().map(|t| t.views()).collect();
     let mut samples = Samples::default();
+    let mut live = match edits.any() {
+        true => {
+            let live = LiveScene::new(scene.clone());
+            let driver = EditDriver::new(&live, &edits)?;
+            Some((live, driver))
+        }
+        false => None,
+    };
     for frame in 0..args.warmup + args.frames {
+        // The edits themselves are the caller's work: made before the clock starts.
+        if let Some((live, driver)) = &mut live {
+            driver.apply(live, frame)?;
+        }
         let start = Instant::now();
+        let synced = match &mut live {
+            Some((live, _)) => renderer.sync(&gpu.device, &gpu.queue, live)?,
+            None => SyncStats::default(),
+        };
+        let sync_end = Instant::now();
         let prepared = renderer.prepare(&gpu.queue, rig, frame as f32 * FRAME_SECONDS)?;
         let encode_start = Instant::now();
         let mut encoder = gpu.device.create_command_encoder(&Default::default());
@@ -245,6 +289,7 @@ fn measure(
         }
         let ms = |a: Instant, b: Instant| (b - a).as_secs_f64() * 1e3;
         samples.cpu.push(ms(start, end));
+        samples.sync.push(ms(start, sync_end));
         samples.cull.push(prepared.cpu_cull.as_secs_f64() * 1e3);
         samples.upload.push(prepared.cpu_upload.as_secs_f64() * 1e3);
         samples.encode.push(ms(encode_start, submit_start));
@@ -261,11 +306,12 @@ fn measure(
             samples.gpu_draw.push(of("draw"));
             samples.gpu.push(q.passes.iter().map(|(_, v)| v).sum());
             samples.statistics = q.vertex_invocations.zip(q.clipper_primitives);
+            samples.triangles = q.triangles_submitted;
         }
         samples.last = (
             recorded.draw_calls,
             recorded.dispatches,
-            prepared.bytes_uploaded,
+            prepared.bytes_uploaded + synced.bytes_uploaded,
         );
     }
     let med = |v: &[f64]| percentile(v, 0.5);
@@ -292,6 +338,10 @@ fn measure(
         vertex_invocations: samples.statistics.map(|s| s.0),
         clipper_primitives: samples.statistics.map(|s| s.1),
         indirect_validation: gpu.indirect_validation(),
+        moving_percent: edits.moving,
+        churn_percent: edits.churn,
+        sync_ms_median: med(&samples.sync),
+        triangles_submitted: samples.triangles,
         trace: timer.map(|t| t.last_frame().to_vec()).unwrap_or_default(),
     })
 }
@@ -299,6 +349,8 @@ fn measure(
 #[derive(Default)]
 struct Samples {
     cpu: Vec<f64>,
+    sync: Vec<f64>,
+    triangles: Option<u64>,
     cull: Vec<f64>,
     upload: Vec<f64>,
     encode: Vec<f64>,
@@ -325,11 +377,12 @@ fn print_table(rows: &[Row]) {
         );
     }
     println!(
-        "{:>14} {:>13} {:>4} {:>9} | {:>9} {:>9} | {:>9} {:>9} | {:>8} {:>8} {:>8} {:>8} | {:>9} {:>5} {:>10} | {:>11} {:>11}",
+        "{:>14} {:>13} {:>4} {:>9} {:>6} | {:>9} {:>9} | {:>9} {:>9} | {:>8} {:>8} {:>8} {:>8} | {:>9} {:>5} {:>10} | {:>11} {:>11}",
         "rig",
         "mode",
         "cull",
         "instances",
+        "moving",
         "cpu med",
         "cpu p95",
         "gpu med",
@@ -349,11 +402,12 @@ fn print_table(rows: &[Row]) {
             .file_stem()
             .map_or(r.rig.clone(), |s| s.to_string_lossy().into());
         println!(
-            "{:>14} {:>13} {:>4} {:>9} | {:>9.3} {:>9.3} | {:>9} {:>9} | {:>8.3} {:>8.3} {:>8.3} {:>8.3} | {:>9} {:>5} {:>10} | {:>11} {:>11}",
+            "{:>14} {:>13} {:>4} {:>9} {:>6} | {:>9.3} {:>9.3} | {:>9} {:>9} | {:>8.3} {:>8.3} {:>8.3} {:>8.3} | {:>9} {:>5} {:>10} | {:>11} {:>11}",
             rig,
             r.mode.name(),
             format!("{:?}", r.cull).to_lowercase(),
             r.instances,
+            format!("{}%", r.moving_percent),
             r.cpu_ms_median,
             r.cpu_ms_p95,
             opt(r.gpu_ms_median),
@@ -377,12 +431,12 @@ fn count(v: Option<u64>) -> String {
 
 fn write_csv(path: &std::path::Path, rows: &[Row]) -> Result<()> {
     let mut text = String::from(
-        "mode,cull,rig,instances,cpu_ms_median,cpu_ms_p95,gpu_ms_median,gpu_ms_p95,draw_calls,dispatches,bytes_uploaded,adapter\n",
+        "mode,cull,rig,instances,cpu_ms_median,cpu_ms_p95,gpu_ms_median,gpu_ms_p95,draw_calls,dispatches,bytes_uploaded,adapter,moving_percent,churn_percent,sync_ms_median,triangles_submitted\n",
     );
     let field = |v: Option<f64>| v.map_or(String::new(), |x| format!("{x:.4}"));
     for r in rows {
         text += &format!(
-            "{},{},{},{},{:.4},{:.4},{},{},{},{},{},\"{}\"\n",
+            "{},{},{},{},{:.4},{:.4},{},{},{},{},{},\"{}\",{},{},{:.4},{}\n",
             r.mode.name(),
             format!("{:?}", r.cull).to_lowercase(),
             r.rig,
@@ -394,7 +448,12 @@ fn write_csv(path: &std::path::Path, rows: &[Row]) -> Result<()> {
             r.draw_calls,
             r.dispatches,
             r.bytes_uploaded,
-            r.adapter.replace('"', "'")
+            r.adapter.replace('"', "'"),
+            r.moving_percent,
+            r.churn_percent,
+            r.sync_ms_median,
+            r.triangles_submitted
+                .map_or(String::new(), |t| t.to_string())
         );
     }
     std::fs::write(path, text).map_err(|e| Error::io(path, e))

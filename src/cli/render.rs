@@ -6,11 +6,16 @@ use std::time::Instant;
 use clap::Parser;
 use serde::Serialize;
 
+use super::edits::{EditArgs, EditDriver};
 use super::{SceneArgs, write_json};
 use crate::device::{Gpu, list_counts};
 use crate::error::{Error, Result};
+use crate::live::LiveScene;
+use crate::profiling::GpuTimer;
 use crate::readback::read_rgba8;
-use crate::renderer::{CullMode, DisplayTarget, FrameStats, Renderer, RendererOptions, StereoMode};
+use crate::renderer::{
+    CullMode, DisplayTarget, FrameStats, Renderer, RendererOptions, StereoMode, SyncStats,
+};
 use crate::rig::Rig;
 use crate::scene::Scene;
 use crate::scene_spec;
@@ -53,6 +58,24 @@ pub struct Session {
     pub scene: Scene,
     pub renderer: Renderer,
     pub targets: Vec<DisplayTarget>,
+    /// With `--moving` or `--churn`: the live scene and what edits it each frame.
+    pub live: Option<(LiveScene, EditDriver)>,
+    /// Where frames record GPU timings and pipeline statistics, if asked and available.
+    pub timer: Option<GpuTimer>,
+    frames: u32,
+}
+
+/// One frame's figures from [`Session::frame`].
+pub struct FrameFigures {
+    /// Recorded and uploaded by prepare + encode + submit (sync's bytes included).
+    pub stats: FrameStats,
+    /// sync + prepare + encode + submit on the CPU: stereocull's cost.
+    pub cpu_ms: f64,
+    /// Applying the frame's edits to the live scene: the caller's work.
+    pub edit_ms: f64,
+    /// Of `cpu_ms`, the sync.
+    pub sync_ms: f64,
+    pub sync: SyncStats,
 }
 
 impl Session {
@@ -62,6 +85,7 @@ impl Session {
     pub fn open(
         args: &SceneArgs,
         (cull, mode, msaa): (CullMode, StereoMode, Option<u32>),
+        edits: &EditArgs,
     ) -> Result<Session> {
         let rig = args.load_rig()?;
         let scene = scene_spec::load(&args.scene)?;
@@ -83,27 +107,57 @@ impl Session {
         }
         let renderer = Renderer::new(&gpu.device, &scene, &rig, options)?;
         let targets = renderer.create_targets(&gpu.device);
+        let live = match edits.any() {
+            true => {
+                let live = LiveScene::new(scene.clone());
+                let driver = EditDriver::new(&live, edits)?;
+                Some((live, driver))
+            }
+            false => None,
+        };
         Ok(Session {
             gpu,
             rig,
             scene,
             renderer,
             targets,
+            live,
+            timer: None,
+            frames: 0,
         })
     }
 
-    /// Writes the contexts for `time` (seconds), records and submits one frame; returns
-    /// its stats with the CPU time of prepare + encode + submit.
-    pub fn frame(&mut self, time: f32) -> Result<(FrameStats, f64)> {
+    /// Applies this frame's edits (if live), syncs them, writes the contexts for `time`
+    /// (seconds), records and submits one frame.
+    pub fn frame(&mut self, time: f32) -> Result<FrameFigures> {
+        let ms = |since: Instant| since.elapsed().as_secs_f64() * 1e3;
+        let (mut edit_ms, mut sync_ms, mut sync) = (0.0, 0.0, SyncStats::default());
         let start = Instant::now();
-        let stats = self.renderer.submit_frame(
+        if let Some((live, driver)) = &mut self.live {
+            driver.apply(live, self.frames)?;
+            edit_ms = ms(start);
+            let sync_start = Instant::now();
+            sync = self
+                .renderer
+                .sync(&self.gpu.device, &self.gpu.queue, live)?;
+            sync_ms = ms(sync_start);
+        }
+        self.frames += 1;
+        let mut stats = self.renderer.submit_frame_timed(
             &self.gpu.device,
             &self.gpu.queue,
-            &self.rig,
-            time,
+            (&self.rig, time),
             &self.targets,
+            self.timer.as_mut(),
         )?;
-        Ok((stats, start.elapsed().as_secs_f64() * 1e3))
+        stats.bytes_uploaded += sync.bytes_uploaded;
+        Ok(FrameFigures {
+            stats,
+            cpu_ms: ms(start) - edit_ms,
+            edit_ms,
+            sync_ms,
+            sync,
+        })
     }
 }
 
@@ -118,8 +172,9 @@ struct DisplayStats {
 }
 
 pub fn render(args: &RenderArgs) -> Result<()> {
-    let mut session = Session::open(&args.scene, (args.cull, args.mode, args.msaa))?;
-    let (stats, cpu_ms) = session.frame(args.time)?;
+    let edits = EditArgs::default();
+    let mut session = Session::open(&args.scene, (args.cull, args.mode, args.msaa), &edits)?;
+    let FrameFigures { stats, cpu_ms, .. } = session.frame(args.time)?;
     let start = Instant::now();
     session.gpu.wait()?;
     let gpu_wait_ms = start.elapsed().as_secs_f64() * 1e3;

@@ -6,10 +6,11 @@ use clap::Args;
 use indicatif::{ProgressBar, ProgressStyle};
 use serde::Serialize;
 
+use super::edits::EditArgs;
 use super::render::Session;
 use super::{FRAME_SECONDS, SceneArgs};
 use crate::error::Result;
-use crate::profiling::percentile;
+use crate::profiling::{GpuTimer, percentile};
 use crate::renderer::{CullMode, StereoMode};
 
 #[derive(Args)]
@@ -25,6 +26,8 @@ pub struct StressArgs {
     /// MSAA samples per pixel (1: none).
     #[arg(long, default_value_t = 1)]
     pub msaa: u32,
+    #[command(flatten)]
+    pub edits: EditArgs,
     /// Print per-frame and summary figures as one JSON object instead of text.
     #[arg(long)]
     pub json: bool,
@@ -33,8 +36,18 @@ pub struct StressArgs {
 #[derive(Serialize)]
 struct FrameRecord {
     frame: u32,
-    /// prepare + encode + submit on the CPU.
+    /// sync + prepare + encode + submit on the CPU.
     cpu_ms: f64,
+    /// Of `cpu_ms`, syncing the frame's edits (0 without `--moving` / `--churn`).
+    sync_ms: f64,
+    /// Making the frame's edits (the caller's work, not in `cpu_ms`).
+    edit_ms: f64,
+    /// Instances synced as scatter edits; whether the cull order was rewritten.
+    moved: u32,
+    reloaded: bool,
+    /// Primitives reaching the clipper in the draw passes (pipeline statistics; `None`
+    /// where the adapter has none).
+    triangles_submitted: Option<u64>,
     /// Until the GPU finished the frame.
     frame_ms: f64,
     visible: Vec<u32>,
@@ -52,12 +65,18 @@ struct Summary {
     frames: u32,
     cpu_ms_median: f64,
     cpu_ms_p95: f64,
+    sync_ms_median: f64,
+    edit_ms_median: f64,
+    moving_percent: f64,
+    churn_percent: f64,
     frame_ms_median: f64,
     frame_ms_p95: f64,
     visible_mean: Vec<f64>,
     draw_calls_per_frame: u32,
     dispatches_per_frame: u32,
     bytes_uploaded_per_frame: u64,
+    /// Median over the frames of the triangles submitted (pipeline statistics).
+    triangles_submitted_median: Option<f64>,
     gpu_bytes_per_instance: u64,
     /// Memory after the first frame, after every tenth of the run, and after the last:
     /// in a soak run, growth after warm-up means a leak.
@@ -93,7 +112,10 @@ impl MemorySample {
 }
 
 pub fn stress(args: &StressArgs) -> Result<()> {
-    let mut session = Session::open(&args.scene, (args.cull, args.mode, Some(args.msaa)))?;
+    let mode = (args.cull, args.mode, Some(args.msaa));
+    let mut session = Session::open(&args.scene, mode, &args.edits)?;
+    let passes = 2 * session.rig.displays.len() as u32;
+    session.timer = GpuTimer::new(&session.gpu.device, &session.gpu.queue, passes);
     let bar = if args.json {
         ProgressBar::hidden()
     } else {
@@ -113,15 +135,28 @@ pub fn stress(args: &StressArgs) -> Result<()> {
         session.rig.viewer.yaw_deg = base.yaw_deg + 40.0 * phase.sin();
         session.rig.viewer.position[0] = base.position[0] + 0.3 * (2.0 * phase).sin();
         let start = Instant::now();
-        let (stats, cpu_ms) = session.frame(frame as f32 * FRAME_SECONDS)?;
+        let figures = session.frame(frame as f32 * FRAME_SECONDS)?;
+        let (stats, cpu_ms) = (figures.stats, figures.cpu_ms);
         session.gpu.wait()?;
         let frame_ms = start.elapsed().as_secs_f64() * 1e3;
+        let triangles_submitted = match session.timer.as_mut() {
+            Some(t) => {
+                t.read(&session.gpu.device, &session.gpu.queue)?
+                    .triangles_submitted
+            }
+            None => None,
+        };
         let visible = session
             .renderer
             .read_visible_counts(&session.gpu.device, &session.gpu.queue)?;
         let record = FrameRecord {
             frame,
             cpu_ms,
+            sync_ms: figures.sync_ms,
+            edit_ms: figures.edit_ms,
+            moved: figures.sync.moved,
+            reloaded: figures.sync.reloaded,
+            triangles_submitted,
             frame_ms,
             visible,
             draw_calls: stats.draw_calls,
@@ -166,7 +201,8 @@ fn summarize(
     records: &[FrameRecord],
     memory: Vec<MemorySample>,
 ) -> Summary {
-    let cpu: Vec<f64> = records.iter().map(|r| r.cpu_ms).collect();
+    let of = |f: fn(&FrameRecord) -> f64| records.iter().map(f).collect::<Vec<f64>>();
+    let cpu = of(|r| r.cpu_ms);
     let frame: Vec<f64> = records.iter().map(|r| r.frame_ms).collect();
     let displays = session.rig.displays.len();
     let n = records.len().max(1) as f64;
@@ -184,6 +220,10 @@ fn summarize(
         frames: args.frames,
         cpu_ms_median: percentile(&cpu, 0.5),
         cpu_ms_p95: percentile(&cpu, 0.95),
+        sync_ms_median: percentile(&of(|r| r.sync_ms), 0.5),
+        edit_ms_median: percentile(&of(|r| r.edit_ms), 0.5),
+        moving_percent: args.edits.moving,
+        churn_percent: args.edits.churn,
         frame_ms_median: percentile(&frame, 0.5),
         frame_ms_p95: percentile(&frame, 0.95),
         visible_mean: (0..displays)
@@ -192,6 +232,14 @@ fn summarize(
         draw_calls_per_frame: last.map_or(0, |r| r.draw_calls),
         dispatches_per_frame: last.map_or(0, |r| r.dispatches),
         bytes_uploaded_per_frame: last.map_or(0, |r| r.bytes_uploaded),
+        triangles_submitted_median: {
+            let t: Vec<f64> = records
+                .iter()
+                .filter_map(|r| r.triangles_submitted)
+                .map(|t| t as f64)
+                .collect();
+            (!t.is_empty()).then(|| percentile(&t, 0.5))
+        },
         gpu_bytes_per_instance: session.renderer.gpu_bytes_per_instance(),
         memory,
     }
@@ -211,9 +259,15 @@ fn print_summary(s: &Summary) {
         s.instances, s.frames, s.cull
     );
     println!(
-        "cpu (prepare+encode+submit): median {:.3} ms, p95 {:.3} ms",
+        "cpu (sync+prepare+encode+submit): median {:.3} ms, p95 {:.3} ms",
         s.cpu_ms_median, s.cpu_ms_p95
     );
+    if s.moving_percent > 0.0 || s.churn_percent > 0.0 {
+        println!(
+            "edits ({} % moving, {} % churn): making them {:.3} ms, sync {:.3} ms (medians)",
+            s.moving_percent, s.churn_percent, s.edit_ms_median, s.sync_ms_median
+        );
+    }
     println!(
         "frame (until GPU done):      median {:.2} ms, p95 {:.2} ms",
         s.frame_ms_median, s.frame_ms_p95
@@ -236,10 +290,12 @@ fn print_summary(s: &Summary) {
         );
     }
     println!(
-        "per frame: {} draw calls, {} dispatches, {} bytes uploaded; GPU memory {} bytes per instance",
+        "per frame: {} draw calls, {} dispatches, {} bytes uploaded, {} triangles submitted; GPU memory {} bytes per instance",
         s.draw_calls_per_frame,
         s.dispatches_per_frame,
         s.bytes_uploaded_per_frame,
+        s.triangles_submitted_median
+            .map_or("n/a".into(), |t| format!("{t:.0}")),
         s.gpu_bytes_per_instance
     );
 }

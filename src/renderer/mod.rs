@@ -366,11 +366,11 @@ impl Renderer {
             CullState::Cpu(_) => None,
         };
         let targets = ScatterTargets { instances, spheres };
-        let (new_spheres, bytes) = self.scatter.stage(device, queue, (scene, moved), targets);
+        let bytes = self.scatter.stage(device, queue, (scene, moved), targets);
         if let CullState::Cpu(layout) = culling {
-            for (&slot, &sphere) in moved.iter().zip(&new_spheres) {
+            for &slot in moved {
                 let at = layout.positions[slot as usize];
-                layout.set_sphere(at, sphere);
+                layout.set_sphere(at, self.scatter.staged_sphere(slot));
             }
         }
         SyncStats {
@@ -562,10 +562,23 @@ impl Renderer {
         time: f32,
         targets: &[DisplayTarget],
     ) -> Result<FrameStats> {
+        self.submit_frame_timed(device, queue, (rig, time), targets, None)
+    }
+
+    /// [`Renderer::submit_frame`] with GPU timing and pipeline statistics recorded into
+    /// `timer` (read it after the frame completes).
+    pub fn submit_frame_timed(
+        &mut self,
+        device: &wgpu::Device,
+        queue: &wgpu::Queue,
+        (rig, time): (&Rig, f32),
+        targets: &[DisplayTarget],
+        timer: Option<&mut GpuTimer>,
+    ) -> Result<FrameStats> {
         let prepared = self.prepare(queue, rig, time)?;
         let mut encoder = device.create_command_encoder(&Default::default());
         let views: Vec<_> = targets.iter().map(DisplayTarget::views).collect();
-        let recorded = self.encode(&mut encoder, &views, None)?;
+        let recorded = self.encode(&mut encoder, &views, timer)?;
         queue.submit([encoder.finish()]);
         Ok(FrameStats {
             bytes_uploaded: prepared.bytes_uploaded,
