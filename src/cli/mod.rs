@@ -213,7 +213,7 @@ fn cull(args: &CullArgs) -> Result<()> {
         .displays
         .iter()
         .zip(&outputs)
-        .map(|(d, out)| display_dump(&d.name, d.views(), out, &scene))
+        .map(|(d, out)| display_dump(&d.name, d.views(), out, scene))
         .collect();
     write_json(
         &args.dump_visible,
