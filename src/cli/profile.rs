@@ -55,6 +55,9 @@ pub struct ProfileArgs {
     /// MSAA samples per pixel (1: none).
     #[arg(long, default_value_t = 1)]
     pub msaa: u32,
+    /// Give every mesh a base color texture (`procedural:N:M:1:textured`).
+    #[arg(long)]
+    pub textured: bool,
     /// Percents of instances moved every frame, one configuration each (`0,1,10`
     /// measures what moves cost against the static scene in one run).
     #[arg(long, value_delimiter = ',', default_value = "0")]
@@ -147,7 +150,10 @@ pub fn profile(args: &ProfileArgs) -> Result<()> {
     );
     let mut rows = Vec::new();
     for &n in &args.instances {
-        let scene = procedural::scene(n, args.meshes, 1);
+        let mut scene = procedural::scene(n, args.meshes, 1);
+        if args.textured {
+            procedural::texture(&mut scene);
+        }
         for (spec, rig) in &rigs {
             for (&(mode, cull), &moving) in configs
                 .iter()
