@@ -18,15 +18,20 @@ pub struct FrameContext {
     pub time: f32,
     /// Where the viewer looks (unit length).
     pub viewer_direction: Vec3,
+    /// Level-of-detail scale: (pixels per radian / pixels of error allowed)^2 for the
+    /// sharpest display, so that one level per instance serves every display and eye
+    /// (see [`crate::records::lod_level`]).
+    pub lod_scale: f32,
 }
 
 impl FrameContext {
-    pub fn new(viewer: &Viewer, time: f32) -> FrameContext {
+    pub fn new(viewer: &Viewer, time: f32, lod_scale: f32) -> FrameContext {
         let orientation = viewer.orientation();
         FrameContext {
             viewer_position: viewer.position().as_vec3(),
             time,
             viewer_direction: (orientation * -glam::DVec3::Z).as_vec3(),
+            lod_scale,
         }
     }
 }
@@ -39,6 +44,7 @@ pub struct EyeContext {
     pub clip_from_view: Mat4,
     pub view_from_clip: Mat4,
     pub clip_from_world: Mat4,
+    pub world_from_clip: Mat4,
     pub position: Vec3,
 }
 
@@ -51,6 +57,7 @@ impl EyeContext {
             clip_from_view,
             view_from_clip: clip_from_view.inverse(),
             clip_from_world: v.clip_from_world(),
+            world_from_clip: v.world_from_clip(),
             position: v.position(),
         }
     }

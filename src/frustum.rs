@@ -90,8 +90,17 @@ impl View {
     /// Composed in f64 and rounded once: the vertex stage then needs one product per
     /// vertex instead of two, and loses nothing to an f32 view translation.
     pub fn clip_from_world(&self) -> Mat4 {
+        self.clip_from_world_f64().as_mat4()
+    }
+
+    /// The inverse of [`View::clip_from_world`], from the f64 product.
+    pub fn world_from_clip(&self) -> Mat4 {
+        self.clip_from_world_f64().inverse().as_mat4()
+    }
+
+    fn clip_from_world_f64(&self) -> glam::DMat4 {
         let view_from_world = glam::DMat4::from(self.world_from_view.inverse());
-        (self.clip_from_view().as_dmat4() * view_from_world).as_mat4()
+        self.clip_from_view().as_dmat4() * view_from_world
     }
 
     /// The six planes, built from the pose and tangents rather than extracted from

@@ -26,11 +26,16 @@ impl Handle {
     }
 }
 
+/// A moved instance as the scatter pass takes it: its slot, the rows of its new
+/// transform, its new world sphere (as bits: 17 words, 68 bytes).
+pub type Edit = [u32; 17];
+
 /// What changed since the last sync.
 #[derive(Clone, Debug, Default, PartialEq, Eq)]
 pub struct Changes {
-    /// Slots whose transform changed (each once, in first-change order).
-    pub moved: Vec<u32>,
+    /// Edits of the instances whose transform changed (each slot once, its last move;
+    /// in first-move order).
+    pub moved: Vec<Edit>,
     /// Slots whose record changed otherwise (color), each once.
     pub recolored: Vec<u32>,
     /// Instances were inserted or removed: the cull order changes.
@@ -53,13 +58,12 @@ pub struct LiveScene {
     generations: Vec<u32>,
     /// Vacant slots, lowest first.
     vacant: std::collections::BTreeSet<u32>,
-    /// Per slot: already listed in `changes.moved` / `changes.recolored`.
-    listed: Vec<u8>,
+    /// Per slot: 1 + its edit's index in `changes.moved` (0: not moved since the sync).
+    moved_at: Vec<u32>,
+    /// Per slot: listed in `changes.recolored`.
+    recolored: Vec<bool>,
     changes: Changes,
 }
-
-const MOVED: u8 = 1;
-const RECOLORED: u8 = 2;
 
 impl LiveScene {
     /// The mesh id of a vacant slot.
@@ -81,7 +85,8 @@ impl LiveScene {
             scene,
             generations: vec![0; n],
             vacant: Default::default(),
-            listed: vec![0; n],
+            moved_at: vec![0; n],
+            recolored: vec![false; n],
             changes: Changes::default(),
         }
     }
@@ -149,7 +154,8 @@ impl LiveScene {
             None => {
                 self.scene.instances.push(instance);
                 self.generations.push(0);
-                self.listed.push(0);
+                self.moved_at.push(0);
+                self.recolored.push(false);
                 self.slot_count() - 1
             }
         };
@@ -160,13 +166,21 @@ impl LiveScene {
         })
     }
 
-    /// Moves an instance: only its record and sphere are uploaded at the next sync.
+    /// Moves an instance: only its transform and sphere are uploaded at the next sync.
+    /// The edit is made here, while the instance is in cache, not at the sync.
     pub fn set_transform(&mut self, handle: Handle, world_from_local: Affine3A) -> Result<()> {
         self.check(handle)?;
         check_finite(&world_from_local)?;
         let slot = handle.slot as usize;
         self.scene.instances[slot].world_from_local = world_from_local;
-        self.list(slot, MOVED);
+        let edit = make_edit(&self.scene, handle.slot);
+        match self.moved_at[slot] {
+            0 => {
+                self.changes.moved.push(edit);
+                self.moved_at[slot] = self.changes.moved.len() as u32;
+            }
+            at => self.changes.moved[at as usize - 1] = edit,
+        }
         Ok(())
     }
 
@@ -177,7 +191,9 @@ impl LiveScene {
         }
         let slot = handle.slot as usize;
         self.scene.instances[slot].color = color;
-        self.list(slot, RECOLORED);
+        if !std::mem::replace(&mut self.recolored[slot], true) {
+            self.changes.recolored.push(handle.slot);
+        }
         Ok(())
     }
 
@@ -206,20 +222,13 @@ impl LiveScene {
 
     /// The changes since the last call, which forgets them.
     pub fn take_changes(&mut self) -> Changes {
-        for &slot in self.changes.moved.iter().chain(&self.changes.recolored) {
-            self.listed[slot as usize] = 0;
+        for edit in &self.changes.moved {
+            self.moved_at[edit[0] as usize] = 0;
+        }
+        for &slot in &self.changes.recolored {
+            self.recolored[slot as usize] = false;
         }
         std::mem::take(&mut self.changes)
-    }
-
-    fn list(&mut self, slot: usize, kind: u8) {
-        if self.listed[slot] & kind == 0 {
-            self.listed[slot] |= kind;
-            match kind {
-                MOVED => self.changes.moved.push(slot as u32),
-                _ => self.changes.recolored.push(slot as u32),
-            }
-        }
     }
 
     fn check(&self, handle: Handle) -> Result<()> {
@@ -236,6 +245,31 @@ impl LiveScene {
             Some(_) => Ok(()),
         }
     }
+}
+
+/// The edit of `slot`: its transform's rows and its world sphere, as the scatter pass
+/// reads them.
+pub fn make_edit(scene: &Scene, slot: u32) -> Edit {
+    let instance = &scene.instances[slot as usize];
+    let m = instance.world_from_local;
+    let (x, y, z, t) = (
+        m.matrix3.x_axis,
+        m.matrix3.y_axis,
+        m.matrix3.z_axis,
+        m.translation,
+    );
+    let s = scene.world_sphere(instance);
+    let floats = [
+        x.x, y.x, z.x, t.x, x.y, y.y, z.y, t.y, x.z, y.z, z.z, t.z, s.x, s.y, s.z, s.w,
+    ];
+    let mut edit = [slot; 17];
+    edit[1..].copy_from_slice(&floats.map(f32::to_bits));
+    edit
+}
+
+/// The world sphere an edit carries.
+pub fn edit_sphere(edit: &Edit) -> glam::Vec4 {
+    glam::Vec4::from_array([edit[13], edit[14], edit[15], edit[16]].map(f32::from_bits))
 }
 
 fn check_finite(t: &Affine3A) -> Result<()> {

@@ -5,7 +5,7 @@
 use bytemuck::{Pod, Zeroable};
 use glam::Vec4;
 
-use crate::scene::{Instance, Scene};
+use crate::scene::{Instance, MAX_LODS, Mesh, Scene};
 
 /// What the vertex shader reads per instance, indexed by instance id (64 bytes).
 #[repr(C)]
@@ -32,6 +32,19 @@ pub struct MeshRecord {
     /// First position of this mesh's instances in [`CullLayout::order`].
     pub cull_start: u32,
     pub cull_count: u32,
+}
+
+/// One level of detail of a mesh as culling reads it: [`MAX_LODS`] per mesh, level 0
+/// the mesh itself; levels a mesh lacks have an infinite error and are never chosen.
+#[repr(C)]
+#[derive(Clone, Copy, Debug, PartialEq, Pod, Zeroable)]
+pub struct LodRecord {
+    pub first_index: u32,
+    pub index_count: u32,
+    /// The level's error relative to the mesh's bounding radius, squared: an instance
+    /// with world sphere radius `r` at distance `d` from the viewer takes the level when
+    /// `d * d > error_sq * lod_scale * r * r` (`lod_scale` from the frame context).
+    pub error_sq: f32,
 }
 
 /// One indexed indirect draw, as `multi_draw_indexed_indirect(_count)` reads it.
@@ -69,7 +82,11 @@ pub struct CullLayout {
     /// Cull position of each instance id ([`CullLayout::VACANT`] for vacant slots):
     /// where a moved instance's sphere goes.
     pub positions: Vec<u32>,
+    /// Mesh of each cull position: which levels of detail it has.
+    pub mesh_of: Vec<u32>,
     pub meshes: Vec<MeshRecord>,
+    /// [`MAX_LODS`] per mesh.
+    pub lods: Vec<LodRecord>,
 }
 
 impl CullLayout {
@@ -107,12 +124,14 @@ impl CullLayout {
         let mut order = vec![0u32; count];
         let mut spheres = vec![Vec4::ZERO; count];
         let mut positions = vec![CullLayout::VACANT; scene.instances.len()];
+        let mut mesh_of = vec![0u32; count];
         let mut cursor = starts;
         for (id, inst) in occupied() {
             let at = &mut cursor[inst.mesh as usize];
             order[*at as usize] = id as u32;
             spheres[*at as usize] = scene.world_sphere(inst);
             positions[id] = *at;
+            mesh_of[*at as usize] = inst.mesh;
             *at += 1;
         }
         let column = |f: fn(&Vec4) -> f32| spheres.iter().map(f).collect();
@@ -126,7 +145,9 @@ impl CullLayout {
             spheres,
             order,
             positions,
+            mesh_of,
             meshes,
+            lods: scene.meshes.iter().flat_map(lod_records).collect(),
         }
     }
 
@@ -137,6 +158,48 @@ impl CullLayout {
         let [x, y, z, minus_r] = &mut self.columns;
         (x[at], y[at], z[at], minus_r[at]) = (sphere.x, sphere.y, sphere.z, -sphere.w);
     }
+}
+
+fn lod_records(mesh: &Mesh) -> [LodRecord; MAX_LODS] {
+    std::array::from_fn(|level| match level {
+        0 => LodRecord {
+            first_index: mesh.first_index,
+            index_count: mesh.index_count,
+            error_sq: 0.0,
+        },
+        _ => match mesh.lods.get(level - 1) {
+            Some(l) => LodRecord {
+                first_index: l.first_index,
+                index_count: l.index_count,
+                error_sq: l.error * l.error,
+            },
+            None => LodRecord {
+                first_index: mesh.first_index,
+                index_count: mesh.index_count,
+                error_sq: f32::INFINITY,
+            },
+        },
+    })
+}
+
+/// The level of detail of a sphere seen from `viewer`: how many of its mesh's coarser
+/// levels pass `d * d > error_sq * lod_scale * r * r` (errors ascend with the level).
+/// `wgsl/shared/cull_math.wgsl`'s `lod_level` does the same operations in the same order.
+pub fn lod_level(sphere: Vec4, viewer: glam::Vec3, lods: &[LodRecord], lod_scale: f32) -> u32 {
+    let (dx, dy, dz) = (
+        sphere.x - viewer.x,
+        sphere.y - viewer.y,
+        sphere.z - viewer.z,
+    );
+    let d2 = dx * dx + dy * dy + dz * dz;
+    let r2 = sphere.w * sphere.w;
+    let mut level = 0;
+    for lod in &lods[1..] {
+        if d2 > lod.error_sq * lod_scale * r2 {
+            level += 1;
+        }
+    }
+    level
 }
 
 pub fn instance_records(scene: &Scene) -> Vec<InstanceRecord> {

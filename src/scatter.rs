@@ -1,5 +1,6 @@
 //! Moved instances reach the GPU sparsely: per frame, one buffer of edits (slot, new
-//! transform rows, new world sphere: 68 bytes each) and one compute dispatch
+//! transform rows, new world sphere: 68 bytes each, made by
+//! [`crate::live::LiveScene::set_transform`]) and one compute dispatch
 //! (`wgsl/scatter.wgsl`) that writes them into the instance records and, under GPU
 //! culling, the spheres in cull order. A frame without moves uploads and dispatches
 //! nothing.
@@ -10,26 +11,24 @@
 //! bit and flip a decision at a tangent; 16 bytes more per edit keep GPU and CPU culls
 //! byte-identical.
 
-use glam::Vec4;
-
 use crate::buffers::storage_buffer;
+use crate::live::{Edit, make_edit};
 use crate::scene::Scene;
 use crate::shaders::{SCATTER_BINDINGS, bind_group, bind_group_layout, scatter_source};
 
-const HEADER_WORDS: usize = 4;
-/// Slot, 12 transform words, 4 sphere words.
-pub const WORDS_PER_EDIT: usize = 17;
+const HEADER_BYTES: u64 = 16;
+const EDIT_BYTES: u64 = size_of::<Edit>() as u64;
 const GROUP: u32 = 64;
 
-/// The scatter pipeline, its edits buffer and the edits staged for the next frame.
+/// The scatter pipeline, its edits buffer and which slots it holds edits for.
 pub struct Scatter {
     pipeline: wgpu::ComputePipeline,
     layout: wgpu::BindGroupLayout,
     edits: wgpu::Buffer,
     bind_group: Option<wgpu::BindGroup>,
-    /// Staged edits (17 words each) and, per slot, 1 + its edit's index (0: none): a
-    /// slot moved twice before a dispatch keeps one edit, the last.
-    staged: Vec<u32>,
+    /// Slots with an edit in the buffer, in buffer order, and per slot 1 + its edit's
+    /// index (0: none): a slot moved in two syncs before a dispatch keeps one edit.
+    slots: Vec<u32>,
     index: Vec<u32>,
     spheres_too: bool,
     max_groups: u32,
@@ -67,76 +66,88 @@ impl Scatter {
             layout,
             edits: edits_buffer(device, 0),
             bind_group: None,
-            staged: Vec::new(),
+            slots: Vec::new(),
             index: Vec::new(),
             spheres_too: false,
             max_groups: device.limits().max_compute_workgroups_per_dimension,
         }
     }
 
-    /// Staged edits not yet dispatched.
+    /// Edits in the buffer, not yet dispatched.
     pub fn pending(&self) -> usize {
-        self.staged.len() / WORDS_PER_EDIT
+        self.slots.len()
     }
 
-    /// Stages the moved `slots` of `scene` (each listed once) and uploads every staged
-    /// edit; returns the bytes written.
+    /// Writes `edits` (each slot once) into the edits buffer, after or over the ones a
+    /// sync earlier this frame wrote; returns the bytes written. `scene` is read only in
+    /// the rare case of a second sync outgrowing the buffer.
     pub fn stage(
         &mut self,
         device: &wgpu::Device,
         queue: &wgpu::Queue,
-        (scene, slots): (&Scene, &[u32]),
+        (scene, edits): (&Scene, &[Edit]),
         targets: ScatterTargets,
     ) -> u64 {
         self.index
             .resize(self.index.len().max(scene.instances.len()), 0);
-        // Slots not staged yet get new edits at the end; those staged by an earlier sync
-        // of this frame are overwritten in place.
-        let split;
-        let (fresh, again): (&[u32], &[u32]) = match self.staged.is_empty() {
-            true => (slots, &[]),
-            false => {
-                split = slots
-                    .iter()
-                    .partition::<Vec<u32>, _>(|&&s| self.index[s as usize] == 0);
-                (&split.0, &split.1)
-            }
-        };
-        let first = self.staged.len();
-        // Into the staged vector's kept capacity, on every core: no allocation, no page
-        // faults in the steady state.
-        self.staged.reserve(fresh.len() * WORDS_PER_EDIT);
-        for &slot in fresh {
-            self.staged.extend_from_slice(&make_edit(scene, slot));
-        }
-        for (k, &slot) in fresh.iter().enumerate() {
-            self.index[slot as usize] = (first / WORDS_PER_EDIT + k + 1) as u32;
-        }
-        for &slot in again {
-            let at = (self.index[slot as usize] as usize - 1) * WORDS_PER_EDIT;
-            self.staged[at..at + WORDS_PER_EDIT].copy_from_slice(&make_edit(scene, slot));
-        }
         self.spheres_too = targets.spheres.is_some();
-        let needed = self.bytes();
-        if needed > self.edits.size() {
-            self.edits = edits_buffer(device, needed + needed / 2);
-            self.bind_group = None;
+        let mut bytes = 0;
+        if self.slots.is_empty() {
+            // The common case, one sync per frame: the edits go up as they are.
+            self.grow(device, edits.len());
+            for (k, edit) in edits.iter().enumerate() {
+                self.index[edit[0] as usize] = k as u32 + 1;
+            }
+            self.slots.extend(edits.iter().map(|e| e[0]));
+            queue.write_buffer(&self.edits, HEADER_BYTES, bytemuck::cast_slice(edits));
+            bytes += EDIT_BYTES * edits.len() as u64;
+        } else {
+            bytes += self.merge(device, queue, (scene, edits));
         }
         if self.bind_group.is_none() {
             self.bind_group = Some(self.bind(device, &targets));
         }
-        let header = self.header();
-        queue.write_buffer(&self.edits, 0, bytemuck::cast_slice(&header));
-        let body = 4 * HEADER_WORDS as u64;
-        queue.write_buffer(&self.edits, body, bytemuck::cast_slice(&self.staged));
-        needed
+        queue.write_buffer(&self.edits, 0, bytemuck::cast_slice(&self.header()));
+        bytes + HEADER_BYTES
     }
 
-    /// The staged world sphere of `slot` (which must be staged).
-    pub fn staged_sphere(&self, slot: u32) -> Vec4 {
-        let at = (self.index[slot as usize] as usize - 1) * WORDS_PER_EDIT;
-        let words: [u32; 4] = std::array::from_fn(|k| self.staged[at + 13 + k]);
-        Vec4::from_array(words.map(f32::from_bits))
+    /// A second sync before the dispatch: slots already staged are overwritten in place,
+    /// new ones appended; a buffer too small is replaced and refilled from `scene`.
+    fn merge(
+        &mut self,
+        device: &wgpu::Device,
+        queue: &wgpu::Queue,
+        (scene, edits): (&Scene, &[Edit]),
+    ) -> u64 {
+        let fresh = edits
+            .iter()
+            .filter(|e| self.index[e[0] as usize] == 0)
+            .count();
+        if self.grow(device, self.slots.len() + fresh) {
+            let all: Vec<Edit> = self.slots.iter().map(|&s| make_edit(scene, s)).collect();
+            queue.write_buffer(&self.edits, HEADER_BYTES, bytemuck::cast_slice(&all));
+        }
+        for edit in edits {
+            let slot = edit[0] as usize;
+            if self.index[slot] == 0 {
+                self.slots.push(edit[0]);
+                self.index[slot] = self.slots.len() as u32;
+            }
+            let at = HEADER_BYTES + EDIT_BYTES * (self.index[slot] as u64 - 1);
+            queue.write_buffer(&self.edits, at, bytemuck::bytes_of(edit));
+        }
+        EDIT_BYTES * edits.len() as u64
+    }
+
+    /// Makes room for `count` edits; returns whether the buffer is new (and empty).
+    fn grow(&mut self, device: &wgpu::Device, count: usize) -> bool {
+        let needed = HEADER_BYTES + EDIT_BYTES * count as u64;
+        if needed <= self.edits.size() {
+            return false;
+        }
+        self.edits = edits_buffer(device, needed + needed / 2);
+        self.bind_group = None;
+        true
     }
 
     /// Drops the staged edits and the bind group: the scene was uploaded whole again
@@ -162,19 +173,16 @@ impl Scatter {
         pass.set_bind_group(0, bind_group, &[]);
         let (x, y) = self.groups();
         pass.dispatch_workgroups(x, y, 1);
+        drop(pass);
         self.clear();
         1
     }
 
     fn clear(&mut self) {
-        for edit in self.staged.chunks_exact(WORDS_PER_EDIT) {
-            self.index[edit[0] as usize] = 0;
+        for &slot in &self.slots {
+            self.index[slot as usize] = 0;
         }
-        self.staged.clear();
-    }
-
-    fn bytes(&self) -> u64 {
-        4 * (HEADER_WORDS + self.staged.len()) as u64
+        self.slots.clear();
     }
 
     fn groups(&self) -> (u32, u32) {
@@ -183,7 +191,8 @@ impl Scatter {
         (x, groups.div_ceil(x).max(1))
     }
 
-    fn header(&self) -> [u32; HEADER_WORDS] {
+    /// Edit count, spheres too (GPU culling), workgroups along x.
+    fn header(&self) -> [u32; 4] {
         let count = self.pending() as u32;
         [count, u32::from(self.spheres_too), self.groups().0, 0]
     }
@@ -205,26 +214,6 @@ impl Scatter {
         let buffers = [&self.edits, targets.instances, s, p];
         bind_group(device, "stereocull.scatter", &self.layout, buffers)
     }
-}
-
-/// One edit: the slot, its transform's rows, its world sphere.
-fn make_edit(scene: &Scene, slot: u32) -> [u32; WORDS_PER_EDIT] {
-    let instance = &scene.instances[slot as usize];
-    let m = instance.world_from_local;
-    let (x, y, z, t) = (
-        m.matrix3.x_axis,
-        m.matrix3.y_axis,
-        m.matrix3.z_axis,
-        m.translation,
-    );
-    let sphere = scene.world_sphere(instance);
-    let floats = [
-        x.x, y.x, z.x, t.x, x.y, y.y, z.y, t.y, x.z, y.z, z.z, t.z, sphere.x, sphere.y, sphere.z,
-        sphere.w,
-    ];
-    let mut edit = [slot; WORDS_PER_EDIT];
-    edit[1..].copy_from_slice(&floats.map(f32::to_bits));
-    edit
 }
 
 fn edits_buffer(device: &wgpu::Device, size: u64) -> wgpu::Buffer {

@@ -64,7 +64,22 @@ pub struct Mesh {
     pub base_vertex: i32,
     /// Local-space bounding sphere: center in xyz, radius in w.
     pub bounds: Vec4,
+    /// Coarser levels of detail, finest first (the mesh itself is level 0), made with
+    /// meshoptimizer when the mesh is added; shares the mesh's vertices.
+    pub lods: Vec<Lod>,
 }
+
+/// A coarser level of a mesh: its triangles, and how far they stray from the mesh's.
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub struct Lod {
+    pub first_index: u32,
+    pub index_count: u32,
+    /// meshoptimizer's error, as a fraction of the mesh's bounding radius.
+    pub error: f32,
+}
+
+/// Levels of detail per mesh, the mesh itself included.
+pub const MAX_LODS: usize = 4;
 
 #[derive(Clone, Copy, Debug, PartialEq)]
 pub struct Instance {
@@ -133,15 +148,25 @@ impl Scene {
         vertices: &[Vertex],
         indices: &[u32],
     ) -> u32 {
-        let mesh = Mesh {
+        let bounds = bounding_sphere(vertices);
+        let mut mesh = Mesh {
             name: name.into(),
             first_index: self.indices.len() as u32,
             index_count: indices.len() as u32,
             base_vertex: self.vertices.len() as i32,
-            bounds: bounding_sphere(vertices),
+            bounds,
+            lods: Vec::new(),
         };
         self.vertices.extend_from_slice(vertices);
         self.indices.extend_from_slice(indices);
+        for (level, error) in lod_chain(vertices, indices, bounds.w) {
+            mesh.lods.push(Lod {
+                first_index: self.indices.len() as u32,
+                index_count: level.len() as u32,
+                error,
+            });
+            self.indices.extend(level);
+        }
         self.meshes.push(mesh);
         self.meshes.len() as u32 - 1
     }
@@ -149,15 +174,27 @@ impl Scene {
     /// Appends a twin of mesh `id` with its triangles' winding reversed, sharing its
     /// vertices, and returns its id: the mesh for instances whose transform mirrors.
     pub fn add_mirrored_mesh(&mut self, id: u32) -> u32 {
-        let mesh = &self.meshes[id as usize];
-        let first = mesh.first_index as usize;
-        let indices = reversed_winding(&self.indices[first..first + mesh.index_count as usize]);
+        let mesh = self.meshes[id as usize].clone();
+        let mut reversed = |first: u32, count: u32| {
+            let (first, count) = (first as usize, count as usize);
+            let indices = reversed_winding(&self.indices[first..first + count]);
+            let at = self.indices.len() as u32;
+            self.indices.extend(indices);
+            at
+        };
         let twin = Mesh {
             name: format!("{} (mirrored)", mesh.name),
-            first_index: self.indices.len() as u32,
-            ..mesh.clone()
+            first_index: reversed(mesh.first_index, mesh.index_count),
+            lods: mesh
+                .lods
+                .iter()
+                .map(|l| Lod {
+                    first_index: reversed(l.first_index, l.index_count),
+                    ..*l
+                })
+                .collect(),
+            ..mesh
         };
-        self.indices.extend(indices);
         self.meshes.push(twin);
         self.meshes.len() as u32 - 1
     }
@@ -205,6 +242,38 @@ pub fn both_windings(indices: &[u32]) -> Vec<u32> {
     let mut both = indices.to_vec();
     both.extend(reversed_winding(indices));
     both
+}
+
+/// The largest error a level may have, as a fraction of the mesh's bounding radius.
+const MAX_LOD_ERROR: f32 = 0.25;
+
+/// Up to [`MAX_LODS`] - 1 coarser index lists of a mesh, each about a quarter of the
+/// one before, with their errors relative to `radius`; stops where meshoptimizer can no
+/// longer halve the triangles within [`MAX_LOD_ERROR`]. Vertices are welded by position
+/// first, so that UV and normal seams do not read as borders that must stay.
+fn lod_chain(vertices: &[Vertex], indices: &[u32], radius: f32) -> Vec<(Vec<u32>, f32)> {
+    let Ok(adapter) =
+        meshopt::VertexDataAdapter::new(bytemuck::cast_slice(vertices), size_of::<Vertex>(), 0)
+    else {
+        return Vec::new();
+    };
+    let weld = meshopt::generate_position_remap(&adapter);
+    let welded: Vec<u32> = indices.iter().map(|&i| weld[i as usize]).collect();
+    let mut chain: Vec<(Vec<u32>, f32)> = Vec::new();
+    let mut previous = indices.len();
+    while chain.len() + 1 < MAX_LODS && previous >= 4 * 3 * 8 {
+        let target = (previous / 4).next_multiple_of(3);
+        let mut error = 0.0;
+        let options = meshopt::SimplifyOptions::ErrorAbsolute;
+        let cap = MAX_LOD_ERROR * radius;
+        let level = meshopt::simplify(&welded, &adapter, target, cap, options, Some(&mut error));
+        if level.is_empty() || 2 * level.len() > previous {
+            break;
+        }
+        previous = level.len();
+        chain.push((level, error / radius.max(f32::MIN_POSITIVE)));
+    }
+    chain
 }
 
 fn bounding_sphere(vertices: &[Vertex]) -> Vec4 {

@@ -52,7 +52,7 @@ const COMPUTE: wgpu::ShaderStages = wgpu::ShaderStages::COMPUTE;
 
 /// Every cull pass's bindings: the frame context, per display its context and outputs,
 /// the scene data uploaded once, and scratch shared by all displays.
-pub const CULL_BINDINGS: [Binding; 11] = [
+pub const CULL_BINDINGS: [Binding; 13] = [
     binding("frame", Access::Uniform, "FrameContext", COMPUTE),
     binding("display", Access::Uniform, "DisplayContext", COMPUTE),
     binding("params", Access::Uniform, "CullParams", COMPUTE),
@@ -61,14 +61,18 @@ pub const CULL_BINDINGS: [Binding; 11] = [
     // Instance id at each cull position.
     binding("order", Access::StorageRead, "array<u32>", COMPUTE),
     binding("meshes", Access::StorageRead, "array<MeshRecord>", COMPUTE),
-    // Per instance: visibility bit and prefix within the workgroup.
+    // MAX_LODS levels per mesh.
+    binding("lods", Access::StorageRead, "array<LodRecord>", COMPUTE),
+    // Mesh of each cull position.
+    binding("mesh_of", Access::StorageRead, "array<u32>", COMPUTE),
+    // Per level of detail and instance: visibility bit and prefix within the workgroup.
     binding(
         "local_prefix",
         Access::StorageReadWrite,
         "array<u32>",
         COMPUTE,
     ),
-    // Per workgroup: its total, then (after the draws pass) its prefix.
+    // Per level of detail and workgroup: its total, then (after the draws pass) its prefix.
     binding(
         "block_sums",
         Access::StorageReadWrite,
@@ -104,7 +108,7 @@ pub const DRAW_BINDINGS: [Binding; 4] = [
         "instances",
         Access::StorageRead,
         "array<InstanceRecord>",
-        wgpu::ShaderStages::VERTEX,
+        wgpu::ShaderStages::VERTEX_FRAGMENT,
     ),
     binding(
         "visible",
@@ -364,7 +368,8 @@ pub fn decode_source(views: u32) -> String {
 }
 
 fn constants() -> String {
-    format!("\nconst WORKGROUP_SIZE: u32 = {WORKGROUP_SIZE}u;\n")
+    let lods = crate::scene::MAX_LODS;
+    format!("\nconst WORKGROUP_SIZE: u32 = {WORKGROUP_SIZE}u;\nconst MAX_LODS: u32 = {lods}u;\n")
 }
 
 /// Every shader variant the crate can build, with its label.

@@ -10,7 +10,7 @@ use stereocull::cull::gpu::CullParams;
 use stereocull::draw::VERTEX_ATTRIBUTES;
 use stereocull::materials::MaterialRecord;
 use stereocull::records::uniform_bytes;
-use stereocull::records::{DrawArgs, InstanceRecord, MeshRecord};
+use stereocull::records::{DrawArgs, InstanceRecord, LodRecord, MeshRecord};
 use stereocull::scene::Vertex;
 use stereocull::shaders::{
     Access, Binding, CULL_BINDINGS, CullPass, DRAW_BINDINGS, DrawKey, SCATTER_BINDINGS,
@@ -100,6 +100,15 @@ fn records_match_wgsl() {
         ],
     );
     check(
+        "LodRecord",
+        size_of::<LodRecord>(),
+        &[
+            ("first_index", offset_of!(LodRecord, first_index)),
+            ("index_count", offset_of!(LodRecord, index_count)),
+            ("error_sq", offset_of!(LodRecord, error_sq)),
+        ],
+    );
+    check(
         "MaterialRecord",
         size_of::<MaterialRecord>(),
         &[(
@@ -139,7 +148,8 @@ fn eye(seed: f32) -> EyeContext {
         clip_from_view: distinct_mat(seed + 2.0),
         view_from_clip: distinct_mat(seed + 3.0),
         clip_from_world: distinct_mat(seed + 4.0),
-        position: Vec3::new(seed + 5.0, seed + 5.1, seed + 5.2),
+        world_from_clip: distinct_mat(seed + 5.0),
+        position: Vec3::new(seed + 6.0, seed + 6.1, seed + 6.2),
     }
 }
 
@@ -173,7 +183,8 @@ fn contexts_match_wgsl() {
             ("clip_from_view", 12.0),
             ("view_from_clip", 13.0),
             ("clip_from_world", 14.0),
-            ("position", 15.0),
+            ("world_from_clip", 15.0),
+            ("position", 16.0),
         ],
     );
     let d = DisplayContext {
@@ -218,6 +229,7 @@ fn contexts_match_wgsl() {
         viewer_position: Vec3::new(1.0, 1.1, 1.2),
         time: 2.0,
         viewer_direction: Vec3::new(3.0, 3.1, 3.2),
+        lod_scale: 4.0,
     };
     check_uniform(
         "FrameContext",
@@ -226,12 +238,14 @@ fn contexts_match_wgsl() {
             ("viewer_position", 1.0),
             ("time", 2.0),
             ("viewer_direction", 3.0),
+            ("lod_scale", 4.0),
         ],
     );
     let params = CullParams {
         instance_count: 3,
         mesh_count: 5,
         groups_x: 7,
+        lod_levels: 4,
     };
     check_uniform(
         "CullParams",
@@ -240,6 +254,7 @@ fn contexts_match_wgsl() {
             ("instance_count", f32::from_bits(3)),
             ("mesh_count", f32::from_bits(5)),
             ("groups_x", f32::from_bits(7)),
+            ("lod_levels", f32::from_bits(4)),
         ],
     );
 }

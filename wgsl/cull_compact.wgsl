@@ -1,16 +1,20 @@
-// Pass 3 of 3 per display: every visible instance writes its id to its slot. Slots
-// ascend with cull position, so each mesh's ids are contiguous and ascending.
+// Pass 3 of 3 per display: every visible instance writes its id to its slot, one z
+// slice per level of detail. Slots ascend with cull position within a (level, mesh)
+// group, so each draw's ids are contiguous and ascending.
 // Bindings (all cull passes share them): CULL_BINDINGS in src/shaders.rs.
 
 @compute @workgroup_size(WORKGROUP_SIZE)
 fn compact(@builtin(workgroup_id) wid: vec3<u32>, @builtin(local_invocation_index) local: u32) {
     let block = wid.y * params.groups_x + wid.x;
+    let level = wid.z;
+    let n = params.instance_count;
     let k = block * WORKGROUP_SIZE + local;
-    if (k >= params.instance_count) {
+    if (k >= n) {
         return;
     }
-    let entry = local_prefix[k];
+    let blocks = (n + WORKGROUP_SIZE - 1u) / WORKGROUP_SIZE;
+    let entry = local_prefix[level * n + k];
     if ((entry & VISIBLE_BIT) != 0u) {
-        visible[block_sums[block] + (entry & ~VISIBLE_BIT)] = order[k];
+        visible[block_sums[level * blocks + block] + (entry & ~VISIBLE_BIT)] = order[k];
     }
 }

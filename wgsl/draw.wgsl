@@ -11,5 +11,6 @@ fn vs_main(v: VertexInput, @builtin(instance_index) instance_index: u32) -> Vert
 
 @fragment
 fn fs_main(in: FragmentInput) -> @location(0) vec4<f32> {
-    return fragment(in, in.ids.x);
+    let eye = in.ids.x;
+    return fragment(in, eye, f32(eye) * display.resolution.x);
 }

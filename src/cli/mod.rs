@@ -16,8 +16,9 @@ use crate::device::{Gpu, OPTIONAL_FEATURES, Tier};
 use crate::error::{Error, Result};
 use crate::live::LiveScene;
 use crate::records::CullLayout;
-use crate::renderer::{CullMode, Renderer, RendererOptions};
+use crate::renderer::{CullMode, Renderer, RendererOptions, frame_lod};
 use crate::rig::Rig;
+use crate::scene::MAX_LODS;
 use crate::scene::Scene;
 use crate::scene_spec::{self, DEFAULT_SCENE};
 
@@ -74,6 +75,22 @@ pub struct SceneArgs {
     /// Per-eye height in pixels for every display (default: the rig's).
     #[arg(long)]
     pub height: Option<u32>,
+    /// Levels of detail chosen on the GPU from the viewer's position.
+    #[arg(long, value_enum, default_value = "off")]
+    pub lod: Switch,
+}
+
+#[derive(Clone, Copy, Debug, PartialEq, Eq, clap::ValueEnum, Serialize)]
+#[serde(rename_all = "lowercase")]
+pub enum Switch {
+    On,
+    Off,
+}
+
+impl Switch {
+    pub fn on(self) -> bool {
+        self == Switch::On
+    }
 }
 
 impl SceneArgs {
@@ -204,9 +221,22 @@ fn cull(args: &CullArgs) -> Result<()> {
             for frame in 0..args.frames {
                 driver.apply(&mut live, frame)?;
             }
-            cpu::cull_many(&CullLayout::new(live.scene()), &rig.cull_jobs()?)
+            let levels = if args.scene.lod.on() {
+                MAX_LODS as u32
+            } else {
+                1
+            };
+            let lod = frame_lod(&rig, &rig.resolve()?, levels);
+            let layout = CullLayout::new(live.scene());
+            cpu::cull_many_lod(&layout, &rig.cull_jobs()?, Some(&lod))
         }
-        CullMode::Gpu => gpu_cull(&rig, &mut live, (&mut driver, args.frames))?,
+        CullMode::Gpu => {
+            let options = RendererOptions {
+                lod: args.scene.lod.on(),
+                ..Default::default()
+            };
+            gpu_cull((&rig, options), &mut live, (&mut driver, args.frames))?
+        }
     };
     let scene = live.scene();
     let displays: Vec<_> = rig
@@ -224,12 +254,11 @@ fn cull(args: &CullArgs) -> Result<()> {
 /// `frames` GPU-culled frames, each after its edits are synced; the last frame's cull
 /// buffers read back.
 fn gpu_cull(
-    rig: &Rig,
+    (rig, options): (&Rig, RendererOptions),
     live: &mut LiveScene,
     (driver, frames): (&mut edits::EditDriver, u32),
 ) -> Result<Vec<CullOutput>> {
     let gpu = Gpu::headless()?;
-    let options = RendererOptions::default();
     let mut renderer = Renderer::new(&gpu.device, live.scene(), rig, options)?;
     let targets = renderer.create_targets(&gpu.device);
     for frame in 0..frames {

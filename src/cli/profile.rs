@@ -9,7 +9,7 @@ use indicatif::{ProgressBar, ProgressStyle};
 use serde::Serialize;
 
 use super::edits::{EditArgs, EditDriver};
-use super::{FRAME_SECONDS, chart, write_json};
+use super::{FRAME_SECONDS, Switch, chart, write_json};
 use crate::device::{Gpu, list_counts};
 use crate::error::{Error, Result};
 use crate::live::LiveScene;
@@ -58,6 +58,9 @@ pub struct ProfileArgs {
     /// Give every mesh a base color texture (`procedural:N:M:1:textured`).
     #[arg(long)]
     pub textured: bool,
+    /// Levels of detail chosen on the GPU from the viewer's position.
+    #[arg(long, value_enum, default_value = "off")]
+    pub lod: Switch,
     /// Percents of instances moved every frame, one configuration each (`0,1,10`
     /// measures what moves cost against the static scene in one run).
     #[arg(long, value_delimiter = ',', default_value = "0")]
@@ -252,6 +255,7 @@ fn measure(
         cull,
         mode,
         sample_count: args.msaa,
+        lod: args.lod.on(),
         ..Default::default()
     };
     let mut renderer = Renderer::new(&gpu.device, scene, rig, options)?;

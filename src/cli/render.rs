@@ -93,6 +93,7 @@ impl Session {
         let mut options = RendererOptions {
             cull,
             mode,
+            lod: args.lod.on(),
             ..Default::default()
         };
         let counts = gpu.sample_counts(options.color_format);

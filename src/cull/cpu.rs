@@ -7,8 +7,11 @@
 
 use rayon::prelude::*;
 
+use glam::{Vec3, Vec4};
+
 use super::{CullJob, CullOutput};
-use crate::records::{CullLayout, DrawArgs};
+use crate::records::{CullLayout, DrawArgs, lod_level};
+use crate::scene::MAX_LODS;
 
 /// Instances per parallel task: large enough to amortise scheduling, a multiple of 64.
 const CHUNK: usize = 1 << 14;
@@ -19,9 +22,41 @@ pub fn cull(layout: &CullLayout, job: &CullJob) -> CullOutput {
     cull_many(layout, std::slice::from_ref(job)).remove(0)
 }
 
+/// The frame's level-of-detail choice (what the frame context carries to the GPU): the
+/// viewer's position, the scale, and how many levels are culled into (1: LOD off).
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub struct FrameLod {
+    pub viewer: Vec3,
+    pub lod_scale: f32,
+    pub levels: u32,
+}
+
 /// Culls for several displays (or eyes) at once: every sphere is read once for all of
 /// them, which is what a frame with several displays wants.
 pub fn cull_many(layout: &CullLayout, displays: &[CullJob]) -> Vec<CullOutput> {
+    cull_many_lod(layout, displays, None)
+}
+
+/// [`cull_many`] with levels of detail chosen per instance from the viewer (the same
+/// level for every display), draws per (level, mesh) as the GPU's.
+pub fn cull_many_lod(
+    layout: &CullLayout,
+    displays: &[CullJob],
+    lod: Option<&FrameLod>,
+) -> Vec<CullOutput> {
+    let levels: Option<(Vec<u8>, u32)> = lod.filter(|l| l.levels > 1).map(|l| {
+        let level_of = |(s, &m): (&Vec4, &u32)| {
+            let lods = &layout.lods[m as usize * MAX_LODS..][..MAX_LODS];
+            lod_level(*s, l.viewer, lods, l.lod_scale) as u8
+        };
+        let levels = layout
+            .spheres
+            .par_iter()
+            .zip(&layout.mesh_of)
+            .map(level_of)
+            .collect();
+        (levels, l.levels)
+    });
     let n = layout.spheres.len();
     let words = n.div_ceil(64);
     let planes: Vec<[[f32; 4]; 6]> = displays
@@ -46,8 +81,15 @@ pub fn cull_many(layout: &CullLayout, displays: &[CullJob]) -> Vec<CullOutput> {
                     c[d * per..(d + 1) * per].iter().copied()
                 })
                 .collect();
-            let chunk_counts: Vec<u32> = counts.iter().map(|c| c[d]).collect();
-            build_output(layout, &mask, &chunk_counts, job.instances_per_object)
+            match &levels {
+                None => {
+                    let chunk_counts: Vec<u32> = counts.iter().map(|c| c[d]).collect();
+                    build_output(layout, &mask, &chunk_counts, job.instances_per_object)
+                }
+                Some((levels, n)) => {
+                    build_output_lod(layout, &mask, (levels, *n), job.instances_per_object)
+                }
+            }
         })
         .collect()
 }
@@ -179,6 +221,53 @@ fn build_output(
     }
     CullOutput {
         visible,
+        draws,
+        draw_count: draw_count as u32,
+    }
+}
+
+/// The contract's buffers with levels of detail: visible ids grouped by level (finest
+/// first), then mesh, then cull position; one draw per non-empty (level, mesh) in that
+/// order with the level's index range.
+fn build_output_lod(
+    layout: &CullLayout,
+    mask: &[u64],
+    (levels, level_count): (&[u8], u32),
+    instances_per_object: u32,
+) -> CullOutput {
+    let l_count = level_count as usize;
+    let mut buckets = vec![Vec::new(); l_count];
+    let mut counts = vec![[0u32; MAX_LODS]; layout.meshes.len()];
+    for (m, mesh) in layout.meshes.iter().enumerate() {
+        let range = mesh.cull_start as usize..(mesh.cull_start + mesh.cull_count) as usize;
+        for pos in range.filter(|&p| mask[p / 64] >> (p % 64) & 1 == 1) {
+            let level = levels[pos] as usize;
+            buckets[level].push(layout.order[pos]);
+            counts[m][level] += 1;
+        }
+    }
+    let mut draws = vec![DrawArgs::default(); layout.meshes.len() * l_count];
+    let (mut draw_count, mut offset) = (0, 0);
+    for level in 0..l_count {
+        for ((m, mesh), per_level) in layout.meshes.iter().enumerate().zip(&counts) {
+            let count = per_level[level];
+            if count == 0 {
+                continue;
+            }
+            let lod = layout.lods[m * MAX_LODS + level];
+            draws[draw_count] = DrawArgs {
+                index_count: lod.index_count,
+                instance_count: instances_per_object * count,
+                first_index: lod.first_index,
+                base_vertex: mesh.base_vertex,
+                first_instance: instances_per_object * offset,
+            };
+            draw_count += 1;
+            offset += count;
+        }
+    }
+    CullOutput {
+        visible: buckets.concat(),
         draws,
         draw_count: draw_count as u32,
     }

@@ -16,6 +16,8 @@ pub struct CullParams {
     pub mesh_count: u32,
     /// Workgroups along x in the cull and compact dispatches (y carries the rest).
     pub groups_x: u32,
+    /// Levels of detail in use: 1 (off) or [`MAX_LODS`].
+    pub lod_levels: u32,
 }
 
 /// Bytes of the counts buffer: the draw count, then the visible total.
@@ -34,11 +36,15 @@ pub struct CullScene {
     pub mesh_count: u32,
     groups: (u32, u32),
     max_groups: u32,
+    /// Levels of detail culled into: the z of the cull and compact dispatches.
+    pub levels: u32,
     params: wgpu::Buffer,
     spheres: wgpu::Buffer,
     order: wgpu::Buffer,
     positions: wgpu::Buffer,
+    mesh_of: wgpu::Buffer,
     meshes: wgpu::Buffer,
+    lods: wgpu::Buffer,
     local_prefix: wgpu::Buffer,
     block_sums: wgpu::Buffer,
 }
@@ -53,11 +59,12 @@ pub struct CullTargets {
 }
 
 impl CullScene {
-    /// Uploads `layout`, with room for `slots` instances (a live scene's capacity).
-    pub fn new(device: &wgpu::Device, layout: &CullLayout, slots: u32) -> CullScene {
+    /// Uploads `layout`, with room for `slots` instances (a live scene's capacity), for
+    /// culling into `levels` levels of detail (1: LOD off).
+    pub fn new(device: &wgpu::Device, layout: &CullLayout, slots: u32, levels: u32) -> CullScene {
         let slots = slots.max(layout.positions.len() as u32);
         let max_groups = device.limits().max_compute_workgroups_per_dimension;
-        let (params, groups) = cull_params(layout, max_groups);
+        let (params, groups) = cull_params(layout, (max_groups, levels));
         let room = |label: &str, contents: &[u8], per_slot: u64| {
             let usage = wgpu::BufferUsages::STORAGE | wgpu::BufferUsages::COPY_DST;
             init_buffer_with_room(device, label, contents, per_slot * slots as u64, usage)
@@ -69,6 +76,7 @@ impl CullScene {
             mesh_count: params.mesh_count,
             groups,
             max_groups,
+            levels,
             params: init_buffer(
                 device,
                 "stereocull.cull_params",
@@ -86,17 +94,23 @@ impl CullScene {
                 bytemuck::cast_slice(&layout.positions),
                 4,
             ),
+            mesh_of: room(
+                "stereocull.mesh_of",
+                bytemuck::cast_slice(&layout.mesh_of),
+                4,
+            ),
             meshes: room("stereocull.meshes", bytemuck::cast_slice(&layout.meshes), 0),
+            lods: room("stereocull.lods", bytemuck::cast_slice(&layout.lods), 0),
             local_prefix: storage_buffer(
                 device,
                 "stereocull.local_prefix",
-                4 * slots as u64,
+                4 * (slots * levels) as u64,
                 scratch,
             ),
             block_sums: storage_buffer(
                 device,
                 "stereocull.block_sums",
-                4 * (most_groups.0 * most_groups.1) as u64,
+                4 * (most_groups.0 * most_groups.1 * levels) as u64,
                 scratch,
             ),
         }
@@ -105,13 +119,14 @@ impl CullScene {
     /// Writes a new `layout` (instances inserted or removed) into the buffers, which must
     /// have room for it (same meshes, no more slots than made for); returns the bytes.
     pub fn reload(&mut self, queue: &wgpu::Queue, layout: &CullLayout) -> u64 {
-        let (params, groups) = cull_params(layout, self.max_groups);
+        let (params, groups) = cull_params(layout, (self.max_groups, self.levels));
         (self.instance_count, self.groups) = (params.instance_count, groups);
-        let writes: [(&wgpu::Buffer, &[u8]); 5] = [
+        let writes: [(&wgpu::Buffer, &[u8]); 6] = [
             (&self.params, &uniform_bytes(&params)),
             (&self.spheres, bytemuck::cast_slice(&layout.spheres)),
             (&self.order, bytemuck::cast_slice(&layout.order)),
             (&self.positions, bytemuck::cast_slice(&layout.positions)),
+            (&self.mesh_of, bytemuck::cast_slice(&layout.mesh_of)),
             (&self.meshes, bytemuck::cast_slice(&layout.meshes)),
         ];
         writes
@@ -129,13 +144,14 @@ impl CullScene {
         [&self.spheres, &self.positions]
     }
 
-    /// Bytes on the GPU per instance for culling (spheres, order, positions, scratch).
-    pub const BYTES_PER_INSTANCE: u64 = 16 + 4 + 4 + 4;
+    /// Bytes on the GPU per instance for culling with one level of detail (spheres,
+    /// order, positions, mesh, scratch); each further level adds 4 bytes of scratch.
+    pub const BYTES_PER_INSTANCE: u64 = 16 + 4 + 4 + 4 + 4;
 }
 
 impl CullTargets {
-    /// Sized for every instance visible and every mesh drawn.
-    pub fn new(device: &wgpu::Device, instance_count: u32, mesh_count: u32) -> CullTargets {
+    /// Sized for every instance visible and `draws` draws (meshes times levels).
+    pub fn new(device: &wgpu::Device, instance_count: u32, draws: u32) -> CullTargets {
         let out = wgpu::BufferUsages::STORAGE
             | wgpu::BufferUsages::COPY_SRC
             | wgpu::BufferUsages::COPY_DST;
@@ -145,7 +161,7 @@ impl CullTargets {
             draws: storage_buffer(
                 device,
                 "stereocull.draws",
-                (size_of::<DrawArgs>() as u32 * mesh_count) as u64,
+                (size_of::<DrawArgs>() as u32 * draws) as u64,
                 indirect,
             ),
             counts: storage_buffer(device, "stereocull.counts", COUNTS_BYTES, indirect),
@@ -153,13 +169,14 @@ impl CullTargets {
     }
 }
 
-fn cull_params(layout: &CullLayout, max_groups: u32) -> (CullParams, (u32, u32)) {
+fn cull_params(layout: &CullLayout, (max_groups, levels): (u32, u32)) -> (CullParams, (u32, u32)) {
     let n = layout.spheres.len() as u32;
     let groups = dispatch_size(n.div_ceil(WORKGROUP_SIZE), max_groups);
     let params = CullParams {
         instance_count: n,
         mesh_count: layout.meshes.len() as u32,
         groups_x: groups.0,
+        lod_levels: levels,
     };
     (params, groups)
 }
@@ -215,6 +232,8 @@ impl GpuCuller {
             &scene.spheres,
             &scene.order,
             &scene.meshes,
+            &scene.lods,
+            &scene.mesh_of,
             &scene.local_prefix,
             &scene.block_sums,
             &targets.visible,
@@ -238,7 +257,7 @@ impl GpuCuller {
             pass.set_pipeline(pipeline);
             match kind {
                 CullPass::Draws => pass.dispatch_workgroups(1, 1, 1),
-                CullPass::Cull | CullPass::Compact => pass.dispatch_workgroups(x, y, 1),
+                CullPass::Cull | CullPass::Compact => pass.dispatch_workgroups(x, y, scene.levels),
             }
         }
     }

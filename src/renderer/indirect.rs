@@ -12,6 +12,7 @@ use super::{
     CullMode, CullState, FrameStats, RendererOptions, TargetViews, context_buffer,
     display_contexts, write,
 };
+use crate::cull::cpu::FrameLod;
 use crate::cull::gpu::{COUNTS_BYTES, CullScene, CullTargets, GpuCuller};
 use crate::cull::{CullOutput, cpu};
 use crate::draw::{DrawFeatures, DrawScene, Drawer};
@@ -49,7 +50,8 @@ pub(super) struct IndirectPath {
     culling: Culling,
     drawer: Drawer,
     pub(super) draw_scene: DrawScene,
-    mesh_count: u32,
+    /// Draw entries per display: meshes times levels of detail.
+    max_draws: u32,
     displays: Vec<IndirectDisplay>,
 }
 
@@ -66,7 +68,7 @@ impl IndirectPath {
         let culling = match options.cull {
             CullMode::Gpu => Culling::Gpu {
                 culler: GpuCuller::new(device),
-                scene: CullScene::new(device, &layout, slots),
+                scene: CullScene::new(device, &layout, slots, options.lod_levels()),
             },
             CullMode::Cpu => Culling::Cpu { layout },
         };
@@ -87,12 +89,12 @@ impl IndirectPath {
             options.material.as_deref(),
         );
         let draw_scene = DrawScene::new(device, &drawer, scene, slots)?;
-        let meshes = scene.meshes.len() as u32;
+        let draws = scene.meshes.len() as u32 * options.lod_levels();
         let displays = keys
             .iter()
             .map(|&key| {
                 let context = context_buffer(device);
-                let cull = CullTargets::new(device, slots, meshes);
+                let cull = CullTargets::new(device, slots, draws);
                 let cull_bind_group = match &culling {
                     Culling::Gpu { culler, scene } => {
                         Some(culler.bind_group(device, scene, [frame, &context], &cull))
@@ -117,7 +119,7 @@ impl IndirectPath {
             culling,
             drawer,
             draw_scene,
-            mesh_count: meshes,
+            max_draws: draws,
             displays,
         })
     }
@@ -136,7 +138,7 @@ impl IndirectPath {
         &self,
         queue: &wgpu::Queue,
         rig: &Rig,
-        resolved: &ResolvedRig,
+        (resolved, lod): (&ResolvedRig, &FrameLod),
     ) -> FrameStats {
         let contexts = display_contexts(rig, resolved, |i| {
             self.displays[i].key.instances_per_object()
@@ -152,7 +154,7 @@ impl IndirectPath {
                     .zip(&resolved.displays)
                     .map(|(state, r)| r.cull_job(state.key.instances_per_object()))
                     .collect();
-                cpu::cull_many(layout, &jobs)
+                cpu::cull_many_lod(layout, &jobs, Some(lod))
             }
         };
         stats.cpu_cull = start.elapsed();
@@ -226,8 +228,7 @@ impl IndirectPath {
     pub(super) fn draw_with_own_pipeline(&self, pass: &mut wgpu::RenderPass, index: usize) {
         let state = &self.displays[index];
         Drawer::bind_resources(pass, &self.draw_scene, &state.draw_bind_group);
-        self.drawer
-            .draw_indirect(pass, self.mesh_count, &state.cull);
+        self.drawer.draw_indirect(pass, self.max_draws, &state.cull);
     }
 
     pub(super) fn bind_group_layout(&self) -> &wgpu::BindGroupLayout {
@@ -243,8 +244,7 @@ impl IndirectPath {
         let state = &self.displays[index];
         self.drawer
             .bind(pass, state.key, &self.draw_scene, &state.draw_bind_group);
-        self.drawer
-            .draw_indirect(pass, self.mesh_count, &state.cull);
+        self.drawer.draw_indirect(pass, self.max_draws, &state.cull);
         1
     }
 
@@ -261,7 +261,7 @@ impl IndirectPath {
             0 => Vec::new(),
             n => read_pod(device, queue, &cull.visible, 4 * n as u64)?,
         };
-        let draws_bytes = (size_of::<DrawArgs>() as u32 * self.mesh_count) as u64;
+        let draws_bytes = (size_of::<DrawArgs>() as u32 * self.max_draws) as u64;
         Ok(CullOutput {
             visible,
             draws: read_pod(device, queue, &cull.draws, draws_bytes)?,

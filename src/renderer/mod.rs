@@ -75,17 +75,18 @@ use std::time::Duration;
 
 use crate::contexts::{DisplayContext, FrameContext};
 use crate::cull::CullOutput;
+use crate::cull::cpu::FrameLod;
 use crate::cull::gpu::{CullScene, CullTargets};
 use crate::draw::DrawScene;
 use crate::draw::{DEPTH_FORMAT, TargetFormat};
 use crate::error::{Error, Result};
-use crate::live::LiveScene;
+use crate::live::{Edit, LiveScene, edit_sphere};
 pub use crate::modes::StereoMode;
 use crate::profiling::GpuTimer;
 use crate::records::{CullLayout, MeshRecord, instance_record, instance_records, uniform_bytes};
 use crate::rig::{ResolvedRig, Rig};
 use crate::scatter::{Scatter, ScatterTargets};
-use crate::scene::{Scene, Vertex};
+use crate::scene::{MAX_LODS, Scene, Vertex};
 
 mod classic;
 mod indirect;
@@ -121,11 +122,18 @@ pub struct RendererOptions {
     /// decode, the eye routing and the seam): WGSL defining `fn material(s: Surface) ->
     /// vec4<f32>`, with `Surface` (world position, normal, color, eye, instance) and the
     /// bindings `frame` and `display` (`display.eye[s.eye]` is the eye's context) in
-    /// scope. `None`: the built-in shading.
+    /// scope; `base_color(s)` samples the material's texture. `None`: the built-in
+    /// shading.
     pub material: Option<Arc<str>>,
     pub cull: CullMode,
     pub mode: StereoMode,
+    /// Levels of detail ([`crate::scene::Mesh::lods`]), one per instance and frame from
+    /// the viewer's position, at most [`LOD_PIXELS`] of error on the sharpest display.
+    pub lod: bool,
 }
+
+/// Screen-space error, in pixels, a level of detail may show.
+pub const LOD_PIXELS: f32 = 1.0;
 
 impl RendererOptions {
     /// The attachments the draw pipelines are built for.
@@ -147,7 +155,36 @@ impl Default for RendererOptions {
             material: None,
             cull: CullMode::Gpu,
             mode: StereoMode::Instanced,
+            lod: false,
         }
+    }
+}
+
+impl RendererOptions {
+    /// Levels of detail culled into: [`MAX_LODS`], or 1 with LOD off.
+    pub fn lod_levels(&self) -> u32 {
+        if self.lod { MAX_LODS as u32 } else { 1 }
+    }
+}
+
+/// The frame's level-of-detail choice for `rig`: the viewer, and the scale that holds
+/// the error under [`LOD_PIXELS`] on the display with the most pixels per radian.
+pub fn frame_lod(rig: &Rig, resolved: &ResolvedRig, levels: u32) -> FrameLod {
+    let pixels_per_radian = rig
+        .displays
+        .iter()
+        .zip(&resolved.displays)
+        .flat_map(|(d, r)| {
+            r.eyes.iter().map(move |e| {
+                let across = e.fov.left.atan() + e.fov.right.atan();
+                d.resolution[0] as f32 / across.max(1e-6)
+            })
+        })
+        .fold(0.0, f32::max);
+    FrameLod {
+        viewer: rig.viewer.position().as_vec3(),
+        lod_scale: (pixels_per_radian / LOD_PIXELS).powi(2),
+        levels,
     }
 }
 
@@ -355,7 +392,7 @@ impl Renderer {
         device: &wgpu::Device,
         queue: &wgpu::Queue,
         scene: &Scene,
-        moved: &[u32],
+        moved: &[Edit],
     ) -> SyncStats {
         if moved.is_empty() {
             return SyncStats::default();
@@ -368,9 +405,9 @@ impl Renderer {
         let targets = ScatterTargets { instances, spheres };
         let bytes = self.scatter.stage(device, queue, (scene, moved), targets);
         if let CullState::Cpu(layout) = culling {
-            for &slot in moved {
-                let at = layout.positions[slot as usize];
-                layout.set_sphere(at, self.scatter.staged_sphere(slot));
+            for edit in moved {
+                let at = layout.positions[edit[0] as usize];
+                layout.set_sphere(at, edit_sphere(edit));
             }
         }
         SyncStats {
@@ -417,11 +454,12 @@ impl Renderer {
             ));
         }
         let resolved = rig.resolve()?;
-        let frame = uniform_bytes(&FrameContext::new(&rig.viewer, time));
+        let lod = frame_lod(rig, &resolved, self.options.lod_levels());
+        let frame = uniform_bytes(&FrameContext::new(&rig.viewer, time, lod.lod_scale));
         let frame_bytes = write(queue, &self.frame, &frame);
         let mut stats = match &mut self.path {
-            Path::Indirect(p) => p.prepare(queue, rig, &resolved),
-            Path::Classic(p) => p.prepare(queue, rig, &resolved),
+            Path::Indirect(p) => p.prepare(queue, rig, (&resolved, &lod)),
+            Path::Classic(p) => p.prepare(queue, rig, (&resolved, &lod)),
         };
         // Texels go up with the first frame: `new` has no queue.
         stats.bytes_uploaded += frame_bytes + self.path.draw_scene().materials.upload(queue);

@@ -10,6 +10,8 @@ struct EyeContext {
     view_from_clip: mat4x4<f32>,
     // clip_from_view * view_from_world, composed in f64 on the CPU: what vertices use.
     clip_from_world: mat4x4<f32>,
+    // Its inverse (f64 too): how fragments find their world position.
+    world_from_clip: mat4x4<f32>,
     // The eyeball: apex of this eye's frustum, used for specular.
     position: vec3<f32>,
 }
@@ -40,4 +42,6 @@ struct FrameContext {
     viewer_position: vec3<f32>,
     time: f32,
     viewer_direction: vec3<f32>,
+    // (pixels per radian / pixels of error allowed)^2: see lod_level in cull_math.wgsl.
+    lod_scale: f32,
 }

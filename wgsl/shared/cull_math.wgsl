@@ -10,6 +10,27 @@ fn sphere_in_planes(planes: array<vec4<f32>, 6>, s: vec4<f32>) -> bool {
     return true;
 }
 
+// The level of detail of cull position k's sphere, from the viewer's position (the
+// frame context, never an eye's: both eyes and every display draw the same level). The
+// CPU twin is records::lod_level: same operations, same order.
+fn lod_level(k: u32) -> u32 {
+    if (params.lod_levels == 1u) {
+        return 0u;
+    }
+    let s = spheres[k];
+    let d = s.xyz - frame.viewer_position;
+    let d2 = d.x * d.x + d.y * d.y + d.z * d.z;
+    let r2 = s.w * s.w;
+    let first = mesh_of[k] * MAX_LODS;
+    var level = 0u;
+    for (var l = 1u; l < MAX_LODS; l++) {
+        if (d2 > lods[first + l].error_sq * frame.lod_scale * r2) {
+            level += 1u;
+        }
+    }
+    return level;
+}
+
 // Bit 31 of a local_prefix entry is the instance's visibility flag; the low bits are
 // its exclusive prefix within its workgroup (< WORKGROUP_SIZE).
 const VISIBLE_BIT: u32 = 0x80000000u;

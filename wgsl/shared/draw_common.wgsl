@@ -1,5 +1,9 @@
 // Shared by the built-in draw pipelines: their vertex output and shading, on top of
-// the decode (wgsl/shared/decode.wgsl).
+// the decode (wgsl/shared/decode.wgsl). Vertices pass on only what the fragment stage
+// cannot find itself: the software rasterizers we profile on (lavapipe) set up every
+// varying of every triangle, and most triangles of a large scene cover a pixel or none.
+// The fragment stage reads the instance's color from its record and rebuilds its world
+// position from the depth buffer's coordinates.
 
 fn vertex(v: VertexInput, slot: u32, eye: u32, double_wide: bool) -> VertexOutput {
     let d = decode(v, slot, eye, double_wide);
@@ -8,9 +12,7 @@ fn vertex(v: VertexInput, slot: u32, eye: u32, double_wide: bool) -> VertexOutpu
         set_seam_distance(&out, d.seam);
     }
     out.position = d.clip;
-    out.world_position = d.world_position;
     out.normal = d.world_normal;
-    out.color = d.color;
     out.ids = vec3(d.eye, d.instance, d.material);
     out.uv = d.uv;
     return out;
@@ -19,13 +21,9 @@ fn vertex(v: VertexInput, slot: u32, eye: u32, double_wide: bool) -> VertexOutpu
 // The fragment stage gets its own input: naga rejects clip_distances in it.
 struct FragmentInput {
     @builtin(position) position: vec4<f32>,
-    @location(0) world_position: vec3<f32>,
-    @location(1) normal: vec3<f32>,
-    @location(2) color: vec4<f32>,
-    // (eye, instance, material) in one location: lavapipe's multiview misroutes
-    // clipped triangles as varyings grow past five locations.
-    @location(3) @interpolate(flat) ids: vec3<u32>,
-    @location(4) uv: vec2<f32>,
+    @location(0) normal: vec3<f32>,
+    @location(1) @interpolate(flat) ids: vec3<u32>,
+    @location(2) uv: vec2<f32>,
 }
 
 // What a material sees of one fragment: a caller's `fn material(s: Surface) ->
@@ -58,13 +56,24 @@ fn base_color(s: Surface) -> vec4<f32> {
 const LIGHT_DIRECTION: vec3<f32> = vec3(0.37139068, 0.74278135, 0.55708601);
 
 // The fragment stage of every built-in pipeline, for eye `eye` (its entry point says
-// where the eye comes from).
-fn fragment(in: FragmentInput, eye: u32) -> vec4<f32> {
+// where the eye comes from), whose view starts `eye_x` pixels into the target.
+fn fragment(in: FragmentInput, eye: u32, eye_x: f32) -> vec4<f32> {
     if (DISCARD_OTHER_HALF && ((in.position.x < display.resolution.x) != (eye == 0u))) {
         discard;
     }
-    let s = Surface(in.world_position, in.normal, in.color, eye, in.ids.y, in.uv, in.ids.z);
+    let color = unpack4x8unorm(instances[in.ids.y].color);
+    let world = world_position(in.position, eye, eye_x);
+    let s = Surface(world, in.normal, color, eye, in.ids.y, in.uv, in.ids.z);
     return surface_color(s);
+}
+
+// The world position under a fragment of eye `eye`: its pixel and depth back through
+// the eye's projection (world_from_clip, composed in f64 on the CPU).
+fn world_position(frag: vec4<f32>, eye: u32, eye_x: f32) -> vec3<f32> {
+    let size = display.resolution;
+    let ndc = vec2((frag.x - eye_x) / size.x * 2.0 - 1.0, 1.0 - frag.y / size.y * 2.0);
+    let world = display.eye[eye].world_from_clip * vec4(ndc, frag.z, 1.0);
+    return world.xyz / world.w;
 }
 
 // The built-in shading: diffuse from one light, specular from this eye's own position

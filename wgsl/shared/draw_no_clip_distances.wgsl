@@ -3,13 +3,11 @@
 
 struct VertexOutput {
     @builtin(position) position: vec4<f32>,
-    @location(0) world_position: vec3<f32>,
-    @location(1) normal: vec3<f32>,
-    @location(2) color: vec4<f32>,
+    @location(0) normal: vec3<f32>,
     // (eye, instance, material) in one location: lavapipe's multiview misroutes
-    // clipped triangles as varyings grow past five locations.
-    @location(3) @interpolate(flat) ids: vec3<u32>,
-    @location(4) uv: vec2<f32>,
+    // clipped triangles as varyings grow.
+    @location(1) @interpolate(flat) ids: vec3<u32>,
+    @location(2) uv: vec2<f32>,
 }
 
 fn set_seam_distance(out: ptr<function, VertexOutput>, distance: f32) {}

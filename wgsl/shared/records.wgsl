@@ -22,6 +22,14 @@ struct MeshRecord {
     cull_count: u32,
 }
 
+// MAX_LODS per mesh, level 0 the mesh itself; mirrored by LodRecord in src/records.rs.
+struct LodRecord {
+    first_index: u32,
+    index_count: u32,
+    // Squared error relative to the bounding radius; infinite for levels a mesh lacks.
+    error_sq: f32,
+}
+
 // Mirrored by MaterialRecord in src/materials.rs (bytemuck).
 struct MaterialRecord {
     // Layer of base_color_textures, or 0xffffffff: untextured.
@@ -43,6 +51,9 @@ struct DrawArgs {
 struct CullParams {
     instance_count: u32,
     mesh_count: u32,
-    // Workgroups along x in the cull and compact dispatches (y carries the rest).
+    // Workgroups along x in the cull and compact dispatches (y carries the rest; z is
+    // the level of detail).
     groups_x: u32,
+    // Levels of detail in use: 1 (LOD off) or MAX_LODS.
+    lod_levels: u32,
 }
