@@ -27,9 +27,12 @@ pub struct Scatter {
     edits: wgpu::Buffer,
     bind_group: Option<wgpu::BindGroup>,
     /// Slots with an edit in the buffer, in buffer order, and per slot 1 + its edit's
-    /// index (0: none): a slot moved in two syncs before a dispatch keeps one edit.
+    /// index (0: none): a slot moved in two syncs before a dispatch keeps one edit. The
+    /// index is built only when a second sync comes (`indexed`): one sync per frame
+    /// pays no random writes for it.
     slots: Vec<u32>,
     index: Vec<u32>,
+    indexed: bool,
     spheres_too: bool,
     max_groups: u32,
 }
@@ -68,6 +71,7 @@ impl Scatter {
             bind_group: None,
             slots: Vec::new(),
             index: Vec::new(),
+            indexed: false,
             spheres_too: false,
             max_groups: device.limits().max_compute_workgroups_per_dimension,
         }
@@ -88,16 +92,11 @@ impl Scatter {
         (scene, edits): (&Scene, &[Edit]),
         targets: ScatterTargets,
     ) -> u64 {
-        self.index
-            .resize(self.index.len().max(scene.instances.len()), 0);
         self.spheres_too = targets.spheres.is_some();
         let mut bytes = 0;
         if self.slots.is_empty() {
             // The common case, one sync per frame: the edits go up as they are.
             self.grow(device, edits.len());
-            for (k, edit) in edits.iter().enumerate() {
-                self.index[edit[0] as usize] = k as u32 + 1;
-            }
             self.slots.extend(edits.iter().map(|e| e[0]));
             queue.write_buffer(&self.edits, HEADER_BYTES, bytemuck::cast_slice(edits));
             bytes += EDIT_BYTES * edits.len() as u64;
@@ -119,6 +118,14 @@ impl Scatter {
         queue: &wgpu::Queue,
         (scene, edits): (&Scene, &[Edit]),
     ) -> u64 {
+        if !self.indexed {
+            self.index
+                .resize(self.index.len().max(scene.instances.len()), 0);
+            for (k, &slot) in self.slots.iter().enumerate() {
+                self.index[slot as usize] = k as u32 + 1;
+            }
+            self.indexed = true;
+        }
         let fresh = edits
             .iter()
             .filter(|e| self.index[e[0] as usize] == 0)
@@ -179,8 +186,11 @@ impl Scatter {
     }
 
     fn clear(&mut self) {
-        for &slot in &self.slots {
-            self.index[slot as usize] = 0;
+        if self.indexed {
+            for &slot in &self.slots {
+                self.index[slot as usize] = 0;
+            }
+            self.indexed = false;
         }
         self.slots.clear();
     }

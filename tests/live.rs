@@ -324,3 +324,38 @@ fn a_moved_instance_renders_like_a_fresh_scene_with_it_there() {
         }
     }
 }
+
+/// Two syncs before a frame: the second's edits join the first's in one dispatch (an
+/// instance moved in both keeps its last move), also when they outgrow the edits buffer.
+#[test]
+fn edits_of_two_syncs_before_a_frame_merge() {
+    let gpu = gpu();
+    let rig = support::sized("cave", 32, 32);
+    let mut rng = Pcg64Mcg::seed_from_u64(11);
+    let mut scene = empty_scene();
+    scene.instances = (0..3000)
+        .map(|k| random_instance(&mut rng, k % MESHES))
+        .collect();
+    let mut live = LiveScene::new(scene.clone());
+    let handles = live.handles();
+    let mut renderer =
+        Renderer::new(&gpu.device, &scene, &rig, RendererOptions::default()).unwrap();
+    for &h in handles.iter().step_by(7).take(10) {
+        live.set_transform(h, random_transform(&mut rng)).unwrap();
+    }
+    renderer.sync(&gpu.device, &gpu.queue, &mut live).unwrap();
+    for &h in handles.iter().step_by(3) {
+        live.set_transform(h, random_transform(&mut rng)).unwrap();
+    }
+    let second = renderer.sync(&gpu.device, &gpu.queue, &mut live).unwrap();
+    assert_eq!(second.moved, 1000);
+    let targets = renderer.create_targets(&gpu.device);
+    let frame = renderer
+        .submit_frame(&gpu.device, &gpu.queue, &rig, 0.0, &targets)
+        .unwrap();
+    assert_eq!(frame.dispatches, 1 + 5 * 3, "one scatter for both syncs");
+    for (d, reference) in reference_culls(live.scene(), &rig).into_iter().enumerate() {
+        let got = renderer.read_cull(&gpu.device, &gpu.queue, d).unwrap();
+        assert!(got == reference, "display {d}");
+    }
+}
