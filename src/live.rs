@@ -84,10 +84,13 @@ pub struct LiveScene {
     generations: Vec<u32>,
     /// Vacant slots, lowest first.
     vacant: std::collections::BTreeSet<u32>,
-    /// Per slot: 1 + its edit's index in `changes.moved` (0: not moved since the sync).
-    moved_at: Vec<u32>,
-    /// Per slot: listed in `changes.recolored`.
-    recolored: Vec<bool>,
+    /// Per slot: the change set (`epoch`) it was last moved in, and its edit's index in
+    /// `changes.moved` then; epochs make forgetting a change set free.
+    moved_at: Vec<(u32, u32)>,
+    /// Per slot: the change set it was last listed in `changes.recolored` in.
+    recolored: Vec<u32>,
+    /// The current change set; starts at 1, so that 0 means never.
+    epoch: u32,
     changes: Changes,
 }
 
@@ -111,8 +114,9 @@ impl LiveScene {
             scene,
             generations: vec![0; n],
             vacant: Default::default(),
-            moved_at: vec![0; n],
-            recolored: vec![false; n],
+            moved_at: vec![(0, 0); n],
+            recolored: vec![0; n],
+            epoch: 1,
             changes: Changes::default(),
         }
     }
@@ -180,8 +184,8 @@ impl LiveScene {
             None => {
                 self.scene.instances.push(instance);
                 self.generations.push(0);
-                self.moved_at.push(0);
-                self.recolored.push(false);
+                self.moved_at.push((0, 0));
+                self.recolored.push(0);
                 self.slot_count() - 1
             }
         };
@@ -201,11 +205,11 @@ impl LiveScene {
         self.scene.instances[slot].world_from_local = world_from_local;
         let edit = make_edit(&self.scene, handle.slot);
         match self.moved_at[slot] {
-            0 => {
+            (epoch, at) if epoch == self.epoch => self.changes.moved[at as usize] = edit,
+            _ => {
+                self.moved_at[slot] = (self.epoch, self.changes.moved.len() as u32);
                 self.changes.moved.push(edit);
-                self.moved_at[slot] = self.changes.moved.len() as u32;
             }
-            at => self.changes.moved[at as usize - 1] = edit,
         }
         Ok(())
     }
@@ -217,7 +221,7 @@ impl LiveScene {
         }
         let slot = handle.slot as usize;
         self.scene.instances[slot].color = color;
-        if !std::mem::replace(&mut self.recolored[slot], true) {
+        if std::mem::replace(&mut self.recolored[slot], self.epoch) != self.epoch {
             self.changes.recolored.push(handle.slot);
         }
         Ok(())
@@ -248,11 +252,12 @@ impl LiveScene {
 
     /// The changes since the last call, which forgets them.
     pub fn take_changes(&mut self) -> Changes {
-        for edit in &self.changes.moved {
-            self.moved_at[edit[0] as usize] = 0;
-        }
-        for &slot in &self.changes.recolored {
-            self.recolored[slot as usize] = false;
+        self.epoch = self.epoch.wrapping_add(1);
+        if self.epoch == 0 {
+            // After 2^32 change sets the stamps start over.
+            self.moved_at.fill((0, 0));
+            self.recolored.fill(0);
+            self.epoch = 1;
         }
         std::mem::take(&mut self.changes)
     }
