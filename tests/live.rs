@@ -9,12 +9,14 @@ use glam::{Affine3A, Quat, Vec3, Vec4};
 use rand::{Rng, SeedableRng};
 use rand_pcg::Pcg64Mcg;
 use stereocull::Error;
+use stereocull::cull::cpu;
 use stereocull::device::Gpu;
 use stereocull::live::{Handle, LiveScene};
 use stereocull::readback::read_rgba8;
-use stereocull::renderer::{CullMode, Renderer, RendererOptions, StereoMode, SyncStats};
+use stereocull::records::CullLayout;
+use stereocull::renderer::{CullMode, Renderer, RendererOptions, StereoMode, SyncStats, frame_lod};
 use stereocull::rig::Rig;
-use stereocull::scene::{Animation, Instance, Scene};
+use stereocull::scene::{Animation, Instance, MAX_LODS, Scene};
 use stereocull::shapes;
 use support::{Tolerance, assert_images_match, gpu, reference_culls};
 
@@ -41,12 +43,16 @@ fn random_instance(rng: &mut Pcg64Mcg, mesh: u32) -> Instance {
     }
 }
 
+/// A third of them 20 times as far (up to 200 m), where coarser levels of detail start.
 fn random_transform(rng: &mut Pcg64Mcg) -> Affine3A {
-    let at = Vec3::new(
-        rng.random_range(-8.0..8.0),
-        rng.random_range(-2.0..5.0),
-        rng.random_range(-10.0..6.0),
-    );
+    let spread = if rng.random_bool(0.3) { 20.0 } else { 1.0 };
+    let at = Vec3::new(0.0, 1.6, 2.0)
+        + spread
+            * Vec3::new(
+                rng.random_range(-8.0..8.0),
+                rng.random_range(-3.6..3.4),
+                rng.random_range(-12.0..4.0),
+            );
     let turn = Quat::from_rotation_y(rng.random_range(0.0..6.3));
     Affine3A::from_scale_rotation_translation(Vec3::splat(rng.random_range(0.2..1.5)), turn, at)
 }
@@ -139,7 +145,15 @@ fn check(
     renderer
         .submit_frame(&gpu.device, &gpu.queue, &rig, 0.0, &targets)
         .unwrap();
-    for (d, reference) in reference_culls(want, &rig).into_iter().enumerate() {
+    let reference = match renderer.options().lod {
+        false => reference_culls(want, &rig),
+        true => {
+            let lod = frame_lod(&rig, &rig.resolve().unwrap(), MAX_LODS as u32);
+            let jobs = rig.cull_jobs().unwrap();
+            cpu::cull_many_lod(&CullLayout::new(want), &jobs, Some(&lod))
+        }
+    };
+    for (d, reference) in reference.into_iter().enumerate() {
         let got = renderer.read_cull(&gpu.device, &gpu.queue, d).unwrap();
         assert_eq!(got.draw_count, reference.draw_count, "{what}: draw count");
         assert_eq!(got.draws, reference.draws, "{what}: draws");
@@ -151,13 +165,13 @@ fn check(
 /// Random edit sequences from an empty scene: inserts into it, moves, recolors, removes
 /// (also of a mesh's last instance), slots reused after removal. Every third frame, a
 /// GPU-culled and a CPU-culled renderer sync the same changes and must both match the
-/// model's reference cull.
+/// model's reference cull; two of the four sequences with levels of detail on.
 #[test]
 fn edit_sequences_keep_gpu_and_cpu_culls_identical_to_the_model() {
     let gpu = gpu();
     let meshes = empty_scene();
     let rig = support::sized("hmd", 32, 32);
-    for seed in 0..4u64 {
+    for (seed, lod) in [(0u64, false), (1, false), (2, true), (3, true)] {
         let mut rng = Pcg64Mcg::seed_from_u64(seed);
         let mut model = Model {
             slots: Vec::new(),
@@ -167,6 +181,7 @@ fn edit_sequences_keep_gpu_and_cpu_culls_identical_to_the_model() {
         let mut renderers = [CullMode::Gpu, CullMode::Cpu].map(|cull| {
             let options = RendererOptions {
                 cull,
+                lod,
                 ..Default::default()
             };
             Renderer::new(&gpu.device, &meshes, &rig, options).unwrap()
@@ -201,6 +216,19 @@ fn edit_sequences_keep_gpu_and_cpu_culls_identical_to_the_model() {
             !model.live().is_empty(),
             "seed {seed}: the sequence ends with instances"
         );
+        if lod {
+            // The far instances were drawn at coarser levels, or the LOD runs prove little.
+            let (want, rig) = (model.scene(&meshes), Rig::preset("hmd").unwrap());
+            let lod = frame_lod(&rig, &rig.resolve().unwrap(), MAX_LODS as u32);
+            let jobs = rig.cull_jobs().unwrap();
+            let with = cpu::cull_many_lod(&CullLayout::new(&want), &jobs, Some(&lod));
+            let finest: Vec<u32> = want.meshes.iter().map(|m| m.first_index).collect();
+            let coarse = with[0].draws[..with[0].draw_count as usize]
+                .iter()
+                .filter(|d| !finest.contains(&d.first_index))
+                .count();
+            assert!(coarse > 0, "seed {seed}: no coarser level drawn");
+        }
     }
 }
 
