@@ -70,123 +70,36 @@
 //! (`classic.rs`). Each frame, [`Renderer::prepare`] resolves the rig once
 //! ([`Rig::resolve`]) and builds every context and cull job from that.
 
-use std::sync::Arc;
 use std::time::Duration;
 
 use crate::contexts::{DisplayContext, FrameContext};
 use crate::cull::CullOutput;
-use crate::cull::cpu::FrameLod;
 use crate::cull::gpu::{CullScene, CullTargets};
 use crate::draw::DrawScene;
-use crate::draw::{DEPTH_FORMAT, TargetFormat};
 use crate::error::{Error, Result};
-use crate::live::{Edit, LiveScene, edit_sphere};
 pub use crate::modes::StereoMode;
 use crate::profiling::GpuTimer;
-use crate::records::{CullLayout, MeshRecord, instance_record, instance_records, uniform_bytes};
+use crate::records::uniform_bytes;
 use crate::rig::{ResolvedRig, Rig};
-use crate::scatter::{Scatter, ScatterTargets};
-use crate::scene::{MAX_LODS, Scene, Vertex};
+use crate::scatter::Scatter;
+use crate::scene::Scene;
 
+mod checks;
 mod classic;
 mod indirect;
+mod options;
 mod passes;
+mod sync;
 mod targets;
 
+use checks::check_device;
 use classic::ClassicPath;
 use indirect::IndirectPath;
+pub use options::{CullMode, LOD_PIXELS, RendererOptions, frame_lod};
 use passes::{close, open_display};
+use sync::CullState;
+pub use sync::SyncStats;
 pub use targets::{DisplayTarget, TargetShape, TargetViews};
-
-/// Where the per-display cull runs.
-#[derive(Clone, Copy, Debug, Default, PartialEq, Eq, Hash, clap::ValueEnum, serde::Serialize)]
-#[serde(rename_all = "lowercase")]
-pub enum CullMode {
-    /// Compute passes on the GPU; nothing per instance crosses the bus each frame.
-    #[default]
-    Gpu,
-    /// The rayon culler, then an upload of its results.
-    Cpu,
-}
-
-#[derive(Clone, Debug)]
-pub struct RendererOptions {
-    pub color_format: wgpu::TextureFormat,
-    /// MSAA samples per pixel of the color and depth attachments (1: none). Every device
-    /// has 1 and 4; 2, 8 and 16 where the adapter has them and the device was opened with
-    /// `TEXTURE_ADAPTER_SPECIFIC_FORMAT_FEATURES` (`device::Gpu::sample_counts`).
-    pub sample_count: u32,
-    /// The depth attachment's format (the caller's, when drawing into its passes).
-    pub depth_format: wgpu::TextureFormat,
-    /// The caller's shading, compiled into every draw pipeline (which keep the instance
-    /// decode, the eye routing and the seam): WGSL defining `fn material(s: Surface) ->
-    /// vec4<f32>`, with `Surface` (world position, normal, color, eye, instance) and the
-    /// bindings `frame` and `display` (`display.eye[s.eye]` is the eye's context) in
-    /// scope; `base_color(s)` samples the material's texture. `None`: the built-in
-    /// shading.
-    pub material: Option<Arc<str>>,
-    pub cull: CullMode,
-    pub mode: StereoMode,
-    /// Levels of detail ([`crate::scene::Mesh::lods`]), one per instance and frame from
-    /// the viewer's position, at most [`LOD_PIXELS`] of error on the sharpest display.
-    pub lod: bool,
-}
-
-/// Screen-space error, in pixels, a level of detail may show.
-pub const LOD_PIXELS: f32 = 1.0;
-
-impl RendererOptions {
-    /// The attachments the draw pipelines are built for.
-    pub fn target_format(&self) -> TargetFormat {
-        TargetFormat {
-            color: self.color_format,
-            depth: self.depth_format,
-            samples: self.sample_count,
-        }
-    }
-}
-
-impl Default for RendererOptions {
-    fn default() -> Self {
-        RendererOptions {
-            color_format: wgpu::TextureFormat::Rgba8UnormSrgb,
-            sample_count: 1,
-            depth_format: DEPTH_FORMAT,
-            material: None,
-            cull: CullMode::Gpu,
-            mode: StereoMode::Instanced,
-            lod: false,
-        }
-    }
-}
-
-impl RendererOptions {
-    /// Levels of detail culled into: [`MAX_LODS`], or 1 with LOD off.
-    pub fn lod_levels(&self) -> u32 {
-        if self.lod { MAX_LODS as u32 } else { 1 }
-    }
-}
-
-/// The frame's level-of-detail choice for `rig`: the viewer, and the scale that holds
-/// the error under [`LOD_PIXELS`] on the display with the most pixels per radian.
-pub fn frame_lod(rig: &Rig, resolved: &ResolvedRig, levels: u32) -> FrameLod {
-    let pixels_per_radian = rig
-        .displays
-        .iter()
-        .zip(&resolved.displays)
-        .flat_map(|(d, r)| {
-            r.eyes.iter().map(move |e| {
-                let across = e.fov.left.atan() + e.fov.right.atan();
-                d.resolution[0] as f32 / across.max(1e-6)
-            })
-        })
-        .fold(0.0, f32::max);
-    FrameLod {
-        viewer: rig.viewer.position().as_vec3(),
-        lod_scale: (pixels_per_radian / LOD_PIXELS).powi(2),
-        levels,
-    }
-}
 
 /// What one frame recorded and uploaded, and the CPU time of its phases.
 #[derive(Clone, Copy, Debug, Default, PartialEq, serde::Serialize)]
@@ -237,33 +150,6 @@ impl Path {
             Path::Classic(p) => &mut p.draw_scene,
         }
     }
-
-    /// The instance records and the culling state: what edits change.
-    fn edit_targets(&mut self) -> (&wgpu::Buffer, CullState<'_>) {
-        match self {
-            Path::Indirect(p) => p.edit_targets(),
-            Path::Classic(p) => (&p.draw_scene.instances, CullState::Cpu(&mut p.layout)),
-        }
-    }
-}
-
-/// What edits change in the culling: the GPU culler's buffers, or the CPU culler's layout.
-enum CullState<'a> {
-    Gpu(&'a mut CullScene),
-    Cpu(&'a mut CullLayout),
-}
-
-/// What [`Renderer::sync`] did.
-#[derive(Clone, Copy, Debug, Default, PartialEq, Eq, serde::Serialize)]
-pub struct SyncStats {
-    pub bytes_uploaded: u64,
-    /// Instances whose transform went up sparsely (one scatter edit each).
-    pub moved: u32,
-    /// The cull order was written again (instances inserted or removed): O(instances).
-    pub reloaded: bool,
-    /// The scene outgrew the buffers (or gained meshes): everything was uploaded again,
-    /// with room to grow by half.
-    pub reallocated: bool,
 }
 
 pub struct Renderer {
@@ -315,106 +201,6 @@ impl Renderer {
             slots,
             rig: rig.clone(),
         })
-    }
-
-    /// Brings the GPU copy of `live` up to date with its changes since the last sync,
-    /// paying for what changed: moved instances go up as scatter edits (68 bytes each,
-    /// applied by one dispatch in the next `encode`); inserts and removes rewrite the cull
-    /// order and records (O(instances)); a scene that outgrew its buffers, or gained
-    /// meshes, is uploaded again with room to grow by half. Call it before `prepare`.
-    pub fn sync(
-        &mut self,
-        device: &wgpu::Device,
-        queue: &wgpu::Queue,
-        live: &mut LiveScene,
-    ) -> Result<SyncStats> {
-        let changes = live.take_changes();
-        let scene = live.scene();
-        let slots = scene.instances.len() as u32;
-        if changes.geometry || slots > self.slots {
-            check_device(device, scene, &self.options)?;
-            let room = slots + slots / 2;
-            self.path = Path::new(
-                device,
-                scene,
-                (&self.rig, &self.frame),
-                (&self.options, room),
-            )?;
-            self.slots = room;
-            self.scatter.reset();
-            let bytes =
-                (scene.instances.len() * size_of::<crate::records::InstanceRecord>()) as u64;
-            return Ok(SyncStats {
-                bytes_uploaded: bytes,
-                reloaded: true,
-                reallocated: true,
-                ..SyncStats::default()
-            });
-        }
-        if changes.restructured {
-            return Ok(self.reload(queue, scene));
-        }
-        let mut stats = self.stage_moves(device, queue, scene, &changes.moved);
-        let (instances, _) = self.path.edit_targets();
-        for &slot in &changes.recolored {
-            let record = instance_record(&scene.instances[slot as usize]);
-            let offset = slot as u64 * DrawScene::BYTES_PER_INSTANCE;
-            queue.write_buffer(instances, offset, bytemuck::bytes_of(&record));
-            stats.bytes_uploaded += DrawScene::BYTES_PER_INSTANCE;
-        }
-        Ok(stats)
-    }
-
-    /// Writes the whole scene into the existing buffers: records, cull order, spheres.
-    fn reload(&mut self, queue: &wgpu::Queue, scene: &Scene) -> SyncStats {
-        self.scatter.reset();
-        let records = instance_records(scene);
-        let (instances, culling) = self.path.edit_targets();
-        queue.write_buffer(instances, 0, bytemuck::cast_slice(&records));
-        let layout = CullLayout::new(scene);
-        let layout_bytes = match culling {
-            CullState::Gpu(cull) => cull.reload(queue, &layout),
-            CullState::Cpu(cpu) => {
-                *cpu = layout;
-                0
-            }
-        };
-        SyncStats {
-            bytes_uploaded: std::mem::size_of_val(&records[..]) as u64 + layout_bytes,
-            reloaded: true,
-            ..SyncStats::default()
-        }
-    }
-
-    /// Stages the moved instances' edits; a CPU culler's layout takes their new spheres.
-    fn stage_moves(
-        &mut self,
-        device: &wgpu::Device,
-        queue: &wgpu::Queue,
-        scene: &Scene,
-        moved: &[Edit],
-    ) -> SyncStats {
-        if moved.is_empty() {
-            return SyncStats::default();
-        }
-        let (instances, culling) = self.path.edit_targets();
-        let spheres = match &culling {
-            CullState::Gpu(cull) => Some(cull.scatter_targets()),
-            CullState::Cpu(_) => None,
-        };
-        let targets = ScatterTargets { instances, spheres };
-        let bytes = self.scatter.stage(device, queue, (scene, moved), targets);
-        if let CullState::Cpu(layout) = culling {
-            for edit in moved {
-                let at = layout.positions[edit[0] as usize];
-                layout.set_sphere(at, edit_sphere(edit));
-            }
-        }
-        SyncStats {
-            bytes_uploaded: bytes,
-            moved: moved.len() as u32,
-            ..SyncStats::default()
-        }
     }
 
     /// The options the renderer was made with.
@@ -700,98 +486,4 @@ fn write(queue: &wgpu::Queue, buffer: &wgpu::Buffer, bytes: &[u8]) -> u64 {
         queue.write_buffer(buffer, 0, bytes);
     }
     bytes.len() as u64
-}
-
-/// MSAA the device can do for the options' color format and the depth format. Without
-/// `TEXTURE_ADAPTER_SPECIFIC_FORMAT_FEATURES` that is WebGPU's guarantee (1 and 4);
-/// with it the adapter decides, which only the adapter knows: wgpu then checks.
-fn check_sample_count(features: wgpu::Features, options: &RendererOptions) -> Result<()> {
-    let n = options.sample_count;
-    let specific = features.contains(wgpu::Features::TEXTURE_ADAPTER_SPECIFIC_FORMAT_FEATURES);
-    let counts = match specific {
-        true => vec![1, 2, 4, 8, 16],
-        false => crate::device::guaranteed_sample_counts(
-            features,
-            (options.color_format, options.depth_format),
-        ),
-    };
-    if !counts.contains(&n) {
-        return Err(Error::Unsupported(format!(
-            "{n}x MSAA is not available for {:?}; this device has {}",
-            options.color_format,
-            crate::device::list_counts(&counts)
-        )));
-    }
-    if n > 1
-        && options.mode == StereoMode::Multiview
-        && !features.contains(wgpu::Features::MULTISAMPLE_ARRAY)
-    {
-        return Err(Error::Unsupported(
-            "multiview with MSAA needs MULTISAMPLE_ARRAY (multisampled two-layer targets), which this device lacks".into(),
-        ));
-    }
-    Ok(())
-}
-
-/// What a mode cannot do without, said before anything is built.
-fn check_device(device: &wgpu::Device, scene: &Scene, options: &RendererOptions) -> Result<()> {
-    let features = device.features();
-    let mode = options.mode.name();
-    check_sample_count(features, options)?;
-    if options.mode.per_instance() && options.cull == CullMode::Gpu {
-        return Err(Error::Unsupported(format!(
-            "{mode} records a draw call per visible instance, so it culls on the CPU: use --cull cpu"
-        )));
-    }
-    if !options.mode.per_instance() && !features.contains(wgpu::Features::INDIRECT_FIRST_INSTANCE) {
-        return Err(Error::Unsupported(format!(
-            "{mode} needs INDIRECT_FIRST_INSTANCE (per-mesh offsets in indirect draws), which this device lacks"
-        )));
-    }
-    if options.mode == StereoMode::Multiview && !features.contains(wgpu::Features::MULTIVIEW) {
-        return Err(Error::Unsupported(
-            "multiview is unavailable: the device lacks MULTIVIEW".into(),
-        ));
-    }
-    let limits = device.limits();
-    // Storage buffers are bound whole, so the binding limit holds for them; vertex and
-    // index buffers are not bindings and only need to fit one buffer.
-    let storage = limits
-        .max_storage_buffer_binding_size
-        .min(limits.max_buffer_size);
-    let buffers = [
-        (
-            "instance records",
-            DrawScene::BYTES_PER_INSTANCE,
-            scene.instances.len(),
-            storage,
-        ),
-        (
-            "mesh records",
-            size_of::<MeshRecord>() as u64,
-            scene.meshes.len(),
-            storage,
-        ),
-        (
-            "vertices",
-            size_of::<Vertex>() as u64,
-            scene.vertices.len(),
-            limits.max_buffer_size,
-        ),
-        (
-            "indices",
-            size_of::<u32>() as u64,
-            scene.indices.len(),
-            limits.max_buffer_size,
-        ),
-    ];
-    for (what, size, count, max) in buffers {
-        let bytes = size * count as u64;
-        if bytes > max {
-            return Err(Error::Limits(format!(
-                "the scene's {count} {what} need a {bytes}-byte buffer but the device allows {max}"
-            )));
-        }
-    }
-    Ok(())
 }

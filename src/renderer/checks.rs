@@ -1,0 +1,107 @@
+//! What a device must have for the options and scene asked of it, said before anything
+//! is built.
+
+use super::{CullMode, RendererOptions};
+use crate::draw::DrawScene;
+use crate::error::{Error, Result};
+use crate::modes::StereoMode;
+use crate::records::MeshRecord;
+use crate::scene::{Scene, Vertex};
+
+/// MSAA the device can do for the options' color format and the depth format. Without
+/// `TEXTURE_ADAPTER_SPECIFIC_FORMAT_FEATURES` that is WebGPU's guarantee (1 and 4);
+/// with it the adapter decides, which only the adapter knows: wgpu then checks.
+fn check_sample_count(features: wgpu::Features, options: &RendererOptions) -> Result<()> {
+    let n = options.sample_count;
+    let specific = features.contains(wgpu::Features::TEXTURE_ADAPTER_SPECIFIC_FORMAT_FEATURES);
+    let counts = match specific {
+        true => vec![1, 2, 4, 8, 16],
+        false => crate::device::guaranteed_sample_counts(
+            features,
+            (options.color_format, options.depth_format),
+        ),
+    };
+    if !counts.contains(&n) {
+        return Err(Error::Unsupported(format!(
+            "{n}x MSAA is not available for {:?}; this device has {}",
+            options.color_format,
+            crate::device::list_counts(&counts)
+        )));
+    }
+    if n > 1
+        && options.mode == StereoMode::Multiview
+        && !features.contains(wgpu::Features::MULTISAMPLE_ARRAY)
+    {
+        return Err(Error::Unsupported(
+            "multiview with MSAA needs MULTISAMPLE_ARRAY (multisampled two-layer targets), which this device lacks".into(),
+        ));
+    }
+    Ok(())
+}
+
+/// What a mode cannot do without, said before anything is built.
+pub(super) fn check_device(
+    device: &wgpu::Device,
+    scene: &Scene,
+    options: &RendererOptions,
+) -> Result<()> {
+    let features = device.features();
+    let mode = options.mode.name();
+    check_sample_count(features, options)?;
+    if options.mode.per_instance() && options.cull == CullMode::Gpu {
+        return Err(Error::Unsupported(format!(
+            "{mode} records a draw call per visible instance, so it culls on the CPU: use --cull cpu"
+        )));
+    }
+    if !options.mode.per_instance() && !features.contains(wgpu::Features::INDIRECT_FIRST_INSTANCE) {
+        return Err(Error::Unsupported(format!(
+            "{mode} needs INDIRECT_FIRST_INSTANCE (per-mesh offsets in indirect draws), which this device lacks"
+        )));
+    }
+    if options.mode == StereoMode::Multiview && !features.contains(wgpu::Features::MULTIVIEW) {
+        return Err(Error::Unsupported(
+            "multiview is unavailable: the device lacks MULTIVIEW".into(),
+        ));
+    }
+    let limits = device.limits();
+    // Storage buffers are bound whole, so the binding limit holds for them; vertex and
+    // index buffers are not bindings and only need to fit one buffer.
+    let storage = limits
+        .max_storage_buffer_binding_size
+        .min(limits.max_buffer_size);
+    let buffers = [
+        (
+            "instance records",
+            DrawScene::BYTES_PER_INSTANCE,
+            scene.instances.len(),
+            storage,
+        ),
+        (
+            "mesh records",
+            size_of::<MeshRecord>() as u64,
+            scene.meshes.len(),
+            storage,
+        ),
+        (
+            "vertices",
+            size_of::<Vertex>() as u64,
+            scene.vertices.len(),
+            limits.max_buffer_size,
+        ),
+        (
+            "indices",
+            size_of::<u32>() as u64,
+            scene.indices.len(),
+            limits.max_buffer_size,
+        ),
+    ];
+    for (what, size, count, max) in buffers {
+        let bytes = size * count as u64;
+        if bytes > max {
+            return Err(Error::Limits(format!(
+                "the scene's {count} {what} need a {bytes}-byte buffer but the device allows {max}"
+            )));
+        }
+    }
+    Ok(())
+}

@@ -1,0 +1,98 @@
+//! What a renderer is made with ([`RendererOptions`]), and the level-of-detail choice
+//! those options and a rig make for each frame.
+
+use std::sync::Arc;
+
+use crate::cull::cpu::FrameLod;
+use crate::draw::{DEPTH_FORMAT, TargetFormat};
+use crate::modes::StereoMode;
+use crate::rig::{ResolvedRig, Rig};
+use crate::scene::MAX_LODS;
+
+/// Where the per-display cull runs.
+#[derive(Clone, Copy, Debug, Default, PartialEq, Eq, Hash, clap::ValueEnum, serde::Serialize)]
+#[serde(rename_all = "lowercase")]
+pub enum CullMode {
+    /// Compute passes on the GPU; nothing per instance crosses the bus each frame.
+    #[default]
+    Gpu,
+    /// The rayon culler, then an upload of its results.
+    Cpu,
+}
+
+#[derive(Clone, Debug)]
+pub struct RendererOptions {
+    pub color_format: wgpu::TextureFormat,
+    /// MSAA samples per pixel of the color and depth attachments (1: none). Every device
+    /// has 1 and 4; 2, 8 and 16 where the adapter has them and the device was opened with
+    /// `TEXTURE_ADAPTER_SPECIFIC_FORMAT_FEATURES` (`device::Gpu::sample_counts`).
+    pub sample_count: u32,
+    /// The depth attachment's format (the caller's, when drawing into its passes).
+    pub depth_format: wgpu::TextureFormat,
+    /// The caller's shading, compiled into every draw pipeline (which keep the instance
+    /// decode, the eye routing and the seam): WGSL defining `fn material(s: Surface) ->
+    /// vec4<f32>`, with `Surface` (world position, normal, color, eye, instance) and the
+    /// bindings `frame` and `display` (`display.eye[s.eye]` is the eye's context) in
+    /// scope; `base_color(s)` samples the material's texture. `None`: the built-in
+    /// shading.
+    pub material: Option<Arc<str>>,
+    pub cull: CullMode,
+    pub mode: StereoMode,
+    /// Levels of detail ([`crate::scene::Mesh::lods`]), one per instance and frame from
+    /// the viewer's position, at most [`LOD_PIXELS`] of error on the sharpest display.
+    pub lod: bool,
+}
+
+/// Screen-space error, in pixels, a level of detail may show.
+pub const LOD_PIXELS: f32 = 1.0;
+
+impl RendererOptions {
+    /// Levels of detail culled into: [`MAX_LODS`], or 1 with LOD off.
+    pub fn lod_levels(&self) -> u32 {
+        if self.lod { MAX_LODS as u32 } else { 1 }
+    }
+
+    /// The attachments the draw pipelines are built for.
+    pub fn target_format(&self) -> TargetFormat {
+        TargetFormat {
+            color: self.color_format,
+            depth: self.depth_format,
+            samples: self.sample_count,
+        }
+    }
+}
+
+impl Default for RendererOptions {
+    fn default() -> Self {
+        RendererOptions {
+            color_format: wgpu::TextureFormat::Rgba8UnormSrgb,
+            sample_count: 1,
+            depth_format: DEPTH_FORMAT,
+            material: None,
+            cull: CullMode::Gpu,
+            mode: StereoMode::Instanced,
+            lod: false,
+        }
+    }
+}
+
+/// The frame's level-of-detail choice for `rig`: the viewer, and the scale that holds
+/// the error under [`LOD_PIXELS`] on the display with the most pixels per radian.
+pub fn frame_lod(rig: &Rig, resolved: &ResolvedRig, levels: u32) -> FrameLod {
+    let pixels_per_radian = rig
+        .displays
+        .iter()
+        .zip(&resolved.displays)
+        .flat_map(|(d, r)| {
+            r.eyes.iter().map(move |e| {
+                let across = e.fov.left.atan() + e.fov.right.atan();
+                d.resolution[0] as f32 / across.max(1e-6)
+            })
+        })
+        .fold(0.0, f32::max);
+    FrameLod {
+        viewer: rig.viewer.position().as_vec3(),
+        lod_scale: (pixels_per_radian / LOD_PIXELS).powi(2),
+        levels,
+    }
+}
