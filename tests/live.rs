@@ -150,7 +150,7 @@ fn check(
         true => {
             let lod = frame_lod(&rig, &rig.resolve().unwrap(), MAX_LODS as u32);
             let jobs = rig.cull_jobs().unwrap();
-            cpu::cull_many_lod(&CullLayout::new(want), &jobs, Some(&lod))
+            cpu::cull_many_lod(&CullLayout::new(want), &jobs, &lod)
         }
     };
     for (d, reference) in reference.into_iter().enumerate() {
@@ -221,7 +221,7 @@ fn edit_sequences_keep_gpu_and_cpu_culls_identical_to_the_model() {
             let (want, rig) = (model.scene(&meshes), Rig::preset("hmd").unwrap());
             let lod = frame_lod(&rig, &rig.resolve().unwrap(), MAX_LODS as u32);
             let jobs = rig.cull_jobs().unwrap();
-            let with = cpu::cull_many_lod(&CullLayout::new(&want), &jobs, Some(&lod));
+            let with = cpu::cull_many_lod(&CullLayout::new(&want), &jobs, &lod);
             let finest: Vec<u32> = want.meshes.iter().map(|m| m.first_index).collect();
             let coarse = with[0].draws[..with[0].draw_count as usize]
                 .iter()

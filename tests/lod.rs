@@ -102,11 +102,7 @@ fn near_middle_and_far_instances_take_the_expected_levels() {
     let want: Vec<u32> = std::iter::once(mesh.first_index)
         .chain(mesh.lods.iter().map(|l| l.first_index))
         .collect();
-    let reference = cpu::cull_many_lod(
-        &CullLayout::new(&scene),
-        &rig.cull_jobs().unwrap(),
-        Some(&lod),
-    );
+    let reference = cpu::cull_many_lod(&CullLayout::new(&scene), &rig.cull_jobs().unwrap(), &lod);
     for (what, out) in [
         (
             "gpu",
@@ -137,7 +133,7 @@ fn gpu_matches_cpu_with_lod_on_every_preset() {
             let reference = cpu::cull_many_lod(
                 &CullLayout::new(&scene),
                 &rig.cull_jobs().unwrap(),
-                Some(&lod_of(&rig)),
+                &lod_of(&rig),
             );
             let got = culls(&gpu, &scene, &rig, StereoMode::Instanced);
             for (d, (got, want)) in got.iter().zip(&reference).enumerate() {
@@ -174,7 +170,7 @@ fn both_eyes_and_every_display_draw_an_instance_at_one_level() {
             instances_per_object: 1,
         })
         .collect();
-    let per_eye = cpu::cull_many_lod(&layout, &eyes, Some(&lod));
+    let per_eye = cpu::cull_many_lod(&layout, &eyes, &lod);
     let (left, right) = (drawn_ranges(&per_eye[0], 1), drawn_ranges(&per_eye[1], 1));
     let both: Vec<_> = left.keys().filter(|id| right.contains_key(id)).collect();
     assert!(both.len() > 1000, "{} seen by both eyes", both.len());

@@ -228,7 +228,7 @@ fn cull(args: &CullArgs) -> Result<()> {
             };
             let lod = frame_lod(&rig, &rig.resolve()?, levels);
             let layout = CullLayout::new(live.scene());
-            cpu::cull_many_lod(&layout, &rig.cull_jobs()?, Some(&lod))
+            cpu::cull_many_lod(&layout, &rig.cull_jobs()?, &lod)
         }
         CullMode::Gpu => {
             let options = RendererOptions {

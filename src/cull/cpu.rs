@@ -31,23 +31,28 @@ pub struct FrameLod {
     pub levels: u32,
 }
 
+impl FrameLod {
+    /// One level: every instance at its mesh's own triangles.
+    pub const OFF: FrameLod = FrameLod {
+        viewer: Vec3::ZERO,
+        lod_scale: 0.0,
+        levels: 1,
+    };
+}
+
 /// Culls for several displays (or eyes) at once: every sphere is read once for all of
 /// them, which is what a frame with several displays wants.
 pub fn cull_many(layout: &CullLayout, displays: &[CullJob]) -> Vec<CullOutput> {
-    cull_many_lod(layout, displays, None)
+    cull_many_lod(layout, displays, &FrameLod::OFF)
 }
 
 /// [`cull_many`] with levels of detail chosen per instance from the viewer (the same
 /// level for every display), draws per (level, mesh) as the GPU's.
-pub fn cull_many_lod(
-    layout: &CullLayout,
-    displays: &[CullJob],
-    lod: Option<&FrameLod>,
-) -> Vec<CullOutput> {
-    let levels: Option<(Vec<u8>, u32)> = lod.filter(|l| l.levels > 1).map(|l| {
+pub fn cull_many_lod(layout: &CullLayout, displays: &[CullJob], lod: &FrameLod) -> Vec<CullOutput> {
+    let levels: Option<(Vec<u8>, u32)> = (lod.levels > 1).then(|| {
         let level_of = |(s, &m): (&Vec4, &u32)| {
             let lods = &layout.lods[m as usize * MAX_LODS..][..MAX_LODS];
-            lod_level(*s, l.viewer, lods, l.lod_scale) as u8
+            lod_level(*s, lod.viewer, lods, lod.lod_scale) as u8
         };
         let levels = layout
             .spheres
@@ -55,7 +60,7 @@ pub fn cull_many_lod(
             .zip(&layout.mesh_of)
             .map(level_of)
             .collect();
-        (levels, l.levels)
+        (levels, lod.levels)
     });
     let n = layout.spheres.len();
     let words = n.div_ceil(64);

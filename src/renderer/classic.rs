@@ -161,7 +161,7 @@ impl ClassicPath {
                 per_display.push(1);
             }
         }
-        let mut outputs = cpu::cull_many_lod(&self.layout, &jobs, Some(lod)).into_iter();
+        let mut outputs = cpu::cull_many_lod(&self.layout, &jobs, lod).into_iter();
         per_display
             .iter()
             .map(|&k| outputs.by_ref().take(k).collect())

@@ -154,7 +154,7 @@ impl IndirectPath {
                     .zip(&resolved.displays)
                     .map(|(state, r)| r.cull_job(state.key.instances_per_object()))
                     .collect();
-                cpu::cull_many_lod(layout, &jobs, Some(lod))
+                cpu::cull_many_lod(layout, &jobs, lod)
             }
         };
         stats.cpu_cull = start.elapsed();
