@@ -14,7 +14,10 @@
 use crate::buffers::storage_buffer;
 use crate::live::{Edit, make_edit};
 use crate::scene::Scene;
-use crate::shaders::{SCATTER_BINDINGS, bind_group, bind_group_layout, scatter_source};
+use crate::shaders::{
+    SCATTER_BINDINGS, bind_group, bind_group_layout, compute_pipeline, dispatch_size,
+    pipeline_layout, scatter_source,
+};
 
 const HEADER_BYTES: u64 = 16;
 const EDIT_BYTES: u64 = size_of::<Edit>() as u64;
@@ -47,23 +50,9 @@ pub struct ScatterTargets<'a> {
 impl Scatter {
     pub fn new(device: &wgpu::Device) -> Scatter {
         let layout = bind_group_layout(device, "stereocull.scatter", &SCATTER_BINDINGS);
-        let pipeline_layout = device.create_pipeline_layout(&wgpu::PipelineLayoutDescriptor {
-            label: Some("stereocull.scatter"),
-            bind_group_layouts: &[Some(&layout)],
-            immediate_size: 0,
-        });
-        let module = device.create_shader_module(wgpu::ShaderModuleDescriptor {
-            label: Some("stereocull.scatter"),
-            source: wgpu::ShaderSource::Wgsl(scatter_source().into()),
-        });
-        let pipeline = device.create_compute_pipeline(&wgpu::ComputePipelineDescriptor {
-            label: Some("stereocull.scatter"),
-            layout: Some(&pipeline_layout),
-            module: &module,
-            entry_point: Some("scatter"),
-            compilation_options: Default::default(),
-            cache: None,
-        });
+        let pipeline_layout = pipeline_layout(device, "stereocull.scatter", &layout);
+        let entry = (scatter_source(), "scatter");
+        let pipeline = compute_pipeline(device, "stereocull.scatter", &pipeline_layout, entry);
         Scatter {
             pipeline,
             layout,
@@ -196,9 +185,7 @@ impl Scatter {
     }
 
     fn groups(&self) -> (u32, u32) {
-        let groups = (self.pending() as u32).div_ceil(GROUP);
-        let x = groups.clamp(1, self.max_groups);
-        (x, groups.div_ceil(x).max(1))
+        dispatch_size((self.pending() as u32).div_ceil(GROUP), self.max_groups)
     }
 
     /// Edit count, spheres too (GPU culling), workgroups along x.

@@ -146,6 +146,46 @@ pub fn scatter_source() -> String {
     [RECORDS, &bindings, body].concat()
 }
 
+/// A pipeline layout of one bind group, `group`.
+pub(crate) fn pipeline_layout(
+    device: &wgpu::Device,
+    label: &str,
+    group: &wgpu::BindGroupLayout,
+) -> wgpu::PipelineLayout {
+    device.create_pipeline_layout(&wgpu::PipelineLayoutDescriptor {
+        label: Some(label),
+        bind_group_layouts: &[Some(group)],
+        immediate_size: 0,
+    })
+}
+
+/// The compute pipeline of `entry` in WGSL `source`.
+pub(crate) fn compute_pipeline(
+    device: &wgpu::Device,
+    label: &str,
+    layout: &wgpu::PipelineLayout,
+    (source, entry): (String, &str),
+) -> wgpu::ComputePipeline {
+    let module = device.create_shader_module(wgpu::ShaderModuleDescriptor {
+        label: Some(label),
+        source: wgpu::ShaderSource::Wgsl(source.into()),
+    });
+    device.create_compute_pipeline(&wgpu::ComputePipelineDescriptor {
+        label: Some(label),
+        layout: Some(layout),
+        module: &module,
+        entry_point: Some(entry),
+        compilation_options: Default::default(),
+        cache: None,
+    })
+}
+
+/// Splits `groups` workgroups into x * y with x within the per-dimension limit.
+pub(crate) fn dispatch_size(groups: u32, max_per_dimension: u32) -> (u32, u32) {
+    let x = groups.clamp(1, max_per_dimension);
+    (x, groups.div_ceil(x).max(1))
+}
+
 /// The WGSL declarations of `bindings`, in group 0.
 fn declarations(bindings: &[Binding]) -> String {
     bindings

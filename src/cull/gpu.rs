@@ -6,7 +6,10 @@ use crate::buffers::{init_buffer, init_buffer_with_room, storage_buffer};
 
 use crate::records::uniform_bytes;
 use crate::records::{CullLayout, DrawArgs};
-use crate::shaders::{CULL_BINDINGS, CullPass, WORKGROUP_SIZE, bind_group, bind_group_layout};
+use crate::shaders::{
+    CULL_BINDINGS, CullPass, WORKGROUP_SIZE, bind_group, bind_group_layout, compute_pipeline,
+    dispatch_size, pipeline_layout,
+};
 
 /// The uniform the cull passes read besides the display context (`CullParams` in
 /// `wgsl/shared/records.wgsl`); encase lays it out as WGSL does.
@@ -181,35 +184,15 @@ fn cull_params(layout: &CullLayout, (max_groups, levels): (u32, u32)) -> (CullPa
     (params, groups)
 }
 
-/// Splits `groups` workgroups into x * y with x within the per-dimension limit.
-fn dispatch_size(groups: u32, max_per_dimension: u32) -> (u32, u32) {
-    let x = groups.clamp(1, max_per_dimension);
-    (x, groups.div_ceil(x).max(1))
-}
-
 impl GpuCuller {
     pub fn new(device: &wgpu::Device) -> GpuCuller {
         let layout = bind_group_layout(device, "stereocull.cull", &CULL_BINDINGS);
-        let pipeline_layout = device.create_pipeline_layout(&wgpu::PipelineLayoutDescriptor {
-            label: Some("stereocull.cull"),
-            bind_group_layouts: &[Some(&layout)],
-            immediate_size: 0,
-        });
+        let pipeline_layout = pipeline_layout(device, "stereocull.cull", &layout);
         let pipelines = CullPass::ALL
             .iter()
             .map(|pass| {
-                let module = device.create_shader_module(wgpu::ShaderModuleDescriptor {
-                    label: Some(pass.label()),
-                    source: wgpu::ShaderSource::Wgsl(pass.source().into()),
-                });
-                device.create_compute_pipeline(&wgpu::ComputePipelineDescriptor {
-                    label: Some(pass.label()),
-                    layout: Some(&pipeline_layout),
-                    module: &module,
-                    entry_point: Some(pass.entry_point()),
-                    compilation_options: Default::default(),
-                    cache: None,
-                })
+                let entry = (pass.source(), pass.entry_point());
+                compute_pipeline(device, pass.label(), &pipeline_layout, entry)
             })
             .collect();
         GpuCuller { layout, pipelines }
