@@ -69,6 +69,14 @@ const MULTIVIEW: Tolerance = Tolerance {
     share: 0.003,
 };
 
+/// How far `mode`'s image may be from `instanced`'s.
+fn tolerance(mode: StereoMode) -> Tolerance {
+    match mode {
+        StereoMode::Multiview => MULTIVIEW,
+        _ => EDGES,
+    }
+}
+
 #[test]
 fn each_half_equals_that_eye_rendered_alone() {
     assert_halves_are_single_eyes(&["hmd", "cave", "hmd-peripheral"], 1);
@@ -252,14 +260,9 @@ fn every_stereo_mode_agrees_with_instanced() {
         let rig = sized(preset);
         let reference = render(&gpu, &scene, &rig, CullMode::Gpu);
         for mode in StereoMode::ALL {
-            let tolerance = if mode == StereoMode::Multiview {
-                MULTIVIEW
-            } else {
-                EDGES
-            };
             let label = format!("mode-{preset}");
             let case = (&scene, &rig);
-            assert_mode_matches(&gpu, case, (mode, 1), &reference, tolerance, &label);
+            assert_mode_matches(&gpu, case, (mode, 1), &reference, tolerance(mode), &label);
         }
     }
 }
@@ -365,13 +368,9 @@ fn assert_modes_agree_under_msaa(gpu: &Gpu, scene: &Scene, rig: &Rig, label: &st
     };
     let reference = draw(StereoMode::Instanced, 4);
     for mode in StereoMode::ALL {
-        let tolerance = if mode == StereoMode::Multiview {
-            MULTIVIEW
-        } else {
-            EDGES
-        };
         let name = format!("msaa-{label}");
-        assert_mode_matches(gpu, (scene, rig), (mode, 4), &reference, tolerance, &name);
+        let case = (scene, rig);
+        assert_mode_matches(gpu, case, (mode, 4), &reference, tolerance(mode), &name);
     }
     let aliased = draw(StereoMode::Instanced, 1).remove(0);
     let edges = reference[0]

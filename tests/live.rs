@@ -33,6 +33,13 @@ fn empty_scene() -> Scene {
     scene
 }
 
+/// `n` random instances of the meshes in turn.
+fn random_scene(rng: &mut Pcg64Mcg, n: u32) -> Scene {
+    let mut scene = empty_scene();
+    scene.instances = (0..n).map(|k| random_instance(rng, k % MESHES)).collect();
+    scene
+}
+
 /// Somewhere within a few meters of the hmd viewer at (0, 1.6, 2), in view or not.
 fn random_instance(rng: &mut Pcg64Mcg, mesh: u32) -> Instance {
     Instance {
@@ -299,10 +306,7 @@ fn a_moved_instance_renders_like_a_fresh_scene_with_it_there() {
     let gpu = gpu();
     let rig = support::sized("hmd", 120, 100);
     let mut rng = Pcg64Mcg::seed_from_u64(3);
-    let mut scene = empty_scene();
-    scene.instances = (0..40)
-        .map(|k| random_instance(&mut rng, k % MESHES))
-        .collect();
+    let scene = random_scene(&mut rng, 40);
     let ahead = Affine3A::from_translation(Vec3::new(0.2, 1.5, -1.5));
     for mode in [StereoMode::Instanced, StereoMode::MultiPass] {
         let options = RendererOptions {
@@ -360,10 +364,7 @@ fn edits_of_two_syncs_before_a_frame_merge() {
     let gpu = gpu();
     let rig = support::sized("cave", 32, 32);
     let mut rng = Pcg64Mcg::seed_from_u64(11);
-    let mut scene = empty_scene();
-    scene.instances = (0..3000)
-        .map(|k| random_instance(&mut rng, k % MESHES))
-        .collect();
+    let scene = random_scene(&mut rng, 3000);
     let mut live = LiveScene::new(scene.clone());
     let handles = live.handles();
     let mut renderer =
