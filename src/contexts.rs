@@ -6,6 +6,7 @@
 use encase::ShaderType;
 use glam::{Mat4, Vec2, Vec3, Vec4};
 
+use crate::cull::CoarseCull;
 use crate::frustum::View;
 use crate::rig::{ResolvedDisplay, Viewer};
 
@@ -22,16 +23,23 @@ pub struct FrameContext {
     /// sharpest display, so that one level per instance serves every display and eye
     /// (see [`crate::records::lod_level`]).
     pub lod_scale: f32,
+    /// The frame-level coarse cull's test ([`CoarseCull`]; read only when it is on).
+    pub coarse_planes: [Vec4; 6],
+    pub coarse_inflation: f32,
+    pub coarse_slack: f32,
 }
 
 impl FrameContext {
-    pub fn new(viewer: &Viewer, time: f32, lod_scale: f32) -> FrameContext {
+    pub fn new(viewer: &Viewer, time: f32, lod_scale: f32, coarse: &CoarseCull) -> FrameContext {
         let orientation = viewer.orientation();
         FrameContext {
             viewer_position: viewer.position().as_vec3(),
             time,
             viewer_direction: (orientation * -glam::DVec3::Z).as_vec3(),
             lod_scale,
+            coarse_planes: coarse.planes,
+            coarse_inflation: coarse.inflation,
+            coarse_slack: coarse.slack,
         }
     }
 }

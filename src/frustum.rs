@@ -263,7 +263,7 @@ fn widest_fov(local: &[[DVec3; 8]]) -> Option<Fov> {
 }
 
 /// The smallest f32 not below `x`.
-fn round_up(x: f64) -> f32 {
+pub(crate) fn round_up(x: f64) -> f32 {
     let r = x as f32;
     if (r as f64) < x { r.next_up() } else { r }
 }

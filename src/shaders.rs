@@ -51,8 +51,9 @@ const fn binding(
 const COMPUTE: wgpu::ShaderStages = wgpu::ShaderStages::COMPUTE;
 
 /// Every cull pass's bindings: the frame context, per display its context and outputs,
-/// the scene data uploaded once, and scratch shared by all displays.
-pub const CULL_BINDINGS: [Binding; 13] = [
+/// the scene data uploaded once, scratch shared by all displays, and the frame's coarse
+/// cull results.
+pub const CULL_BINDINGS: [Binding; 16] = [
     binding("frame", Access::Uniform, "FrameContext", COMPUTE),
     binding("display", Access::Uniform, "DisplayContext", COMPUTE),
     binding("params", Access::Uniform, "CullParams", COMPUTE),
@@ -88,7 +89,37 @@ pub const CULL_BINDINGS: [Binding; 13] = [
     ),
     // The draw count (what multi_draw_indexed_indirect_count reads), visible total.
     binding("counts", Access::StorageReadWrite, "array<u32, 2>", COMPUTE),
+    // The frame's coarse cull: candidate cull positions, ascending, their number, and
+    // each mesh's (start, count) among them.
+    binding(
+        "candidates",
+        Access::StorageReadWrite,
+        "array<u32>",
+        COMPUTE,
+    ),
+    binding(
+        "candidate_count",
+        Access::StorageReadWrite,
+        "array<u32, 1>",
+        COMPUTE,
+    ),
+    binding(
+        "candidate_ranges",
+        Access::StorageReadWrite,
+        "array<vec2<u32>>",
+        COMPUTE,
+    ),
 ];
+
+/// The frame-level coarse passes' group 1: the display passes' indirect dispatch,
+/// which they write and nothing else binds (a buffer read as dispatch arguments may not
+/// be bound for writing in the same dispatch).
+pub const COARSE_BINDINGS: [Binding; 1] = [binding(
+    "coarse_args",
+    Access::StorageReadWrite,
+    "array<u32, 3>",
+    COMPUTE,
+)];
 
 /// Every draw pipeline's bindings.
 pub const DRAW_BINDINGS: [Binding; 4] = [
@@ -141,7 +172,7 @@ pub const SCATTER_BINDINGS: [Binding; 4] = [
 
 /// The scatter pass's source.
 pub fn scatter_source() -> String {
-    let bindings = declarations(&SCATTER_BINDINGS);
+    let bindings = declarations(&SCATTER_BINDINGS, 0);
     let body = include_str!("../wgsl/scatter.wgsl");
     [RECORDS, &bindings, body].concat()
 }
@@ -186,8 +217,8 @@ pub(crate) fn dispatch_size(groups: u32, max_per_dimension: u32) -> (u32, u32) {
     (x, groups.div_ceil(x).max(1))
 }
 
-/// The WGSL declarations of `bindings`, in group 0.
-fn declarations(bindings: &[Binding]) -> String {
+/// The WGSL declarations of `bindings`, in `group`.
+fn declarations(bindings: &[Binding], group: u32) -> String {
     bindings
         .iter()
         .enumerate()
@@ -198,7 +229,7 @@ fn declarations(bindings: &[Binding]) -> String {
                 Access::StorageReadWrite => "storage, read_write",
             };
             format!(
-                "@group(0) @binding({i}) var<{space}> {}: {};\n",
+                "@group({group}) @binding({i}) var<{space}> {}: {};\n",
                 b.name, b.wgsl_type
             )
         })
@@ -260,9 +291,17 @@ pub fn bind_group<const N: usize>(
     })
 }
 
-/// The three per-display cull passes, in dispatch order.
+/// The cull passes: three at the frame level (the coarse cull, when on) and three per
+/// display, each list in dispatch order.
 #[derive(Clone, Copy, Debug, PartialEq, Eq)]
 pub enum CullPass {
+    /// Every sphere against the frame frustum: flags and per-workgroup prefixes.
+    CoarseCull,
+    /// Block prefixes, each mesh's candidate range, the candidate count and the display
+    /// passes' indirect dispatch (one workgroup).
+    CoarseRanges,
+    /// Candidate cull positions into their slots.
+    CoarseCompact,
     /// Sphere tests, flags and per-workgroup prefixes.
     Cull,
     /// Block prefixes, then the packed draws and the draw count (one workgroup).
@@ -272,32 +311,88 @@ pub enum CullPass {
 }
 
 impl CullPass {
-    pub const ALL: [CullPass; 3] = [CullPass::Cull, CullPass::Draws, CullPass::Compact];
+    pub const FRAME: [CullPass; 3] = [
+        CullPass::CoarseCull,
+        CullPass::CoarseRanges,
+        CullPass::CoarseCompact,
+    ];
+    pub const DISPLAY: [CullPass; 3] = [CullPass::Cull, CullPass::Draws, CullPass::Compact];
 
-    pub fn label(self) -> &'static str {
-        match self {
-            CullPass::Cull => "stereocull.cull",
-            CullPass::Draws => "stereocull.cull_draws",
-            CullPass::Compact => "stereocull.cull_compact",
-        }
+    /// The pipeline's label; display passes over the coarse cull's candidates say so.
+    pub fn label(self, over_candidates: bool) -> String {
+        let name = match self {
+            CullPass::CoarseCull => "coarse_cull",
+            CullPass::CoarseRanges => "coarse_ranges",
+            CullPass::CoarseCompact => "coarse_compact",
+            CullPass::Cull => "cull",
+            CullPass::Draws => "cull_draws",
+            CullPass::Compact => "cull_compact",
+        };
+        let tail = if over_candidates && !self.is_frame() {
+            ".candidates"
+        } else {
+            ""
+        };
+        format!("stereocull.{name}{tail}")
+    }
+
+    pub fn is_frame(self) -> bool {
+        Self::FRAME.contains(&self)
     }
 
     pub fn entry_point(self) -> &'static str {
         match self {
+            CullPass::CoarseCull => "coarse_cull",
+            CullPass::CoarseRanges => "coarse_ranges",
+            CullPass::CoarseCompact => "coarse_compact",
             CullPass::Cull => "cull",
             CullPass::Draws => "draws_main",
             CullPass::Compact => "compact",
         }
     }
 
-    pub fn source(self) -> String {
+    /// The pass's source: a display pass runs over every instance, or with
+    /// `over_candidates` over the frame's coarse cull candidates.
+    pub fn source(self, over_candidates: bool) -> String {
         let body = match self {
+            CullPass::CoarseCull | CullPass::CoarseRanges | CullPass::CoarseCompact => {
+                include_str!("../wgsl/cull_coarse.wgsl")
+            }
             CullPass::Cull => include_str!("../wgsl/cull.wgsl"),
             CullPass::Draws => include_str!("../wgsl/cull_draws.wgsl"),
             CullPass::Compact => include_str!("../wgsl/cull_compact.wgsl"),
         };
-        let bindings = declarations(&CULL_BINDINGS);
-        [&constants(), CONTEXTS, RECORDS, &bindings, CULL_MATH, body].concat()
+        let coarse = format!(
+            "const COARSE: bool = {};\n",
+            over_candidates && !self.is_frame()
+        );
+        let mut bindings = declarations(&CULL_BINDINGS, 0);
+        if self.is_frame() {
+            bindings += &declarations(&COARSE_BINDINGS, 1);
+        }
+        [
+            &constants(),
+            &coarse,
+            CONTEXTS,
+            RECORDS,
+            &bindings,
+            CULL_MATH,
+            body,
+        ]
+        .concat()
+    }
+
+    /// Every cull pipeline variant: the frame passes, and the display passes over
+    /// everything and over candidates.
+    pub fn variants() -> Vec<(CullPass, bool)> {
+        let display = [false, true]
+            .into_iter()
+            .flat_map(|c| Self::DISPLAY.map(|p| (p, c)));
+        Self::FRAME
+            .map(|p| (p, false))
+            .into_iter()
+            .chain(display)
+            .collect()
     }
 }
 
@@ -403,7 +498,7 @@ impl DrawKey {
 /// (`wgsl/shared/decode.wgsl`). Append entry points and compile.
 pub fn decode_source(views: u32) -> String {
     let views = format!("const VIEWS: u32 = {views}u;\n");
-    let bindings = declarations(&DRAW_BINDINGS);
+    let bindings = declarations(&DRAW_BINDINGS, 0);
     [&constants(), &views, CONTEXTS, RECORDS, &bindings, DECODE].concat()
 }
 
@@ -414,7 +509,9 @@ fn constants() -> String {
 
 /// Every shader variant the crate can build, with its label.
 pub fn all_sources() -> Vec<(String, String)> {
-    let cull = CullPass::ALL.map(|p| (p.label().to_string(), p.source()));
+    let cull = CullPass::variants()
+        .into_iter()
+        .map(|(p, c)| (p.label(c), p.source(c)));
     let draw = DrawKey::ALL.map(|k| (k.label(), k.source()));
     let scatter = ("stereocull.scatter".to_string(), scatter_source());
     cull.into_iter().chain(draw).chain([scatter]).collect()

@@ -447,7 +447,7 @@ fn profile_writes_table_csv_json_and_chart() {
     assert_eq!(
         lines.next(),
         Some(
-            "mode,cull,rig,instances,cpu_ms_median,cpu_ms_p95,gpu_ms_median,gpu_ms_p95,draw_calls,dispatches,bytes_uploaded,adapter,moving_percent,churn_percent,sync_ms_median,triangles_submitted"
+            "mode,cull,rig,instances,cpu_ms_median,cpu_ms_p95,gpu_ms_median,gpu_ms_p95,draw_calls,dispatches,bytes_uploaded,adapter,moving_percent,churn_percent,sync_ms_median,triangles_submitted,coarse_cull,sphere_tests"
         )
     );
     // 3 classic modes (CPU cull only) + instanced and multiview with both culls, per count.
@@ -548,7 +548,7 @@ fn stress_with_moving_instances_reports_what_they_cost() {
         "the scatter, then three cull passes"
     );
     // 16 bytes of header, 68 per moved instance, then the frame and display contexts.
-    assert_eq!(frame["bytes_uploaded"], 16 + 68 * 500 + 1232);
+    assert_eq!(frame["bytes_uploaded"], 16 + 68 * 500 + 1344);
     let summary = &v["summary"];
     assert!(
         summary["triangles_submitted_median"].as_f64().unwrap() > 1000.0,

@@ -13,8 +13,8 @@ use stereocull::records::uniform_bytes;
 use stereocull::records::{DrawArgs, InstanceRecord, LodRecord, MeshRecord};
 use stereocull::scene::Vertex;
 use stereocull::shaders::{
-    Access, Binding, CULL_BINDINGS, CullPass, DRAW_BINDINGS, DrawKey, SCATTER_BINDINGS,
-    all_sources, scatter_source,
+    Access, Binding, COARSE_BINDINGS, CULL_BINDINGS, CullPass, DRAW_BINDINGS, DrawKey,
+    SCATTER_BINDINGS, all_sources, scatter_source,
 };
 
 fn parse(label: &str, source: &str) -> Module {
@@ -58,7 +58,7 @@ fn wgsl_struct(module: &Module, name: &str) -> (Vec<(String, u32)>, u32) {
 }
 
 fn module() -> Module {
-    parse("cull", &CullPass::Cull.source())
+    parse("cull", &CullPass::Cull.source(false))
 }
 
 #[test]
@@ -230,21 +230,35 @@ fn contexts_match_wgsl() {
         time: 2.0,
         viewer_direction: Vec3::new(3.0, 3.1, 3.2),
         lod_scale: 4.0,
+        coarse_planes: std::array::from_fn(|i| Vec4::splat(5.0 + i as f32)),
+        coarse_inflation: 6.0,
+        coarse_slack: 7.0,
     };
+    let bytes = uniform_bytes(&f);
     check_uniform(
         "FrameContext",
-        &uniform_bytes(&f),
+        &bytes,
         &[
             ("viewer_position", 1.0),
             ("time", 2.0),
             ("viewer_direction", 3.0),
             ("lod_scale", 4.0),
+            ("coarse_planes", 5.0),
+            ("coarse_inflation", 6.0),
+            ("coarse_slack", 7.0),
         ],
     );
+    let (members, _) = wgsl_struct(&module(), "FrameContext");
+    let planes = members
+        .iter()
+        .find(|(m, _)| m == "coarse_planes")
+        .unwrap()
+        .1;
+    assert_eq!(f32_at(&bytes, planes + 5 * 16), 10.0);
     let params = CullParams {
         instance_count: 3,
         mesh_count: 5,
-        groups_x: 7,
+        max_groups: 7,
         lod_levels: 4,
     };
     check_uniform(
@@ -253,7 +267,7 @@ fn contexts_match_wgsl() {
         &[
             ("instance_count", f32::from_bits(3)),
             ("mesh_count", f32::from_bits(5)),
-            ("groups_x", f32::from_bits(7)),
+            ("max_groups", f32::from_bits(7)),
             ("lod_levels", f32::from_bits(4)),
         ],
     );
@@ -263,9 +277,9 @@ fn contexts_match_wgsl() {
 /// is `list[i]`, with its name, address space and access.
 #[test]
 fn every_pass_binds_what_its_list_declares() {
-    let passes = CullPass::ALL
-        .map(|p| (p.label().to_string(), p.source(), &CULL_BINDINGS[..]))
+    let passes = CullPass::variants()
         .into_iter()
+        .map(|(p, c)| (p.label(c), p.source(c), &CULL_BINDINGS[..]))
         .chain(DrawKey::ALL.map(|k| (k.label(), k.source(), &DRAW_BINDINGS[..])))
         .chain([(
             "stereocull.scatter".to_string(),
@@ -275,14 +289,14 @@ fn every_pass_binds_what_its_list_declares() {
     for (label, source, list) in passes {
         let module = parse(&label, &source);
         let mut seen = Vec::new();
-        let mut materials = Vec::new();
+        let mut group_1 = Vec::new();
         for (_, var) in module.global_variables.iter() {
             let Some(binding) = &var.binding else {
                 continue;
             };
             let name = var.name.as_deref().unwrap_or_default();
             if binding.group == 1 {
-                materials.push((binding.binding, name.to_string()));
+                group_1.push((binding.binding, name.to_string()));
                 continue;
             }
             assert_eq!(binding.group, 0, "{label}");
@@ -306,18 +320,25 @@ fn every_pass_binds_what_its_list_declares() {
         seen.sort();
         let all: Vec<u32> = (0..list.len() as u32).collect();
         assert_eq!(seen, all, "{label}: bindings");
-        // Group 1, the draw pipelines' materials (stereocull::materials::bind_group_layout).
-        materials.sort();
-        let want: &[(u32, String)] = if label.starts_with("stereocull.draw") {
-            &[
+        // Group 1: the draw pipelines' materials (stereocull::materials::bind_group_layout),
+        // the coarse passes' indirect dispatch (COARSE_BINDINGS).
+        group_1.sort();
+        let want: Vec<(u32, String)> = if label.starts_with("stereocull.draw") {
+            vec![
                 (0, "base_color_textures".into()),
                 (1, "base_color_sampler".into()),
                 (2, "materials".into()),
             ]
+        } else if label.starts_with("stereocull.coarse") {
+            COARSE_BINDINGS
+                .iter()
+                .enumerate()
+                .map(|(i, b)| (i as u32, b.name.into()))
+                .collect()
         } else {
-            &[]
+            Vec::new()
         };
-        assert_eq!(materials, want, "{label}: group 1");
+        assert_eq!(group_1, want, "{label}: group 1");
     }
 }
 

@@ -1,21 +1,29 @@
-// Pass 1 of 3 per display: test every instance's world sphere against the display
-// frustum (never per eye), choose its level of detail from the viewer, and record, for
-// the level this z slice handles, its flag plus its prefix within the workgroup.
+// Pass 1 of 3 per display: test every instance's world sphere (or every candidate of
+// the frame's coarse cull) against the display frustum (never per eye), choose its
+// level of detail from the viewer, and record, for the level this z slice handles, its
+// flag plus its prefix within the workgroup.
 // Bindings (all cull passes share them): CULL_BINDINGS in src/shaders.rs.
 
 @compute @workgroup_size(WORKGROUP_SIZE)
-fn cull(@builtin(workgroup_id) wid: vec3<u32>, @builtin(local_invocation_index) local: u32) {
-    let block = wid.y * params.groups_x + wid.x;
+fn cull(
+    @builtin(workgroup_id) wid: vec3<u32>,
+    @builtin(num_workgroups) groups: vec3<u32>,
+    @builtin(local_invocation_index) local: u32,
+) {
+    let block = wid.y * groups.x + wid.x;
     let level = wid.z;
-    let n = params.instance_count;
-    let k = block * WORKGROUP_SIZE + local;
+    let n = cull_count();
+    let j = block * WORKGROUP_SIZE + local;
     var flag = 0u;
-    if (k < n && sphere_in_planes(display.planes, spheres[k]) && lod_level(k) == level) {
-        flag = 1u;
+    if (j < n) {
+        let k = cull_position(j);
+        if (sphere_in_planes(display.planes, spheres[k]) && lod_level(k) == level) {
+            flag = 1u;
+        }
     }
     let scan = workgroup_exclusive_scan(local, flag);
-    if (k < n) {
-        local_prefix[level * n + k] = scan.x | select(0u, VISIBLE_BIT, flag == 1u);
+    if (j < n) {
+        local_prefix[level * n + j] = scan.x | select(0u, VISIBLE_BIT, flag == 1u);
     }
     let blocks = (n + WORKGROUP_SIZE - 1u) / WORKGROUP_SIZE;
     if (local == 0u && block < blocks) {

@@ -4,17 +4,21 @@
 // Bindings (all cull passes share them): CULL_BINDINGS in src/shaders.rs.
 
 @compute @workgroup_size(WORKGROUP_SIZE)
-fn compact(@builtin(workgroup_id) wid: vec3<u32>, @builtin(local_invocation_index) local: u32) {
-    let block = wid.y * params.groups_x + wid.x;
+fn compact(
+    @builtin(workgroup_id) wid: vec3<u32>,
+    @builtin(num_workgroups) groups: vec3<u32>,
+    @builtin(local_invocation_index) local: u32,
+) {
+    let block = wid.y * groups.x + wid.x;
     let level = wid.z;
-    let n = params.instance_count;
-    let k = block * WORKGROUP_SIZE + local;
-    if (k >= n) {
+    let n = cull_count();
+    let j = block * WORKGROUP_SIZE + local;
+    if (j >= n) {
         return;
     }
     let blocks = (n + WORKGROUP_SIZE - 1u) / WORKGROUP_SIZE;
-    let entry = local_prefix[level * n + k];
+    let entry = local_prefix[level * n + j];
     if ((entry & VISIBLE_BIT) != 0u) {
-        visible[block_sums[level * blocks + block] + (entry & ~VISIBLE_BIT)] = order[k];
+        visible[block_sums[level * blocks + block] + (entry & ~VISIBLE_BIT)] = order[cull_position(j)];
     }
 }

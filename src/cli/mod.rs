@@ -11,14 +11,14 @@ use std::path::{Path, PathBuf};
 use clap::{Args, Parser, Subcommand};
 use serde::Serialize;
 
-use crate::cull::{CullOutput, cpu};
+use crate::cull::cpu::FrameCull;
+use crate::cull::{CoarseCull, CullOutput, cpu};
 use crate::device::{Gpu, OPTIONAL_FEATURES, Tier};
 use crate::error::{Error, Result};
 use crate::live::LiveScene;
 use crate::records::CullLayout;
-use crate::renderer::{CullMode, Renderer, RendererOptions, frame_lod};
+use crate::renderer::{CoarseMode, CullMode, Renderer, RendererOptions, frame_lod};
 use crate::rig::Rig;
-use crate::scene::MAX_LODS;
 use crate::scene::Scene;
 use crate::scene_spec::{self, DEFAULT_SCENE};
 
@@ -78,6 +78,9 @@ pub struct SceneArgs {
     /// Levels of detail chosen on the GPU from the viewer's position.
     #[arg(long, value_enum, default_value = "off")]
     pub lod: Switch,
+    /// The frame-level coarse cull before the display culls (auto: where the rig gains).
+    #[arg(long, value_enum, default_value = "auto")]
+    pub coarse_cull: CoarseMode,
 }
 
 #[derive(Clone, Copy, Debug, PartialEq, Eq, clap::ValueEnum, Serialize)]
@@ -94,6 +97,15 @@ impl Switch {
 }
 
 impl SceneArgs {
+    /// The renderer options these arguments choose (LOD, coarse cull).
+    pub fn options(&self) -> RendererOptions {
+        RendererOptions {
+            lod: self.lod.on(),
+            coarse_cull: self.coarse_cull,
+            ..Default::default()
+        }
+    }
+
     pub fn load_rig(&self) -> Result<Rig> {
         let mut rig = Rig::load(&self.rig)?;
         if let Some(p) = self.viewer {
@@ -221,20 +233,17 @@ fn cull(args: &CullArgs) -> Result<()> {
             for frame in 0..args.frames {
                 driver.apply(&mut live, frame)?;
             }
-            let levels = if args.scene.lod.on() {
-                MAX_LODS as u32
-            } else {
-                1
+            let options = args.scene.options();
+            let resolved = rig.resolve()?;
+            let frame = FrameCull {
+                lod: frame_lod(&rig, &resolved, options.lod_levels()),
+                coarse: options.coarse_for(&rig).then(|| CoarseCull::new(&resolved)),
             };
-            let lod = frame_lod(&rig, &rig.resolve()?, levels);
             let layout = CullLayout::new(live.scene());
-            cpu::cull_many_lod(&layout, &rig.cull_jobs()?, &lod)
+            cpu::cull_frame(&layout, &rig.cull_jobs()?, &frame)
         }
         CullMode::Gpu => {
-            let options = RendererOptions {
-                lod: args.scene.lod.on(),
-                ..Default::default()
-            };
+            let options = args.scene.options();
             gpu_cull((&rig, options), &mut live, (&mut driver, args.frames))?
         }
     };

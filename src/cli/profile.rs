@@ -15,7 +15,7 @@ use crate::error::{Error, Result};
 use crate::live::LiveScene;
 use crate::procedural;
 use crate::profiling::{GpuTimer, percentile, write_trace};
-use crate::renderer::{CullMode, Renderer, RendererOptions, StereoMode, SyncStats};
+use crate::renderer::{CoarseMode, CullMode, Renderer, RendererOptions, StereoMode, SyncStats};
 use crate::rig::Rig;
 use crate::scene::Scene;
 use wgpu_profiler::GpuTimerQueryResult;
@@ -68,6 +68,9 @@ pub struct ProfileArgs {
     /// Percent of instances removed and inserted again every frame.
     #[arg(long, default_value_t = 0.0)]
     pub churn: f64,
+    /// The frame-level coarse cull, one configuration each (`on,off` compares them).
+    #[arg(long, value_delimiter = ',', value_enum, default_value = "auto")]
+    pub coarse_cull: Vec<CoarseMode>,
     /// Also write a Chrome trace (chrome://tracing, Perfetto) of the last timed frame of
     /// every configuration: per display a scope, per pass (`cull`, `draw`) one inside it.
     #[arg(long)]
@@ -107,6 +110,10 @@ pub struct Row {
     pub sync_ms_median: f64,
     /// Primitives reaching the clipper in the draw passes (last frame).
     pub triangles_submitted: Option<u64>,
+    /// Whether the frames ran the coarse cull.
+    pub coarse_cull: bool,
+    /// Sphere-against-frustum tests of the last frame (GPU culling).
+    pub sphere_tests: Option<u64>,
     /// The last timed frame's GPU scopes, for `--trace`.
     #[serde(skip)]
     pub trace: Vec<GpuTimerQueryResult>,
@@ -144,7 +151,8 @@ pub fn profile(args: &ProfileArgs) -> Result<()> {
     if timer.is_none() {
         println!("GPU timings unavailable: the adapter has no TIMESTAMP_QUERY; CPU timings only");
     }
-    let total = (rigs.len() * args.instances.len() * configs.len() * args.moving.len()) as u64
+    let variants = args.moving.len() * args.coarse_cull.len();
+    let total = (rigs.len() * args.instances.len() * configs.len() * variants) as u64
         * (args.frames + args.warmup) as u64;
     let bar = ProgressBar::new(total);
     bar.set_style(
@@ -158,9 +166,14 @@ pub fn profile(args: &ProfileArgs) -> Result<()> {
             procedural::texture(&mut scene);
         }
         for (spec, rig) in &rigs {
-            for (&(mode, cull), &moving) in configs
+            let variants: Vec<_> = args
+                .moving
                 .iter()
-                .flat_map(|c| args.moving.iter().map(move |m| (c, m)))
+                .flat_map(|m| args.coarse_cull.iter().map(move |c| (*m, *c)))
+                .collect();
+            for (&(mode, cull), &(moving, coarse)) in configs
+                .iter()
+                .flat_map(|c| variants.iter().map(move |v| (c, v)))
             {
                 bar.set_message(format!(
                     "{spec} {n} {} {cull:?} {moving} % moving",
@@ -171,6 +184,7 @@ pub fn profile(args: &ProfileArgs) -> Result<()> {
                     rig,
                     mode,
                     cull,
+                    coarse,
                     edits: EditArgs {
                         moving,
                         churn: args.churn,
@@ -234,6 +248,7 @@ struct Config<'a> {
     rig: &'a Rig,
     mode: StereoMode,
     cull: CullMode,
+    coarse: CoarseMode,
     edits: EditArgs,
 }
 
@@ -245,6 +260,7 @@ fn measure(
         rig,
         mode,
         cull,
+        coarse,
         edits,
     }: &Config,
     args: &ProfileArgs,
@@ -256,6 +272,7 @@ fn measure(
         mode,
         sample_count: args.msaa,
         lod: args.lod.on(),
+        coarse_cull: coarse,
         ..Default::default()
     };
     let mut renderer = Renderer::new(&gpu.device, scene, rig, options)?;
@@ -324,6 +341,7 @@ fn measure(
             prepared.bytes_uploaded + synced.bytes_uploaded,
         );
     }
+    let sphere_tests = renderer.read_sphere_tests(&gpu.device, &gpu.queue)?;
     let med = |v: &[f64]| percentile(v, 0.5);
     let gpu_med = |v: &[f64]| (!v.is_empty()).then(|| percentile(v, 0.5));
     Ok(Row {
@@ -352,6 +370,8 @@ fn measure(
         churn_percent: edits.churn,
         sync_ms_median: med(&samples.sync),
         triangles_submitted: samples.triangles,
+        coarse_cull: renderer.coarse_cull(),
+        sphere_tests,
         trace: timer.map(|t| t.last_frame().to_vec()).unwrap_or_default(),
     })
 }
@@ -441,12 +461,12 @@ fn count(v: Option<u64>) -> String {
 
 fn write_csv(path: &std::path::Path, rows: &[Row]) -> Result<()> {
     let mut text = String::from(
-        "mode,cull,rig,instances,cpu_ms_median,cpu_ms_p95,gpu_ms_median,gpu_ms_p95,draw_calls,dispatches,bytes_uploaded,adapter,moving_percent,churn_percent,sync_ms_median,triangles_submitted\n",
+        "mode,cull,rig,instances,cpu_ms_median,cpu_ms_p95,gpu_ms_median,gpu_ms_p95,draw_calls,dispatches,bytes_uploaded,adapter,moving_percent,churn_percent,sync_ms_median,triangles_submitted,coarse_cull,sphere_tests\n",
     );
     let field = |v: Option<f64>| v.map_or(String::new(), |x| format!("{x:.4}"));
     for r in rows {
         text += &format!(
-            "{},{},{},{},{:.4},{:.4},{},{},{},{},{},\"{}\",{},{},{:.4},{}\n",
+            "{},{},{},{},{:.4},{:.4},{},{},{},{},{},\"{}\",{},{},{:.4},{},{},{}\n",
             r.mode.name(),
             format!("{:?}", r.cull).to_lowercase(),
             r.rig,
@@ -463,7 +483,9 @@ fn write_csv(path: &std::path::Path, rows: &[Row]) -> Result<()> {
             r.churn_percent,
             r.sync_ms_median,
             r.triangles_submitted
-                .map_or(String::new(), |t| t.to_string())
+                .map_or(String::new(), |t| t.to_string()),
+            r.coarse_cull,
+            r.sphere_tests.map_or(String::new(), |t| t.to_string())
         );
     }
     std::fs::write(path, text).map_err(|e| Error::io(path, e))

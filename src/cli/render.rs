@@ -93,8 +93,7 @@ impl Session {
         let mut options = RendererOptions {
             cull,
             mode,
-            lod: args.lod.on(),
-            ..Default::default()
+            ..args.options()
         };
         let counts = gpu.sample_counts(options.color_format);
         let msaa = msaa.unwrap_or_else(|| default_msaa(&gpu, mode, &counts));
@@ -183,6 +182,9 @@ pub fn render(args: &RenderArgs) -> Result<()> {
     let visible = session
         .renderer
         .read_visible_counts(&session.gpu.device, &session.gpu.queue)?;
+    let candidates = session
+        .renderer
+        .read_candidates(&session.gpu.device, &session.gpu.queue)?;
     let mut displays = Vec::new();
     for ((display, target), visible) in session
         .rig
@@ -237,6 +239,8 @@ pub fn render(args: &RenderArgs) -> Result<()> {
             "instances": session.scene.instances.len(),
             "gpu_bytes_per_instance": session.renderer.gpu_bytes_per_instance(),
             "frame": stats,
+            "coarse_cull": session.renderer.coarse_cull(),
+            "coarse_candidates": candidates,
             "cpu_encode_submit_ms": cpu_ms,
             "gpu_wait_ms": gpu_wait_ms,
             "displays": displays,

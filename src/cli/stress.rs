@@ -51,6 +51,8 @@ struct FrameRecord {
     /// Until the GPU finished the frame.
     frame_ms: f64,
     visible: Vec<u32>,
+    /// Sphere-against-frustum tests (GPU culling; see `Renderer::read_sphere_tests`).
+    sphere_tests: Option<u64>,
     draw_calls: u32,
     dispatches: u32,
     bytes_uploaded: u64,
@@ -62,6 +64,8 @@ struct Summary {
     instances: usize,
     displays: Vec<String>,
     cull: CullMode,
+    /// Whether frames ran the frame-level coarse cull.
+    coarse_cull: bool,
     frames: u32,
     cpu_ms_median: f64,
     cpu_ms_p95: f64,
@@ -72,6 +76,8 @@ struct Summary {
     frame_ms_median: f64,
     frame_ms_p95: f64,
     visible_mean: Vec<f64>,
+    /// Median over the frames of the sphere tests (GPU culling).
+    sphere_tests_median: Option<f64>,
     draw_calls_per_frame: u32,
     dispatches_per_frame: u32,
     bytes_uploaded_per_frame: u64,
@@ -149,6 +155,9 @@ pub fn stress(args: &StressArgs) -> Result<()> {
         let visible = session
             .renderer
             .read_visible_counts(&session.gpu.device, &session.gpu.queue)?;
+        let sphere_tests = session
+            .renderer
+            .read_sphere_tests(&session.gpu.device, &session.gpu.queue)?;
         let record = FrameRecord {
             frame,
             cpu_ms,
@@ -159,6 +168,7 @@ pub fn stress(args: &StressArgs) -> Result<()> {
             triangles_submitted,
             frame_ms,
             visible,
+            sphere_tests,
             draw_calls: stats.draw_calls,
             dispatches: stats.dispatches,
             bytes_uploaded: stats.bytes_uploaded,
@@ -217,6 +227,7 @@ fn summarize(
             .map(|d| d.name.clone())
             .collect(),
         cull: args.cull,
+        coarse_cull: session.renderer.coarse_cull(),
         frames: args.frames,
         cpu_ms_median: percentile(&cpu, 0.5),
         cpu_ms_p95: percentile(&cpu, 0.95),
@@ -232,17 +243,17 @@ fn summarize(
         draw_calls_per_frame: last.map_or(0, |r| r.draw_calls),
         dispatches_per_frame: last.map_or(0, |r| r.dispatches),
         bytes_uploaded_per_frame: last.map_or(0, |r| r.bytes_uploaded),
-        triangles_submitted_median: {
-            let t: Vec<f64> = records
-                .iter()
-                .filter_map(|r| r.triangles_submitted)
-                .map(|t| t as f64)
-                .collect();
-            (!t.is_empty()).then(|| percentile(&t, 0.5))
-        },
+        triangles_submitted_median: median_of(records, |r| r.triangles_submitted),
+        sphere_tests_median: median_of(records, |r| r.sphere_tests),
         gpu_bytes_per_instance: session.renderer.gpu_bytes_per_instance(),
         memory,
     }
+}
+
+/// The median of a figure frames may lack; `None` when every frame lacks it.
+fn median_of(records: &[FrameRecord], f: fn(&FrameRecord) -> Option<u64>) -> Option<f64> {
+    let v: Vec<f64> = records.iter().filter_map(f).map(|t| t as f64).collect();
+    (!v.is_empty()).then(|| percentile(&v, 0.5))
 }
 
 /// VmRSS from /proc/self/status; `None` where there is no such file.
@@ -255,8 +266,11 @@ fn resident_kib() -> Option<u64> {
 fn print_summary(s: &Summary) {
     println!("adapter: {}", s.adapter);
     println!(
-        "{} instances, {} frames, cull {:?}",
-        s.instances, s.frames, s.cull
+        "{} instances, {} frames, cull {:?}, coarse cull {}",
+        s.instances,
+        s.frames,
+        s.cull,
+        if s.coarse_cull { "on" } else { "off" }
     );
     println!(
         "cpu (sync+prepare+encode+submit): median {:.3} ms, p95 {:.3} ms",
@@ -289,13 +303,14 @@ fn print_summary(s: &Summary) {
             show(last.gpu_allocated_bytes),
         );
     }
+    let show = |v: Option<f64>| v.map_or("n/a".into(), |t| format!("{t:.0}"));
     println!(
-        "per frame: {} draw calls, {} dispatches, {} bytes uploaded, {} triangles submitted; GPU memory {} bytes per instance",
+        "per frame: {} draw calls, {} dispatches, {} bytes uploaded, {} triangles submitted, {} sphere tests; GPU memory {} bytes per instance",
         s.draw_calls_per_frame,
         s.dispatches_per_frame,
         s.bytes_uploaded_per_frame,
-        s.triangles_submitted_median
-            .map_or("n/a".into(), |t| format!("{t:.0}")),
+        show(s.triangles_submitted_median),
+        show(s.sphere_tests_median),
         s.gpu_bytes_per_instance
     );
 }

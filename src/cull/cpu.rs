@@ -9,7 +9,7 @@ use rayon::prelude::*;
 
 use glam::{Vec3, Vec4};
 
-use super::{CullJob, CullOutput};
+use super::{CoarseCull, CullJob, CullOutput};
 use crate::records::{CullLayout, DrawArgs, lod_level};
 use crate::scene::MAX_LODS;
 
@@ -49,6 +49,26 @@ pub fn cull_many(layout: &CullLayout, displays: &[CullJob]) -> Vec<CullOutput> {
 /// [`cull_many`] with levels of detail chosen per instance from the viewer (the same
 /// level for every display), draws per (level, mesh) as the GPU's.
 pub fn cull_many_lod(layout: &CullLayout, displays: &[CullJob], lod: &FrameLod) -> Vec<CullOutput> {
+    let frame = FrameCull {
+        lod: *lod,
+        coarse: None,
+    };
+    cull_frame(layout, displays, &frame)
+}
+
+/// What the frame level decides for every display's cull: the levels of detail, and
+/// the coarse cull's test when it runs.
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub struct FrameCull {
+    pub lod: FrameLod,
+    pub coarse: Option<CoarseCull>,
+}
+
+/// [`cull_many_lod`], with the frame's coarse cull first when it runs: each display
+/// then tests only the candidates (whole groups of 64 without one are skipped). The
+/// outputs are the same as without it; that is the coarse test's guarantee.
+pub fn cull_frame(layout: &CullLayout, displays: &[CullJob], frame: &FrameCull) -> Vec<CullOutput> {
+    let (lod, coarse) = (&frame.lod, frame.coarse.as_ref());
     let levels: Option<(Vec<u8>, u32)> = (lod.levels > 1).then(|| {
         let level_of = |(s, &m): (&Vec4, &u32)| {
             let lods = &layout.lods[m as usize * MAX_LODS..][..MAX_LODS];
@@ -73,7 +93,7 @@ pub fn cull_many_lod(layout: &CullLayout, displays: &[CullJob], lod: &FrameLod) 
     let counts: Vec<Vec<u32>> = masks
         .par_chunks_mut(WORDS_PER_CHUNK * displays.len())
         .enumerate()
-        .map(|(chunk, out)| test_chunk(layout, &planes, chunk * CHUNK, out))
+        .map(|(chunk, out)| test_chunk(layout, (&planes, coarse), chunk * CHUNK, out))
         .collect();
     displays
         .iter()
@@ -99,11 +119,12 @@ pub fn cull_many_lod(layout: &CullLayout, displays: &[CullJob], lod: &FrameLod) 
         .collect()
 }
 
-/// Tests one chunk of spheres for every display; `out` holds each display's words for
-/// the chunk one after another. Returns the visible count per display.
+/// Tests one chunk of spheres for every display (only the coarse test's candidates,
+/// given one); `out` holds each display's words for the chunk one after another.
+/// Returns the visible count per display.
 fn test_chunk(
     layout: &CullLayout,
-    planes: &[[[f32; 4]; 6]],
+    (planes, coarse): (&[[[f32; 4]; 6]], Option<&CoarseCull>),
     start: usize,
     out: &mut [u64],
 ) -> Vec<u32> {
@@ -114,8 +135,12 @@ fn test_chunk(
     for (w, group) in (start..end).step_by(64).enumerate() {
         let g = group..(group + 64).min(end);
         let cols = [&x[g.clone()], &y[g.clone()], &z[g.clone()], &neg_r[g]];
+        let candidates = coarse.map_or(u64::MAX, |c| coarse_group(c, cols));
         for (d, p) in planes.iter().enumerate() {
-            let bits = test_group(p, cols);
+            let bits = match candidates {
+                0 => 0,
+                _ => test_group(p, cols) & candidates,
+            };
             out[d * per + w] = bits;
             counts[d] += bits.count_ones();
         }
@@ -140,6 +165,68 @@ fn test_group(planes: &[[f32; 4]; 6], cols: [&[f32]; 4]) -> u64 {
     });
     let [x, y, z, r] = &lanes;
     test_lanes(planes, [x, y, z, r]) & ((1u64 << n) - 1)
+}
+
+/// Coarse candidate bits of up to 64 spheres given as columns: per sphere exactly
+/// [`CoarseCull::test`]'s arithmetic, laid out over 64 lanes like [`test_group`].
+fn coarse_group(coarse: &CoarseCull, cols: [&[f32]; 4]) -> u64 {
+    if let [Ok(x), Ok(y), Ok(z), Ok(r)] = cols.map(<&[f32; 64]>::try_from) {
+        return coarse_lanes(coarse, [x, y, z, r]);
+    }
+    let n = cols[0].len();
+    let lanes: [[f32; 64]; 4] = cols.map(|c| {
+        let mut lane = [0.0; 64];
+        lane[..n].copy_from_slice(c);
+        lane
+    });
+    let [x, y, z, r] = &lanes;
+    coarse_lanes(coarse, [x, y, z, r]) & ((1u64 << n) - 1)
+}
+
+fn coarse_lanes(coarse: &CoarseCull, lanes: [&[f32; 64]; 4]) -> u64 {
+    #[cfg(target_arch = "x86_64")]
+    if std::is_x86_feature_detected!("avx2") {
+        // SAFETY: the processor has AVX2, checked just above.
+        return unsafe { coarse_lanes_avx2(coarse, lanes) };
+    }
+    coarse_lanes_portable(coarse, lanes)
+}
+
+#[cfg(target_arch = "x86_64")]
+#[target_feature(enable = "avx2")]
+fn coarse_lanes_avx2(coarse: &CoarseCull, lanes: [&[f32; 64]; 4]) -> u64 {
+    coarse_lanes_portable(coarse, lanes)
+}
+
+#[inline(always)]
+fn coarse_lanes_portable(coarse: &CoarseCull, [x, y, z, neg_r]: [&[f32; 64]; 4]) -> u64 {
+    let mut neg_reach = [0.0f32; 64];
+    for i in 0..64 {
+        let reach =
+            -neg_r[i] * coarse.inflation + coarse.slack * (x[i].abs() + y[i].abs() + z[i].abs());
+        neg_reach[i] = -reach;
+    }
+    let mut inside = [u32::MAX; 64];
+    for p in &coarse.planes {
+        for i in 0..64 {
+            let dist = p.x * x[i] + p.y * y[i] + p.z * z[i] + p.w;
+            inside[i] &= ((dist >= neg_reach[i]) as u32).wrapping_neg();
+        }
+    }
+    let mut bits = 0u64;
+    for (i, m) in inside.iter().enumerate() {
+        bits |= ((m & 1) as u64) << i;
+    }
+    bits
+}
+
+/// How many instances the coarse test keeps: each display's cull runs over these.
+pub fn coarse_candidates(layout: &CullLayout, coarse: &CoarseCull) -> u32 {
+    layout
+        .spheres
+        .par_iter()
+        .filter(|&&s| coarse.test(s))
+        .count() as u32
 }
 
 fn test_lanes(planes: &[[f32; 4]; 6], lanes: [&[f32; 64]; 4]) -> u64 {

@@ -1,14 +1,17 @@
 //! GPU culling: per display, three compute dispatches (`wgsl/cull.wgsl`,
 //! `cull_draws.wgsl`, `cull_compact.wgsl`) that write the visible list, the draws and the
-//! draw count per the contract in [`super`], byte-identical to [`super::cpu`].
+//! draw count per the contract in [`super`], byte-identical to [`super::cpu`]. With the
+//! frame-level coarse cull ([`super::coarse`]), three dispatches per frame first
+//! (`wgsl/cull_coarse.wgsl`) leave the candidates, and each display's passes run over
+//! those, dispatched indirectly from their count.
 
 use crate::buffers::{init_buffer, init_buffer_with_room, storage_buffer};
 
 use crate::records::uniform_bytes;
 use crate::records::{CullLayout, DrawArgs};
 use crate::shaders::{
-    CULL_BINDINGS, CullPass, WORKGROUP_SIZE, bind_group, bind_group_layout, compute_pipeline,
-    dispatch_size, pipeline_layout,
+    COARSE_BINDINGS, CULL_BINDINGS, CullPass, WORKGROUP_SIZE, bind_group, bind_group_layout,
+    compute_pipeline, dispatch_size, pipeline_layout,
 };
 
 /// The uniform the cull passes read besides the display context (`CullParams` in
@@ -17,8 +20,9 @@ use crate::shaders::{
 pub struct CullParams {
     pub instance_count: u32,
     pub mesh_count: u32,
-    /// Workgroups along x in the cull and compact dispatches (y carries the rest).
-    pub groups_x: u32,
+    /// The device's limit of workgroups per dimension: the coarse pass splits the
+    /// candidates' dispatch into x and y with it.
+    pub max_groups: u32,
     /// Levels of detail in use: 1 (off) or [`MAX_LODS`].
     pub lod_levels: u32,
 }
@@ -29,7 +33,11 @@ pub const COUNTS_BYTES: u64 = 8;
 /// The cull pipelines and their shared bind-group layout.
 pub struct GpuCuller {
     layout: wgpu::BindGroupLayout,
+    /// The display passes, in dispatch order.
     pipelines: Vec<wgpu::ComputePipeline>,
+    /// With the coarse cull: the frame passes, and group 1's layout (their writes of
+    /// the display passes' indirect dispatch).
+    frame: Option<(Vec<wgpu::ComputePipeline>, wgpu::BindGroupLayout)>,
 }
 
 /// Scene data the cull passes read, uploaded once, plus scratch shared by all displays
@@ -50,6 +58,12 @@ pub struct CullScene {
     lods: wgpu::Buffer,
     local_prefix: wgpu::Buffer,
     block_sums: wgpu::Buffer,
+    candidates: wgpu::Buffer,
+    /// The candidate count (the coarse passes write it; read back for statistics).
+    pub candidate_count: wgpu::Buffer,
+    candidate_ranges: wgpu::Buffer,
+    /// The display passes' indirect dispatch, written by the coarse passes.
+    coarse_args: wgpu::Buffer,
 }
 
 /// One display's cull outputs: what its draw pass consumes.
@@ -63,8 +77,13 @@ pub struct CullTargets {
 
 impl CullScene {
     /// Uploads `layout`, with room for `slots` instances (a live scene's capacity), for
-    /// culling into `levels` levels of detail (1: LOD off).
-    pub fn new(device: &wgpu::Device, layout: &CullLayout, slots: u32, levels: u32) -> CullScene {
+    /// culling into `levels` levels of detail (1: LOD off), with room for the coarse
+    /// cull's candidates when `coarse`.
+    pub fn new(
+        device: &wgpu::Device,
+        layout: &CullLayout,
+        (slots, levels, coarse): (u32, u32, bool),
+    ) -> CullScene {
         let slots = slots.max(layout.positions.len() as u32);
         let max_groups = device.limits().max_compute_workgroups_per_dimension;
         let (params, groups) = cull_params(layout, (max_groups, levels));
@@ -73,6 +92,8 @@ impl CullScene {
             init_buffer_with_room(device, label, contents, per_slot * slots as u64, usage)
         };
         let scratch = wgpu::BufferUsages::STORAGE;
+        let candidates = if coarse { slots as u64 } else { 0 };
+        let meshes = layout.meshes.len() as u64;
         let most_groups = dispatch_size(slots.div_ceil(WORKGROUP_SIZE), max_groups);
         CullScene {
             instance_count: params.instance_count,
@@ -115,6 +136,25 @@ impl CullScene {
                 "stereocull.block_sums",
                 4 * (most_groups.0 * most_groups.1 * levels) as u64,
                 scratch,
+            ),
+            candidates: storage_buffer(device, "stereocull.candidates", 4 * candidates, scratch),
+            candidate_count: storage_buffer(
+                device,
+                "stereocull.candidate_count",
+                4,
+                scratch | wgpu::BufferUsages::COPY_SRC,
+            ),
+            candidate_ranges: storage_buffer(
+                device,
+                "stereocull.candidate_ranges",
+                8 * meshes,
+                scratch,
+            ),
+            coarse_args: storage_buffer(
+                device,
+                "stereocull.coarse_args",
+                12,
+                scratch | wgpu::BufferUsages::INDIRECT,
             ),
         }
     }
@@ -178,24 +218,42 @@ fn cull_params(layout: &CullLayout, (max_groups, levels): (u32, u32)) -> (CullPa
     let params = CullParams {
         instance_count: n,
         mesh_count: layout.meshes.len() as u32,
-        groups_x: groups.0,
+        max_groups,
         lod_levels: levels,
     };
     (params, groups)
 }
 
 impl GpuCuller {
-    pub fn new(device: &wgpu::Device) -> GpuCuller {
+    /// The display passes (over the coarse cull's candidates when `coarse`), and with
+    /// `coarse` the frame passes too.
+    pub fn new(device: &wgpu::Device, coarse: bool) -> GpuCuller {
         let layout = bind_group_layout(device, "stereocull.cull", &CULL_BINDINGS);
-        let pipeline_layout = pipeline_layout(device, "stereocull.cull", &layout);
-        let pipelines = CullPass::ALL
-            .iter()
-            .map(|pass| {
-                let entry = (pass.source(), pass.entry_point());
-                compute_pipeline(device, pass.label(), &pipeline_layout, entry)
-            })
-            .collect();
-        GpuCuller { layout, pipelines }
+        let build = |passes: [CullPass; 3], pipeline_layout: &wgpu::PipelineLayout| {
+            let build_one = |pass: CullPass| {
+                let entry = (pass.source(coarse), pass.entry_point());
+                compute_pipeline(device, &pass.label(coarse), pipeline_layout, entry)
+            };
+            passes.map(build_one).to_vec()
+        };
+        let pipelines = build(
+            CullPass::DISPLAY,
+            &pipeline_layout(device, "stereocull.cull", &layout),
+        );
+        let frame = coarse.then(|| {
+            let args = bind_group_layout(device, "stereocull.coarse", &COARSE_BINDINGS);
+            let both = device.create_pipeline_layout(&wgpu::PipelineLayoutDescriptor {
+                label: Some("stereocull.coarse"),
+                bind_group_layouts: &[Some(&layout), Some(&args)],
+                immediate_size: 0,
+            });
+            (build(CullPass::FRAME, &both), args)
+        });
+        GpuCuller {
+            layout,
+            pipelines,
+            frame,
+        }
     }
 
     /// The bind group for one display: the frame context, shared scene data, and the
@@ -222,12 +280,55 @@ impl GpuCuller {
             &targets.visible,
             &targets.draws,
             &targets.counts,
+            &scene.candidates,
+            &scene.candidate_count,
+            &scene.candidate_ranges,
         ];
         bind_group(device, "stereocull.cull", &self.layout, buffers)
     }
 
+    /// Group 1 of the frame passes (with the coarse cull).
+    pub fn coarse_bind_group(
+        &self,
+        device: &wgpu::Device,
+        scene: &CullScene,
+    ) -> Option<wgpu::BindGroup> {
+        let (_, layout) = self.frame.as_ref()?;
+        Some(bind_group(
+            device,
+            "stereocull.coarse",
+            layout,
+            [&scene.coarse_args],
+        ))
+    }
+
+    /// Records the frame's coarse cull (nothing without it): `bind_groups` are any
+    /// display's group 0 (the frame passes read none of its display's bindings) and
+    /// [`GpuCuller::coarse_bind_group`]. Returns the dispatches.
+    pub fn encode_frame(
+        &self,
+        pass: &mut wgpu::ComputePass,
+        scene: &CullScene,
+        [display, args]: [&wgpu::BindGroup; 2],
+    ) -> u32 {
+        let Some((pipelines, _)) = &self.frame else {
+            return 0;
+        };
+        pass.set_bind_group(0, display, &[]);
+        pass.set_bind_group(1, args, &[]);
+        let (x, y) = scene.groups;
+        for (pipeline, kind) in pipelines.iter().zip(CullPass::FRAME) {
+            pass.set_pipeline(pipeline);
+            match kind {
+                CullPass::CoarseRanges => pass.dispatch_workgroups(1, 1, 1),
+                _ => pass.dispatch_workgroups(x, y, 1),
+            }
+        }
+        pipelines.len() as u32
+    }
+
     /// Records the three dispatches for one display: a fixed count, whatever the
-    /// number of instances.
+    /// number of instances (over the candidates, sized by the coarse passes).
     pub fn encode(
         &self,
         pass: &mut wgpu::ComputePass,
@@ -236,14 +337,15 @@ impl GpuCuller {
     ) {
         pass.set_bind_group(0, bind_group, &[]);
         let (x, y) = scene.groups;
-        for (pipeline, kind) in self.pipelines.iter().zip(CullPass::ALL) {
+        for (pipeline, kind) in self.pipelines.iter().zip(CullPass::DISPLAY) {
             pass.set_pipeline(pipeline);
-            match kind {
-                CullPass::Draws => pass.dispatch_workgroups(1, 1, 1),
-                CullPass::Cull | CullPass::Compact => pass.dispatch_workgroups(x, y, scene.levels),
+            match (kind, &self.frame) {
+                (CullPass::Draws, _) => pass.dispatch_workgroups(1, 1, 1),
+                (_, Some(_)) => pass.dispatch_workgroups_indirect(&scene.coarse_args, 0),
+                (_, None) => pass.dispatch_workgroups(x, y, scene.levels),
             }
         }
     }
 
-    pub const DISPATCHES_PER_DISPLAY: u32 = CullPass::ALL.len() as u32;
+    pub const DISPATCHES_PER_DISPLAY: u32 = CullPass::DISPLAY.len() as u32;
 }

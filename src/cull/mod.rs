@@ -7,8 +7,11 @@
 //! - `instance_count = V * visible_in_mesh`, `first_instance = V * offset`, where V is
 //!   [`CullJob::instances_per_object`].
 
+pub mod coarse;
 pub mod cpu;
 pub mod gpu;
+
+pub use coarse::CoarseCull;
 
 use glam::Vec4;
 

@@ -8,7 +8,7 @@ use std::time::Instant;
 use super::passes::draw_pass;
 use super::{FrameStats, RendererOptions, TargetViews, context_buffer, display_contexts, write};
 use crate::buffers::storage_buffer;
-use crate::cull::cpu::FrameLod;
+use crate::cull::cpu::FrameCull;
 use crate::cull::{CullJob, CullOutput, cpu};
 use crate::draw::{DrawFeatures, DrawScene, Drawer, set_eye_viewport};
 use crate::error::Result;
@@ -116,12 +116,12 @@ impl ClassicPath {
         &mut self,
         queue: &wgpu::Queue,
         rig: &Rig,
-        (resolved, lod): (&ResolvedRig, &FrameLod),
+        (resolved, frame): (&ResolvedRig, &FrameCull),
     ) -> FrameStats {
         let contexts = display_contexts(rig, resolved, |_| 1);
         let mut stats = FrameStats::default();
         let start = Instant::now();
-        self.culls = self.cull(resolved, lod);
+        self.culls = self.cull(resolved, frame);
         stats.cpu_cull = start.elapsed();
         let start = Instant::now();
         for ((state, ctx), culls) in self.displays.iter().zip(&contexts).zip(&self.culls) {
@@ -146,7 +146,7 @@ impl ClassicPath {
 
     /// Per display one cull against the display frustum; multi-camera culls each eye of
     /// a stereo display against that eye's own frustum instead.
-    fn cull(&self, resolved: &ResolvedRig, lod: &FrameLod) -> Vec<Vec<CullOutput>> {
+    fn cull(&self, resolved: &ResolvedRig, frame: &FrameCull) -> Vec<Vec<CullOutput>> {
         let mut jobs = Vec::new();
         let mut per_display = Vec::new();
         for r in &resolved.displays {
@@ -161,7 +161,7 @@ impl ClassicPath {
                 per_display.push(1);
             }
         }
-        let mut outputs = cpu::cull_many_lod(&self.layout, &jobs, lod).into_iter();
+        let mut outputs = cpu::cull_frame(&self.layout, &jobs, frame).into_iter();
         per_display
             .iter()
             .map(|&k| outputs.by_ref().take(k).collect())

@@ -7,12 +7,12 @@
 
 use std::time::Instant;
 
-use super::passes::{close, draw_pass, open_pass};
+use super::passes::{close, draw_pass, open_display, open_pass};
 use super::{
     CullMode, CullState, FrameStats, RendererOptions, TargetViews, context_buffer,
     display_contexts, write,
 };
-use crate::cull::cpu::FrameLod;
+use crate::cull::cpu::FrameCull;
 use crate::cull::gpu::{COUNTS_BYTES, CullScene, CullTargets, GpuCuller};
 use crate::cull::{CullOutput, cpu};
 use crate::draw::{DrawFeatures, DrawScene, Drawer};
@@ -28,8 +28,13 @@ use wgpu_profiler::GpuProfilerQuery;
 
 /// Where the visible lists and draws come from.
 enum Culling {
-    /// Three compute dispatches per display over scene data uploaded once.
-    Gpu { culler: GpuCuller, scene: CullScene },
+    /// Three compute dispatches per display over scene data uploaded once (after three
+    /// per frame for the coarse cull, whose group 1 is `coarse`).
+    Gpu {
+        culler: GpuCuller,
+        scene: Box<CullScene>,
+        coarse: Option<wgpu::BindGroup>,
+    },
     /// The CPU culler over its own copy of the cull layout; results are uploaded.
     Cpu { layout: CullLayout },
 }
@@ -65,11 +70,19 @@ impl IndirectPath {
     ) -> Result<IndirectPath> {
         let multiview = options.mode == StereoMode::Multiview;
         let layout = CullLayout::new(scene);
+        let coarse = options.coarse_for(rig);
         let culling = match options.cull {
-            CullMode::Gpu => Culling::Gpu {
-                culler: GpuCuller::new(device),
-                scene: CullScene::new(device, &layout, slots, options.lod_levels()),
-            },
+            CullMode::Gpu => {
+                let culler = GpuCuller::new(device, coarse);
+                let shape = (slots, options.lod_levels(), coarse);
+                let scene = Box::new(CullScene::new(device, &layout, shape));
+                let coarse = culler.coarse_bind_group(device, &scene);
+                Culling::Gpu {
+                    culler,
+                    scene,
+                    coarse,
+                }
+            }
             CullMode::Cpu => Culling::Cpu { layout },
         };
         let clip = DrawFeatures::of(device).clip_distances;
@@ -96,7 +109,7 @@ impl IndirectPath {
                 let context = context_buffer(device);
                 let cull = CullTargets::new(device, slots, draws);
                 let cull_bind_group = match &culling {
-                    Culling::Gpu { culler, scene } => {
+                    Culling::Gpu { culler, scene, .. } => {
                         Some(culler.bind_group(device, scene, [frame, &context], &cull))
                     }
                     Culling::Cpu { .. } => None,
@@ -138,7 +151,7 @@ impl IndirectPath {
         &self,
         queue: &wgpu::Queue,
         rig: &Rig,
-        (resolved, lod): (&ResolvedRig, &FrameLod),
+        (resolved, frame): (&ResolvedRig, &FrameCull),
     ) -> FrameStats {
         let contexts = display_contexts(rig, resolved, |i| {
             self.displays[i].key.instances_per_object()
@@ -154,7 +167,7 @@ impl IndirectPath {
                     .zip(&resolved.displays)
                     .map(|(state, r)| r.cull_job(state.key.instances_per_object()))
                     .collect();
-                cpu::cull_many_lod(layout, &jobs, lod)
+                cpu::cull_frame(layout, &jobs, frame)
             }
         };
         stats.cpu_cull = start.elapsed();
@@ -171,6 +184,80 @@ impl IndirectPath {
         }
         stats.cpu_upload = start.elapsed();
         stats
+    }
+
+    /// The frame level's passes: the coarse cull, when it runs on the GPU, timed as
+    /// `coarse_cull` inside a `frame` scope. Returns the dispatches recorded.
+    pub(super) fn encode_frame(
+        &self,
+        encoder: &mut wgpu::CommandEncoder,
+        timer: &mut Option<&mut GpuTimer>,
+    ) -> u32 {
+        let (
+            Culling::Gpu {
+                culler,
+                scene,
+                coarse: Some(args),
+            },
+            Some(first),
+        ) = (&self.culling, self.displays.first())
+        else {
+            return 0;
+        };
+        let Some(display) = &first.cull_bind_group else {
+            return 0;
+        };
+        let frame = open_display(timer, "frame", encoder);
+        let scope = open_pass(timer, "coarse_cull", &frame, encoder);
+        let writes = scope
+            .as_ref()
+            .and_then(|q| q.compute_pass_timestamp_writes());
+        let mut pass = encoder.begin_compute_pass(&wgpu::ComputePassDescriptor {
+            label: Some("stereocull.coarse_cull"),
+            timestamp_writes: writes,
+        });
+        let dispatches = culler.encode_frame(&mut pass, scene, [display, args]);
+        drop(pass);
+        close(timer, encoder, scope);
+        close(timer, encoder, frame);
+        dispatches
+    }
+
+    /// The coarse cull's candidate count of the last frame (GPU culling with it on),
+    /// read back after the frame was submitted.
+    pub(super) fn read_candidates(
+        &self,
+        device: &wgpu::Device,
+        queue: &wgpu::Queue,
+    ) -> Result<Option<u32>> {
+        match &self.culling {
+            Culling::Gpu {
+                scene,
+                coarse: Some(_),
+                ..
+            } => Ok(Some(
+                read_pod::<u32>(device, queue, &scene.candidate_count, 4)?[0],
+            )),
+            _ => Ok(None),
+        }
+    }
+
+    /// Sphere-against-frustum tests of the last frame on the GPU (`None` culling on the
+    /// CPU): every instance per display, or with the coarse cull every instance once
+    /// plus the candidates per display.
+    pub(super) fn read_sphere_tests(
+        &self,
+        device: &wgpu::Device,
+        queue: &wgpu::Queue,
+    ) -> Result<Option<u64>> {
+        let Culling::Gpu { scene, .. } = &self.culling else {
+            return Ok(None);
+        };
+        let (n, displays) = (scene.instance_count as u64, self.displays.len() as u64);
+        Ok(Some(match self.read_candidates(device, queue)? {
+            Some(c) => n + displays * c as u64,
+            None => displays * n,
+        }))
     }
 
     /// Display `index`: its cull dispatches (GPU culling), then one pass with one draw
@@ -204,7 +291,7 @@ impl IndirectPath {
         display: &Option<GpuProfilerQuery>,
     ) -> u32 {
         let state = &self.displays[index];
-        let (Culling::Gpu { culler, scene }, Some(bind_group)) =
+        let (Culling::Gpu { culler, scene, .. }, Some(bind_group)) =
             (&self.culling, &state.cull_bind_group)
         else {
             return 0;

@@ -73,8 +73,9 @@
 use std::time::Duration;
 
 use crate::contexts::{DisplayContext, FrameContext};
-use crate::cull::CullOutput;
+use crate::cull::cpu::FrameCull;
 use crate::cull::gpu::{CullScene, CullTargets};
+use crate::cull::{CoarseCull, CullOutput};
 use crate::draw::DrawScene;
 use crate::error::{Error, Result};
 pub use crate::modes::StereoMode;
@@ -95,7 +96,7 @@ mod targets;
 use checks::check_device;
 use classic::ClassicPath;
 use indirect::IndirectPath;
-pub use options::{CullMode, LOD_PIXELS, RendererOptions, frame_lod};
+pub use options::{CoarseMode, CullMode, LOD_PIXELS, RendererOptions, frame_lod};
 use passes::{close, open_display};
 use sync::CullState;
 pub use sync::SyncStats;
@@ -167,6 +168,8 @@ pub struct Renderer {
     slots: u32,
     /// The rig as made: the displays a reallocation rebuilds for.
     rig: Rig,
+    /// Whether each frame starts with the coarse cull ([`RendererOptions::coarse_for`]).
+    coarse: bool,
 }
 
 impl Renderer {
@@ -179,6 +182,7 @@ impl Renderer {
         options: RendererOptions,
     ) -> Result<Renderer> {
         check_device(device, scene, &options)?;
+        let options_coarse = options.coarse_for(rig);
         let frame = uniform_buffer::<FrameContext>(device, "stereocull.frame_context");
         let slots = scene.instances.len() as u32;
         let path = Path::new(device, scene, (rig, &frame), (&options, slots))?;
@@ -200,6 +204,7 @@ impl Renderer {
             scatter: Scatter::new(device),
             slots,
             rig: rig.clone(),
+            coarse: options_coarse,
         })
     }
 
@@ -210,6 +215,12 @@ impl Renderer {
 
     pub fn mode(&self) -> StereoMode {
         self.options.mode
+    }
+
+    /// Whether frames start with the coarse cull: [`crate::renderer::CoarseMode`] as
+    /// decided for the rig.
+    pub fn coarse_cull(&self) -> bool {
+        self.coarse
     }
 
     /// GPU bytes per instance: the 64-byte instance record, the GPU culler's layout and
@@ -240,12 +251,16 @@ impl Renderer {
             ));
         }
         let resolved = rig.resolve()?;
-        let lod = frame_lod(rig, &resolved, self.options.lod_levels());
-        let frame = uniform_bytes(&FrameContext::new(&rig.viewer, time, lod.lod_scale));
-        let frame_bytes = write(queue, &self.frame, &frame);
+        let cull = FrameCull {
+            lod: frame_lod(rig, &resolved, self.options.lod_levels()),
+            coarse: self.coarse.then(|| CoarseCull::new(&resolved)),
+        };
+        let coarse = cull.coarse.unwrap_or(CoarseCull::EVERYTHING);
+        let context = FrameContext::new(&rig.viewer, time, cull.lod.lod_scale, &coarse);
+        let frame_bytes = write(queue, &self.frame, &uniform_bytes(&context));
         let mut stats = match &mut self.path {
-            Path::Indirect(p) => p.prepare(queue, rig, (&resolved, &lod)),
-            Path::Classic(p) => p.prepare(queue, rig, (&resolved, &lod)),
+            Path::Indirect(p) => p.prepare(queue, rig, (&resolved, &cull)),
+            Path::Classic(p) => p.prepare(queue, rig, (&resolved, &cull)),
         };
         // Texels go up with the first frame: `new` has no queue.
         stats.bytes_uploaded += frame_bytes + self.path.draw_scene().materials.upload(queue);
@@ -268,7 +283,7 @@ impl Renderer {
             });
         }
         let mut stats = FrameStats {
-            dispatches: self.scatter.encode(encoder),
+            dispatches: self.scatter.encode(encoder) + self.encode_frame(encoder, &mut timer),
             ..FrameStats::default()
         };
         for (i, target) in targets.iter().enumerate() {
@@ -287,6 +302,46 @@ impl Renderer {
         Ok(stats)
     }
 
+    /// The frame level's passes, before any display's: the coarse cull on the GPU.
+    fn encode_frame(
+        &self,
+        encoder: &mut wgpu::CommandEncoder,
+        timer: &mut Option<&mut GpuTimer>,
+    ) -> u32 {
+        match &self.path {
+            Path::Indirect(p) => p.encode_frame(encoder, timer),
+            Path::Classic(_) => 0,
+        }
+    }
+
+    /// The coarse cull's candidates in the last frame, read back after it was submitted
+    /// (GPU culling with the coarse cull; `None` otherwise): each display's cull tested
+    /// only these.
+    pub fn read_candidates(
+        &self,
+        device: &wgpu::Device,
+        queue: &wgpu::Queue,
+    ) -> Result<Option<u32>> {
+        match &self.path {
+            Path::Indirect(p) => p.read_candidates(device, queue),
+            Path::Classic(_) => Ok(None),
+        }
+    }
+
+    /// Sphere-against-frustum tests of the last frame with GPU culling (read back after
+    /// it was submitted; `None` otherwise): every instance once per display, or with the
+    /// coarse cull once for the frame plus once per display for each candidate.
+    pub fn read_sphere_tests(
+        &self,
+        device: &wgpu::Device,
+        queue: &wgpu::Queue,
+    ) -> Result<Option<u64>> {
+        match &self.path {
+            Path::Indirect(p) => p.read_sphere_tests(device, queue),
+            Path::Classic(_) => Ok(None),
+        }
+    }
+
     /// For drawing into the caller's own render passes: records this frame's culls
     /// (GPU culling: each display's dispatches, timed as `cull` inside a scope per
     /// display; CPU culling: nothing, `prepare` uploaded them). Then, in passes the
@@ -297,7 +352,7 @@ impl Renderer {
         mut timer: Option<&mut GpuTimer>,
     ) -> FrameStats {
         let mut stats = FrameStats {
-            dispatches: self.scatter.encode(encoder),
+            dispatches: self.scatter.encode(encoder) + self.encode_frame(encoder, &mut timer),
             ..FrameStats::default()
         };
         if let Path::Indirect(p) = &self.path {

@@ -3,6 +3,7 @@
 
 use std::sync::Arc;
 
+use crate::cull::coarse::expected_tests;
 use crate::cull::cpu::FrameLod;
 use crate::draw::{DEPTH_FORMAT, TargetFormat};
 use crate::modes::StereoMode;
@@ -18,6 +19,21 @@ pub enum CullMode {
     Gpu,
     /// The rayon culler, then an upload of its results.
     Cpu,
+}
+
+/// Whether each frame starts with the coarse cull ([`crate::cull::coarse`]): every
+/// instance once against the frame frustum, then each display's cull over the
+/// candidates only. The draws are the same either way; only the work differs.
+#[derive(Clone, Copy, Debug, Default, PartialEq, Eq, Hash, clap::ValueEnum, serde::Serialize)]
+#[serde(rename_all = "lowercase")]
+pub enum CoarseMode {
+    /// On where it is expected to save sphere tests by a fifth or more
+    /// ([`crate::cull::coarse::expected_tests`]): rigs of several displays with a
+    /// frame frustum (`hmd-peripheral`), not one display nor displays around the viewer.
+    #[default]
+    Auto,
+    On,
+    Off,
 }
 
 #[derive(Clone, Debug)]
@@ -41,6 +57,7 @@ pub struct RendererOptions {
     /// Levels of detail ([`crate::scene::Mesh::lods`]), one per instance and frame from
     /// the viewer's position, at most [`LOD_PIXELS`] of error on the sharpest display.
     pub lod: bool,
+    pub coarse_cull: CoarseMode,
 }
 
 /// Screen-space error, in pixels, a level of detail may show.
@@ -50,6 +67,20 @@ impl RendererOptions {
     /// Levels of detail culled into: [`MAX_LODS`], or 1 with LOD off.
     pub fn lod_levels(&self) -> u32 {
         if self.lod { MAX_LODS as u32 } else { 1 }
+    }
+
+    /// Whether frames on `rig` run the coarse cull: [`CoarseMode`] decided for the rig
+    /// as it stands (a rig that fails to resolve gets none; `Renderer::new` reports it).
+    pub fn coarse_for(&self, rig: &Rig) -> bool {
+        match self.coarse_cull {
+            CoarseMode::On => true,
+            CoarseMode::Off => false,
+            CoarseMode::Auto => rig
+                .resolve()
+                .ok()
+                .and_then(|r| expected_tests(&r))
+                .is_some_and(|ratio| ratio <= 0.8),
+        }
     }
 
     /// The attachments the draw pipelines are built for.
@@ -72,6 +103,7 @@ impl Default for RendererOptions {
             cull: CullMode::Gpu,
             mode: StereoMode::Instanced,
             lod: false,
+            coarse_cull: CoarseMode::Auto,
         }
     }
 }

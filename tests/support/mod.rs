@@ -9,14 +9,17 @@ pub mod room;
 
 use std::path::PathBuf;
 
-use glam::{Affine3A, Vec3, Vec4};
+use glam::{Affine3A, Quat, Vec3, Vec4};
 use image::{Rgba, RgbaImage};
+use proptest::prelude::*;
+use rand::{Rng, SeedableRng};
 use stereocull::cull::{CullOutput, cpu};
 use stereocull::device::Gpu;
+use stereocull::procedural;
 use stereocull::readback::read_rgba8;
 use stereocull::records::CullLayout;
 use stereocull::renderer::{CullMode, Renderer, RendererOptions, StereoMode};
-use stereocull::rig::Rig;
+use stereocull::rig::{Mount, Rig};
 use stereocull::scene::{Animation, Instance, Scene};
 use stereocull::shapes;
 
@@ -170,4 +173,71 @@ pub fn assert_images_match(
         );
     }
     count
+}
+
+pub const PRESETS: [&str; 3] = ["hmd", "cave", "hmd-peripheral"];
+
+/// A preset moved anywhere within a million meters, looking anywhere, with a far plane
+/// of a kilometer or of two thousand kilometers. A CAVE moves with its viewer (its walls
+/// are world-fixed), who stays within half a meter of its center.
+pub fn rig_strategy() -> impl Strategy<Value = Rig> {
+    let coordinate = prop_oneof![-10.0f32..10.0, -1.0e6f32..1.0e6];
+    (
+        0..PRESETS.len(),
+        [coordinate.clone(), coordinate.clone(), coordinate],
+        [-0.5f32..0.5, -0.5f32..0.5, -0.5f32..0.5],
+        -180.0f32..180.0,
+        -80.0f32..80.0,
+        0.0f32..0.08,
+        prop_oneof![Just(1.0e3f32), Just(2.0e6f32)],
+    )
+        .prop_map(|(preset, moved, jitter, yaw, pitch, ipd, far)| {
+            let mut rig = Rig::preset(PRESETS[preset]).unwrap();
+            let moved = Vec3::from(moved);
+            let home = Vec3::from(rig.viewer.position);
+            rig.viewer.position = (home + moved + Vec3::from(jitter)).into();
+            rig.viewer.yaw_deg = yaw;
+            rig.viewer.pitch_deg = pitch;
+            rig.viewer.ipd = ipd;
+            rig.far = far;
+            for d in &mut rig.displays {
+                d.resolution = [64, 64];
+                if let Mount::Screen(s) = &mut d.mount {
+                    for corner in [&mut s.lower_left, &mut s.lower_right, &mut s.upper_left] {
+                        *corner = (Vec3::from(*corner) + moved).into();
+                    }
+                }
+            }
+            rig
+        })
+}
+
+/// `n` instances of `meshes` meshes around the viewer, at distances from 10 cm to two
+/// thousand kilometers and sizes from a tenth of a millimeter to a hundred meters.
+pub fn extreme_scene(rig: &Rig, n: u32, meshes: u32, seed: u64) -> Scene {
+    let mut scene = procedural::scene(n, meshes, seed);
+    let mut rng = rand_pcg::Pcg64::seed_from_u64(seed);
+    let around = Vec3::from(rig.viewer.position);
+    for inst in &mut scene.instances {
+        let direction = Vec3::new(
+            rng.random_range(-1.0..1.0),
+            rng.random_range(-1.0..1.0),
+            rng.random_range(-1.0..1.0),
+        )
+        .normalize_or(Vec3::Z);
+        let distance = 10f32.powf(rng.random_range(-1.0..6.3));
+        let scale = 10f32.powf(rng.random_range(-4.0..2.0));
+        let rotation = Quat::from_euler(
+            glam::EulerRot::YXZ,
+            rng.random(),
+            rng.random(),
+            rng.random(),
+        );
+        inst.world_from_local = Affine3A::from_scale_rotation_translation(
+            Vec3::splat(scale),
+            rotation,
+            around + direction * distance,
+        );
+    }
+    scene
 }

@@ -44,4 +44,10 @@ struct FrameContext {
     viewer_direction: vec3<f32>,
     // (pixels per radian / pixels of error allowed)^2: see lod_level in cull_math.wgsl.
     lod_scale: f32,
+    // The frame-level coarse cull (src/cull/coarse.rs): the frame frustum's planes,
+    // pushed out so that they keep every sphere any display keeps, how much radii grow,
+    // and the rounding slack per unit of |center|. See coarse_test in cull_coarse.wgsl.
+    coarse_planes: array<vec4<f32>, 6>,
+    coarse_inflation: f32,
+    coarse_slack: f32,
 }

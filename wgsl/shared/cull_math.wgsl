@@ -31,6 +31,69 @@ fn lod_level(k: u32) -> u32 {
     return level;
 }
 
+// What a display's passes run over: every cull position, or, after the frame's coarse
+// cull (COARSE), its candidates (cull positions, ascending), whose count it wrote.
+fn cull_count() -> u32 {
+    if (COARSE) {
+        return candidate_count[0];
+    }
+    return params.instance_count;
+}
+
+fn cull_position(j: u32) -> u32 {
+    if (COARSE) {
+        return candidates[j];
+    }
+    return j;
+}
+
+// Mesh m's (start, count) among what the passes run over.
+fn mesh_range(m: u32) -> vec2<u32> {
+    if (COARSE) {
+        return candidate_ranges[m];
+    }
+    return vec2(meshes[m].cull_start, meshes[m].cull_count);
+}
+
+var<workgroup> uniform_count: u32;
+
+// cull_count(), as a value the whole workgroup agrees on (loops with barriers need it).
+fn workgroup_cull_count(local: u32) -> u32 {
+    if (local == 0u) {
+        uniform_count = cull_count();
+    }
+    return workgroupUniformLoad(&uniform_count);
+}
+
+// Flagged entries of `level` before position `pos` of the n run over, plus every finer
+// level's (pos may be n, which gives `total`). Block sums must hold block prefixes.
+fn flagged_before(level: u32, pos: u32, n: u32, total: u32) -> u32 {
+    if (pos >= n) {
+        return total;
+    }
+    let blocks = (n + WORKGROUP_SIZE - 1u) / WORKGROUP_SIZE;
+    return block_sums[level * blocks + pos / WORKGROUP_SIZE] + (local_prefix[level * n + pos] & ~VISIBLE_BIT);
+}
+
+// Turns `blocks` block sums from block_sums[first] on into block prefixes starting at
+// `carry`, in one workgroup; returns carry plus their total.
+fn prefix_blocks(first: u32, blocks: u32, carry_in: u32, local: u32) -> u32 {
+    var carry = carry_in;
+    for (var base = 0u; base < blocks; base += WORKGROUP_SIZE) {
+        let b = base + local;
+        var sum = 0u;
+        if (b < blocks) {
+            sum = block_sums[first + b];
+        }
+        let scan = workgroup_exclusive_scan(local, sum);
+        if (b < blocks) {
+            block_sums[first + b] = carry + scan.x;
+        }
+        carry += scan.y;
+    }
+    return carry;
+}
+
 // Bit 31 of a local_prefix entry is the instance's visibility flag; the low bits are
 // its exclusive prefix within its workgroup (< WORKGROUP_SIZE).
 const VISIBLE_BIT: u32 = 0x80000000u;

@@ -51,9 +51,9 @@ struct DrawArgs {
 struct CullParams {
     instance_count: u32,
     mesh_count: u32,
-    // Workgroups along x in the cull and compact dispatches (y carries the rest; z is
-    // the level of detail).
-    groups_x: u32,
+    // The device's limit of workgroups per dimension: how the coarse pass splits the
+    // candidates' dispatch into x and y (z is the level of detail).
+    max_groups: u32,
     // Levels of detail in use: 1 (LOD off) or MAX_LODS.
     lod_levels: u32,
 }

@@ -1,0 +1,187 @@
+//! The frame-level coarse cull: its test keeps every sphere that any display's or eye's
+//! plane test keeps (tried adversarially at frustum corners, where plane tests keep
+//! spheres outside the frustum), and the draw buffers with and without it are
+//! byte-identical, GPU and CPU, over every preset, random rigs and every mode.
+
+mod support;
+
+use glam::{DVec3, Vec3, Vec4};
+use proptest::prelude::*;
+use proptest::strategy::ValueTree;
+use rand::{Rng, SeedableRng};
+use stereocull::cull::coarse::expected_tests;
+use stereocull::cull::{CoarseCull, CullOutput};
+use stereocull::frustum::{View, sphere_in_planes};
+use stereocull::renderer::{CoarseMode, CullMode, Renderer, RendererOptions, StereoMode};
+use stereocull::rig::Rig;
+use stereocull::scene::Scene;
+
+/// Every view whose planes some cull tests: each display's combined view and its eyes.
+fn views(rig: &Rig) -> Vec<View> {
+    let resolved = rig.resolve().unwrap();
+    resolved
+        .displays
+        .iter()
+        .flat_map(|d| [d.combined].into_iter().chain(d.eyes.iter().copied()))
+        .collect()
+}
+
+/// A sphere near a corner of `view`, from 1 mm to 100 m, its center up to two radii
+/// from the corner: where the plane test keeps spheres the frustum does not hold.
+fn sphere_at_a_corner(view: &View, rng: &mut rand_pcg::Pcg64) -> Vec4 {
+    let corner = view.corners()[rng.random_range(0..8)];
+    let radius = 10f64.powf(rng.random_range(-3.0..2.0));
+    let direction = DVec3::new(
+        rng.random_range(-1.0..1.0),
+        rng.random_range(-1.0..1.0),
+        rng.random_range(-1.0..1.0),
+    )
+    .normalize_or(DVec3::X);
+    let center = corner + direction * radius * rng.random_range(0.0..2.0);
+    center.as_vec3().extend(radius as f32)
+}
+
+/// How many spheres near the corners some view keeps and the coarse test drops.
+fn dropped(rig: &Rig, coarse: &CoarseCull, seed: u64) -> (u32, u32) {
+    let mut rng = rand_pcg::Pcg64::seed_from_u64(seed);
+    let views = views(rig);
+    let (mut kept, mut lost) = (0, 0);
+    for _ in 0..400 {
+        let view = &views[rng.random_range(0..views.len())];
+        let s = sphere_at_a_corner(view, &mut rng);
+        if views
+            .iter()
+            .any(|v| sphere_in_planes(&v.frustum().planes, s))
+        {
+            kept += 1;
+            lost += u32::from(!coarse.test(s));
+        }
+    }
+    (kept, lost)
+}
+
+proptest! {
+    #![proptest_config(ProptestConfig::with_cases(300))]
+
+    #[test]
+    fn the_coarse_test_keeps_what_any_display_or_eye_keeps(
+        rig in support::rig_strategy(),
+        seed in any::<u64>(),
+    ) {
+        let coarse = CoarseCull::new(&rig.resolve().unwrap());
+        let (kept, lost) = dropped(&rig, &coarse, seed);
+        prop_assert!(kept > 0);
+        prop_assert_eq!(lost, 0, "{} of {} kept spheres dropped; {:?}", lost, kept, coarse);
+    }
+}
+
+/// The growth of radii is what makes the guarantee: without it the same corner spheres
+/// are dropped (so the test above can fail), and with it the frame frustum still
+/// narrows (it is no `EVERYTHING`).
+#[test]
+fn without_grown_radii_corner_spheres_are_dropped() {
+    let rig = Rig::preset("hmd-peripheral").unwrap();
+    let coarse = CoarseCull::new(&rig.resolve().unwrap());
+    assert_ne!(coarse, CoarseCull::EVERYTHING);
+    assert!(
+        (1.0..3.0).contains(&coarse.inflation),
+        "{}",
+        coarse.inflation
+    );
+    let bare = CoarseCull {
+        inflation: 1.0,
+        slack: 0.0,
+        ..coarse
+    };
+    let lost: u32 = (0..8).map(|seed| dropped(&rig, &bare, seed).1).sum();
+    assert!(
+        lost > 0,
+        "no corner sphere separates the bare frame frustum"
+    );
+    let behind = Vec3::new(0.0, 1.6, 40.0).extend(0.5);
+    assert!(
+        !coarse.test(behind),
+        "a sphere behind the viewer is no candidate"
+    );
+}
+
+#[test]
+fn auto_runs_the_coarse_cull_where_it_pays() {
+    let auto = RendererOptions::default();
+    let on = |preset: &str| auto.coarse_for(&Rig::preset(preset).unwrap());
+    assert!(on("hmd-peripheral"));
+    assert!(
+        !on("hmd"),
+        "one display: the coarse cull would only add tests"
+    );
+    assert!(!on("cave"), "walls around the viewer: no frame frustum");
+    let resolved = Rig::preset("hmd-peripheral").unwrap().resolve().unwrap();
+    let ratio = expected_tests(&resolved).unwrap();
+    assert!((0.5..0.8).contains(&ratio), "{ratio}");
+    assert_eq!(
+        expected_tests(&Rig::preset("cave").unwrap().resolve().unwrap()),
+        None
+    );
+}
+
+fn culls(scene: &Scene, rig: &Rig, options: RendererOptions) -> (Vec<CullOutput>, Option<u32>) {
+    let gpu = support::gpu();
+    let mut renderer = Renderer::new(&gpu.device, scene, rig, options).unwrap();
+    let targets = renderer.create_targets(&gpu.device);
+    renderer
+        .submit_frame(&gpu.device, &gpu.queue, rig, 0.0, &targets)
+        .unwrap();
+    let outputs = (0..rig.displays.len())
+        .map(|d| renderer.read_cull(&gpu.device, &gpu.queue, d).unwrap())
+        .collect();
+    let candidates = renderer.read_candidates(&gpu.device, &gpu.queue).unwrap();
+    (outputs, candidates)
+}
+
+/// Random scenes on every preset and on random rigs: with the coarse cull forced on, the
+/// GPU's and the CPU's draw buffers equal the CPU reference without it, in the indirect
+/// modes and (CPU culls per eye) multi-camera, with and without levels of detail.
+#[test]
+fn draw_buffers_are_the_same_with_and_without_the_coarse_cull() {
+    let mut runner = proptest::test_runner::TestRunner::deterministic();
+    let random_rigs = (0..4).map(|_| {
+        support::rig_strategy()
+            .new_tree(&mut runner)
+            .unwrap()
+            .current()
+    });
+    let rigs: Vec<Rig> = support::PRESETS
+        .iter()
+        .map(|p| support::sized(p, 64, 64))
+        .chain(random_rigs)
+        .collect();
+    for (i, rig) in rigs.iter().enumerate() {
+        let scene = support::extreme_scene(rig, 3000 + 500 * i as u32, 9, i as u64);
+        for (mode, cull, lod) in [
+            (StereoMode::Instanced, CullMode::Gpu, false),
+            (StereoMode::Instanced, CullMode::Gpu, true),
+            (StereoMode::Instanced, CullMode::Cpu, false),
+            (StereoMode::MultiCamera, CullMode::Cpu, false),
+        ] {
+            let options = |coarse_cull| RendererOptions {
+                mode,
+                cull,
+                lod,
+                coarse_cull,
+                ..RendererOptions::default()
+            };
+            let (with, candidates) = culls(&scene, rig, options(CoarseMode::On));
+            let (without, none) = culls(&scene, rig, options(CoarseMode::Off));
+            let case = format!("rig {i} {mode:?} {cull:?} lod {lod}");
+            assert_eq!(with, without, "{case}");
+            assert_eq!(none, None, "{case}");
+            if cull == CullMode::Gpu {
+                let n = scene.instances.len() as u32;
+                let c = candidates.unwrap_or_else(|| panic!("{case}: no candidate count"));
+                let visible = with.iter().map(|o| o.visible.len() as u32).max().unwrap();
+                assert!((visible..=n).contains(&c), "{case}: {c} candidates");
+                eprintln!("{case}: {c} candidates of {n}, at most {visible} visible");
+            }
+        }
+    }
+}
