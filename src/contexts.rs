@@ -9,6 +9,7 @@ use glam::{Mat4, Vec2, Vec3, Vec4};
 use crate::cull::CoarseCull;
 use crate::frustum::View;
 use crate::rig::{ResolvedDisplay, Viewer};
+use crate::shadow::LightView;
 
 /// Once per frame: the viewer (not any eye) and the time, bound to the cull and draw
 /// pipelines. The draw pass animates instances from `time` ([`crate::scene::Animation`]).
@@ -27,10 +28,22 @@ pub struct FrameContext {
     pub coarse_planes: [Vec4; 6],
     pub coarse_inflation: f32,
     pub coarse_slack: f32,
+    /// The frame's light ([`crate::shadow`]): world to its shadow map's clip space,
+    /// where it comes from (unit), and 1 when the shadow map was drawn this frame.
+    pub light_from_world: Mat4,
+    pub light_direction: Vec3,
+    pub shadows: u32,
 }
 
 impl FrameContext {
-    pub fn new(viewer: &Viewer, time: f32, lod_scale: f32, coarse: &CoarseCull) -> FrameContext {
+    /// The frame's context; `light` shades, and with `shadows` its view's shadow map
+    /// darkens what it does not reach.
+    pub fn new(
+        viewer: &Viewer,
+        (time, lod_scale): (f32, f32),
+        coarse: &CoarseCull,
+        (light, shadows): (&LightView, bool),
+    ) -> FrameContext {
         let orientation = viewer.orientation();
         FrameContext {
             viewer_position: viewer.position().as_vec3(),
@@ -40,6 +53,9 @@ impl FrameContext {
             coarse_planes: coarse.planes,
             coarse_inflation: coarse.inflation,
             coarse_slack: coarse.slack,
+            light_from_world: light.clip_from_world,
+            light_direction: light.direction,
+            shadows: u32::from(shadows),
         }
     }
 }
@@ -123,6 +139,37 @@ impl DisplayContext {
             eye: [self.eye[e]; 2],
             first_eye: e as u32,
             ..*self
+        }
+    }
+}
+
+impl DisplayContext {
+    /// The frame's light as a display: its one view in both eye slots, so that the draw
+    /// decode (`display.eye[0].clip_from_world`) projects into the `size`-texel shadow
+    /// map, and its box's planes for its cull.
+    pub fn light(view: &LightView, size: u32) -> DisplayContext {
+        let clip_from_world = view.clip_from_world;
+        let world_from_clip = clip_from_world.inverse();
+        let eye = EyeContext {
+            view_from_world: Mat4::IDENTITY,
+            world_from_view: Mat4::IDENTITY,
+            clip_from_view: clip_from_world,
+            view_from_clip: world_from_clip,
+            clip_from_world,
+            world_from_clip,
+            position: Vec3::ZERO,
+        };
+        DisplayContext {
+            view_from_world: Mat4::IDENTITY,
+            world_from_view: Mat4::IDENTITY,
+            clip_from_view: clip_from_world,
+            view_from_clip: world_from_clip,
+            eye: [eye; 2],
+            position: Vec3::ZERO,
+            resolution: Vec2::splat(size as f32),
+            planes: view.planes,
+            instances_per_object: 1,
+            first_eye: 0,
         }
     }
 }

@@ -12,6 +12,7 @@ use crate::materials::{self, GpuMaterials};
 use crate::records::{InstanceRecord, instance_records};
 use crate::scene::{Scene, Vertex};
 use crate::shaders::{DRAW_BINDINGS, DrawKey, bind_group, bind_group_layout};
+use crate::shadow::{self, ShadowMap};
 
 /// The depth format of the renderer's own targets, unless the options name another.
 pub const DEPTH_FORMAT: wgpu::TextureFormat = wgpu::TextureFormat::Depth32Float;
@@ -36,12 +37,14 @@ pub const CLEAR_COLOR: wgpu::Color = wgpu::Color {
 pub const VERTEX_ATTRIBUTES: [wgpu::VertexAttribute; 4] =
     wgpu::vertex_attr_array![0 => Float32x3, 1 => Float32x3, 2 => Float32x2, 3 => Uint32];
 
-/// The scene's geometry, instance records and materials on the GPU, uploaded once.
+/// The scene's geometry, instance records and materials on the GPU, uploaded once, and
+/// the frame's shadow map the draws sample.
 pub struct DrawScene {
     pub vertices: wgpu::Buffer,
     pub indices: wgpu::Buffer,
     pub instances: wgpu::Buffer,
     pub materials: GpuMaterials,
+    pub shadow_map: ShadowMap,
     pub mesh_count: u32,
 }
 
@@ -56,8 +59,10 @@ impl DrawScene {
     ) -> Result<DrawScene> {
         let init =
             |label: &str, contents: &[u8], usage| init_buffer(device, label, contents, usage);
+        let shadow_size = drawer.shadow.as_ref().map_or(1, |s| s.size);
         Ok(DrawScene {
             materials: GpuMaterials::new(device, &drawer.materials_layout, scene)?,
+            shadow_map: ShadowMap::new(device, &drawer.shadow_layout, shadow_size),
             vertices: init(
                 "stereocull.vertices",
                 bytemuck::cast_slice(&scene.vertices),
@@ -100,12 +105,21 @@ impl DrawFeatures {
     }
 }
 
-/// Draw pipelines by variant, for one color format.
+/// Draw pipelines by variant, for one color format, and the shadow pass's.
 pub struct Drawer {
     layout: wgpu::BindGroupLayout,
     materials_layout: wgpu::BindGroupLayout,
+    shadow_layout: wgpu::BindGroupLayout,
     pipelines: HashMap<DrawKey, wgpu::RenderPipeline>,
+    /// With shadows: the depth-only pipeline and the shadow map's size.
+    pub shadow: Option<ShadowPipeline>,
     pub features: DrawFeatures,
+}
+
+/// The frame's shadow pass pipeline (`wgsl/shadow.wgsl`).
+pub struct ShadowPipeline {
+    pub pipeline: wgpu::RenderPipeline,
+    pub size: u32,
 }
 
 impl Drawer {
@@ -115,18 +129,20 @@ impl Drawer {
     }
 
     /// Builds the pipelines for the given variants, rendering into `target`, shaded by
-    /// `material` (see [`DrawKey::source_with`]) or the built-in shading.
+    /// `material` (see [`DrawKey::source_with`]) or the built-in shading, and with
+    /// `shadow_size` the shadow pass's, into a map of that many texels a side.
     pub fn new(
         device: &wgpu::Device,
         target: TargetFormat,
-        keys: &[DrawKey],
-        material: Option<&str>,
+        (keys, material): (&[DrawKey], Option<&str>),
+        shadow_size: Option<u32>,
     ) -> Drawer {
         let layout = bind_group_layout(device, "stereocull.draw", &DRAW_BINDINGS);
         let materials_layout = materials::bind_group_layout(device);
+        let shadow_layout = shadow::bind_group_layout(device);
         let pipeline_layout = device.create_pipeline_layout(&wgpu::PipelineLayoutDescriptor {
             label: Some("stereocull.draw"),
-            bind_group_layouts: &[Some(&layout), Some(&materials_layout)],
+            bind_group_layouts: &[Some(&layout), Some(&materials_layout), Some(&shadow_layout)],
             immediate_size: 0,
         });
         let pipelines = keys
@@ -139,10 +155,16 @@ impl Drawer {
                 )
             })
             .collect();
+        let shadow = shadow_size.map(|size| ShadowPipeline {
+            pipeline: shadow_pipeline(device, &layout),
+            size,
+        });
         Drawer {
             layout,
             materials_layout,
+            shadow_layout,
             pipelines,
+            shadow,
             features: DrawFeatures::of(device),
         }
     }
@@ -176,6 +198,7 @@ impl Drawer {
         pass.set_pipeline(&self.pipelines[&key]);
         Drawer::bind_resources(pass, scene, bind_group);
         pass.set_bind_group(1, &scene.materials.bind_group, &[]);
+        pass.set_bind_group(2, &scene.shadow_map.bind_group, &[]);
     }
 
     /// The geometry and group 0 on `pass`, for whatever pipeline it has.
@@ -257,6 +280,47 @@ pub fn set_eye_viewport(pass: &mut wgpu::RenderPass, eye: u32, eye_size: (u32, u
     let (w, h) = eye_size;
     pass.set_viewport((eye * w) as f32, 0.0, w as f32, h as f32, 0.0, 1.0);
     pass.set_scissor_rect(eye * w, 0, w, h);
+}
+
+/// Depth only, both faces (open meshes cast shadows too), biased by slope so that lit
+/// surfaces do not shadow themselves.
+fn shadow_pipeline(device: &wgpu::Device, group_0: &wgpu::BindGroupLayout) -> wgpu::RenderPipeline {
+    let label = "stereocull.shadow";
+    let layout = crate::shaders::pipeline_layout(device, label, group_0);
+    let module = device.create_shader_module(wgpu::ShaderModuleDescriptor {
+        label: Some(label),
+        source: wgpu::ShaderSource::Wgsl(crate::shaders::shadow_source().into()),
+    });
+    device.create_render_pipeline(&wgpu::RenderPipelineDescriptor {
+        label: Some(label),
+        layout: Some(&layout),
+        vertex: wgpu::VertexState {
+            module: &module,
+            entry_point: Some("vs_main"),
+            compilation_options: Default::default(),
+            buffers: &[Some(wgpu::VertexBufferLayout {
+                array_stride: size_of::<Vertex>() as u64,
+                step_mode: wgpu::VertexStepMode::Vertex,
+                attributes: &VERTEX_ATTRIBUTES,
+            })],
+        },
+        primitive: wgpu::PrimitiveState::default(),
+        depth_stencil: Some(wgpu::DepthStencilState {
+            format: shadow::SHADOW_FORMAT,
+            depth_write_enabled: Some(true),
+            depth_compare: Some(wgpu::CompareFunction::Less),
+            stencil: Default::default(),
+            bias: wgpu::DepthBiasState {
+                constant: 2,
+                slope_scale: 2.0,
+                clamp: 0.0,
+            },
+        }),
+        multisample: Default::default(),
+        fragment: None,
+        multiview_mask: None,
+        cache: None,
+    })
 }
 
 fn pipeline(

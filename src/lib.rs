@@ -37,6 +37,7 @@ pub mod scatter;
 pub mod scene;
 pub mod scene_spec;
 pub mod shaders;
+pub mod shadow;
 pub mod shapes;
 
 pub use error::{Error, Result};

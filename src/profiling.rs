@@ -37,6 +37,9 @@ pub struct FrameQueries {
     pub passes: Vec<(String, f64)>,
     /// Summed over the draw passes; `None` without pipeline statistics.
     pub vertex_invocations: Option<u64>,
+    /// Per statistics query of the frame, in order (`PassRecord::statistics` says which
+    /// pass each counted).
+    pub vertex_invocations_per_query: Vec<u64>,
     /// Primitives that reached the clipper: the triangles submitted.
     pub triangles_submitted: Option<u64>,
     pub clipper_primitives: Option<u64>,
@@ -113,15 +116,16 @@ impl GpuTimer {
     }
 
     /// Starts counting vertex invocations and clipped primitives in `pass`; returns
-    /// whether it did (then [`GpuTimer::end_statistics`] must follow in the same pass).
-    pub fn begin_statistics(&mut self, pass: &mut wgpu::RenderPass) -> bool {
+    /// the query's index in the frame when it did (then [`GpuTimer::end_statistics`]
+    /// must follow in the same pass).
+    pub fn begin_statistics(&mut self, pass: &mut wgpu::RenderPass) -> Option<u32> {
         match self.statistics.as_mut() {
             Some(s) if s.used < s.capacity => {
                 pass.begin_pipeline_statistics_query(&s.queries, s.used);
                 s.used += 1;
-                true
+                Some(s.used - 1)
             }
-            _ => false,
+            _ => None,
         }
     }
 
@@ -168,6 +172,11 @@ impl GpuTimer {
             };
             let sum = |k: usize| Some(counts.iter().skip(k).step_by(STATISTICS_PER_QUERY).sum());
             frame.vertex_invocations = sum(0);
+            frame.vertex_invocations_per_query = counts
+                .iter()
+                .step_by(STATISTICS_PER_QUERY)
+                .copied()
+                .collect();
             frame.triangles_submitted = sum(1);
             frame.clipper_primitives = sum(2);
             s.used = 0;

@@ -127,7 +127,7 @@ pub const DRAW_BINDINGS: [Binding; 4] = [
         "frame",
         Access::Uniform,
         "FrameContext",
-        wgpu::ShaderStages::VERTEX,
+        wgpu::ShaderStages::VERTEX_FRAGMENT,
     ),
     binding(
         "display",
@@ -483,6 +483,7 @@ impl DrawKey {
             prelude,
             &decode_source(self.views),
             crate::materials::DECLARATIONS,
+            SHADOW_DECLARATIONS,
             DRAW_COMMON,
             &shading,
             entry,
@@ -507,6 +508,20 @@ fn constants() -> String {
     format!("\nconst WORKGROUP_SIZE: u32 = {WORKGROUP_SIZE}u;\nconst MAX_LODS: u32 = {lods}u;\n")
 }
 
+/// Group 2 of the built-in draw pipelines: the frame's shadow map and its comparison
+/// sampler (`light_reaching` in `wgsl/shared/draw_common.wgsl`; the layout is
+/// `shadow::bind_group_layout`).
+pub const SHADOW_DECLARATIONS: &str = "\
+@group(2) @binding(0) var shadow_map: texture_depth_2d;
+@group(2) @binding(1) var shadow_sampler: sampler_comparison;
+";
+
+/// The frame's shadow pass: depth only, the light as the display's eye 0
+/// (`wgsl/shadow.wgsl` after the mono decode).
+pub fn shadow_source() -> String {
+    [&decode_source(1), include_str!("../wgsl/shadow.wgsl")].concat()
+}
+
 /// Every shader variant the crate can build, with its label.
 pub fn all_sources() -> Vec<(String, String)> {
     let cull = CullPass::variants()
@@ -514,5 +529,9 @@ pub fn all_sources() -> Vec<(String, String)> {
         .map(|(p, c)| (p.label(c), p.source(c)));
     let draw = DrawKey::ALL.map(|k| (k.label(), k.source()));
     let scatter = ("stereocull.scatter".to_string(), scatter_source());
-    cull.into_iter().chain(draw).chain([scatter]).collect()
+    let shadow = ("stereocull.shadow".to_string(), shadow_source());
+    cull.into_iter()
+        .chain(draw)
+        .chain([scatter, shadow])
+        .collect()
 }

@@ -9,7 +9,6 @@ use glam::{DVec3, Vec3, Vec4};
 use proptest::prelude::*;
 use proptest::strategy::ValueTree;
 use rand::{Rng, SeedableRng};
-use stereocull::cull::coarse::expected_tests;
 use stereocull::cull::{CoarseCull, CullOutput};
 use stereocull::frustum::{View, sphere_in_planes};
 use stereocull::renderer::{CoarseMode, CullMode, Renderer, RendererOptions, StereoMode};
@@ -68,7 +67,7 @@ proptest! {
         rig in support::rig_strategy(),
         seed in any::<u64>(),
     ) {
-        let coarse = CoarseCull::new(&rig.resolve().unwrap());
+        let coarse = rig.resolve().unwrap().coarse_cull();
         let (kept, lost) = dropped(&rig, &coarse, seed);
         prop_assert!(kept > 0);
         prop_assert_eq!(lost, 0, "{} of {} kept spheres dropped; {:?}", lost, kept, coarse);
@@ -81,7 +80,7 @@ proptest! {
 #[test]
 fn without_grown_radii_corner_spheres_are_dropped() {
     let rig = Rig::preset("hmd-peripheral").unwrap();
-    let coarse = CoarseCull::new(&rig.resolve().unwrap());
+    let coarse = rig.resolve().unwrap().coarse_cull();
     assert_ne!(coarse, CoarseCull::EVERYTHING);
     assert!(
         (1.0..3.0).contains(&coarse.inflation),
@@ -116,10 +115,14 @@ fn auto_runs_the_coarse_cull_where_it_pays() {
     );
     assert!(!on("cave"), "walls around the viewer: no frame frustum");
     let resolved = Rig::preset("hmd-peripheral").unwrap().resolve().unwrap();
-    let ratio = expected_tests(&resolved).unwrap();
+    let ratio = resolved.expected_coarse_tests().unwrap();
     assert!((0.5..0.8).contains(&ratio), "{ratio}");
     assert_eq!(
-        expected_tests(&Rig::preset("cave").unwrap().resolve().unwrap()),
+        Rig::preset("cave")
+            .unwrap()
+            .resolve()
+            .unwrap()
+            .expected_coarse_tests(),
         None
     );
 }

@@ -267,6 +267,42 @@ fn every_stereo_mode_agrees_with_instanced() {
     }
 }
 
+/// With the frame's shadow map on, every mode samples the same map: the images agree
+/// as without it (and shadows show: the image differs from the unshadowed one).
+#[test]
+fn every_stereo_mode_agrees_with_instanced_with_shadows() {
+    let gpu = gpu_with(wgpu::Features::all());
+    let scene = scene_spec::load("default").unwrap();
+    let rig = sized("hmd");
+    let with_shadows = |mode| RendererOptions {
+        shadows: true,
+        ..options(support::cull_for(mode), mode, 1)
+    };
+    let render = |mode| support::render(&gpu, &scene, &rig, with_shadows(mode)).unwrap();
+    let reference = render(StereoMode::Instanced);
+    let plain = support::render(
+        &gpu,
+        &scene,
+        &rig,
+        options(CullMode::Gpu, StereoMode::Instanced, 1),
+    );
+    let darker = reference[0]
+        .pixels()
+        .zip(plain.unwrap()[0].pixels())
+        .filter(|(s, p)| {
+            let sum = |c: &[u8]| c.iter().map(|&v| v as u32).sum::<u32>();
+            sum(&s.0[..3]) + 30 < sum(&p.0[..3])
+        })
+        .count();
+    assert!(darker > 100, "{darker} pixels in shadow");
+    for mode in StereoMode::ALL {
+        for (d, (actual, want)) in render(mode).iter().zip(&reference).enumerate() {
+            let name = format!("shadows-hmd-{d}-{}", mode.name());
+            assert_images_match(&name, actual, want, tolerance(mode));
+        }
+    }
+}
+
 /// wgpu's GL backend over Mesa's llvmpipe (needs `libegl1` and `libgl1-mesa-dri`, which
 /// `.ci/run` installs): no indirect count and no multiview there, so this also runs the
 /// fixed-count fallback on a second API. Every mode it has draws the Vulkan image

@@ -14,7 +14,7 @@ use stereocull::records::{DrawArgs, InstanceRecord, LodRecord, MeshRecord};
 use stereocull::scene::Vertex;
 use stereocull::shaders::{
     Access, Binding, COARSE_BINDINGS, CULL_BINDINGS, CullPass, DRAW_BINDINGS, DrawKey,
-    SCATTER_BINDINGS, all_sources, scatter_source,
+    SCATTER_BINDINGS, all_sources, scatter_source, shadow_source,
 };
 
 fn parse(label: &str, source: &str) -> Module {
@@ -233,6 +233,9 @@ fn contexts_match_wgsl() {
         coarse_planes: std::array::from_fn(|i| Vec4::splat(5.0 + i as f32)),
         coarse_inflation: 6.0,
         coarse_slack: 7.0,
+        light_from_world: Mat4::from_cols_array(&[8.0; 16]),
+        light_direction: Vec3::splat(9.0),
+        shadows: 10,
     };
     let bytes = uniform_bytes(&f);
     check_uniform(
@@ -246,6 +249,9 @@ fn contexts_match_wgsl() {
             ("coarse_planes", 5.0),
             ("coarse_inflation", 6.0),
             ("coarse_slack", 7.0),
+            ("light_from_world", 8.0),
+            ("light_direction", 9.0),
+            ("shadows", f32::from_bits(10)),
         ],
     );
     let (members, _) = wgsl_struct(&module(), "FrameContext");
@@ -281,15 +287,23 @@ fn every_pass_binds_what_its_list_declares() {
         .into_iter()
         .map(|(p, c)| (p.label(c), p.source(c), &CULL_BINDINGS[..]))
         .chain(DrawKey::ALL.map(|k| (k.label(), k.source(), &DRAW_BINDINGS[..])))
-        .chain([(
-            "stereocull.scatter".to_string(),
-            scatter_source(),
-            &SCATTER_BINDINGS[..],
-        )]);
+        .chain([
+            (
+                "stereocull.scatter".to_string(),
+                scatter_source(),
+                &SCATTER_BINDINGS[..],
+            ),
+            (
+                "stereocull.shadow".to_string(),
+                shadow_source(),
+                &DRAW_BINDINGS[..],
+            ),
+        ]);
     for (label, source, list) in passes {
         let module = parse(&label, &source);
         let mut seen = Vec::new();
         let mut group_1 = Vec::new();
+        let mut group_2 = Vec::new();
         for (_, var) in module.global_variables.iter() {
             let Some(binding) = &var.binding else {
                 continue;
@@ -297,6 +311,10 @@ fn every_pass_binds_what_its_list_declares() {
             let name = var.name.as_deref().unwrap_or_default();
             if binding.group == 1 {
                 group_1.push((binding.binding, name.to_string()));
+                continue;
+            }
+            if binding.group == 2 {
+                group_2.push((binding.binding, name.to_string()));
                 continue;
             }
             assert_eq!(binding.group, 0, "{label}");
@@ -323,6 +341,13 @@ fn every_pass_binds_what_its_list_declares() {
         // Group 1: the draw pipelines' materials (stereocull::materials::bind_group_layout),
         // the coarse passes' indirect dispatch (COARSE_BINDINGS).
         group_1.sort();
+        // Group 2: the draw pipelines' shadow map (stereocull::shadow::bind_group_layout).
+        group_2.sort();
+        let shadow_map: Vec<(u32, String)> = match label.starts_with("stereocull.draw") {
+            true => vec![(0, "shadow_map".into()), (1, "shadow_sampler".into())],
+            false => Vec::new(),
+        };
+        assert_eq!(group_2, shadow_map, "{label}: group 2");
         let want: Vec<(u32, String)> = if label.starts_with("stereocull.draw") {
             vec![
                 (0, "base_color_textures".into()),

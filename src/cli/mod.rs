@@ -12,7 +12,7 @@ use clap::{Args, Parser, Subcommand};
 use serde::Serialize;
 
 use crate::cull::cpu::FrameCull;
-use crate::cull::{CoarseCull, CullOutput, cpu};
+use crate::cull::{CullOutput, cpu};
 use crate::device::{Gpu, OPTIONAL_FEATURES, Tier};
 use crate::error::{Error, Result};
 use crate::live::LiveScene;
@@ -81,6 +81,9 @@ pub struct SceneArgs {
     /// The frame-level coarse cull before the display culls (auto: where the rig gains).
     #[arg(long, value_enum, default_value = "auto")]
     pub coarse_cull: CoarseMode,
+    /// The frame's shadow map: drawn once per frame, sampled by every display and eye.
+    #[arg(long, value_enum, default_value = "off")]
+    pub shadows: Switch,
 }
 
 #[derive(Clone, Copy, Debug, PartialEq, Eq, clap::ValueEnum, Serialize)]
@@ -102,6 +105,7 @@ impl SceneArgs {
         RendererOptions {
             lod: self.lod.on(),
             coarse_cull: self.coarse_cull,
+            shadows: self.shadows.on(),
             ..Default::default()
         }
     }
@@ -237,7 +241,7 @@ fn cull(args: &CullArgs) -> Result<()> {
             let resolved = rig.resolve()?;
             let frame = FrameCull {
                 lod: frame_lod(&rig, &resolved, options.lod_levels()),
-                coarse: options.coarse_for(&rig).then(|| CoarseCull::new(&resolved)),
+                coarse: options.coarse_for(&rig).then(|| resolved.coarse_cull()),
             };
             let layout = CullLayout::new(live.scene());
             cpu::cull_frame(&layout, &rig.cull_jobs()?, &frame)

@@ -68,6 +68,9 @@ pub struct ProfileArgs {
     /// Percent of instances removed and inserted again every frame.
     #[arg(long, default_value_t = 0.0)]
     pub churn: f64,
+    /// The frame's shadow map, drawn once per frame.
+    #[arg(long, value_enum, default_value = "off")]
+    pub shadows: Switch,
     /// The frame-level coarse cull, one configuration each (`on,off` compares them).
     #[arg(long, value_delimiter = ',', value_enum, default_value = "auto")]
     pub coarse_cull: Vec<CoarseMode>,
@@ -273,6 +276,7 @@ fn measure(
         sample_count: args.msaa,
         lod: args.lod.on(),
         coarse_cull: coarse,
+        shadows: args.shadows.on(),
         ..Default::default()
     };
     let mut renderer = Renderer::new(&gpu.device, scene, rig, options)?;

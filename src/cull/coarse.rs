@@ -12,11 +12,11 @@
 //! grown by `sum(l_i)`. [`CoarseCull::new`] finds the smallest such sum per plane
 //! (over every display) and grows radii by the largest, plus slack for rounding on both
 //! sides, so the guarantee holds in f32 too (tests/coarse.rs tries to break it).
+//! `ResolvedRig::coarse_cull` builds it for a frame.
 
 use glam::{DMat3, DVec3, Vec4};
 
-use crate::frustum::round_up;
-use crate::rig::ResolvedRig;
+use crate::frustum::{View, round_up};
 
 /// The frame-level test: the frame frustum's planes and how much radii grow.
 #[derive(Clone, Copy, Debug, PartialEq)]
@@ -41,25 +41,6 @@ impl CoarseCull {
         inflation: 1.0,
         slack: 0.0,
     };
-
-    /// The coarse test for one resolved frame: the frame frustum's planes made safe for
-    /// every display's cull and every eye's (the multi-camera mode culls per eye), or
-    /// [`CoarseCull::EVERYTHING`] without a frame frustum.
-    pub fn new(resolved: &ResolvedRig) -> CoarseCull {
-        let Some(frame) = resolved.frame() else {
-            return CoarseCull::EVERYTHING;
-        };
-        let displays: Vec<[Vec4; 6]> = resolved
-            .displays
-            .iter()
-            .flat_map(|d| {
-                [d.planes]
-                    .into_iter()
-                    .chain(d.eyes.iter().map(|e| e.frustum().planes))
-            })
-            .collect();
-        Self::holding(frame.frustum().planes, &displays).unwrap_or(CoarseCull::EVERYTHING)
-    }
 
     /// `frame` made to hold every one of `displays`' plane tests, or `None` when some
     /// frame plane is no non-negative combination of a display's planes (the frame
@@ -114,10 +95,8 @@ impl CoarseCull {
 
 /// Sphere tests per frame with the coarse cull divided by those without, for a scene
 /// spread evenly around the viewer: `(1 + displays * share) / displays`, where `share`
-/// is the frame frustum's share of all directions (its solid angle over 4 pi). `None`
-/// without a frame frustum.
-pub fn expected_tests(resolved: &ResolvedRig) -> Option<f64> {
-    let frame = resolved.frame()?;
+/// is the `frame` frustum's share of all directions (its solid angle over 4 pi).
+pub fn expected_tests(frame: &View, displays: usize) -> f64 {
     let [left, right, up, down] = frame.fov.tangents();
     // A pyramid's solid angle, quadrant by quadrant: atan(a b / sqrt(1 + a^2 + b^2)).
     let quadrant = |a: f64, b: f64| (a * b / (1.0 + a * a + b * b).sqrt()).atan();
@@ -126,8 +105,8 @@ pub fn expected_tests(resolved: &ResolvedRig) -> Option<f64> {
         .flat_map(|&a| [up, down].map(|b| quadrant(a, b)))
         .sum();
     let share = solid_angle / (4.0 * std::f64::consts::PI);
-    let displays = resolved.displays.len() as f64;
-    Some((1.0 + displays * share) / displays)
+    let displays = displays as f64;
+    (1.0 + displays * share) / displays
 }
 
 /// The non-negative weights, one per display plane, whose combination of the display's

@@ -33,11 +33,20 @@ pub const COUNTS_BYTES: u64 = 8;
 /// The cull pipelines and their shared bind-group layout.
 pub struct GpuCuller {
     layout: wgpu::BindGroupLayout,
-    /// The display passes, in dispatch order.
+    /// The display passes over every instance, in dispatch order (the displays' without
+    /// the coarse cull; the light's always).
     pipelines: Vec<wgpu::ComputePipeline>,
-    /// With the coarse cull: the frame passes, and group 1's layout (their writes of
-    /// the display passes' indirect dispatch).
-    frame: Option<(Vec<wgpu::ComputePipeline>, wgpu::BindGroupLayout)>,
+    coarse: Option<CoarsePipelines>,
+}
+
+/// The coarse cull's pipelines.
+struct CoarsePipelines {
+    /// The display passes over the candidates.
+    display: Vec<wgpu::ComputePipeline>,
+    /// The frame passes, and their group 1's layout (their writes of the display
+    /// passes' indirect dispatch).
+    frame: Vec<wgpu::ComputePipeline>,
+    args_layout: wgpu::BindGroupLayout,
 }
 
 /// Scene data the cull passes read, uploaded once, plus scratch shared by all displays
@@ -225,34 +234,36 @@ fn cull_params(layout: &CullLayout, (max_groups, levels): (u32, u32)) -> (CullPa
 }
 
 impl GpuCuller {
-    /// The display passes (over the coarse cull's candidates when `coarse`), and with
-    /// `coarse` the frame passes too.
+    /// The display passes, and with `coarse` the frame passes and the display passes
+    /// over their candidates too.
     pub fn new(device: &wgpu::Device, coarse: bool) -> GpuCuller {
         let layout = bind_group_layout(device, "stereocull.cull", &CULL_BINDINGS);
-        let build = |passes: [CullPass; 3], pipeline_layout: &wgpu::PipelineLayout| {
+        let build = |passes: [CullPass; 3], candidates: bool, with: &wgpu::PipelineLayout| {
             let build_one = |pass: CullPass| {
-                let entry = (pass.source(coarse), pass.entry_point());
-                compute_pipeline(device, &pass.label(coarse), pipeline_layout, entry)
+                let entry = (pass.source(candidates), pass.entry_point());
+                compute_pipeline(device, &pass.label(candidates), with, entry)
             };
             passes.map(build_one).to_vec()
         };
-        let pipelines = build(
-            CullPass::DISPLAY,
-            &pipeline_layout(device, "stereocull.cull", &layout),
-        );
-        let frame = coarse.then(|| {
-            let args = bind_group_layout(device, "stereocull.coarse", &COARSE_BINDINGS);
+        let display_layout = pipeline_layout(device, "stereocull.cull", &layout);
+        let pipelines = build(CullPass::DISPLAY, false, &display_layout);
+        let coarse = coarse.then(|| {
+            let args_layout = bind_group_layout(device, "stereocull.coarse", &COARSE_BINDINGS);
             let both = device.create_pipeline_layout(&wgpu::PipelineLayoutDescriptor {
                 label: Some("stereocull.coarse"),
-                bind_group_layouts: &[Some(&layout), Some(&args)],
+                bind_group_layouts: &[Some(&layout), Some(&args_layout)],
                 immediate_size: 0,
             });
-            (build(CullPass::FRAME, &both), args)
+            CoarsePipelines {
+                display: build(CullPass::DISPLAY, true, &display_layout),
+                frame: build(CullPass::FRAME, false, &both),
+                args_layout,
+            }
         });
         GpuCuller {
             layout,
             pipelines,
-            frame,
+            coarse,
         }
     }
 
@@ -293,11 +304,11 @@ impl GpuCuller {
         device: &wgpu::Device,
         scene: &CullScene,
     ) -> Option<wgpu::BindGroup> {
-        let (_, layout) = self.frame.as_ref()?;
+        let coarse = self.coarse.as_ref()?;
         Some(bind_group(
             device,
             "stereocull.coarse",
-            layout,
+            &coarse.args_layout,
             [&scene.coarse_args],
         ))
     }
@@ -311,7 +322,10 @@ impl GpuCuller {
         scene: &CullScene,
         [display, args]: [&wgpu::BindGroup; 2],
     ) -> u32 {
-        let Some((pipelines, _)) = &self.frame else {
+        let Some(CoarsePipelines {
+            frame: pipelines, ..
+        }) = &self.coarse
+        else {
             return 0;
         };
         pass.set_bind_group(0, display, &[]);
@@ -328,21 +342,28 @@ impl GpuCuller {
     }
 
     /// Records the three dispatches for one display: a fixed count, whatever the
-    /// number of instances (over the candidates, sized by the coarse passes).
+    /// number of instances; `over_candidates` (with the coarse cull) runs them over the
+    /// frame's candidates, dispatched as the coarse passes sized them.
     pub fn encode(
         &self,
         pass: &mut wgpu::ComputePass,
         scene: &CullScene,
         bind_group: &wgpu::BindGroup,
+        over_candidates: bool,
     ) {
         pass.set_bind_group(0, bind_group, &[]);
         let (x, y) = scene.groups;
-        for (pipeline, kind) in self.pipelines.iter().zip(CullPass::DISPLAY) {
+        let pipelines = match (&self.coarse, over_candidates) {
+            (Some(c), true) => &c.display,
+            _ => &self.pipelines,
+        };
+        let indirect = !std::ptr::eq(pipelines, &self.pipelines);
+        for (pipeline, kind) in pipelines.iter().zip(CullPass::DISPLAY) {
             pass.set_pipeline(pipeline);
-            match (kind, &self.frame) {
+            match (kind, indirect) {
                 (CullPass::Draws, _) => pass.dispatch_workgroups(1, 1, 1),
-                (_, Some(_)) => pass.dispatch_workgroups_indirect(&scene.coarse_args, 0),
-                (_, None) => pass.dispatch_workgroups(x, y, scene.levels),
+                (_, true) => pass.dispatch_workgroups_indirect(&scene.coarse_args, 0),
+                (_, false) => pass.dispatch_workgroups(x, y, scene.levels),
             }
         }
     }

@@ -64,6 +64,7 @@ pub(super) fn check_device(
         ));
     }
     let limits = device.limits();
+    check_shadows(features, &limits, options)?;
     // Storage buffers are bound whole, so the binding limit holds for them; vertex and
     // index buffers are not bindings and only need to fit one buffer.
     let storage = limits
@@ -102,6 +103,29 @@ pub(super) fn check_device(
                 "the scene's {count} {what} need a {bytes}-byte buffer but the device allows {max}"
             )));
         }
+    }
+    Ok(())
+}
+
+/// The shadow pass draws indirectly in every mode, into a map the device can hold.
+fn check_shadows(
+    features: wgpu::Features,
+    limits: &wgpu::Limits,
+    options: &RendererOptions,
+) -> Result<()> {
+    let Some(size) = options.shadow_size() else {
+        return Ok(());
+    };
+    if !features.contains(wgpu::Features::INDIRECT_FIRST_INSTANCE) {
+        return Err(Error::Unsupported(
+            "shadows need INDIRECT_FIRST_INSTANCE (the shadow pass draws indirectly), which this device lacks".into(),
+        ));
+    }
+    if size == 0 || size > limits.max_texture_dimension_2d {
+        return Err(Error::Limits(format!(
+            "a {size} x {size} shadow map; the device's 2D textures hold 1 to {} a side",
+            limits.max_texture_dimension_2d
+        )));
     }
     Ok(())
 }

@@ -5,7 +5,8 @@
 
 use std::time::Instant;
 
-use super::passes::draw_pass;
+use super::passes::{PassRecord, draw_pass};
+use super::shadow_pass::{LightCull, ShadowPass};
 use super::{FrameStats, RendererOptions, TargetViews, context_buffer, display_contexts, write};
 use crate::buffers::storage_buffer;
 use crate::cull::cpu::FrameCull;
@@ -18,6 +19,7 @@ use crate::records::{CullLayout, uniform_bytes};
 use crate::rig::{ResolvedRig, Rig};
 use crate::scene::Scene;
 use crate::shaders::DrawKey;
+use crate::shadow::LightView;
 use wgpu_profiler::GpuProfilerQuery;
 
 /// One eye of a stereo display: its own context (that eye in both eye slots) and, for
@@ -47,6 +49,8 @@ pub(super) struct ClassicPath {
     displays: Vec<ClassicDisplay>,
     /// This frame's CPU culls per display: one, or one per eye (multi-camera).
     culls: Vec<Vec<CullOutput>>,
+    /// With shadows: the frame's shadow pass, culled on the CPU.
+    shadow: Option<ShadowPass>,
 }
 
 impl ClassicPath {
@@ -61,8 +65,8 @@ impl ClassicPath {
         let drawer = Drawer::new(
             device,
             options.target_format(),
-            &[DrawKey::new(1, clip)],
-            options.material.as_deref(),
+            (&[DrawKey::new(1, clip)], options.material.as_deref()),
+            options.shadow_size(),
         );
         let draw_scene = DrawScene::new(device, &drawer, scene, slots)?;
         let n = slots as u64;
@@ -100,6 +104,10 @@ impl ClassicPath {
                 }
             })
             .collect();
+        let draws = scene.meshes.len() as u32 * options.lod_levels();
+        let shadow = options
+            .shadows
+            .then(|| ShadowPass::new(device, (&drawer, &draw_scene), frame, None, (slots, draws)));
         Ok(ClassicPath {
             mode: options.mode,
             layout: CullLayout::new(scene),
@@ -107,6 +115,7 @@ impl ClassicPath {
             draw_scene,
             displays,
             culls: Vec::new(),
+            shadow,
         })
     }
 
@@ -116,12 +125,17 @@ impl ClassicPath {
         &mut self,
         queue: &wgpu::Queue,
         rig: &Rig,
-        (resolved, frame): (&ResolvedRig, &FrameCull),
+        (resolved, frame, light): (&ResolvedRig, &FrameCull, Option<&LightView>),
     ) -> FrameStats {
         let contexts = display_contexts(rig, resolved, |_| 1);
         let mut stats = FrameStats::default();
         let start = Instant::now();
         self.culls = self.cull(resolved, frame);
+        if let (Some(shadow), Some(light)) = (&self.shadow, light) {
+            let size = self.draw_scene.shadow_map.size;
+            let cull = LightCull::Cpu(&self.layout);
+            stats.bytes_uploaded += shadow.prepare(queue, (light, size), &cull, &frame.lod);
+        }
         stats.cpu_cull = start.elapsed();
         let start = Instant::now();
         for ((state, ctx), culls) in self.displays.iter().zip(&contexts).zip(&self.culls) {
@@ -168,27 +182,60 @@ impl ClassicPath {
             .collect()
     }
 
+    /// The frame level's passes: the shadow pass, when on.
+    pub(super) fn encode_frame(
+        &self,
+        encoder: &mut wgpu::CommandEncoder,
+        timing: (&mut Option<&mut GpuTimer>, &mut Vec<PassRecord>),
+    ) -> FrameStats {
+        let Some(shadow) = &self.shadow else {
+            return FrameStats::default();
+        };
+        let scene = (&self.drawer, &self.draw_scene);
+        let cull = LightCull::Cpu(&self.layout);
+        let (dispatches, draw_calls) = shadow.encode(encoder, scene, &cull, timing);
+        FrameStats {
+            draw_calls,
+            dispatches,
+            ..Default::default()
+        }
+    }
+
     /// Display `index` into its own passes, timed inside `display`: one per eye for a
     /// stereo display in multi-pass and multi-camera, else one.
     pub(super) fn encode_display(
         &self,
         encoder: &mut wgpu::CommandEncoder,
         (index, target): (usize, &TargetViews),
-        timer: &mut Option<&mut GpuTimer>,
-        display: &Option<GpuProfilerQuery>,
+        (timer, display): (&mut Option<&mut GpuTimer>, &Option<GpuProfilerQuery>),
+        log: &mut Vec<PassRecord>,
     ) -> FrameStats {
         let stereo = self.displays[index].eyes.len() == 2;
         let draw_calls = match self.mode {
             StereoMode::MultiCamera | StereoMode::MultiPass if stereo => (0..2)
                 .map(|e| {
-                    draw_pass(encoder, target, e == 0, false, timer, display, |pass| {
-                        self.draw_eye(pass, index, e)
-                    })
+                    let what = (&mut *log, PassRecord::eye("draw", index, e));
+                    draw_pass(
+                        encoder,
+                        target,
+                        (e == 0, false),
+                        (timer, display),
+                        what,
+                        |pass| self.draw_eye(pass, index, e),
+                    )
                 })
                 .sum(),
-            _ => draw_pass(encoder, target, true, false, timer, display, |pass| {
-                self.draw(pass, index)
-            }),
+            _ => {
+                let what = (log, PassRecord::display("draw", index));
+                draw_pass(
+                    encoder,
+                    target,
+                    (true, false),
+                    (timer, display),
+                    what,
+                    |pass| self.draw(pass, index),
+                )
+            }
         };
         FrameStats {
             draw_calls,

@@ -7,7 +7,8 @@
 
 use std::time::Instant;
 
-use super::passes::{close, draw_pass, open_display, open_pass};
+use super::passes::{PassRecord, close, draw_pass, open_display, open_pass};
+use super::shadow_pass::{LightCull, ShadowPass};
 use super::{
     CullMode, CullState, FrameStats, RendererOptions, TargetViews, context_buffer,
     display_contexts, write,
@@ -24,6 +25,7 @@ use crate::records::{CullLayout, DrawArgs, uniform_bytes};
 use crate::rig::{ResolvedRig, Rig};
 use crate::scene::Scene;
 use crate::shaders::DrawKey;
+use crate::shadow::LightView;
 use wgpu_profiler::GpuProfilerQuery;
 
 /// Where the visible lists and draws come from.
@@ -58,6 +60,8 @@ pub(super) struct IndirectPath {
     /// Draw entries per display: meshes times levels of detail.
     max_draws: u32,
     displays: Vec<IndirectDisplay>,
+    /// With shadows: the frame's shadow pass.
+    shadow: Option<ShadowPass>,
 }
 
 impl IndirectPath {
@@ -98,8 +102,8 @@ impl IndirectPath {
         let drawer = Drawer::new(
             device,
             options.target_format(),
-            &keys,
-            options.material.as_deref(),
+            (&keys, options.material.as_deref()),
+            options.shadow_size(),
         );
         let draw_scene = DrawScene::new(device, &drawer, scene, slots)?;
         let draws = scene.meshes.len() as u32 * options.lod_levels();
@@ -128,12 +132,26 @@ impl IndirectPath {
                 }
             })
             .collect();
+        let shadow = options.shadows.then(|| {
+            let culler = match &culling {
+                Culling::Gpu { culler, scene, .. } => Some((culler, &**scene)),
+                Culling::Cpu { .. } => None,
+            };
+            ShadowPass::new(
+                device,
+                (&drawer, &draw_scene),
+                frame,
+                culler,
+                (slots, draws),
+            )
+        });
         Ok(IndirectPath {
             culling,
             drawer,
             draw_scene,
             max_draws: draws,
             displays,
+            shadow,
         })
     }
 
@@ -151,7 +169,7 @@ impl IndirectPath {
         &self,
         queue: &wgpu::Queue,
         rig: &Rig,
-        (resolved, frame): (&ResolvedRig, &FrameCull),
+        (resolved, frame, light): (&ResolvedRig, &FrameCull, Option<&LightView>),
     ) -> FrameStats {
         let contexts = display_contexts(rig, resolved, |i| {
             self.displays[i].key.instances_per_object()
@@ -182,16 +200,47 @@ impl IndirectPath {
                 + write(queue, &cull.draws, bytemuck::cast_slice(&out.draws))
                 + write(queue, &cull.counts, bytemuck::cast_slice(&counts));
         }
+        if let (Some(shadow), Some(light)) = (&self.shadow, light) {
+            let cull = match &self.culling {
+                Culling::Gpu { culler, scene, .. } => LightCull::Gpu(culler, scene),
+                Culling::Cpu { layout } => LightCull::Cpu(layout),
+            };
+            let size = self.draw_scene.shadow_map.size;
+            stats.bytes_uploaded += shadow.prepare(queue, (light, size), &cull, &frame.lod);
+        }
         stats.cpu_upload = start.elapsed();
         stats
     }
 
-    /// The frame level's passes: the coarse cull, when it runs on the GPU, timed as
-    /// `coarse_cull` inside a `frame` scope. Returns the dispatches recorded.
+    /// The frame level's passes: the coarse cull (when it runs, on the GPU), timed as
+    /// `coarse_cull` inside a `frame` scope, then the shadow pass (with shadows).
     pub(super) fn encode_frame(
         &self,
         encoder: &mut wgpu::CommandEncoder,
+        (timer, log): (&mut Option<&mut GpuTimer>, &mut Vec<PassRecord>),
+    ) -> FrameStats {
+        let mut stats = FrameStats {
+            dispatches: self.encode_coarse(encoder, timer, log),
+            ..Default::default()
+        };
+        if let Some(shadow) = &self.shadow {
+            let cull = match &self.culling {
+                Culling::Gpu { culler, scene, .. } => LightCull::Gpu(culler, scene),
+                Culling::Cpu { layout } => LightCull::Cpu(layout),
+            };
+            let drawing = (&self.drawer, &self.draw_scene);
+            let (dispatches, draw_calls) = shadow.encode(encoder, drawing, &cull, (timer, log));
+            stats.dispatches += dispatches;
+            stats.draw_calls += draw_calls;
+        }
+        stats
+    }
+
+    fn encode_coarse(
+        &self,
+        encoder: &mut wgpu::CommandEncoder,
         timer: &mut Option<&mut GpuTimer>,
+        log: &mut Vec<PassRecord>,
     ) -> u32 {
         let (
             Culling::Gpu {
@@ -220,6 +269,7 @@ impl IndirectPath {
         drop(pass);
         close(timer, encoder, scope);
         close(timer, encoder, frame);
+        log.push(PassRecord::frame("coarse_cull"));
         dispatches
     }
 
@@ -266,14 +316,20 @@ impl IndirectPath {
         &self,
         encoder: &mut wgpu::CommandEncoder,
         (index, target): (usize, &TargetViews),
-        timer: &mut Option<&mut GpuTimer>,
-        display: &Option<GpuProfilerQuery>,
+        (timer, display): (&mut Option<&mut GpuTimer>, &Option<GpuProfilerQuery>),
+        log: &mut Vec<PassRecord>,
     ) -> FrameStats {
-        let dispatches = self.encode_cull(encoder, index, timer, display);
+        let dispatches = self.encode_cull(encoder, index, (timer, display), log);
         let multiview = self.displays[index].key.multiview;
-        let draw_calls = draw_pass(encoder, target, true, multiview, timer, display, |pass| {
-            self.draw(pass, index)
-        });
+        let what = (log, PassRecord::display("draw", index));
+        let draw_calls = draw_pass(
+            encoder,
+            target,
+            (true, multiview),
+            (timer, display),
+            what,
+            |pass| self.draw(pass, index),
+        );
         FrameStats {
             draw_calls,
             dispatches,
@@ -287,12 +343,18 @@ impl IndirectPath {
         &self,
         encoder: &mut wgpu::CommandEncoder,
         index: usize,
-        timer: &mut Option<&mut GpuTimer>,
-        display: &Option<GpuProfilerQuery>,
+        (timer, display): (&mut Option<&mut GpuTimer>, &Option<GpuProfilerQuery>),
+        log: &mut Vec<PassRecord>,
     ) -> u32 {
         let state = &self.displays[index];
-        let (Culling::Gpu { culler, scene, .. }, Some(bind_group)) =
-            (&self.culling, &state.cull_bind_group)
+        let (
+            Culling::Gpu {
+                culler,
+                scene,
+                coarse,
+            },
+            Some(bind_group),
+        ) = (&self.culling, &state.cull_bind_group)
         else {
             return 0;
         };
@@ -304,9 +366,10 @@ impl IndirectPath {
             label: Some("stereocull.cull"),
             timestamp_writes: writes,
         });
-        culler.encode(&mut pass, scene, bind_group);
+        culler.encode(&mut pass, scene, bind_group, coarse.is_some());
         drop(pass);
         close(timer, encoder, scope);
+        log.push(PassRecord::display("cull", index));
         GpuCuller::DISPATCHES_PER_DISPLAY
     }
 

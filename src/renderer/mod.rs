@@ -84,12 +84,14 @@ use crate::records::uniform_bytes;
 use crate::rig::{ResolvedRig, Rig};
 use crate::scatter::Scatter;
 use crate::scene::Scene;
+use crate::shadow::LightView;
 
 mod checks;
 mod classic;
 mod indirect;
 mod options;
 mod passes;
+mod shadow_pass;
 mod sync;
 mod targets;
 
@@ -97,6 +99,7 @@ use checks::check_device;
 use classic::ClassicPath;
 use indirect::IndirectPath;
 pub use options::{CoarseMode, CullMode, LOD_PIXELS, RendererOptions, frame_lod};
+pub use passes::{Level, PassRecord};
 use passes::{close, open_display};
 use sync::CullState;
 pub use sync::SyncStats;
@@ -170,6 +173,8 @@ pub struct Renderer {
     rig: Rig,
     /// Whether each frame starts with the coarse cull ([`RendererOptions::coarse_for`]).
     coarse: bool,
+    /// What the last `encode` or `encode_culls` recorded, pass by pass.
+    passes: Vec<PassRecord>,
 }
 
 impl Renderer {
@@ -205,6 +210,7 @@ impl Renderer {
             slots,
             rig: rig.clone(),
             coarse: options_coarse,
+            passes: Vec::new(),
         })
     }
 
@@ -253,14 +259,22 @@ impl Renderer {
         let resolved = rig.resolve()?;
         let cull = FrameCull {
             lod: frame_lod(rig, &resolved, self.options.lod_levels()),
-            coarse: self.coarse.then(|| CoarseCull::new(&resolved)),
+            coarse: self.coarse.then(|| resolved.coarse_cull()),
         };
         let coarse = cull.coarse.unwrap_or(CoarseCull::EVERYTHING);
-        let context = FrameContext::new(&rig.viewer, time, cull.lod.lod_scale, &coarse);
+        let light = LightView::fit(&self.options.light, &resolved);
+        let shadows = self.options.shadows;
+        let context = FrameContext::new(
+            &rig.viewer,
+            (time, cull.lod.lod_scale),
+            &coarse,
+            (&light, shadows),
+        );
         let frame_bytes = write(queue, &self.frame, &uniform_bytes(&context));
+        let frame = (&resolved, &cull, shadows.then_some(&light));
         let mut stats = match &mut self.path {
-            Path::Indirect(p) => p.prepare(queue, rig, (&resolved, &cull)),
-            Path::Classic(p) => p.prepare(queue, rig, (&resolved, &cull)),
+            Path::Indirect(p) => p.prepare(queue, rig, frame),
+            Path::Classic(p) => p.prepare(queue, rig, frame),
         };
         // Texels go up with the first frame: `new` has no queue.
         stats.bytes_uploaded += frame_bytes + self.path.draw_scene().materials.upload(queue);
@@ -282,15 +296,14 @@ impl Renderer {
                 displays: self.shapes.len(),
             });
         }
-        let mut stats = FrameStats {
-            dispatches: self.scatter.encode(encoder) + self.encode_frame(encoder, &mut timer),
-            ..FrameStats::default()
-        };
+        let mut stats = self.encode_frame(encoder, &mut timer);
         for (i, target) in targets.iter().enumerate() {
             let display = open_display(&timer, &self.names[i], encoder);
+            let timing = (&mut timer, &display);
+            let log = &mut self.passes;
             let recorded = match &self.path {
-                Path::Indirect(p) => p.encode_display(encoder, (i, target), &mut timer, &display),
-                Path::Classic(p) => p.encode_display(encoder, (i, target), &mut timer, &display),
+                Path::Indirect(p) => p.encode_display(encoder, (i, target), timing, log),
+                Path::Classic(p) => p.encode_display(encoder, (i, target), timing, log),
             };
             stats.draw_calls += recorded.draw_calls;
             stats.dispatches += recorded.dispatches;
@@ -302,16 +315,34 @@ impl Renderer {
         Ok(stats)
     }
 
-    /// The frame level's passes, before any display's: the coarse cull on the GPU.
+    /// The frame level's passes, before any display's (and a new pass log): the
+    /// scatter of moved instances, the coarse cull, the shadow pass.
     fn encode_frame(
-        &self,
+        &mut self,
         encoder: &mut wgpu::CommandEncoder,
         timer: &mut Option<&mut GpuTimer>,
-    ) -> u32 {
-        match &self.path {
-            Path::Indirect(p) => p.encode_frame(encoder, timer),
-            Path::Classic(_) => 0,
+    ) -> FrameStats {
+        self.passes.clear();
+        let scattered = self.scatter.encode(encoder);
+        if scattered > 0 {
+            self.passes.push(PassRecord::frame("scatter"));
         }
+        let log = (timer, &mut self.passes);
+        let stats = match &self.path {
+            Path::Indirect(p) => p.encode_frame(encoder, log),
+            Path::Classic(p) => p.encode_frame(encoder, log),
+        };
+        FrameStats {
+            dispatches: stats.dispatches + scattered,
+            ..stats
+        }
+    }
+
+    /// The passes the last `encode` (or `encode_culls`) recorded, in order, each with its
+    /// level (frame, display, eye): the shadow pass appears once per frame, whatever
+    /// the displays.
+    pub fn passes(&self) -> &[PassRecord] {
+        &self.passes
     }
 
     /// The coarse cull's candidates in the last frame, read back after it was submitted
@@ -351,14 +382,12 @@ impl Renderer {
         encoder: &mut wgpu::CommandEncoder,
         mut timer: Option<&mut GpuTimer>,
     ) -> FrameStats {
-        let mut stats = FrameStats {
-            dispatches: self.scatter.encode(encoder) + self.encode_frame(encoder, &mut timer),
-            ..FrameStats::default()
-        };
+        let mut stats = self.encode_frame(encoder, &mut timer);
         if let Path::Indirect(p) = &self.path {
             for i in 0..self.shapes.len() {
                 let display = open_display(&timer, &self.names[i], encoder);
-                stats.dispatches += p.encode_cull(encoder, i, &mut timer, &display);
+                let timing = (&mut timer, &display);
+                stats.dispatches += p.encode_cull(encoder, i, timing, &mut self.passes);
                 close(&timer, encoder, display);
             }
         }

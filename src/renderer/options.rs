@@ -3,12 +3,12 @@
 
 use std::sync::Arc;
 
-use crate::cull::coarse::expected_tests;
 use crate::cull::cpu::FrameLod;
 use crate::draw::{DEPTH_FORMAT, TargetFormat};
 use crate::modes::StereoMode;
 use crate::rig::{ResolvedRig, Rig};
 use crate::scene::MAX_LODS;
+use crate::shadow::Light;
 
 /// Where the per-display cull runs.
 #[derive(Clone, Copy, Debug, Default, PartialEq, Eq, Hash, clap::ValueEnum, serde::Serialize)]
@@ -28,7 +28,7 @@ pub enum CullMode {
 #[serde(rename_all = "lowercase")]
 pub enum CoarseMode {
     /// On where it is expected to save sphere tests by a fifth or more
-    /// ([`crate::cull::coarse::expected_tests`]): rigs of several displays with a
+    /// ([`crate::rig::ResolvedRig::expected_coarse_tests`]): rigs of several displays with a
     /// frame frustum (`hmd-peripheral`), not one display nor displays around the viewer.
     #[default]
     Auto,
@@ -58,6 +58,11 @@ pub struct RendererOptions {
     /// the viewer's position, at most [`LOD_PIXELS`] of error on the sharpest display.
     pub lod: bool,
     pub coarse_cull: CoarseMode,
+    /// The frame's shadow map ([`crate::shadow`]): drawn once per frame from `light`,
+    /// sampled by every display and eye.
+    pub shadows: bool,
+    /// The one directional light: shading, and with `shadows` the shadow map.
+    pub light: Light,
 }
 
 /// Screen-space error, in pixels, a level of detail may show.
@@ -78,9 +83,14 @@ impl RendererOptions {
             CoarseMode::Auto => rig
                 .resolve()
                 .ok()
-                .and_then(|r| expected_tests(&r))
+                .and_then(|r| r.expected_coarse_tests())
                 .is_some_and(|ratio| ratio <= 0.8),
         }
+    }
+
+    /// The shadow map's texels a side, with shadows on.
+    pub fn shadow_size(&self) -> Option<u32> {
+        self.shadows.then_some(self.light.shadow_map_size)
     }
 
     /// The attachments the draw pipelines are built for.
@@ -104,6 +114,8 @@ impl Default for RendererOptions {
             mode: StereoMode::Instanced,
             lod: false,
             coarse_cull: CoarseMode::Auto,
+            shadows: false,
+            light: Light::default(),
         }
     }
 }

@@ -1,5 +1,6 @@
 //! Recording passes with their timer scopes: a scope per display, a scope per pass
-//! inside it, and pipeline statistics around each draw pass, shared by both paths.
+//! inside it, and pipeline statistics around each draw pass, shared by both paths; and
+//! the log of what a frame recorded, pass by pass, at which level.
 
 use wgpu_profiler::GpuProfilerQuery;
 
@@ -7,16 +8,65 @@ use super::TargetViews;
 use crate::draw::begin_pass;
 use crate::profiling::GpuTimer;
 
-/// Records one draw pass into `target`, clearing it or not: a `draw` timer scope inside
-/// `display`'s and pipeline statistics around what `record` draws (it returns its
-/// draw calls).
+/// Where a pass belongs in the chapter's Listing 1.1: once per frame, once per display,
+/// or once per eye.
+#[derive(Clone, Copy, Debug, PartialEq, Eq, serde::Serialize)]
+#[serde(rename_all = "lowercase")]
+pub enum Level {
+    Frame,
+    Display,
+    Eye,
+}
+
+/// One pass a frame recorded, in recording order ([`super::Renderer::passes`]).
+#[derive(Clone, Copy, Debug, PartialEq, Eq, serde::Serialize)]
+pub struct PassRecord {
+    pub level: Level,
+    /// `scatter`, `coarse_cull`, `shadow_cull`, `shadow` (frame); `cull`, `draw`.
+    pub name: &'static str,
+    pub display: Option<u32>,
+    pub eye: Option<u32>,
+    /// Its pipeline-statistics query in the frame's [`GpuTimer`], when counted.
+    pub statistics: Option<u32>,
+}
+
+impl PassRecord {
+    pub fn frame(name: &'static str) -> PassRecord {
+        PassRecord {
+            level: Level::Frame,
+            name,
+            display: None,
+            eye: None,
+            statistics: None,
+        }
+    }
+
+    pub fn display(name: &'static str, display: usize) -> PassRecord {
+        PassRecord {
+            level: Level::Display,
+            display: Some(display as u32),
+            ..PassRecord::frame(name)
+        }
+    }
+
+    pub fn eye(name: &'static str, display: usize, eye: usize) -> PassRecord {
+        PassRecord {
+            level: Level::Eye,
+            eye: Some(eye as u32),
+            ..PassRecord::display(name, display)
+        }
+    }
+}
+
+/// Records one draw pass into `target`, clearing it or not (and in multiview or not): a
+/// `draw` timer scope inside `display`'s, and pipeline statistics around what `record`
+/// draws (it returns its draw calls); logs the pass as `what`.
 pub(super) fn draw_pass(
     encoder: &mut wgpu::CommandEncoder,
     target: &TargetViews,
-    clear: bool,
-    multiview: bool,
-    timer: &mut Option<&mut GpuTimer>,
-    display: &Option<GpuProfilerQuery>,
+    (clear, multiview): (bool, bool),
+    (timer, display): (&mut Option<&mut GpuTimer>, &Option<GpuProfilerQuery>),
+    (log, what): (&mut Vec<PassRecord>, PassRecord),
     record: impl FnOnce(&mut wgpu::RenderPass) -> u32,
 ) -> u32 {
     let scope = open_pass(timer, "draw", display, encoder);
@@ -24,13 +74,14 @@ pub(super) fn draw_pass(
         .as_ref()
         .and_then(|q| q.render_pass_timestamp_writes());
     let mut pass = begin_pass(encoder, target.attachments(), clear, multiview, writes);
-    let counting = timer
+    let statistics = timer
         .as_deref_mut()
-        .is_some_and(|t| t.begin_statistics(&mut pass));
+        .and_then(|t| t.begin_statistics(&mut pass));
     let calls = record(&mut pass);
-    GpuTimer::end_statistics(&mut pass, counting);
+    GpuTimer::end_statistics(&mut pass, statistics.is_some());
     drop(pass);
     close(timer, encoder, scope);
+    log.push(PassRecord { statistics, ..what });
     calls
 }
 

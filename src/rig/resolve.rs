@@ -4,7 +4,8 @@
 use glam::{DAffine3, DMat3, DQuat, DVec3, Vec4};
 
 use super::{Display, HeadFixed, Mount, Rig, Screen, Viewer, euler};
-use crate::cull::CullJob;
+use crate::cull::coarse::expected_tests;
+use crate::cull::{CoarseCull, CullJob};
 use crate::error::{Error, Result};
 use crate::frustum::{Fov, View, enclosing_view};
 
@@ -101,6 +102,30 @@ impl ResolvedRig {
             .map(|d| d.combined.corners_from(origin))
             .collect();
         enclosing_view(self.viewer_orientation, origin, &corners)
+    }
+
+    /// The frame's coarse cull test: the frame frustum's planes made safe for every
+    /// display's cull and every eye's (the multi-camera mode culls per eye), or
+    /// [`CoarseCull::EVERYTHING`] without a frame frustum.
+    pub fn coarse_cull(&self) -> CoarseCull {
+        let Some(frame) = self.frame() else {
+            return CoarseCull::EVERYTHING;
+        };
+        let views: Vec<[Vec4; 6]> = self
+            .displays
+            .iter()
+            .flat_map(|d| {
+                [d.planes]
+                    .into_iter()
+                    .chain(d.eyes.iter().map(|e| e.frustum().planes))
+            })
+            .collect();
+        CoarseCull::holding(frame.frustum().planes, &views).unwrap_or(CoarseCull::EVERYTHING)
+    }
+
+    /// [`expected_tests`] for this frame: `None` without a frame frustum.
+    pub fn expected_coarse_tests(&self) -> Option<f64> {
+        Some(expected_tests(&self.frame()?, self.displays.len()))
     }
 }
 

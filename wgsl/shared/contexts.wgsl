@@ -50,4 +50,9 @@ struct FrameContext {
     coarse_planes: array<vec4<f32>, 6>,
     coarse_inflation: f32,
     coarse_slack: f32,
+    // The frame's light (src/shadow.rs): world to its shadow map's clip space, where
+    // it comes from (unit), and 1 when the shadow map was drawn this frame.
+    light_from_world: mat4x4<f32>,
+    light_direction: vec3<f32>,
+    shadows: u32,
 }

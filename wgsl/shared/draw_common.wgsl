@@ -28,7 +28,8 @@ struct FragmentInput {
 
 // What a material sees of one fragment: a caller's `fn material(s: Surface) ->
 // vec4<f32>` (RendererOptions::material) replaces `shade` below; `display.eye[s.eye]`
-// is the eye's context, `frame` the frame's.
+// is the eye's context, `frame` the frame's (its light: `frame.light_direction`, and
+// `light_reaching(s.world_position, normal)` for the shadow map).
 struct Surface {
     world_position: vec3<f32>,
     // Interpolated, not normalized.
@@ -53,7 +54,31 @@ fn base_color(s: Surface) -> vec4<f32> {
     return s.color * select(vec4(1.0), texel, textured);
 }
 
-const LIGHT_DIRECTION: vec3<f32> = vec3(0.37139068, 0.74278135, 0.55708601);
+// How much of the frame's light reaches world position `p` (facing `n`, unit): 1 lit,
+// 0 in shadow, from a 3 x 3 percentage-closer filter over the frame's shadow map (each
+// tap bilinear, so 4 x 4 texels weigh in), taken a texel and a half along the normal
+// so that surfaces do not shadow themselves. 1 outside the map and without shadows.
+fn light_reaching(p: vec3<f32>, n: vec3<f32>) -> f32 {
+    if (frame.shadows == 0u) {
+        return 1.0;
+    }
+    let m = frame.light_from_world;
+    let size = vec2<f32>(textureDimensions(shadow_map));
+    let texel = 2.0 / (length(vec3(m[0].x, m[1].x, m[2].x)) * size.x);
+    let clip = m * vec4(p + n * (1.5 * texel), 1.0);
+    let uv = vec2(clip.x * 0.5 + 0.5, 0.5 - clip.y * 0.5);
+    if (any(uv < vec2(0.0)) || any(uv > vec2(1.0)) || clip.z > 1.0) {
+        return 1.0;
+    }
+    var lit = 0.0;
+    for (var y = -1; y <= 1; y++) {
+        for (var x = -1; x <= 1; x++) {
+            let at = uv + vec2(f32(x), f32(y)) / size;
+            lit += textureSampleCompareLevel(shadow_map, shadow_sampler, at, clip.z);
+        }
+    }
+    return lit / 9.0;
+}
 
 // The fragment stage of every built-in pipeline, for eye `eye` (its entry point says
 // where the eye comes from), whose view starts `eye_x` pixels into the target.
@@ -84,8 +109,10 @@ fn shade(s: Surface) -> vec4<f32> {
     if (dot(n, to_eye) < 0.0) {
         n = -n;
     }
-    let diffuse = max(dot(n, LIGHT_DIRECTION), 0.0);
-    let half_vector = normalize(LIGHT_DIRECTION + to_eye);
-    let specular = 0.3 * pow(max(dot(n, half_vector), 0.0), 48.0);
+    let light = frame.light_direction;
+    let reaching = light_reaching(s.world_position, n);
+    let diffuse = max(dot(n, light), 0.0) * reaching;
+    let half_vector = normalize(light + to_eye);
+    let specular = 0.3 * pow(max(dot(n, half_vector), 0.0), 48.0) * reaching;
     return vec4(base_color(s).rgb * (0.25 + 0.75 * diffuse) + vec3(specular), 1.0);
 }
