@@ -449,7 +449,7 @@ fn profile_writes_table_csv_json_and_chart() {
     assert_eq!(
         lines.next(),
         Some(
-            "mode,cull,rig,instances,cpu_ms_median,cpu_ms_p95,gpu_ms_median,gpu_ms_p95,draw_calls,dispatches,bytes_uploaded,adapter,moving_percent,churn_percent,sync_ms_median,triangles_submitted,coarse_cull,sphere_tests"
+            "mode,cull,rig,instances,cpu_ms_median,cpu_ms_p95,gpu_ms_median,gpu_ms_p95,draw_calls,dispatches,bytes_uploaded,adapter,moving_percent,churn_percent,sync_ms_median,triangles_submitted,coarse_cull,sphere_tests,shadows,shadow_passes"
         )
     );
     // 3 classic modes (CPU cull only) + instanced and multiview with both culls, per count.
@@ -558,4 +558,68 @@ fn stress_with_moving_instances_reports_what_they_cost() {
         "{summary}"
     );
     assert_eq!(summary["moving_percent"], 10.0);
+}
+
+/// `stats.json` lists the frame's passes by level: on `cave` with shadows and the
+/// coarse cull forced on, the frame level runs `coarse_cull`, `shadow_cull` and `shadow`
+/// once each, every wall its `cull` and `draw`; the shadow and draw passes carry their
+/// vertex-shader invocations (lavapipe has pipeline statistics).
+#[test]
+fn render_reports_the_passes_of_each_level() {
+    let dir = tempfile::tempdir().unwrap();
+    let out = stereocull(&[
+        "render",
+        "--rig",
+        "cave",
+        "--width",
+        "24",
+        "--height",
+        "24",
+        "--msaa",
+        "1",
+        "--shadows",
+        "on",
+        "--coarse-cull",
+        "on",
+        "--out",
+        dir.path().to_str().unwrap(),
+    ]);
+    assert!(
+        out.status.success(),
+        "{}",
+        String::from_utf8_lossy(&out.stderr)
+    );
+    let stats: Value =
+        serde_json::from_str(&std::fs::read_to_string(dir.path().join("stats.json")).unwrap())
+            .unwrap();
+    let passes = stats["passes"].as_array().unwrap();
+    let at = |level: &str| -> Vec<&str> {
+        passes
+            .iter()
+            .filter(|p| p["level"] == level)
+            .map(|p| p["name"].as_str().unwrap())
+            .collect()
+    };
+    assert_eq!(
+        at("frame"),
+        ["coarse_cull", "shadow_cull", "shadow"],
+        "{stats}"
+    );
+    assert_eq!(at("display"), ["cull", "draw"].repeat(5), "{stats}");
+    assert!(at("eye").is_empty());
+    assert_eq!(stats["passes_per_level"]["frame"], 3);
+    assert_eq!(stats["coarse_cull"], true);
+    assert_eq!(stats["shadows"], true);
+    for p in passes
+        .iter()
+        .filter(|p| p["name"] == "shadow" || p["name"] == "draw")
+    {
+        assert!(p["vertex_invocations"].as_u64().unwrap() > 0, "{p}");
+    }
+    let walls: Vec<&str> = passes
+        .iter()
+        .filter(|p| p["name"] == "draw")
+        .map(|p| p["display"].as_str().unwrap())
+        .collect();
+    assert_eq!(walls, ["front", "left", "right", "floor", "ceiling"]);
 }

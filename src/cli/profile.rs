@@ -9,6 +9,7 @@ use indicatif::{ProgressBar, ProgressStyle};
 use serde::Serialize;
 
 use super::edits::{EditArgs, EditDriver};
+use super::render::{PassReport, pass_reports};
 use super::{FRAME_SECONDS, Switch, chart, write_json};
 use crate::device::{Gpu, list_counts};
 use crate::error::{Error, Result};
@@ -117,6 +118,11 @@ pub struct Row {
     pub coarse_cull: bool,
     /// Sphere-against-frustum tests of the last frame (GPU culling).
     pub sphere_tests: Option<u64>,
+    pub shadows: bool,
+    /// The last frame's shadow passes (1 with shadows, whatever the rig).
+    pub shadow_passes: usize,
+    /// The last frame's passes, with level and vertex-shader invocations.
+    pub passes: Vec<PassReport>,
     /// The last timed frame's GPU scopes, for `--trace`.
     #[serde(skip)]
     pub trace: Vec<GpuTimerQueryResult>,
@@ -325,6 +331,7 @@ fn measure(
         samples.upload.push(prepared.cpu_upload.as_secs_f64() * 1e3);
         samples.encode.push(ms(encode_start, submit_start));
         samples.submit.push(ms(submit_start, end));
+        samples.passes = pass_reports(&renderer, rig, queries.as_ref());
         if let Some(q) = queries {
             let of = |label| {
                 q.passes
@@ -376,6 +383,9 @@ fn measure(
         triangles_submitted: samples.triangles,
         coarse_cull: renderer.coarse_cull(),
         sphere_tests,
+        shadows: args.shadows.on(),
+        shadow_passes: samples.passes.iter().filter(|p| p.name == "shadow").count(),
+        passes: samples.passes,
         trace: timer.map(|t| t.last_frame().to_vec()).unwrap_or_default(),
     })
 }
@@ -396,6 +406,7 @@ struct Samples {
     last: (u32, u32, u64),
     /// Vertex-shader invocations and clipped primitives of the last frame.
     statistics: Option<(u64, u64)>,
+    passes: Vec<PassReport>,
 }
 
 fn opt(v: Option<f64>) -> String {
@@ -465,12 +476,12 @@ fn count(v: Option<u64>) -> String {
 
 fn write_csv(path: &std::path::Path, rows: &[Row]) -> Result<()> {
     let mut text = String::from(
-        "mode,cull,rig,instances,cpu_ms_median,cpu_ms_p95,gpu_ms_median,gpu_ms_p95,draw_calls,dispatches,bytes_uploaded,adapter,moving_percent,churn_percent,sync_ms_median,triangles_submitted,coarse_cull,sphere_tests\n",
+        "mode,cull,rig,instances,cpu_ms_median,cpu_ms_p95,gpu_ms_median,gpu_ms_p95,draw_calls,dispatches,bytes_uploaded,adapter,moving_percent,churn_percent,sync_ms_median,triangles_submitted,coarse_cull,sphere_tests,shadows,shadow_passes\n",
     );
     let field = |v: Option<f64>| v.map_or(String::new(), |x| format!("{x:.4}"));
     for r in rows {
         text += &format!(
-            "{},{},{},{},{:.4},{:.4},{},{},{},{},{},\"{}\",{},{},{:.4},{},{},{}\n",
+            "{},{},{},{},{:.4},{:.4},{},{},{},{},{},\"{}\",{},{},{:.4},{},{},{},{},{}\n",
             r.mode.name(),
             format!("{:?}", r.cull).to_lowercase(),
             r.rig,
@@ -489,7 +500,9 @@ fn write_csv(path: &std::path::Path, rows: &[Row]) -> Result<()> {
             r.triangles_submitted
                 .map_or(String::new(), |t| t.to_string()),
             r.coarse_cull,
-            r.sphere_tests.map_or(String::new(), |t| t.to_string())
+            r.sphere_tests.map_or(String::new(), |t| t.to_string()),
+            r.shadows,
+            r.shadow_passes
         );
     }
     std::fs::write(path, text).map_err(|e| Error::io(path, e))

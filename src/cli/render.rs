@@ -11,10 +11,10 @@ use super::{SceneArgs, write_json};
 use crate::device::{Gpu, list_counts};
 use crate::error::{Error, Result};
 use crate::live::LiveScene;
-use crate::profiling::GpuTimer;
+use crate::profiling::{FrameQueries, GpuTimer};
 use crate::readback::read_rgba8;
 use crate::renderer::{
-    CullMode, DisplayTarget, FrameStats, Renderer, RendererOptions, StereoMode, SyncStats,
+    CullMode, DisplayTarget, FrameStats, Level, Renderer, RendererOptions, StereoMode, SyncStats,
 };
 use crate::rig::Rig;
 use crate::scene::Scene;
@@ -161,6 +161,51 @@ impl Session {
     }
 }
 
+/// One pass of a frame as the reports list it ([`Renderer::passes`]).
+#[derive(Clone, Debug, Serialize)]
+pub struct PassReport {
+    pub level: Level,
+    pub name: &'static str,
+    pub display: Option<String>,
+    pub eye: Option<u32>,
+    /// Vertex-shader invocations (pipeline statistics, where the adapter has them; draw
+    /// and shadow passes).
+    pub vertex_invocations: Option<u64>,
+}
+
+/// The last frame's passes in recording order, with the displays named and each
+/// counted pass's vertex-shader invocations from `queries`.
+pub fn pass_reports(
+    renderer: &Renderer,
+    rig: &Rig,
+    queries: Option<&FrameQueries>,
+) -> Vec<PassReport> {
+    renderer
+        .passes()
+        .iter()
+        .map(|p| PassReport {
+            level: p.level,
+            name: p.name,
+            display: p.display.map(|d| rig.displays[d as usize].name.clone()),
+            eye: p.eye,
+            vertex_invocations: p
+                .statistics
+                .zip(queries)
+                .and_then(|(i, q)| q.vertex_invocations_per_query.get(i as usize).copied()),
+        })
+        .collect()
+}
+
+/// How many passes of each level `passes` holds: (frame, display, eye).
+pub fn passes_per_level(passes: &[PassReport]) -> serde_json::Value {
+    let count = |level| passes.iter().filter(|p| p.level == level).count();
+    serde_json::json!({
+        "frame": count(Level::Frame),
+        "display": count(Level::Display),
+        "eye": count(Level::Eye),
+    })
+}
+
 #[derive(Serialize)]
 struct DisplayStats {
     name: String,
@@ -174,10 +219,18 @@ struct DisplayStats {
 pub fn render(args: &RenderArgs) -> Result<()> {
     let edits = EditArgs::default();
     let mut session = Session::open(&args.scene, (args.cull, args.mode, args.msaa), &edits)?;
+    // Room for every display's draw passes (one per eye at most) and the shadow pass.
+    let counted = 2 * session.rig.displays.len() as u32 + 1;
+    session.timer = GpuTimer::new(&session.gpu.device, &session.gpu.queue, counted);
     let FrameFigures { stats, cpu_ms, .. } = session.frame(args.time)?;
     let start = Instant::now();
     session.gpu.wait()?;
     let gpu_wait_ms = start.elapsed().as_secs_f64() * 1e3;
+    let queries = match session.timer.as_mut() {
+        Some(t) => Some(t.read(&session.gpu.device, &session.gpu.queue)?),
+        None => None,
+    };
+    let passes = pass_reports(&session.renderer, &session.rig, queries.as_ref());
     std::fs::create_dir_all(&args.out).map_err(|e| Error::io(&args.out, e))?;
     let visible = session
         .renderer
@@ -241,6 +294,9 @@ pub fn render(args: &RenderArgs) -> Result<()> {
             "frame": stats,
             "coarse_cull": session.renderer.coarse_cull(),
             "coarse_candidates": candidates,
+            "shadows": session.renderer.options().shadows,
+            "passes_per_level": passes_per_level(&passes),
+            "passes": passes,
             "cpu_encode_submit_ms": cpu_ms,
             "gpu_wait_ms": gpu_wait_ms,
             "displays": displays,

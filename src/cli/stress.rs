@@ -7,7 +7,7 @@ use indicatif::{ProgressBar, ProgressStyle};
 use serde::Serialize;
 
 use super::edits::EditArgs;
-use super::render::Session;
+use super::render::{PassReport, Session, pass_reports, passes_per_level};
 use super::{FRAME_SECONDS, SceneArgs};
 use crate::error::Result;
 use crate::profiling::{GpuTimer, percentile};
@@ -53,6 +53,8 @@ struct FrameRecord {
     visible: Vec<u32>,
     /// Sphere-against-frustum tests (GPU culling; see `Renderer::read_sphere_tests`).
     sphere_tests: Option<u64>,
+    /// The passes recorded, with their level and vertex-shader invocations.
+    passes: Vec<PassReport>,
     draw_calls: u32,
     dispatches: u32,
     bytes_uploaded: u64,
@@ -78,6 +80,9 @@ struct Summary {
     visible_mean: Vec<f64>,
     /// Median over the frames of the sphere tests (GPU culling).
     sphere_tests_median: Option<f64>,
+    /// Whether frames draw the shadow map, and the last frame's passes per level.
+    shadows: bool,
+    passes_per_level: serde_json::Value,
     draw_calls_per_frame: u32,
     dispatches_per_frame: u32,
     bytes_uploaded_per_frame: u64,
@@ -120,8 +125,9 @@ impl MemorySample {
 pub fn stress(args: &StressArgs) -> Result<()> {
     let mode = (args.cull, args.mode, Some(args.msaa));
     let mut session = Session::open(&args.scene, mode, &args.edits)?;
-    let passes = 2 * session.rig.displays.len() as u32;
-    session.timer = GpuTimer::new(&session.gpu.device, &session.gpu.queue, passes);
+    // Room for every display's draw passes (one per eye at most) and the shadow pass.
+    let counted = 2 * session.rig.displays.len() as u32 + 1;
+    session.timer = GpuTimer::new(&session.gpu.device, &session.gpu.queue, counted);
     let bar = if args.json {
         ProgressBar::hidden()
     } else {
@@ -145,13 +151,12 @@ pub fn stress(args: &StressArgs) -> Result<()> {
         let (stats, cpu_ms) = (figures.stats, figures.cpu_ms);
         session.gpu.wait()?;
         let frame_ms = start.elapsed().as_secs_f64() * 1e3;
-        let triangles_submitted = match session.timer.as_mut() {
-            Some(t) => {
-                t.read(&session.gpu.device, &session.gpu.queue)?
-                    .triangles_submitted
-            }
+        let queries = match session.timer.as_mut() {
+            Some(t) => Some(t.read(&session.gpu.device, &session.gpu.queue)?),
             None => None,
         };
+        let triangles_submitted = queries.as_ref().and_then(|q| q.triangles_submitted);
+        let passes = pass_reports(&session.renderer, &session.rig, queries.as_ref());
         let visible = session
             .renderer
             .read_visible_counts(&session.gpu.device, &session.gpu.queue)?;
@@ -169,6 +174,7 @@ pub fn stress(args: &StressArgs) -> Result<()> {
             frame_ms,
             visible,
             sphere_tests,
+            passes,
             draw_calls: stats.draw_calls,
             dispatches: stats.dispatches,
             bytes_uploaded: stats.bytes_uploaded,
@@ -245,6 +251,8 @@ fn summarize(
         bytes_uploaded_per_frame: last.map_or(0, |r| r.bytes_uploaded),
         triangles_submitted_median: median_of(records, |r| r.triangles_submitted),
         sphere_tests_median: median_of(records, |r| r.sphere_tests),
+        shadows: session.renderer.options().shadows,
+        passes_per_level: passes_per_level(last.map_or(&[], |r| &r.passes[..])),
         gpu_bytes_per_instance: session.renderer.gpu_bytes_per_instance(),
         memory,
     }
