@@ -106,6 +106,11 @@ pub struct DisplayContext {
     /// Which eye `eye[0]` is: 0, or 1 in the per-eye contexts of the classic modes
     /// (which hold one eye in both slots), so that shaders see the true eye index.
     pub first_eye: u32,
+    /// The far split ([`crate::cull::Split`], the cull's `in_split`): 0 none, 1 keep
+    /// near, 2 keep far instances, those entirely beyond `split_distance` from
+    /// `position` (the display's apex).
+    pub split_keep: u32,
+    pub split_distance: f32,
 }
 
 impl DisplayContext {
@@ -129,6 +134,8 @@ impl DisplayContext {
             planes: display.planes,
             instances_per_object,
             first_eye: 0,
+            split_keep: 0,
+            split_distance: 0.0,
         }
     }
 
@@ -170,6 +177,8 @@ impl DisplayContext {
             planes: view.planes,
             instances_per_object: 1,
             first_eye: 0,
+            split_keep: 0,
+            split_distance: 0.0,
         }
     }
 }

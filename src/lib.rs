@@ -22,6 +22,7 @@ pub mod cull;
 pub mod device;
 pub mod draw;
 pub mod error;
+pub mod far_layer;
 pub mod frustum;
 pub mod gltf_import;
 pub mod live;

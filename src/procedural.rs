@@ -45,6 +45,47 @@ pub fn scene(n: u32, mesh_count: u32, seed: u64) -> Scene {
     scene
 }
 
+/// A city around a room: a tenth of `n` instances are objects of the procedural scene
+/// within 8 m of the viewer's standing point, the rest buildings (facades of 4 x 8
+/// windows, 260 triangles; 8 to 30 m wide, 10 to 120 m tall, on the ground) from 200 m
+/// to 2 km away: most of what a viewer sees is far enough that both eyes see it alike.
+pub fn city(n: u32, seed: u64) -> Scene {
+    let room = n / 10;
+    let mut scene = scene(room, 8, seed);
+    // Pulled in from the procedural ball to 8 m.
+    let center = Vec3::new(0.0, 1.5, 0.0);
+    let shrink = (8.0 / (4.0 + (room as f32).cbrt() * 0.8)).min(1.0);
+    for inst in &mut scene.instances {
+        let t = Vec3::from(inst.world_from_local.translation);
+        inst.world_from_local.translation = (center + (t - center) * shrink).into();
+    }
+    let building = shapes::building(4, 8);
+    let mesh = scene.add_mesh(
+        "building".to_string(),
+        &building.vertices,
+        &building.indices,
+    );
+    let mut rng = Pcg64Mcg::seed_from_u64(seed ^ 0xc17);
+    scene.instances.extend((room..n).map(|_| {
+        let angle = rng.random_range(0.0..std::f32::consts::TAU);
+        let distance = rng.random_range(200.0f32..2000.0);
+        let size = Vec3::new(
+            rng.random_range(8.0..30.0),
+            rng.random_range(10.0..120.0),
+            rng.random_range(8.0..30.0),
+        );
+        let at = Vec3::new(angle.cos() * distance, size.y * 0.5, angle.sin() * distance);
+        let grey = rng.random_range(0.35..0.8);
+        Instance {
+            world_from_local: Affine3A::from_scale_rotation_translation(size, Quat::IDENTITY, at),
+            mesh,
+            color: Vec4::new(grey, grey * 0.95, grey * 0.9, 1.0),
+            animation: Animation::NONE,
+        }
+    }));
+    scene
+}
+
 /// Gives every mesh of `scene` one base color texture (a generated 256 x 256 pattern of
 /// colored tiles and stripes, so that filtering and mipmaps have work to do).
 pub fn texture(scene: &mut Scene) {

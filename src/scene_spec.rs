@@ -1,5 +1,6 @@
 //! Scenes by name, above the importers: `default` (the built-in room),
-//! `procedural:N[:MESHES[:SEED[:textured]]]`, or a `.gltf` / `.glb` file.
+//! `procedural:N[:MESHES[:SEED[:textured]]]`, `city:N[:SEED]`, or a `.gltf` / `.glb`
+//! file.
 
 use std::path::Path;
 
@@ -25,6 +26,9 @@ pub const ROOM_GLB: &[u8] = include_bytes!("../assets/room.glb");
 /// An empty scene is an error: there would be nothing to cull or draw, and GPU
 /// buffers cannot be empty.
 pub fn load(spec: &str) -> Result<Scene> {
+    if let Some(rest) = spec.strip_prefix("city:") {
+        return checked(spec, parse_city(spec, rest)?);
+    }
     let scene = match spec.strip_prefix("procedural:") {
         Some(rest) => {
             let (n, meshes, seed, textured) = parse_procedural(spec, rest)?;
@@ -39,7 +43,11 @@ pub fn load(spec: &str) -> Result<Scene> {
         }
         None => gltf_import::import(Path::new(spec))?,
     };
-    let mut scene = scene;
+    checked(spec, scene)
+}
+
+/// `scene` with non-finite instances dropped; an error when none remain.
+fn checked(spec: &str, mut scene: Scene) -> Result<Scene> {
     let dropped = scene.drop_non_finite_instances();
     if dropped > 0 {
         log::warn!("{spec}: dropped {dropped} instance(s) with non-finite transforms");
@@ -51,6 +59,27 @@ pub fn load(spec: &str) -> Result<Scene> {
         });
     }
     Ok(scene)
+}
+
+/// `city:N[:SEED]`: [`procedural::city`].
+fn parse_city(spec: &str, rest: &str) -> Result<Scene> {
+    let fail = |message: &str| Error::SceneSpec {
+        spec: spec.into(),
+        message: format!("{message}; expected city:N[:SEED]"),
+    };
+    let mut parts = rest.split(':');
+    let n = parts
+        .next()
+        .and_then(|s| s.parse().ok())
+        .ok_or_else(|| fail("N is not a count"))?;
+    let seed = match parts.next() {
+        Some(s) => s.parse().map_err(|_| fail("SEED is not an integer"))?,
+        None => DEFAULT_PROCEDURAL_SEED,
+    };
+    if parts.next().is_some() {
+        return Err(fail("too many fields"));
+    }
+    Ok(procedural::city(n, seed))
 }
 
 fn parse_procedural(spec: &str, rest: &str) -> Result<(u32, u32, u64, bool)> {

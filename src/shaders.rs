@@ -516,6 +516,22 @@ pub const SHADOW_DECLARATIONS: &str = "\
 @group(2) @binding(1) var shadow_sampler: sampler_comparison;
 ";
 
+/// The far-layer composite's group 0 (`wgsl/far_composite.wgsl`; the layout is
+/// `renderer::far_pass`'s): the display's and the far layer's contexts, the far layer.
+pub const FAR_DECLARATIONS: &str = "\
+@group(0) @binding(0) var<uniform> display: DisplayContext;
+@group(0) @binding(1) var<uniform> far: DisplayContext;
+@group(0) @binding(2) var far_color: texture_2d<f32>;
+@group(0) @binding(3) var far_depth: texture_depth_2d;
+@group(0) @binding(4) var far_sampler: sampler;
+";
+
+/// The far layer's composite into a stereo display (`wgsl/far_composite.wgsl`).
+pub fn far_composite_source() -> String {
+    let body = include_str!("../wgsl/far_composite.wgsl");
+    [&constants(), CONTEXTS, FAR_DECLARATIONS, body].concat()
+}
+
 /// The frame's shadow pass: depth only, the light as the display's eye 0
 /// (`wgsl/shadow.wgsl` after the mono decode).
 pub fn shadow_source() -> String {
@@ -530,8 +546,12 @@ pub fn all_sources() -> Vec<(String, String)> {
     let draw = DrawKey::ALL.map(|k| (k.label(), k.source()));
     let scatter = ("stereocull.scatter".to_string(), scatter_source());
     let shadow = ("stereocull.shadow".to_string(), shadow_source());
+    let far = (
+        "stereocull.far_composite".to_string(),
+        far_composite_source(),
+    );
     cull.into_iter()
         .chain(draw)
-        .chain([scatter, shadow])
+        .chain([scatter, shadow, far])
         .collect()
 }

@@ -112,6 +112,7 @@ impl LightView {
         CullJob {
             planes: self.planes,
             instances_per_object: 1,
+            split: None,
         }
     }
 }

@@ -48,6 +48,33 @@ pub fn cuboid(half: Vec3) -> Shape {
     s
 }
 
+/// A unit box (half-size 0.5) whose four sides are facades of `columns x floors`
+/// quads (a window grid) under a flat roof: the city's buildings.
+pub fn building(columns: u32, floors: u32) -> Shape {
+    let mut out = Shape {
+        vertices: Vec::new(),
+        indices: Vec::new(),
+    };
+    let mut add = |s: Shape| {
+        let base = out.vertices.len() as u32;
+        out.vertices.extend(s.vertices);
+        out.indices.extend(s.indices.iter().map(|i| base + i));
+    };
+    for n in [Vec3::X, Vec3::Z, Vec3::NEG_X, Vec3::NEG_Z] {
+        // Counter-clockwise from outside: across x up = n.
+        let across = Vec3::Y.cross(n);
+        add(grid(columns, floors, |u, v| {
+            (0.5 * n + across * (u - 0.5) + Vec3::Y * (v - 0.5), n)
+        }));
+    }
+    for (n, down) in [(Vec3::Y, Vec3::NEG_Z), (Vec3::NEG_Y, Vec3::Z)] {
+        add(grid(1, 1, |u, v| {
+            (0.5 * n + Vec3::X * (u - 0.5) + down * (v - 0.5), n)
+        }));
+    }
+    out
+}
+
 /// A grid of `(columns + 1) x (rows + 1)` vertices from `f(u, v)` (both in 0..=1, also
 /// the texture coordinates) returning position and normal, stitched into quads.
 fn grid(columns: u32, rows: u32, f: impl Fn(f32, f32) -> (Vec3, Vec3)) -> Shape {

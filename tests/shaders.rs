@@ -198,6 +198,8 @@ fn contexts_match_wgsl() {
         planes: std::array::from_fn(|i| Vec4::splat(7.0 + i as f32)),
         instances_per_object: 2,
         first_eye: 1,
+        split_keep: 2,
+        split_distance: 13.0,
     };
     let bytes = uniform_bytes(&d);
     check_uniform(
@@ -214,6 +216,8 @@ fn contexts_match_wgsl() {
             ("planes", 7.0),
             ("instances_per_object", f32::from_bits(2)),
             ("first_eye", f32::from_bits(1)),
+            ("split_keep", f32::from_bits(2)),
+            ("split_distance", 13.0),
         ],
     );
     // The second eye sits one EyeContext span after the first, and the last plane five

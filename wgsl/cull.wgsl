@@ -17,7 +17,8 @@ fn cull(
     var flag = 0u;
     if (j < n) {
         let k = cull_position(j);
-        if (sphere_in_planes(display.planes, spheres[k]) && lod_level(k) == level) {
+        let s = spheres[k];
+        if (sphere_in_planes(display.planes, s) && in_split(s) && lod_level(k) == level) {
             flag = 1u;
         }
     }

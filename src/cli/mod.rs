@@ -84,6 +84,12 @@ pub struct SceneArgs {
     /// The frame's shadow map: drawn once per frame, sampled by every display and eye.
     #[arg(long, value_enum, default_value = "off")]
     pub shadows: Switch,
+    /// Distant instances drawn once per stereo display into a far layer both eyes share.
+    #[arg(long, value_enum, default_value = "off")]
+    pub far_layer: Switch,
+    /// Pixels the eyes' images of a far instance may differ by (sets the far distance).
+    #[arg(long, default_value_t = crate::far_layer::FAR_THRESHOLD_PX)]
+    pub far_threshold: f32,
 }
 
 #[derive(Clone, Copy, Debug, PartialEq, Eq, clap::ValueEnum, Serialize)]
@@ -106,6 +112,8 @@ impl SceneArgs {
             lod: self.lod.on(),
             coarse_cull: self.coarse_cull,
             shadows: self.shadows.on(),
+            far_layer: self.far_layer.on(),
+            far_threshold_px: self.far_threshold,
             ..Default::default()
         }
     }

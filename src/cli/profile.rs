@@ -16,7 +16,9 @@ use crate::error::{Error, Result};
 use crate::live::LiveScene;
 use crate::procedural;
 use crate::profiling::{GpuTimer, percentile, write_trace};
-use crate::renderer::{CoarseMode, CullMode, Renderer, RendererOptions, StereoMode, SyncStats};
+use crate::renderer::{
+    CoarseMode, CullMode, FarSplit, Renderer, RendererOptions, StereoMode, SyncStats,
+};
 use crate::rig::Rig;
 use crate::scene::Scene;
 use wgpu_profiler::GpuTimerQueryResult;
@@ -59,6 +61,9 @@ pub struct ProfileArgs {
     /// Give every mesh a base color texture (`procedural:N:M:1:textured`).
     #[arg(long)]
     pub textured: bool,
+    /// Profile `city:N` scenes (a room and buildings 200 m to 2 km away) instead.
+    #[arg(long)]
+    pub city: bool,
     /// Levels of detail chosen on the GPU from the viewer's position.
     #[arg(long, value_enum, default_value = "off")]
     pub lod: Switch,
@@ -72,6 +77,12 @@ pub struct ProfileArgs {
     /// The frame's shadow map, drawn once per frame.
     #[arg(long, value_enum, default_value = "off")]
     pub shadows: Switch,
+    /// The far layer, one configuration each (`on,off` compares them).
+    #[arg(long, value_delimiter = ',', value_enum, default_value = "off")]
+    pub far_layer: Vec<Switch>,
+    /// Pixels the eyes' images of a far instance may differ by.
+    #[arg(long, default_value_t = crate::far_layer::FAR_THRESHOLD_PX)]
+    pub far_threshold: f32,
     /// The frame-level coarse cull, one configuration each (`on,off` compares them).
     #[arg(long, value_delimiter = ',', value_enum, default_value = "auto")]
     pub coarse_cull: Vec<CoarseMode>,
@@ -119,6 +130,9 @@ pub struct Row {
     /// Sphere-against-frustum tests of the last frame (GPU culling).
     pub sphere_tests: Option<u64>,
     pub shadows: bool,
+    pub far_layer: bool,
+    /// The last frame's far/near split per display (with the far layer).
+    pub far_near: Vec<Option<FarSplit>>,
     /// The last frame's shadow passes (1 with shadows, whatever the rig).
     pub shadow_passes: usize,
     /// The last frame's passes, with level and vertex-shader invocations.
@@ -160,7 +174,7 @@ pub fn profile(args: &ProfileArgs) -> Result<()> {
     if timer.is_none() {
         println!("GPU timings unavailable: the adapter has no TIMESTAMP_QUERY; CPU timings only");
     }
-    let variants = args.moving.len() * args.coarse_cull.len();
+    let variants = args.moving.len() * args.coarse_cull.len() * args.far_layer.len();
     let total = (rigs.len() * args.instances.len() * configs.len() * variants) as u64
         * (args.frames + args.warmup) as u64;
     let bar = ProgressBar::new(total);
@@ -170,7 +184,10 @@ pub fn profile(args: &ProfileArgs) -> Result<()> {
     );
     let mut rows = Vec::new();
     for &n in &args.instances {
-        let mut scene = procedural::scene(n, args.meshes, 1);
+        let mut scene = match args.city {
+            true => procedural::city(n, 1),
+            false => procedural::scene(n, args.meshes, 1),
+        };
         if args.textured {
             procedural::texture(&mut scene);
         }
@@ -179,8 +196,9 @@ pub fn profile(args: &ProfileArgs) -> Result<()> {
                 .moving
                 .iter()
                 .flat_map(|m| args.coarse_cull.iter().map(move |c| (*m, *c)))
+                .flat_map(|(m, c)| args.far_layer.iter().map(move |f| (m, c, f.on())))
                 .collect();
-            for (&(mode, cull), &(moving, coarse)) in configs
+            for (&(mode, cull), &(moving, coarse, far)) in configs
                 .iter()
                 .flat_map(|c| variants.iter().map(move |v| (c, v)))
             {
@@ -194,6 +212,7 @@ pub fn profile(args: &ProfileArgs) -> Result<()> {
                     mode,
                     cull,
                     coarse,
+                    far,
                     edits: EditArgs {
                         moving,
                         churn: args.churn,
@@ -258,6 +277,7 @@ struct Config<'a> {
     mode: StereoMode,
     cull: CullMode,
     coarse: CoarseMode,
+    far: bool,
     edits: EditArgs,
 }
 
@@ -270,6 +290,7 @@ fn measure(
         mode,
         cull,
         coarse,
+        far,
         edits,
     }: &Config,
     args: &ProfileArgs,
@@ -283,6 +304,8 @@ fn measure(
         lod: args.lod.on(),
         coarse_cull: coarse,
         shadows: args.shadows.on(),
+        far_layer: far,
+        far_threshold_px: args.far_threshold,
         ..Default::default()
     };
     let mut renderer = Renderer::new(&gpu.device, scene, rig, options)?;
@@ -353,6 +376,7 @@ fn measure(
         );
     }
     let sphere_tests = renderer.read_sphere_tests(&gpu.device, &gpu.queue)?;
+    let far_near = renderer.read_far_split(&gpu.device, &gpu.queue)?;
     let med = |v: &[f64]| percentile(v, 0.5);
     let gpu_med = |v: &[f64]| (!v.is_empty()).then(|| percentile(v, 0.5));
     Ok(Row {
@@ -384,6 +408,8 @@ fn measure(
         coarse_cull: renderer.coarse_cull(),
         sphere_tests,
         shadows: args.shadows.on(),
+        far_layer: far,
+        far_near,
         shadow_passes: samples.passes.iter().filter(|p| p.name == "shadow").count(),
         passes: samples.passes,
         trace: timer.map(|t| t.last_frame().to_vec()).unwrap_or_default(),

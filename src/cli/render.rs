@@ -196,6 +196,19 @@ pub fn pass_reports(
         .collect()
 }
 
+/// The last frame's far/near split, per display with a far layer, named.
+pub fn far_near(session: &Session) -> Result<Vec<serde_json::Value>> {
+    let device = (&session.gpu.device, &session.gpu.queue);
+    let splits = session.renderer.read_far_split(device.0, device.1)?;
+    Ok(session
+        .rig
+        .displays
+        .iter()
+        .zip(splits)
+        .filter_map(|(d, s)| s.map(|s| serde_json::json!({ "display": d.name, "split": s })))
+        .collect())
+}
+
 /// How many passes of each level `passes` holds: (frame, display, eye).
 pub fn passes_per_level(passes: &[PassReport]) -> serde_json::Value {
     let count = |level| passes.iter().filter(|p| p.level == level).count();
@@ -231,6 +244,7 @@ pub fn render(args: &RenderArgs) -> Result<()> {
         None => None,
     };
     let passes = pass_reports(&session.renderer, &session.rig, queries.as_ref());
+    let far_near = far_near(&session)?;
     std::fs::create_dir_all(&args.out).map_err(|e| Error::io(&args.out, e))?;
     let visible = session
         .renderer
@@ -295,6 +309,8 @@ pub fn render(args: &RenderArgs) -> Result<()> {
             "coarse_cull": session.renderer.coarse_cull(),
             "coarse_candidates": candidates,
             "shadows": session.renderer.options().shadows,
+            "far_layer": session.renderer.options().far_layer,
+            "far_near": far_near,
             "passes_per_level": passes_per_level(&passes),
             "passes": passes,
             "cpu_encode_submit_ms": cpu_ms,

@@ -7,7 +7,7 @@ use indicatif::{ProgressBar, ProgressStyle};
 use serde::Serialize;
 
 use super::edits::EditArgs;
-use super::render::{PassReport, Session, pass_reports, passes_per_level};
+use super::render::{PassReport, Session, far_near, pass_reports, passes_per_level};
 use super::{FRAME_SECONDS, SceneArgs};
 use crate::error::Result;
 use crate::profiling::{GpuTimer, percentile};
@@ -83,6 +83,8 @@ struct Summary {
     /// Whether frames draw the shadow map, and the last frame's passes per level.
     shadows: bool,
     passes_per_level: serde_json::Value,
+    /// With the far layer: the last frame's far distance and far/near split per display.
+    far_near: Vec<serde_json::Value>,
     draw_calls_per_frame: u32,
     dispatches_per_frame: u32,
     bytes_uploaded_per_frame: u64,
@@ -201,7 +203,8 @@ pub fn stress(args: &StressArgs) -> Result<()> {
     }
     bar.finish_and_clear();
     memory.dedup_by_key(|m| m.frame);
-    let summary = summarize(&session, args, &records, memory);
+    let far_near = far_near(&session)?;
+    let summary = summarize(&session, args, (&records, far_near), memory);
     if args.json {
         let all = serde_json::json!({ "frames": records, "summary": summary });
         println!("{all}");
@@ -214,7 +217,7 @@ pub fn stress(args: &StressArgs) -> Result<()> {
 fn summarize(
     session: &Session,
     args: &StressArgs,
-    records: &[FrameRecord],
+    (records, far_near): (&[FrameRecord], Vec<serde_json::Value>),
     memory: Vec<MemorySample>,
 ) -> Summary {
     let of = |f: fn(&FrameRecord) -> f64| records.iter().map(f).collect::<Vec<f64>>();
@@ -253,6 +256,7 @@ fn summarize(
         sphere_tests_median: median_of(records, |r| r.sphere_tests),
         shadows: session.renderer.options().shadows,
         passes_per_level: passes_per_level(last.map_or(&[], |r| &r.passes[..])),
+        far_near,
         gpu_bytes_per_instance: session.renderer.gpu_bytes_per_instance(),
         memory,
     }

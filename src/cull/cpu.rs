@@ -9,7 +9,7 @@ use rayon::prelude::*;
 
 use glam::{Vec3, Vec4};
 
-use super::{CoarseCull, CullJob, CullOutput};
+use super::{CoarseCull, CullJob, CullOutput, Split};
 use crate::records::{CullLayout, DrawArgs, lod_level};
 use crate::scene::MAX_LODS;
 
@@ -88,12 +88,18 @@ pub fn cull_frame(layout: &CullLayout, displays: &[CullJob], frame: &FrameCull) 
         .iter()
         .map(|job| job.planes.map(|v| v.to_array()))
         .collect();
+    let splits: Vec<Option<Split>> = displays.iter().map(|job| job.split).collect();
+    let tests = FrameTests {
+        planes: &planes,
+        splits: &splits,
+        coarse,
+    };
     // One mask per display, chunk-interleaved so each task writes one contiguous run.
     let mut masks = vec![0u64; words * displays.len()];
     let counts: Vec<Vec<u32>> = masks
         .par_chunks_mut(WORDS_PER_CHUNK * displays.len())
         .enumerate()
-        .map(|(chunk, out)| test_chunk(layout, (&planes, coarse), chunk * CHUNK, out))
+        .map(|(chunk, out)| test_chunk(layout, tests, chunk * CHUNK, out))
         .collect();
     displays
         .iter()
@@ -119,12 +125,25 @@ pub fn cull_frame(layout: &CullLayout, displays: &[CullJob], frame: &FrameCull) 
         .collect()
 }
 
+/// What each sphere is tested against: every display's planes and far split, after
+/// the frame's coarse test when it runs.
+#[derive(Clone, Copy)]
+struct FrameTests<'a> {
+    planes: &'a [[[f32; 4]; 6]],
+    splits: &'a [Option<Split>],
+    coarse: Option<&'a CoarseCull>,
+}
+
 /// Tests one chunk of spheres for every display (only the coarse test's candidates,
 /// given one); `out` holds each display's words for the chunk one after another.
 /// Returns the visible count per display.
 fn test_chunk(
     layout: &CullLayout,
-    (planes, coarse): (&[[[f32; 4]; 6]], Option<&CoarseCull>),
+    FrameTests {
+        planes,
+        splits,
+        coarse,
+    }: FrameTests,
     start: usize,
     out: &mut [u64],
 ) -> Vec<u32> {
@@ -136,10 +155,14 @@ fn test_chunk(
         let g = group..(group + 64).min(end);
         let cols = [&x[g.clone()], &y[g.clone()], &z[g.clone()], &neg_r[g]];
         let candidates = coarse.map_or(u64::MAX, |c| coarse_group(c, cols));
-        for (d, p) in planes.iter().enumerate() {
+        for (d, (p, split)) in planes.iter().zip(splits).enumerate() {
             let bits = match candidates {
                 0 => 0,
                 _ => test_group(p, cols) & candidates,
+            };
+            let bits = match split {
+                Some(s) if bits != 0 => bits & split_group(s, cols),
+                _ => bits,
             };
             out[d * per + w] = bits;
             counts[d] += bits.count_ones();
@@ -216,6 +239,16 @@ fn coarse_lanes_portable(coarse: &CoarseCull, [x, y, z, neg_r]: [&[f32; 64]; 4])
     let mut bits = 0u64;
     for (i, m) in inside.iter().enumerate() {
         bits |= ((m & 1) as u64) << i;
+    }
+    bits
+}
+
+/// The bits of up to 64 spheres given as columns that `split` keeps ([`Split::keeps`]).
+fn split_group(split: &Split, [x, y, z, neg_r]: [&[f32]; 4]) -> u64 {
+    let mut bits = 0u64;
+    for i in 0..x.len() {
+        let sphere = glam::Vec4::new(x[i], y[i], z[i], -neg_r[i]);
+        bits |= (split.keeps(sphere) as u64) << i;
     }
     bits
 }

@@ -13,7 +13,7 @@ pub mod gpu;
 
 pub use coarse::CoarseCull;
 
-use glam::Vec4;
+use glam::{Vec3, Vec4};
 
 use crate::records::DrawArgs;
 
@@ -25,6 +25,34 @@ pub struct CullJob {
     pub planes: [Vec4; 6],
     /// 2 for instanced stereo (counts doubled), else 1.
     pub instances_per_object: u32,
+    /// With a far layer: which side of the display's far distance this cull keeps.
+    pub split: Option<Split>,
+}
+
+/// A display's far split ([`crate::far_layer`]): instances entirely beyond `distance`
+/// from `origin` (the display's apex) are far, the rest near.
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub struct Split {
+    pub origin: Vec3,
+    pub distance: f32,
+    /// Keep the far instances (the far layer's cull), else the near ones.
+    pub keep_far: bool,
+}
+
+impl Split {
+    /// Whether the cull keeps sphere `s`. The CPU twin of `in_split` in
+    /// `wgsl/shared/cull_math.wgsl`: same operations, same order, no square root.
+    #[inline]
+    pub fn keeps(&self, s: Vec4) -> bool {
+        let (dx, dy, dz) = (
+            s.x - self.origin.x,
+            s.y - self.origin.y,
+            s.z - self.origin.z,
+        );
+        let d2 = dx * dx + dy * dy + dz * dz;
+        let reach = self.distance + s.w;
+        (d2 >= reach * reach) == self.keep_far
+    }
 }
 
 /// One display's cull result, as the draw pass consumes it.

@@ -65,6 +65,19 @@ pub(super) fn check_device(
     }
     let limits = device.limits();
     check_shadows(features, &limits, options)?;
+    if options.far_layer && options.mode != StereoMode::Instanced {
+        return Err(Error::Unsupported(format!(
+            "the far layer shares distant geometry between the eyes of instanced's doubled draws; {mode} has none"
+        )));
+    }
+    if options.far_layer
+        && !(options.far_threshold_px > 0.0 && options.far_threshold_px.is_finite())
+    {
+        return Err(Error::Unsupported(format!(
+            "a far threshold of {} pixels: it must be a positive number",
+            options.far_threshold_px
+        )));
+    }
     // Storage buffers are bound whole, so the binding limit holds for them; vertex and
     // index buffers are not bindings and only need to fit one buffer.
     let storage = limits

@@ -168,6 +168,7 @@ impl ClassicPath {
                 jobs.extend(r.eyes.iter().map(|e| CullJob {
                     planes: e.frustum().planes,
                     instances_per_object: 1,
+                    split: None,
                 }));
                 per_display.push(2);
             } else {

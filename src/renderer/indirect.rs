@@ -7,6 +7,7 @@
 
 use std::time::Instant;
 
+use super::far_pass::{Far, FarLayers};
 use super::passes::{PassRecord, close, draw_pass, open_display, open_pass};
 use super::shadow_pass::{LightCull, ShadowPass};
 use super::{
@@ -62,6 +63,8 @@ pub(super) struct IndirectPath {
     displays: Vec<IndirectDisplay>,
     /// With shadows: the frame's shadow pass.
     shadow: Option<ShadowPass>,
+    /// With the far layer: the stereo displays' far layers.
+    far: Option<Far>,
 }
 
 impl IndirectPath {
@@ -107,7 +110,7 @@ impl IndirectPath {
         );
         let draw_scene = DrawScene::new(device, &drawer, scene, slots)?;
         let draws = scene.meshes.len() as u32 * options.lod_levels();
-        let displays = keys
+        let displays: Vec<IndirectDisplay> = keys
             .iter()
             .map(|&key| {
                 let context = context_buffer(device);
@@ -145,6 +148,16 @@ impl IndirectPath {
                 (slots, draws),
             )
         });
+        let far = match options.far_layer {
+            false => None,
+            true => Some(far_layers(
+                device,
+                (rig, frame, options),
+                &culling,
+                (&draw_scene, &displays),
+                (slots, draws),
+            )?),
+        };
         Ok(IndirectPath {
             culling,
             drawer,
@@ -152,6 +165,7 @@ impl IndirectPath {
             max_draws: draws,
             displays,
             shadow,
+            far,
         })
     }
 
@@ -166,25 +180,31 @@ impl IndirectPath {
 
     /// Writes each display's context and, culling on the CPU, its cull results.
     pub(super) fn prepare(
-        &self,
+        &mut self,
         queue: &wgpu::Queue,
         rig: &Rig,
         (resolved, frame, light): (&ResolvedRig, &FrameCull, Option<&LightView>),
     ) -> FrameStats {
-        let contexts = display_contexts(rig, resolved, |i| {
+        let mut contexts = display_contexts(rig, resolved, |i| {
             self.displays[i].key.instances_per_object()
         });
+        if let Some(far) = &mut self.far {
+            far.plan(rig, resolved, &mut contexts);
+        }
         let mut stats = FrameStats::default();
         let start = Instant::now();
         let culls = match &self.culling {
             Culling::Gpu { .. } => Vec::new(),
             Culling::Cpu { layout } => {
-                let jobs: Vec<_> = self
+                let mut jobs: Vec<_> = self
                     .displays
                     .iter()
                     .zip(&resolved.displays)
                     .map(|(state, r)| r.cull_job(state.key.instances_per_object()))
                     .collect();
+                if let Some(far) = &self.far {
+                    far.split_jobs(&mut jobs);
+                }
                 cpu::cull_frame(layout, &jobs, frame)
             }
         };
@@ -199,6 +219,10 @@ impl IndirectPath {
             stats.bytes_uploaded += write(queue, &cull.visible, bytemuck::cast_slice(&out.visible))
                 + write(queue, &cull.draws, bytemuck::cast_slice(&out.draws))
                 + write(queue, &cull.counts, bytemuck::cast_slice(&counts));
+        }
+        if let Some(far) = &self.far {
+            let outputs = culls.get(self.displays.len()..).unwrap_or(&[]);
+            stats.bytes_uploaded += far.prepare(queue, outputs);
         }
         if let (Some(shadow), Some(light)) = (&self.shadow, light) {
             let cull = match &self.culling {
@@ -319,7 +343,7 @@ impl IndirectPath {
         (timer, display): (&mut Option<&mut GpuTimer>, &Option<GpuProfilerQuery>),
         log: &mut Vec<PassRecord>,
     ) -> FrameStats {
-        let dispatches = self.encode_cull(encoder, index, (timer, display), log);
+        let culled = self.encode_cull(encoder, index, (timer, display), log);
         let multiview = self.displays[index].key.multiview;
         let what = (log, PassRecord::display("draw", index));
         let draw_calls = draw_pass(
@@ -331,46 +355,55 @@ impl IndirectPath {
             |pass| self.draw(pass, index),
         );
         FrameStats {
-            draw_calls,
-            dispatches,
-            ..Default::default()
+            draw_calls: culled.draw_calls + draw_calls,
+            ..culled
         }
     }
 
-    /// Display `index`'s cull dispatches, timed inside `display` (none when culling on
-    /// the CPU: `prepare` uploaded the results). Returns the dispatches recorded.
+    /// Display `index`'s cull dispatches (none when culling on the CPU: `prepare`
+    /// uploaded the results) and, with a far layer, its far cull and far layer pass,
+    /// timed inside `display`.
     pub(super) fn encode_cull(
         &self,
         encoder: &mut wgpu::CommandEncoder,
         index: usize,
         (timer, display): (&mut Option<&mut GpuTimer>, &Option<GpuProfilerQuery>),
         log: &mut Vec<PassRecord>,
-    ) -> u32 {
+    ) -> FrameStats {
         let state = &self.displays[index];
-        let (
+        let gpu = match &self.culling {
             Culling::Gpu {
                 culler,
                 scene,
                 coarse,
-            },
-            Some(bind_group),
-        ) = (&self.culling, &state.cull_bind_group)
-        else {
-            return 0;
+            } => Some((culler, &**scene, coarse.is_some())),
+            Culling::Cpu { .. } => None,
         };
-        let scope = open_pass(timer, "cull", display, encoder);
-        let writes = scope
-            .as_ref()
-            .and_then(|q| q.compute_pass_timestamp_writes());
-        let mut pass = encoder.begin_compute_pass(&wgpu::ComputePassDescriptor {
-            label: Some("stereocull.cull"),
-            timestamp_writes: writes,
-        });
-        culler.encode(&mut pass, scene, bind_group, coarse.is_some());
-        drop(pass);
-        close(timer, encoder, scope);
-        log.push(PassRecord::display("cull", index));
-        GpuCuller::DISPATCHES_PER_DISPLAY
+        let mut stats = FrameStats::default();
+        if let (Some((culler, scene, candidates)), Some(bind_group)) = (gpu, &state.cull_bind_group)
+        {
+            let scope = open_pass(timer, "cull", display, encoder);
+            let writes = scope
+                .as_ref()
+                .and_then(|q| q.compute_pass_timestamp_writes());
+            let mut pass = encoder.begin_compute_pass(&wgpu::ComputePassDescriptor {
+                label: Some("stereocull.cull"),
+                timestamp_writes: writes,
+            });
+            culler.encode(&mut pass, scene, bind_group, candidates);
+            drop(pass);
+            close(timer, encoder, scope);
+            log.push(PassRecord::display("cull", index));
+            stats.dispatches = GpuCuller::DISPATCHES_PER_DISPLAY;
+        }
+        if let Some((far, Some(layer))) = self.far.as_ref().map(|f| (f, &f.displays[index])) {
+            let at = (index, layer, &self.draw_scene);
+            let (dispatches, draw_calls) =
+                far.layers.encode(encoder, at, gpu, (timer, display, log));
+            stats.dispatches += dispatches;
+            stats.draw_calls += draw_calls;
+        }
+        stats
     }
 
     /// Display `index`'s one multi-draw-indirect call into `pass`, whose pipeline the
@@ -390,12 +423,17 @@ impl IndirectPath {
     }
 
     /// Display `index`'s one multi-draw-indirect call into `pass`.
+    /// With a far layer, its composite goes first (one more draw call).
     pub(super) fn draw(&self, pass: &mut wgpu::RenderPass, index: usize) -> u32 {
         let state = &self.displays[index];
+        let composite = match self.far.as_ref().map(|f| (f, &f.displays[index])) {
+            Some((far, Some(layer))) => far.layers.composite(pass, layer),
+            _ => 0,
+        };
         self.drawer
             .bind(pass, state.key, &self.draw_scene, &state.draw_bind_group);
         self.drawer.draw_indirect(pass, self.max_draws, &state.cull);
-        1
+        composite + 1
     }
 
     /// Display `index`'s cull buffers, read back after the frame was submitted.
@@ -405,7 +443,38 @@ impl IndirectPath {
         queue: &wgpu::Queue,
         index: usize,
     ) -> Result<CullOutput> {
-        let cull = &self.displays[index].cull;
+        self.read_targets(device, queue, &self.displays[index].cull)
+    }
+
+    /// Display `index`'s far layer's cull buffers (`None` without one), read back after
+    /// the frame was submitted.
+    pub(super) fn read_far_cull(
+        &self,
+        device: &wgpu::Device,
+        queue: &wgpu::Queue,
+        index: usize,
+    ) -> Result<Option<CullOutput>> {
+        match self.far.as_ref().and_then(|f| f.displays[index].as_ref()) {
+            Some(far) => self.read_targets(device, queue, &far.cull).map(Some),
+            None => Ok(None),
+        }
+    }
+
+    /// This frame's far distance per display, with the far layer (`None` per display
+    /// without one).
+    pub(super) fn far_distances(&self) -> Vec<Option<f32>> {
+        match &self.far {
+            Some(far) => far.plans.iter().map(|p| p.map(|p| p.distance)).collect(),
+            None => vec![None; self.displays.len()],
+        }
+    }
+
+    fn read_targets(
+        &self,
+        device: &wgpu::Device,
+        queue: &wgpu::Queue,
+        cull: &CullTargets,
+    ) -> Result<CullOutput> {
         let [draw_count, visible_total] = read_counts(device, queue, cull)?;
         let visible = match visible_total {
             0 => Vec::new(),
@@ -436,4 +505,32 @@ impl IndirectPath {
 fn read_counts(device: &wgpu::Device, queue: &wgpu::Queue, cull: &CullTargets) -> Result<[u32; 2]> {
     let counts: Vec<u32> = read_pod(device, queue, &cull.counts, COUNTS_BYTES)?;
     Ok([counts[0], counts[1]])
+}
+
+/// The far layers of the stereo displays, composited into `displays`' passes.
+fn far_layers(
+    device: &wgpu::Device,
+    (rig, frame, options): (&Rig, &wgpu::Buffer, &RendererOptions),
+    culling: &Culling,
+    (draw_scene, displays): (&DrawScene, &[IndirectDisplay]),
+    sizes: (u32, u32),
+) -> Result<Far> {
+    let material = options.material.as_deref();
+    let layers = FarLayers::new(
+        device,
+        (options.target_format(), material),
+        options.far_threshold_px,
+    );
+    let culler = match culling {
+        Culling::Gpu { culler, scene, .. } => Some((culler, &**scene)),
+        Culling::Cpu { .. } => None,
+    };
+    let contexts: Vec<&wgpu::Buffer> = displays.iter().map(|d| &d.context).collect();
+    Far::new(
+        device,
+        (layers, rig),
+        (draw_scene, frame, &contexts),
+        culler,
+        sizes,
+    )
 }

@@ -88,6 +88,7 @@ use crate::shadow::LightView;
 
 mod checks;
 mod classic;
+mod far_pass;
 mod indirect;
 mod options;
 mod passes;
@@ -104,6 +105,17 @@ use passes::{close, open_display};
 use sync::CullState;
 pub use sync::SyncStats;
 pub use targets::{DisplayTarget, TargetShape, TargetViews};
+
+/// One display's far/near split in a frame ([`Renderer::read_far_split`]).
+#[derive(Clone, Copy, Debug, PartialEq, serde::Serialize)]
+pub struct FarSplit {
+    /// Meters from the display's apex beyond which whole instances are far.
+    pub distance: f32,
+    /// Visible instances drawn once into the far layer.
+    pub far: u32,
+    /// Visible instances drawn for both eyes.
+    pub near: u32,
+}
 
 /// What one frame recorded and uploaded, and the CPU time of its phases.
 #[derive(Clone, Copy, Debug, Default, PartialEq, serde::Serialize)]
@@ -387,7 +399,9 @@ impl Renderer {
             for i in 0..self.shapes.len() {
                 let display = open_display(&timer, &self.names[i], encoder);
                 let timing = (&mut timer, &display);
-                stats.dispatches += p.encode_cull(encoder, i, timing, &mut self.passes);
+                let culled = p.encode_cull(encoder, i, timing, &mut self.passes);
+                stats.dispatches += culled.dispatches;
+                stats.draw_calls += culled.draw_calls;
                 close(&timer, encoder, display);
             }
         }
@@ -445,6 +459,9 @@ impl Renderer {
         index: usize,
     ) -> Result<()> {
         match &self.path {
+            Path::Indirect(_) if self.options.far_layer => Err(Error::Unsupported(
+                "with the far layer the renderer composites before its draws; draw_display draws both".into(),
+            )),
             Path::Indirect(p) if index < self.shapes.len() => {
                 p.draw_with_own_pipeline(pass, index);
                 Ok(())
@@ -519,6 +536,46 @@ impl Renderer {
             Path::Indirect(p) => p.read_cull(device, queue, index),
             Path::Classic(p) => Ok(p.cull_output(index)),
         }
+    }
+
+    /// Display `index`'s far layer cull of the last frame (the far instances, each drawn
+    /// once; the contract's buffers with V = 1), read back after it was submitted;
+    /// `None` for a display without a far layer.
+    pub fn read_far_cull(
+        &self,
+        device: &wgpu::Device,
+        queue: &wgpu::Queue,
+        index: usize,
+    ) -> Result<Option<CullOutput>> {
+        match &self.path {
+            Path::Indirect(p) if index < self.shapes.len() => p.read_far_cull(device, queue, index),
+            _ => Ok(None),
+        }
+    }
+
+    /// The last frame's far/near split per display (`None` for displays without a far
+    /// layer): the far distance and the visible far and near instances, read back.
+    pub fn read_far_split(
+        &self,
+        device: &wgpu::Device,
+        queue: &wgpu::Queue,
+    ) -> Result<Vec<Option<FarSplit>>> {
+        let Path::Indirect(p) = &self.path else {
+            return Ok(vec![None; self.shapes.len()]);
+        };
+        let near = p.visible_counts(device, queue)?;
+        (0..self.shapes.len())
+            .zip(p.far_distances())
+            .zip(near)
+            .map(|((i, distance), near)| {
+                let far = p.read_far_cull(device, queue, i)?;
+                Ok(distance.zip(far).map(|(distance, far)| FarSplit {
+                    distance,
+                    far: far.visible.len() as u32,
+                    near,
+                }))
+            })
+            .collect()
     }
 
     /// Visible totals of every display: read back from the counts buffers on the

@@ -5,6 +5,7 @@ use std::sync::Arc;
 
 use crate::cull::cpu::FrameLod;
 use crate::draw::{DEPTH_FORMAT, TargetFormat};
+use crate::far_layer::FAR_THRESHOLD_PX;
 use crate::modes::StereoMode;
 use crate::rig::{ResolvedRig, Rig};
 use crate::scene::MAX_LODS;
@@ -63,6 +64,11 @@ pub struct RendererOptions {
     pub shadows: bool,
     /// The one directional light: shading, and with `shadows` the shadow map.
     pub light: Light,
+    /// Distant instances drawn once per stereo display into a far layer both eyes share
+    /// ([`crate::far_layer`]; the `instanced` mode).
+    pub far_layer: bool,
+    /// Pixels the eyes' images of a far instance may differ by: sets the far distance.
+    pub far_threshold_px: f32,
 }
 
 /// Screen-space error, in pixels, a level of detail may show.
@@ -116,6 +122,8 @@ impl Default for RendererOptions {
             coarse_cull: CoarseMode::Auto,
             shadows: false,
             light: Light::default(),
+            far_layer: false,
+            far_threshold_px: FAR_THRESHOLD_PX,
         }
     }
 }

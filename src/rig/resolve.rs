@@ -148,6 +148,7 @@ impl ResolvedDisplay {
         CullJob {
             planes: self.planes,
             instances_per_object,
+            split: None,
         }
     }
 }

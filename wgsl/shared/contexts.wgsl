@@ -35,6 +35,10 @@ struct DisplayContext {
     // Which eye eye[0] is: 1 in the classic modes' right-eye contexts (both slots hold
     // that eye), else 0.
     first_eye: u32,
+    // The far split (src/far_layer.rs): 0 none, 1 keep near, 2 keep far instances,
+    // those entirely beyond split_distance from `position` (the display's apex).
+    split_keep: u32,
+    split_distance: f32,
 }
 
 // Once per frame: the viewer (not any eye) and the time in seconds.

@@ -10,6 +10,19 @@ fn sphere_in_planes(planes: array<vec4<f32>, 6>, s: vec4<f32>) -> bool {
     return true;
 }
 
+// Whether the display's far split (src/far_layer.rs) keeps sphere s: with split_keep 2
+// the far ones (entirely beyond split_distance from the display's apex), with 1 the
+// rest, with 0 every sphere. The CPU twin is Split::keeps: same operations, same order.
+fn in_split(s: vec4<f32>) -> bool {
+    if (display.split_keep == 0u) {
+        return true;
+    }
+    let d = s.xyz - display.position;
+    let d2 = d.x * d.x + d.y * d.y + d.z * d.z;
+    let reach = display.split_distance + s.w;
+    return (d2 >= reach * reach) == (display.split_keep == 2u);
+}
+
 // The level of detail of cull position k's sphere, from the viewer's position (the
 // frame context, never an eye's: both eyes and every display draw the same level). The
 // CPU twin is records::lod_level: same operations, same order.

@@ -1,0 +1,445 @@
+//! The far layers of the indirect path ([`crate::far_layer`]): per stereo display, the
+//! far instances' cull (GPU passes or the CPU culler), one pass drawing them once into
+//! the display's far layer, and the composite that opens the display's own pass.
+
+use super::passes::{PassRecord, close, open_pass};
+use super::{context_buffer, write};
+use crate::contexts::DisplayContext;
+use crate::cull::gpu::{CullScene, CullTargets, GpuCuller};
+use crate::cull::{CullJob, CullOutput};
+use crate::draw::{CLEAR_COLOR, DEPTH_FORMAT, DrawScene, Drawer, TargetFormat};
+use crate::error::Result;
+use crate::far_layer::FarPlan;
+use crate::profiling::GpuTimer;
+use crate::records::uniform_bytes;
+use crate::rig::{ResolvedRig, Rig};
+use crate::shaders::{DrawKey, far_composite_source};
+use wgpu_profiler::GpuProfilerQuery;
+
+/// What every far layer shares: the mono pipeline drawing into them (single-sampled),
+/// the composite pipeline and its layout.
+pub(super) struct FarLayers {
+    drawer: Drawer,
+    composite: wgpu::RenderPipeline,
+    composite_layout: wgpu::BindGroupLayout,
+    sampler: wgpu::Sampler,
+    color: wgpu::TextureFormat,
+    /// The threshold the far distance is computed for, in pixels.
+    pub(super) threshold: f32,
+}
+
+/// One stereo display's far layer.
+pub(super) struct FarDisplay {
+    context: wgpu::Buffer,
+    pub(super) cull: CullTargets,
+    cull_bind_group: Option<wgpu::BindGroup>,
+    draw_bind_group: wgpu::BindGroup,
+    color: wgpu::TextureView,
+    depth: wgpu::TextureView,
+    composite_bind_group: wgpu::BindGroup,
+    /// Texels, fixed when made (the plan of the rig as made).
+    pub(super) size: (u32, u32),
+    /// Draw entries: meshes times levels of detail.
+    max_draws: u32,
+}
+
+impl FarLayers {
+    pub(super) fn new(
+        device: &wgpu::Device,
+        (format, material): (TargetFormat, Option<&str>),
+        threshold: f32,
+    ) -> FarLayers {
+        let single = TargetFormat {
+            depth: DEPTH_FORMAT,
+            samples: 1,
+            ..format
+        };
+        let key = DrawKey::new(1, false);
+        let drawer = Drawer::new(device, single, (&[key], material), None);
+        let composite_layout = composite_layout(device);
+        FarLayers {
+            composite: composite_pipeline(device, &composite_layout, format),
+            drawer,
+            composite_layout,
+            sampler: device.create_sampler(&wgpu::SamplerDescriptor {
+                label: Some("stereocull.far_sampler"),
+                mag_filter: wgpu::FilterMode::Linear,
+                min_filter: wgpu::FilterMode::Linear,
+                ..Default::default()
+            }),
+            color: format.color,
+            threshold,
+        }
+    }
+
+    /// Display `plan`'s far layer: its textures, context, cull outputs and bindings.
+    pub(super) fn display(
+        &self,
+        device: &wgpu::Device,
+        (draw_scene, frame, display): (&DrawScene, &wgpu::Buffer, &wgpu::Buffer),
+        culler: Option<(&GpuCuller, &CullScene)>,
+        (plan, slots, max_draws): (&FarPlan, u32, u32),
+    ) -> FarDisplay {
+        let context = context_buffer(device);
+        let cull = CullTargets::new(device, slots, max_draws);
+        let texture = |label, format| {
+            device
+                .create_texture(&wgpu::TextureDescriptor {
+                    label: Some(label),
+                    size: wgpu::Extent3d {
+                        width: plan.size.0,
+                        height: plan.size.1,
+                        depth_or_array_layers: 1,
+                    },
+                    mip_level_count: 1,
+                    sample_count: 1,
+                    dimension: wgpu::TextureDimension::D2,
+                    format,
+                    usage: wgpu::TextureUsages::RENDER_ATTACHMENT
+                        | wgpu::TextureUsages::TEXTURE_BINDING,
+                    view_formats: &[],
+                })
+                .create_view(&Default::default())
+        };
+        let color = texture("stereocull.far_color", self.color);
+        let depth = texture("stereocull.far_depth", DEPTH_FORMAT);
+        let composite_bind_group = device.create_bind_group(&wgpu::BindGroupDescriptor {
+            label: Some("stereocull.far_composite"),
+            layout: &self.composite_layout,
+            entries: &[
+                buffer_entry(0, display),
+                buffer_entry(1, &context),
+                view_entry(2, &color),
+                view_entry(3, &depth),
+                wgpu::BindGroupEntry {
+                    binding: 4,
+                    resource: wgpu::BindingResource::Sampler(&self.sampler),
+                },
+            ],
+        });
+        FarDisplay {
+            cull_bind_group: culler
+                .map(|(c, scene)| c.bind_group(device, scene, [frame, &context], &cull)),
+            draw_bind_group: self.drawer.bind_group(
+                device,
+                [frame, &context],
+                draw_scene,
+                &cull.visible,
+            ),
+            context,
+            cull,
+            color,
+            depth,
+            composite_bind_group,
+            size: plan.size,
+            max_draws,
+        }
+    }
+
+    /// Records display `index`'s far cull (GPU culling; `over_candidates` with the
+    /// coarse cull) and its far layer pass, timed inside `display`. Returns (dispatches,
+    /// draw calls).
+    pub(super) fn encode(
+        &self,
+        encoder: &mut wgpu::CommandEncoder,
+        (index, far, draw_scene): (usize, &FarDisplay, &DrawScene),
+        culler: Option<(&GpuCuller, &CullScene, bool)>,
+        (timer, display, log): (
+            &mut Option<&mut GpuTimer>,
+            &Option<GpuProfilerQuery>,
+            &mut Vec<PassRecord>,
+        ),
+    ) -> (u32, u32) {
+        let mut dispatches = 0;
+        if let (Some((culler, scene, candidates)), Some(group)) = (culler, &far.cull_bind_group) {
+            let scope = open_pass(timer, "far_cull", display, encoder);
+            let writes = scope
+                .as_ref()
+                .and_then(|q| q.compute_pass_timestamp_writes());
+            let mut pass = encoder.begin_compute_pass(&wgpu::ComputePassDescriptor {
+                label: Some("stereocull.far_cull"),
+                timestamp_writes: writes,
+            });
+            culler.encode(&mut pass, scene, group, candidates);
+            drop(pass);
+            close(timer, encoder, scope);
+            log.push(PassRecord::display("far_cull", index));
+            dispatches = GpuCuller::DISPATCHES_PER_DISPLAY;
+        }
+        let scope = open_pass(timer, "far_layer", display, encoder);
+        let writes = scope
+            .as_ref()
+            .and_then(|q| q.render_pass_timestamp_writes());
+        let mut pass = encoder.begin_render_pass(&wgpu::RenderPassDescriptor {
+            label: Some("stereocull.far_layer"),
+            color_attachments: &[Some(wgpu::RenderPassColorAttachment {
+                view: &far.color,
+                depth_slice: None,
+                resolve_target: None,
+                ops: wgpu::Operations {
+                    load: wgpu::LoadOp::Clear(CLEAR_COLOR),
+                    store: wgpu::StoreOp::Store,
+                },
+            })],
+            depth_stencil_attachment: Some(wgpu::RenderPassDepthStencilAttachment {
+                view: &far.depth,
+                depth_ops: Some(wgpu::Operations {
+                    load: wgpu::LoadOp::Clear(1.0),
+                    store: wgpu::StoreOp::Store,
+                }),
+                stencil_ops: None,
+            }),
+            timestamp_writes: writes,
+            occlusion_query_set: None,
+            multiview_mask: None,
+        });
+        let statistics = timer
+            .as_deref_mut()
+            .and_then(|t| t.begin_statistics(&mut pass));
+        let key = DrawKey::new(1, false);
+        self.drawer
+            .bind(&mut pass, key, draw_scene, &far.draw_bind_group);
+        self.drawer
+            .draw_indirect(&mut pass, far.max_draws, &far.cull);
+        GpuTimer::end_statistics(&mut pass, statistics.is_some());
+        drop(pass);
+        close(timer, encoder, scope);
+        log.push(PassRecord {
+            statistics,
+            ..PassRecord::display("far_layer", index)
+        });
+        (dispatches, 1)
+    }
+
+    /// The composite into the display's pass, before its near geometry: one draw, one
+    /// instance per eye.
+    pub(super) fn composite(&self, pass: &mut wgpu::RenderPass, far: &FarDisplay) -> u32 {
+        pass.set_pipeline(&self.composite);
+        pass.set_bind_group(0, &far.composite_bind_group, &[]);
+        pass.draw(0..3, 0..2);
+        1
+    }
+}
+
+impl FarDisplay {
+    /// Writes this frame's far context for `plan` (at the layer's fixed size) and,
+    /// culled on the CPU, the far cull. Returns the bytes written.
+    pub(super) fn prepare(
+        &self,
+        queue: &wgpu::Queue,
+        plan: &FarPlan,
+        cpu: Option<&CullOutput>,
+    ) -> u64 {
+        let sized = FarPlan {
+            size: self.size,
+            ..*plan
+        };
+        let mut bytes = write(queue, &self.context, &uniform_bytes(&sized.context()));
+        if let Some(out) = cpu {
+            let counts = [out.draw_count, out.visible.len() as u32];
+            bytes += write(
+                queue,
+                &self.cull.visible,
+                bytemuck::cast_slice(&out.visible),
+            ) + write(queue, &self.cull.draws, bytemuck::cast_slice(&out.draws))
+                + write(queue, &self.cull.counts, bytemuck::cast_slice(&counts));
+        }
+        bytes
+    }
+}
+
+fn buffer_entry(binding: u32, buffer: &wgpu::Buffer) -> wgpu::BindGroupEntry<'_> {
+    wgpu::BindGroupEntry {
+        binding,
+        resource: buffer.as_entire_binding(),
+    }
+}
+
+fn view_entry(binding: u32, view: &wgpu::TextureView) -> wgpu::BindGroupEntry<'_> {
+    wgpu::BindGroupEntry {
+        binding,
+        resource: wgpu::BindingResource::TextureView(view),
+    }
+}
+
+/// The layout of `shaders::FAR_DECLARATIONS`.
+fn composite_layout(device: &wgpu::Device) -> wgpu::BindGroupLayout {
+    let fragment = wgpu::ShaderStages::FRAGMENT;
+    let uniform = |binding| wgpu::BindGroupLayoutEntry {
+        binding,
+        visibility: fragment,
+        ty: wgpu::BindingType::Buffer {
+            ty: wgpu::BufferBindingType::Uniform,
+            has_dynamic_offset: false,
+            min_binding_size: None,
+        },
+        count: None,
+    };
+    let texture = |binding, sample_type| wgpu::BindGroupLayoutEntry {
+        binding,
+        visibility: fragment,
+        ty: wgpu::BindingType::Texture {
+            sample_type,
+            view_dimension: wgpu::TextureViewDimension::D2,
+            multisampled: false,
+        },
+        count: None,
+    };
+    device.create_bind_group_layout(&wgpu::BindGroupLayoutDescriptor {
+        label: Some("stereocull.far_composite"),
+        entries: &[
+            uniform(0),
+            uniform(1),
+            texture(2, wgpu::TextureSampleType::Float { filterable: true }),
+            texture(3, wgpu::TextureSampleType::Depth),
+            wgpu::BindGroupLayoutEntry {
+                binding: 4,
+                visibility: fragment,
+                ty: wgpu::BindingType::Sampler(wgpu::SamplerBindingType::Filtering),
+                count: None,
+            },
+        ],
+    })
+}
+
+/// Writes color and the far points' depth as each eye sees them (depth always passes:
+/// the composite opens the pass), at the display's sample count.
+fn composite_pipeline(
+    device: &wgpu::Device,
+    layout: &wgpu::BindGroupLayout,
+    format: TargetFormat,
+) -> wgpu::RenderPipeline {
+    let label = "stereocull.far_composite";
+    let module = device.create_shader_module(wgpu::ShaderModuleDescriptor {
+        label: Some(label),
+        source: wgpu::ShaderSource::Wgsl(far_composite_source().into()),
+    });
+    let pipeline_layout = crate::shaders::pipeline_layout(device, label, layout);
+    device.create_render_pipeline(&wgpu::RenderPipelineDescriptor {
+        label: Some(label),
+        layout: Some(&pipeline_layout),
+        vertex: wgpu::VertexState {
+            module: &module,
+            entry_point: Some("vs_main"),
+            compilation_options: Default::default(),
+            buffers: &[],
+        },
+        primitive: wgpu::PrimitiveState::default(),
+        depth_stencil: Some(wgpu::DepthStencilState {
+            format: format.depth,
+            depth_write_enabled: Some(true),
+            depth_compare: Some(wgpu::CompareFunction::Always),
+            stencil: Default::default(),
+            bias: Default::default(),
+        }),
+        multisample: wgpu::MultisampleState {
+            count: format.samples,
+            ..Default::default()
+        },
+        fragment: Some(wgpu::FragmentState {
+            module: &module,
+            entry_point: Some("fs_main"),
+            compilation_options: Default::default(),
+            targets: &[Some(format.color.into())],
+        }),
+        multiview_mask: None,
+        cache: None,
+    })
+}
+
+/// The indirect path's far layers: what they share, each stereo display's own, and this
+/// frame's plans.
+pub(super) struct Far {
+    pub(super) layers: FarLayers,
+    /// Per display; `None` for mono displays (nothing to share between eyes).
+    pub(super) displays: Vec<Option<FarDisplay>>,
+    /// This frame's plan per display, from `plan`.
+    pub(super) plans: Vec<Option<FarPlan>>,
+}
+
+impl Far {
+    /// Far layers for `rig`'s stereo displays, sized by the plans of its pose as made,
+    /// each composited into the display whose context is `contexts[i]`.
+    pub(super) fn new(
+        device: &wgpu::Device,
+        (layers, rig): (FarLayers, &Rig),
+        (draw_scene, frame, contexts): (&DrawScene, &wgpu::Buffer, &[&wgpu::Buffer]),
+        culler: Option<(&GpuCuller, &CullScene)>,
+        (slots, max_draws): (u32, u32),
+    ) -> Result<Far> {
+        let resolved = rig.resolve()?;
+        let displays = rig
+            .displays
+            .iter()
+            .zip(&resolved.displays)
+            .zip(contexts)
+            .map(|((d, r), context)| {
+                d.stereo.then(|| {
+                    let plan = FarPlan::new(r, d.resolution, layers.threshold);
+                    let bound = (draw_scene, frame, *context);
+                    layers.display(device, bound, culler, (&plan, slots, max_draws))
+                })
+            })
+            .collect();
+        Ok(Far {
+            layers,
+            displays,
+            plans: Vec::new(),
+        })
+    }
+
+    /// This frame's plans; the near contexts of displays with a far layer keep their
+    /// near instances only.
+    pub(super) fn plan(
+        &mut self,
+        rig: &Rig,
+        resolved: &ResolvedRig,
+        contexts: &mut [DisplayContext],
+    ) {
+        self.plans = rig
+            .displays
+            .iter()
+            .zip(&resolved.displays)
+            .zip(&self.displays)
+            .map(|((d, r), far)| {
+                far.as_ref()
+                    .map(|_| FarPlan::new(r, d.resolution, self.layers.threshold))
+            })
+            .collect();
+        for (context, plan) in contexts.iter_mut().zip(&self.plans) {
+            if let Some(plan) = plan {
+                context.split_keep = 1;
+                context.split_distance = plan.distance;
+            }
+        }
+    }
+
+    /// The CPU culler's jobs: the displays' `jobs` split where they have a far layer,
+    /// then one far job per far layer, in display order.
+    pub(super) fn split_jobs(&self, jobs: &mut Vec<CullJob>) {
+        let mut far_jobs = Vec::new();
+        for (job, plan) in jobs.iter_mut().zip(&self.plans) {
+            if let Some(plan) = plan {
+                job.split = Some(plan.split(false));
+                far_jobs.push(CullJob {
+                    planes: plan.view.frustum().planes,
+                    instances_per_object: 1,
+                    split: Some(plan.split(true)),
+                });
+            }
+        }
+        jobs.extend(far_jobs);
+    }
+
+    /// Writes every far layer's context and (culled on the CPU, `outputs` in display
+    /// order) its cull. Returns the bytes written.
+    pub(super) fn prepare(&self, queue: &wgpu::Queue, outputs: &[CullOutput]) -> u64 {
+        let mut outputs = outputs.iter();
+        self.displays
+            .iter()
+            .zip(&self.plans)
+            .filter_map(|(far, plan)| far.as_ref().zip(plan.as_ref()))
+            .map(|(far, plan)| far.prepare(queue, plan, outputs.next()))
+            .sum()
+    }
+}

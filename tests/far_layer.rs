@@ -1,0 +1,348 @@
+//! The far layer: near and far culls are the GPU's and the CPU's byte for byte and split
+//! the display cull exactly; far objects land within the threshold of where the full
+//! per-eye render puts them; depth between the far layer and near geometry is right
+//! both ways; with nothing far, no pixel changes.
+
+mod support;
+
+use std::collections::BTreeSet;
+
+use glam::{Affine3A, DVec3, Vec3, Vec4};
+use image::RgbaImage;
+use proptest::strategy::{Strategy, ValueTree};
+use stereocull::Error;
+use stereocull::far_layer::FarPlan;
+use stereocull::renderer::{CullMode, Renderer, RendererOptions, StereoMode};
+use stereocull::rig::Rig;
+use stereocull::scene::{Animation, Instance, Scene};
+use stereocull::{scene_spec, shapes};
+use support::{Tolerance, assert_images_match};
+
+/// Unlit: each object one flat color, so that it can be found in the image.
+const FLAT: &str = "fn material(s: Surface) -> vec4<f32> { return vec4(s.color.rgb, 1.0); }";
+
+fn culls(scene: &Scene, rig: &Rig, cull: CullMode, far_layer: bool) -> Vec<[BTreeSet<u32>; 2]> {
+    let gpu = support::gpu();
+    let options = RendererOptions {
+        cull,
+        far_layer,
+        ..RendererOptions::default()
+    };
+    let mut renderer = Renderer::new(&gpu.device, scene, rig, options).unwrap();
+    let targets = renderer.create_targets(&gpu.device);
+    renderer
+        .submit_frame(&gpu.device, &gpu.queue, rig, 0.0, &targets)
+        .unwrap();
+    (0..rig.displays.len())
+        .map(|d| {
+            let near = renderer.read_cull(&gpu.device, &gpu.queue, d).unwrap();
+            let far = renderer.read_far_cull(&gpu.device, &gpu.queue, d).unwrap();
+            if cull == CullMode::Gpu {
+                // The GPU's buffers equal the CPU culler's (checked below on the sets,
+                // here on the exact bytes against a CPU-culled twin).
+                let cpu = cpu_twin(scene, rig, far_layer, d);
+                assert_eq!((Some(near.clone()), far.clone()), cpu, "display {d}");
+            }
+            let ids = |o: &stereocull::cull::CullOutput| o.visible.iter().copied().collect();
+            [ids(&near), far.as_ref().map(ids).unwrap_or_default()]
+        })
+        .collect()
+}
+
+fn cpu_twin(
+    scene: &Scene,
+    rig: &Rig,
+    far_layer: bool,
+    d: usize,
+) -> (
+    Option<stereocull::cull::CullOutput>,
+    Option<stereocull::cull::CullOutput>,
+) {
+    let gpu = support::gpu();
+    let options = RendererOptions {
+        cull: CullMode::Cpu,
+        far_layer,
+        ..RendererOptions::default()
+    };
+    let mut renderer = Renderer::new(&gpu.device, scene, rig, options).unwrap();
+    let targets = renderer.create_targets(&gpu.device);
+    renderer
+        .submit_frame(&gpu.device, &gpu.queue, rig, 0.0, &targets)
+        .unwrap();
+    (
+        Some(renderer.read_cull(&gpu.device, &gpu.queue, d).unwrap()),
+        renderer.read_far_cull(&gpu.device, &gpu.queue, d).unwrap(),
+    )
+}
+
+/// On every preset and random rigs, over objects from 10 cm to 2,000 km away: the near
+/// and far culls are byte-identical on GPU and CPU, disjoint, and together exactly the
+/// display cull without a far layer.
+#[test]
+fn near_and_far_culls_split_the_display_cull_identically_on_gpu_and_cpu() {
+    let mut runner = proptest::test_runner::TestRunner::deterministic();
+    let random = (0..3).map(|_| {
+        support::rig_strategy()
+            .new_tree(&mut runner)
+            .unwrap()
+            .current()
+    });
+    let rigs: Vec<Rig> = support::PRESETS
+        .iter()
+        .map(|p| support::sized(p, 64, 64))
+        .chain(random)
+        .collect();
+    let (mut far_seen, mut near_seen) = (0, 0);
+    for (i, rig) in rigs.iter().enumerate() {
+        let scene = support::extreme_scene(rig, 3000, 7, 40 + i as u64);
+        let whole = culls(&scene, rig, CullMode::Gpu, false);
+        let split = culls(&scene, rig, CullMode::Gpu, true);
+        for (d, (display, [near, far])) in rig.displays.iter().zip(split).enumerate() {
+            let [all, _] = &whole[d];
+            if !display.stereo {
+                assert!(far.is_empty(), "rig {i} display {d}: mono has no far layer");
+                assert_eq!(&near, all);
+                continue;
+            }
+            assert!(near.is_disjoint(&far), "rig {i} display {d}");
+            assert_eq!(
+                &near.union(&far).copied().collect::<BTreeSet<_>>(),
+                all,
+                "rig {i} display {d}"
+            );
+            far_seen += far.len();
+            near_seen += near.len();
+        }
+    }
+    assert!(
+        far_seen > 100 && near_seen > 100,
+        "far {far_seen}, near {near_seen}"
+    );
+}
+
+fn flat_box(at: Vec3, half: Vec3, color: Vec4, mesh: u32) -> Instance {
+    turned_box(at, half, color, (mesh, glam::Quat::IDENTITY))
+}
+
+fn turned_box(at: Vec3, half: Vec3, color: Vec4, (mesh, turn): (u32, glam::Quat)) -> Instance {
+    Instance {
+        world_from_local: Affine3A::from_scale_rotation_translation(half * 2.0, turn, at),
+        mesh,
+        color,
+        animation: Animation::NONE,
+    }
+}
+
+fn unit_box_scene(instances: Vec<Instance>) -> Scene {
+    let mut s = Scene::default();
+    let cube = shapes::cuboid(Vec3::splat(0.5));
+    s.add_mesh("box", &cube.vertices, &cube.indices);
+    s.instances = instances;
+    s
+}
+
+fn render(scene: &Scene, rig: &Rig, far_layer: bool, threshold: f32) -> Vec<RgbaImage> {
+    let options = RendererOptions {
+        far_layer,
+        far_threshold_px: threshold,
+        material: Some(FLAT.into()),
+        ..RendererOptions::default()
+    };
+    support::render(&support::gpu(), scene, rig, options).unwrap()
+}
+
+/// The hmd's far distance at `size` pixels per eye and the default threshold.
+fn far_distance(rig: &Rig) -> f32 {
+    let resolved = rig.resolve().unwrap();
+    let d = &rig.displays[0];
+    FarPlan::new(&resolved.displays[0], d.resolution, 0.5).distance
+}
+
+/// Coverage-weighted centroid of `color` in eye `eye`'s half: each pixel weighs by how
+/// far it is, in linear light, from the clear color towards `color` (edges blended by
+/// the far layer's filtering count in part, as coverage), pixels of other hues not at
+/// all. Returns the centroid and the summed weight.
+fn centroid(image: &RgbaImage, eye: u32, color: [f64; 3]) -> Option<(f64, f64, f64)> {
+    const BACKGROUND: [f64; 3] = [0.02, 0.02, 0.03];
+    let linear = |v: u8| {
+        let c = v as f64 / 255.0;
+        if c <= 0.04045 {
+            c / 12.92
+        } else {
+            ((c + 0.055) / 1.055).powf(2.4)
+        }
+    };
+    let towards: Vec<f64> = (0..3).map(|c| color[c] - BACKGROUND[c]).collect();
+    let length2: f64 = towards.iter().map(|t| t * t).sum();
+    let half = image.width() / 2;
+    let (mut sx, mut sy, mut total) = (0.0, 0.0, 0.0);
+    for y in 0..image.height() {
+        for x in eye * half..(eye + 1) * half {
+            let p = image.get_pixel(x, y).0;
+            let off: Vec<f64> = (0..3).map(|c| linear(p[c]) - BACKGROUND[c]).collect();
+            let along = off.iter().zip(&towards).map(|(o, t)| o * t).sum::<f64>() / length2;
+            let across: f64 = (0..3).map(|c| (off[c] - along * towards[c]).powi(2)).sum();
+            if along > 0.02 && across.sqrt() < 0.1 {
+                let w = along.min(1.0);
+                (sx, sy, total) = (sx + w * x as f64, sy + w * y as f64, total + w);
+            }
+        }
+    }
+    (total > 0.0).then(|| (sx / total, sy / total, total))
+}
+
+/// Boxes of distinct colors from 1.2 to 3 far distances away: in each eye, each box's
+/// centroid with the far layer lies within the threshold (half a pixel) of its centroid
+/// in the full per-eye render, and the images agree but for edge pixels.
+#[test]
+fn far_objects_land_within_the_threshold_of_the_full_render() {
+    let rig = support::sized("hmd", 320, 320);
+    let far = far_distance(&rig);
+    let colors = [
+        [1.0, 0.0, 0.0],
+        [0.0, 1.0, 0.0],
+        [0.0, 0.0, 1.0],
+        [1.0, 1.0, 0.0],
+        [0.0, 1.0, 1.0],
+        [1.0, 0.0, 1.0],
+    ];
+    let eye = Vec3::from(rig.viewer.position);
+    let boxes: Vec<Instance> = colors
+        .iter()
+        .enumerate()
+        .map(|(k, &c)| {
+            let distance = far * (1.2 + 0.35 * k as f32);
+            let angle = -0.6 + 0.24 * k as f32;
+            let up = 0.15 * ((k % 3) as f32 - 1.0);
+            let at = eye + Vec3::new(angle.sin(), up, -angle.cos()) * distance;
+            let half = Vec3::splat(0.05 * distance);
+            // Turned, so that no edge runs along the pixel grid: the centroid then
+            // measures where the box is, not how its edges fell on pixel centers.
+            let turn = glam::Quat::from_euler(glam::EulerRot::ZYX, 0.5 + 0.1 * k as f32, 0.4, 0.3);
+            turned_box(at, half, Vec3::from(c).extend(1.0), (0, turn))
+        })
+        .collect();
+    let scene = unit_box_scene(boxes);
+    let (with, without) = (
+        render(&scene, &rig, true, 0.5),
+        render(&scene, &rig, false, 0.5),
+    );
+    let mut largest: f64 = 0.0;
+    for c in colors {
+        for e in 0..2 {
+            let a = centroid(&with[0], e, c.map(f64::from))
+                .expect("the far box shows with the far layer");
+            let b = centroid(&without[0], e, c.map(f64::from)).expect("the far box shows without");
+            assert!(a.2 > 20.0, "{c:?}: {} pixels", a.2);
+            let shift = ((a.0 - b.0).powi(2) + (a.1 - b.1).powi(2)).sqrt();
+            eprintln!("{c:?} eye {e}: moved {shift:.3} px");
+            largest = largest.max(shift);
+        }
+    }
+    eprintln!("largest shift of a far box: {largest:.3} px (threshold 0.5)");
+    assert!(largest < 0.5, "a far box moved {largest} px");
+    let edges = Tolerance {
+        levels: 2,
+        share: 0.01,
+    };
+    assert_images_match("far-layer-shift", &with[0], &without[0], edges);
+}
+
+/// A long near wall to the right, reaching past the far distance: a far box in front of
+/// its far part hides it there, and a far box behind it is hidden by it, with and
+/// without the far layer.
+#[test]
+fn far_objects_hide_and_are_hidden_by_the_far_ends_of_near_ones() {
+    let rig = support::sized("hmd", 320, 320);
+    let far = far_distance(&rig);
+    let eye = Vec3::from(rig.viewer.position);
+    let wall_color = Vec4::new(0.0, 1.0, 0.0, 1.0);
+    let (front, behind) = (Vec4::new(1.0, 0.0, 0.0, 1.0), Vec4::new(0.0, 0.0, 1.0, 1.0));
+    let depth = |k: f32| eye.z - k * far;
+    let wall_x = eye.x + 0.25 * far;
+    let wall = flat_box(
+        Vec3::new(wall_x, eye.y, depth(1.75)),
+        Vec3::new(0.5, 0.4 * far, 1.25 * far),
+        wall_color,
+        0,
+    );
+    let front_at = Vec3::new(eye.x + 0.15 * far, eye.y, depth(2.0));
+    let behind_at = Vec3::new(eye.x + 0.5 * far, eye.y, depth(2.5));
+    let scene = unit_box_scene(vec![
+        wall,
+        flat_box(front_at, Vec3::splat(0.05 * far), front, 0),
+        flat_box(behind_at, Vec3::splat(0.05 * far), behind, 0),
+    ]);
+    for far_layer in [true, false] {
+        let images = render(&scene, &rig, far_layer, 0.5);
+        for e in 0..2 {
+            let at = |p: Vec3| pixel(&rig, e, p);
+            let shade = |p: Vec3| images[0].get_pixel(at(p).0, at(p).1).0;
+            let srgb = |c: Vec4| c.truncate().to_array().map(|v| (v * 255.0) as u8);
+            let case = format!("far layer {far_layer}, eye {e}");
+            assert_eq!(
+                shade(front_at)[..3],
+                srgb(front),
+                "{case}: the far box in front"
+            );
+            assert_eq!(
+                shade(behind_at)[..3],
+                srgb(wall_color),
+                "{case}: the far box behind"
+            );
+        }
+    }
+}
+
+/// Where eye `e` of the hmd sees `p`, in the double-wide image.
+fn pixel(rig: &Rig, e: u32, p: Vec3) -> (u32, u32) {
+    let view = rig.resolve().unwrap().displays[0].eyes[e as usize];
+    let clip = view.clip_from_world().as_dmat4() * p.as_dvec3().extend(1.0);
+    let ndc = DVec3::new(clip.x, clip.y, clip.z) / clip.w;
+    let (w, h) = (rig.displays[0].resolution[0], rig.displays[0].resolution[1]);
+    let x = (ndc.x * 0.5 + 0.5) * w as f64;
+    let y = (0.5 - ndc.y * 0.5) * h as f64;
+    (x as u32 + e * w, y as u32)
+}
+
+/// A threshold so fine that nothing is far: the far layer is empty and changes no
+/// pixel of the default scene, on the GPU and CPU paths.
+#[test]
+fn with_nothing_far_the_far_layer_changes_no_pixel() {
+    let scene = scene_spec::load("default").unwrap();
+    let rig = support::sized("hmd", 96, 96);
+    for cull in [CullMode::Gpu, CullMode::Cpu] {
+        let options = |far_layer| RendererOptions {
+            cull,
+            far_layer,
+            far_threshold_px: 1e-4,
+            ..RendererOptions::default()
+        };
+        let gpu = support::gpu();
+        let with = support::render(&gpu, &scene, &rig, options(true)).unwrap();
+        let without = support::render(&gpu, &scene, &rig, options(false)).unwrap();
+        assert_images_match(
+            &format!("far-none-{cull:?}"),
+            &with[0],
+            &without[0],
+            Tolerance::EXACT,
+        );
+    }
+}
+
+#[test]
+fn the_far_layer_is_an_error_outside_instanced() {
+    let gpu = support::gpu();
+    let scene = scene_spec::load("default").unwrap();
+    let rig = support::sized("hmd", 32, 32);
+    for mode in [StereoMode::Multiview, StereoMode::MultiPass] {
+        let options = RendererOptions {
+            mode,
+            cull: support::cull_for(mode),
+            far_layer: true,
+            ..RendererOptions::default()
+        };
+        let result = Renderer::new(&gpu.device, &scene, &rig, options);
+        assert!(matches!(result, Err(Error::Unsupported(_))), "{mode:?}");
+    }
+}
