@@ -346,3 +346,52 @@ fn the_far_layer_is_an_error_outside_instanced() {
         assert!(matches!(result, Err(Error::Unsupported(_))), "{mode:?}");
     }
 }
+
+/// The composite's mapping (FarPlan::far_uv, `far_uv` in `wgsl/far_composite.wgsl`): an
+/// eye pixel takes the far layer where the far view projects a point 100 km along that
+/// pixel's ray, on the hmd (parallel eyes) and every CAVE wall (off-axis windows).
+#[test]
+fn an_eye_pixel_takes_the_far_layer_where_its_ray_ends() {
+    use rand::{Rng, SeedableRng};
+    let mut rng = rand_pcg::Pcg64::seed_from_u64(11);
+    let mut checked = 0;
+    for preset in ["hmd", "cave"] {
+        let rig = support::sized(preset, 200, 160);
+        let resolved = rig.resolve().unwrap();
+        for (d, display) in resolved.displays.iter().enumerate() {
+            let plan = FarPlan::new(display, rig.displays[d].resolution, 0.5);
+            for eye in &display.eyes {
+                for _ in 0..50 {
+                    let pixel = (rng.random_range(0.0..200.0), rng.random_range(0.0..160.0));
+                    let Some(uv) = plan.far_uv(eye, pixel, (200, 160)) else {
+                        continue;
+                    };
+                    let [l, r, u, dn] = eye.fov.tangents();
+                    let t = (
+                        -l + (l + r) * pixel.0 / 200.0,
+                        u - (u + dn) * pixel.1 / 160.0,
+                    );
+                    let ray = eye.world_from_view.matrix3 * DVec3::new(t.0, t.1, -1.0);
+                    let end = eye.world_from_view.translation + ray.normalize() * 1e5;
+                    let clip = glam::DMat4::from(plan.view.world_from_view.inverse());
+                    let local = clip.transform_point3(end);
+                    let [fl, fr, fu, fd] = plan.view.fov.tangents();
+                    let want = (
+                        (local.x / -local.z + fl) / (fl + fr),
+                        (fu - local.y / -local.z) / (fu + fd),
+                    );
+                    let texel = |v: f64, n: u32| v * n as f64;
+                    let (w, h) = plan.size;
+                    let off = (texel(uv.0 - want.0, w).abs(), texel(uv.1 - want.1, h).abs());
+                    // 100 km is not infinity: the eye's offset from the apex still shows.
+                    assert!(
+                        off.0 < 0.01 && off.1 < 0.01,
+                        "{preset} display {d}: {off:?} texels"
+                    );
+                    checked += 1;
+                }
+            }
+        }
+    }
+    assert!(checked > 500, "{checked} pixels checked");
+}

@@ -2,7 +2,7 @@
 // the frame's coarse cull) against the display frustum (never per eye), choose its
 // level of detail from the viewer, and record, for the level this z slice handles, its
 // flag plus its prefix within the workgroup.
-// Bindings (all cull passes share them): CULL_BINDINGS in src/shaders.rs.
+// Bindings (all cull passes share them): CULL_BINDINGS in src/shaders/bindings.rs.
 
 @compute @workgroup_size(WORKGROUP_SIZE)
 fn cull(

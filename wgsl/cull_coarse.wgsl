@@ -3,7 +3,7 @@
 // ascending order with each mesh's range among them, are what every display's passes
 // then run over, dispatched indirectly from their count. Three entry points, in
 // dispatch order: coarse_cull, coarse_ranges (one workgroup), coarse_compact.
-// Bindings: CULL_BINDINGS in group 0, COARSE_BINDINGS in group 1 (src/shaders.rs).
+// Bindings: CULL_BINDINGS in group 0, COARSE_BINDINGS in group 1 (src/shaders/bindings.rs).
 
 // The CPU twin is CoarseCull::test: same operations, same order, no fma.
 fn coarse_test(s: vec4<f32>) -> bool {

@@ -1,7 +1,7 @@
 // Pass 3 of 3 per display: every visible instance writes its id to its slot, one z
 // slice per level of detail. Slots ascend with cull position within a (level, mesh)
 // group, so each draw's ids are contiguous and ascending.
-// Bindings (all cull passes share them): CULL_BINDINGS in src/shaders.rs.
+// Bindings (all cull passes share them): CULL_BINDINGS in src/shaders/bindings.rs.
 
 @compute @workgroup_size(WORKGROUP_SIZE)
 fn compact(

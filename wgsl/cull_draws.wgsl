@@ -3,7 +3,7 @@
 // build one draw per mesh with visible instances at that level, packed in ascending
 // mesh id after the finer levels' draws; zero the rest and write the counts.
 // Deterministic: no atomics anywhere.
-// Bindings (all cull passes share them): CULL_BINDINGS in src/shaders.rs.
+// Bindings (all cull passes share them): CULL_BINDINGS in src/shaders/bindings.rs.
 
 @compute @workgroup_size(WORKGROUP_SIZE)
 fn draws_main(@builtin(local_invocation_index) local: u32) {

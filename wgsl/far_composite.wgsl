@@ -5,7 +5,7 @@
 // with that far point's depth as this eye sees it, so that near geometry drawn next
 // hides it or is hidden by it as it should. Where the far layer holds nothing the
 // fragment is discarded and the clear color stays.
-// Bindings: SHADERS' FAR_DECLARATIONS (group 0).
+// Bindings: FAR_DECLARATIONS in src/shaders/mod.rs (group 0).
 
 struct CompositeVarying {
     @builtin(position) position: vec4<f32>,

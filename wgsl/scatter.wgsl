@@ -2,7 +2,7 @@
 // (17 words after the 4-word header, see src/scatter.rs) is a slot, the instance's new
 // transform rows and its world bounding sphere, computed on the CPU so that the GPU and
 // the CPU culler test the very same sphere.
-// Bindings: SCATTER_BINDINGS in src/shaders.rs.
+// Bindings: SCATTER_BINDINGS in src/shaders/bindings.rs.
 
 const HEADER: u32 = 4u;
 const WORDS_PER_EDIT: u32 = 17u;

@@ -1,6 +1,6 @@
 // The frame's shadow pass (src/shadow.rs), once per frame before any display: depth
 // only, from the light's cull outputs, the light's view in the display context's eye 0.
-// Bindings: DRAW_BINDINGS in src/shaders.rs (group 0).
+// Bindings: DRAW_BINDINGS in src/shaders/bindings.rs (group 0).
 
 @vertex
 fn vs_main(v: VertexInput, @builtin(instance_index) instance_index: u32) -> @builtin(position) vec4<f32> {

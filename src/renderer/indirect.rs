@@ -14,15 +14,14 @@ use super::{
     CullMode, CullState, FrameStats, RendererOptions, TargetViews, context_buffer,
     display_contexts, write,
 };
+use crate::cull::cpu;
 use crate::cull::cpu::FrameCull;
-use crate::cull::gpu::{COUNTS_BYTES, CullScene, CullTargets, GpuCuller};
-use crate::cull::{CullOutput, cpu};
+use crate::cull::gpu::{CullScene, CullTargets, GpuCuller};
 use crate::draw::{DrawFeatures, DrawScene, Drawer};
 use crate::error::Result;
 use crate::modes::StereoMode;
 use crate::profiling::GpuTimer;
-use crate::readback::read_pod;
-use crate::records::{CullLayout, DrawArgs, uniform_bytes};
+use crate::records::{CullLayout, uniform_bytes};
 use crate::rig::{ResolvedRig, Rig};
 use crate::scene::Scene;
 use crate::shaders::DrawKey;
@@ -30,7 +29,7 @@ use crate::shadow::LightView;
 use wgpu_profiler::GpuProfilerQuery;
 
 /// Where the visible lists and draws come from.
-enum Culling {
+pub(super) enum Culling {
     /// Three compute dispatches per display over scene data uploaded once (after three
     /// per frame for the coarse cull, whose group 1 is `coarse`).
     Gpu {
@@ -43,10 +42,10 @@ enum Culling {
 }
 
 /// One display's buffers and bindings.
-struct IndirectDisplay {
+pub(super) struct IndirectDisplay {
     context: wgpu::Buffer,
     /// Filled by the cull passes or by the CPU upload; read by the draw.
-    cull: CullTargets,
+    pub(super) cull: CullTargets,
     /// GPU culling only.
     cull_bind_group: Option<wgpu::BindGroup>,
     draw_bind_group: wgpu::BindGroup,
@@ -55,16 +54,16 @@ struct IndirectDisplay {
 }
 
 pub(super) struct IndirectPath {
-    culling: Culling,
+    pub(super) culling: Culling,
     drawer: Drawer,
     pub(super) draw_scene: DrawScene,
     /// Draw entries per display: meshes times levels of detail.
-    max_draws: u32,
-    displays: Vec<IndirectDisplay>,
+    pub(super) max_draws: u32,
+    pub(super) displays: Vec<IndirectDisplay>,
     /// With shadows: the frame's shadow pass.
     shadow: Option<ShadowPass>,
     /// With the far layer: the stereo displays' far layers.
-    far: Option<Far>,
+    pub(super) far: Option<Far>,
 }
 
 impl IndirectPath {
@@ -297,43 +296,6 @@ impl IndirectPath {
         dispatches
     }
 
-    /// The coarse cull's candidate count of the last frame (GPU culling with it on),
-    /// read back after the frame was submitted.
-    pub(super) fn read_candidates(
-        &self,
-        device: &wgpu::Device,
-        queue: &wgpu::Queue,
-    ) -> Result<Option<u32>> {
-        match &self.culling {
-            Culling::Gpu {
-                scene,
-                coarse: Some(_),
-                ..
-            } => Ok(Some(
-                read_pod::<u32>(device, queue, &scene.candidate_count, 4)?[0],
-            )),
-            _ => Ok(None),
-        }
-    }
-
-    /// Sphere-against-frustum tests of the last frame on the GPU (`None` culling on the
-    /// CPU): every instance per display, or with the coarse cull every instance once
-    /// plus the candidates per display.
-    pub(super) fn read_sphere_tests(
-        &self,
-        device: &wgpu::Device,
-        queue: &wgpu::Queue,
-    ) -> Result<Option<u64>> {
-        let Culling::Gpu { scene, .. } = &self.culling else {
-            return Ok(None);
-        };
-        let (n, displays) = (scene.instance_count as u64, self.displays.len() as u64);
-        Ok(Some(match self.read_candidates(device, queue)? {
-            Some(c) => n + displays * c as u64,
-            None => displays * n,
-        }))
-    }
-
     /// Display `index`: its cull dispatches (GPU culling), then one pass with one draw
     /// call, timed inside `display`.
     pub(super) fn encode_display(
@@ -435,76 +397,6 @@ impl IndirectPath {
         self.drawer.draw_indirect(pass, self.max_draws, &state.cull);
         composite + 1
     }
-
-    /// Display `index`'s cull buffers, read back after the frame was submitted.
-    pub(super) fn read_cull(
-        &self,
-        device: &wgpu::Device,
-        queue: &wgpu::Queue,
-        index: usize,
-    ) -> Result<CullOutput> {
-        self.read_targets(device, queue, &self.displays[index].cull)
-    }
-
-    /// Display `index`'s far layer's cull buffers (`None` without one), read back after
-    /// the frame was submitted.
-    pub(super) fn read_far_cull(
-        &self,
-        device: &wgpu::Device,
-        queue: &wgpu::Queue,
-        index: usize,
-    ) -> Result<Option<CullOutput>> {
-        match self.far.as_ref().and_then(|f| f.displays[index].as_ref()) {
-            Some(far) => self.read_targets(device, queue, &far.cull).map(Some),
-            None => Ok(None),
-        }
-    }
-
-    /// This frame's far distance per display, with the far layer (`None` per display
-    /// without one).
-    pub(super) fn far_distances(&self) -> Vec<Option<f32>> {
-        match &self.far {
-            Some(far) => far.plans.iter().map(|p| p.map(|p| p.distance)).collect(),
-            None => vec![None; self.displays.len()],
-        }
-    }
-
-    fn read_targets(
-        &self,
-        device: &wgpu::Device,
-        queue: &wgpu::Queue,
-        cull: &CullTargets,
-    ) -> Result<CullOutput> {
-        let [draw_count, visible_total] = read_counts(device, queue, cull)?;
-        let visible = match visible_total {
-            0 => Vec::new(),
-            n => read_pod(device, queue, &cull.visible, 4 * n as u64)?,
-        };
-        let draws_bytes = (size_of::<DrawArgs>() as u32 * self.max_draws) as u64;
-        Ok(CullOutput {
-            visible,
-            draws: read_pod(device, queue, &cull.draws, draws_bytes)?,
-            draw_count,
-        })
-    }
-
-    /// Every display's visible total, from its counts buffer.
-    pub(super) fn visible_counts(
-        &self,
-        device: &wgpu::Device,
-        queue: &wgpu::Queue,
-    ) -> Result<Vec<u32>> {
-        self.displays
-            .iter()
-            .map(|d| Ok(read_counts(device, queue, &d.cull)?[1]))
-            .collect()
-    }
-}
-
-/// The counts buffer: the draw count and the visible total.
-fn read_counts(device: &wgpu::Device, queue: &wgpu::Queue, cull: &CullTargets) -> Result<[u32; 2]> {
-    let counts: Vec<u32> = read_pod(device, queue, &cull.counts, COUNTS_BYTES)?;
-    Ok([counts[0], counts[1]])
 }
 
 /// The far layers of the stereo displays, composited into `displays`' passes.

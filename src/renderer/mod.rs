@@ -73,9 +73,9 @@
 use std::time::Duration;
 
 use crate::contexts::{DisplayContext, FrameContext};
+use crate::cull::CoarseCull;
 use crate::cull::cpu::FrameCull;
-use crate::cull::gpu::{CullScene, CullTargets};
-use crate::cull::{CoarseCull, CullOutput};
+use crate::cull::gpu::CullScene;
 use crate::draw::DrawScene;
 use crate::error::{Error, Result};
 pub use crate::modes::StereoMode;
@@ -91,7 +91,9 @@ mod classic;
 mod far_pass;
 mod indirect;
 mod options;
+mod own_passes;
 mod passes;
+mod readback;
 mod shadow_pass;
 mod sync;
 mod targets;
@@ -102,20 +104,10 @@ use indirect::IndirectPath;
 pub use options::{CoarseMode, CullMode, LOD_PIXELS, RendererOptions, frame_lod};
 pub use passes::{Level, PassRecord};
 use passes::{close, open_display};
+pub use readback::FarSplit;
 use sync::CullState;
 pub use sync::SyncStats;
 pub use targets::{DisplayTarget, TargetShape, TargetViews};
-
-/// One display's far/near split in a frame ([`Renderer::read_far_split`]).
-#[derive(Clone, Copy, Debug, PartialEq, serde::Serialize)]
-pub struct FarSplit {
-    /// Meters from the display's apex beyond which whole instances are far.
-    pub distance: f32,
-    /// Visible instances drawn once into the far layer.
-    pub far: u32,
-    /// Visible instances drawn for both eyes.
-    pub near: u32,
-}
 
 /// What one frame recorded and uploaded, and the CPU time of its phases.
 #[derive(Clone, Copy, Debug, Default, PartialEq, serde::Serialize)]
@@ -357,126 +349,6 @@ impl Renderer {
         &self.passes
     }
 
-    /// The coarse cull's candidates in the last frame, read back after it was submitted
-    /// (GPU culling with the coarse cull; `None` otherwise): each display's cull tested
-    /// only these.
-    pub fn read_candidates(
-        &self,
-        device: &wgpu::Device,
-        queue: &wgpu::Queue,
-    ) -> Result<Option<u32>> {
-        match &self.path {
-            Path::Indirect(p) => p.read_candidates(device, queue),
-            Path::Classic(_) => Ok(None),
-        }
-    }
-
-    /// Sphere-against-frustum tests of the last frame with GPU culling (read back after
-    /// it was submitted; `None` otherwise): every instance once per display, or with the
-    /// coarse cull once for the frame plus once per display for each candidate.
-    pub fn read_sphere_tests(
-        &self,
-        device: &wgpu::Device,
-        queue: &wgpu::Queue,
-    ) -> Result<Option<u64>> {
-        match &self.path {
-            Path::Indirect(p) => p.read_sphere_tests(device, queue),
-            Path::Classic(_) => Ok(None),
-        }
-    }
-
-    /// For drawing into the caller's own render passes: records this frame's culls
-    /// (GPU culling: each display's dispatches, timed as `cull` inside a scope per
-    /// display; CPU culling: nothing, `prepare` uploaded them). Then, in passes the
-    /// caller begins, [`Renderer::draw_display`] for each display.
-    pub fn encode_culls(
-        &mut self,
-        encoder: &mut wgpu::CommandEncoder,
-        mut timer: Option<&mut GpuTimer>,
-    ) -> FrameStats {
-        let mut stats = self.encode_frame(encoder, &mut timer);
-        if let Path::Indirect(p) = &self.path {
-            for i in 0..self.shapes.len() {
-                let display = open_display(&timer, &self.names[i], encoder);
-                let timing = (&mut timer, &display);
-                let culled = p.encode_cull(encoder, i, timing, &mut self.passes);
-                stats.dispatches += culled.dispatches;
-                stats.draw_calls += culled.draw_calls;
-                close(&timer, encoder, display);
-            }
-        }
-        if let Some(t) = timer {
-            t.resolve(encoder);
-        }
-        stats
-    }
-
-    /// Draws display `index` into a render pass the caller began, after
-    /// [`Renderer::encode_culls`] was recorded for this frame. The pass must render into
-    /// that display's target shape ([`TargetViews`]) with the formats and sample count of
-    /// [`RendererOptions`], and with `multiview_mask` `0b11` for a stereo display in
-    /// multiview. Its load and store operations, and whatever the caller draws before and
-    /// after (sky, UI, transparent geometry), are the caller's. Returns the draw calls.
-    pub fn draw_display(&self, pass: &mut wgpu::RenderPass, index: usize) -> Result<u32> {
-        if index >= self.shapes.len() {
-            return Err(Error::NoSuchDisplay {
-                index,
-                displays: self.shapes.len(),
-            });
-        }
-        Ok(match &self.path {
-            Path::Indirect(p) => p.draw(pass, index),
-            Path::Classic(p) => p.draw(pass, index),
-        })
-    }
-
-    /// For an engine's own draw pipeline (the indirect modes): group 0's layout, to
-    /// build its pipeline layout on (its own bind groups from group 1), with
-    /// [`crate::shaders::decode_source`] as the shader's start. `None` in the classic
-    /// modes.
-    pub fn bind_group_layout(&self) -> Option<&wgpu::BindGroupLayout> {
-        match &self.path {
-            Path::Indirect(p) => Some(p.bind_group_layout()),
-            Path::Classic(_) => None,
-        }
-    }
-
-    /// Display `index`'s cull outputs on the GPU (the indirect modes): the visible list,
-    /// the draws and the counts, per the README's cull contract.
-    pub fn cull_buffers(&self, index: usize) -> Option<&CullTargets> {
-        match &self.path {
-            Path::Indirect(p) if index < self.shapes.len() => Some(p.cull_targets(index)),
-            _ => None,
-        }
-    }
-
-    /// Display `index`'s one multi-draw-indirect call, in a pass the caller began with a
-    /// pipeline of its own already set (layout from [`Renderer::bind_group_layout`]):
-    /// binds group 0, the vertex and index buffers, and draws. The indirect modes only.
-    pub fn draw_display_with_own_pipeline(
-        &self,
-        pass: &mut wgpu::RenderPass,
-        index: usize,
-    ) -> Result<()> {
-        match &self.path {
-            Path::Indirect(_) if self.options.far_layer => Err(Error::Unsupported(
-                "with the far layer the renderer composites before its draws; draw_display draws both".into(),
-            )),
-            Path::Indirect(p) if index < self.shapes.len() => {
-                p.draw_with_own_pipeline(pass, index);
-                Ok(())
-            }
-            Path::Indirect(_) => Err(Error::NoSuchDisplay {
-                index,
-                displays: self.shapes.len(),
-            }),
-            Path::Classic(_) => Err(Error::Unsupported(format!(
-                "{} draws per instance; pipelines of the caller's own draw the indirect modes",
-                self.options.mode.name()
-            ))),
-        }
-    }
-
     /// Headless convenience: [`Renderer::prepare`], [`Renderer::encode`] into a new encoder
     /// and submit, rendering into `targets` (from [`Renderer::create_targets`]).
     pub fn submit_frame(
@@ -520,75 +392,6 @@ impl Renderer {
             .iter()
             .map(|s| s.create(device, self.options.target_format()))
             .collect()
-    }
-
-    /// Display `index`'s cull result of the last frame: on the indirect path its buffers
-    /// read back (after the frame was submitted: the visible list up to the visible
-    /// total, all draws, the draw count); in the classic modes the CPU cull they drew
-    /// from (multi-camera: the left eye's).
-    pub fn read_cull(
-        &self,
-        device: &wgpu::Device,
-        queue: &wgpu::Queue,
-        index: usize,
-    ) -> Result<CullOutput> {
-        match &self.path {
-            Path::Indirect(p) => p.read_cull(device, queue, index),
-            Path::Classic(p) => Ok(p.cull_output(index)),
-        }
-    }
-
-    /// Display `index`'s far layer cull of the last frame (the far instances, each drawn
-    /// once; the contract's buffers with V = 1), read back after it was submitted;
-    /// `None` for a display without a far layer.
-    pub fn read_far_cull(
-        &self,
-        device: &wgpu::Device,
-        queue: &wgpu::Queue,
-        index: usize,
-    ) -> Result<Option<CullOutput>> {
-        match &self.path {
-            Path::Indirect(p) if index < self.shapes.len() => p.read_far_cull(device, queue, index),
-            _ => Ok(None),
-        }
-    }
-
-    /// The last frame's far/near split per display (`None` for displays without a far
-    /// layer): the far distance and the visible far and near instances, read back.
-    pub fn read_far_split(
-        &self,
-        device: &wgpu::Device,
-        queue: &wgpu::Queue,
-    ) -> Result<Vec<Option<FarSplit>>> {
-        let Path::Indirect(p) = &self.path else {
-            return Ok(vec![None; self.shapes.len()]);
-        };
-        let near = p.visible_counts(device, queue)?;
-        (0..self.shapes.len())
-            .zip(p.far_distances())
-            .zip(near)
-            .map(|((i, distance), near)| {
-                let far = p.read_far_cull(device, queue, i)?;
-                Ok(distance.zip(far).map(|(distance, far)| FarSplit {
-                    distance,
-                    far: far.visible.len() as u32,
-                    near,
-                }))
-            })
-            .collect()
-    }
-
-    /// Visible totals of every display: read back from the counts buffers on the
-    /// indirect path, taken from this frame's CPU culls in the classic modes.
-    pub fn read_visible_counts(
-        &self,
-        device: &wgpu::Device,
-        queue: &wgpu::Queue,
-    ) -> Result<Vec<u32>> {
-        match &self.path {
-            Path::Indirect(p) => p.visible_counts(device, queue),
-            Path::Classic(p) => Ok(p.visible_counts()),
-        }
     }
 }
 

@@ -2,7 +2,7 @@
 // their own (Renderer::draw_display_with_own_pipeline): which instance and eye an
 // instance_index means, the instance's animated world transform, the eye's clip
 // position remapped into its half of a double-wide target, and the seam distance.
-// Bindings: DRAW_BINDINGS in src/shaders.rs (group 0).
+// Bindings: DRAW_BINDINGS in src/shaders/bindings.rs (group 0).
 
 struct VertexInput {
     @location(0) position: vec3<f32>,

@@ -1,0 +1,103 @@
+//! Drawing into the caller's own passes: the frame's culls (and frame-level passes)
+//! into its encoder, then each display's draws inside a render pass it began, with the
+//! built-in pipelines or one of its own.
+
+use super::passes::{close, open_display};
+use super::{FrameStats, Path, Renderer};
+use crate::cull::gpu::CullTargets;
+use crate::error::{Error, Result};
+use crate::profiling::GpuTimer;
+
+impl Renderer {
+    /// For drawing into the caller's own render passes: records this frame's culls
+    /// (GPU culling: each display's dispatches, timed as `cull` inside a scope per
+    /// display; CPU culling: nothing, `prepare` uploaded them). Then, in passes the
+    /// caller begins, [`Renderer::draw_display`] for each display.
+    pub fn encode_culls(
+        &mut self,
+        encoder: &mut wgpu::CommandEncoder,
+        mut timer: Option<&mut GpuTimer>,
+    ) -> FrameStats {
+        let mut stats = self.encode_frame(encoder, &mut timer);
+        if let Path::Indirect(p) = &self.path {
+            for i in 0..self.shapes.len() {
+                let display = open_display(&timer, &self.names[i], encoder);
+                let timing = (&mut timer, &display);
+                let culled = p.encode_cull(encoder, i, timing, &mut self.passes);
+                stats.dispatches += culled.dispatches;
+                stats.draw_calls += culled.draw_calls;
+                close(&timer, encoder, display);
+            }
+        }
+        if let Some(t) = timer {
+            t.resolve(encoder);
+        }
+        stats
+    }
+
+    /// Draws display `index` into a render pass the caller began, after
+    /// [`Renderer::encode_culls`] was recorded for this frame. The pass must render into
+    /// that display's target shape ([`TargetViews`]) with the formats and sample count of
+    /// [`RendererOptions`], and with `multiview_mask` `0b11` for a stereo display in
+    /// multiview. Its load and store operations, and whatever the caller draws before and
+    /// after (sky, UI, transparent geometry), are the caller's. Returns the draw calls.
+    pub fn draw_display(&self, pass: &mut wgpu::RenderPass, index: usize) -> Result<u32> {
+        if index >= self.shapes.len() {
+            return Err(Error::NoSuchDisplay {
+                index,
+                displays: self.shapes.len(),
+            });
+        }
+        Ok(match &self.path {
+            Path::Indirect(p) => p.draw(pass, index),
+            Path::Classic(p) => p.draw(pass, index),
+        })
+    }
+
+    /// For an engine's own draw pipeline (the indirect modes): group 0's layout, to
+    /// build its pipeline layout on (its own bind groups from group 1), with
+    /// [`crate::shaders::decode_source`] as the shader's start. `None` in the classic
+    /// modes.
+    pub fn bind_group_layout(&self) -> Option<&wgpu::BindGroupLayout> {
+        match &self.path {
+            Path::Indirect(p) => Some(p.bind_group_layout()),
+            Path::Classic(_) => None,
+        }
+    }
+
+    /// Display `index`'s cull outputs on the GPU (the indirect modes): the visible list,
+    /// the draws and the counts, per the README's cull contract.
+    pub fn cull_buffers(&self, index: usize) -> Option<&CullTargets> {
+        match &self.path {
+            Path::Indirect(p) if index < self.shapes.len() => Some(p.cull_targets(index)),
+            _ => None,
+        }
+    }
+
+    /// Display `index`'s one multi-draw-indirect call, in a pass the caller began with a
+    /// pipeline of its own already set (layout from [`Renderer::bind_group_layout`]):
+    /// binds group 0, the vertex and index buffers, and draws. The indirect modes only.
+    pub fn draw_display_with_own_pipeline(
+        &self,
+        pass: &mut wgpu::RenderPass,
+        index: usize,
+    ) -> Result<()> {
+        match &self.path {
+            Path::Indirect(_) if self.options.far_layer => Err(Error::Unsupported(
+                "with the far layer the renderer composites before its draws; draw_display draws both".into(),
+            )),
+            Path::Indirect(p) if index < self.shapes.len() => {
+                p.draw_with_own_pipeline(pass, index);
+                Ok(())
+            }
+            Path::Indirect(_) => Err(Error::NoSuchDisplay {
+                index,
+                displays: self.shapes.len(),
+            }),
+            Path::Classic(_) => Err(Error::Unsupported(format!(
+                "{} draws per instance; pipelines of the caller's own draw the indirect modes",
+                self.options.mode.name()
+            ))),
+        }
+    }
+}

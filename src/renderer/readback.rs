@@ -1,0 +1,229 @@
+//! Reading a submitted frame back: each display's cull buffers (and its far layer's),
+//! visible totals, the far/near split, and what the coarse cull saved.
+
+use super::indirect::{Culling, IndirectPath};
+use super::{Path, Renderer};
+use crate::cull::CullOutput;
+use crate::cull::gpu::{COUNTS_BYTES, CullTargets};
+use crate::error::Result;
+use crate::readback::read_pod;
+use crate::records::DrawArgs;
+
+/// One display's far/near split in a frame ([`Renderer::read_far_split`]).
+#[derive(Clone, Copy, Debug, PartialEq, serde::Serialize)]
+pub struct FarSplit {
+    /// Meters from the display's apex beyond which whole instances are far.
+    pub distance: f32,
+    /// Visible instances drawn once into the far layer.
+    pub far: u32,
+    /// Visible instances drawn for both eyes.
+    pub near: u32,
+}
+
+impl Renderer {
+    /// The coarse cull's candidates in the last frame, read back after it was submitted
+    /// (GPU culling with the coarse cull; `None` otherwise): each display's cull tested
+    /// only these.
+    pub fn read_candidates(
+        &self,
+        device: &wgpu::Device,
+        queue: &wgpu::Queue,
+    ) -> Result<Option<u32>> {
+        match &self.path {
+            Path::Indirect(p) => p.read_candidates(device, queue),
+            Path::Classic(_) => Ok(None),
+        }
+    }
+
+    /// Sphere-against-frustum tests of the last frame with GPU culling (read back after
+    /// it was submitted; `None` otherwise): every instance once per display, or with the
+    /// coarse cull once for the frame plus once per display for each candidate.
+    pub fn read_sphere_tests(
+        &self,
+        device: &wgpu::Device,
+        queue: &wgpu::Queue,
+    ) -> Result<Option<u64>> {
+        match &self.path {
+            Path::Indirect(p) => p.read_sphere_tests(device, queue),
+            Path::Classic(_) => Ok(None),
+        }
+    }
+
+    /// Display `index`'s cull result of the last frame: on the indirect path its buffers
+    /// read back (after the frame was submitted: the visible list up to the visible
+    /// total, all draws, the draw count); in the classic modes the CPU cull they drew
+    /// from (multi-camera: the left eye's).
+    pub fn read_cull(
+        &self,
+        device: &wgpu::Device,
+        queue: &wgpu::Queue,
+        index: usize,
+    ) -> Result<CullOutput> {
+        match &self.path {
+            Path::Indirect(p) => p.read_cull(device, queue, index),
+            Path::Classic(p) => Ok(p.cull_output(index)),
+        }
+    }
+
+    /// Display `index`'s far layer cull of the last frame (the far instances, each drawn
+    /// once; the contract's buffers with V = 1), read back after it was submitted;
+    /// `None` for a display without a far layer.
+    pub fn read_far_cull(
+        &self,
+        device: &wgpu::Device,
+        queue: &wgpu::Queue,
+        index: usize,
+    ) -> Result<Option<CullOutput>> {
+        match &self.path {
+            Path::Indirect(p) if index < self.shapes.len() => p.read_far_cull(device, queue, index),
+            _ => Ok(None),
+        }
+    }
+
+    /// The last frame's far/near split per display (`None` for displays without a far
+    /// layer): the far distance and the visible far and near instances, read back.
+    pub fn read_far_split(
+        &self,
+        device: &wgpu::Device,
+        queue: &wgpu::Queue,
+    ) -> Result<Vec<Option<FarSplit>>> {
+        let Path::Indirect(p) = &self.path else {
+            return Ok(vec![None; self.shapes.len()]);
+        };
+        let near = p.visible_counts(device, queue)?;
+        (0..self.shapes.len())
+            .zip(p.far_distances())
+            .zip(near)
+            .map(|((i, distance), near)| {
+                let far = p.read_far_cull(device, queue, i)?;
+                Ok(distance.zip(far).map(|(distance, far)| FarSplit {
+                    distance,
+                    far: far.visible.len() as u32,
+                    near,
+                }))
+            })
+            .collect()
+    }
+
+    /// Visible totals of every display: read back from the counts buffers on the
+    /// indirect path, taken from this frame's CPU culls in the classic modes.
+    pub fn read_visible_counts(
+        &self,
+        device: &wgpu::Device,
+        queue: &wgpu::Queue,
+    ) -> Result<Vec<u32>> {
+        match &self.path {
+            Path::Indirect(p) => p.visible_counts(device, queue),
+            Path::Classic(p) => Ok(p.visible_counts()),
+        }
+    }
+}
+
+impl IndirectPath {
+    /// The coarse cull's candidate count of the last frame (GPU culling with it on),
+    /// read back after the frame was submitted.
+    pub(super) fn read_candidates(
+        &self,
+        device: &wgpu::Device,
+        queue: &wgpu::Queue,
+    ) -> Result<Option<u32>> {
+        match &self.culling {
+            Culling::Gpu {
+                scene,
+                coarse: Some(_),
+                ..
+            } => Ok(Some(
+                read_pod::<u32>(device, queue, &scene.candidate_count, 4)?[0],
+            )),
+            _ => Ok(None),
+        }
+    }
+
+    /// Sphere-against-frustum tests of the last frame on the GPU (`None` culling on the
+    /// CPU): every instance per display, or with the coarse cull every instance once
+    /// plus the candidates per display.
+    pub(super) fn read_sphere_tests(
+        &self,
+        device: &wgpu::Device,
+        queue: &wgpu::Queue,
+    ) -> Result<Option<u64>> {
+        let Culling::Gpu { scene, .. } = &self.culling else {
+            return Ok(None);
+        };
+        let (n, displays) = (scene.instance_count as u64, self.displays.len() as u64);
+        Ok(Some(match self.read_candidates(device, queue)? {
+            Some(c) => n + displays * c as u64,
+            None => displays * n,
+        }))
+    }
+
+    /// Display `index`'s cull buffers, read back after the frame was submitted.
+    pub(super) fn read_cull(
+        &self,
+        device: &wgpu::Device,
+        queue: &wgpu::Queue,
+        index: usize,
+    ) -> Result<CullOutput> {
+        self.read_targets(device, queue, &self.displays[index].cull)
+    }
+
+    /// Display `index`'s far layer's cull buffers (`None` without one), read back after
+    /// the frame was submitted.
+    pub(super) fn read_far_cull(
+        &self,
+        device: &wgpu::Device,
+        queue: &wgpu::Queue,
+        index: usize,
+    ) -> Result<Option<CullOutput>> {
+        match self.far.as_ref().and_then(|f| f.displays[index].as_ref()) {
+            Some(far) => self.read_targets(device, queue, &far.cull).map(Some),
+            None => Ok(None),
+        }
+    }
+
+    /// This frame's far distance per display, with the far layer (`None` per display
+    /// without one).
+    pub(super) fn far_distances(&self) -> Vec<Option<f32>> {
+        match &self.far {
+            Some(far) => far.plans.iter().map(|p| p.map(|p| p.distance)).collect(),
+            None => vec![None; self.displays.len()],
+        }
+    }
+
+    fn read_targets(
+        &self,
+        device: &wgpu::Device,
+        queue: &wgpu::Queue,
+        cull: &CullTargets,
+    ) -> Result<CullOutput> {
+        let [draw_count, visible_total] = read_counts(device, queue, cull)?;
+        let visible = match visible_total {
+            0 => Vec::new(),
+            n => read_pod(device, queue, &cull.visible, 4 * n as u64)?,
+        };
+        let draws_bytes = (size_of::<DrawArgs>() as u32 * self.max_draws) as u64;
+        Ok(CullOutput {
+            visible,
+            draws: read_pod(device, queue, &cull.draws, draws_bytes)?,
+            draw_count,
+        })
+    }
+
+    /// Every display's visible total, from its counts buffer.
+    pub(super) fn visible_counts(
+        &self,
+        device: &wgpu::Device,
+        queue: &wgpu::Queue,
+    ) -> Result<Vec<u32>> {
+        self.displays
+            .iter()
+            .map(|d| Ok(read_counts(device, queue, &d.cull)?[1]))
+            .collect()
+    }
+}
+
+/// The counts buffer: the draw count and the visible total.
+fn read_counts(device: &wgpu::Device, queue: &wgpu::Queue, cull: &CullTargets) -> Result<[u32; 2]> {
+    let counts: Vec<u32> = read_pod(device, queue, &cull.counts, COUNTS_BYTES)?;
+    Ok([counts[0], counts[1]])
+}
