@@ -82,6 +82,7 @@ fn without_grown_radii_corner_spheres_are_dropped() {
     let rig = Rig::preset("hmd-peripheral").unwrap();
     let coarse = rig.resolve().unwrap().coarse_cull();
     assert_ne!(coarse, CoarseCull::EVERYTHING);
+    eprintln!("hmd-peripheral: radii grow by {}", coarse.inflation);
     assert!(
         (1.0..3.0).contains(&coarse.inflation),
         "{}",
