@@ -13,9 +13,9 @@
 use glam::{DVec3, Vec2};
 
 use crate::contexts::{DisplayContext, EyeContext};
-use crate::cull::Split;
+use crate::cull::{CullJob, Split};
 use crate::frustum::View;
-use crate::rig::ResolvedDisplay;
+use crate::rig::{ResolvedDisplay, ResolvedRig, Rig};
 
 /// Pixels two eyes' images of a far instance may differ by, unless the options say.
 pub const FAR_THRESHOLD_PX: f32 = 0.5;
@@ -121,4 +121,32 @@ impl FarPlan {
         let uv = ((fx + fl) / (fl + fr), (fu - fy) / (fu + fd));
         ((0.0..=1.0).contains(&uv.0) && (0.0..=1.0).contains(&uv.1)).then_some(uv)
     }
+}
+
+/// Each display's far plan for a frame: stereo displays only (a mono display has no
+/// two images to share).
+pub fn plans(rig: &Rig, resolved: &ResolvedRig, threshold: f32) -> Vec<Option<FarPlan>> {
+    rig.displays
+        .iter()
+        .zip(&resolved.displays)
+        .map(|(d, r)| d.stereo.then(|| FarPlan::new(r, d.resolution, threshold)))
+        .collect()
+}
+
+/// The CPU culler's jobs with far layers: each display's job in `jobs` keeps its near
+/// side where the display has a plan, then one far job per plan follows, in display
+/// order (instances drawn once, the display frustum, the far side).
+pub fn split_jobs(jobs: &mut Vec<CullJob>, plans: &[Option<FarPlan>]) {
+    let mut far_jobs = Vec::new();
+    for (job, plan) in jobs.iter_mut().zip(plans) {
+        if let Some(plan) = plan {
+            job.split = Some(plan.split(false));
+            far_jobs.push(CullJob {
+                planes: plan.view.frustum().planes,
+                instances_per_object: 1,
+                split: Some(plan.split(true)),
+            });
+        }
+    }
+    jobs.extend(far_jobs);
 }

@@ -29,6 +29,13 @@ fn info_names_the_adapter() {
         text.contains("\ntier: full"),
         "lavapipe has every feature: {text}"
     );
+    let coarse = |preset: &str| {
+        text.lines()
+            .find(|l| l.trim_start().starts_with(&format!("{preset} ")))
+            .map(|l| l.split_whitespace().nth(1).unwrap_or_default().to_string())
+    };
+    assert_eq!(coarse("hmd-peripheral").as_deref(), Some("on"), "{text}");
+    assert_eq!(coarse("hmd").as_deref(), Some("off"), "{text}");
 }
 
 /// The GL backend lacks indirect count and multiview: `info` names the tier and costs.
@@ -622,4 +629,70 @@ fn render_reports_the_passes_of_each_level() {
         .map(|p| p["display"].as_str().unwrap())
         .collect();
     assert_eq!(walls, ["front", "left", "right", "floor", "ceiling"]);
+}
+
+/// With the far layer (and shadows and the coarse cull, which change no cull), `cull`
+/// dumps each stereo display's near cull and its far cull (`<name>.far`, one view),
+/// GPU and CPU alike; together they hold what the display sees without it.
+#[test]
+fn cull_dumps_far_layers_alike_on_gpu_and_cpu() {
+    let base = [
+        "cull",
+        "--scene",
+        "city:4000",
+        "--rig",
+        "hmd-peripheral",
+        "--width",
+        "64",
+        "--height",
+        "64",
+    ];
+    let with = [
+        &base[..],
+        &[
+            "--far-layer",
+            "on",
+            "--shadows",
+            "on",
+            "--coarse-cull",
+            "on",
+        ],
+    ]
+    .concat();
+    let cpu = dump(&[&with[..], &["--cull", "cpu"]].concat());
+    let gpu = dump(&[&with[..], &["--cull", "gpu"]].concat());
+    assert_eq!(cpu, gpu);
+    let names: Vec<&str> = cpu["displays"]
+        .as_array()
+        .unwrap()
+        .iter()
+        .map(|d| d["name"].as_str().unwrap())
+        .collect();
+    assert_eq!(
+        names,
+        [
+            "center",
+            "peripheral-left",
+            "peripheral-right",
+            "center.far"
+        ]
+    );
+    let ids = |d: &Value| -> Vec<u64> {
+        let mut v: Vec<u64> = d["visible"]
+            .as_array()
+            .unwrap()
+            .iter()
+            .map(|x| x.as_u64().unwrap())
+            .collect();
+        v.sort();
+        v
+    };
+    let whole = dump(&[&base[..], &["--cull", "cpu"]].concat());
+    let mut both = [ids(&cpu["displays"][0]), ids(&cpu["displays"][3])].concat();
+    both.sort();
+    assert!(
+        !ids(&cpu["displays"][3]).is_empty(),
+        "the city's buildings are far"
+    );
+    assert_eq!(both, ids(&whole["displays"][0]));
 }

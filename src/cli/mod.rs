@@ -15,6 +15,7 @@ use crate::cull::cpu::FrameCull;
 use crate::cull::{CullOutput, cpu};
 use crate::device::{Gpu, OPTIONAL_FEATURES, Tier};
 use crate::error::{Error, Result};
+use crate::far_layer;
 use crate::live::LiveScene;
 use crate::records::CullLayout;
 use crate::renderer::{CoarseMode, CullMode, Renderer, RendererOptions, frame_lod};
@@ -191,6 +192,16 @@ fn info() -> Result<()> {
             println!("  {name:40} no  (costs: {without})");
         }
     }
+    println!("coarse cull with --coarse-cull auto (sphere tests expected with it / without):");
+    for preset in crate::rig::PRESETS {
+        let resolved = Rig::preset(preset)?.resolve()?;
+        let expected = resolved.expected_coarse_tests();
+        let on = RendererOptions::default().coarse_for(&Rig::preset(preset)?);
+        let why = expected.map_or("no frame frustum holds the displays".into(), |r| {
+            format!("{r:.2}")
+        });
+        println!("  {preset:40} {}  ({why})", if on { "on " } else { "off" });
+    }
     Ok(())
 }
 
@@ -240,45 +251,69 @@ fn cull(args: &CullArgs) -> Result<()> {
     let rig = args.scene.load_rig()?;
     let mut live = LiveScene::new(scene_spec::load(&args.scene.scene)?);
     let mut driver = edits::EditDriver::new(&live, &args.edits)?;
-    let outputs = match args.cull {
+    let options = args.scene.options();
+    let (outputs, far) = match args.cull {
         CullMode::Cpu => {
             for frame in 0..args.frames {
                 driver.apply(&mut live, frame)?;
             }
-            let options = args.scene.options();
-            let resolved = rig.resolve()?;
-            let frame = FrameCull {
-                lod: frame_lod(&rig, &resolved, options.lod_levels()),
-                coarse: options.coarse_for(&rig).then(|| resolved.coarse_cull()),
-            };
-            let layout = CullLayout::new(live.scene());
-            cpu::cull_frame(&layout, &rig.cull_jobs()?, &frame)
+            cpu_cull(&rig, &options, live.scene())?
         }
-        CullMode::Gpu => {
-            let options = args.scene.options();
-            gpu_cull((&rig, options), &mut live, (&mut driver, args.frames))?
-        }
+        CullMode::Gpu => gpu_cull((&rig, options), &mut live, (&mut driver, args.frames))?,
     };
     let scene = live.scene();
-    let displays: Vec<_> = rig
+    let near = rig
         .displays
         .iter()
         .zip(&outputs)
-        .map(|(d, out)| display_dump(&d.name, d.views(), out, scene))
-        .collect();
+        .map(|(d, out)| display_dump(&d.name, d.views(), out, scene));
+    // With the far layer, each stereo display's far cull follows as `<name>.far`.
+    let far_dumps = rig.displays.iter().zip(&far).filter_map(|(d, out)| {
+        Some(display_dump(
+            &format!("{}.far", d.name),
+            1,
+            out.as_ref()?,
+            scene,
+        ))
+    });
+    let displays: Vec<_> = near.chain(far_dumps).collect();
     write_json(
         &args.dump_visible,
         &serde_json::json!({ "displays": displays }),
     )
 }
 
+/// Every display's cull and, with the far layer, each stereo display's far cull: what
+/// the renderer's CPU path culls.
+fn cpu_cull(
+    rig: &Rig,
+    options: &RendererOptions,
+    scene: &Scene,
+) -> Result<(Vec<CullOutput>, Vec<Option<CullOutput>>)> {
+    let resolved = rig.resolve()?;
+    let frame = FrameCull {
+        lod: frame_lod(rig, &resolved, options.lod_levels()),
+        coarse: options.coarse_for(rig).then(|| resolved.coarse_cull()),
+    };
+    let plans = match options.far_layer {
+        true => far_layer::plans(rig, &resolved, options.far_threshold_px),
+        false => vec![None; rig.displays.len()],
+    };
+    let mut jobs = rig.cull_jobs()?;
+    far_layer::split_jobs(&mut jobs, &plans);
+    let mut outputs = cpu::cull_frame(&CullLayout::new(scene), &jobs, &frame);
+    let mut far = outputs.split_off(rig.displays.len()).into_iter();
+    let far = plans.iter().map(|p| p.and_then(|_| far.next())).collect();
+    Ok((outputs, far))
+}
+
 /// `frames` GPU-culled frames, each after its edits are synced; the last frame's cull
-/// buffers read back.
+/// buffers (and far layers' culls) read back.
 fn gpu_cull(
     (rig, options): (&Rig, RendererOptions),
     live: &mut LiveScene,
     (driver, frames): (&mut edits::EditDriver, u32),
-) -> Result<Vec<CullOutput>> {
+) -> Result<(Vec<CullOutput>, Vec<Option<CullOutput>>)> {
     let gpu = Gpu::headless()?;
     let mut renderer = Renderer::new(&gpu.device, live.scene(), rig, options)?;
     let targets = renderer.create_targets(&gpu.device);
@@ -287,9 +322,13 @@ fn gpu_cull(
         renderer.sync(&gpu.device, &gpu.queue, live)?;
         renderer.submit_frame(&gpu.device, &gpu.queue, rig, 0.0, &targets)?;
     }
-    (0..rig.displays.len())
-        .map(|i| renderer.read_cull(&gpu.device, &gpu.queue, i))
-        .collect()
+    let displays = 0..rig.displays.len();
+    let read = |i| renderer.read_cull(&gpu.device, &gpu.queue, i);
+    let far = |i| renderer.read_far_cull(&gpu.device, &gpu.queue, i);
+    Ok((
+        displays.clone().map(read).collect::<Result<_>>()?,
+        displays.map(far).collect::<Result<_>>()?,
+    ))
 }
 
 pub fn write_json(path: &Path, value: &impl Serialize) -> Result<()> {

@@ -9,7 +9,7 @@ use crate::cull::gpu::{CullScene, CullTargets, GpuCuller};
 use crate::cull::{CullJob, CullOutput};
 use crate::draw::{CLEAR_COLOR, DEPTH_FORMAT, DrawScene, Drawer, TargetFormat};
 use crate::error::Result;
-use crate::far_layer::FarPlan;
+use crate::far_layer::{self, FarPlan};
 use crate::profiling::GpuTimer;
 use crate::records::uniform_bytes;
 use crate::rig::{ResolvedRig, Rig};
@@ -396,16 +396,7 @@ impl Far {
         resolved: &ResolvedRig,
         contexts: &mut [DisplayContext],
     ) {
-        self.plans = rig
-            .displays
-            .iter()
-            .zip(&resolved.displays)
-            .zip(&self.displays)
-            .map(|((d, r), far)| {
-                far.as_ref()
-                    .map(|_| FarPlan::new(r, d.resolution, self.layers.threshold))
-            })
-            .collect();
+        self.plans = far_layer::plans(rig, resolved, self.layers.threshold);
         for (context, plan) in contexts.iter_mut().zip(&self.plans) {
             if let Some(plan) = plan {
                 context.split_keep = 1;
@@ -414,21 +405,9 @@ impl Far {
         }
     }
 
-    /// The CPU culler's jobs: the displays' `jobs` split where they have a far layer,
-    /// then one far job per far layer, in display order.
+    /// The CPU culler's jobs: see [`far_layer::split_jobs`].
     pub(super) fn split_jobs(&self, jobs: &mut Vec<CullJob>) {
-        let mut far_jobs = Vec::new();
-        for (job, plan) in jobs.iter_mut().zip(&self.plans) {
-            if let Some(plan) = plan {
-                job.split = Some(plan.split(false));
-                far_jobs.push(CullJob {
-                    planes: plan.view.frustum().planes,
-                    instances_per_object: 1,
-                    split: Some(plan.split(true)),
-                });
-            }
-        }
-        jobs.extend(far_jobs);
+        far_layer::split_jobs(jobs, &self.plans);
     }
 
     /// Writes every far layer's context and (culled on the CPU, `outputs` in display
