@@ -11,7 +11,7 @@ use crate::error::Result;
 use crate::materials::{self, GpuMaterials};
 use crate::records::{InstanceRecord, instance_records};
 use crate::scene::{Scene, Vertex};
-use crate::shaders::{DRAW_BINDINGS, DrawKey, bind_group, bind_group_layout};
+use crate::shaders::{DRAW_BINDINGS, DrawKey, Windows, bind_group, bind_group_layout};
 use crate::shadow::{self, ShadowMap};
 
 /// The depth format of the renderer's own targets, unless the options name another.
@@ -113,6 +113,8 @@ pub struct Drawer {
     pipelines: HashMap<DrawKey, wgpu::RenderPipeline>,
     /// With shadows: the depth-only pipeline and the shadow map's size.
     pub shadow: Option<ShadowPipeline>,
+    /// How the instance records are bound.
+    pub windows: Windows,
     pub features: DrawFeatures,
 }
 
@@ -135,9 +137,9 @@ impl Drawer {
         device: &wgpu::Device,
         target: TargetFormat,
         (keys, material): (&[DrawKey], Option<&str>),
-        shadow_size: Option<u32>,
+        (shadow_size, windows): (Option<u32>, Windows),
     ) -> Drawer {
-        let layout = bind_group_layout(device, "stereocull.draw", &DRAW_BINDINGS);
+        let layout = bind_group_layout(device, "stereocull.draw", &DRAW_BINDINGS, &windows);
         let materials_layout = materials::bind_group_layout(device);
         let shadow_layout = shadow::bind_group_layout(device);
         let pipeline_layout = device.create_pipeline_layout(&wgpu::PipelineLayoutDescriptor {
@@ -148,7 +150,7 @@ impl Drawer {
         let pipelines = keys
             .iter()
             .map(|&key| {
-                let source = key.source_with(material);
+                let source = key.source_with(material, &windows);
                 (
                     key,
                     pipeline(device, &pipeline_layout, (key, &source), target),
@@ -156,7 +158,7 @@ impl Drawer {
             })
             .collect();
         let shadow = shadow_size.map(|size| ShadowPipeline {
-            pipeline: shadow_pipeline(device, &layout),
+            pipeline: shadow_pipeline(device, &layout, &windows),
             size,
         });
         Drawer {
@@ -165,6 +167,7 @@ impl Drawer {
             shadow_layout,
             pipelines,
             shadow,
+            windows,
             features: DrawFeatures::of(device),
         }
     }
@@ -183,8 +186,9 @@ impl Drawer {
         visible: &wgpu::Buffer,
     ) -> wgpu::BindGroup {
         // In DRAW_BINDINGS order.
-        let buffers = [frame_context, display_context, &scene.instances, visible];
-        bind_group(device, "stereocull.draw", &self.layout, buffers)
+        let buffers = [frame_context, display_context, visible, &scene.instances];
+        let list = (&DRAW_BINDINGS[..], &self.windows);
+        bind_group(device, ("stereocull.draw", &self.layout), list, buffers)
     }
 
     /// Sets the pipeline, geometry and bindings on `pass`.
@@ -284,12 +288,16 @@ pub fn set_eye_viewport(pass: &mut wgpu::RenderPass, eye: u32, eye_size: (u32, u
 
 /// Depth only, both faces (open meshes cast shadows too), biased by slope so that lit
 /// surfaces do not shadow themselves.
-fn shadow_pipeline(device: &wgpu::Device, group_0: &wgpu::BindGroupLayout) -> wgpu::RenderPipeline {
+fn shadow_pipeline(
+    device: &wgpu::Device,
+    group_0: &wgpu::BindGroupLayout,
+    windows: &Windows,
+) -> wgpu::RenderPipeline {
     let label = "stereocull.shadow";
     let layout = crate::shaders::pipeline_layout(device, label, group_0);
     let module = device.create_shader_module(wgpu::ShaderModuleDescriptor {
         label: Some(label),
-        source: wgpu::ShaderSource::Wgsl(crate::shaders::shadow_source().into()),
+        source: wgpu::ShaderSource::Wgsl(crate::shaders::shadow_source(windows).into()),
     });
     device.create_render_pipeline(&wgpu::RenderPipelineDescriptor {
         label: Some(label),

@@ -15,7 +15,7 @@ use crate::buffers::storage_buffer;
 use crate::live::{Edit, make_edit};
 use crate::scene::Scene;
 use crate::shaders::{
-    SCATTER_BINDINGS, bind_group, bind_group_layout, compute_pipeline, dispatch_size,
+    SCATTER_BINDINGS, Windows, bind_group, bind_group_layout, compute_pipeline, dispatch_size,
     pipeline_layout, scatter_source,
 };
 
@@ -27,6 +27,7 @@ const GROUP: u32 = 64;
 pub struct Scatter {
     pipeline: wgpu::ComputePipeline,
     layout: wgpu::BindGroupLayout,
+    windows: Windows,
     edits: wgpu::Buffer,
     bind_group: Option<wgpu::BindGroup>,
     /// Slots with an edit in the buffer, in buffer order, and per slot 1 + its edit's
@@ -48,14 +49,16 @@ pub struct ScatterTargets<'a> {
 }
 
 impl Scatter {
-    pub fn new(device: &wgpu::Device) -> Scatter {
-        let layout = bind_group_layout(device, "stereocull.scatter", &SCATTER_BINDINGS);
+    /// The scatter pass for instance records and spheres bound in `windows`.
+    pub fn new(device: &wgpu::Device, windows: Windows) -> Scatter {
+        let layout = bind_group_layout(device, "stereocull.scatter", &SCATTER_BINDINGS, &windows);
         let pipeline_layout = pipeline_layout(device, "stereocull.scatter", &layout);
-        let entry = (scatter_source(), "scatter");
+        let entry = (scatter_source(&windows), "scatter");
         let pipeline = compute_pipeline(device, "stereocull.scatter", &pipeline_layout, entry);
         Scatter {
             pipeline,
             layout,
+            windows,
             edits: edits_buffer(device, 0),
             bind_group: None,
             slots: Vec::new(),
@@ -208,8 +211,10 @@ impl Scatter {
                 [&spheres, &positions]
             }
         };
-        let buffers = [&self.edits, targets.instances, s, p];
-        bind_group(device, "stereocull.scatter", &self.layout, buffers)
+        // In SCATTER_BINDINGS order.
+        let buffers = [&self.edits, p, targets.instances, s];
+        let list = (&SCATTER_BINDINGS[..], &self.windows);
+        bind_group(device, ("stereocull.scatter", &self.layout), list, buffers)
     }
 }
 

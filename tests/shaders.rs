@@ -14,7 +14,7 @@ use stereocull::records::{DrawArgs, InstanceRecord, LodRecord, MeshRecord};
 use stereocull::scene::Vertex;
 use stereocull::shaders::{
     Access, Binding, COARSE_BINDINGS, CULL_BINDINGS, CullPass, DRAW_BINDINGS, DrawKey,
-    SCATTER_BINDINGS, all_sources, scatter_source, shadow_source,
+    SCATTER_BINDINGS, Window, Windows, all_sources, scatter_source, shadow_source,
 };
 
 fn parse(label: &str, source: &str) -> Module {
@@ -58,7 +58,7 @@ fn wgsl_struct(module: &Module, name: &str) -> (Vec<(String, u32)>, u32) {
 }
 
 fn module() -> Module {
-    parse("cull", &CullPass::Cull.source(false))
+    parse("cull", &CullPass::Cull.source(false, &Windows::WHOLE))
 }
 
 #[test]
@@ -289,17 +289,17 @@ fn contexts_match_wgsl() {
 fn every_pass_binds_what_its_list_declares() {
     let passes = CullPass::variants()
         .into_iter()
-        .map(|(p, c)| (p.label(c), p.source(c), &CULL_BINDINGS[..]))
+        .map(|(p, c)| (p.label(c), p.source(c, &Windows::WHOLE), &CULL_BINDINGS[..]))
         .chain(DrawKey::ALL.map(|k| (k.label(), k.source(), &DRAW_BINDINGS[..])))
         .chain([
             (
                 "stereocull.scatter".to_string(),
-                scatter_source(),
+                scatter_source(&Windows::WHOLE),
                 &SCATTER_BINDINGS[..],
             ),
             (
                 "stereocull.shadow".to_string(),
-                shadow_source(),
+                shadow_source(&Windows::WHOLE),
                 &DRAW_BINDINGS[..],
             ),
         ]);
@@ -415,4 +415,50 @@ fn vertex_layout_matches_wgsl() {
         assert_eq!(attribute.format, wgsl_format, "{name}");
     }
     assert_eq!(size_of::<Vertex>(), 36);
+}
+
+/// Past one binding, a windowed array takes one binding per window, in order, after the
+/// list's other bindings: the scatter pass with 5M instances and 64 MiB bindings binds
+/// its edits and positions, five windows of records and two of spheres.
+#[test]
+fn windowed_arrays_take_one_binding_per_window() {
+    let split = Windows::new(5 << 20, 64 << 20);
+    assert_eq!(
+        split.instances,
+        Window {
+            count: 5,
+            shift: 20
+        }
+    );
+    assert_eq!(
+        split.spheres,
+        Window {
+            count: 2,
+            shift: 22
+        }
+    );
+    assert_eq!(Windows::new(1000, 64 << 20), Windows::WHOLE);
+    let module = parse("scatter", &scatter_source(&split));
+    let mut bound: Vec<(u32, String)> = module
+        .global_variables
+        .iter()
+        .filter_map(|(_, v)| Some((v.binding.as_ref()?.binding, v.name.clone()?)))
+        .collect();
+    bound.sort();
+    let names: Vec<&str> = bound.iter().map(|(_, n)| n.as_str()).collect();
+    assert_eq!(
+        names,
+        [
+            "edits",
+            "positions",
+            "instances_0",
+            "instances_1",
+            "instances_2",
+            "instances_3",
+            "instances_4",
+            "spheres_0",
+            "spheres_1"
+        ]
+    );
+    assert!(bound.iter().enumerate().all(|(i, (b, _))| *b == i as u32));
 }

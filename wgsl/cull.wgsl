@@ -17,7 +17,7 @@ fn cull(
     var flag = 0u;
     if (j < n) {
         let k = cull_position(j);
-        let s = spheres[k];
+        let s = spheres_at(k);
         if (sphere_in_planes(display.planes, s) && in_split(s) && lod_level(k) == level) {
             flag = 1u;
         }

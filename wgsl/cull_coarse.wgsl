@@ -27,7 +27,7 @@ fn coarse_cull(
     let n = params.instance_count;
     let k = block * WORKGROUP_SIZE + local;
     var flag = 0u;
-    if (k < n && coarse_test(spheres[k])) {
+    if (k < n && coarse_test(spheres_at(k))) {
         flag = 1u;
     }
     let scan = workgroup_exclusive_scan(local, flag);

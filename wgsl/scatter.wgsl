@@ -21,9 +21,10 @@ fn scatter(@builtin(workgroup_id) wid: vec3<u32>, @builtin(local_invocation_inde
     }
     let at = HEADER + i * WORDS_PER_EDIT;
     let slot = edits[at];
-    instances[slot].world_from_local =
-        array(edit_vec4(at + 1u), edit_vec4(at + 5u), edit_vec4(at + 9u));
+    var record = instances_at(slot);
+    record.world_from_local = array(edit_vec4(at + 1u), edit_vec4(at + 5u), edit_vec4(at + 9u));
+    instances_set(slot, record);
     if (edits[1] != 0u) {
-        spheres[positions[slot]] = edit_vec4(at + 13u);
+        spheres_set(positions[slot], edit_vec4(at + 13u));
     }
 }

@@ -10,8 +10,8 @@ use crate::buffers::{init_buffer, init_buffer_with_room, storage_buffer};
 use crate::records::uniform_bytes;
 use crate::records::{CullLayout, DrawArgs};
 use crate::shaders::{
-    COARSE_BINDINGS, CULL_BINDINGS, CullPass, WORKGROUP_SIZE, bind_group, bind_group_layout,
-    compute_pipeline, dispatch_size, pipeline_layout,
+    COARSE_BINDINGS, CULL_BINDINGS, CullPass, WORKGROUP_SIZE, Windows, bind_group,
+    bind_group_layout, compute_pipeline, dispatch_size, pipeline_layout,
 };
 
 /// The uniform the cull passes read besides the display context (`CullParams` in
@@ -33,6 +33,8 @@ pub const COUNTS_BYTES: u64 = 8;
 /// The cull pipelines and their shared bind-group layout.
 pub struct GpuCuller {
     layout: wgpu::BindGroupLayout,
+    /// How the spheres are bound.
+    windows: Windows,
     /// The display passes over every instance, in dispatch order (the displays' without
     /// the coarse cull; the light's always).
     pipelines: Vec<wgpu::ComputePipeline>,
@@ -236,11 +238,11 @@ fn cull_params(layout: &CullLayout, (max_groups, levels): (u32, u32)) -> (CullPa
 impl GpuCuller {
     /// The display passes, and with `coarse` the frame passes and the display passes
     /// over their candidates too.
-    pub fn new(device: &wgpu::Device, coarse: bool) -> GpuCuller {
-        let layout = bind_group_layout(device, "stereocull.cull", &CULL_BINDINGS);
+    pub fn new(device: &wgpu::Device, coarse: bool, windows: Windows) -> GpuCuller {
+        let layout = bind_group_layout(device, "stereocull.cull", &CULL_BINDINGS, &windows);
         let build = |passes: [CullPass; 3], candidates: bool, with: &wgpu::PipelineLayout| {
             let build_one = |pass: CullPass| {
-                let entry = (pass.source(candidates), pass.entry_point());
+                let entry = (pass.source(candidates, &windows), pass.entry_point());
                 compute_pipeline(device, &pass.label(candidates), with, entry)
             };
             passes.map(build_one).to_vec()
@@ -248,7 +250,9 @@ impl GpuCuller {
         let display_layout = pipeline_layout(device, "stereocull.cull", &layout);
         let pipelines = build(CullPass::DISPLAY, false, &display_layout);
         let coarse = coarse.then(|| {
-            let args_layout = bind_group_layout(device, "stereocull.coarse", &COARSE_BINDINGS);
+            let whole = &Windows::WHOLE;
+            let args_layout =
+                bind_group_layout(device, "stereocull.coarse", &COARSE_BINDINGS, whole);
             let both = device.create_pipeline_layout(&wgpu::PipelineLayoutDescriptor {
                 label: Some("stereocull.coarse"),
                 bind_group_layouts: &[Some(&layout), Some(&args_layout)],
@@ -262,6 +266,7 @@ impl GpuCuller {
         });
         GpuCuller {
             layout,
+            windows,
             pipelines,
             coarse,
         }
@@ -281,7 +286,6 @@ impl GpuCuller {
             frame_context,
             display_context,
             &scene.params,
-            &scene.spheres,
             &scene.order,
             &scene.meshes,
             &scene.lods,
@@ -294,8 +298,10 @@ impl GpuCuller {
             &scene.candidates,
             &scene.candidate_count,
             &scene.candidate_ranges,
+            &scene.spheres,
         ];
-        bind_group(device, "stereocull.cull", &self.layout, buffers)
+        let list = (&CULL_BINDINGS[..], &self.windows);
+        bind_group(device, ("stereocull.cull", &self.layout), list, buffers)
     }
 
     /// Group 1 of the frame passes (with the coarse cull).
@@ -307,8 +313,8 @@ impl GpuCuller {
         let coarse = self.coarse.as_ref()?;
         Some(bind_group(
             device,
-            "stereocull.coarse",
-            &coarse.args_layout,
+            ("stereocull.coarse", &coarse.args_layout),
+            (&COARSE_BINDINGS[..], &Windows::WHOLE),
             [&scene.coarse_args],
         ))
     }

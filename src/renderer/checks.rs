@@ -7,6 +7,7 @@ use crate::error::{Error, Result};
 use crate::modes::StereoMode;
 use crate::records::MeshRecord;
 use crate::scene::{Scene, Vertex};
+use crate::shaders::Windowed;
 
 /// MSAA the device can do for the options' color format and the depth format. Without
 /// `TEXTURE_ADAPTER_SPECIFIC_FORMAT_FEATURES` that is WebGPU's guarantee (1 and 4);
@@ -78,15 +79,27 @@ pub(super) fn check_device(
             options.far_threshold_px
         )));
     }
-    // Storage buffers are bound whole, so the binding limit holds for them; vertex and
-    // index buffers are not bindings and only need to fit one buffer.
-    let storage = limits
-        .max_storage_buffer_binding_size
-        .min(limits.max_buffer_size);
+    // Storage buffers bound whole must fit one binding; instance records and spheres
+    // are bound in windows (`shaders::Windows`), and vertex and index buffers are no
+    // bindings: those only need to fit one buffer.
+    let storage = options.binding_bytes(device).min(limits.max_buffer_size);
+    let per_level = 4 * options.lod_levels() as u64;
     let buffers = [
         (
             "instance records",
             DrawScene::BYTES_PER_INSTANCE,
+            scene.instances.len(),
+            limits.max_buffer_size,
+        ),
+        (
+            "world bounding spheres",
+            Windowed::Spheres.stride(),
+            scene.instances.len(),
+            limits.max_buffer_size,
+        ),
+        (
+            "cull flags (4 bytes per instance and level of detail)",
+            per_level,
             scene.instances.len(),
             storage,
         ),

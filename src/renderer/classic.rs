@@ -66,7 +66,7 @@ impl ClassicPath {
             device,
             options.target_format(),
             (&[DrawKey::new(1, clip)], options.material.as_deref()),
-            options.shadow_size(),
+            (options.shadow_size(), options.windows(device, slots)),
         );
         let draw_scene = DrawScene::new(device, &drawer, scene, slots)?;
         let n = slots as u64;

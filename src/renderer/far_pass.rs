@@ -47,7 +47,7 @@ impl FarLayers {
     pub(super) fn new(
         device: &wgpu::Device,
         (format, material): (TargetFormat, Option<&str>),
-        threshold: f32,
+        (threshold, windows): (f32, crate::shaders::Windows),
     ) -> FarLayers {
         let single = TargetFormat {
             depth: DEPTH_FORMAT,
@@ -55,7 +55,7 @@ impl FarLayers {
             ..format
         };
         let key = DrawKey::new(1, false);
-        let drawer = Drawer::new(device, single, (&[key], material), None);
+        let drawer = Drawer::new(device, single, (&[key], material), (None, windows));
         let composite_layout = composite_layout(device);
         FarLayers {
             composite: composite_pipeline(device, &composite_layout, format),

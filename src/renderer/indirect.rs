@@ -77,9 +77,10 @@ impl IndirectPath {
         let multiview = options.mode == StereoMode::Multiview;
         let layout = CullLayout::new(scene);
         let coarse = options.coarse_for(rig);
+        let windows = options.windows(device, slots);
         let culling = match options.cull {
             CullMode::Gpu => {
-                let culler = GpuCuller::new(device, coarse);
+                let culler = GpuCuller::new(device, coarse, windows);
                 let shape = (slots, options.lod_levels(), coarse);
                 let scene = Box::new(CullScene::new(device, &layout, shape));
                 let coarse = culler.coarse_bind_group(device, &scene);
@@ -105,7 +106,7 @@ impl IndirectPath {
             device,
             options.target_format(),
             (&keys, options.material.as_deref()),
-            options.shadow_size(),
+            (options.shadow_size(), windows),
         );
         let draw_scene = DrawScene::new(device, &drawer, scene, slots)?;
         let draws = scene.meshes.len() as u32 * options.lod_levels();
@@ -376,6 +377,11 @@ impl IndirectPath {
         self.drawer.draw_indirect(pass, self.max_draws, &state.cull);
     }
 
+    /// How the instance records are bound.
+    pub(super) fn windows(&self) -> crate::shaders::Windows {
+        self.drawer.windows
+    }
+
     pub(super) fn bind_group_layout(&self) -> &wgpu::BindGroupLayout {
         self.drawer.layout()
     }
@@ -408,10 +414,11 @@ fn far_layers(
     sizes: (u32, u32),
 ) -> Result<Far> {
     let material = options.material.as_deref();
+    let windows = options.windows(device, sizes.0);
     let layers = FarLayers::new(
         device,
         (options.target_format(), material),
-        options.far_threshold_px,
+        (options.far_threshold_px, windows),
     );
     let culler = match culling {
         Culling::Gpu { culler, scene, .. } => Some((culler, &**scene)),

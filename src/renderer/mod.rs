@@ -192,6 +192,10 @@ impl Renderer {
     ) -> Result<Renderer> {
         check_device(device, scene, &options)?;
         let options_coarse = options.coarse_for(rig);
+        let scatter = Scatter::new(
+            device,
+            options.windows(device, scene.instances.len() as u32),
+        );
         let frame = uniform_buffer::<FrameContext>(device, "stereocull.frame_context");
         let slots = scene.instances.len() as u32;
         let path = Path::new(device, scene, (rig, &frame), (&options, slots))?;
@@ -210,7 +214,7 @@ impl Renderer {
             path,
             shapes,
             names: rig.displays.iter().map(|d| d.name.clone()).collect(),
-            scatter: Scatter::new(device),
+            scatter,
             slots,
             rig: rig.clone(),
             coarse: options_coarse,

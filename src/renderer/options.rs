@@ -9,6 +9,7 @@ use crate::far_layer::FAR_THRESHOLD_PX;
 use crate::modes::StereoMode;
 use crate::rig::{ResolvedRig, Rig};
 use crate::scene::MAX_LODS;
+use crate::shaders::Windows;
 use crate::shadow::Light;
 
 /// Where the per-display cull runs.
@@ -69,6 +70,10 @@ pub struct RendererOptions {
     pub far_layer: bool,
     /// Pixels the eyes' images of a far instance may differ by: sets the far distance.
     pub far_threshold_px: f32,
+    /// Bytes one storage binding may hold; `None`: the device's limit. Per-instance
+    /// arrays larger than this are bound as several windows of one buffer
+    /// ([`Windows`]); a smaller value than the device's exercises that on small scenes.
+    pub binding_limit: Option<u64>,
 }
 
 /// Screen-space error, in pixels, a level of detail may show.
@@ -92,6 +97,18 @@ impl RendererOptions {
                 .and_then(|r| r.expected_coarse_tests())
                 .is_some_and(|ratio| ratio <= 0.8),
         }
+    }
+
+    /// How per-instance arrays of `slots` instances are bound on `device`.
+    pub fn windows(&self, device: &wgpu::Device, slots: u32) -> Windows {
+        Windows::new(slots, self.binding_bytes(device))
+    }
+
+    /// Bytes one storage binding may hold: the device's limit, or `binding_limit` below it.
+    pub fn binding_bytes(&self, device: &wgpu::Device) -> u64 {
+        let device_limit = device.limits().max_storage_buffer_binding_size;
+        self.binding_limit
+            .map_or(device_limit, |l| l.min(device_limit))
     }
 
     /// The shadow map's texels a side, with shadows on.
@@ -124,6 +141,7 @@ impl Default for RendererOptions {
             light: Light::default(),
             far_layer: false,
             far_threshold_px: FAR_THRESHOLD_PX,
+            binding_limit: None,
         }
     }
 }

@@ -100,4 +100,14 @@ impl Renderer {
             ))),
         }
     }
+
+    /// The stereo decode for an engine's own pipeline on this renderer's group 0
+    /// ([`crate::shaders::decode_source_with`] with this renderer's binding windows):
+    /// `None` in the classic modes.
+    pub fn decode_source(&self, views: u32) -> Option<String> {
+        match &self.path {
+            Path::Indirect(p) => Some(crate::shaders::decode_source_with(views, &p.windows())),
+            Path::Classic(_) => None,
+        }
+    }
 }

@@ -7,7 +7,7 @@ use crate::draw::DrawScene;
 use crate::error::Result;
 use crate::live::{Edit, LiveScene, edit_sphere};
 use crate::records::{CullLayout, InstanceRecord, instance_record, instance_records};
-use crate::scatter::ScatterTargets;
+use crate::scatter::{Scatter, ScatterTargets};
 use crate::scene::Scene;
 
 /// What edits change in the culling: the GPU culler's buffers, or the CPU culler's layout.
@@ -64,7 +64,8 @@ impl Renderer {
                 (&self.options, room),
             )?;
             self.slots = room;
-            self.scatter.reset();
+            // The bindings may now need more windows.
+            self.scatter = Scatter::new(device, self.options.windows(device, room));
             let bytes = (scene.instances.len() * size_of::<InstanceRecord>()) as u64;
             return Ok(SyncStats {
                 bytes_uploaded: bytes,

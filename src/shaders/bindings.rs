@@ -2,13 +2,99 @@
 //! them: WGSL declarations, bind-group layouts and bind groups, pipelines.
 
 /// One buffer binding of group 0: its WGSL declaration and its layout entry both come
-/// from here; its binding number is its position in the list.
+/// from here; its binding number is its position in the list (a windowed binding takes
+/// one number per window, so windowed bindings come last).
 #[derive(Clone, Copy, Debug, PartialEq, Eq)]
 pub struct Binding {
     pub name: &'static str,
     pub access: Access,
     pub wgsl_type: &'static str,
     pub stages: wgpu::ShaderStages,
+    /// A per-instance array that may outgrow one binding: bound as [`Windows`] says,
+    /// read (and written) through `<name>_at(i)` (and `<name>_set(i, v)`).
+    pub windowed: Option<Windowed>,
+}
+
+/// The per-instance arrays that may outgrow the device's largest storage binding.
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+pub enum Windowed {
+    /// Instance records, 64 bytes each.
+    Instances,
+    /// World bounding spheres, 16 bytes each.
+    Spheres,
+}
+
+impl Windowed {
+    pub fn stride(self) -> u64 {
+        match self {
+            Windowed::Instances => 64,
+            Windowed::Spheres => 16,
+        }
+    }
+}
+
+/// How one windowed array is bound: `count` bindings of `1 << shift` elements each
+/// (the last may hold fewer); one window binds the buffer whole.
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+pub struct Window {
+    pub count: u32,
+    pub shift: u32,
+}
+
+impl Window {
+    pub const WHOLE: Window = Window {
+        count: 1,
+        shift: 31,
+    };
+
+    /// Windows for `slots` elements of `stride` bytes, at most `limit` bytes a binding.
+    pub fn new(slots: u32, stride: u64, limit: u64) -> Window {
+        let per = (limit / stride).max(1);
+        let shift = (u64::BITS - 1 - per.leading_zeros()).min(31);
+        match (slots as u64).div_ceil(1 << shift) {
+            0 | 1 => Window::WHOLE,
+            count => Window {
+                count: count as u32,
+                shift,
+            },
+        }
+    }
+}
+
+/// How every windowed array of a renderer is bound.
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+pub struct Windows {
+    pub instances: Window,
+    pub spheres: Window,
+}
+
+impl Windows {
+    pub const WHOLE: Windows = Windows {
+        instances: Window::WHOLE,
+        spheres: Window::WHOLE,
+    };
+
+    /// For `slots` instances with bindings of at most `limit` bytes.
+    pub fn new(slots: u32, limit: u64) -> Windows {
+        let of = |w: Windowed| Window::new(slots, w.stride(), limit);
+        Windows {
+            instances: of(Windowed::Instances),
+            spheres: of(Windowed::Spheres),
+        }
+    }
+
+    pub fn of(&self, windowed: Windowed) -> Window {
+        match windowed {
+            Windowed::Instances => self.instances,
+            Windowed::Spheres => self.spheres,
+        }
+    }
+
+    /// The window count of each binding of `list`, in order (1 for plain ones).
+    fn counts(&self, list: &[Binding]) -> impl Iterator<Item = u32> {
+        list.iter()
+            .map(|b| b.windowed.map_or(1, |w| self.of(w).count))
+    }
 }
 
 #[derive(Clone, Copy, Debug, PartialEq, Eq)]
@@ -29,6 +115,19 @@ const fn binding(
         access,
         wgsl_type,
         stages,
+        windowed: None,
+    }
+}
+
+const fn windowed(
+    name: &'static str,
+    access: Access,
+    wgsl_type: &'static str,
+    (stages, which): (wgpu::ShaderStages, Windowed),
+) -> Binding {
+    Binding {
+        windowed: Some(which),
+        ..binding(name, access, wgsl_type, stages)
     }
 }
 
@@ -41,8 +140,6 @@ pub const CULL_BINDINGS: [Binding; 16] = [
     binding("frame", Access::Uniform, "FrameContext", COMPUTE),
     binding("display", Access::Uniform, "DisplayContext", COMPUTE),
     binding("params", Access::Uniform, "CullParams", COMPUTE),
-    // World bounding spheres in cull order.
-    binding("spheres", Access::StorageRead, "array<vec4<f32>>", COMPUTE),
     // Instance id at each cull position.
     binding("order", Access::StorageRead, "array<u32>", COMPUTE),
     binding("meshes", Access::StorageRead, "array<MeshRecord>", COMPUTE),
@@ -93,6 +190,13 @@ pub const CULL_BINDINGS: [Binding; 16] = [
         "array<vec2<u32>>",
         COMPUTE,
     ),
+    // World bounding spheres in cull order.
+    windowed(
+        "spheres",
+        Access::StorageRead,
+        "array<vec4<f32>>",
+        (COMPUTE, Windowed::Spheres),
+    ),
 ];
 
 /// The frame-level coarse passes' group 1: the display passes' indirect dispatch,
@@ -120,16 +224,16 @@ pub const DRAW_BINDINGS: [Binding; 4] = [
         wgpu::ShaderStages::VERTEX_FRAGMENT,
     ),
     binding(
-        "instances",
-        Access::StorageRead,
-        "array<InstanceRecord>",
-        wgpu::ShaderStages::VERTEX_FRAGMENT,
-    ),
-    binding(
         "visible",
         Access::StorageRead,
         "array<u32>",
         wgpu::ShaderStages::VERTEX,
+    ),
+    windowed(
+        "instances",
+        Access::StorageRead,
+        "array<InstanceRecord>",
+        (wgpu::ShaderStages::VERTEX_FRAGMENT, Windowed::Instances),
     ),
 ];
 
@@ -137,21 +241,21 @@ pub const DRAW_BINDINGS: [Binding; 4] = [
 /// they go.
 pub const SCATTER_BINDINGS: [Binding; 4] = [
     binding("edits", Access::StorageRead, "array<u32>", COMPUTE),
-    binding(
+    // Cull position of each slot.
+    binding("positions", Access::StorageRead, "array<u32>", COMPUTE),
+    windowed(
         "instances",
         Access::StorageReadWrite,
         "array<InstanceRecord>",
-        COMPUTE,
+        (COMPUTE, Windowed::Instances),
     ),
     // World bounding spheres in cull order (the GPU culler's; a stand-in otherwise).
-    binding(
+    windowed(
         "spheres",
         Access::StorageReadWrite,
         "array<vec4<f32>>",
-        COMPUTE,
+        (COMPUTE, Windowed::Spheres),
     ),
-    // Cull position of each slot.
-    binding("positions", Access::StorageRead, "array<u32>", COMPUTE),
 ];
 
 /// A pipeline layout of one bind group, `group`.
@@ -194,73 +298,159 @@ pub(crate) fn dispatch_size(groups: u32, max_per_dimension: u32) -> (u32, u32) {
     (x, groups.div_ceil(x).max(1))
 }
 
-/// The WGSL declarations of `bindings`, in `group`.
-pub(super) fn declarations(bindings: &[Binding], group: u32) -> String {
-    bindings
-        .iter()
-        .enumerate()
-        .map(|(i, b)| {
-            let space = match b.access {
-                Access::Uniform => "uniform",
-                Access::StorageRead => "storage, read",
-                Access::StorageReadWrite => "storage, read_write",
-            };
-            format!(
-                "@group({group}) @binding({i}) var<{space}> {}: {};\n",
-                b.name, b.wgsl_type
-            )
-        })
-        .collect()
+/// The WGSL declarations of `bindings`, in `group`, windowed ones as `windows` says,
+/// each with its accessors.
+pub(super) fn declarations(bindings: &[Binding], group: u32, windows: &Windows) -> String {
+    let mut number = 0;
+    let mut out = String::new();
+    for (b, count) in bindings.iter().zip(windows.counts(bindings)) {
+        let space = match b.access {
+            Access::Uniform => "uniform",
+            Access::StorageRead => "storage, read",
+            Access::StorageReadWrite => "storage, read_write",
+        };
+        let names = window_names(b.name, count);
+        for name in &names {
+            out += &format!(
+                "@group({group}) @binding({number}) var<{space}> {name}: {};\n",
+                b.wgsl_type
+            );
+            number += 1;
+        }
+        if let Some(w) = b.windowed {
+            out += &accessors(b, &names, windows.of(w).shift);
+        }
+    }
+    out
 }
 
-/// The bind-group layout of `bindings`.
+fn window_names(name: &str, count: u32) -> Vec<String> {
+    match count {
+        1 => vec![name.to_string()],
+        n => (0..n).map(|k| format!("{name}_{k}")).collect(),
+    }
+}
+
+/// `<name>_at(i)`, and for writable arrays `<name>_set(i, v)`: element `i` in window
+/// `i >> shift`.
+fn accessors(b: &Binding, names: &[String], shift: u32) -> String {
+    let element = b
+        .wgsl_type
+        .strip_prefix("array<")
+        .and_then(|t| t.strip_suffix('>'))
+        .unwrap_or(b.wgsl_type);
+    let name = b.name;
+    let pick = |body: &dyn Fn(&str) -> String| match names {
+        [one] => body(&format!("{one}[i]")),
+        _ => {
+            let mask = (1u64 << shift) - 1;
+            let cases: String = names
+                .iter()
+                .enumerate()
+                .map(|(k, n)| {
+                    let label = if k + 1 == names.len() {
+                        "default".to_string()
+                    } else {
+                        format!("case {k}u")
+                    };
+                    format!(
+                        "        {label}: {{ {} }}\n",
+                        body(&format!("{n}[i & {mask}u]"))
+                    )
+                })
+                .collect();
+            format!("    switch (i >> {shift}u) {{\n{cases}    }}\n")
+        }
+    };
+    let wrap = |body: String| match names {
+        [_] => format!("    {body}\n"),
+        _ => body,
+    };
+    let mut out = format!(
+        "fn {name}_at(i: u32) -> {element} {{\n{}}}\n",
+        wrap(pick(&|at| format!("return {at};")))
+    );
+    if b.access == Access::StorageReadWrite {
+        out += &format!(
+            "fn {name}_set(i: u32, v: {element}) {{\n{}}}\n",
+            wrap(pick(&|at| format!("{at} = v;")))
+        );
+    }
+    out
+}
+
+/// The bind-group layout of `bindings`, windowed ones as `windows` says.
 pub fn bind_group_layout(
     device: &wgpu::Device,
     label: &str,
     bindings: &[Binding],
+    windows: &Windows,
 ) -> wgpu::BindGroupLayout {
-    let entries: Vec<_> = bindings
-        .iter()
-        .enumerate()
-        .map(|(i, b)| wgpu::BindGroupLayoutEntry {
-            binding: i as u32,
-            visibility: b.stages,
-            ty: wgpu::BindingType::Buffer {
-                ty: match b.access {
-                    Access::Uniform => wgpu::BufferBindingType::Uniform,
-                    Access::StorageRead => wgpu::BufferBindingType::Storage { read_only: true },
-                    Access::StorageReadWrite => {
-                        wgpu::BufferBindingType::Storage { read_only: false }
-                    }
+    let mut entries = Vec::new();
+    for (b, count) in bindings.iter().zip(windows.counts(bindings)) {
+        for _ in 0..count {
+            entries.push(wgpu::BindGroupLayoutEntry {
+                binding: entries.len() as u32,
+                visibility: b.stages,
+                ty: wgpu::BindingType::Buffer {
+                    ty: match b.access {
+                        Access::Uniform => wgpu::BufferBindingType::Uniform,
+                        Access::StorageRead => wgpu::BufferBindingType::Storage { read_only: true },
+                        Access::StorageReadWrite => {
+                            wgpu::BufferBindingType::Storage { read_only: false }
+                        }
+                    },
+                    has_dynamic_offset: false,
+                    min_binding_size: None,
                 },
-                has_dynamic_offset: false,
-                min_binding_size: None,
-            },
-            count: None,
-        })
-        .collect();
+                count: None,
+            });
+        }
+    }
     device.create_bind_group_layout(&wgpu::BindGroupLayoutDescriptor {
         label: Some(label),
         entries: &entries,
     })
 }
 
-/// A bind group with `buffers[i]` whole at binding `i`: the buffers in the order of
-/// the binding list `layout` was made from.
+/// A bind group with `buffers[i]` for `bindings[i]` (the list `layout` was made from):
+/// whole, or a windowed one as its windows, each `1 << shift` elements further.
 pub fn bind_group<const N: usize>(
     device: &wgpu::Device,
-    label: &str,
-    layout: &wgpu::BindGroupLayout,
+    (label, layout): (&str, &wgpu::BindGroupLayout),
+    (bindings, windows): (&[Binding], &Windows),
     buffers: [&wgpu::Buffer; N],
 ) -> wgpu::BindGroup {
-    let entries: Vec<_> = buffers
-        .iter()
-        .enumerate()
-        .map(|(i, b)| wgpu::BindGroupEntry {
-            binding: i as u32,
-            resource: b.as_entire_binding(),
-        })
-        .collect();
+    let mut entries = Vec::new();
+    for (b, buffer) in bindings.iter().zip(buffers) {
+        let window = b.windowed.map(|w| (windows.of(w), w.stride()));
+        match window {
+            Some((w, stride)) if w.count > 1 => {
+                let bytes = stride << w.shift;
+                for k in 0..w.count as u64 {
+                    // A window past the buffer's end (a stand-in) binds it whole.
+                    let resource = match k * bytes {
+                        offset if offset < buffer.size() => {
+                            wgpu::BindingResource::Buffer(wgpu::BufferBinding {
+                                buffer,
+                                offset,
+                                size: wgpu::BufferSize::new(bytes.min(buffer.size() - offset)),
+                            })
+                        }
+                        _ => buffer.as_entire_binding(),
+                    };
+                    entries.push(wgpu::BindGroupEntry {
+                        binding: entries.len() as u32,
+                        resource,
+                    });
+                }
+            }
+            _ => entries.push(wgpu::BindGroupEntry {
+                binding: entries.len() as u32,
+                resource: buffer.as_entire_binding(),
+            }),
+        }
+    }
     device.create_bind_group(&wgpu::BindGroupDescriptor {
         label: Some(label),
         layout,

@@ -21,14 +21,14 @@ mod bindings;
 
 use bindings::declarations;
 pub use bindings::{
-    Access, Binding, COARSE_BINDINGS, CULL_BINDINGS, DRAW_BINDINGS, SCATTER_BINDINGS, bind_group,
-    bind_group_layout,
+    Access, Binding, COARSE_BINDINGS, CULL_BINDINGS, DRAW_BINDINGS, SCATTER_BINDINGS, Window,
+    Windowed, Windows, bind_group, bind_group_layout,
 };
 pub(crate) use bindings::{compute_pipeline, dispatch_size, pipeline_layout};
 
 /// The scatter pass's source.
-pub fn scatter_source() -> String {
-    let bindings = declarations(&SCATTER_BINDINGS, 0);
+pub fn scatter_source(windows: &Windows) -> String {
+    let bindings = declarations(&SCATTER_BINDINGS, 0, windows);
     let body = include_str!("../../wgsl/scatter.wgsl");
     [RECORDS, &bindings, body].concat()
 }
@@ -95,7 +95,7 @@ impl CullPass {
 
     /// The pass's source: a display pass runs over every instance, or with
     /// `over_candidates` over the frame's coarse cull candidates.
-    pub fn source(self, over_candidates: bool) -> String {
+    pub fn source(self, over_candidates: bool, windows: &Windows) -> String {
         let body = match self {
             CullPass::CoarseCull | CullPass::CoarseRanges | CullPass::CoarseCompact => {
                 include_str!("../../wgsl/cull_coarse.wgsl")
@@ -108,9 +108,9 @@ impl CullPass {
             "const COARSE: bool = {};\n",
             over_candidates && !self.is_frame()
         );
-        let mut bindings = declarations(&CULL_BINDINGS, 0);
+        let mut bindings = declarations(&CULL_BINDINGS, 0, windows);
         if self.is_frame() {
-            bindings += &declarations(&COARSE_BINDINGS, 1);
+            bindings += &declarations(&COARSE_BINDINGS, 1, &Windows::WHOLE);
         }
         [
             &constants(),
@@ -203,12 +203,12 @@ impl DrawKey {
 
     /// The variant's source with the built-in shading.
     pub fn source(self) -> String {
-        self.source_with(None)
+        self.source_with(None, &Windows::WHOLE)
     }
 
     /// The variant's source; `material` (WGSL defining `fn material(s: Surface) ->
     /// vec4<f32>`, see `wgsl/shared/draw_common.wgsl`) replaces the built-in shading.
-    pub fn source_with(self, material: Option<&str>) -> String {
+    pub fn source_with(self, material: Option<&str>, windows: &Windows) -> String {
         let prelude = if self.clip_distances {
             DRAW_CLIP_DISTANCES
         } else {
@@ -223,7 +223,7 @@ impl DrawKey {
         };
         [
             prelude,
-            &decode_source(self.views),
+            &decode_source_with(self.views, windows),
             crate::materials::DECLARATIONS,
             SHADOW_DECLARATIONS,
             DRAW_COMMON,
@@ -240,8 +240,14 @@ impl DrawKey {
 /// eyes, else 1) and `decode_instance`, `decode` and their `Decoded`
 /// (`wgsl/shared/decode.wgsl`). Append entry points and compile.
 pub fn decode_source(views: u32) -> String {
+    decode_source_with(views, &Windows::WHOLE)
+}
+
+/// [`decode_source`] for instance records bound in `windows` (scenes past one binding:
+/// `Renderer::decode_source` gives the renderer's).
+pub fn decode_source_with(views: u32, windows: &Windows) -> String {
     let views = format!("const VIEWS: u32 = {views}u;\n");
-    let bindings = declarations(&DRAW_BINDINGS, 0);
+    let bindings = declarations(&DRAW_BINDINGS, 0, windows);
     [&constants(), &views, CONTEXTS, RECORDS, &bindings, DECODE].concat()
 }
 
@@ -276,24 +282,42 @@ pub fn far_composite_source() -> String {
 
 /// The frame's shadow pass: depth only, the light as the display's eye 0
 /// (`wgsl/shadow.wgsl` after the mono decode).
-pub fn shadow_source() -> String {
-    [&decode_source(1), include_str!("../../wgsl/shadow.wgsl")].concat()
+pub fn shadow_source(windows: &Windows) -> String {
+    [
+        &decode_source_with(1, windows),
+        include_str!("../../wgsl/shadow.wgsl"),
+    ]
+    .concat()
 }
 
 /// Every shader variant the crate can build, with its label.
 pub fn all_sources() -> Vec<(String, String)> {
-    let cull = CullPass::variants()
-        .into_iter()
-        .map(|(p, c)| (p.label(c), p.source(c)));
-    let draw = DrawKey::ALL.map(|k| (k.label(), k.source()));
-    let scatter = ("stereocull.scatter".to_string(), scatter_source());
-    let shadow = ("stereocull.shadow".to_string(), shadow_source());
-    let far = (
-        "stereocull.far_composite".to_string(),
-        far_composite_source(),
-    );
-    cull.into_iter()
-        .chain(draw)
-        .chain([scatter, shadow, far])
+    // Whole bindings, and every windowed array split in three (scenes past one binding).
+    let split = Windows::new(5 << 20, 64 << 20);
+    [Windows::WHOLE, split]
+        .iter()
+        .flat_map(|w| {
+            let tag = if *w == Windows::WHOLE {
+                ""
+            } else {
+                ".windowed"
+            };
+            let cull = CullPass::variants()
+                .into_iter()
+                .map(move |(p, c)| (p.label(c), p.source(c, w)));
+            let draw = DrawKey::ALL.map(|k| (k.label(), k.source_with(None, w)));
+            let others = [
+                ("stereocull.scatter".to_string(), scatter_source(w)),
+                ("stereocull.shadow".to_string(), shadow_source(w)),
+                (
+                    "stereocull.far_composite".to_string(),
+                    far_composite_source(),
+                ),
+            ];
+            cull.chain(draw)
+                .chain(others)
+                .map(move |(label, source)| (format!("{label}{tag}"), source))
+                .collect::<Vec<_>>()
+        })
         .collect()
 }

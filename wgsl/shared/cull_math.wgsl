@@ -30,7 +30,7 @@ fn lod_level(k: u32) -> u32 {
     if (params.lod_levels == 1u) {
         return 0u;
     }
-    let s = spheres[k];
+    let s = spheres_at(k);
     let d = s.xyz - frame.viewer_position;
     let d2 = d.x * d.x + d.y * d.y + d.z * d.z;
     let r2 = s.w * s.w;

@@ -60,7 +60,7 @@ struct Decoded {
 // remaps x into that eye's half of a 2W-wide target.
 fn decode(v: VertexInput, slot: u32, eye: u32, double_wide: bool) -> Decoded {
     let id = visible[slot];
-    let inst = instances[id];
+    let inst = instances_at(id);
     // Most instances do not animate: the branches spare them a sin and cos per vertex.
     var spun = mat3x3(vec3(1.0, 0.0, 0.0), vec3(0.0, 1.0, 0.0), vec3(0.0, 0.0, 1.0));
     if (inst.spin != 0.0) {

@@ -86,7 +86,7 @@ fn fragment(in: FragmentInput, eye: u32, eye_x: f32) -> vec4<f32> {
     if (DISCARD_OTHER_HALF && ((in.position.x < display.resolution.x) != (eye == 0u))) {
         discard;
     }
-    let color = unpack4x8unorm(instances[in.ids.y].color);
+    let color = unpack4x8unorm(instances_at(in.ids.y).color);
     let world = world_position(in.position, eye, eye_x);
     let s = Surface(world, in.normal, color, eye, in.ids.y, in.uv, in.ids.z);
     return surface_color(s);
