@@ -279,6 +279,18 @@ pub fn begin_pass<'e>(
     })
 }
 
+/// `view` as a depth attachment cleared to the far plane and kept.
+pub fn cleared_depth(view: &wgpu::TextureView) -> wgpu::RenderPassDepthStencilAttachment<'_> {
+    wgpu::RenderPassDepthStencilAttachment {
+        view,
+        depth_ops: Some(wgpu::Operations {
+            load: wgpu::LoadOp::Clear(1.0),
+            store: wgpu::StoreOp::Store,
+        }),
+        stencil_ops: None,
+    }
+}
+
 /// Restricts drawing to eye `eye`'s half of a double-wide target of per-eye size `eye_size`.
 pub fn set_eye_viewport(pass: &mut wgpu::RenderPass, eye: u32, eye_size: (u32, u32)) {
     let (w, h) = eye_size;

@@ -7,7 +7,6 @@ mod support;
 
 use glam::{DVec3, Vec3, Vec4};
 use proptest::prelude::*;
-use proptest::strategy::ValueTree;
 use rand::{Rng, SeedableRng};
 use stereocull::cull::{CoarseCull, CullOutput};
 use stereocull::frustum::{View, sphere_in_planes};
@@ -147,18 +146,7 @@ fn culls(scene: &Scene, rig: &Rig, options: RendererOptions) -> (Vec<CullOutput>
 /// modes and (CPU culls per eye) multi-camera, with and without levels of detail.
 #[test]
 fn draw_buffers_are_the_same_with_and_without_the_coarse_cull() {
-    let mut runner = proptest::test_runner::TestRunner::deterministic();
-    let random_rigs = (0..4).map(|_| {
-        support::rig_strategy()
-            .new_tree(&mut runner)
-            .unwrap()
-            .current()
-    });
-    let rigs: Vec<Rig> = support::PRESETS
-        .iter()
-        .map(|p| support::sized(p, 64, 64))
-        .chain(random_rigs)
-        .collect();
+    let rigs = support::presets_and_random_rigs(4);
     for (i, rig) in rigs.iter().enumerate() {
         let scene = support::extreme_scene(rig, 3000 + 500 * i as u32, 9, i as u64);
         for (mode, cull, lod) in [

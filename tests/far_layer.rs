@@ -9,7 +9,6 @@ use std::collections::BTreeSet;
 
 use glam::{Affine3A, DVec3, Vec3, Vec4};
 use image::RgbaImage;
-use proptest::strategy::{Strategy, ValueTree};
 use stereocull::Error;
 use stereocull::far_layer::FarPlan;
 use stereocull::renderer::{CullMode, Renderer, RendererOptions, StereoMode};
@@ -80,18 +79,7 @@ fn cpu_twin(
 /// display cull without a far layer.
 #[test]
 fn near_and_far_culls_split_the_display_cull_identically_on_gpu_and_cpu() {
-    let mut runner = proptest::test_runner::TestRunner::deterministic();
-    let random = (0..3).map(|_| {
-        support::rig_strategy()
-            .new_tree(&mut runner)
-            .unwrap()
-            .current()
-    });
-    let rigs: Vec<Rig> = support::PRESETS
-        .iter()
-        .map(|p| support::sized(p, 64, 64))
-        .chain(random)
-        .collect();
+    let rigs = support::presets_and_random_rigs(3);
     let (mut far_seen, mut near_seen) = (0, 0);
     for (i, rig) in rigs.iter().enumerate() {
         let scene = support::extreme_scene(rig, 3000, 7, 40 + i as u64);

@@ -2,12 +2,12 @@
 //! far instances' cull (GPU passes or the CPU culler), one pass drawing them once into
 //! the display's far layer, and the composite that opens the display's own pass.
 
-use super::passes::{PassRecord, close, open_pass};
+use super::passes::{PassRecord, close, compute_pass, open_pass};
 use super::{context_buffer, write};
 use crate::contexts::DisplayContext;
 use crate::cull::gpu::{CullScene, CullTargets, GpuCuller};
 use crate::cull::{CullJob, CullOutput};
-use crate::draw::{CLEAR_COLOR, DEPTH_FORMAT, DrawScene, Drawer, TargetFormat};
+use crate::draw::{CLEAR_COLOR, DEPTH_FORMAT, DrawScene, Drawer, TargetFormat, cleared_depth};
 use crate::error::Result;
 use crate::far_layer::{self, FarPlan};
 use crate::profiling::GpuTimer;
@@ -152,18 +152,10 @@ impl FarLayers {
     ) -> (u32, u32) {
         let mut dispatches = 0;
         if let (Some((culler, scene, candidates)), Some(group)) = (culler, &far.cull_bind_group) {
-            let scope = open_pass(timer, "far_cull", display, encoder);
-            let writes = scope
-                .as_ref()
-                .and_then(|q| q.compute_pass_timestamp_writes());
-            let mut pass = encoder.begin_compute_pass(&wgpu::ComputePassDescriptor {
-                label: Some("stereocull.far_cull"),
-                timestamp_writes: writes,
+            let what = (&mut *log, PassRecord::display("far_cull", index));
+            compute_pass(encoder, (timer, display), what, |pass| {
+                culler.encode(pass, scene, group, candidates);
             });
-            culler.encode(&mut pass, scene, group, candidates);
-            drop(pass);
-            close(timer, encoder, scope);
-            log.push(PassRecord::display("far_cull", index));
             dispatches = GpuCuller::DISPATCHES_PER_DISPLAY;
         }
         let scope = open_pass(timer, "far_layer", display, encoder);
@@ -181,14 +173,7 @@ impl FarLayers {
                     store: wgpu::StoreOp::Store,
                 },
             })],
-            depth_stencil_attachment: Some(wgpu::RenderPassDepthStencilAttachment {
-                view: &far.depth,
-                depth_ops: Some(wgpu::Operations {
-                    load: wgpu::LoadOp::Clear(1.0),
-                    store: wgpu::StoreOp::Store,
-                }),
-                stencil_ops: None,
-            }),
+            depth_stencil_attachment: Some(cleared_depth(&far.depth)),
             timestamp_writes: writes,
             occlusion_query_set: None,
             multiview_mask: None,

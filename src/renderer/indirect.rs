@@ -8,7 +8,7 @@
 use std::time::Instant;
 
 use super::far_pass::{Far, FarLayers};
-use super::passes::{PassRecord, close, draw_pass, open_display, open_pass};
+use super::passes::{PassRecord, close, compute_pass, draw_pass, open_display};
 use super::shadow_pass::{LightCull, ShadowPass};
 use super::{
     CullMode, CullState, FrameStats, RendererOptions, TargetViews, context_buffer,
@@ -281,19 +281,12 @@ impl IndirectPath {
             return 0;
         };
         let frame = open_display(timer, "frame", encoder);
-        let scope = open_pass(timer, "coarse_cull", &frame, encoder);
-        let writes = scope
-            .as_ref()
-            .and_then(|q| q.compute_pass_timestamp_writes());
-        let mut pass = encoder.begin_compute_pass(&wgpu::ComputePassDescriptor {
-            label: Some("stereocull.coarse_cull"),
-            timestamp_writes: writes,
+        let mut dispatches = 0;
+        let what = (log, PassRecord::frame("coarse_cull"));
+        compute_pass(encoder, (timer, &frame), what, |pass| {
+            dispatches = culler.encode_frame(pass, scene, [display, args]);
         });
-        let dispatches = culler.encode_frame(&mut pass, scene, [display, args]);
-        drop(pass);
-        close(timer, encoder, scope);
         close(timer, encoder, frame);
-        log.push(PassRecord::frame("coarse_cull"));
         dispatches
     }
 
@@ -345,18 +338,10 @@ impl IndirectPath {
         let mut stats = FrameStats::default();
         if let (Some((culler, scene, candidates)), Some(bind_group)) = (gpu, &state.cull_bind_group)
         {
-            let scope = open_pass(timer, "cull", display, encoder);
-            let writes = scope
-                .as_ref()
-                .and_then(|q| q.compute_pass_timestamp_writes());
-            let mut pass = encoder.begin_compute_pass(&wgpu::ComputePassDescriptor {
-                label: Some("stereocull.cull"),
-                timestamp_writes: writes,
+            let what = (&mut *log, PassRecord::display("cull", index));
+            compute_pass(encoder, (timer, display), what, |pass| {
+                culler.encode(pass, scene, bind_group, candidates);
             });
-            culler.encode(&mut pass, scene, bind_group, candidates);
-            drop(pass);
-            close(timer, encoder, scope);
-            log.push(PassRecord::display("cull", index));
             stats.dispatches = GpuCuller::DISPATCHES_PER_DISPLAY;
         }
         if let Some((far, Some(layer))) = self.far.as_ref().map(|f| (f, &f.displays[index])) {

@@ -85,6 +85,29 @@ pub(super) fn draw_pass(
     calls
 }
 
+/// Records one compute pass, timed as `what`'s name inside `parent`'s scope and logged
+/// as `what`; `record` fills it.
+pub(super) fn compute_pass(
+    encoder: &mut wgpu::CommandEncoder,
+    (timer, parent): (&mut Option<&mut GpuTimer>, &Option<GpuProfilerQuery>),
+    (log, what): (&mut Vec<PassRecord>, PassRecord),
+    record: impl FnOnce(&mut wgpu::ComputePass),
+) {
+    let scope = open_pass(timer, what.name, parent, encoder);
+    let writes = scope
+        .as_ref()
+        .and_then(|q| q.compute_pass_timestamp_writes());
+    let label = format!("stereocull.{}", what.name);
+    let mut pass = encoder.begin_compute_pass(&wgpu::ComputePassDescriptor {
+        label: Some(&label),
+        timestamp_writes: writes,
+    });
+    record(&mut pass);
+    drop(pass);
+    close(timer, encoder, scope);
+    log.push(what);
+}
+
 /// Opens display `name`'s timer scope, when timing.
 pub(super) fn open_display(
     timer: &Option<&mut GpuTimer>,

@@ -3,12 +3,12 @@
 //! with one multi-draw-indirect call into the shadow map, once per frame, before any
 //! display.
 
-use super::passes::{PassRecord, close, open_display, open_pass};
+use super::passes::{PassRecord, close, compute_pass, open_display, open_pass};
 use super::write;
 use crate::contexts::DisplayContext;
 use crate::cull::cpu::{self, FrameLod};
 use crate::cull::gpu::{CullScene, CullTargets, GpuCuller};
-use crate::draw::{DrawScene, Drawer};
+use crate::draw::{DrawScene, Drawer, cleared_depth};
 use crate::profiling::GpuTimer;
 use crate::records::{CullLayout, uniform_bytes};
 use crate::shadow::LightView;
@@ -99,18 +99,10 @@ impl ShadowPass {
         let frame = open_display(timer, "shadow", encoder);
         let mut dispatches = 0;
         if let (LightCull::Gpu(culler, scene), Some(group)) = (cull, &self.cull_bind_group) {
-            let scope = open_pass(timer, "shadow_cull", &frame, encoder);
-            let writes = scope
-                .as_ref()
-                .and_then(|q| q.compute_pass_timestamp_writes());
-            let mut pass = encoder.begin_compute_pass(&wgpu::ComputePassDescriptor {
-                label: Some("stereocull.shadow_cull"),
-                timestamp_writes: writes,
+            let what = (&mut *log, PassRecord::frame("shadow_cull"));
+            compute_pass(encoder, (timer, &frame), what, |pass| {
+                culler.encode(pass, scene, group, false);
             });
-            culler.encode(&mut pass, scene, group, false);
-            drop(pass);
-            close(timer, encoder, scope);
-            log.push(PassRecord::frame("shadow_cull"));
             dispatches = GpuCuller::DISPATCHES_PER_DISPLAY;
         }
         let scope = open_pass(timer, "shadow", &frame, encoder);
@@ -120,14 +112,7 @@ impl ShadowPass {
         let mut pass = encoder.begin_render_pass(&wgpu::RenderPassDescriptor {
             label: Some("stereocull.shadow"),
             color_attachments: &[],
-            depth_stencil_attachment: Some(wgpu::RenderPassDepthStencilAttachment {
-                view: &draw_scene.shadow_map.view,
-                depth_ops: Some(wgpu::Operations {
-                    load: wgpu::LoadOp::Clear(1.0),
-                    store: wgpu::StoreOp::Store,
-                }),
-                stencil_ops: None,
-            }),
+            depth_stencil_attachment: Some(cleared_depth(&draw_scene.shadow_map.view)),
             timestamp_writes: writes,
             occlusion_query_set: None,
             multiview_mask: None,

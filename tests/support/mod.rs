@@ -241,3 +241,16 @@ pub fn extreme_scene(rig: &Rig, n: u32, meshes: u32, seed: u64) -> Scene {
     }
     scene
 }
+
+/// Every preset at 64 x 64 pixels per eye, then `random` rigs from [`rig_strategy`]
+/// (fixed seeds): the rigs the byte-equality tests run over.
+pub fn presets_and_random_rigs(random: usize) -> Vec<Rig> {
+    use proptest::strategy::ValueTree;
+    let mut runner = proptest::test_runner::TestRunner::deterministic();
+    let random = (0..random).map(|_| rig_strategy().new_tree(&mut runner).unwrap().current());
+    PRESETS
+        .iter()
+        .map(|p| sized(p, 64, 64))
+        .chain(random)
+        .collect()
+}
