@@ -7,6 +7,7 @@
 
 use crate::buffers::{init_buffer, init_buffer_with_room, storage_buffer};
 
+use crate::cull::CullOutput;
 use crate::records::uniform_bytes;
 use crate::records::{CullLayout, DrawArgs};
 use crate::shaders::{
@@ -220,6 +221,26 @@ impl CullTargets {
             ),
             counts: storage_buffer(device, "stereocull.counts", COUNTS_BYTES, indirect),
         }
+    }
+}
+
+impl CullTargets {
+    /// Writes a CPU cull's `out` into these buffers; returns the bytes written.
+    pub fn upload(&self, queue: &wgpu::Queue, out: &CullOutput) -> u64 {
+        let counts = [out.draw_count, out.visible.len() as u32];
+        let writes: [(&wgpu::Buffer, &[u8]); 3] = [
+            (&self.visible, bytemuck::cast_slice(&out.visible)),
+            (&self.draws, bytemuck::cast_slice(&out.draws)),
+            (&self.counts, bytemuck::cast_slice(&counts)),
+        ];
+        writes
+            .iter()
+            .filter(|(_, bytes)| !bytes.is_empty())
+            .map(|(buffer, bytes)| {
+                queue.write_buffer(buffer, 0, bytes);
+                bytes.len() as u64
+            })
+            .sum()
     }
 }
 

@@ -221,13 +221,7 @@ impl FarDisplay {
         };
         let mut bytes = write(queue, &self.context, &uniform_bytes(&sized.context()));
         if let Some(out) = cpu {
-            let counts = [out.draw_count, out.visible.len() as u32];
-            bytes += write(
-                queue,
-                &self.cull.visible,
-                bytemuck::cast_slice(&out.visible),
-            ) + write(queue, &self.cull.draws, bytemuck::cast_slice(&out.draws))
-                + write(queue, &self.cull.counts, bytemuck::cast_slice(&counts));
+            bytes += self.cull.upload(queue, out);
         }
         bytes
     }

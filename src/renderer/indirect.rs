@@ -214,11 +214,7 @@ impl IndirectPath {
             stats.bytes_uploaded += write(queue, &state.context, &uniform_bytes(ctx));
         }
         for (state, out) in self.displays.iter().zip(&culls) {
-            let counts = [out.draw_count, out.visible.len() as u32];
-            let cull = &state.cull;
-            stats.bytes_uploaded += write(queue, &cull.visible, bytemuck::cast_slice(&out.visible))
-                + write(queue, &cull.draws, bytemuck::cast_slice(&out.draws))
-                + write(queue, &cull.counts, bytemuck::cast_slice(&counts));
+            stats.bytes_uploaded += state.cull.upload(queue, out);
         }
         if let Some(far) = &self.far {
             let outputs = culls.get(self.displays.len()..).unwrap_or(&[]);

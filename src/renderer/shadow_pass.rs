@@ -72,13 +72,7 @@ impl ShadowPass {
         );
         if let LightCull::Cpu(layout) = cull {
             let out = cpu::cull_many_lod(layout, &[view.cull_job()], lod).remove(0);
-            let counts = [out.draw_count, out.visible.len() as u32];
-            bytes += write(
-                queue,
-                &self.cull.visible,
-                bytemuck::cast_slice(&out.visible),
-            ) + write(queue, &self.cull.draws, bytemuck::cast_slice(&out.draws))
-                + write(queue, &self.cull.counts, bytemuck::cast_slice(&counts));
+            bytes += self.cull.upload(queue, &out);
         }
         bytes
     }
