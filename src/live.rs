@@ -64,7 +64,9 @@ pub struct Changes {
     pub moved: Vec<Edit>,
     /// Slots whose record changed otherwise (color), each once.
     pub recolored: Vec<u32>,
-    /// Instances were inserted or removed: the cull order changes.
+    /// Instances were inserted or removed (other than a removed instance's slot taken
+    /// back by an instance of the same mesh, which is a move and a record rewrite): the
+    /// cull order changes.
     pub restructured: bool,
     /// Meshes were added: geometry grows.
     pub geometry: bool,
@@ -92,6 +94,10 @@ pub struct LiveScene {
     /// The current change set; starts at 1, so that 0 means never.
     epoch: u32,
     changes: Changes,
+    /// Slots vacated in this change set, with the mesh they held: an insert that takes
+    /// one back with the same mesh leaves the cull order as it was (a respawn), so it
+    /// goes up as an edit, not as a new order.
+    vacated: std::collections::BTreeMap<u32, u32>,
 }
 
 impl LiveScene {
@@ -118,6 +124,7 @@ impl LiveScene {
             recolored: vec![0; n],
             epoch: 1,
             changes: Changes::default(),
+            vacated: Default::default(),
         }
     }
 
@@ -189,7 +196,14 @@ impl LiveScene {
                 self.slot_count() - 1
             }
         };
-        self.changes.restructured = true;
+        match self.vacated.remove(&slot) {
+            // Back where it was in the cull order: its record and sphere go up as edits.
+            Some(mesh) if mesh == instance.mesh => {
+                self.stage_move(slot);
+                self.stage_record(slot);
+            }
+            _ => self.changes.restructured = true,
+        }
         Ok(Handle {
             slot,
             generation: self.generations[slot as usize],
@@ -201,17 +215,28 @@ impl LiveScene {
     pub fn set_transform(&mut self, handle: Handle, world_from_local: Affine3A) -> Result<()> {
         self.check(handle)?;
         check_finite(&world_from_local)?;
-        let slot = handle.slot as usize;
-        self.scene.instances[slot].world_from_local = world_from_local;
-        let edit = make_edit(&self.scene, handle.slot);
-        match self.moved_at[slot] {
+        self.scene.instances[handle.slot as usize].world_from_local = world_from_local;
+        self.stage_move(handle.slot);
+        Ok(())
+    }
+
+    /// Lists `slot`'s edit (transform and sphere) in this change set, once.
+    fn stage_move(&mut self, slot: u32) {
+        let edit = make_edit(&self.scene, slot);
+        match self.moved_at[slot as usize] {
             (epoch, at) if epoch == self.epoch => self.changes.moved[at as usize] = edit,
             _ => {
-                self.moved_at[slot] = (self.epoch, self.changes.moved.len() as u32);
+                self.moved_at[slot as usize] = (self.epoch, self.changes.moved.len() as u32);
                 self.changes.moved.push(edit);
             }
         }
-        Ok(())
+    }
+
+    /// Lists `slot`'s record (color, animation) for a rewrite in this change set, once.
+    fn stage_record(&mut self, slot: u32) {
+        if std::mem::replace(&mut self.recolored[slot as usize], self.epoch) != self.epoch {
+            self.changes.recolored.push(slot);
+        }
     }
 
     pub fn set_color(&mut self, handle: Handle, color: Vec4) -> Result<()> {
@@ -219,11 +244,8 @@ impl LiveScene {
         if !color.is_finite() {
             return Err(Error::NonFinite("the color".into()));
         }
-        let slot = handle.slot as usize;
-        self.scene.instances[slot].color = color;
-        if std::mem::replace(&mut self.recolored[slot], self.epoch) != self.epoch {
-            self.changes.recolored.push(handle.slot);
-        }
+        self.scene.instances[handle.slot as usize].color = color;
+        self.stage_record(handle.slot);
         Ok(())
     }
 
@@ -235,7 +257,8 @@ impl LiveScene {
             std::mem::replace(&mut self.scene.instances[slot], LiveScene::VACANT_INSTANCE);
         self.generations[slot] = self.generations[slot].wrapping_add(1);
         self.vacant.insert(handle.slot);
-        self.changes.restructured = true;
+        // The first mesh it held this change set is where the cull order has it.
+        self.vacated.entry(handle.slot).or_insert(removed.mesh);
         Ok(removed)
     }
 
@@ -250,8 +273,12 @@ impl LiveScene {
         self.scene.add_mesh(name, vertices, indices)
     }
 
-    /// The changes since the last call, which forgets them.
+    /// The changes since the last call, which forgets them. Slots vacated and not taken
+    /// back by the same mesh change the cull order.
     pub fn take_changes(&mut self) -> Changes {
+        if !std::mem::take(&mut self.vacated).is_empty() {
+            self.changes.restructured = true;
+        }
         self.epoch = self.epoch.wrapping_add(1);
         if self.epoch == 0 {
             // After 2^32 change sets the stamps start over.

@@ -92,7 +92,7 @@ fn edit(rng: &mut Pcg64Mcg, live: &mut LiveScene, model: &mut Model, moves: bool
     let present = model.live();
     let kind = match moves {
         true => rng.random_range(3..8),
-        false => rng.random_range(0..10),
+        false => rng.random_range(0..11),
     };
     match kind {
         // Inserts (more likely while the scene is small): into the lowest vacant slot.
@@ -129,6 +129,23 @@ fn edit(rng: &mut Pcg64Mcg, live: &mut LiveScene, model: &mut Model, moves: bool
             assert_eq!(Some(removed), model.slots[slot].take());
             // The handle is dead now, and stays dead after its slot is reused.
             assert!(matches!(live.get(h), Err(Error::BadHandle(_))));
+        }
+        // A respawn: removed, and an instance of the same mesh inserted (into that slot
+        // when it is the lowest vacant: then the cull order stays and only edits go up).
+        10 if !present.is_empty() => {
+            let slot = present[rng.random_range(0..present.len())];
+            let mesh = model.slots[slot].unwrap().mesh;
+            live.remove(model.handles[slot].take().unwrap()).unwrap();
+            model.slots[slot] = None;
+            let inst = random_instance(rng, mesh);
+            let h = live.insert(inst).unwrap();
+            let at = h.slot() as usize;
+            if at == model.slots.len() {
+                model.slots.push(None);
+                model.handles.push(None);
+            }
+            model.slots[at] = Some(inst);
+            model.handles[at] = Some(h);
         }
         _ => {}
     }
@@ -389,5 +406,54 @@ fn edits_of_two_syncs_before_a_frame_merge() {
     for (d, reference) in reference_culls(live.scene(), &rig).into_iter().enumerate() {
         let got = renderer.read_cull(&gpu.device, &gpu.queue, d).unwrap();
         assert!(got == reference, "display {d}");
+    }
+}
+
+/// Respawns (an instance removed and one of the same mesh inserted into its slot, as
+/// `--churn` does) leave the cull order as it was: they go up as edits and record
+/// rewrites, not as a new order, and the culls still equal the model's, GPU and CPU;
+/// a respawn as another mesh rewrites the order.
+#[test]
+fn respawns_are_sparse_edits() {
+    let gpu = gpu();
+    let mut rng = Pcg64Mcg::seed_from_u64(44);
+    for cull in [CullMode::Gpu, CullMode::Cpu] {
+        let scene = random_scene(&mut rng, 2000);
+        let mut live = LiveScene::new(scene.clone());
+        let options = RendererOptions {
+            cull,
+            ..RendererOptions::default()
+        };
+        let mut renderer =
+            Renderer::new(&gpu.device, &scene, &Rig::preset("hmd").unwrap(), options).unwrap();
+        let mut handles = live.handles();
+        for frame in 0..3 {
+            for k in 0..50 {
+                let i = (frame * 97 + k * 31) % handles.len();
+                let mut inst = live.remove(handles[i]).unwrap();
+                inst.world_from_local = random_transform(&mut rng);
+                handles[i] = live.insert(inst).unwrap();
+            }
+            let want = live.scene().clone();
+            let synced = check(
+                &gpu,
+                &mut renderer,
+                &mut live,
+                &want,
+                &format!("{cull:?} frame {frame}"),
+            );
+            assert!(!synced.reloaded, "{cull:?}: {synced:?}");
+            assert_eq!(synced.moved, 50);
+        }
+        let inst = live.remove(handles[0]).unwrap();
+        let other = (inst.mesh + 1) % MESHES;
+        live.insert(Instance {
+            mesh: other,
+            ..inst
+        })
+        .unwrap();
+        let want = live.scene().clone();
+        let synced = check(&gpu, &mut renderer, &mut live, &want, "another mesh");
+        assert!(synced.reloaded, "{synced:?}");
     }
 }
