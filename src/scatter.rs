@@ -1,9 +1,10 @@
-//! Moved instances reach the GPU sparsely: per frame, one buffer of edits (slot, new
+//! Edited instances reach the GPU sparsely: per frame, one buffer of moves (slot, new
 //! transform rows, new world sphere: 68 bytes each, made by
 //! [`crate::live::LiveScene::set_transform`]) and one compute dispatch
 //! (`wgsl/scatter.wgsl`) that writes them into the instance records and, under GPU
-//! culling, the spheres in cull order. A frame without moves uploads and dispatches
-//! nothing.
+//! culling, the spheres in cull order; then one buffer of whole records (slot and the
+//! 64-byte record: recolors, respawns) and one dispatch that writes them. A frame
+//! without edits uploads and dispatches nothing.
 //!
 //! The spheres are computed on the CPU ([`crate::scene::Scene::world_sphere`]), not in
 //! the scatter pass: WGSL's `sqrt` need not be correctly rounded and drivers may fuse
@@ -12,7 +13,7 @@
 //! byte-identical.
 
 use crate::buffers::storage_buffer;
-use crate::live::{Edit, make_edit};
+use crate::live::{Edit, make_edit, record_edit};
 use crate::scene::Scene;
 use crate::shaders::{
     SCATTER_BINDINGS, Windows, bind_group, bind_group_layout, compute_pipeline, dispatch_size,
@@ -23,8 +24,61 @@ const HEADER_BYTES: u64 = 16;
 const EDIT_BYTES: u64 = size_of::<Edit>() as u64;
 const GROUP: u32 = 64;
 
-/// The scatter pipeline, its edits buffer and which slots it holds edits for.
+/// What a scatter's 17-word edits carry.
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+pub enum EditKind {
+    /// Slot, transform rows, world sphere ([`make_edit`]).
+    Moves,
+    /// Slot and the whole record ([`record_edit`]).
+    Records,
+}
+
+impl EditKind {
+    fn entry_point(self) -> &'static str {
+        match self {
+            EditKind::Moves => "scatter",
+            EditKind::Records => "scatter_records",
+        }
+    }
+
+    fn make(self, scene: &Scene, slot: u32) -> Edit {
+        match self {
+            EditKind::Moves => make_edit(scene, slot),
+            EditKind::Records => record_edit(scene, slot),
+        }
+    }
+}
+
+/// A frame's two scatters, dispatched in this order: moves, then whole records (a
+/// respawned instance has both, and its record must win).
+pub struct Scatters {
+    pub moves: Scatter,
+    pub records: Scatter,
+}
+
+impl Scatters {
+    pub fn new(device: &wgpu::Device, windows: Windows) -> Scatters {
+        Scatters {
+            moves: Scatter::new(device, windows, EditKind::Moves),
+            records: Scatter::new(device, windows, EditKind::Records),
+        }
+    }
+
+    /// Records the dispatches of what is staged; returns them (0 to 2).
+    pub fn encode(&mut self, encoder: &mut wgpu::CommandEncoder) -> u32 {
+        self.moves.encode(encoder) + self.records.encode(encoder)
+    }
+
+    /// Drops what is staged: the scene was uploaded whole again.
+    pub fn reset(&mut self) {
+        self.moves.reset();
+        self.records.reset();
+    }
+}
+
+/// A scatter pipeline, its edits buffer and which slots it holds edits for.
 pub struct Scatter {
+    kind: EditKind,
     pipeline: wgpu::ComputePipeline,
     layout: wgpu::BindGroupLayout,
     windows: Windows,
@@ -49,13 +103,14 @@ pub struct ScatterTargets<'a> {
 }
 
 impl Scatter {
-    /// The scatter pass for instance records and spheres bound in `windows`.
-    pub fn new(device: &wgpu::Device, windows: Windows) -> Scatter {
+    /// The scatter pass of `kind` for instance records and spheres bound in `windows`.
+    pub fn new(device: &wgpu::Device, windows: Windows, kind: EditKind) -> Scatter {
         let layout = bind_group_layout(device, "stereocull.scatter", &SCATTER_BINDINGS, &windows);
         let pipeline_layout = pipeline_layout(device, "stereocull.scatter", &layout);
-        let entry = (scatter_source(&windows), "scatter");
+        let entry = (scatter_source(&windows), kind.entry_point());
         let pipeline = compute_pipeline(device, "stereocull.scatter", &pipeline_layout, entry);
         Scatter {
+            kind,
             pipeline,
             layout,
             windows,
@@ -123,7 +178,11 @@ impl Scatter {
             .filter(|e| self.index[e[0] as usize] == 0)
             .count();
         if self.grow(device, self.slots.len() + fresh) {
-            let all: Vec<Edit> = self.slots.iter().map(|&s| make_edit(scene, s)).collect();
+            let all: Vec<Edit> = self
+                .slots
+                .iter()
+                .map(|&s| self.kind.make(scene, s))
+                .collect();
             queue.write_buffer(&self.edits, HEADER_BYTES, bytemuck::cast_slice(&all));
         }
         for edit in edits {
@@ -165,7 +224,7 @@ impl Scatter {
             return 0;
         }
         let mut pass = encoder.begin_compute_pass(&wgpu::ComputePassDescriptor {
-            label: Some("stereocull.scatter"),
+            label: Some(self.kind.entry_point()),
             timestamp_writes: None,
         });
         pass.set_pipeline(&self.pipeline);

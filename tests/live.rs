@@ -409,6 +409,13 @@ fn edits_of_two_syncs_before_a_frame_merge() {
     }
 }
 
+fn options_for(cull: CullMode) -> RendererOptions {
+    RendererOptions {
+        cull,
+        ..RendererOptions::default()
+    }
+}
+
 /// Respawns (an instance removed and one of the same mesh inserted into its slot, as
 /// `--churn` does) leave the cull order as it was: they go up as edits and record
 /// rewrites, not as a new order, and the culls still equal the model's, GPU and CPU;
@@ -432,6 +439,7 @@ fn respawns_are_sparse_edits() {
                 let i = (frame * 97 + k * 31) % handles.len();
                 let mut inst = live.remove(handles[i]).unwrap();
                 inst.world_from_local = random_transform(&mut rng);
+                inst.color = Vec4::new(rng.random(), rng.random(), 0.5, 1.0);
                 handles[i] = live.insert(inst).unwrap();
             }
             let want = live.scene().clone();
@@ -445,6 +453,21 @@ fn respawns_are_sparse_edits() {
             assert!(!synced.reloaded, "{cull:?}: {synced:?}");
             assert_eq!(synced.moved, 50);
         }
+        // The records went up through the records scatter: the image is a fresh scene's.
+        let rig = Rig::preset("hmd").unwrap();
+        let draw = |r: &mut Renderer| {
+            let targets = r.create_targets(&gpu.device);
+            r.submit_frame(&gpu.device, &gpu.queue, &rig, 0.0, &targets)
+                .unwrap();
+            read_rgba8(&gpu.device, &gpu.queue, &targets[0].color).unwrap()
+        };
+        let fresh = &mut Renderer::new(&gpu.device, live.scene(), &rig, options_for(cull)).unwrap();
+        assert_images_match(
+            &format!("respawned-{cull:?}"),
+            &draw(&mut renderer),
+            &draw(fresh),
+            Tolerance::EXACT,
+        );
         let inst = live.remove(handles[0]).unwrap();
         let other = (inst.mesh + 1) % MESHES;
         live.insert(Instance {

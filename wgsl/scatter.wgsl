@@ -28,3 +28,18 @@ fn scatter(@builtin(workgroup_id) wid: vec3<u32>, @builtin(local_invocation_inde
         spheres_set(positions[slot], edit_vec4(at + 13u));
     }
 }
+
+// The records scatter (dispatched after the moves): each edit is a slot and its whole
+// 64-byte record (records.wgsl's InstanceRecord, word for word).
+@compute @workgroup_size(SCATTER_GROUP)
+fn scatter_records(@builtin(workgroup_id) wid: vec3<u32>, @builtin(local_invocation_index) local: u32) {
+    let i = (wid.y * edits[2] + wid.x) * SCATTER_GROUP + local;
+    if (i >= edits[0]) {
+        return;
+    }
+    let at = HEADER + i * WORDS_PER_EDIT;
+    let rows = array(edit_vec4(at + 1u), edit_vec4(at + 5u), edit_vec4(at + 9u));
+    let spin = bitcast<f32>(edits[at + 15u]);
+    let bob = bitcast<f32>(edits[at + 16u]);
+    instances_set(edits[at], InstanceRecord(rows, edits[at + 13u], edits[at + 14u], spin, bob));
+}

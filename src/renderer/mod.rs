@@ -82,7 +82,7 @@ pub use crate::modes::StereoMode;
 use crate::profiling::GpuTimer;
 use crate::records::uniform_bytes;
 use crate::rig::{ResolvedRig, Rig};
-use crate::scatter::Scatter;
+use crate::scatter::Scatters;
 use crate::scene::Scene;
 use crate::shadow::LightView;
 
@@ -170,7 +170,7 @@ pub struct Renderer {
     /// Per display: the rig's name, for timer scopes.
     names: Vec<String>,
     /// Moved instances, staged by `sync`, dispatched by the next `encode`.
-    scatter: Scatter,
+    scatter: Scatters,
     /// Instance slots the buffers have room for.
     slots: u32,
     /// The rig as made: the displays a reallocation rebuilds for.
@@ -192,7 +192,7 @@ impl Renderer {
     ) -> Result<Renderer> {
         check_device(device, scene, &options)?;
         let options_coarse = options.coarse_for(rig);
-        let scatter = Scatter::new(
+        let scatter = Scatters::new(
             device,
             options.windows(device, scene.instances.len() as u32),
         );

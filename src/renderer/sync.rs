@@ -3,11 +3,10 @@
 
 use super::{Path, Renderer, check_device};
 use crate::cull::gpu::CullScene;
-use crate::draw::DrawScene;
 use crate::error::Result;
-use crate::live::{Edit, LiveScene, edit_sphere};
-use crate::records::{CullLayout, InstanceRecord, instance_record, instance_records};
-use crate::scatter::{Scatter, ScatterTargets};
+use crate::live::{Edit, LiveScene, edit_sphere, record_edit};
+use crate::records::{CullLayout, InstanceRecord, instance_records};
+use crate::scatter::{ScatterTargets, Scatters};
 use crate::scene::Scene;
 
 /// What edits change in the culling: the GPU culler's buffers, or the CPU culler's layout.
@@ -65,7 +64,7 @@ impl Renderer {
             )?;
             self.slots = room;
             // The bindings may now need more windows.
-            self.scatter = Scatter::new(device, self.options.windows(device, room));
+            self.scatter = Scatters::new(device, self.options.windows(device, room));
             let bytes = (scene.instances.len() * size_of::<InstanceRecord>()) as u64;
             return Ok(SyncStats {
                 bytes_uploaded: bytes,
@@ -78,12 +77,19 @@ impl Renderer {
             return Ok(self.reload(queue, scene));
         }
         let mut stats = self.stage_moves(device, queue, scene, &changes.moved);
-        let (instances, _) = self.path.edit_targets();
-        for &slot in &changes.recolored {
-            let record = instance_record(&scene.instances[slot as usize]);
-            let offset = slot as u64 * DrawScene::BYTES_PER_INSTANCE;
-            queue.write_buffer(instances, offset, bytemuck::bytes_of(&record));
-            stats.bytes_uploaded += DrawScene::BYTES_PER_INSTANCE;
+        if !changes.recolored.is_empty() {
+            let records: Vec<Edit> = changes
+                .recolored
+                .iter()
+                .map(|&slot| record_edit(scene, slot))
+                .collect();
+            let (instances, culling) = self.path.edit_targets();
+            let targets = ScatterTargets {
+                instances,
+                spheres: scatter_spheres(&culling),
+            };
+            let scatter = &mut self.scatter.records;
+            stats.bytes_uploaded += scatter.stage(device, queue, (scene, &records), targets);
         }
         Ok(stats)
     }
@@ -121,12 +127,14 @@ impl Renderer {
             return SyncStats::default();
         }
         let (instances, culling) = self.path.edit_targets();
-        let spheres = match &culling {
-            CullState::Gpu(cull) => Some(cull.scatter_targets()),
-            CullState::Cpu(_) => None,
+        let targets = ScatterTargets {
+            instances,
+            spheres: scatter_spheres(&culling),
         };
-        let targets = ScatterTargets { instances, spheres };
-        let bytes = self.scatter.stage(device, queue, (scene, moved), targets);
+        let bytes = self
+            .scatter
+            .moves
+            .stage(device, queue, (scene, moved), targets);
         if let CullState::Cpu(layout) = culling {
             for edit in moved {
                 let at = layout.positions[edit[0] as usize];
@@ -138,5 +146,14 @@ impl Renderer {
             moved: moved.len() as u32,
             ..SyncStats::default()
         }
+    }
+}
+
+/// The GPU culler's spheres and cull positions, which moves update (`None` culling on
+/// the CPU).
+fn scatter_spheres<'a>(culling: &'a CullState<'_>) -> Option<[&'a wgpu::Buffer; 2]> {
+    match culling {
+        CullState::Gpu(cull) => Some(cull.scatter_targets()),
+        CullState::Cpu(_) => None,
     }
 }
