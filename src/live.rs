@@ -325,16 +325,6 @@ pub fn make_edit(scene: &Scene, slot: u32) -> Edit {
     edit
 }
 
-/// The record edit of `slot`: the slot, then its whole 64-byte instance record, as the
-/// records scatter reads them.
-pub fn record_edit(scene: &Scene, slot: u32) -> Edit {
-    let record = crate::records::instance_record(&scene.instances[slot as usize]);
-    let words: [u32; 16] = bytemuck::cast(record);
-    let mut edit = [slot; 17];
-    edit[1..].copy_from_slice(&words);
-    edit
-}
-
 /// The world sphere an edit carries.
 pub fn edit_sphere(edit: &Edit) -> glam::Vec4 {
     glam::Vec4::from_array([edit[13], edit[14], edit[15], edit[16]].map(f32::from_bits))

@@ -13,7 +13,8 @@
 //! byte-identical.
 
 use crate::buffers::storage_buffer;
-use crate::live::{Edit, make_edit, record_edit};
+use crate::live::{Edit, make_edit};
+use crate::records::instance_record;
 use crate::scene::Scene;
 use crate::shaders::{
     SCATTER_BINDINGS, Windows, bind_group, bind_group_layout, compute_pipeline, dispatch_size,
@@ -280,4 +281,14 @@ impl Scatter {
 fn edits_buffer(device: &wgpu::Device, size: u64) -> wgpu::Buffer {
     let usage = wgpu::BufferUsages::STORAGE | wgpu::BufferUsages::COPY_DST;
     storage_buffer(device, "stereocull.edits", size, usage)
+}
+
+/// The record edit of `slot`: the slot, then its whole 64-byte instance record, as the
+/// records scatter reads them.
+pub fn record_edit(scene: &Scene, slot: u32) -> Edit {
+    let record = instance_record(&scene.instances[slot as usize]);
+    let words: [u32; 16] = bytemuck::cast(record);
+    let mut edit = [slot; 17];
+    edit[1..].copy_from_slice(&words);
+    edit
 }

@@ -4,9 +4,9 @@
 use super::{Path, Renderer, check_device};
 use crate::cull::gpu::CullScene;
 use crate::error::Result;
-use crate::live::{Edit, LiveScene, edit_sphere, record_edit};
+use crate::live::{Edit, LiveScene, edit_sphere};
 use crate::records::{CullLayout, InstanceRecord, instance_records};
-use crate::scatter::{ScatterTargets, Scatters};
+use crate::scatter::{ScatterTargets, Scatters, record_edit};
 use crate::scene::Scene;
 
 /// What edits change in the culling: the GPU culler's buffers, or the CPU culler's layout.
