@@ -66,8 +66,17 @@ impl Scatters {
     }
 
     /// Records the dispatches of what is staged; returns them (0 to 2).
+    /// Records the dispatches of what is staged, in one compute pass (dispatches in a
+    /// pass are ordered); returns them (0 to 2).
     pub fn encode(&mut self, encoder: &mut wgpu::CommandEncoder) -> u32 {
-        self.moves.encode(encoder) + self.records.encode(encoder)
+        if self.moves.pending() + self.records.pending() == 0 {
+            return 0;
+        }
+        let mut pass = encoder.begin_compute_pass(&wgpu::ComputePassDescriptor {
+            label: Some("stereocull.scatter"),
+            timestamp_writes: None,
+        });
+        self.moves.encode(&mut pass) + self.records.encode(&mut pass)
     }
 
     /// Drops what is staged: the scene was uploaded whole again.
@@ -216,23 +225,19 @@ impl Scatter {
         self.bind_group = None;
     }
 
-    /// Records the scatter dispatch if edits are staged; returns the dispatches (0 or 1).
-    pub fn encode(&mut self, encoder: &mut wgpu::CommandEncoder) -> u32 {
+    /// Records the scatter dispatch into `pass` if edits are staged; returns the
+    /// dispatches (0 or 1).
+    pub fn encode(&mut self, pass: &mut wgpu::ComputePass) -> u32 {
         let (Some(bind_group), count) = (&self.bind_group, self.pending()) else {
             return 0;
         };
         if count == 0 {
             return 0;
         }
-        let mut pass = encoder.begin_compute_pass(&wgpu::ComputePassDescriptor {
-            label: Some(self.kind.entry_point()),
-            timestamp_writes: None,
-        });
         pass.set_pipeline(&self.pipeline);
         pass.set_bind_group(0, bind_group, &[]);
         let (x, y) = self.groups();
         pass.dispatch_workgroups(x, y, 1);
-        drop(pass);
         self.clear();
         1
     }
