@@ -3,6 +3,7 @@
 mod chart;
 mod edits;
 mod profile;
+mod profile_report;
 mod render;
 mod stress;
 

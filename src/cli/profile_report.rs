@@ -1,0 +1,103 @@
+//! `profile`'s outputs: the table it prints and `profile.csv`.
+
+use super::profile::Row;
+use crate::error::{Error, Result};
+
+fn opt(v: Option<f64>) -> String {
+    v.map_or("n/a".into(), |x| format!("{x:.3}"))
+}
+
+pub(super) fn print_table(rows: &[Row]) {
+    if let Some(r) = rows.first() {
+        let validation = if r.indirect_validation { "on" } else { "off" };
+        println!(
+            "adapter: {}; wgpu indirect validation: {validation}",
+            r.adapter
+        );
+    }
+    println!(
+        "{:>14} {:>13} {:>4} {:>9} {:>6} | {:>9} {:>9} | {:>9} {:>9} | {:>8} {:>8} {:>8} {:>8} | {:>9} {:>5} {:>10} | {:>11} {:>11}",
+        "rig",
+        "mode",
+        "cull",
+        "instances",
+        "moving",
+        "cpu med",
+        "cpu p95",
+        "gpu med",
+        "gpu p95",
+        "cull",
+        "upload",
+        "encode",
+        "submit",
+        "draws",
+        "disp",
+        "uploaded",
+        "vs invoc",
+        "clip prims"
+    );
+    for r in rows {
+        let rig = std::path::Path::new(&r.rig)
+            .file_stem()
+            .map_or(r.rig.clone(), |s| s.to_string_lossy().into());
+        println!(
+            "{:>14} {:>13} {:>4} {:>9} {:>6} | {:>9.3} {:>9.3} | {:>9} {:>9} | {:>8.3} {:>8.3} {:>8.3} {:>8.3} | {:>9} {:>5} {:>10} | {:>11} {:>11}",
+            rig,
+            r.mode.name(),
+            format!("{:?}", r.cull).to_lowercase(),
+            r.instances,
+            format!("{}%", r.moving_percent),
+            r.cpu_ms_median,
+            r.cpu_ms_p95,
+            opt(r.gpu_ms_median),
+            opt(r.gpu_ms_p95),
+            r.cull_ms_median,
+            r.upload_ms_median,
+            r.encode_ms_median,
+            r.submit_ms_median,
+            r.draw_calls,
+            r.dispatches,
+            r.bytes_uploaded,
+            count(r.vertex_invocations),
+            count(r.clipper_primitives)
+        );
+    }
+}
+
+fn count(v: Option<u64>) -> String {
+    v.map_or("n/a".into(), |x| x.to_string())
+}
+
+pub(super) fn write_csv(path: &std::path::Path, rows: &[Row]) -> Result<()> {
+    let mut text = String::from(
+        "mode,cull,rig,instances,cpu_ms_median,cpu_ms_p95,gpu_ms_median,gpu_ms_p95,draw_calls,dispatches,bytes_uploaded,adapter,moving_percent,churn_percent,sync_ms_median,triangles_submitted,coarse_cull,sphere_tests,shadows,shadow_passes\n",
+    );
+    let field = |v: Option<f64>| v.map_or(String::new(), |x| format!("{x:.4}"));
+    for r in rows {
+        text += &format!(
+            "{},{},{},{},{:.4},{:.4},{},{},{},{},{},\"{}\",{},{},{:.4},{},{},{},{},{}\n",
+            r.mode.name(),
+            format!("{:?}", r.cull).to_lowercase(),
+            r.rig,
+            r.instances,
+            r.cpu_ms_median,
+            r.cpu_ms_p95,
+            field(r.gpu_ms_median),
+            field(r.gpu_ms_p95),
+            r.draw_calls,
+            r.dispatches,
+            r.bytes_uploaded,
+            r.adapter.replace('"', "'"),
+            r.moving_percent,
+            r.churn_percent,
+            r.sync_ms_median,
+            r.triangles_submitted
+                .map_or(String::new(), |t| t.to_string()),
+            r.coarse_cull,
+            r.sphere_tests.map_or(String::new(), |t| t.to_string()),
+            r.shadows,
+            r.shadow_passes
+        );
+    }
+    std::fs::write(path, text).map_err(|e| Error::io(path, e))
+}
