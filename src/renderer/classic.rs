@@ -5,7 +5,7 @@
 
 use std::time::Instant;
 
-use super::passes::{PassRecord, draw_pass};
+use super::passes::{PassRecord, Timing, draw_pass};
 use super::shadow_pass::{LightCull, ShadowPass};
 use super::{FrameStats, RendererOptions, TargetViews, context_buffer, display_contexts, write};
 use crate::buffers::storage_buffer;
@@ -20,7 +20,6 @@ use crate::rig::{ResolvedRig, Rig};
 use crate::scene::Scene;
 use crate::shaders::DrawKey;
 use crate::shadow::LightView;
-use wgpu_profiler::GpuProfilerQuery;
 
 /// One eye of a stereo display: its own context (that eye in both eye slots) and, for
 /// multi-camera, its own visible list.
@@ -208,7 +207,7 @@ impl ClassicPath {
         &self,
         encoder: &mut wgpu::CommandEncoder,
         (index, target): (usize, &TargetViews),
-        (timer, display): (&mut Option<&mut GpuTimer>, &Option<GpuProfilerQuery>),
+        (timer, display): Timing,
         log: &mut Vec<PassRecord>,
     ) -> FrameStats {
         let stereo = self.displays[index].eyes.len() == 2;

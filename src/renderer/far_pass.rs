@@ -2,16 +2,15 @@
 //! far instances' cull (GPU passes or the CPU culler), one pass drawing them once into
 //! the display's far layer, and the composite that opens the display's own pass.
 
-use super::passes::{PassRecord, close, compute_pass, open_pass};
-use super::{context_buffer, write};
+use super::passes::{PassRecord, opener, render_pass};
+use super::view_pass::ViewPass;
 use crate::contexts::DisplayContext;
-use crate::cull::gpu::{CullScene, CullTargets, GpuCuller};
+use crate::cull::gpu::{CullScene, GpuCuller};
 use crate::cull::{CullJob, CullOutput};
 use crate::draw::{CLEAR_COLOR, DEPTH_FORMAT, DrawScene, Drawer, TargetFormat, cleared_depth};
 use crate::error::Result;
 use crate::far_layer::{self, FarPlan};
 use crate::profiling::GpuTimer;
-use crate::records::uniform_bytes;
 use crate::rig::{ResolvedRig, Rig};
 use crate::shaders::{DrawKey, far_composite_source};
 use wgpu_profiler::GpuProfilerQuery;
@@ -28,19 +27,14 @@ pub(super) struct FarLayers {
     pub(super) threshold: f32,
 }
 
-/// One stereo display's far layer.
+/// One stereo display's far layer: one more view, and its textures.
 pub(super) struct FarDisplay {
-    context: wgpu::Buffer,
-    pub(super) cull: CullTargets,
-    cull_bind_group: Option<wgpu::BindGroup>,
-    draw_bind_group: wgpu::BindGroup,
+    pub(super) view: ViewPass,
     color: wgpu::TextureView,
     depth: wgpu::TextureView,
     composite_bind_group: wgpu::BindGroup,
     /// Texels, fixed when made (the plan of the rig as made).
     pub(super) size: (u32, u32),
-    /// Draw entries: meshes times levels of detail.
-    max_draws: u32,
 }
 
 impl FarLayers {
@@ -78,10 +72,9 @@ impl FarLayers {
         device: &wgpu::Device,
         (draw_scene, frame, display): (&DrawScene, &wgpu::Buffer, &wgpu::Buffer),
         culler: Option<(&GpuCuller, &CullScene)>,
-        (plan, slots, max_draws): (&FarPlan, u32, u32),
+        (plan, sizes): (&FarPlan, (u32, u32)),
     ) -> FarDisplay {
-        let context = context_buffer(device);
-        let cull = CullTargets::new(device, slots, max_draws);
+        let view = ViewPass::new(device, (&self.drawer, draw_scene), frame, culler, sizes);
         let texture = |label, format| {
             device
                 .create_texture(&wgpu::TextureDescriptor {
@@ -108,7 +101,7 @@ impl FarLayers {
             layout: &self.composite_layout,
             entries: &[
                 buffer_entry(0, display),
-                buffer_entry(1, &context),
+                buffer_entry(1, view.context()),
                 view_entry(2, &color),
                 view_entry(3, &depth),
                 wgpu::BindGroupEntry {
@@ -118,21 +111,11 @@ impl FarLayers {
             ],
         });
         FarDisplay {
-            cull_bind_group: culler
-                .map(|(c, scene)| c.bind_group(device, scene, [frame, &context], &cull)),
-            draw_bind_group: self.drawer.bind_group(
-                device,
-                [frame, &context],
-                draw_scene,
-                &cull.visible,
-            ),
-            context,
-            cull,
+            view,
             color,
             depth,
             composite_bind_group,
             size: plan.size,
-            max_draws,
         }
     }
 
@@ -150,50 +133,36 @@ impl FarLayers {
             &mut Vec<PassRecord>,
         ),
     ) -> (u32, u32) {
-        let mut dispatches = 0;
-        if let (Some((culler, scene, candidates)), Some(group)) = (culler, &far.cull_bind_group) {
-            let what = (&mut *log, PassRecord::display("far_cull", index));
-            compute_pass(encoder, (timer, display), what, |pass| {
-                culler.encode(pass, scene, group, candidates);
-            });
-            dispatches = GpuCuller::DISPATCHES_PER_DISPLAY;
-        }
-        let scope = open_pass(timer, "far_layer", display, encoder);
-        let writes = scope
-            .as_ref()
-            .and_then(|q| q.render_pass_timestamp_writes());
-        let mut pass = encoder.begin_render_pass(&wgpu::RenderPassDescriptor {
-            label: Some("stereocull.far_layer"),
-            color_attachments: &[Some(wgpu::RenderPassColorAttachment {
-                view: &far.color,
-                depth_slice: None,
-                resolve_target: None,
-                ops: wgpu::Operations {
-                    load: wgpu::LoadOp::Clear(CLEAR_COLOR),
-                    store: wgpu::StoreOp::Store,
-                },
-            })],
-            depth_stencil_attachment: Some(cleared_depth(&far.depth)),
-            timestamp_writes: writes,
-            occlusion_query_set: None,
-            multiview_mask: None,
+        let what = (&mut *log, PassRecord::display("far_cull", index));
+        let dispatches = far
+            .view
+            .encode_cull(encoder, culler, (timer, display), what);
+        let begin = opener(|encoder, writes| {
+            encoder
+                .begin_render_pass(&wgpu::RenderPassDescriptor {
+                    label: Some("stereocull.far_layer"),
+                    color_attachments: &[Some(wgpu::RenderPassColorAttachment {
+                        view: &far.color,
+                        depth_slice: None,
+                        resolve_target: None,
+                        ops: wgpu::Operations {
+                            load: wgpu::LoadOp::Clear(CLEAR_COLOR),
+                            store: wgpu::StoreOp::Store,
+                        },
+                    })],
+                    depth_stencil_attachment: Some(cleared_depth(&far.depth)),
+                    timestamp_writes: writes,
+                    occlusion_query_set: None,
+                    multiview_mask: None,
+                })
+                .forget_lifetime()
         });
-        let statistics = timer
-            .as_deref_mut()
-            .and_then(|t| t.begin_statistics(&mut pass));
-        let key = DrawKey::new(1, false);
-        self.drawer
-            .bind(&mut pass, key, draw_scene, &far.draw_bind_group);
-        self.drawer
-            .draw_indirect(&mut pass, far.max_draws, &far.cull);
-        GpuTimer::end_statistics(&mut pass, statistics.is_some());
-        drop(pass);
-        close(timer, encoder, scope);
-        log.push(PassRecord {
-            statistics,
-            ..PassRecord::display("far_layer", index)
+        let logged = (log, PassRecord::display("far_layer", index));
+        let drawing = (&self.drawer, draw_scene);
+        let draw_calls = render_pass(encoder, begin, ((timer, display), logged), |pass| {
+            far.view.draw(pass, drawing, Some(DrawKey::new(1, false)))
         });
-        (dispatches, 1)
+        (dispatches, draw_calls)
     }
 
     /// The composite into the display's pass, before its near geometry: one draw, one
@@ -219,11 +188,7 @@ impl FarDisplay {
             size: self.size,
             ..*plan
         };
-        let mut bytes = write(queue, &self.context, &uniform_bytes(&sized.context()));
-        if let Some(out) = cpu {
-            bytes += self.cull.upload(queue, out);
-        }
-        bytes
+        self.view.prepare(queue, &sized.context(), cpu)
     }
 }
 
@@ -356,7 +321,7 @@ impl Far {
                 d.stereo.then(|| {
                     let plan = FarPlan::new(r, d.resolution, layers.threshold);
                     let bound = (draw_scene, frame, *context);
-                    layers.display(device, bound, culler, (&plan, slots, max_draws))
+                    layers.display(device, bound, culler, (&plan, (slots, max_draws)))
                 })
             })
             .collect();

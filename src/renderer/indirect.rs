@@ -8,7 +8,7 @@
 use std::time::Instant;
 
 use super::far_pass::{Far, FarLayers};
-use super::passes::{PassRecord, close, compute_pass, draw_pass, open_display};
+use super::passes::{PassRecord, Timing, close, compute_pass, draw_pass, open_display};
 use super::shadow_pass::{LightCull, ShadowPass};
 use super::{
     CullMode, CullState, FrameStats, RendererOptions, TargetViews, context_buffer,
@@ -26,7 +26,6 @@ use crate::rig::{ResolvedRig, Rig};
 use crate::scene::Scene;
 use crate::shaders::DrawKey;
 use crate::shadow::LightView;
-use wgpu_profiler::GpuProfilerQuery;
 
 /// Where the visible lists and draws come from.
 pub(super) enum Culling {
@@ -292,7 +291,7 @@ impl IndirectPath {
         &self,
         encoder: &mut wgpu::CommandEncoder,
         (index, target): (usize, &TargetViews),
-        (timer, display): (&mut Option<&mut GpuTimer>, &Option<GpuProfilerQuery>),
+        (timer, display): Timing,
         log: &mut Vec<PassRecord>,
     ) -> FrameStats {
         let culled = self.encode_cull(encoder, index, (timer, display), log);
@@ -319,7 +318,7 @@ impl IndirectPath {
         &self,
         encoder: &mut wgpu::CommandEncoder,
         index: usize,
-        (timer, display): (&mut Option<&mut GpuTimer>, &Option<GpuProfilerQuery>),
+        (timer, display): Timing,
         log: &mut Vec<PassRecord>,
     ) -> FrameStats {
         let state = &self.displays[index];

@@ -97,6 +97,7 @@ mod readback;
 mod shadow_pass;
 mod sync;
 mod targets;
+mod view_pass;
 
 use checks::check_device;
 use classic::ClassicPath;

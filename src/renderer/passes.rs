@@ -58,22 +58,60 @@ impl PassRecord {
     }
 }
 
-/// Records one draw pass into `target`, clearing it or not (and in multiview or not): a
-/// `draw` timer scope inside `display`'s, and pipeline statistics around what `record`
-/// draws (it returns its draw calls); logs the pass as `what`.
+/// Records one draw pass into `target`, clearing it or not (and in multiview or not):
+/// [`render_pass`] named `draw`.
 pub(super) fn draw_pass(
     encoder: &mut wgpu::CommandEncoder,
     target: &TargetViews,
     (clear, multiview): (bool, bool),
-    (timer, display): (&mut Option<&mut GpuTimer>, &Option<GpuProfilerQuery>),
-    (log, what): (&mut Vec<PassRecord>, PassRecord),
+    timing: Timing,
+    logged: Logged,
     record: impl FnOnce(&mut wgpu::RenderPass) -> u32,
 ) -> u32 {
-    let scope = open_pass(timer, "draw", display, encoder);
+    let begin = opener(|encoder, writes| {
+        begin_pass(encoder, target.attachments(), clear, multiview, writes).forget_lifetime()
+    });
+    render_pass(encoder, begin, (timing, logged), record)
+}
+
+/// The frame's timer, if any, and the scope a pass nests in.
+pub(super) type Timing<'a, 'b> = (
+    &'a mut Option<&'b mut GpuTimer>,
+    &'a Option<GpuProfilerQuery>,
+);
+
+/// The frame's pass log, and the entry a pass adds to it.
+pub(super) type Logged<'a> = (&'a mut Vec<PassRecord>, PassRecord);
+
+/// How [`render_pass`] opens its pass: from the encoder and the scope's timestamp
+/// writes. (Typing the closure here gives it the signature for every lifetime.)
+pub(super) fn opener<F>(begin: F) -> F
+where
+    F: FnOnce(
+        &mut wgpu::CommandEncoder,
+        Option<wgpu::RenderPassTimestampWrites>,
+    ) -> wgpu::RenderPass<'static>,
+{
+    begin
+}
+
+/// Records one render pass that `begin` opens (given its timestamp writes): a timer
+/// scope named as `what` inside `parent`'s, and pipeline statistics around what `record`
+/// draws (it returns its draw calls); logs the pass as `what`.
+pub(super) fn render_pass(
+    encoder: &mut wgpu::CommandEncoder,
+    begin: impl FnOnce(
+        &mut wgpu::CommandEncoder,
+        Option<wgpu::RenderPassTimestampWrites>,
+    ) -> wgpu::RenderPass<'static>,
+    ((timer, parent), (log, what)): (Timing, Logged),
+    record: impl FnOnce(&mut wgpu::RenderPass) -> u32,
+) -> u32 {
+    let scope = open_pass(timer, what.name, parent, encoder);
     let writes = scope
         .as_ref()
         .and_then(|q| q.render_pass_timestamp_writes());
-    let mut pass = begin_pass(encoder, target.attachments(), clear, multiview, writes);
+    let mut pass = begin(encoder, writes);
     let statistics = timer
         .as_deref_mut()
         .and_then(|t| t.begin_statistics(&mut pass));
@@ -89,8 +127,8 @@ pub(super) fn draw_pass(
 /// as `what`; `record` fills it.
 pub(super) fn compute_pass(
     encoder: &mut wgpu::CommandEncoder,
-    (timer, parent): (&mut Option<&mut GpuTimer>, &Option<GpuProfilerQuery>),
-    (log, what): (&mut Vec<PassRecord>, PassRecord),
+    (timer, parent): Timing,
+    (log, what): Logged,
     record: impl FnOnce(&mut wgpu::ComputePass),
 ) {
     let scope = open_pass(timer, what.name, parent, encoder);

@@ -176,7 +176,7 @@ impl IndirectPath {
         index: usize,
     ) -> Result<Option<CullOutput>> {
         match self.far.as_ref().and_then(|f| f.displays[index].as_ref()) {
-            Some(far) => self.read_targets(device, queue, &far.cull).map(Some),
+            Some(far) => self.read_targets(device, queue, far.view.cull()).map(Some),
             None => Ok(None),
         }
     }

@@ -3,14 +3,14 @@
 //! with one multi-draw-indirect call into the shadow map, once per frame, before any
 //! display.
 
-use super::passes::{PassRecord, close, compute_pass, open_display, open_pass};
-use super::write;
+use super::passes::{PassRecord, close, open_display, opener, render_pass};
+use super::view_pass::ViewPass;
 use crate::contexts::DisplayContext;
 use crate::cull::cpu::{self, FrameLod};
-use crate::cull::gpu::{CullScene, CullTargets, GpuCuller};
+use crate::cull::gpu::{CullScene, GpuCuller};
 use crate::draw::{DrawScene, Drawer, cleared_depth};
 use crate::profiling::GpuTimer;
-use crate::records::{CullLayout, uniform_bytes};
+use crate::records::CullLayout;
 use crate::shadow::LightView;
 
 /// Where the light's cull comes from: the GPU culler (its passes and scene data), or
@@ -20,39 +20,21 @@ pub(super) enum LightCull<'a> {
     Cpu(&'a CullLayout),
 }
 
-/// The light's context, cull outputs and bindings.
+/// The light as one more view.
 pub(super) struct ShadowPass {
-    context: wgpu::Buffer,
-    cull: CullTargets,
-    /// GPU culling only.
-    cull_bind_group: Option<wgpu::BindGroup>,
-    draw_bind_group: wgpu::BindGroup,
-    /// Draw entries: meshes times levels of detail.
-    max_draws: u32,
+    view: ViewPass,
 }
 
 impl ShadowPass {
     pub(super) fn new(
         device: &wgpu::Device,
-        (drawer, draw_scene): (&Drawer, &DrawScene),
+        drawing: (&Drawer, &DrawScene),
         frame: &wgpu::Buffer,
         culler: Option<(&GpuCuller, &CullScene)>,
-        (slots, max_draws): (u32, u32),
+        sizes: (u32, u32),
     ) -> ShadowPass {
-        let context = super::context_buffer(device);
-        let cull = CullTargets::new(device, slots, max_draws);
         ShadowPass {
-            cull_bind_group: culler
-                .map(|(c, scene)| c.bind_group(device, scene, [frame, &context], &cull)),
-            draw_bind_group: drawer.bind_group(
-                device,
-                [frame, &context],
-                draw_scene,
-                &cull.visible,
-            ),
-            context,
-            cull,
-            max_draws,
+            view: ViewPass::new(device, drawing, frame, culler, sizes),
         }
     }
 
@@ -65,16 +47,14 @@ impl ShadowPass {
         cull: &LightCull,
         lod: &FrameLod,
     ) -> u64 {
-        let mut bytes = write(
-            queue,
-            &self.context,
-            &uniform_bytes(&DisplayContext::light(view, size)),
-        );
-        if let LightCull::Cpu(layout) = cull {
-            let out = cpu::cull_many_lod(layout, &[view.cull_job()], lod).remove(0);
-            bytes += self.cull.upload(queue, &out);
-        }
-        bytes
+        let cpu = match cull {
+            LightCull::Cpu(layout) => {
+                Some(cpu::cull_many_lod(layout, &[view.cull_job()], lod).remove(0))
+            }
+            LightCull::Gpu(..) => None,
+        };
+        let context = DisplayContext::light(view, size);
+        self.view.prepare(queue, &context, cpu.as_ref())
     }
 
     /// Records the light's cull (on the GPU) and the shadow pass, timed as
@@ -91,40 +71,30 @@ impl ShadowPass {
             return (0, 0);
         };
         let frame = open_display(timer, "shadow", encoder);
-        let mut dispatches = 0;
-        if let (LightCull::Gpu(culler, scene), Some(group)) = (cull, &self.cull_bind_group) {
-            let what = (&mut *log, PassRecord::frame("shadow_cull"));
-            compute_pass(encoder, (timer, &frame), what, |pass| {
-                culler.encode(pass, scene, group, false);
-            });
-            dispatches = GpuCuller::DISPATCHES_PER_DISPLAY;
-        }
-        let scope = open_pass(timer, "shadow", &frame, encoder);
-        let writes = scope
-            .as_ref()
-            .and_then(|q| q.render_pass_timestamp_writes());
-        let mut pass = encoder.begin_render_pass(&wgpu::RenderPassDescriptor {
-            label: Some("stereocull.shadow"),
-            color_attachments: &[],
-            depth_stencil_attachment: Some(cleared_depth(&draw_scene.shadow_map.view)),
-            timestamp_writes: writes,
-            occlusion_query_set: None,
-            multiview_mask: None,
+        let gpu = match cull {
+            LightCull::Gpu(culler, scene) => Some((*culler, *scene, false)),
+            LightCull::Cpu(_) => None,
+        };
+        let what = (&mut *log, PassRecord::frame("shadow_cull"));
+        let dispatches = self.view.encode_cull(encoder, gpu, (timer, &frame), what);
+        let begin = opener(|encoder, writes| {
+            encoder
+                .begin_render_pass(&wgpu::RenderPassDescriptor {
+                    label: Some("stereocull.shadow"),
+                    color_attachments: &[],
+                    depth_stencil_attachment: Some(cleared_depth(&draw_scene.shadow_map.view)),
+                    timestamp_writes: writes,
+                    occlusion_query_set: None,
+                    multiview_mask: None,
+                })
+                .forget_lifetime()
         });
-        let statistics = timer
-            .as_deref_mut()
-            .and_then(|t| t.begin_statistics(&mut pass));
-        pass.set_pipeline(&shadow.pipeline);
-        Drawer::bind_resources(&mut pass, draw_scene, &self.draw_bind_group);
-        drawer.draw_indirect(&mut pass, self.max_draws, &self.cull);
-        GpuTimer::end_statistics(&mut pass, statistics.is_some());
-        drop(pass);
-        close(timer, encoder, scope);
+        let logged = (log, PassRecord::frame("shadow"));
+        let draw_calls = render_pass(encoder, begin, ((timer, &frame), logged), |pass| {
+            pass.set_pipeline(&shadow.pipeline);
+            self.view.draw(pass, (drawer, draw_scene), None)
+        });
         close(timer, encoder, frame);
-        log.push(PassRecord {
-            statistics,
-            ..PassRecord::frame("shadow")
-        });
-        (dispatches, 1)
+        (dispatches, draw_calls)
     }
 }
