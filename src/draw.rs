@@ -37,6 +37,14 @@ pub const CLEAR_COLOR: wgpu::Color = wgpu::Color {
 pub const VERTEX_ATTRIBUTES: [wgpu::VertexAttribute; 4] =
     wgpu::vertex_attr_array![0 => Float32x3, 1 => Float32x3, 2 => Float32x2, 3 => Uint32];
 
+/// The scene's vertex buffer as every pipeline drawing it reads it (an engine's own
+/// pipeline too).
+pub const VERTEX_BUFFER: wgpu::VertexBufferLayout<'static> = wgpu::VertexBufferLayout {
+    array_stride: size_of::<Vertex>() as u64,
+    step_mode: wgpu::VertexStepMode::Vertex,
+    attributes: &VERTEX_ATTRIBUTES,
+};
+
 /// The scene's geometry, instance records and materials on the GPU, uploaded once, and
 /// the frame's shadow map the draws sample.
 pub struct DrawScene {
@@ -318,11 +326,7 @@ fn shadow_pipeline(
             module: &module,
             entry_point: Some("vs_main"),
             compilation_options: Default::default(),
-            buffers: &[Some(wgpu::VertexBufferLayout {
-                array_stride: size_of::<Vertex>() as u64,
-                step_mode: wgpu::VertexStepMode::Vertex,
-                attributes: &VERTEX_ATTRIBUTES,
-            })],
+            buffers: &[Some(VERTEX_BUFFER)],
         },
         primitive: wgpu::PrimitiveState::default(),
         depth_stencil: Some(wgpu::DepthStencilState {
@@ -361,11 +365,7 @@ fn pipeline(
             module: &module,
             entry_point: Some("vs_main"),
             compilation_options: Default::default(),
-            buffers: &[Some(wgpu::VertexBufferLayout {
-                array_stride: size_of::<Vertex>() as u64,
-                step_mode: wgpu::VertexStepMode::Vertex,
-                attributes: &VERTEX_ATTRIBUTES,
-            })],
+            buffers: &[Some(VERTEX_BUFFER)],
         },
         primitive: wgpu::PrimitiveState {
             cull_mode: key.face_culling(),

@@ -341,11 +341,7 @@ fn own_pipeline(
             module: &module,
             entry_point: Some("vs"),
             compilation_options: Default::default(),
-            buffers: &[Some(wgpu::VertexBufferLayout {
-                array_stride: size_of::<stereocull::scene::Vertex>() as u64,
-                step_mode: wgpu::VertexStepMode::Vertex,
-                attributes: &stereocull::draw::VERTEX_ATTRIBUTES,
-            })],
+            buffers: &[Some(stereocull::draw::VERTEX_BUFFER)],
         },
         primitive: Default::default(),
         depth_stencil: Some(wgpu::DepthStencilState {
