@@ -10,7 +10,7 @@ use proptest::prelude::*;
 use rand::{Rng, SeedableRng};
 use stereocull::cull::{CoarseCull, CullOutput};
 use stereocull::frustum::{View, sphere_in_planes};
-use stereocull::renderer::{CoarseMode, CullMode, Renderer, RendererOptions, StereoMode};
+use stereocull::renderer::{CoarseMode, CullMode, RendererOptions, StereoMode};
 use stereocull::rig::Rig;
 use stereocull::scene::Scene;
 
@@ -129,14 +129,8 @@ fn auto_runs_the_coarse_cull_where_it_pays() {
 
 fn culls(scene: &Scene, rig: &Rig, options: RendererOptions) -> (Vec<CullOutput>, Option<u32>) {
     let gpu = support::gpu();
-    let mut renderer = Renderer::new(&gpu.device, scene, rig, options).unwrap();
-    let targets = renderer.create_targets(&gpu.device);
-    renderer
-        .submit_frame(&gpu.device, &gpu.queue, rig, 0.0, &targets)
-        .unwrap();
-    let outputs = (0..rig.displays.len())
-        .map(|d| renderer.read_cull(&gpu.device, &gpu.queue, d).unwrap())
-        .collect();
+    let renderer = support::one_frame(&gpu, scene, rig, options);
+    let outputs = support::read_culls(&gpu, &renderer, rig);
     let candidates = renderer.read_candidates(&gpu.device, &gpu.queue).unwrap();
     (outputs, candidates)
 }

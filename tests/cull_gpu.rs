@@ -6,18 +6,14 @@ mod support;
 use glam::Vec3;
 use stereocull::device::Gpu;
 use stereocull::procedural;
-use stereocull::renderer::{Renderer, RendererOptions};
+use stereocull::renderer::RendererOptions;
 use stereocull::rig::Rig;
 use stereocull::scene::Scene;
 use support::{cubes, gpu, reference_culls};
 
 /// Runs one GPU-culled frame and compares every display's buffers with the CPU's.
 fn compare(gpu: &Gpu, scene: &Scene, rig: &Rig, what: &str) -> Vec<usize> {
-    let mut renderer = Renderer::new(&gpu.device, scene, rig, RendererOptions::default()).unwrap();
-    let targets = renderer.create_targets(&gpu.device);
-    renderer
-        .submit_frame(&gpu.device, &gpu.queue, rig, 0.0, &targets)
-        .unwrap();
+    let renderer = support::one_frame(gpu, scene, rig, RendererOptions::default());
     reference_culls(scene, rig)
         .into_iter()
         .enumerate()

@@ -34,19 +34,12 @@ fn culls(
         far_layer,
         ..RendererOptions::default()
     };
-    let mut renderer = Renderer::new(&gpu.device, scene, rig, options).unwrap();
-    let targets = renderer.create_targets(&gpu.device);
-    renderer
-        .submit_frame(&gpu.device, &gpu.queue, rig, 0.0, &targets)
-        .unwrap();
-    (0..rig.displays.len())
-        .map(|d| {
-            let near = renderer.read_cull(&gpu.device, &gpu.queue, d).unwrap();
-            (
-                near,
-                renderer.read_far_cull(&gpu.device, &gpu.queue, d).unwrap(),
-            )
-        })
+    let renderer = support::one_frame(&gpu, scene, rig, options);
+    let far = |d| renderer.read_far_cull(&gpu.device, &gpu.queue, d).unwrap();
+    let near = support::read_culls(&gpu, &renderer, rig);
+    near.into_iter()
+        .enumerate()
+        .map(|(d, n)| (n, far(d)))
         .collect()
 }
 

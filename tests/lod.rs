@@ -11,7 +11,7 @@ use stereocull::cull::CullOutput;
 use stereocull::cull::cpu::{self, FrameLod};
 use stereocull::device::Gpu;
 use stereocull::records::CullLayout;
-use stereocull::renderer::{Renderer, RendererOptions, StereoMode, frame_lod};
+use stereocull::renderer::{RendererOptions, StereoMode, frame_lod};
 use stereocull::rig::Rig;
 use stereocull::scene::{Animation, Instance, MAX_LODS, Scene};
 use stereocull::{procedural, shapes};
@@ -25,13 +25,10 @@ fn culls(gpu: &Gpu, scene: &Scene, rig: &Rig, mode: StereoMode) -> Vec<Vec<CullO
         cull: support::cull_for(mode),
         ..Default::default()
     };
-    let mut renderer = Renderer::new(&gpu.device, scene, rig, options).unwrap();
-    let targets = renderer.create_targets(&gpu.device);
-    renderer
-        .submit_frame(&gpu.device, &gpu.queue, rig, 0.0, &targets)
-        .unwrap();
-    (0..rig.displays.len())
-        .map(|d| vec![renderer.read_cull(&gpu.device, &gpu.queue, d).unwrap()])
+    let renderer = support::one_frame(gpu, scene, rig, options);
+    support::read_culls(gpu, &renderer, rig)
+        .into_iter()
+        .map(|out| vec![out])
         .collect()
 }
 

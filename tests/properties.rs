@@ -13,7 +13,7 @@ use stereocull::cull::cpu;
 use stereocull::device::Gpu;
 use stereocull::procedural;
 use stereocull::records::CullLayout;
-use stereocull::renderer::{Renderer, RendererOptions};
+use stereocull::renderer::RendererOptions;
 use stereocull::rig::{Mount, Rig, Screen};
 use stereocull::scene::Scene;
 
@@ -87,11 +87,9 @@ proptest! {
     ) {
         let gpu = gpu();
         let scene = support::extreme_scene(&rig, n, meshes, seed);
-        let mut renderer = Renderer::new(&gpu.device, &scene, &rig, RendererOptions::default()).unwrap();
-        let targets = renderer.create_targets(&gpu.device);
-        renderer.submit_frame(&gpu.device, &gpu.queue, &rig, 0.0, &targets).unwrap();
-        for (d, want) in support::reference_culls(&scene, &rig).into_iter().enumerate() {
-            let got = renderer.read_cull(&gpu.device, &gpu.queue, d).unwrap();
+        let renderer = support::one_frame(gpu, &scene, &rig, RendererOptions::default());
+        let got = support::read_culls(gpu, &renderer, &rig);
+        for (d, (got, want)) in got.into_iter().zip(support::reference_culls(&scene, &rig)).enumerate() {
             prop_assert_eq!(got, want, "display {}", d);
         }
     }

@@ -61,11 +61,7 @@ fn windowed_culls_keep_the_contract() {
                 binding_limit: Some(limit),
                 ..RendererOptions::default()
             };
-            let mut renderer = Renderer::new(&gpu.device, &scene, &rig, options).unwrap();
-            let targets = renderer.create_targets(&gpu.device);
-            renderer
-                .submit_frame(&gpu.device, &gpu.queue, &rig, 0.0, &targets)
-                .unwrap();
+            let renderer = support::one_frame(&gpu, &scene, &rig, options);
             let resolved = rig.resolve().unwrap();
             let frame = cull::cpu::FrameCull {
                 lod: stereocull::renderer::frame_lod(
@@ -77,10 +73,8 @@ fn windowed_culls_keep_the_contract() {
             };
             let layout = stereocull::records::CullLayout::new(&scene);
             let want = cull::cpu::cull_frame(&layout, &rig.cull_jobs().unwrap(), &frame);
-            for (d, want) in want.into_iter().enumerate() {
-                let got = renderer.read_cull(&gpu.device, &gpu.queue, d).unwrap();
-                assert_eq!(got, want, "{preset} lod {lod} display {d}");
-            }
+            let got = support::read_culls(&gpu, &renderer, &rig);
+            assert_eq!(got, want, "{preset} lod {lod}");
         }
     }
 }

@@ -87,6 +87,24 @@ pub fn cull_for(mode: StereoMode) -> CullMode {
     }
 }
 
+/// A renderer made with `options` that has submitted one frame of `scene` seen by `rig`
+/// at time 0 (into targets of its own).
+pub fn one_frame(gpu: &Gpu, scene: &Scene, rig: &Rig, options: RendererOptions) -> Renderer {
+    let mut renderer = Renderer::new(&gpu.device, scene, rig, options).unwrap();
+    let targets = renderer.create_targets(&gpu.device);
+    renderer
+        .submit_frame(&gpu.device, &gpu.queue, rig, 0.0, &targets)
+        .unwrap();
+    renderer
+}
+
+/// Every display's cull buffers of `renderer`'s last frame, read back.
+pub fn read_culls(gpu: &Gpu, renderer: &Renderer, rig: &Rig) -> Vec<CullOutput> {
+    (0..rig.displays.len())
+        .map(|d| renderer.read_cull(&gpu.device, &gpu.queue, d).unwrap())
+        .collect()
+}
+
 /// One frame of `scene` seen by `rig` at time 0, every display read back.
 pub fn render(
     gpu: &Gpu,
