@@ -63,54 +63,76 @@ fn checked(spec: &str, mut scene: Scene) -> Result<Scene> {
 
 /// `city:N[:SEED]`: [`procedural::city`].
 fn parse_city(spec: &str, rest: &str) -> Result<Scene> {
-    let fail = |message: &str| Error::SceneSpec {
-        spec: spec.into(),
-        message: format!("{message}; expected city:N[:SEED]"),
-    };
-    let mut parts = rest.split(':');
-    let n = parts
-        .next()
-        .and_then(|s| s.parse().ok())
-        .ok_or_else(|| fail("N is not a count"))?;
-    let seed = match parts.next() {
-        Some(s) => s.parse().map_err(|_| fail("SEED is not an integer"))?,
-        None => DEFAULT_PROCEDURAL_SEED,
-    };
-    if parts.next().is_some() {
-        return Err(fail("too many fields"));
-    }
+    let mut fields = Fields::new(spec, rest, "city:N[:SEED]");
+    let n = fields.count()?;
+    let seed = fields.seed()?;
+    fields.end()?;
     Ok(procedural::city(n, seed))
 }
 
 fn parse_procedural(spec: &str, rest: &str) -> Result<(u32, u32, u64, bool)> {
-    let fail = |message: &str| Error::SceneSpec {
-        spec: spec.into(),
-        message: format!("{message}; expected procedural:N[:MESHES[:SEED[:textured]]]"),
-    };
-    let mut parts = rest.split(':');
-    let n = parts
-        .next()
-        .and_then(|s| s.parse().ok())
-        .ok_or_else(|| fail("N is not a count"))?;
-    let meshes = match parts.next() {
+    let mut fields = Fields::new(spec, rest, "procedural:N[:MESHES[:SEED[:textured]]]");
+    let n = fields.count()?;
+    let meshes = match fields.parts.next() {
         Some(s) => s
             .parse()
             .ok()
             .filter(|&m: &u32| m > 0)
-            .ok_or_else(|| fail("MESHES is not a positive count"))?,
+            .ok_or_else(|| fields.fail("MESHES is not a positive count"))?,
         None => DEFAULT_PROCEDURAL_MESHES,
     };
-    let seed = match parts.next() {
-        Some(s) => s.parse().map_err(|_| fail("SEED is not an integer"))?,
-        None => DEFAULT_PROCEDURAL_SEED,
-    };
-    let textured = match parts.next() {
+    let seed = fields.seed()?;
+    let textured = match fields.parts.next() {
         Some("textured") => true,
-        Some(_) => return Err(fail("the fourth field can only be `textured`")),
+        Some(_) => return Err(fields.fail("the fourth field can only be `textured`")),
         None => false,
     };
-    if parts.next().is_some() {
-        return Err(fail("too many fields"));
-    }
+    fields.end()?;
     Ok((n, meshes, seed, textured))
+}
+
+/// The `:`-separated fields of a generated scene's spec, read in order; errors name
+/// the spec and the form it should have.
+struct Fields<'a> {
+    spec: &'a str,
+    form: &'static str,
+    parts: std::str::Split<'a, char>,
+}
+
+impl<'a> Fields<'a> {
+    fn new(spec: &'a str, rest: &'a str, form: &'static str) -> Fields<'a> {
+        Fields {
+            spec,
+            form,
+            parts: rest.split(':'),
+        }
+    }
+
+    fn fail(&self, message: &str) -> Error {
+        Error::SceneSpec {
+            spec: self.spec.into(),
+            message: format!("{message}; expected {}", self.form),
+        }
+    }
+
+    /// N, the instance count.
+    fn count(&mut self) -> Result<u32> {
+        let n = self.parts.next().and_then(|s| s.parse().ok());
+        n.ok_or_else(|| self.fail("N is not a count"))
+    }
+
+    /// SEED, or the default seed when the spec ends here.
+    fn seed(&mut self) -> Result<u64> {
+        match self.parts.next() {
+            Some(s) => s.parse().map_err(|_| self.fail("SEED is not an integer")),
+            None => Ok(DEFAULT_PROCEDURAL_SEED),
+        }
+    }
+
+    fn end(mut self) -> Result<()> {
+        match self.parts.next() {
+            Some(_) => Err(self.fail("too many fields")),
+            None => Ok(()),
+        }
+    }
 }
