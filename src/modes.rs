@@ -43,6 +43,11 @@ impl StereoMode {
         )
     }
 
+    /// Culls each eye of a stereo display against its own frustum (not the display's).
+    pub fn culls_per_eye(self) -> bool {
+        self == StereoMode::MultiCamera
+    }
+
     pub fn name(self) -> &'static str {
         match self {
             StereoMode::MultiCamera => "multi-camera",

@@ -14,14 +14,15 @@ use stereocull::renderer::{CoarseMode, CullMode, RendererOptions, StereoMode};
 use stereocull::rig::Rig;
 use stereocull::scene::Scene;
 
-/// Every view whose planes some cull tests: each display's combined view and its eyes.
-fn views(rig: &Rig) -> Vec<View> {
+/// Every view whose planes the culls test: each display's combined view, or with
+/// `per_eye` each eye's (multi-camera).
+fn views(rig: &Rig, per_eye: bool) -> Vec<View> {
     let resolved = rig.resolve().unwrap();
-    resolved
-        .displays
-        .iter()
-        .flat_map(|d| [d.combined].into_iter().chain(d.eyes.iter().copied()))
-        .collect()
+    let displays = resolved.displays.iter();
+    match per_eye {
+        false => displays.map(|d| d.combined).collect(),
+        true => displays.flat_map(|d| d.eyes.iter().copied()).collect(),
+    }
 }
 
 /// A sphere near a corner of `view`, from 1 mm to 100 m, its center up to two radii
@@ -39,10 +40,11 @@ fn sphere_at_a_corner(view: &View, rng: &mut rand_pcg::Pcg64) -> Vec4 {
     center.as_vec3().extend(radius as f32)
 }
 
-/// How many spheres near the corners some view keeps and the coarse test drops.
-fn dropped(rig: &Rig, coarse: &CoarseCull, seed: u64) -> (u32, u32) {
+/// How many spheres near the corners some view (with `per_eye`, some eye) keeps and the
+/// coarse test drops.
+fn dropped(rig: &Rig, (coarse, per_eye): (&CoarseCull, bool), seed: u64) -> (u32, u32) {
     let mut rng = rand_pcg::Pcg64::seed_from_u64(seed);
-    let views = views(rig);
+    let views = views(rig, per_eye);
     let (mut kept, mut lost) = (0, 0);
     for _ in 0..400 {
         let view = &views[rng.random_range(0..views.len())];
@@ -66,10 +68,12 @@ proptest! {
         rig in support::rig_strategy(),
         seed in any::<u64>(),
     ) {
-        let coarse = rig.resolve().unwrap().coarse_cull();
-        let (kept, lost) = dropped(&rig, &coarse, seed);
-        prop_assert!(kept > 0);
-        prop_assert_eq!(lost, 0, "{} of {} kept spheres dropped; {:?}", lost, kept, coarse);
+        for per_eye in [false, true] {
+            let coarse = rig.resolve().unwrap().coarse_cull(per_eye);
+            let (kept, lost) = dropped(&rig, (&coarse, per_eye), seed);
+            prop_assert!(kept > 0);
+            prop_assert_eq!(lost, 0, "per eye {}: {} of {} kept spheres dropped; {:?}", per_eye, lost, kept, coarse);
+        }
     }
 }
 
@@ -79,7 +83,7 @@ proptest! {
 #[test]
 fn without_grown_radii_corner_spheres_are_dropped() {
     let rig = Rig::preset("hmd-peripheral").unwrap();
-    let coarse = rig.resolve().unwrap().coarse_cull();
+    let coarse = rig.resolve().unwrap().coarse_cull(false);
     assert_ne!(coarse, CoarseCull::EVERYTHING);
     eprintln!("hmd-peripheral: radii grow by {}", coarse.inflation);
     assert!(
@@ -92,7 +96,9 @@ fn without_grown_radii_corner_spheres_are_dropped() {
         slack: 0.0,
         ..coarse
     };
-    let lost: u32 = (0..8).map(|seed| dropped(&rig, &bare, seed).1).sum();
+    let lost: u32 = (0..8)
+        .map(|seed| dropped(&rig, (&bare, false), seed).1)
+        .sum();
     assert!(
         lost > 0,
         "no corner sphere separates the bare frame frustum"

@@ -294,7 +294,7 @@ fn cpu_cull(
     let resolved = rig.resolve()?;
     let frame = FrameCull {
         lod: frame_lod(rig, &resolved, options.lod_levels()),
-        coarse: options.coarse_for(rig).then(|| resolved.coarse_cull()),
+        coarse: options.coarse_for(rig).then(|| resolved.coarse_cull(false)),
     };
     let plans = match options.far_layer {
         true => far_layer::plans(rig, &resolved, options.far_threshold_px),

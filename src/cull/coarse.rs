@@ -126,9 +126,14 @@ fn smallest_combination(normal: DVec3, display: &[Vec4; 6]) -> Option<[f64; 6]> 
             best = Some(weights);
         }
     };
+    // Every set of one, two or three planes once (repeats stand for the smaller sets).
     for i in 0..6 {
         for j in i..6 {
             for k in j..6 {
+                let pair_again = i == j && j < k;
+                if pair_again {
+                    continue;
+                }
                 if let Some(weights) = solve([i, j, k], &normals, normal) {
                     consider(weights);
                 }

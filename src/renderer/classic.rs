@@ -163,7 +163,7 @@ impl ClassicPath {
         let mut jobs = Vec::new();
         let mut per_display = Vec::new();
         for r in &resolved.displays {
-            if self.mode == StereoMode::MultiCamera && r.eyes.len() == 2 {
+            if self.mode.culls_per_eye() && r.eyes.len() == 2 {
                 jobs.extend(r.eyes.iter().map(|e| CullJob {
                     planes: e.frustum().planes,
                     instances_per_object: 1,

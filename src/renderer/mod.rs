@@ -268,7 +268,9 @@ impl Renderer {
         let resolved = rig.resolve()?;
         let cull = FrameCull {
             lod: frame_lod(rig, &resolved, self.options.lod_levels()),
-            coarse: self.coarse.then(|| resolved.coarse_cull()),
+            coarse: self
+                .coarse
+                .then(|| resolved.coarse_cull(self.options.mode.culls_per_eye())),
         };
         let coarse = cull.coarse.unwrap_or(CoarseCull::EVERYTHING);
         let light = LightView::fit(&self.options.light, &resolved);

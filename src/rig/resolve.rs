@@ -105,21 +105,21 @@ impl ResolvedRig {
     }
 
     /// The frame's coarse cull test: the frame frustum's planes made safe for every
-    /// display's cull and every eye's (the multi-camera mode culls per eye), or
-    /// [`CoarseCull::EVERYTHING`] without a frame frustum.
-    pub fn coarse_cull(&self) -> CoarseCull {
+    /// display's cull, and with `per_eye` for every eye's instead (the multi-camera mode
+    /// culls per eye), or [`CoarseCull::EVERYTHING`] without a frame frustum. Only the
+    /// culls that will run are held: each costs a search per frame plane.
+    pub fn coarse_cull(&self, per_eye: bool) -> CoarseCull {
         let Some(frame) = self.frame() else {
             return CoarseCull::EVERYTHING;
         };
-        let views: Vec<[Vec4; 6]> = self
-            .displays
-            .iter()
-            .flat_map(|d| {
-                [d.planes]
-                    .into_iter()
-                    .chain(d.eyes.iter().map(|e| e.frustum().planes))
-            })
-            .collect();
+        let views: Vec<[Vec4; 6]> = match per_eye {
+            false => self.displays.iter().map(|d| d.planes).collect(),
+            true => self
+                .displays
+                .iter()
+                .flat_map(|d| d.eyes.iter().map(|e| e.frustum().planes))
+                .collect(),
+        };
         CoarseCull::holding(frame.frustum().planes, &views).unwrap_or(CoarseCull::EVERYTHING)
     }
 
