@@ -153,7 +153,7 @@ impl IndirectPath {
                 device,
                 (rig, frame, options),
                 &culling,
-                (&draw_scene, &displays),
+                (&draw_scene, &displays, windows),
                 (slots, draws),
             )?),
         };
@@ -390,11 +390,10 @@ fn far_layers(
     device: &wgpu::Device,
     (rig, frame, options): (&Rig, &wgpu::Buffer, &RendererOptions),
     culling: &Culling,
-    (draw_scene, displays): (&DrawScene, &[IndirectDisplay]),
+    (draw_scene, displays, windows): (&DrawScene, &[IndirectDisplay], crate::shaders::Windows),
     sizes: (u32, u32),
 ) -> Result<Far> {
     let material = options.material.as_deref();
-    let windows = options.windows(device, sizes.0);
     let layers = FarLayers::new(
         device,
         (options.target_format(), material),
