@@ -244,7 +244,7 @@ impl UiPanel {
 }
 
 /// Bring your own pipeline: a pipeline written here, on stereocull's decode
-/// (`shaders::decode_source`) and group 0 layout, drawing the cull outputs with the one
+/// (`Renderer::decode_source`) and group 0 layout, drawing the cull outputs with the one
 /// indirect call, gives the built-in image. Both keep the eyes apart by a fragment
 /// discard here (clip distances off), so the comparison is exact.
 #[test]
@@ -304,7 +304,7 @@ fn own_pipeline(
     renderer: &Renderer,
     options: RendererOptions,
 ) -> wgpu::RenderPipeline {
-    let source = stereocull::shaders::decode_source(2)
+    let source = renderer.decode_source(2).expect("the indirect modes")
         + "
         struct Out {
             @builtin(position) position: vec4<f32>,

@@ -248,15 +248,6 @@ fn split_group(split: &Split, [x, y, z, neg_r]: [&[f32]; 4]) -> u64 {
     bits
 }
 
-/// How many instances the coarse test keeps: each display's cull runs over these.
-pub fn coarse_candidates(layout: &CullLayout, coarse: &CoarseCull) -> u32 {
-    layout
-        .spheres
-        .par_iter()
-        .filter(|&&s| coarse.test(s))
-        .count() as u32
-}
-
 fn test_lanes(planes: &[[f32; 4]; 6], lanes: [&[f32; 64]; 4]) -> u64 {
     #[cfg(target_arch = "x86_64")]
     if std::is_x86_feature_detected!("avx2") {

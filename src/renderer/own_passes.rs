@@ -56,8 +56,7 @@ impl Renderer {
 
     /// For an engine's own draw pipeline (the indirect modes): group 0's layout, to
     /// build its pipeline layout on (its own bind groups from group 1), with
-    /// [`crate::shaders::decode_source`] as the shader's start. `None` in the classic
-    /// modes.
+    /// [`Renderer::decode_source`] as the shader's start. `None` in the classic modes.
     pub fn bind_group_layout(&self) -> Option<&wgpu::BindGroupLayout> {
         match &self.path {
             Path::Indirect(p) => Some(p.bind_group_layout()),
