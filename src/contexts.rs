@@ -111,6 +111,9 @@ pub struct DisplayContext {
     /// `position` (the display's apex).
     pub split_keep: u32,
     pub split_distance: f32,
+    /// Which of the frame coarse cull's block lists this cull runs over: its display's
+    /// index (the far layer's cull shares its display's). Read only over candidates.
+    pub cull_slot: u32,
 }
 
 impl DisplayContext {
@@ -136,6 +139,7 @@ impl DisplayContext {
             first_eye: 0,
             split_keep: 0,
             split_distance: 0.0,
+            cull_slot: 0,
         }
     }
 
@@ -179,6 +183,7 @@ impl DisplayContext {
             first_eye: 0,
             split_keep: 0,
             split_distance: 0.0,
+            cull_slot: 0,
         }
     }
 }

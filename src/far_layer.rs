@@ -84,8 +84,9 @@ impl FarPlan {
     }
 
     /// The far layer's display context: its one view in both eye slots, culling the far
-    /// instances of the display frustum, each drawn once.
-    pub fn context(&self) -> DisplayContext {
+    /// instances of the display frustum, each drawn once, over the coarse cull's
+    /// `cull_slot` (its display's).
+    pub fn context(&self, cull_slot: u32) -> DisplayContext {
         let eye = EyeContext::from_view(&self.view);
         DisplayContext {
             view_from_world: eye.view_from_world,
@@ -100,6 +101,7 @@ impl FarPlan {
             first_eye: 0,
             split_keep: 2,
             split_distance: self.distance,
+            cull_slot,
         }
     }
 

@@ -10,7 +10,10 @@ use crate::shapes::{self, Shape};
 
 /// `n` instances of `mesh_count` built-in meshes scattered in a ball around the
 /// origin (where every preset's viewer stands), at real scale: objects of 0.1 m to
-/// 1.5 m, spread so that density stays near a few per cubic meter at any `n`.
+/// 1.5 m, spread so that density stays near a few per cubic meter at any `n`. Ids
+/// follow a Hilbert curve through the ball, as an engine that inserts in spatial order
+/// would give them: neighbours in the cull order are neighbours in space, which the
+/// coarse cull's blocks ([`crate::cull::coarse`]) need.
 pub fn scene(n: u32, mesh_count: u32, seed: u64) -> Scene {
     let mut scene = Scene::default();
     for k in 0..mesh_count.max(1) {
@@ -42,7 +45,57 @@ pub fn scene(n: u32, mesh_count: u32, seed: u64) -> Scene {
             }
         })
         .collect();
+    let offset = |i: &Instance| (Vec3::from(i.world_from_local.translation) - center) / radius;
+    scene.instances.sort_by_cached_key(|i| hilbert(offset(i)));
     scene
+}
+
+/// The position of `p` (in the cube `[-1, 1]^3`) along a Hilbert curve of 10 bits per
+/// axis.
+fn hilbert(p: Vec3) -> u32 {
+    hilbert_index(
+        p.to_array()
+            .map(|v| ((v * 0.5 + 0.5).clamp(0.0, 1.0) * 1023.0) as u32),
+        10,
+    )
+}
+
+/// The position of grid cell `x` (`bits` per axis, at most 10) along a Hilbert curve,
+/// by Skilling's transpose ("Programming the Hilbert curve", 2004): unlike a Morton
+/// curve it never jumps, so any run of it stays compact.
+fn hilbert_index(mut x: [u32; 3], bits: u32) -> u32 {
+    let mut q = 1 << (bits - 1);
+    while q > 1 {
+        let low = q - 1;
+        for i in 0..3 {
+            if x[i] & q != 0 {
+                x[0] ^= low;
+            } else {
+                let t = (x[0] ^ x[i]) & low;
+                x[0] ^= t;
+                x[i] ^= t;
+            }
+        }
+        q >>= 1;
+    }
+    x[1] ^= x[0];
+    x[2] ^= x[1];
+    let mut t = 0;
+    let mut q = 1 << (bits - 1);
+    while q > 1 {
+        if x[2] & q != 0 {
+            t ^= q - 1;
+        }
+        q >>= 1;
+    }
+    let spread = |v: u32| {
+        let mut v = v ^ t;
+        v = (v | (v << 16)) & 0x0300_00ff;
+        v = (v | (v << 8)) & 0x0300_f00f;
+        v = (v | (v << 4)) & 0x030c_30c3;
+        (v | (v << 2)) & 0x0924_9249
+    };
+    (spread(x[0]) << 2) | (spread(x[1]) << 1) | spread(x[2])
 }
 
 /// A city around a room: a tenth of `n` instances are objects of the procedural scene
@@ -127,6 +180,32 @@ fn random_in_shell(rng: &mut Pcg64Mcg, inner: f32, outer: f32) -> Vec3 {
         let d = p.length();
         if (inner..=outer).contains(&d) {
             return p;
+        }
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::hilbert_index;
+
+    /// Every cell of an 8^3 grid gets its own index, and cells one index apart share a
+    /// face: the curve visits all of them without a jump.
+    #[test]
+    fn the_hilbert_curve_visits_every_cell_by_steps_to_a_neighbour() {
+        let mut cells = vec![None; 512];
+        for x in 0..8 {
+            for y in 0..8 {
+                for z in 0..8 {
+                    let index = hilbert_index([x, y, z], 3) as usize;
+                    assert!(cells[index].is_none(), "index {index} twice");
+                    cells[index] = Some([x as i32, y as i32, z as i32]);
+                }
+            }
+        }
+        let cells: Vec<[i32; 3]> = cells.into_iter().map(|c| c.expect("every index")).collect();
+        for pair in cells.windows(2) {
+            let step: i32 = (0..3).map(|i| (pair[0][i] - pair[1][i]).abs()).sum();
+            assert_eq!(step, 1, "{:?} to {:?}", pair[0], pair[1]);
         }
     }
 }

@@ -232,3 +232,16 @@ pub fn uniform_bytes<T: encase::ShaderType + encase::internal::WriteInto>(value:
         .expect("writing into a growable Vec cannot fail");
     buffer.into_inner()
 }
+
+/// Serializes storage records (a runtime-sized array) into the bytes the WGSL array
+/// expects.
+pub fn storage_bytes<T>(values: &[T]) -> Vec<u8>
+where
+    T: encase::ShaderType + encase::ShaderSize + encase::internal::WriteInto,
+{
+    let mut buffer = encase::StorageBuffer::new(Vec::new());
+    buffer
+        .write(values)
+        .expect("writing into a growable Vec cannot fail");
+    buffer.into_inner()
+}

@@ -6,11 +6,12 @@ use std::mem::{offset_of, size_of};
 use glam::{Mat4, Vec2, Vec3, Vec4};
 use naga::{Module, TypeInner};
 use stereocull::contexts::{DisplayContext, EyeContext, FrameContext};
+use stereocull::cull::CoarseCull;
 use stereocull::cull::gpu::CullParams;
 use stereocull::draw::VERTEX_ATTRIBUTES;
 use stereocull::materials::MaterialRecord;
-use stereocull::records::uniform_bytes;
 use stereocull::records::{DrawArgs, InstanceRecord, LodRecord, MeshRecord};
+use stereocull::records::{storage_bytes, uniform_bytes};
 use stereocull::scene::Vertex;
 use stereocull::shaders::{
     Access, Binding, COARSE_BINDINGS, CULL_BINDINGS, CullPass, DRAW_BINDINGS, DrawKey,
@@ -200,6 +201,7 @@ fn contexts_match_wgsl() {
         first_eye: 1,
         split_keep: 2,
         split_distance: 13.0,
+        cull_slot: 3,
     };
     let bytes = uniform_bytes(&d);
     check_uniform(
@@ -218,6 +220,7 @@ fn contexts_match_wgsl() {
             ("first_eye", f32::from_bits(1)),
             ("split_keep", f32::from_bits(2)),
             ("split_distance", 13.0),
+            ("cull_slot", f32::from_bits(3)),
         ],
     );
     // The second eye sits one EyeContext span after the first, and the last plane five
@@ -265,6 +268,21 @@ fn contexts_match_wgsl() {
         .unwrap()
         .1;
     assert_eq!(f32_at(&bytes, planes + 5 * 16), 10.0);
+    let test = CoarseCull {
+        planes: std::array::from_fn(|i| Vec4::splat(1.0 + i as f32)),
+        inflation: 7.0,
+        slack: 8.0,
+    };
+    let bytes = storage_bytes(&[test, test]);
+    let (_, span) = wgsl_struct(&module(), "CoarseTest");
+    assert_eq!(bytes.len(), 2 * span as usize, "CoarseTest stride");
+    check_uniform(
+        "CoarseTest",
+        &bytes[..span as usize],
+        &[("planes", 1.0), ("inflation", 7.0), ("slack", 8.0)],
+    );
+    let (members, _) = wgsl_struct(&module(), "CoarseTest");
+    assert_eq!(f32_at(&bytes, members[0].1 + 5 * 16), 6.0);
     let params = CullParams {
         instance_count: 3,
         mesh_count: 5,

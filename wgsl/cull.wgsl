@@ -1,6 +1,6 @@
-// Pass 1 of 3 per display: test every instance's world sphere (or every candidate of
-// the frame's coarse cull) against the display frustum (never per eye), choose its
-// level of detail from the viewer, and record, for the level this z slice handles, its
+// Pass 1 of 3 per display: test every instance's world sphere (or those of the blocks
+// the frame's coarse cull listed for this display) against the display frustum (never
+// per eye), choose its level of detail from the viewer, and record, for the level this z slice handles, its
 // flag plus its prefix within the workgroup.
 // Bindings (all cull passes share them): CULL_BINDINGS in src/shaders/bindings.rs.
 
@@ -17,9 +17,11 @@ fn cull(
     var flag = 0u;
     if (j < n) {
         let k = cull_position(j);
-        let s = spheres_at(k);
-        if (sphere_in_planes(display.planes, s) && in_split(s) && lod_level(k) == level) {
-            flag = 1u;
+        if (k < params.instance_count) {
+            let s = spheres_at(k);
+            if (sphere_in_planes(display.planes, s) && in_split(s) && lod_level(k) == level) {
+                flag = 1u;
+            }
         }
     }
     let scan = workgroup_exclusive_scan(local, flag);

@@ -1,15 +1,16 @@
-// The frame level, before any display's cull (src/cull/coarse.rs): every instance is
-// tested once against the frame frustum, and the candidates, as cull positions in
-// ascending order with each mesh's range among them, are what every display's passes
-// then run over, dispatched indirectly from their count. Three entry points, in
-// dispatch order: coarse_cull, coarse_ranges (one workgroup), coarse_compact.
+// The frame level, before any display's cull (src/cull/coarse.rs): the cull order is
+// cut into blocks of BLOCK positions; each block's sphere is tested once against the
+// frame frustum and, when it passes, against each display's frustum (its slot); each
+// display's passes then run over the positions of its own blocks, dispatched
+// indirectly from their count. Two entry points, in dispatch order: coarse_blocks (one
+// invocation per cull position) and coarse_lists (one workgroup per slot).
 // Bindings: CULL_BINDINGS in group 0, COARSE_BINDINGS in group 1 (src/shaders/bindings.rs).
 
 // The CPU twin is CoarseCull::test: same operations, same order, no fma.
-fn coarse_test(s: vec4<f32>) -> bool {
-    let reach = s.w * frame.coarse_inflation + frame.coarse_slack * (abs(s.x) + abs(s.y) + abs(s.z));
+fn grown_test(planes: array<vec4<f32>, 6>, inflation: f32, slack: f32, s: vec4<f32>) -> bool {
+    let reach = s.w * inflation + slack * (abs(s.x) + abs(s.y) + abs(s.z));
     for (var i = 0u; i < 6u; i++) {
-        let p = frame.coarse_planes[i];
+        let p = planes[i];
         if (p.x * s.x + p.y * s.y + p.z * s.z + p.w < -reach) {
             return false;
         }
@@ -17,65 +18,130 @@ fn coarse_test(s: vec4<f32>) -> bool {
     return true;
 }
 
+// A block's sphere s and box (center s.xyz, half extents e) against a slot's test:
+// per plane the nearer reach of the two. The CPU twin is CoarseCull::test_block.
+fn block_test(t: CoarseTest, s: vec4<f32>, e: vec3<f32>) -> bool {
+    let slack = t.slack * (abs(s.x) + abs(s.y) + abs(s.z));
+    let sphere = s.w * t.inflation + slack;
+    for (var i = 0u; i < 6u; i++) {
+        let p = t.planes[i];
+        let boxed = (abs(p.x) * e.x + abs(p.y) * e.y + abs(p.z) * e.z) * t.inflation;
+        if (p.x * s.x + p.y * s.y + p.z * s.z + p.w < -min(sphere, boxed + slack)) {
+            return false;
+        }
+    }
+    return true;
+}
+
+var<workgroup> low: array<vec3<f32>, WORKGROUP_SIZE>;
+var<workgroup> high: array<vec3<f32>, WORKGROUP_SIZE>;
+var<workgroup> reach: array<f32, WORKGROUP_SIZE>;
+
+// The twin of block_of in src/cull/coarse.rs (each holds its members on its own; they
+// need not agree bit for bit): the box of the members' spheres, then the farthest
+// member's far side from its center, each reduced over the block's invocations.
 @compute @workgroup_size(WORKGROUP_SIZE)
-fn coarse_cull(
+fn coarse_blocks(
     @builtin(workgroup_id) wid: vec3<u32>,
     @builtin(num_workgroups) groups: vec3<u32>,
     @builtin(local_invocation_index) local: u32,
 ) {
-    let block = wid.y * groups.x + wid.x;
-    let n = params.instance_count;
-    let k = block * WORKGROUP_SIZE + local;
-    var flag = 0u;
-    if (k < n && coarse_test(spheres_at(k))) {
-        flag = 1u;
+    let k = (wid.y * groups.x + wid.x) * WORKGROUP_SIZE + local;
+    let member = k < params.instance_count;
+    var s = vec4(0.0);
+    low[local] = vec3(3.0e38);
+    high[local] = vec3(-3.0e38);
+    if (member) {
+        s = spheres_at(k);
+        low[local] = s.xyz - s.w;
+        high[local] = s.xyz + s.w;
     }
-    let scan = workgroup_exclusive_scan(local, flag);
-    if (k < n) {
-        local_prefix[k] = scan.x | select(0u, VISIBLE_BIT, flag == 1u);
+    workgroupBarrier();
+    let lane = local % BLOCK;
+    for (var step = BLOCK / 2u; step > 0u; step >>= 1u) {
+        if (lane < step) {
+            low[local] = min(low[local], low[local + step]);
+            high[local] = max(high[local], high[local + step]);
+        }
+        workgroupBarrier();
     }
-    let blocks = (n + WORKGROUP_SIZE - 1u) / WORKGROUP_SIZE;
-    if (local == 0u && block < blocks) {
-        block_sums[block] = scan.y;
+    let first = local - lane;
+    let center = (low[first] + high[first]) * 0.5;
+    reach[local] = select(0.0, length(s.xyz - center) + s.w, member);
+    workgroupBarrier();
+    for (var step = BLOCK / 2u; step > 0u; step >>= 1u) {
+        if (lane < step) {
+            reach[local] = max(reach[local], reach[local + step]);
+        }
+        workgroupBarrier();
+    }
+    let block = k / BLOCK;
+    let blocks = block_count();
+    if (lane != 0u || block >= blocks) {
+        return;
+    }
+    let sphere = vec4(center, reach[first] * BLOCK_GROWTH);
+    let magnitude = abs(center.x) + abs(center.y) + abs(center.z);
+    let extent = (high[first] - low[first]) * 0.5 * BLOCK_GROWTH + magnitude * BLOCK_SLACK;
+    let in_frame = grown_test(frame.coarse_planes, frame.coarse_inflation, frame.coarse_slack, sphere);
+    for (var slot = 0u; slot < arrayLength(&block_tests); slot++) {
+        let kept = in_frame && block_test(block_tests[slot], sphere, extent);
+        block_marks[slot * blocks + block] = select(0u, VISIBLE_BIT, kept);
     }
 }
 
+// Per slot, one workgroup: its blocks' marks become (blocks kept before) | kept bit,
+// the kept blocks are listed in ascending order, each mesh's range among the listed
+// positions is found, and the display passes' count and indirect dispatch written.
 @compute @workgroup_size(WORKGROUP_SIZE)
-fn coarse_ranges(@builtin(local_invocation_index) local: u32) {
-    let n = params.instance_count;
-    let blocks = (n + WORKGROUP_SIZE - 1u) / WORKGROUP_SIZE;
-    let total = prefix_blocks(0u, blocks, 0u, local);
+fn coarse_lists(
+    @builtin(workgroup_id) wid: vec3<u32>,
+    @builtin(local_invocation_index) local: u32,
+) {
+    let slot = wid.x;
+    let blocks = block_count();
+    let first = slot * blocks;
+    var listed = 0u;
+    for (var base = 0u; base < blocks; base += WORKGROUP_SIZE) {
+        let b = base + local;
+        var kept = 0u;
+        if (b < blocks) {
+            kept = block_marks[first + b] >> 31u;
+        }
+        let scan = workgroup_exclusive_scan(local, kept);
+        if (b < blocks) {
+            block_marks[first + b] = (listed + scan.x) | (kept << 31u);
+            if (kept == 1u) {
+                block_list[first + listed + scan.x] = b;
+            }
+        }
+        listed += scan.y;
+    }
     storageBarrier();
     for (var m = local; m < params.mesh_count; m += WORKGROUP_SIZE) {
         let mesh = meshes[m];
-        let start = flagged_before(0u, mesh.cull_start, n, total);
-        let end = flagged_before(0u, mesh.cull_start + mesh.cull_count, n, total);
-        candidate_ranges[m] = vec2(start, end - start);
+        let start = listed_before(first, mesh.cull_start, listed);
+        let end = listed_before(first, mesh.cull_start + mesh.cull_count, listed);
+        candidate_ranges[slot * params.mesh_count + m] = vec2(start, end - start);
     }
     if (local == 0u) {
-        candidate_count[0] = total;
+        let count = listed * BLOCK;
+        candidate_count[slot] = count;
         // The display passes' grid: x within the device's limit, y the rest.
-        let needed = (total + WORKGROUP_SIZE - 1u) / WORKGROUP_SIZE;
+        let needed = (count + WORKGROUP_SIZE - 1u) / WORKGROUP_SIZE;
         let x = min(needed, params.max_groups);
-        coarse_args[0] = x;
-        coarse_args[1] = select(0u, (needed + x - 1u) / x, x > 0u);
-        coarse_args[2] = params.lod_levels;
+        coarse_args[slot * 3u] = x;
+        coarse_args[slot * 3u + 1u] = select(0u, (needed + x - 1u) / x, x > 0u);
+        coarse_args[slot * 3u + 2u] = params.lod_levels;
     }
 }
 
-@compute @workgroup_size(WORKGROUP_SIZE)
-fn coarse_compact(
-    @builtin(workgroup_id) wid: vec3<u32>,
-    @builtin(num_workgroups) groups: vec3<u32>,
-    @builtin(local_invocation_index) local: u32,
-) {
-    let block = wid.y * groups.x + wid.x;
-    let k = block * WORKGROUP_SIZE + local;
-    if (k >= params.instance_count) {
-        return;
+// Listed positions before cull position `pos` of the slot whose marks start at `first`.
+fn listed_before(first: u32, pos: u32, listed: u32) -> u32 {
+    if (pos >= params.instance_count) {
+        return listed * BLOCK;
     }
-    let entry = local_prefix[k];
-    if ((entry & VISIBLE_BIT) != 0u) {
-        candidates[block_sums[block] + (entry & ~VISIBLE_BIT)] = k;
-    }
+    let mark = block_marks[first + pos / BLOCK];
+    let within = select(0u, pos % BLOCK, (mark & VISIBLE_BIT) != 0u);
+    return (mark & ~VISIBLE_BIT) * BLOCK + within;
 }

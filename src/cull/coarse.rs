@@ -1,25 +1,36 @@
-//! The frame-level coarse cull (the chapter's section 1.2.3): one test of every instance
-//! against the frame frustum, which holds every display frustum, narrows each
-//! display's cull to the candidates that pass.
+//! The frame-level coarse cull (the chapter's section 1.2.3): the cull order is cut into
+//! blocks of [`BLOCK`] positions, each block's bounding sphere is tested once against
+//! the frame frustum (which holds every display frustum) and, when it passes, against
+//! each display's frustum; each display's cull then runs over the instances of its own
+//! blocks only. Blocks pay where the cull order is spatially coherent (ids near each
+//! other lie near each other: the procedural scenes are generated so, and an engine
+//! inserting in spatial order gets the same); in a scene shuffled in space every
+//! block spans everything, and the cull stays exact but saves nothing.
 //!
-//! The display culls must come out byte-identical with and without it, so the coarse
-//! test must keep every sphere that any display's plane test keeps. Containment of the
-//! frusta is not enough for that: the plane test also keeps spheres near a frustum's
-//! corners that lie outside it, and such a sphere can lie wholly outside a frame plane
-//! that cuts past the corner at another angle. By Farkas' lemma every frame plane is a
-//! non-negative combination `sum(l_i * display_plane_i)` of each display's planes; a
-//! sphere passing every display plane then passes the frame plane with its radius
-//! grown by `sum(l_i)`. [`CoarseCull::new`] finds the smallest such sum per plane
-//! (over every display) and grows radii by the largest, plus slack for rounding on both
-//! sides, so the guarantee holds in f32 too (tests/coarse.rs tries to break it).
-//! `ResolvedRig::coarse_cull` builds it for a frame.
+//! The display culls must come out byte-identical with and without it, so the block
+//! tests must keep every block that holds a sphere any display's plane test keeps.
+//! Containment of the frusta is not enough for the frame test: the plane test also
+//! keeps spheres near a frustum's corners that lie outside it, and such a sphere can lie
+//! wholly outside a frame plane that cuts past the corner at another angle. By Farkas'
+//! lemma every frame plane is a non-negative combination `sum(l_i * display_plane_i)`
+//! of each display's planes; a sphere passing every display plane then passes the frame
+//! plane with its radius grown by `sum(l_i)`. [`CoarseCull::holding`] finds the smallest
+//! such sum per plane (over every display) and grows radii by the largest, plus slack
+//! for rounding on both sides, so the guarantee holds in f32 too (tests/coarse.rs tries
+//! to break it); [`CoarseCull::around`] is the same for a display's own planes (weights
+//! of one). A block's sphere holds its members' spheres with room for rounding
+//! ([`block_sphere`]), so a member that passes passes the block too.
+//! `ResolvedRig::coarse_cull` builds the frame's test.
 
-use glam::{DMat3, DVec3, Vec4};
+use glam::{DMat3, DVec3, Vec3, Vec4};
 
 use crate::frustum::{View, round_up};
 
-/// The frame-level test: the frame frustum's planes and how much radii grow.
-#[derive(Clone, Copy, Debug, PartialEq)]
+/// A grown sphere test: the frame frustum's (the frame test), or a display's (its
+/// block test), planes pushed out and radii grown so that it keeps what it must. The
+/// GPU reads the block tests as `CoarseTest` (`wgsl/shared/records.wgsl`); encase lays
+/// them out.
+#[derive(Clone, Copy, Debug, PartialEq, encase::ShaderType)]
 pub struct CoarseCull {
     /// Left, right, bottom, top, near, far of the frame frustum, each pushed out far
     /// enough that it holds every display plane's test (see the module docs).
@@ -61,29 +72,42 @@ impl CoarseCull {
                 *offset = offset.max(needed);
             }
         }
-        // The display test errs by a few units of roundoff times |center|_1 + |d|, and
-        // so does this one; the weights carry the display's error over, grown.
-        let slack = 8.0 * UNIT_ROUNDOFF * (inflation + 2.0);
         let magnitude = displays
             .iter()
             .flatten()
             .chain(&frame)
             .map(|p| p.w.abs() as f64)
             .fold(0.0, f64::max);
+        Some(CoarseCull::grown(frame, offsets, inflation, magnitude))
+    }
+
+    /// The test of `planes` themselves, grown for rounding as [`CoarseCull::holding`]
+    /// grows the frame's: what a block must pass to hold a sphere these planes keep.
+    pub fn around(planes: [Vec4; 6]) -> CoarseCull {
+        let magnitude = planes.iter().map(|p| p.w.abs() as f64).fold(0.0, f64::max);
+        CoarseCull::grown(planes, planes.map(|p| p.w as f64), 1.0, magnitude)
+    }
+
+    /// `planes` pushed out to `offsets`, radii grown by `inflation`, and both grown by
+    /// the slack that rounding needs: the display test errs by a few units of roundoff
+    /// times `|center|_1 + |d|`, and so does this one; the weights carry the display's
+    /// error over, grown.
+    fn grown(planes: [Vec4; 6], offsets: [f64; 6], inflation: f64, magnitude: f64) -> CoarseCull {
+        let slack = 8.0 * UNIT_ROUNDOFF * (inflation + 2.0);
         let inflation = inflation * (1.0 + 1e-6);
-        let mut planes = frame;
+        let mut planes = planes;
         for (p, offset) in planes.iter_mut().zip(offsets) {
             p.w = round_up(offset + slack * (magnitude + offset.abs()));
         }
-        Some(CoarseCull {
+        CoarseCull {
             planes,
             inflation: round_up(inflation),
             slack: round_up(slack),
-        })
+        }
     }
 
     /// Whether sphere `s` (center, radius) is a candidate. The CPU twin of
-    /// `coarse_test` in `wgsl/shared/cull_math.wgsl`: same operations, same order.
+    /// `grown_test` in `wgsl/cull_coarse.wgsl`: same operations, same order.
     #[inline]
     pub fn test(&self, s: Vec4) -> bool {
         let reach = s.w * self.inflation + self.slack * (s.x.abs() + s.y.abs() + s.z.abs());
@@ -91,22 +115,79 @@ impl CoarseCull {
             .iter()
             .all(|p| p.x * s.x + p.y * s.y + p.z * s.z + p.w >= -reach)
     }
+
+    /// Whether `block` may hold a sphere that these planes keep: per plane, the nearer
+    /// reach of its sphere and of its box (each holds every member, so each alone would
+    /// do; the box is the tighter along the axes, the sphere across them). For a
+    /// display's own planes ([`CoarseCull::around`]): the box's reach is not grown by
+    /// the Farkas weights, which a frame test would need. The CPU twin of `block_test`
+    /// in `wgsl/cull_coarse.wgsl`.
+    #[inline]
+    pub fn test_block(&self, block: &Block) -> bool {
+        let (s, e) = (block.sphere, block.extent);
+        let slack = self.slack * (s.x.abs() + s.y.abs() + s.z.abs());
+        let sphere = s.w * self.inflation + slack;
+        self.planes.iter().all(|p| {
+            let boxed = (p.x.abs() * e.x + p.y.abs() * e.y + p.z.abs() * e.z) * self.inflation;
+            p.x * s.x + p.y * s.y + p.z * s.z + p.w >= -sphere.min(boxed + slack)
+        })
+    }
+}
+
+/// A block of the cull order as the coarse cull sees it: a sphere and a box around
+/// the same center, each holding every member's sphere.
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub struct Block {
+    /// Center and radius.
+    pub sphere: Vec4,
+    /// The box's half extents.
+    pub extent: Vec3,
+}
+
+pub use crate::shaders::{BLOCK, BLOCK_GROWTH, BLOCK_SLACK};
+
+/// The block of spheres given as columns (x, y, z, -radius): the box of their spheres,
+/// and around its center a sphere reaching the farthest member's far side, both grown
+/// by [`BLOCK_GROWTH`] (the box by [`BLOCK_SLACK`] too). The twin of `coarse_blocks` in
+/// `wgsl/cull_coarse.wgsl`; they need not agree bit for bit, each holds its members.
+pub fn block_of([x, y, z, neg_r]: [&[f32]; 4]) -> Block {
+    let center_of = |i: usize| Vec3::new(x[i], y[i], z[i]);
+    let (mut low, mut high) = (Vec3::splat(f32::MAX), Vec3::splat(f32::MIN));
+    for (i, r) in neg_r.iter().enumerate() {
+        low = low.min(center_of(i) + *r);
+        high = high.max(center_of(i) - *r);
+    }
+    let center = (low + high) * 0.5;
+    let reach = neg_r
+        .iter()
+        .enumerate()
+        .map(|(i, r)| (center_of(i) - center).length() - r)
+        .fold(0.0, f32::max);
+    let magnitude = center.abs().element_sum();
+    Block {
+        sphere: center.extend(reach * BLOCK_GROWTH),
+        extent: (high - low) * 0.5 * BLOCK_GROWTH + magnitude * BLOCK_SLACK,
+    }
 }
 
 /// Sphere tests per frame with the coarse cull divided by those without, for a scene
-/// spread evenly around the viewer: `(1 + displays * share) / displays`, where `share`
-/// is the `frame` frustum's share of all directions (its solid angle over 4 pi).
-pub fn expected_tests(frame: &View, displays: usize) -> f64 {
-    let [left, right, up, down] = frame.fov.tangents();
-    // A pyramid's solid angle, quadrant by quadrant: atan(a b / sqrt(1 + a^2 + b^2)).
-    let quadrant = |a: f64, b: f64| (a * b / (1.0 + a * a + b * b).sqrt()).atan();
-    let solid_angle: f64 = [left, right]
-        .iter()
-        .flat_map(|&a| [up, down].map(|b| quadrant(a, b)))
-        .sum();
-    let share = solid_angle / (4.0 * std::f64::consts::PI);
-    let displays = displays as f64;
-    (1.0 + displays * share) / displays
+/// spread evenly around the viewer in a spatially coherent order: every sphere is read
+/// once for the blocks, then each display tests about what its own frustum holds,
+/// `(1 + sum(share)) / displays`, where a display's `share` is its frustum's share of
+/// all directions (its solid angle over 4 pi; blocks across its edges left out).
+pub fn expected_tests(displays: &[View]) -> f64 {
+    let share = |view: &View| {
+        let [left, right, up, down] = view.fov.tangents();
+        // A pyramid's solid angle, quadrant by quadrant: atan(a b / sqrt(1 + a^2 + b^2)).
+        let quadrant = |a: f64, b: f64| (a * b / (1.0 + a * a + b * b).sqrt()).atan();
+        let solid_angle: f64 = [left, right]
+            .iter()
+            .flat_map(|&a| [up, down].map(|b| quadrant(a, b)))
+            .sum();
+        solid_angle / (4.0 * std::f64::consts::PI)
+    };
+    let shares: f64 = displays.iter().map(share).sum();
+    (1.0 + shares) / displays.len().max(1) as f64
 }
 
 /// The non-negative weights, one per display plane, whose combination of the display's

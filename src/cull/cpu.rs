@@ -9,12 +9,15 @@ use rayon::prelude::*;
 
 use glam::{Vec3, Vec4};
 
+use super::coarse::{BLOCK, block_of};
 use super::{CoarseCull, CullJob, CullOutput, Split};
 use crate::records::{CullLayout, DrawArgs, lod_level};
 use crate::scene::MAX_LODS;
 
 /// Instances per parallel task: large enough to amortise scheduling, a multiple of 64.
 const CHUNK: usize = 1 << 14;
+// One mask word per coarse block: the block tests skip whole words.
+const _: () = assert!(BLOCK == 64);
 const WORDS_PER_CHUNK: usize = CHUNK / 64;
 
 /// Culls every instance for one job and builds its draws.
@@ -64,9 +67,10 @@ pub struct FrameCull {
     pub coarse: Option<CoarseCull>,
 }
 
-/// [`cull_many_lod`], with the frame's coarse cull first when it runs: each display
-/// then tests only the candidates (whole groups of 64 without one are skipped). The
-/// outputs are the same as without it; that is the coarse test's guarantee.
+/// [`cull_many_lod`], with the frame's coarse cull first when it runs: each group of
+/// [`BLOCK`] spheres is a block whose sphere is tested against the frame frustum and
+/// then each display's (or eye's), and each display tests only its blocks' spheres.
+/// The outputs are the same as without it; that is the block tests' guarantee.
 pub fn cull_frame(layout: &CullLayout, displays: &[CullJob], frame: &FrameCull) -> Vec<CullOutput> {
     let (lod, coarse) = (&frame.lod, frame.coarse.as_ref());
     let levels: Option<(Vec<u8>, u32)> = (lod.levels > 1).then(|| {
@@ -89,10 +93,17 @@ pub fn cull_frame(layout: &CullLayout, displays: &[CullJob], frame: &FrameCull) 
         .map(|job| job.planes.map(|v| v.to_array()))
         .collect();
     let splits: Vec<Option<Split>> = displays.iter().map(|job| job.split).collect();
+    let blocks: Vec<CoarseCull> = match coarse {
+        Some(_) => displays
+            .iter()
+            .map(|j| CoarseCull::around(j.planes))
+            .collect(),
+        None => Vec::new(),
+    };
     let tests = FrameTests {
         planes: &planes,
         splits: &splits,
-        coarse,
+        coarse: coarse.map(|frame| (frame, &blocks[..])),
     };
     // One mask per display, chunk-interleaved so each task writes one contiguous run.
     let mut masks = vec![0u64; words * displays.len()];
@@ -126,16 +137,16 @@ pub fn cull_frame(layout: &CullLayout, displays: &[CullJob], frame: &FrameCull) 
 }
 
 /// What each sphere is tested against: every display's planes and far split, after
-/// the frame's coarse test when it runs.
+/// its block's tests when the coarse cull runs (the frame's, then each display's).
 #[derive(Clone, Copy)]
 struct FrameTests<'a> {
     planes: &'a [[[f32; 4]; 6]],
     splits: &'a [Option<Split>],
-    coarse: Option<&'a CoarseCull>,
+    coarse: Option<(&'a CoarseCull, &'a [CoarseCull])>,
 }
 
-/// Tests one chunk of spheres for every display (only the coarse test's candidates,
-/// given one); `out` holds each display's words for the chunk one after another.
+/// Tests one chunk of spheres for every display (only the blocks that pass the coarse
+/// tests, given them); `out` holds each display's words for the chunk one after another.
 /// Returns the visible count per display.
 fn test_chunk(
     layout: &CullLayout,
@@ -151,15 +162,17 @@ fn test_chunk(
     let per = out.len() / planes.len();
     let [x, y, z, neg_r] = &layout.columns;
     let mut counts = vec![0; planes.len()];
-    for (w, group) in (start..end).step_by(64).enumerate() {
-        let g = group..(group + 64).min(end);
+    for (w, group) in (start..end).step_by(BLOCK as usize).enumerate() {
+        let g = group..(group + BLOCK as usize).min(end);
         let cols = [&x[g.clone()], &y[g.clone()], &z[g.clone()], &neg_r[g]];
-        let candidates = coarse.map_or(u64::MAX, |c| coarse_group(c, cols));
+        let block = coarse.map(|(frame, displays)| {
+            let block = block_of(cols);
+            (frame.test(block.sphere), displays, block)
+        });
         for (d, (p, split)) in planes.iter().zip(splits).enumerate() {
-            let bits = match candidates {
-                0 => 0,
-                _ => test_group(p, cols) & candidates,
-            };
+            let listed =
+                block.is_none_or(|(in_frame, tests, b)| in_frame && tests[d].test_block(&b));
+            let bits = if listed { test_group(p, cols) } else { 0 };
             let bits = match split {
                 Some(s) if bits != 0 => bits & split_group(s, cols),
                 _ => bits,
@@ -179,12 +192,6 @@ fn test_group(planes: &[[f32; 4]; 6], cols: [&[f32]; 4]) -> u64 {
     on_lanes(cols, |lanes| test_lanes(planes, lanes))
 }
 
-/// Coarse candidate bits of up to 64 spheres given as columns: per sphere exactly
-/// [`CoarseCull::test`]'s arithmetic, laid out over 64 lanes like [`test_group`].
-fn coarse_group(coarse: &CoarseCull, cols: [&[f32]; 4]) -> u64 {
-    on_lanes(cols, |lanes| coarse_lanes(coarse, lanes))
-}
-
 /// `test` over up to 64 spheres as columns, on lanes of exactly 64: the last group of a
 /// scene is short, so it is padded and the padding's bits dropped.
 fn on_lanes(cols: [&[f32]; 4], test: impl Fn([&[f32; 64]; 4]) -> u64) -> u64 {
@@ -199,43 +206,6 @@ fn on_lanes(cols: [&[f32]; 4], test: impl Fn([&[f32; 64]; 4]) -> u64) -> u64 {
     });
     let [x, y, z, r] = &lanes;
     test([x, y, z, r]) & ((1u64 << n) - 1)
-}
-
-fn coarse_lanes(coarse: &CoarseCull, lanes: [&[f32; 64]; 4]) -> u64 {
-    #[cfg(target_arch = "x86_64")]
-    if std::is_x86_feature_detected!("avx2") {
-        // SAFETY: the processor has AVX2, checked just above.
-        return unsafe { coarse_lanes_avx2(coarse, lanes) };
-    }
-    coarse_lanes_portable(coarse, lanes)
-}
-
-#[cfg(target_arch = "x86_64")]
-#[target_feature(enable = "avx2")]
-fn coarse_lanes_avx2(coarse: &CoarseCull, lanes: [&[f32; 64]; 4]) -> u64 {
-    coarse_lanes_portable(coarse, lanes)
-}
-
-#[inline(always)]
-fn coarse_lanes_portable(coarse: &CoarseCull, [x, y, z, neg_r]: [&[f32; 64]; 4]) -> u64 {
-    let mut neg_reach = [0.0f32; 64];
-    for i in 0..64 {
-        let reach =
-            -neg_r[i] * coarse.inflation + coarse.slack * (x[i].abs() + y[i].abs() + z[i].abs());
-        neg_reach[i] = -reach;
-    }
-    let mut inside = [u32::MAX; 64];
-    for p in &coarse.planes {
-        for i in 0..64 {
-            let dist = p.x * x[i] + p.y * y[i] + p.z * z[i] + p.w;
-            inside[i] &= ((dist >= neg_reach[i]) as u32).wrapping_neg();
-        }
-    }
-    let mut bits = 0u64;
-    for (i, m) in inside.iter().enumerate() {
-        bits |= ((m & 1) as u64) << i;
-    }
-    bits
 }
 
 /// The bits of up to 64 spheres given as columns that `split` keeps ([`Split::keeps`]).

@@ -1,19 +1,22 @@
 //! GPU culling: per display, three compute dispatches (`wgsl/cull.wgsl`,
 //! `cull_draws.wgsl`, `cull_compact.wgsl`) that write the visible list, the draws and the
 //! draw count per the contract in [`super`], byte-identical to [`super::cpu`]. With the
-//! frame-level coarse cull ([`super::coarse`]), three dispatches per frame first
-//! (`wgsl/cull_coarse.wgsl`) leave the candidates, and each display's passes run over
-//! those, dispatched indirectly from their count.
+//! frame-level coarse cull ([`super::coarse`]), two dispatches per frame first
+//! (`wgsl/cull_coarse.wgsl`) list each display's blocks, and each display's passes run
+//! over its blocks' positions, dispatched indirectly from their count.
 
 use crate::buffers::{init_buffer, init_buffer_with_room, storage_buffer};
 
 use crate::cull::CullOutput;
-use crate::records::uniform_bytes;
+use crate::cull::coarse::{BLOCK, CoarseCull};
 use crate::records::{CullLayout, DrawArgs};
+use crate::records::{storage_bytes, uniform_bytes};
 use crate::shaders::{
     COARSE_BINDINGS, CULL_BINDINGS, CullPass, WORKGROUP_SIZE, Windows, bind_group,
     bind_group_layout, compute_pipeline, dispatch_size, pipeline_layout,
 };
+use encase::ShaderType;
+use glam::Vec4;
 
 /// The uniform the cull passes read besides the display context (`CullParams` in
 /// `wgsl/shared/records.wgsl`); encase lays it out as WGSL does.
@@ -70,11 +73,17 @@ pub struct CullScene {
     lods: wgpu::Buffer,
     local_prefix: wgpu::Buffer,
     block_sums: wgpu::Buffer,
-    candidates: wgpu::Buffer,
-    /// The candidate count (the coarse passes write it; read back for statistics).
+    /// The coarse cull's slots (displays; 0 without it) and its buffers per slot.
+    coarse_slots: u32,
+    block_marks: wgpu::Buffer,
+    block_list: wgpu::Buffer,
+    /// Each slot's listed positions (the coarse passes write it; read back for
+    /// statistics).
     pub candidate_count: wgpu::Buffer,
     candidate_ranges: wgpu::Buffer,
-    /// The display passes' indirect dispatch, written by the coarse passes.
+    block_tests: wgpu::Buffer,
+    /// The display passes' indirect dispatches, one per slot, written by the coarse
+    /// passes.
     coarse_args: wgpu::Buffer,
 }
 
@@ -90,11 +99,11 @@ pub struct CullTargets {
 impl CullScene {
     /// Uploads `layout`, with room for `slots` instances (a live scene's capacity), for
     /// culling into `levels` levels of detail (1: LOD off), with room for the coarse
-    /// cull's candidates when `coarse`.
+    /// cull's lists of `coarse_slots` displays (0: no coarse cull).
     pub fn new(
         device: &wgpu::Device,
         layout: &CullLayout,
-        (slots, levels, coarse): (u32, u32, bool),
+        (slots, levels, coarse_slots): (u32, u32, u32),
     ) -> CullScene {
         let slots = slots.max(layout.positions.len() as u32);
         let max_groups = device.limits().max_compute_workgroups_per_dimension;
@@ -104,7 +113,10 @@ impl CullScene {
             init_buffer_with_room(device, label, contents, per_slot * slots as u64, usage)
         };
         let scratch = wgpu::BufferUsages::STORAGE;
-        let candidates = if coarse { slots as u64 } else { 0 };
+        // The display passes may run past the last instance to the end of its block.
+        let positions = slots.next_multiple_of(BLOCK) as u64;
+        let per_slot = |bytes: u64| bytes * coarse_slots as u64;
+        let block_bytes = per_slot(4 * slots.div_ceil(BLOCK) as u64);
         let meshes = layout.meshes.len() as u64;
         let most_groups = dispatch_size(slots.div_ceil(WORKGROUP_SIZE), max_groups);
         CullScene {
@@ -140,7 +152,7 @@ impl CullScene {
             local_prefix: storage_buffer(
                 device,
                 "stereocull.local_prefix",
-                4 * (slots * levels) as u64,
+                4 * positions * levels as u64,
                 scratch,
             ),
             block_sums: storage_buffer(
@@ -149,26 +161,47 @@ impl CullScene {
                 4 * (most_groups.0 * most_groups.1 * levels) as u64,
                 scratch,
             ),
-            candidates: storage_buffer(device, "stereocull.candidates", 4 * candidates, scratch),
+            coarse_slots,
+            block_marks: storage_buffer(device, "stereocull.block_marks", block_bytes, scratch),
+            block_list: storage_buffer(device, "stereocull.block_list", block_bytes, scratch),
             candidate_count: storage_buffer(
                 device,
                 "stereocull.candidate_count",
-                4,
+                per_slot(4),
                 scratch | wgpu::BufferUsages::COPY_SRC,
             ),
             candidate_ranges: storage_buffer(
                 device,
                 "stereocull.candidate_ranges",
-                8 * meshes,
+                per_slot(8 * meshes),
                 scratch,
+            ),
+            block_tests: storage_buffer(
+                device,
+                "stereocull.block_tests",
+                per_slot(CoarseCull::min_size().get()),
+                scratch | wgpu::BufferUsages::COPY_DST,
             ),
             coarse_args: storage_buffer(
                 device,
                 "stereocull.coarse_args",
-                12,
+                per_slot(12),
                 scratch | wgpu::BufferUsages::INDIRECT,
             ),
         }
+    }
+
+    /// Writes this frame's block tests, one per coarse slot (display, in order): the
+    /// display frustums' planes grown for rounding ([`CoarseCull::around`]). Returns the
+    /// bytes written; nothing without the coarse cull.
+    pub fn write_block_tests(&self, queue: &wgpu::Queue, planes: &[[Vec4; 6]]) -> u64 {
+        if self.coarse_slots == 0 {
+            return 0;
+        }
+        let tests: Vec<CoarseCull> = planes.iter().map(|p| CoarseCull::around(*p)).collect();
+        let bytes = storage_bytes(&tests);
+        queue.write_buffer(&self.block_tests, 0, &bytes);
+        bytes.len() as u64
     }
 
     /// Writes a new `layout` (instances inserted or removed) into the buffers, which must
@@ -261,15 +294,15 @@ impl GpuCuller {
     /// over their candidates too.
     pub fn new(device: &wgpu::Device, coarse: bool, windows: Windows) -> GpuCuller {
         let layout = bind_group_layout(device, "stereocull.cull", &CULL_BINDINGS, &windows);
-        let build = |passes: [CullPass; 3], candidates: bool, with: &wgpu::PipelineLayout| {
-            let build_one = |pass: CullPass| {
+        let build = |passes: &[CullPass], candidates: bool, with: &wgpu::PipelineLayout| {
+            let build_one = |pass: &CullPass| {
                 let entry = (pass.source(candidates, &windows), pass.entry_point());
                 compute_pipeline(device, &pass.label(candidates), with, entry)
             };
-            passes.map(build_one).to_vec()
+            passes.iter().map(build_one).collect()
         };
         let display_layout = pipeline_layout(device, "stereocull.cull", &layout);
-        let pipelines = build(CullPass::DISPLAY, false, &display_layout);
+        let pipelines = build(&CullPass::DISPLAY, false, &display_layout);
         let coarse = coarse.then(|| {
             let whole = &Windows::WHOLE;
             let args_layout =
@@ -280,8 +313,8 @@ impl GpuCuller {
                 immediate_size: 0,
             });
             CoarsePipelines {
-                display: build(CullPass::DISPLAY, true, &display_layout),
-                frame: build(CullPass::FRAME, false, &both),
+                display: build(&CullPass::DISPLAY, true, &display_layout),
+                frame: build(&CullPass::FRAME, false, &both),
                 args_layout,
             }
         });
@@ -316,9 +349,11 @@ impl GpuCuller {
             &targets.visible,
             &targets.draws,
             &targets.counts,
-            &scene.candidates,
+            &scene.block_marks,
+            &scene.block_list,
             &scene.candidate_count,
             &scene.candidate_ranges,
+            &scene.block_tests,
             &scene.spheres,
         ];
         let list = (&CULL_BINDINGS[..], &self.windows);
@@ -361,7 +396,7 @@ impl GpuCuller {
         for (pipeline, kind) in pipelines.iter().zip(CullPass::FRAME) {
             pass.set_pipeline(pipeline);
             match kind {
-                CullPass::CoarseRanges => pass.dispatch_workgroups(1, 1, 1),
+                CullPass::CoarseLists => pass.dispatch_workgroups(scene.coarse_slots, 1, 1),
                 _ => pass.dispatch_workgroups(x, y, 1),
             }
         }
@@ -369,28 +404,29 @@ impl GpuCuller {
     }
 
     /// Records the three dispatches for one display: a fixed count, whatever the
-    /// number of instances; `over_candidates` (with the coarse cull) runs them over the
-    /// frame's candidates, dispatched as the coarse passes sized them.
+    /// number of instances; with the coarse cull's `slot` they run over that slot's
+    /// listed blocks, dispatched as the coarse passes sized them.
     pub fn encode(
         &self,
         pass: &mut wgpu::ComputePass,
         scene: &CullScene,
         bind_group: &wgpu::BindGroup,
-        over_candidates: bool,
+        slot: Option<u32>,
     ) {
         pass.set_bind_group(0, bind_group, &[]);
         let (x, y) = scene.groups;
-        let pipelines = match (&self.coarse, over_candidates) {
-            (Some(c), true) => &c.display,
-            _ => &self.pipelines,
+        let (pipelines, slot) = match (&self.coarse, slot) {
+            (Some(c), Some(slot)) => (&c.display, Some(slot)),
+            _ => (&self.pipelines, None),
         };
-        let indirect = !std::ptr::eq(pipelines, &self.pipelines);
         for (pipeline, kind) in pipelines.iter().zip(CullPass::DISPLAY) {
             pass.set_pipeline(pipeline);
-            match (kind, indirect) {
+            match (kind, slot) {
                 (CullPass::Draws, _) => pass.dispatch_workgroups(1, 1, 1),
-                (_, true) => pass.dispatch_workgroups_indirect(&scene.coarse_args, 0),
-                (_, false) => pass.dispatch_workgroups(x, y, scene.levels),
+                (_, Some(s)) => {
+                    pass.dispatch_workgroups_indirect(&scene.coarse_args, 12 * s as u64)
+                }
+                (_, None) => pass.dispatch_workgroups(x, y, scene.levels),
             }
         }
     }

@@ -119,14 +119,14 @@ impl FarLayers {
         }
     }
 
-    /// Records display `index`'s far cull (GPU culling; `over_candidates` with the
-    /// coarse cull) and its far layer pass, timed inside `display`. Returns (dispatches,
+    /// Records display `index`'s far cull (GPU culling; with the coarse cull over its
+    /// display's block list) and its far layer pass, timed inside `display`. Returns (dispatches,
     /// draw calls).
     pub(super) fn encode(
         &self,
         encoder: &mut wgpu::CommandEncoder,
         (index, far, draw_scene): (usize, &FarDisplay, &DrawScene),
-        culler: Option<(&GpuCuller, &CullScene, bool)>,
+        culler: Option<(&GpuCuller, &CullScene, Option<u32>)>,
         (timer, display, log): (
             &mut Option<&mut GpuTimer>,
             &Option<GpuProfilerQuery>,
@@ -176,19 +176,20 @@ impl FarLayers {
 }
 
 impl FarDisplay {
-    /// Writes this frame's far context for `plan` (at the layer's fixed size) and,
-    /// culled on the CPU, the far cull. Returns the bytes written.
+    /// Writes this frame's far context for `plan` (at the layer's fixed size, over the
+    /// coarse cull's `slot`, its display's) and, culled on the CPU, the far cull.
+    /// Returns the bytes written.
     pub(super) fn prepare(
         &self,
         queue: &wgpu::Queue,
-        plan: &FarPlan,
+        (plan, slot): (&FarPlan, u32),
         cpu: Option<&CullOutput>,
     ) -> u64 {
         let sized = FarPlan {
             size: self.size,
             ..*plan
         };
-        self.view.prepare(queue, &sized.context(), cpu)
+        self.view.prepare(queue, &sized.context(slot), cpu)
     }
 }
 
@@ -361,8 +362,9 @@ impl Far {
         self.displays
             .iter()
             .zip(&self.plans)
-            .filter_map(|(far, plan)| far.as_ref().zip(plan.as_ref()))
-            .map(|(far, plan)| far.prepare(queue, plan, outputs.next()))
+            .enumerate()
+            .filter_map(|(i, (far, plan))| Some((i as u32, far.as_ref()?, plan.as_ref()?)))
+            .map(|(slot, far, plan)| far.prepare(queue, (plan, slot), outputs.next()))
             .sum()
     }
 }

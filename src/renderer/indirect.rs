@@ -80,7 +80,8 @@ impl IndirectPath {
         let culling = match options.cull {
             CullMode::Gpu => {
                 let culler = GpuCuller::new(device, coarse, windows);
-                let shape = (slots, options.lod_levels(), coarse);
+                let coarse_slots = if coarse { rig.displays.len() as u32 } else { 0 };
+                let shape = (slots, options.lod_levels(), coarse_slots);
                 let scene = Box::new(CullScene::new(device, &layout, shape));
                 let coarse = culler.coarse_bind_group(device, &scene);
                 Culling::Gpu {
@@ -193,7 +194,11 @@ impl IndirectPath {
         let mut stats = FrameStats::default();
         let start = Instant::now();
         let culls = match &self.culling {
-            Culling::Gpu { .. } => Vec::new(),
+            Culling::Gpu { scene, .. } => {
+                let planes: Vec<_> = resolved.displays.iter().map(|d| d.planes).collect();
+                stats.bytes_uploaded += scene.write_block_tests(queue, &planes);
+                Vec::new()
+            }
             Culling::Cpu { layout } => {
                 let mut jobs: Vec<_> = self
                     .displays
@@ -327,15 +332,14 @@ impl IndirectPath {
                 culler,
                 scene,
                 coarse,
-            } => Some((culler, &**scene, coarse.is_some())),
+            } => Some((culler, &**scene, coarse.is_some().then_some(index as u32))),
             Culling::Cpu { .. } => None,
         };
         let mut stats = FrameStats::default();
-        if let (Some((culler, scene, candidates)), Some(bind_group)) = (gpu, &state.cull_bind_group)
-        {
+        if let (Some((culler, scene, slot)), Some(bind_group)) = (gpu, &state.cull_bind_group) {
             let what = (&mut *log, PassRecord::display("cull", index));
             compute_pass(encoder, (timer, display), what, |pass| {
-                culler.encode(pass, scene, bind_group, candidates);
+                culler.encode(pass, scene, bind_group, slot);
             });
             stats.dispatches = GpuCuller::DISPATCHES_PER_DISPLAY;
         }

@@ -427,7 +427,10 @@ fn display_contexts(
         .iter()
         .zip(&resolved.displays)
         .enumerate()
-        .map(|(i, (d, r))| DisplayContext::new(r, d.resolution, instances_per_object(i)))
+        .map(|(i, (d, r))| DisplayContext {
+            cull_slot: i as u32,
+            ..DisplayContext::new(r, d.resolution, instances_per_object(i))
+        })
         .collect()
 }
 

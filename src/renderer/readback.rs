@@ -4,6 +4,7 @@
 use super::indirect::{Culling, IndirectPath};
 use super::{Path, Renderer};
 use crate::cull::CullOutput;
+use crate::cull::coarse::BLOCK;
 use crate::cull::gpu::{COUNTS_BYTES, CullTargets};
 use crate::error::Result;
 use crate::readback::read_pod;
@@ -21,14 +22,14 @@ pub struct FarSplit {
 }
 
 impl Renderer {
-    /// The coarse cull's candidates in the last frame, read back after it was submitted
-    /// (GPU culling with the coarse cull; `None` otherwise): each display's cull tested
-    /// only these.
+    /// The coarse cull's candidates in the last frame per display, read back after it
+    /// was submitted (GPU culling with the coarse cull; `None` otherwise): the cull
+    /// positions of the blocks listed for each display, all its cull tested.
     pub fn read_candidates(
         &self,
         device: &wgpu::Device,
         queue: &wgpu::Queue,
-    ) -> Result<Option<u32>> {
+    ) -> Result<Option<Vec<u32>>> {
         match &self.path {
             Path::Indirect(p) => p.read_candidates(device, queue),
             Path::Classic(_) => Ok(None),
@@ -37,7 +38,8 @@ impl Renderer {
 
     /// Sphere-against-frustum tests of the last frame with GPU culling (read back after
     /// it was submitted; `None` otherwise): every instance once per display, or with the
-    /// coarse cull once for the frame plus once per display for each candidate.
+    /// coarse cull every instance once (for its block's sphere), every block once for
+    /// the frame and once per display, and each display's candidates.
     pub fn read_sphere_tests(
         &self,
         device: &wgpu::Device,
@@ -120,28 +122,33 @@ impl Renderer {
 }
 
 impl IndirectPath {
-    /// The coarse cull's candidate count of the last frame (GPU culling with it on),
-    /// read back after the frame was submitted.
+    /// The coarse cull's candidate count per display of the last frame (GPU culling
+    /// with it on), read back after the frame was submitted.
     pub(super) fn read_candidates(
         &self,
         device: &wgpu::Device,
         queue: &wgpu::Queue,
-    ) -> Result<Option<u32>> {
+    ) -> Result<Option<Vec<u32>>> {
         match &self.culling {
             Culling::Gpu {
                 scene,
                 coarse: Some(_),
                 ..
-            } => Ok(Some(
-                read_pod::<u32>(device, queue, &scene.candidate_count, 4)?[0],
-            )),
+            } => {
+                let bytes = 4 * self.displays.len() as u64;
+                Ok(Some(read_pod::<u32>(
+                    device,
+                    queue,
+                    &scene.candidate_count,
+                    bytes,
+                )?))
+            }
             _ => Ok(None),
         }
     }
 
     /// Sphere-against-frustum tests of the last frame on the GPU (`None` culling on the
-    /// CPU): every instance per display, or with the coarse cull every instance once
-    /// plus the candidates per display.
+    /// CPU): see [`Renderer::read_sphere_tests`].
     pub(super) fn read_sphere_tests(
         &self,
         device: &wgpu::Device,
@@ -151,8 +158,9 @@ impl IndirectPath {
             return Ok(None);
         };
         let (n, displays) = (scene.instance_count as u64, self.displays.len() as u64);
+        let blocks = n.div_ceil(BLOCK as u64);
         Ok(Some(match self.read_candidates(device, queue)? {
-            Some(c) => n + displays * c as u64,
+            Some(c) => n + blocks * (1 + displays) + c.iter().map(|&c| c as u64).sum::<u64>(),
             None => displays * n,
         }))
     }

@@ -72,7 +72,7 @@ impl ShadowPass {
         };
         let frame = open_display(timer, "shadow", encoder);
         let gpu = match cull {
-            LightCull::Gpu(culler, scene) => Some((*culler, *scene, false)),
+            LightCull::Gpu(culler, scene) => Some((*culler, *scene, None)),
             LightCull::Cpu(_) => None,
         };
         let what = (&mut *log, PassRecord::frame("shadow_cull"));

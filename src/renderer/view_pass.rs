@@ -69,21 +69,21 @@ impl ViewPass {
         bytes + cpu.map_or(0, |out| self.cull.upload(queue, out))
     }
 
-    /// Records the view's cull on the GPU (`gpu`: the culler, its scene, and whether to
-    /// run over the coarse cull's candidates), timed and logged as `what`; nothing when
+    /// Records the view's cull on the GPU (`gpu`: the culler, its scene, and the coarse
+    /// cull's slot whose block list it runs over, if any), timed and logged as `what`; nothing when
     /// culling on the CPU. Returns the dispatches.
     pub(super) fn encode_cull(
         &self,
         encoder: &mut wgpu::CommandEncoder,
-        gpu: Option<(&GpuCuller, &CullScene, bool)>,
+        gpu: Option<(&GpuCuller, &CullScene, Option<u32>)>,
         timing: Timing,
         logged: Logged,
     ) -> u32 {
-        let (Some((culler, scene, candidates)), Some(group)) = (gpu, &self.cull_bind_group) else {
+        let (Some((culler, scene, slot)), Some(group)) = (gpu, &self.cull_bind_group) else {
             return 0;
         };
         compute_pass(encoder, timing, logged, |pass| {
-            culler.encode(pass, scene, group, candidates);
+            culler.encode(pass, scene, group, slot);
         });
         GpuCuller::DISPATCHES_PER_DISPLAY
     }

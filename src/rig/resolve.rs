@@ -123,9 +123,11 @@ impl ResolvedRig {
         CoarseCull::holding(frame.frustum().planes, &views).unwrap_or(CoarseCull::EVERYTHING)
     }
 
-    /// [`expected_tests`] for this frame: `None` without a frame frustum.
+    /// [`expected_tests`] for this frame's displays: `None` without a frame frustum.
     pub fn expected_coarse_tests(&self) -> Option<f64> {
-        Some(expected_tests(&self.frame()?, self.displays.len()))
+        self.frame()?;
+        let views: Vec<View> = self.displays.iter().map(|d| d.combined).collect();
+        Some(expected_tests(&views))
     }
 }
 

@@ -136,7 +136,7 @@ const COMPUTE: wgpu::ShaderStages = wgpu::ShaderStages::COMPUTE;
 /// Every cull pass's bindings: the frame context, per display its context and outputs,
 /// the scene data uploaded once, scratch shared by all displays, and the frame's coarse
 /// cull results.
-pub const CULL_BINDINGS: [Binding; 16] = [
+pub const CULL_BINDINGS: [Binding; 18] = [
     binding("frame", Access::Uniform, "FrameContext", COMPUTE),
     binding("display", Access::Uniform, "DisplayContext", COMPUTE),
     binding("params", Access::Uniform, "CullParams", COMPUTE),
@@ -170,10 +170,18 @@ pub const CULL_BINDINGS: [Binding; 16] = [
     ),
     // The draw count (what multi_draw_indexed_indirect_count reads), visible total.
     binding("counts", Access::StorageReadWrite, "array<u32, 2>", COMPUTE),
-    // The frame's coarse cull: candidate cull positions, ascending, their number, and
-    // each mesh's (start, count) among them.
+    // The frame's coarse cull (src/cull/coarse.rs), per slot and block of BLOCK cull
+    // positions: its mark (kept bit, then listed blocks before it), the listed blocks
+    // ascending, per slot the listed positions' count and each mesh's (start, count)
+    // among them, and per slot the block test.
     binding(
-        "candidates",
+        "block_marks",
+        Access::StorageReadWrite,
+        "array<u32>",
+        COMPUTE,
+    ),
+    binding(
+        "block_list",
         Access::StorageReadWrite,
         "array<u32>",
         COMPUTE,
@@ -181,13 +189,19 @@ pub const CULL_BINDINGS: [Binding; 16] = [
     binding(
         "candidate_count",
         Access::StorageReadWrite,
-        "array<u32, 1>",
+        "array<u32>",
         COMPUTE,
     ),
     binding(
         "candidate_ranges",
         Access::StorageReadWrite,
         "array<vec2<u32>>",
+        COMPUTE,
+    ),
+    binding(
+        "block_tests",
+        Access::StorageRead,
+        "array<CoarseTest>",
         COMPUTE,
     ),
     // World bounding spheres in cull order.
@@ -205,7 +219,7 @@ pub const CULL_BINDINGS: [Binding; 16] = [
 pub const COARSE_BINDINGS: [Binding; 1] = [binding(
     "coarse_args",
     Access::StorageReadWrite,
-    "array<u32, 3>",
+    "array<u32>",
     COMPUTE,
 )];
 

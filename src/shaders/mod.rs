@@ -7,6 +7,20 @@
 /// one entry per invocation. 256 is the largest size every WebGPU adapter must support.
 pub const WORKGROUP_SIZE: u32 = 256;
 
+/// Cull positions per block of the frame's coarse cull ([`crate::cull::coarse`]): the
+/// CPU culler's 64 lanes.
+pub const BLOCK: u32 = 64;
+
+/// How much a block's radius and half extents grow over what its members reach: room
+/// for the rounding of its center and of each distance, and for the members' own
+/// plane tests, which err with their `|center|` where the block's test allows for the
+/// block's. The box also grows by [`BLOCK_SLACK`] per unit of `|center|_1`: its faces
+/// come from rounded sums `center +- radius`.
+pub const BLOCK_GROWTH: f32 = 1.0 + 1.0 / 4096.0;
+
+/// See [`BLOCK_GROWTH`]: sixteen units of roundoff.
+pub const BLOCK_SLACK: f32 = 1.0 / 1048576.0;
+
 const CONTEXTS: &str = include_str!("../../wgsl/shared/contexts.wgsl");
 const RECORDS: &str = include_str!("../../wgsl/shared/records.wgsl");
 const CULL_MATH: &str = include_str!("../../wgsl/shared/cull_math.wgsl");
@@ -33,17 +47,15 @@ pub fn scatter_source(windows: &Windows) -> String {
     [RECORDS, &bindings, body].concat()
 }
 
-/// The cull passes: three at the frame level (the coarse cull, when on) and three per
+/// The cull passes: two at the frame level (the coarse cull, when on) and three per
 /// display, each list in dispatch order.
 #[derive(Clone, Copy, Debug, PartialEq, Eq)]
 pub enum CullPass {
-    /// Every sphere against the frame frustum: flags and per-workgroup prefixes.
-    CoarseCull,
-    /// Block prefixes, each mesh's candidate range, the candidate count and the display
-    /// passes' indirect dispatch (one workgroup).
-    CoarseRanges,
-    /// Candidate cull positions into their slots.
-    CoarseCompact,
+    /// Every block's sphere, tested against the frame frustum and each slot's.
+    CoarseBlocks,
+    /// Per slot (one workgroup each): the listed blocks, each mesh's range among their
+    /// positions, the count and the display passes' indirect dispatch.
+    CoarseLists,
     /// Sphere tests, flags and per-workgroup prefixes.
     Cull,
     /// Block prefixes, then the packed draws and the draw count (one workgroup).
@@ -53,19 +65,14 @@ pub enum CullPass {
 }
 
 impl CullPass {
-    pub const FRAME: [CullPass; 3] = [
-        CullPass::CoarseCull,
-        CullPass::CoarseRanges,
-        CullPass::CoarseCompact,
-    ];
+    pub const FRAME: [CullPass; 2] = [CullPass::CoarseBlocks, CullPass::CoarseLists];
     pub const DISPLAY: [CullPass; 3] = [CullPass::Cull, CullPass::Draws, CullPass::Compact];
 
     /// The pipeline's label; display passes over the coarse cull's candidates say so.
     pub fn label(self, over_candidates: bool) -> String {
         let name = match self {
-            CullPass::CoarseCull => "coarse_cull",
-            CullPass::CoarseRanges => "coarse_ranges",
-            CullPass::CoarseCompact => "coarse_compact",
+            CullPass::CoarseBlocks => "coarse_blocks",
+            CullPass::CoarseLists => "coarse_lists",
             CullPass::Cull => "cull",
             CullPass::Draws => "cull_draws",
             CullPass::Compact => "cull_compact",
@@ -84,9 +91,8 @@ impl CullPass {
 
     pub fn entry_point(self) -> &'static str {
         match self {
-            CullPass::CoarseCull => "coarse_cull",
-            CullPass::CoarseRanges => "coarse_ranges",
-            CullPass::CoarseCompact => "coarse_compact",
+            CullPass::CoarseBlocks => "coarse_blocks",
+            CullPass::CoarseLists => "coarse_lists",
             CullPass::Cull => "cull",
             CullPass::Draws => "draws_main",
             CullPass::Compact => "compact",
@@ -97,7 +103,7 @@ impl CullPass {
     /// `over_candidates` over the frame's coarse cull candidates.
     pub fn source(self, over_candidates: bool, windows: &Windows) -> String {
         let body = match self {
-            CullPass::CoarseCull | CullPass::CoarseRanges | CullPass::CoarseCompact => {
+            CullPass::CoarseBlocks | CullPass::CoarseLists => {
                 include_str!("../../wgsl/cull_coarse.wgsl")
             }
             CullPass::Cull => include_str!("../../wgsl/cull.wgsl"),
@@ -253,7 +259,11 @@ pub fn decode_source_with(views: u32, windows: &Windows) -> String {
 
 fn constants() -> String {
     let lods = crate::scene::MAX_LODS;
-    format!("\nconst WORKGROUP_SIZE: u32 = {WORKGROUP_SIZE}u;\nconst MAX_LODS: u32 = {lods}u;\n")
+    format!(
+        "\nconst WORKGROUP_SIZE: u32 = {WORKGROUP_SIZE}u;\nconst MAX_LODS: u32 = {lods}u;\n\
+         const BLOCK: u32 = {BLOCK}u;\nconst BLOCK_GROWTH: f32 = {BLOCK_GROWTH:?};\n\
+         const BLOCK_SLACK: f32 = {BLOCK_SLACK:?};\n"
+    )
 }
 
 /// Group 2 of the built-in draw pipelines: the frame's shadow map and its comparison

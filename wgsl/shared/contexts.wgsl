@@ -39,6 +39,9 @@ struct DisplayContext {
     // those entirely beyond split_distance from `position` (the display's apex).
     split_keep: u32,
     split_distance: f32,
+    // Which of the frame coarse cull's block lists this cull runs over (its display's
+    // index; the far layer's cull shares its display's): read only over candidates.
+    cull_slot: u32,
 }
 
 // Once per frame: the viewer (not any eye) and the time in seconds.
@@ -50,7 +53,7 @@ struct FrameContext {
     lod_scale: f32,
     // The frame-level coarse cull (src/cull/coarse.rs): the frame frustum's planes,
     // pushed out so that they keep every sphere any display keeps, how much radii grow,
-    // and the rounding slack per unit of |center|. See coarse_test in cull_coarse.wgsl.
+    // and the rounding slack per unit of |center|. See grown_test in cull_coarse.wgsl.
     coarse_planes: array<vec4<f32>, 6>,
     coarse_inflation: f32,
     coarse_slack: f32,

@@ -44,18 +44,25 @@ fn lod_level(k: u32) -> u32 {
     return level;
 }
 
+// Blocks of BLOCK cull positions, the coarse cull's unit (the last may be short).
+fn block_count() -> u32 {
+    return (params.instance_count + BLOCK - 1u) / BLOCK;
+}
+
 // What a display's passes run over: every cull position, or, after the frame's coarse
-// cull (COARSE), its candidates (cull positions, ascending), whose count it wrote.
+// cull (COARSE), the positions of the blocks listed for its slot, ascending (the last
+// block's may run past the instances: cull_position then passes instance_count).
 fn cull_count() -> u32 {
     if (COARSE) {
-        return candidate_count[0];
+        return candidate_count[display.cull_slot];
     }
     return params.instance_count;
 }
 
 fn cull_position(j: u32) -> u32 {
     if (COARSE) {
-        return candidates[j];
+        let listed = block_list[display.cull_slot * block_count() + j / BLOCK];
+        return listed * BLOCK + j % BLOCK;
     }
     return j;
 }
@@ -63,7 +70,7 @@ fn cull_position(j: u32) -> u32 {
 // Mesh m's (start, count) among what the passes run over.
 fn mesh_range(m: u32) -> vec2<u32> {
     if (COARSE) {
-        return candidate_ranges[m];
+        return candidate_ranges[display.cull_slot * params.mesh_count + m];
     }
     return vec2(meshes[m].cull_start, meshes[m].cull_count);
 }

@@ -51,9 +51,18 @@ struct DrawArgs {
 struct CullParams {
     instance_count: u32,
     mesh_count: u32,
-    // The device's limit of workgroups per dimension: how the coarse pass splits the
-    // candidates' dispatch into x and y (z is the level of detail).
+    // The device's limit of workgroups per dimension: how the coarse pass splits each
+    // display's dispatch over its blocks into x and y (z is the level of detail).
     max_groups: u32,
     // Levels of detail in use: 1 (LOD off) or MAX_LODS.
     lod_levels: u32,
+}
+
+// One slot's block test of the coarse cull (src/cull/coarse.rs): a display's planes
+// pushed out for rounding, radii grown by `inflation` plus `slack` per unit of
+// |center|_1. Mirrored by CoarseCull (encase).
+struct CoarseTest {
+    planes: array<vec4<f32>, 6>,
+    inflation: f32,
+    slack: f32,
 }
