@@ -1,8 +1,9 @@
 //! CPU culling throughput in instances x displays per second (criterion's "elem"): one
-//! display (`hmd`) and five culled in one pass (`cave`), on all cores and on one.
+//! display (`hmd`) and five culled in one pass (`cave`), on all cores and on one; and
+//! `hmd-peripheral`'s three displays with and without the coarse cull's blocks.
 
 use criterion::{Criterion, Throughput, criterion_group, criterion_main};
-use stereocull::cull::cpu;
+use stereocull::cull::cpu::{self, FrameCull, FrameLod};
 use stereocull::procedural;
 use stereocull::records::CullLayout;
 use stereocull::rig::Rig;
@@ -30,5 +31,25 @@ fn cull(c: &mut Criterion) {
     group.finish();
 }
 
-criterion_group!(benches, cull);
+fn coarse(c: &mut Criterion) {
+    let mut group = c.benchmark_group("cpu_coarse_cull");
+    let rig = Rig::preset("hmd-peripheral").expect("preset");
+    let displays = rig.cull_jobs().expect("display frusta");
+    let test = rig.resolve().expect("resolves").coarse_cull(false);
+    let n = 1_000_000u32;
+    let layout = CullLayout::new(&procedural::scene(n, 8, 1));
+    group.throughput(Throughput::Elements(n as u64 * displays.len() as u64));
+    for (name, coarse) in [("on", Some(test)), ("off", None)] {
+        let frame = FrameCull {
+            lod: FrameLod::OFF,
+            coarse,
+        };
+        group.bench_function(format!("hmd-peripheral/{n}/{name}"), |b| {
+            b.iter(|| cpu::cull_frame(&layout, &displays, &frame))
+        });
+    }
+    group.finish();
+}
+
+criterion_group!(benches, cull, coarse);
 criterion_main!(benches);

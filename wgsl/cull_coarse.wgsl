@@ -18,15 +18,14 @@ fn grown_test(planes: array<vec4<f32>, 6>, inflation: f32, slack: f32, s: vec4<f
     return true;
 }
 
-// A block's sphere s and box (center s.xyz, half extents e) against a slot's test:
-// per plane the nearer reach of the two. The CPU twin is CoarseCull::test_block.
-fn block_test(t: CoarseTest, s: vec4<f32>, e: vec3<f32>) -> bool {
-    let slack = t.slack * (abs(s.x) + abs(s.y) + abs(s.z));
-    let sphere = s.w * t.inflation + slack;
+// A block's box (center c.xyz, half extents e) against a slot's test. The CPU twin
+// is CoarseCull::test_block.
+fn block_test(t: CoarseTest, c: vec4<f32>, e: vec3<f32>) -> bool {
+    let slack = t.slack * (abs(c.x) + abs(c.y) + abs(c.z));
     for (var i = 0u; i < 6u; i++) {
         let p = t.planes[i];
-        let boxed = (abs(p.x) * e.x + abs(p.y) * e.y + abs(p.z) * e.z) * t.inflation;
-        if (p.x * s.x + p.y * s.y + p.z * s.z + p.w < -min(sphere, boxed + slack)) {
+        let reach = (abs(p.x) * e.x + abs(p.y) * e.y + abs(p.z) * e.z) * t.inflation;
+        if (p.x * c.x + p.y * c.y + p.z * c.z + p.w < -(reach + slack)) {
             return false;
         }
     }
@@ -35,11 +34,10 @@ fn block_test(t: CoarseTest, s: vec4<f32>, e: vec3<f32>) -> bool {
 
 var<workgroup> low: array<vec3<f32>, WORKGROUP_SIZE>;
 var<workgroup> high: array<vec3<f32>, WORKGROUP_SIZE>;
-var<workgroup> reach: array<f32, WORKGROUP_SIZE>;
 
 // The twin of block_of in src/cull/coarse.rs (each holds its members on its own; they
-// need not agree bit for bit): the box of the members' spheres, then the farthest
-// member's far side from its center, each reduced over the block's invocations.
+// need not agree bit for bit): the box of the members' spheres, reduced over the
+// block's invocations, grown, and the sphere through its corners.
 @compute @workgroup_size(WORKGROUP_SIZE)
 fn coarse_blocks(
     @builtin(workgroup_id) wid: vec3<u32>,
@@ -47,12 +45,10 @@ fn coarse_blocks(
     @builtin(local_invocation_index) local: u32,
 ) {
     let k = (wid.y * groups.x + wid.x) * WORKGROUP_SIZE + local;
-    let member = k < params.instance_count;
-    var s = vec4(0.0);
     low[local] = vec3(3.0e38);
     high[local] = vec3(-3.0e38);
-    if (member) {
-        s = spheres_at(k);
+    if (k < params.instance_count) {
+        let s = spheres_at(k);
         low[local] = s.xyz - s.w;
         high[local] = s.xyz + s.w;
     }
@@ -65,24 +61,15 @@ fn coarse_blocks(
         }
         workgroupBarrier();
     }
-    let first = local - lane;
-    let center = (low[first] + high[first]) * 0.5;
-    reach[local] = select(0.0, length(s.xyz - center) + s.w, member);
-    workgroupBarrier();
-    for (var step = BLOCK / 2u; step > 0u; step >>= 1u) {
-        if (lane < step) {
-            reach[local] = max(reach[local], reach[local + step]);
-        }
-        workgroupBarrier();
-    }
     let block = k / BLOCK;
     let blocks = block_count();
     if (lane != 0u || block >= blocks) {
         return;
     }
-    let sphere = vec4(center, reach[first] * BLOCK_GROWTH);
+    let center = (low[local] + high[local]) * 0.5;
     let magnitude = abs(center.x) + abs(center.y) + abs(center.z);
-    let extent = (high[first] - low[first]) * 0.5 * BLOCK_GROWTH + magnitude * BLOCK_SLACK;
+    let extent = (high[local] - low[local]) * 0.5 * BLOCK_GROWTH + magnitude * BLOCK_SLACK;
+    let sphere = vec4(center, length(extent) * BLOCK_GROWTH);
     let in_frame = grown_test(frame.coarse_planes, frame.coarse_inflation, frame.coarse_slack, sphere);
     for (var slot = 0u; slot < arrayLength(&block_tests); slot++) {
         let kept = in_frame && block_test(block_tests[slot], sphere, extent);

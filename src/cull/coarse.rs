@@ -116,26 +116,23 @@ impl CoarseCull {
             .all(|p| p.x * s.x + p.y * s.y + p.z * s.z + p.w >= -reach)
     }
 
-    /// Whether `block` may hold a sphere that these planes keep: per plane, the nearer
-    /// reach of its sphere and of its box (each holds every member, so each alone would
-    /// do; the box is the tighter along the axes, the sphere across them). For a
+    /// Whether the box of `block` may hold a sphere that these planes keep. Meant for a
     /// display's own planes ([`CoarseCull::around`]): the box's reach is not grown by
-    /// the Farkas weights, which a frame test would need. The CPU twin of `block_test`
-    /// in `wgsl/cull_coarse.wgsl`.
+    /// Farkas weights as a frame test's would need to be (the frame tests the block's
+    /// sphere). The CPU twin of `block_test` in `wgsl/cull_coarse.wgsl`.
     #[inline]
     pub fn test_block(&self, block: &Block) -> bool {
-        let (s, e) = (block.sphere, block.extent);
-        let slack = self.slack * (s.x.abs() + s.y.abs() + s.z.abs());
-        let sphere = s.w * self.inflation + slack;
+        let (c, e) = (block.sphere, block.extent);
+        let slack = self.slack * (c.x.abs() + c.y.abs() + c.z.abs());
         self.planes.iter().all(|p| {
-            let boxed = (p.x.abs() * e.x + p.y.abs() * e.y + p.z.abs() * e.z) * self.inflation;
-            p.x * s.x + p.y * s.y + p.z * s.z + p.w >= -sphere.min(boxed + slack)
+            let reach = (p.x.abs() * e.x + p.y.abs() * e.y + p.z.abs() * e.z) * self.inflation;
+            p.x * c.x + p.y * c.y + p.z * c.z + p.w >= -(reach + slack)
         })
     }
 }
 
-/// A block of the cull order as the coarse cull sees it: a sphere and a box around
-/// the same center, each holding every member's sphere.
+/// A block of the cull order as the coarse cull sees it: a box holding every member's
+/// sphere, and the sphere through its corners.
 #[derive(Clone, Copy, Debug, PartialEq)]
 pub struct Block {
     /// Center and radius.
@@ -147,27 +144,65 @@ pub struct Block {
 pub use crate::shaders::{BLOCK, BLOCK_GROWTH, BLOCK_SLACK};
 
 /// The block of spheres given as columns (x, y, z, -radius): the box of their spheres,
-/// and around its center a sphere reaching the farthest member's far side, both grown
-/// by [`BLOCK_GROWTH`] (the box by [`BLOCK_SLACK`] too). The twin of `coarse_blocks` in
-/// `wgsl/cull_coarse.wgsl`; they need not agree bit for bit, each holds its members.
+/// grown by [`BLOCK_GROWTH`] and [`BLOCK_SLACK`], and the sphere through its corners.
+/// The twin of `coarse_blocks` in `wgsl/cull_coarse.wgsl`; they need not agree bit for
+/// bit, each holds its members.
 pub fn block_of([x, y, z, neg_r]: [&[f32]; 4]) -> Block {
-    let center_of = |i: usize| Vec3::new(x[i], y[i], z[i]);
-    let (mut low, mut high) = (Vec3::splat(f32::MAX), Vec3::splat(f32::MIN));
-    for (i, r) in neg_r.iter().enumerate() {
-        low = low.min(center_of(i) + *r);
-        high = high.max(center_of(i) - *r);
-    }
+    let [(lx, hx), (ly, hy), (lz, hz)] = [x, y, z].map(|c| bounds(c, neg_r));
+    let (low, high) = (Vec3::new(lx, ly, lz), Vec3::new(hx, hy, hz));
     let center = (low + high) * 0.5;
-    let reach = neg_r
-        .iter()
-        .enumerate()
-        .map(|(i, r)| (center_of(i) - center).length() - r)
-        .fold(0.0, f32::max);
     let magnitude = center.abs().element_sum();
+    let extent = (high - low) * 0.5 * BLOCK_GROWTH + magnitude * BLOCK_SLACK;
     Block {
-        sphere: center.extend(reach * BLOCK_GROWTH),
-        extent: (high - low) * 0.5 * BLOCK_GROWTH + magnitude * BLOCK_SLACK,
+        sphere: center.extend(extent.length() * BLOCK_GROWTH),
+        extent,
     }
+}
+
+/// The lowest `v - r` and highest `v + r` over paired entries: eight lanes at a time
+/// with AVX2 where the processor has it (a full block's 64 entries), as the culler's
+/// plane tests run.
+fn bounds(values: &[f32], neg_r: &[f32]) -> (f32, f32) {
+    #[cfg(target_arch = "x86_64")]
+    if let (Ok(v), Ok(r)) = (
+        <&[f32; 64]>::try_from(values),
+        <&[f32; 64]>::try_from(neg_r),
+    ) && std::is_x86_feature_detected!("avx2")
+    {
+        // SAFETY: the processor has AVX2, checked just above.
+        return unsafe { bounds_avx2(v, r) };
+    }
+    bounds_portable(values, neg_r)
+}
+
+#[cfg(target_arch = "x86_64")]
+#[target_feature(enable = "avx2")]
+fn bounds_avx2(values: &[f32; 64], neg_r: &[f32; 64]) -> (f32, f32) {
+    bounds_portable(values, neg_r)
+}
+
+/// Comparisons and selects rather than `f32::min`, whose NaN rules keep it from
+/// vectorizing; the entries are finite.
+#[inline(always)]
+fn bounds_portable(values: &[f32], neg_r: &[f32]) -> (f32, f32) {
+    let (mut low, mut high) = ([f32::MAX; 8], [f32::MIN; 8]);
+    let (vs, rs) = (values.chunks_exact(8), neg_r.chunks_exact(8));
+    let tail = vs.remainder().iter().zip(rs.remainder());
+    for (v, r) in vs.zip(rs) {
+        for k in 0..8 {
+            let (near, far) = (v[k] + r[k], v[k] - r[k]);
+            low[k] = if near < low[k] { near } else { low[k] };
+            high[k] = if far > high[k] { far } else { high[k] };
+        }
+    }
+    let mut bound = (f32::MAX, f32::MIN);
+    for k in 0..8 {
+        bound = (bound.0.min(low[k]), bound.1.max(high[k]));
+    }
+    for (v, r) in tail {
+        bound = (bound.0.min(v + r), bound.1.max(v - r));
+    }
+    bound
 }
 
 /// Sphere tests per frame with the coarse cull divided by those without, for a scene

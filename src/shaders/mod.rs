@@ -11,11 +11,11 @@ pub const WORKGROUP_SIZE: u32 = 256;
 /// CPU culler's 64 lanes.
 pub const BLOCK: u32 = 64;
 
-/// How much a block's radius and half extents grow over what its members reach: room
-/// for the rounding of its center and of each distance, and for the members' own
-/// plane tests, which err with their `|center|` where the block's test allows for the
-/// block's. The box also grows by [`BLOCK_SLACK`] per unit of `|center|_1`: its faces
-/// come from rounded sums `center +- radius`.
+/// How much a coarse block's half extents (and the radius through its corners) grow
+/// over what its members reach: room for the rounding of its center, extents and
+/// radius, and for the members' own plane tests, which err with their `|center|` where
+/// the block's test allows for the block's. The extents also grow by [`BLOCK_SLACK`]
+/// per unit of `|center|_1`: the box's faces come from rounded sums `center +- radius`.
 pub const BLOCK_GROWTH: f32 = 1.0 + 1.0 / 4096.0;
 
 /// See [`BLOCK_GROWTH`]: sixteen units of roundoff.
