@@ -34,7 +34,14 @@ fn info_names_the_adapter() {
             .find(|l| l.trim_start().starts_with(&format!("{preset} ")))
             .map(|l| l.split_whitespace().nth(1).unwrap_or_default().to_string())
     };
-    assert_eq!(coarse("hmd-peripheral").as_deref(), Some("on"), "{text}");
+    // On a software adapter (lavapipe) auto leaves GPU culling without it: wgpu's
+    // indirect validation costs more than it saves there.
+    let software = text.lines().next().is_some_and(|l| l.contains(", Cpu,"));
+    let gains = if software { "off" } else { "on" };
+    for preset in ["hmd-peripheral", "cave"] {
+        assert_eq!(coarse(preset).as_deref(), Some(gains), "{text}");
+    }
+    assert_eq!(software, text.contains("a software adapter"), "{text}");
     assert_eq!(coarse("hmd").as_deref(), Some("off"), "{text}");
 }
 

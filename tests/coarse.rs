@@ -175,25 +175,40 @@ fn without_grown_radii_corner_spheres_are_dropped() {
 
 #[test]
 fn auto_runs_the_coarse_cull_where_it_pays() {
-    let auto = RendererOptions::default();
-    let on = |preset: &str| auto.coarse_for(&Rig::preset(preset).unwrap());
-    assert!(on("hmd-peripheral"));
-    assert!(
-        !on("hmd"),
-        "one display: the coarse cull would only add tests"
-    );
-    assert!(!on("cave"), "walls around the viewer: no frame frustum");
-    let resolved = Rig::preset("hmd-peripheral").unwrap().resolve().unwrap();
-    let ratio = resolved.expected_coarse_tests().unwrap();
-    assert!((0.3..0.8).contains(&ratio), "{ratio}");
+    let gpu = support::gpu();
+    let auto = |cull| RendererOptions {
+        cull,
+        ..RendererOptions::default()
+    };
+    let on =
+        |preset: &str, cull, device| auto(cull).coarse_for(&Rig::preset(preset).unwrap(), device);
+    for cull in [CullMode::Gpu, CullMode::Cpu] {
+        assert!(on("hmd-peripheral", cull, None));
+        assert!(on("cave", cull, None));
+        assert!(
+            !on("hmd", cull, None),
+            "one display: the coarse cull would only add tests"
+        );
+    }
+    let software = gpu.device.adapter_info().device_type == wgpu::DeviceType::Cpu;
     assert_eq!(
-        Rig::preset("cave")
+        on("cave", CullMode::Gpu, Some(&gpu.device)),
+        !software,
+        "GPU culling on a software adapter: indirect validation costs more"
+    );
+    assert!(on("cave", CullMode::Cpu, Some(&gpu.device)));
+    for (preset, range) in [
+        ("hmd-peripheral", 0.3..0.8),
+        ("cave", 0.2..0.8),
+        ("hmd", 1.0..1.5),
+    ] {
+        let ratio = Rig::preset(preset)
             .unwrap()
             .resolve()
             .unwrap()
-            .expected_coarse_tests(),
-        None
-    );
+            .expected_coarse_tests();
+        assert!(range.contains(&ratio), "{preset}: {ratio}");
+    }
 }
 
 fn culls(

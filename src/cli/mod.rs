@@ -193,15 +193,23 @@ fn info() -> Result<()> {
             println!("  {name:40} no  (costs: {without})");
         }
     }
-    println!("coarse cull with --coarse-cull auto (sphere tests expected with it / without):");
+    println!(
+        "coarse cull with --coarse-cull auto, GPU culling on this adapter \
+         (sphere tests expected with it / without):"
+    );
     for preset in crate::rig::PRESETS {
-        let resolved = Rig::preset(preset)?.resolve()?;
-        let expected = resolved.expected_coarse_tests();
-        let on = RendererOptions::default().coarse_for(&Rig::preset(preset)?);
-        let why = expected.map_or("no frame frustum holds the displays".into(), |r| {
-            format!("{r:.2}")
-        });
-        println!("  {preset:40} {}  ({why})", if on { "on " } else { "off" });
+        let rig = Rig::preset(preset)?;
+        let expected = rig.resolve()?.expected_coarse_tests();
+        let on = RendererOptions::default().coarse_for(&rig, Some(&gpu.device));
+        let gains = RendererOptions::default().coarse_for(&rig, None);
+        let why = match (on, gains) {
+            (false, true) => "; a software adapter: indirect validation costs more",
+            _ => "",
+        };
+        println!(
+            "  {preset:40} {}  ({expected:.2}{why})",
+            if on { "on " } else { "off" }
+        );
     }
     Ok(())
 }
@@ -294,7 +302,9 @@ fn cpu_cull(
     let resolved = rig.resolve()?;
     let frame = FrameCull {
         lod: frame_lod(rig, &resolved, options.lod_levels()),
-        coarse: options.coarse_for(rig).then(|| resolved.coarse_cull(false)),
+        coarse: options
+            .coarse_for(rig, None)
+            .then(|| resolved.coarse_cull(false)),
     };
     let plans = match options.far_layer {
         true => far_layer::plans(rig, &resolved, options.far_threshold_px),

@@ -75,7 +75,7 @@ impl IndirectPath {
     ) -> Result<IndirectPath> {
         let multiview = options.mode == StereoMode::Multiview;
         let layout = CullLayout::new(scene);
-        let coarse = options.coarse_for(rig);
+        let coarse = options.coarse_for(rig, Some(device));
         let windows = options.windows(device, slots);
         let culling = match options.cull {
             CullMode::Gpu => {

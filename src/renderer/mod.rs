@@ -192,7 +192,7 @@ impl Renderer {
         options: RendererOptions,
     ) -> Result<Renderer> {
         check_device(device, scene, &options)?;
-        let options_coarse = options.coarse_for(rig);
+        let options_coarse = options.coarse_for(rig, Some(device));
         let scatter = Scatters::new(
             device,
             options.windows(device, scene.instances.len() as u32),

@@ -23,15 +23,18 @@ pub enum CullMode {
     Cpu,
 }
 
-/// Whether each frame starts with the coarse cull ([`crate::cull::coarse`]): every
-/// instance once against the frame frustum, then each display's cull over the
-/// candidates only. The draws are the same either way; only the work differs.
+/// Whether each frame starts with the coarse cull ([`crate::cull::coarse`]): blocks of
+/// the cull order tested once against the frame frustum and each display's, then each
+/// display's cull over its own blocks only. The draws are the same either way; only the
+/// work differs.
 #[derive(Clone, Copy, Debug, Default, PartialEq, Eq, Hash, clap::ValueEnum, serde::Serialize)]
 #[serde(rename_all = "lowercase")]
 pub enum CoarseMode {
     /// On where it is expected to save sphere tests by a fifth or more
-    /// ([`crate::rig::ResolvedRig::expected_coarse_tests`]): rigs of several displays with a
-    /// frame frustum (`hmd-peripheral`), not one display nor displays around the viewer.
+    /// ([`crate::rig::ResolvedRig::expected_coarse_tests`]): rigs of several displays
+    /// (`hmd-peripheral`, `cave`), not one display. Off for GPU culling on software
+    /// adapters (lavapipe), where wgpu's validation of indirect calls (on by default)
+    /// costs milliseconds per indirect dispatch, more than the cull saves.
     #[default]
     Auto,
     On,
@@ -86,16 +89,20 @@ impl RendererOptions {
     }
 
     /// Whether frames on `rig` run the coarse cull: [`CoarseMode`] decided for the rig
-    /// as it stands (a rig that fails to resolve gets none; `Renderer::new` reports it).
-    pub fn coarse_for(&self, rig: &Rig) -> bool {
+    /// as it stands (a rig that fails to resolve gets none; `Renderer::new` reports it)
+    /// and, culling on the GPU, for `device`'s adapter (`None`: no GPU culling).
+    pub fn coarse_for(&self, rig: &Rig, device: Option<&wgpu::Device>) -> bool {
         match self.coarse_cull {
             CoarseMode::On => true,
             CoarseMode::Off => false,
-            CoarseMode::Auto => rig
-                .resolve()
-                .ok()
-                .and_then(|r| r.expected_coarse_tests())
-                .is_some_and(|ratio| ratio <= 0.8),
+            CoarseMode::Auto => {
+                let software =
+                    |d: &wgpu::Device| d.adapter_info().device_type == wgpu::DeviceType::Cpu;
+                let gains = rig
+                    .resolve()
+                    .is_ok_and(|r| r.expected_coarse_tests() <= 0.8);
+                gains && !(self.cull == CullMode::Gpu && device.is_some_and(software))
+            }
         }
     }
 

@@ -123,11 +123,10 @@ impl ResolvedRig {
         CoarseCull::holding(frame.frustum().planes, &views).unwrap_or(CoarseCull::EVERYTHING)
     }
 
-    /// [`expected_tests`] for this frame's displays: `None` without a frame frustum.
-    pub fn expected_coarse_tests(&self) -> Option<f64> {
-        self.frame()?;
+    /// [`expected_tests`] for this frame's displays.
+    pub fn expected_coarse_tests(&self) -> f64 {
         let views: Vec<View> = self.displays.iter().map(|d| d.combined).collect();
-        Some(expected_tests(&views))
+        expected_tests(&views)
     }
 }
 
