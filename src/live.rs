@@ -5,7 +5,10 @@
 //! An instance lives in a slot, and its slot is its instance id everywhere (the cull
 //! contract's visible ids, `Surface.instance`). A removed instance's slot is vacant until
 //! an insert reuses it, lowest vacant slot first; the slot's generation then moves on,
-//! so handles to the removed instance stay invalid.
+//! so handles to the removed instance stay invalid. In the cull order an instance has a
+//! place among its mesh's ([`Places`]): an insert takes its mesh's lowest vacant place
+//! and a remove leaves one, each a two-word edit; only a mesh out of vacant places lays
+//! the whole order out again, with room.
 //!
 //! ```no_run
 //! # fn demo(device: &wgpu::Device, queue: &wgpu::Queue) -> stereocull::Result<()> {
@@ -36,6 +39,7 @@
 use glam::{Affine3A, Mat4, Vec4};
 
 use crate::error::{Error, Result};
+use crate::places::Places;
 use crate::scene::{Instance, Scene, Vertex};
 
 /// A stable reference to one inserted instance.
@@ -53,20 +57,29 @@ impl Handle {
 }
 
 /// A moved instance as the scatter pass takes it: its slot, the rows of its new
-/// transform, its new world sphere (as bits: 17 words, 68 bytes).
+/// transform, its new world sphere (as bits: 17 words, 68 bytes). A slot of
+/// [`Places::VACANT`] makes it void (its instance was removed after it moved).
 pub type Edit = [u32; 17];
+
+/// A place of the cull order and the slot now there ([`Places::VACANT`]: none).
+pub type PlaceEdit = [u32; 2];
 
 /// What changed since the last sync.
 #[derive(Clone, Debug, Default, PartialEq, Eq)]
 pub struct Changes {
-    /// Edits of the instances whose transform changed (each slot once, its last move;
-    /// in first-move order).
+    /// Places filled or vacated (each place once, its last state; in first-change
+    /// order). Applied before the moves: an inserted instance's sphere goes up as its
+    /// move, to its new place.
+    pub placed: Vec<PlaceEdit>,
+    /// Edits of the instances whose transform changed or that were inserted (each slot
+    /// once, its last move; in first-move order).
     pub moved: Vec<Edit>,
-    /// Slots whose record changed otherwise (color), each once.
+    /// Slots whose record changed otherwise (color, an insert), each once.
     pub recolored: Vec<u32>,
-    /// Instances were inserted or removed (other than a removed instance's slot taken
-    /// back by an instance of the same mesh, which is a move and a record rewrite): the
-    /// cull order changes.
+    /// Slots removed: a move staged by an earlier sync is void.
+    pub removed: Vec<u32>,
+    /// A mesh ran out of vacant places and the cull order was laid out again
+    /// ([`LiveScene::places`]): the whole order goes up.
     pub restructured: bool,
     /// Meshes were added: geometry grows.
     pub geometry: bool,
@@ -91,18 +104,18 @@ pub struct LiveScene {
     moved_at: Vec<(u32, u32)>,
     /// Per slot: the change set it was last listed in `changes.recolored` in.
     recolored: Vec<u32>,
+    /// Per place: the change set it was last changed in, and its edit's index in
+    /// `changes.placed` then.
+    placed_at: Vec<(u32, u32)>,
     /// The current change set; starts at 1, so that 0 means never.
     epoch: u32,
     changes: Changes,
-    /// Slots vacated in this change set, with the mesh they held: an insert that takes
-    /// one back with the same mesh leaves the cull order as it was (a respawn), so it
-    /// goes up as an edit, not as a new order.
-    vacated: std::collections::BTreeMap<u32, u32>,
+    places: Places,
 }
 
 impl LiveScene {
     /// The mesh id of a vacant slot.
-    pub const VACANT: u32 = u32::MAX;
+    pub const VACANT: u32 = Instance::VACANT_MESH;
 
     /// What a vacant slot holds.
     pub const VACANT_INSTANCE: Instance = Instance {
@@ -116,16 +129,23 @@ impl LiveScene {
     /// of those instances are [`LiveScene::handles`].
     pub fn new(scene: Scene) -> LiveScene {
         let n = scene.instances.len();
+        let places = Places::tight(&scene);
         LiveScene {
-            scene,
             generations: vec![0; n],
             vacant: Default::default(),
             moved_at: vec![(0, 0); n],
             recolored: vec![0; n],
+            placed_at: vec![(0, 0); places.len() as usize],
             epoch: 1,
             changes: Changes::default(),
-            vacated: Default::default(),
+            places,
+            scene,
         }
+    }
+
+    /// Where each instance sits in the cull order (what the renderer lays out).
+    pub fn places(&self) -> &Places {
+        &self.places
     }
 
     /// The scene as the renderer uploads it: every slot, vacant ones included.
@@ -196,13 +216,13 @@ impl LiveScene {
                 self.slot_count() - 1
             }
         };
-        match self.vacated.remove(&slot) {
-            // Back where it was in the cull order: its record and sphere go up as edits.
-            Some(mesh) if mesh == instance.mesh => {
+        match self.places.take(slot, instance.mesh) {
+            Some(place) => {
+                self.stage_place([place, slot]);
                 self.stage_move(slot);
                 self.stage_record(slot);
             }
-            _ => self.changes.restructured = true,
+            None => self.lay_out(),
         }
         Ok(Handle {
             slot,
@@ -232,6 +252,26 @@ impl LiveScene {
         }
     }
 
+    /// Lists a place's new state in this change set, once (its last).
+    fn stage_place(&mut self, edit: PlaceEdit) {
+        let place = edit[0] as usize;
+        match self.placed_at[place] {
+            (epoch, at) if epoch == self.epoch => self.changes.placed[at as usize] = edit,
+            _ => {
+                self.placed_at[place] = (self.epoch, self.changes.placed.len() as u32);
+                self.changes.placed.push(edit);
+            }
+        }
+    }
+
+    /// Lays the cull order out again, every mesh with room; the next sync uploads it.
+    fn lay_out(&mut self) {
+        self.places = Places::with_room(&self.scene);
+        self.placed_at = vec![(0, 0); self.places.len() as usize];
+        self.changes.placed.clear();
+        self.changes.restructured = true;
+    }
+
     /// Lists `slot`'s record (color, animation) for a rewrite in this change set, once.
     fn stage_record(&mut self, slot: u32) {
         if std::mem::replace(&mut self.recolored[slot as usize], self.epoch) != self.epoch {
@@ -257,8 +297,15 @@ impl LiveScene {
             std::mem::replace(&mut self.scene.instances[slot], LiveScene::VACANT_INSTANCE);
         self.generations[slot] = self.generations[slot].wrapping_add(1);
         self.vacant.insert(handle.slot);
-        // The first mesh it held this change set is where the cull order has it.
-        self.vacated.entry(handle.slot).or_insert(removed.mesh);
+        let place = self.places.release(handle.slot, removed.mesh);
+        self.stage_place([place, Places::VACANT]);
+        if let (epoch, at) = self.moved_at[slot]
+            && epoch == self.epoch
+        {
+            self.changes.moved[at as usize][0] = Places::VACANT;
+            self.moved_at[slot] = (0, 0);
+        }
+        self.changes.removed.push(handle.slot);
         Ok(removed)
     }
 
@@ -273,17 +320,14 @@ impl LiveScene {
         self.scene.add_mesh(name, vertices, indices)
     }
 
-    /// The changes since the last call, which forgets them. Slots vacated and not taken
-    /// back by the same mesh change the cull order.
+    /// The changes since the last call, which forgets them.
     pub fn take_changes(&mut self) -> Changes {
-        if !std::mem::take(&mut self.vacated).is_empty() {
-            self.changes.restructured = true;
-        }
         self.epoch = self.epoch.wrapping_add(1);
         if self.epoch == 0 {
             // After 2^32 change sets the stamps start over.
             self.moved_at.fill((0, 0));
             self.recolored.fill(0);
+            self.placed_at.fill((0, 0));
             self.epoch = 1;
         }
         std::mem::take(&mut self.changes)

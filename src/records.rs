@@ -5,6 +5,7 @@
 use bytemuck::{Pod, Zeroable};
 use glam::Vec4;
 
+use crate::places::Places;
 use crate::scene::{Instance, MAX_LODS, Mesh, Scene};
 
 /// What the vertex shader reads per instance, indexed by instance id (64 bytes).
@@ -66,18 +67,21 @@ pub struct DrawArgs {
     pub first_instance: u32,
 }
 
-/// The scene as culling sees it: instances grouped by mesh, ascending id within a mesh
-/// (vacant slots of a [`crate::live::LiveScene`] left out).
+/// The scene as culling sees it: instances grouped by mesh, each in its place
+/// ([`Places`]: ascending id within a mesh when laid out, vacant places where removed
+/// instances were and inserted ones will go).
 /// With this order one prefix sum over visibility flags gives every visible instance its
-/// slot, already grouped by draw and sorted: the contract falls out of the storage order.
+/// slot, already grouped by draw and in place order: the contract falls out of the
+/// storage order.
 #[derive(Clone, Debug, PartialEq)]
 pub struct CullLayout {
-    /// World bounding spheres (center, radius) in cull order: what the GPU reads.
+    /// World bounding spheres (center, radius) in cull order: what the GPU reads
+    /// ([`CullLayout::VACANT_SPHERE`] at vacant places).
     pub spheres: Vec<Vec4>,
     /// The same spheres as columns (x, y, z, -radius), for the CPU culler: its plane
     /// tests vectorize over columns. CPU memory only.
     pub columns: [Vec<f32>; 4],
-    /// Instance id at each cull position.
+    /// Instance id at each cull position ([`CullLayout::VACANT`] at vacant places).
     pub order: Vec<u32>,
     /// Cull position of each instance id ([`CullLayout::VACANT`] for vacant slots):
     /// where a moved instance's sphere goes.
@@ -90,50 +94,46 @@ pub struct CullLayout {
 }
 
 impl CullLayout {
-    /// A stable counting sort by mesh: O(instances + meshes).
-    pub const VACANT: u32 = u32::MAX;
+    pub const VACANT: u32 = Places::VACANT;
 
+    /// A vacant place's sphere: its radius of minus infinity fails every plane test
+    /// (GPU and CPU alike) and adds nothing to a coarse block's bounds.
+    pub const VACANT_SPHERE: Vec4 = Vec4::new(0.0, 0.0, 0.0, f32::NEG_INFINITY);
+
+    /// `scene` laid out tight ([`Places::tight`]).
     pub fn new(scene: &Scene) -> CullLayout {
-        let occupied = || {
-            scene
-                .instances
-                .iter()
-                .enumerate()
-                .filter(|(_, i)| i.mesh != crate::live::LiveScene::VACANT)
-        };
-        let mut starts = vec![0u32; scene.meshes.len() + 1];
-        for (_, inst) in occupied() {
-            starts[inst.mesh as usize + 1] += 1;
-        }
-        for m in 0..scene.meshes.len() {
-            starts[m + 1] += starts[m];
-        }
+        CullLayout::with_places(scene, &Places::tight(scene))
+    }
+
+    /// `scene` with its instances at `places`: O(places + meshes).
+    pub fn with_places(scene: &Scene, places: &Places) -> CullLayout {
+        let order = places.slots().to_vec();
+        let spheres: Vec<Vec4> = order
+            .iter()
+            .map(|&slot| match slot {
+                Places::VACANT => CullLayout::VACANT_SPHERE,
+                _ => scene.world_sphere(&scene.instances[slot as usize]),
+            })
+            .collect();
+        let mut positions = places.of_slots().to_vec();
+        positions.resize(scene.instances.len(), CullLayout::VACANT);
+        let mut mesh_of = Vec::with_capacity(order.len());
         let meshes = scene
             .meshes
             .iter()
             .enumerate()
-            .map(|(m, mesh)| MeshRecord {
-                first_index: mesh.first_index,
-                index_count: mesh.index_count,
-                base_vertex: mesh.base_vertex,
-                cull_start: starts[m],
-                cull_count: starts[m + 1] - starts[m],
+            .map(|(m, mesh)| {
+                let (cull_start, cull_count) = places.range(m as u32);
+                mesh_of.resize(mesh_of.len() + cull_count as usize, m as u32);
+                MeshRecord {
+                    first_index: mesh.first_index,
+                    index_count: mesh.index_count,
+                    base_vertex: mesh.base_vertex,
+                    cull_start,
+                    cull_count,
+                }
             })
             .collect();
-        let count = starts[scene.meshes.len()] as usize;
-        let mut order = vec![0u32; count];
-        let mut spheres = vec![Vec4::ZERO; count];
-        let mut positions = vec![CullLayout::VACANT; scene.instances.len()];
-        let mut mesh_of = vec![0u32; count];
-        let mut cursor = starts;
-        for (id, inst) in occupied() {
-            let at = &mut cursor[inst.mesh as usize];
-            order[*at as usize] = id as u32;
-            spheres[*at as usize] = scene.world_sphere(inst);
-            positions[id] = *at;
-            mesh_of[*at as usize] = inst.mesh;
-            *at += 1;
-        }
         let column = |f: fn(&Vec4) -> f32| spheres.iter().map(f).collect();
         CullLayout {
             columns: [
@@ -157,6 +157,18 @@ impl CullLayout {
         self.spheres[at] = sphere;
         let [x, y, z, minus_r] = &mut self.columns;
         (x[at], y[at], z[at], minus_r[at]) = (sphere.x, sphere.y, sphere.z, -sphere.w);
+    }
+
+    /// Applies a place edit: `slot` (or [`CullLayout::VACANT`]) with `sphere` at `place`.
+    pub fn set_place(&mut self, (place, slot, sphere): (u32, u32, Vec4)) {
+        self.order[place as usize] = slot;
+        if slot != CullLayout::VACANT {
+            if self.positions.len() <= slot as usize {
+                self.positions.resize(slot as usize + 1, CullLayout::VACANT);
+            }
+            self.positions[slot as usize] = place;
+        }
+        self.set_sphere(place, sphere);
     }
 }
 

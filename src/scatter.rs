@@ -12,8 +12,24 @@
 //! bit and flip a decision at a tangent; 16 bytes more per edit keep GPU and CPU culls
 //! byte-identical.
 
+//! Edited instances reach the GPU sparsely, in one compute pass per frame with edits
+//! (`wgsl/scatter.wgsl`), three dispatches in this order: places filled or vacated in
+//! the cull order (place and slot: 8 bytes each, from
+//! [`crate::live::LiveScene::insert`] and `remove`), moves (slot, new transform rows,
+//! new world sphere: 68 bytes each, made by [`crate::live::LiveScene::set_transform`]
+//! and inserts) written into the instance records and, under GPU culling, the spheres
+//! in cull order, and whole records (slot and the 64-byte record: recolors, inserts).
+//! A frame without edits uploads and dispatches nothing.
+//!
+//! The spheres are computed on the CPU ([`crate::scene::Scene::world_sphere`]), not in
+//! the scatter pass: WGSL's `sqrt` need not be correctly rounded and drivers may fuse
+//! multiply-adds, so a GPU-computed sphere could differ from the CPU culler's in the last
+//! bit and flip a decision at a tangent; 16 bytes more per edit keep GPU and CPU culls
+//! byte-identical.
+
 use crate::buffers::storage_buffer;
-use crate::live::{Edit, make_edit};
+use crate::live::{Edit, PlaceEdit, make_edit};
+use crate::places::Places;
 use crate::records::instance_record;
 use crate::scene::Scene;
 use crate::shaders::{
@@ -22,12 +38,14 @@ use crate::shaders::{
 };
 
 const HEADER_BYTES: u64 = 16;
-const EDIT_BYTES: u64 = size_of::<Edit>() as u64;
 const GROUP: u32 = 64;
 
-/// What a scatter's 17-word edits carry.
+/// What a scatter's edits carry; each edit's first word is its key (a place, or a
+/// slot), at most one edit per key.
 #[derive(Clone, Copy, Debug, PartialEq, Eq)]
 pub enum EditKind {
+    /// Place and slot ([`PlaceEdit`]).
+    Places,
     /// Slot, transform rows, world sphere ([`make_edit`]).
     Moves,
     /// Slot and the whole record ([`record_edit`]).
@@ -37,68 +55,85 @@ pub enum EditKind {
 impl EditKind {
     fn entry_point(self) -> &'static str {
         match self {
+            EditKind::Places => "scatter_places",
             EditKind::Moves => "scatter",
             EditKind::Records => "scatter_records",
         }
     }
-
-    fn make(self, scene: &Scene, slot: u32) -> Edit {
-        match self {
-            EditKind::Moves => make_edit(scene, slot),
-            EditKind::Records => record_edit(scene, slot),
-        }
-    }
 }
 
-/// A frame's two scatters, dispatched in this order: moves, then whole records (a
-/// respawned instance has both, and its record must win).
+/// A frame's three scatters, dispatched in this order: places (an inserted instance's
+/// place first), moves, then whole records (an inserted instance has both a move and a
+/// record, and its record must win).
 pub struct Scatters {
-    pub moves: Scatter,
-    pub records: Scatter,
+    pub places: Scatter<2>,
+    pub moves: Scatter<17>,
+    pub records: Scatter<17>,
 }
 
 impl Scatters {
     pub fn new(device: &wgpu::Device, windows: Windows) -> Scatters {
         Scatters {
+            places: Scatter::new(device, windows, EditKind::Places),
             moves: Scatter::new(device, windows, EditKind::Moves),
             records: Scatter::new(device, windows, EditKind::Records),
         }
     }
 
-    /// Records the dispatches of what is staged; returns them (0 to 2).
     /// Records the dispatches of what is staged, in one compute pass (dispatches in a
-    /// pass are ordered); returns them (0 to 2).
+    /// pass are ordered); returns them (0 to 3).
     pub fn encode(&mut self, encoder: &mut wgpu::CommandEncoder) -> u32 {
-        if self.moves.pending() + self.records.pending() == 0 {
+        let pending = self.places.pending() + self.moves.pending() + self.records.pending();
+        if pending == 0 {
             return 0;
         }
         let mut pass = encoder.begin_compute_pass(&wgpu::ComputePassDescriptor {
             label: Some("stereocull.scatter"),
             timestamp_writes: None,
         });
-        self.moves.encode(&mut pass) + self.records.encode(&mut pass)
+        self.places.encode(&mut pass)
+            + self.moves.encode(&mut pass)
+            + self.records.encode(&mut pass)
     }
 
     /// Drops what is staged: the scene was uploaded whole again.
     pub fn reset(&mut self) {
+        self.places.reset();
         self.moves.reset();
         self.records.reset();
     }
 }
 
-/// A scatter pipeline, its edits buffer and which slots it holds edits for.
-pub struct Scatter {
-    kind: EditKind,
+/// How a sync remakes the edits already staged when a second sync before the dispatch
+/// outgrows the buffer: from the scene, and (places) the cull order's places.
+pub type Remake<'a, const W: usize> = &'a dyn Fn(u32) -> [u32; W];
+
+/// Each kind's edits as the scene (and places) hold them now.
+pub fn remake_move(scene: &Scene) -> impl Fn(u32) -> Edit + '_ {
+    move |slot| make_edit(scene, slot)
+}
+
+pub fn remake_record(scene: &Scene) -> impl Fn(u32) -> Edit + '_ {
+    move |slot| record_edit(scene, slot)
+}
+
+pub fn remake_place(places: &Places) -> impl Fn(u32) -> PlaceEdit + '_ {
+    move |place| [place, places.slots()[place as usize]]
+}
+
+/// A scatter pipeline, its edits buffer (`W` words each) and which keys it holds
+/// edits for.
+pub struct Scatter<const W: usize> {
     pipeline: wgpu::ComputePipeline,
     layout: wgpu::BindGroupLayout,
     windows: Windows,
     edits: wgpu::Buffer,
     bind_group: Option<wgpu::BindGroup>,
-    /// Slots with an edit in the buffer, in buffer order, and per slot 1 + its edit's
-    /// index (0: none): a slot moved in two syncs before a dispatch keeps one edit. The
+    /// Keys with an edit in the buffer, in buffer order, and per key 1 + its edit's
+    /// index (0: none): a key edited in two syncs before a dispatch keeps one edit. The
     /// index is built only when a second sync comes (`indexed`): one sync per frame
     /// pays no random writes for it.
-    slots: Vec<u32>,
+    keys: Vec<u32>,
     index: Vec<u32>,
     indexed: bool,
     spheres_too: bool,
@@ -106,27 +141,29 @@ pub struct Scatter {
 }
 
 /// Where the edits go: the instance records, and the spheres in cull order with each
-/// slot's cull position (the GPU culler's, or `None` when culling on the CPU).
+/// slot's cull position and each place's slot (the GPU culler's, or `None` when
+/// culling on the CPU).
 pub struct ScatterTargets<'a> {
     pub instances: &'a wgpu::Buffer,
-    pub spheres: Option<[&'a wgpu::Buffer; 2]>,
+    pub spheres: Option<[&'a wgpu::Buffer; 3]>,
 }
 
-impl Scatter {
+impl<const W: usize> Scatter<W> {
+    const EDIT_BYTES: u64 = 4 * W as u64;
+
     /// The scatter pass of `kind` for instance records and spheres bound in `windows`.
-    pub fn new(device: &wgpu::Device, windows: Windows, kind: EditKind) -> Scatter {
+    pub fn new(device: &wgpu::Device, windows: Windows, kind: EditKind) -> Scatter<W> {
         let layout = bind_group_layout(device, "stereocull.scatter", &SCATTER_BINDINGS, &windows);
         let pipeline_layout = pipeline_layout(device, "stereocull.scatter", &layout);
         let entry = (scatter_source(&windows), kind.entry_point());
         let pipeline = compute_pipeline(device, "stereocull.scatter", &pipeline_layout, entry);
         Scatter {
-            kind,
             pipeline,
             layout,
             windows,
             edits: edits_buffer(device, 0),
             bind_group: None,
-            slots: Vec::new(),
+            keys: Vec::new(),
             index: Vec::new(),
             indexed: false,
             spheres_too: false,
@@ -136,29 +173,29 @@ impl Scatter {
 
     /// Edits in the buffer, not yet dispatched.
     pub fn pending(&self) -> usize {
-        self.slots.len()
+        self.keys.len()
     }
 
-    /// Writes `edits` (each slot once) into the edits buffer, after or over the ones a
-    /// sync earlier this frame wrote; returns the bytes written. `scene` is read only in
-    /// the rare case of a second sync outgrowing the buffer.
+    /// Writes `edits` (each key once) into the edits buffer, after or over the ones a
+    /// sync earlier this frame wrote; returns the bytes written. `remake` is called only
+    /// in the rare case of a second sync outgrowing the buffer.
     pub fn stage(
         &mut self,
         device: &wgpu::Device,
         queue: &wgpu::Queue,
-        (scene, edits): (&Scene, &[Edit]),
+        (edits, remake): (&[[u32; W]], Remake<W>),
         targets: ScatterTargets,
     ) -> u64 {
         self.spheres_too = targets.spheres.is_some();
         let mut bytes = 0;
-        if self.slots.is_empty() {
+        if self.keys.is_empty() {
             // The common case, one sync per frame: the edits go up as they are.
             self.grow(device, edits.len());
-            self.slots.extend(edits.iter().map(|e| e[0]));
+            self.keys.extend(edits.iter().map(|e| e[0]));
             queue.write_buffer(&self.edits, HEADER_BYTES, bytemuck::cast_slice(edits));
-            bytes += EDIT_BYTES * edits.len() as u64;
+            bytes += Self::EDIT_BYTES * edits.len() as u64;
         } else {
-            bytes += self.merge(device, queue, (scene, edits));
+            bytes += self.merge(device, queue, (edits, remake));
         }
         if self.bind_group.is_none() {
             self.bind_group = Some(self.bind(device, &targets));
@@ -167,49 +204,67 @@ impl Scatter {
         bytes + HEADER_BYTES
     }
 
-    /// A second sync before the dispatch: slots already staged are overwritten in place,
-    /// new ones appended; a buffer too small is replaced and refilled from `scene`.
+    /// Voids the staged edit of `key`, if any (its instance was removed after an
+    /// earlier sync this frame staged its move): the shader skips void keys.
+    pub fn void(&mut self, queue: &wgpu::Queue, key: u32) {
+        if self.keys.is_empty() {
+            return;
+        }
+        self.build_index();
+        if let Some(&at) = self.index.get(key as usize)
+            && at != 0
+        {
+            let offset = HEADER_BYTES + Self::EDIT_BYTES * (at as u64 - 1);
+            queue.write_buffer(&self.edits, offset, bytemuck::bytes_of(&Places::VACANT));
+        }
+    }
+
+    fn build_index(&mut self) {
+        if self.indexed {
+            return;
+        }
+        let most = self.keys.iter().map(|&k| k as usize + 1).max().unwrap_or(0);
+        self.index.resize(self.index.len().max(most), 0);
+        for (k, &key) in self.keys.iter().enumerate() {
+            self.index[key as usize] = k as u32 + 1;
+        }
+        self.indexed = true;
+    }
+
+    /// A second sync before the dispatch: keys already staged are overwritten in place,
+    /// new ones appended; a buffer too small is replaced and refilled with `remake`.
     fn merge(
         &mut self,
         device: &wgpu::Device,
         queue: &wgpu::Queue,
-        (scene, edits): (&Scene, &[Edit]),
+        (edits, remake): (&[[u32; W]], Remake<W>),
     ) -> u64 {
-        if !self.indexed {
-            self.index
-                .resize(self.index.len().max(scene.instances.len()), 0);
-            for (k, &slot) in self.slots.iter().enumerate() {
-                self.index[slot as usize] = k as u32 + 1;
-            }
-            self.indexed = true;
-        }
+        self.build_index();
+        let most = edits.iter().map(|e| e[0] as usize + 1).max().unwrap_or(0);
+        self.index.resize(self.index.len().max(most), 0);
         let fresh = edits
             .iter()
             .filter(|e| self.index[e[0] as usize] == 0)
             .count();
-        if self.grow(device, self.slots.len() + fresh) {
-            let all: Vec<Edit> = self
-                .slots
-                .iter()
-                .map(|&s| self.kind.make(scene, s))
-                .collect();
+        if self.grow(device, self.keys.len() + fresh) {
+            let all: Vec<[u32; W]> = self.keys.iter().map(|&k| remake(k)).collect();
             queue.write_buffer(&self.edits, HEADER_BYTES, bytemuck::cast_slice(&all));
         }
         for edit in edits {
-            let slot = edit[0] as usize;
-            if self.index[slot] == 0 {
-                self.slots.push(edit[0]);
-                self.index[slot] = self.slots.len() as u32;
+            let key = edit[0] as usize;
+            if self.index[key] == 0 {
+                self.keys.push(edit[0]);
+                self.index[key] = self.keys.len() as u32;
             }
-            let at = HEADER_BYTES + EDIT_BYTES * (self.index[slot] as u64 - 1);
-            queue.write_buffer(&self.edits, at, bytemuck::bytes_of(edit));
+            let at = HEADER_BYTES + Self::EDIT_BYTES * (self.index[key] as u64 - 1);
+            queue.write_buffer(&self.edits, at, bytemuck::cast_slice(edit));
         }
-        EDIT_BYTES * edits.len() as u64
+        Self::EDIT_BYTES * edits.len() as u64
     }
 
     /// Makes room for `count` edits; returns whether the buffer is new (and empty).
     fn grow(&mut self, device: &wgpu::Device, count: usize) -> bool {
-        let needed = HEADER_BYTES + EDIT_BYTES * count as u64;
+        let needed = HEADER_BYTES + Self::EDIT_BYTES * count as u64;
         if needed <= self.edits.size() {
             return false;
         }
@@ -244,12 +299,12 @@ impl Scatter {
 
     fn clear(&mut self) {
         if self.indexed {
-            for &slot in &self.slots {
-                self.index[slot as usize] = 0;
+            for &key in &self.keys {
+                self.index[key as usize] = 0;
             }
             self.indexed = false;
         }
-        self.slots.clear();
+        self.keys.clear();
     }
 
     fn groups(&self) -> (u32, u32) {
@@ -268,16 +323,16 @@ impl Scatter {
             let usage = wgpu::BufferUsages::STORAGE;
             storage_buffer(device, "stereocull.scatter_stand_in", 0, usage)
         };
-        let (spheres, positions);
-        let [s, p] = match targets.spheres {
-            Some(pair) => pair,
+        let (spheres, positions, order);
+        let [s, p, o] = match targets.spheres {
+            Some(three) => three,
             None => {
-                (spheres, positions) = (stand_in(), stand_in());
-                [&spheres, &positions]
+                (spheres, positions, order) = (stand_in(), stand_in(), stand_in());
+                [&spheres, &positions, &order]
             }
         };
         // In SCATTER_BINDINGS order.
-        let buffers = [&self.edits, p, targets.instances, s];
+        let buffers = [&self.edits, p, o, targets.instances, s];
         let list = (&SCATTER_BINDINGS[..], &self.windows);
         bind_group(device, ("stereocull.scatter", &self.layout), list, buffers)
     }

@@ -91,6 +91,12 @@ pub struct Instance {
     pub animation: Animation,
 }
 
+impl Instance {
+    /// The mesh id of a vacant slot of a [`crate::live::LiveScene`], which culling
+    /// skips.
+    pub const VACANT_MESH: u32 = u32::MAX;
+}
+
 /// Per-instance motion, evaluated in the vertex shader (`wgsl/shared/draw_common.wgsl`)
 /// from the frame's time `t` in seconds: the mesh turns about its local +Y axis (through
 /// the local origin) by `spin * t` radians, then is placed by `world_from_local`, then

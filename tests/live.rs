@@ -1,7 +1,9 @@
 //! Live scenes: random edit sequences (fixed seeds) against a plain model of the scene,
 //! with GPU and CPU culling checked byte for byte against the CPU reference of the model
-//! every few frames; typed errors for bad handles and non-finite edits; and a moved
-//! instance drawn exactly where a freshly built scene draws it.
+//! at the live scene's places every few frames (and, as sets per draw, against the
+//! model laid out afresh); inserts take their mesh's lowest vacant place; typed errors
+//! for bad handles and non-finite edits; and a moved instance drawn exactly where a
+//! freshly built scene draws it.
 
 mod support;
 
@@ -14,6 +16,7 @@ use stereocull::contexts::{DisplayContext, FrameContext};
 use stereocull::cull::cpu;
 use stereocull::device::Gpu;
 use stereocull::live::{Handle, LiveScene};
+use stereocull::places::Places;
 use stereocull::readback::read_rgba8;
 use stereocull::records::CullLayout;
 use stereocull::renderer::{CullMode, Renderer, RendererOptions, StereoMode, SyncStats, frame_lod};
@@ -95,14 +98,25 @@ fn edit(rng: &mut Pcg64Mcg, live: &mut LiveScene, model: &mut Model, moves: bool
         false => rng.random_range(0..11),
     };
     match kind {
-        // Inserts (more likely while the scene is small): into the lowest vacant slot.
+        // Inserts (more likely while the scene is small): into the lowest vacant slot,
+        // and the mesh's lowest vacant place (or a new layout when it has none).
         0..=2 => {
             let mesh = rng.random_range(0..MESHES);
             let inst = random_instance(rng, mesh);
+            let place = lowest_vacant_place(live.places(), mesh);
             let h = live.insert(inst).unwrap();
             let slot = h.slot() as usize;
             let lowest_vacant = model.slots.iter().position(Option::is_none);
             assert_eq!(Some(slot), lowest_vacant.or(Some(model.slots.len())));
+            let (start, len) = live.places().range(mesh);
+            let now = live.places().of_slots()[slot];
+            assert!(
+                (start..start + len).contains(&now),
+                "within its mesh's places"
+            );
+            if let Some(place) = place {
+                assert_eq!(now, place, "the mesh's lowest vacant place");
+            }
             if slot == model.slots.len() {
                 model.slots.push(None);
                 model.handles.push(None);
@@ -151,8 +165,15 @@ fn edit(rng: &mut Pcg64Mcg, live: &mut LiveScene, model: &mut Model, moves: bool
     }
 }
 
+/// The lowest vacant place of `mesh`, if it has one.
+fn lowest_vacant_place(places: &Places, mesh: u32) -> Option<u32> {
+    let (start, len) = places.range(mesh);
+    (start..start + len).find(|&p| places.slots()[p as usize] == Places::VACANT)
+}
+
 /// Culls one frame with `renderer` after syncing `live`, and compares every display's
-/// buffers with the CPU reference culling of the model.
+/// buffers with the CPU reference culling of the model at the live scene's places, and
+/// each draw's visible ids as a set with the model laid out afresh.
 fn check(
     gpu: &Gpu,
     renderer: &mut Renderer,
@@ -171,21 +192,42 @@ fn check(
     renderer
         .submit_frame(&gpu.device, &gpu.queue, &rig, 0.0, &targets)
         .unwrap();
-    let reference = match renderer.options().lod {
-        false => reference_culls(want, &rig),
-        true => {
-            let lod = frame_lod(&rig, &rig.resolve().unwrap(), MAX_LODS as u32);
-            let jobs = rig.cull_jobs().unwrap();
-            cpu::cull_many_lod(&CullLayout::new(want), &jobs, &lod)
-        }
+    let lod = match renderer.options().lod {
+        false => cpu::FrameLod::OFF,
+        true => frame_lod(&rig, &rig.resolve().unwrap(), MAX_LODS as u32),
     };
-    for (d, reference) in reference.into_iter().enumerate() {
+    let jobs = rig.cull_jobs().unwrap();
+    let at_places = CullLayout::with_places(want, live.places());
+    let reference = cpu::cull_many_lod(&at_places, &jobs, &lod);
+    let afresh = cpu::cull_many_lod(&CullLayout::new(want), &jobs, &lod);
+    for (d, (reference, afresh)) in reference.into_iter().zip(afresh).enumerate() {
         let got = renderer.read_cull(&gpu.device, &gpu.queue, d).unwrap();
         assert_eq!(got.draw_count, reference.draw_count, "{what}: draw count");
         assert_eq!(got.draws, reference.draws, "{what}: draws");
         assert!(got.visible == reference.visible, "{what}: visible ids");
+        assert_eq!(got.draws, afresh.draws, "{what}: draws of the model afresh");
+        assert_eq!(
+            per_draw_sets(&got),
+            per_draw_sets(&afresh),
+            "{what}: visible sets"
+        );
     }
     synced
+}
+
+/// Each draw's visible ids, sorted.
+fn per_draw_sets(out: &stereocull::cull::CullOutput) -> Vec<Vec<u32>> {
+    out.draws[..out.draw_count as usize]
+        .iter()
+        .map(|d| {
+            let views = 2;
+            let first = (d.first_instance / views) as usize;
+            let count = (d.instance_count / views) as usize;
+            let mut ids = out.visible[first..first + count].to_vec();
+            ids.sort_unstable();
+            ids
+        })
+        .collect()
 }
 
 /// Random edit sequences from an empty scene: inserts into it, moves, recolors, removes
@@ -212,6 +254,7 @@ fn edit_sequences_keep_gpu_and_cpu_culls_identical_to_the_model() {
             };
             Renderer::new(&gpu.device, &meshes, &rig, options).unwrap()
         });
+        let mut sparse_places = 0;
         for frame in 0..24 {
             for _ in 0..rng.random_range(1..40) {
                 edit(&mut rng, &mut live, &mut model, false);
@@ -235,12 +278,19 @@ fn edit_sequences_keep_gpu_and_cpu_culls_identical_to_the_model() {
                     if moves && !model.live().is_empty() {
                         assert!(!synced.reloaded && synced.moved > 0, "{what}: {synced:?}");
                     }
+                    if !synced.reloaded && synced.placed > 0 {
+                        sparse_places += 1;
+                    }
                 }
             }
         }
         assert!(
             !model.live().is_empty(),
             "seed {seed}: the sequence ends with instances"
+        );
+        assert!(
+            sparse_places > 0,
+            "seed {seed}: inserts and removes went up as place edits"
         );
         if lod {
             // The far instances were drawn at coarser levels, or the LOD runs prove little.
@@ -416,10 +466,11 @@ fn options_for(cull: CullMode) -> RendererOptions {
     }
 }
 
-/// Respawns (an instance removed and one of the same mesh inserted into its slot, as
-/// `--churn` does) leave the cull order as it was: they go up as edits and record
-/// rewrites, not as a new order, and the culls still equal the model's, GPU and CPU;
-/// a respawn as another mesh rewrites the order.
+/// Respawns (an instance removed and one of the same mesh inserted, as `--churn` does)
+/// take the place just vacated: they go up as place edits, moves and record rewrites,
+/// not as a new order, and the culls still equal the model's, GPU and CPU. An insert
+/// into a mesh without a vacant place (the scene came tight) lays the order out again,
+/// with room; inserts and removes after that are sparse again.
 #[test]
 fn respawns_are_sparse_edits() {
     let gpu = gpu();
@@ -478,5 +529,16 @@ fn respawns_are_sparse_edits() {
         let want = live.scene().clone();
         let synced = check(&gpu, &mut renderer, &mut live, &want, "another mesh");
         assert!(synced.reloaded, "{synced:?}");
+        for (k, &h) in handles.iter().skip(1).take(20).enumerate() {
+            let inst = live.remove(h).unwrap();
+            let mesh = (inst.mesh + 1 + k as u32 % 2) % MESHES;
+            live.insert(Instance { mesh, ..inst }).unwrap();
+        }
+        let want = live.scene().clone();
+        let synced = check(&gpu, &mut renderer, &mut live, &want, "inserts after");
+        assert!(
+            !synced.reloaded && (1..=40).contains(&synced.placed),
+            "{synced:?}"
+        );
     }
 }

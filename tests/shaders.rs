@@ -469,6 +469,7 @@ fn windowed_arrays_take_one_binding_per_window() {
         [
             "edits",
             "positions",
+            "order",
             "instances_0",
             "instances_1",
             "instances_2",

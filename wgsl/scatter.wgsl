@@ -1,12 +1,16 @@
-// Moved instances into place, once per frame with edits, before any cull: each edit
-// (17 words after the 4-word header, see src/scatter.rs) is a slot, the instance's new
-// transform rows and its world bounding sphere, computed on the CPU so that the GPU and
-// the CPU culler test the very same sphere.
+// Edits into place, once per frame with edits, before any cull, three entry points in
+// dispatch order (src/scatter.rs): places of the cull order filled or vacated, moved
+// instances, whole records. A moves edit (17 words after the 4-word header) is a slot,
+// the instance's new transform rows and its world bounding sphere, computed on the CPU
+// so that the GPU and the CPU culler test the very same sphere.
 // Bindings: SCATTER_BINDINGS in src/shaders/bindings.rs.
 
 const HEADER: u32 = 4u;
 const WORDS_PER_EDIT: u32 = 17u;
+const PLACE_WORDS: u32 = 2u;
 const SCATTER_GROUP: u32 = 64u;
+// A vacant place's slot, and a removed instance's move (see src/places.rs).
+const VACANT: u32 = 0xffffffffu;
 
 fn edit_vec4(at: u32) -> vec4<f32> {
     return bitcast<vec4<f32>>(vec4(edits[at], edits[at + 1u], edits[at + 2u], edits[at + 3u]));
@@ -21,6 +25,9 @@ fn scatter(@builtin(workgroup_id) wid: vec3<u32>, @builtin(local_invocation_inde
     }
     let at = HEADER + i * WORDS_PER_EDIT;
     let slot = edits[at];
+    if (slot == VACANT) {
+        return;
+    }
     var record = instances_at(slot);
     record.world_from_local = array(edit_vec4(at + 1u), edit_vec4(at + 5u), edit_vec4(at + 9u));
     instances_set(slot, record);
@@ -42,4 +49,23 @@ fn scatter_records(@builtin(workgroup_id) wid: vec3<u32>, @builtin(local_invocat
     let spin = bitcast<f32>(edits[at + 15u]);
     let bob = bitcast<f32>(edits[at + 16u]);
     instances_set(edits[at], InstanceRecord(rows, edits[at + 13u], edits[at + 14u], spin, bob));
+}
+
+// The places scatter (dispatched first): each edit is a place and the slot now there,
+// or VACANT; a vacant place's sphere is CullLayout::VACANT_SPHERE (a radius of minus
+// infinity fails every plane test). Only the GPU culler has these buffers.
+@compute @workgroup_size(SCATTER_GROUP)
+fn scatter_places(@builtin(workgroup_id) wid: vec3<u32>, @builtin(local_invocation_index) local: u32) {
+    let i = (wid.y * edits[2] + wid.x) * SCATTER_GROUP + local;
+    if (i >= edits[0] || edits[1] == 0u) {
+        return;
+    }
+    let place = edits[HEADER + i * PLACE_WORDS];
+    let slot = edits[HEADER + i * PLACE_WORDS + 1u];
+    order[place] = slot;
+    if (slot == VACANT) {
+        spheres_set(place, vec4(0.0, 0.0, 0.0, bitcast<f32>(0xff800000u)));
+    } else {
+        positions[slot] = place;
+    }
 }

@@ -105,7 +105,9 @@ impl CullScene {
         layout: &CullLayout,
         (slots, levels, coarse_slots): (u32, u32, u32),
     ) -> CullScene {
-        let slots = slots.max(layout.positions.len() as u32);
+        let slots = slots
+            .max(layout.positions.len() as u32)
+            .max(layout.order.len() as u32);
         let max_groups = device.limits().max_compute_workgroups_per_dimension;
         let (params, groups) = cull_params(layout, (max_groups, levels));
         let room = |label: &str, contents: &[u8], per_slot: u64| {
@@ -226,10 +228,10 @@ impl CullScene {
             .sum()
     }
 
-    /// Where the scatter pass writes moved instances' spheres: the spheres in cull
-    /// order, and each slot's position.
-    pub fn scatter_targets(&self) -> [&wgpu::Buffer; 2] {
-        [&self.spheres, &self.positions]
+    /// Where the scatter passes write: the spheres in cull order, each slot's
+    /// position, each position's slot.
+    pub fn scatter_targets(&self) -> [&wgpu::Buffer; 3] {
+        [&self.spheres, &self.positions, &self.order]
     }
 
     /// Bytes on the GPU per instance for culling with one level of detail (spheres,

@@ -55,9 +55,8 @@ pub(super) struct ClassicPath {
 impl ClassicPath {
     pub(super) fn new(
         device: &wgpu::Device,
-        scene: &Scene,
-        rig: &Rig,
-        frame: &wgpu::Buffer,
+        (scene, layout): (&Scene, CullLayout),
+        (rig, frame): (&Rig, &wgpu::Buffer),
         (options, slots): (&RendererOptions, u32),
     ) -> Result<ClassicPath> {
         let clip = DrawFeatures::of(device).clip_distances;
@@ -109,7 +108,7 @@ impl ClassicPath {
             .then(|| ShadowPass::new(device, (&drawer, &draw_scene), frame, None, (slots, draws)));
         Ok(ClassicPath {
             mode: options.mode,
-            layout: CullLayout::new(scene),
+            layout,
             drawer,
             draw_scene,
             displays,

@@ -68,13 +68,11 @@ pub(super) struct IndirectPath {
 impl IndirectPath {
     pub(super) fn new(
         device: &wgpu::Device,
-        scene: &Scene,
-        rig: &Rig,
-        frame: &wgpu::Buffer,
+        (scene, layout): (&Scene, CullLayout),
+        (rig, frame): (&Rig, &wgpu::Buffer),
         (options, slots): (&RendererOptions, u32),
     ) -> Result<IndirectPath> {
         let multiview = options.mode == StereoMode::Multiview;
-        let layout = CullLayout::new(scene);
         let coarse = options.coarse_for(rig, Some(device));
         let windows = options.windows(device, slots);
         let culling = match options.cull {

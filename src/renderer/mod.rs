@@ -79,8 +79,9 @@ use crate::cull::gpu::CullScene;
 use crate::draw::DrawScene;
 use crate::error::{Error, Result};
 pub use crate::modes::StereoMode;
+use crate::places::Places;
 use crate::profiling::GpuTimer;
-use crate::records::uniform_bytes;
+use crate::records::{CullLayout, uniform_bytes};
 use crate::rig::{ResolvedRig, Rig};
 use crate::scatter::Scatters;
 use crate::scene::Scene;
@@ -131,21 +132,24 @@ enum Path {
 }
 
 impl Path {
+    /// The path for `scene` with its instances at `places`, with room for `slots`
+    /// slots and places.
     fn new(
         device: &wgpu::Device,
-        scene: &Scene,
+        (scene, places): (&Scene, &Places),
         (rig, frame): (&Rig, &wgpu::Buffer),
         (options, slots): (&RendererOptions, u32),
     ) -> Result<Path> {
         let scope = device.push_error_scope(wgpu::ErrorFilter::Validation);
-        let path = match options.mode.per_instance() {
-            false => {
-                IndirectPath::new(device, scene, rig, frame, (options, slots)).map(Path::Indirect)
-            }
-            true => {
-                ClassicPath::new(device, scene, rig, frame, (options, slots)).map(Path::Classic)
-            }
-        };
+        let layout = CullLayout::with_places(scene, places);
+        let at = (rig, frame);
+        let path =
+            match options.mode.per_instance() {
+                false => IndirectPath::new(device, (scene, layout), at, (options, slots))
+                    .map(Path::Indirect),
+                true => ClassicPath::new(device, (scene, layout), at, (options, slots))
+                    .map(Path::Classic),
+            };
         // Popped before returning any error, so the caller's device keeps its scopes.
         if let Some(e) = pollster::block_on(scope.pop()) {
             return Err(Error::Wgpu(e));
@@ -199,7 +203,8 @@ impl Renderer {
         );
         let frame = uniform_buffer::<FrameContext>(device, "stereocull.frame_context");
         let slots = scene.instances.len() as u32;
-        let path = Path::new(device, scene, (rig, &frame), (&options, slots))?;
+        let places = Places::tight(scene);
+        let path = Path::new(device, (scene, &places), (rig, &frame), (&options, slots))?;
         let shapes = rig
             .displays
             .iter()

@@ -4,9 +4,12 @@
 use super::{Path, Renderer, check_device};
 use crate::cull::gpu::CullScene;
 use crate::error::Result;
-use crate::live::{Edit, LiveScene, edit_sphere};
+use crate::live::{Changes, Edit, LiveScene, PlaceEdit, edit_sphere};
+use crate::places::Places;
 use crate::records::{CullLayout, InstanceRecord, instance_records};
-use crate::scatter::{ScatterTargets, Scatters, record_edit};
+use crate::scatter::{
+    ScatterTargets, Scatters, record_edit, remake_move, remake_place, remake_record,
+};
 use crate::scene::Scene;
 
 /// What edits change in the culling: the GPU culler's buffers, or the CPU culler's layout.
@@ -19,9 +22,14 @@ pub(super) enum CullState<'a> {
 #[derive(Clone, Copy, Debug, Default, PartialEq, Eq, serde::Serialize)]
 pub struct SyncStats {
     pub bytes_uploaded: u64,
-    /// Instances whose transform went up sparsely (one scatter edit each).
+    /// Instances whose transform went up sparsely (one scatter edit each; inserted
+    /// instances too).
     pub moved: u32,
-    /// The cull order was written again (instances inserted or removed): O(instances).
+    /// Places of the cull order filled or vacated (inserts and removes, one scatter
+    /// edit each).
+    pub placed: u32,
+    /// The cull order was written again (a mesh ran out of vacant places):
+    /// O(instances), amortized over the inserts that filled the room.
     pub reloaded: bool,
     /// The scene outgrew the buffers (or gained meshes): everything was uploaded again,
     /// with room to grow by half.
@@ -40,10 +48,13 @@ impl Path {
 
 impl Renderer {
     /// Brings the GPU copy of `live` up to date with its changes since the last sync,
-    /// paying for what changed: moved instances go up as scatter edits (68 bytes each,
-    /// applied by one dispatch in the next `encode`); inserts and removes rewrite the cull
-    /// order and records (O(instances)); a scene that outgrew its buffers, or gained
-    /// meshes, is uploaded again with room to grow by half. Call it before `prepare`.
+    /// paying for what changed: inserts and removes fill and vacate places of the cull
+    /// order (8 bytes each), moved and inserted instances go up as scatter edits (68
+    /// bytes each), recolored and inserted ones as records (68 bytes), all applied by
+    /// one compute pass in the next `encode`; a mesh out of vacant places lays the cull
+    /// order out again (O(instances), with room); a scene that outgrew its buffers, or
+    /// gained meshes, is uploaded again with room to grow by half. Call it before
+    /// `prepare`.
     pub fn sync(
         &mut self,
         device: &wgpu::Device,
@@ -51,56 +62,55 @@ impl Renderer {
         live: &mut LiveScene,
     ) -> Result<SyncStats> {
         let changes = live.take_changes();
-        let scene = live.scene();
-        let slots = scene.instances.len() as u32;
-        if changes.geometry || slots > self.slots {
-            check_device(device, scene, &self.options)?;
-            let room = slots + slots / 2;
-            self.path = Path::new(
-                device,
-                scene,
-                (&self.rig, &self.frame),
-                (&self.options, room),
-            )?;
-            self.slots = room;
-            // The bindings may now need more windows.
-            self.scatter = Scatters::new(device, self.options.windows(device, room));
-            let bytes = (scene.instances.len() * size_of::<InstanceRecord>()) as u64;
-            return Ok(SyncStats {
-                bytes_uploaded: bytes,
-                reloaded: true,
-                reallocated: true,
-                ..SyncStats::default()
-            });
+        let (scene, places) = (live.scene(), live.places());
+        let needed = (scene.instances.len() as u32).max(places.len());
+        if changes.geometry || needed > self.slots {
+            return self.reallocate(device, (scene, places), needed);
         }
         if changes.restructured {
-            return Ok(self.reload(queue, scene));
+            return Ok(self.reload(queue, scene, places));
         }
-        let mut stats = self.stage_moves(device, queue, scene, &changes.moved);
-        if !changes.recolored.is_empty() {
-            let records: Vec<Edit> = changes
-                .recolored
-                .iter()
-                .map(|&slot| record_edit(scene, slot))
-                .collect();
-            let (instances, culling) = self.path.edit_targets();
-            let targets = ScatterTargets {
-                instances,
-                spheres: scatter_spheres(&culling),
-            };
-            let scatter = &mut self.scatter.records;
-            stats.bytes_uploaded += scatter.stage(device, queue, (scene, &records), targets);
+        for &slot in &changes.removed {
+            self.scatter.moves.void(queue, slot);
         }
+        let mut stats = self.stage_places(device, queue, places, &changes.placed);
+        let moved = self.stage_moves(device, queue, scene, &changes.moved);
+        stats.moved = moved.moved;
+        stats.bytes_uploaded += moved.bytes_uploaded;
+        stats.bytes_uploaded += self.stage_records(device, queue, scene, &changes);
         Ok(stats)
     }
 
+    /// Uploads everything again into new buffers with room for half as much more.
+    fn reallocate(
+        &mut self,
+        device: &wgpu::Device,
+        (scene, places): (&Scene, &Places),
+        needed: u32,
+    ) -> Result<SyncStats> {
+        check_device(device, scene, &self.options)?;
+        let room = needed + needed / 2;
+        let at = (&self.rig, &self.frame);
+        self.path = Path::new(device, (scene, places), at, (&self.options, room))?;
+        self.slots = room;
+        // The bindings may now need more windows.
+        self.scatter = Scatters::new(device, self.options.windows(device, room));
+        let bytes = (scene.instances.len() * size_of::<InstanceRecord>()) as u64;
+        Ok(SyncStats {
+            bytes_uploaded: bytes,
+            reloaded: true,
+            reallocated: true,
+            ..SyncStats::default()
+        })
+    }
+
     /// Writes the whole scene into the existing buffers: records, cull order, spheres.
-    fn reload(&mut self, queue: &wgpu::Queue, scene: &Scene) -> SyncStats {
+    fn reload(&mut self, queue: &wgpu::Queue, scene: &Scene, places: &Places) -> SyncStats {
         self.scatter.reset();
         let records = instance_records(scene);
         let (instances, culling) = self.path.edit_targets();
         queue.write_buffer(instances, 0, bytemuck::cast_slice(&records));
-        let layout = CullLayout::new(scene);
+        let layout = CullLayout::with_places(scene, places);
         let layout_bytes = match culling {
             CullState::Gpu(cull) => cull.reload(queue, &layout),
             CullState::Cpu(cpu) => {
@@ -115,6 +125,42 @@ impl Renderer {
         }
     }
 
+    /// Stages the places filled and vacated (GPU culling), or applies them to the CPU
+    /// culler's layout.
+    fn stage_places(
+        &mut self,
+        device: &wgpu::Device,
+        queue: &wgpu::Queue,
+        places: &Places,
+        placed: &[PlaceEdit],
+    ) -> SyncStats {
+        if placed.is_empty() {
+            return SyncStats::default();
+        }
+        let (instances, culling) = self.path.edit_targets();
+        let bytes = match culling {
+            CullState::Gpu(cull) => {
+                let targets = ScatterTargets {
+                    instances,
+                    spheres: Some(cull.scatter_targets()),
+                };
+                let edits = (placed, &remake_place(places) as _);
+                self.scatter.places.stage(device, queue, edits, targets)
+            }
+            CullState::Cpu(layout) => {
+                for &[place, slot] in placed {
+                    layout.set_place((place, slot, CullLayout::VACANT_SPHERE));
+                }
+                0
+            }
+        };
+        SyncStats {
+            bytes_uploaded: bytes,
+            placed: placed.len() as u32,
+            ..SyncStats::default()
+        }
+    }
+
     /// Stages the moved instances' edits; a CPU culler's layout takes their new spheres.
     fn stage_moves(
         &mut self,
@@ -123,6 +169,19 @@ impl Renderer {
         scene: &Scene,
         moved: &[Edit],
     ) -> SyncStats {
+        // Moves of instances removed since are void (rare: filtered only when present).
+        let kept: Vec<Edit>;
+        let moved = match moved.iter().any(|e| e[0] == Places::VACANT) {
+            true => {
+                kept = moved
+                    .iter()
+                    .filter(|e| e[0] != Places::VACANT)
+                    .copied()
+                    .collect();
+                &kept[..]
+            }
+            false => moved,
+        };
         if moved.is_empty() {
             return SyncStats::default();
         }
@@ -131,10 +190,8 @@ impl Renderer {
             instances,
             spheres: scatter_spheres(&culling),
         };
-        let bytes = self
-            .scatter
-            .moves
-            .stage(device, queue, (scene, moved), targets);
+        let edits = (moved, &remake_move(scene) as _);
+        let bytes = self.scatter.moves.stage(device, queue, edits, targets);
         if let CullState::Cpu(layout) = culling {
             for edit in moved {
                 let at = layout.positions[edit[0] as usize];
@@ -147,11 +204,37 @@ impl Renderer {
             ..SyncStats::default()
         }
     }
+
+    /// Stages the rewritten records (recolored and inserted instances); returns the
+    /// bytes.
+    fn stage_records(
+        &mut self,
+        device: &wgpu::Device,
+        queue: &wgpu::Queue,
+        scene: &Scene,
+        changes: &Changes,
+    ) -> u64 {
+        if changes.recolored.is_empty() {
+            return 0;
+        }
+        let records: Vec<Edit> = changes
+            .recolored
+            .iter()
+            .map(|&slot| record_edit(scene, slot))
+            .collect();
+        let (instances, culling) = self.path.edit_targets();
+        let targets = ScatterTargets {
+            instances,
+            spheres: scatter_spheres(&culling),
+        };
+        let edits = (&records[..], &remake_record(scene) as _);
+        self.scatter.records.stage(device, queue, edits, targets)
+    }
 }
 
-/// The GPU culler's spheres and cull positions, which moves update (`None` culling on
-/// the CPU).
-fn scatter_spheres<'a>(culling: &'a CullState<'_>) -> Option<[&'a wgpu::Buffer; 2]> {
+/// The GPU culler's spheres, cull positions and order, which edits update (`None`
+/// culling on the CPU).
+fn scatter_spheres<'a>(culling: &'a CullState<'_>) -> Option<[&'a wgpu::Buffer; 3]> {
     match culling {
         CullState::Gpu(cull) => Some(cull.scatter_targets()),
         CullState::Cpu(_) => None,

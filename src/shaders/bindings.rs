@@ -253,10 +253,12 @@ pub const DRAW_BINDINGS: [Binding; 4] = [
 
 /// The scatter pass's bindings (`wgsl/scatter.wgsl`): the frame's edits, and where
 /// they go.
-pub const SCATTER_BINDINGS: [Binding; 4] = [
+pub const SCATTER_BINDINGS: [Binding; 5] = [
     binding("edits", Access::StorageRead, "array<u32>", COMPUTE),
-    // Cull position of each slot.
-    binding("positions", Access::StorageRead, "array<u32>", COMPUTE),
+    // Cull position of each slot (the places scatter writes, the moves read).
+    binding("positions", Access::StorageReadWrite, "array<u32>", COMPUTE),
+    // Slot at each cull position.
+    binding("order", Access::StorageReadWrite, "array<u32>", COMPUTE),
     windowed(
         "instances",
         Access::StorageReadWrite,
