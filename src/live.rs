@@ -27,7 +27,7 @@
 //!     let t = frame as f32 / 90.0;
 //!     live.set_transform(handles[7], Affine3A::from_translation(Vec3::new(t, 1.5, -2.0)))?;
 //!     live.set_color(spawned, Vec4::new(t, 0.2, 0.2, 1.0))?;
-//!     let synced = renderer.sync(device, queue, &mut live)?; // 68 bytes per move
+//!     let synced = renderer.sync(device, queue, &mut live)?; // 56 bytes per move
 //!     renderer.prepare(queue, &rig, t)?;
 //!     // ... encode and submit as in the renderer's example
 //! #   let _ = synced;
@@ -57,9 +57,11 @@ impl Handle {
 }
 
 /// A moved instance as the scatter pass takes it: its slot, the rows of its new
-/// transform, its new world sphere (as bits: 17 words, 68 bytes). A slot of
-/// [`Places::VACANT`] makes it void (its instance was removed after it moved).
-pub type Edit = [u32; 17];
+/// transform, the radius of its new world sphere (as bits: 14 words, 56 bytes); the
+/// scatter pass computes the sphere's center from the rows as the CPU does
+/// ([`crate::scene::Scene::world_sphere`]). A slot of [`Places::VACANT`] makes it void
+/// (its instance was removed after it moved).
+pub type MoveEdit = [u32; 14];
 
 /// A place of the cull order and the slot now there ([`Places::VACANT`]: none).
 pub type PlaceEdit = [u32; 2];
@@ -73,7 +75,7 @@ pub struct Changes {
     pub placed: Vec<PlaceEdit>,
     /// Edits of the instances whose transform changed or that were inserted (each slot
     /// once, its last move; in first-move order).
-    pub moved: Vec<Edit>,
+    pub moved: Vec<MoveEdit>,
     /// Slots whose record changed otherwise (color, an insert), each once.
     pub recolored: Vec<u32>,
     /// Slots removed: a move staged by an earlier sync is void.
@@ -349,9 +351,9 @@ impl LiveScene {
     }
 }
 
-/// The edit of `slot`: its transform's rows and its world sphere, as the scatter pass
-/// reads them.
-pub fn make_edit(scene: &Scene, slot: u32) -> Edit {
+/// The edit of `slot`: its transform's rows and its world sphere's radius, as the
+/// scatter pass reads them.
+pub fn make_edit(scene: &Scene, slot: u32) -> MoveEdit {
     let instance = &scene.instances[slot as usize];
     let m = instance.world_from_local;
     let (x, y, z, t) = (
@@ -362,16 +364,11 @@ pub fn make_edit(scene: &Scene, slot: u32) -> Edit {
     );
     let s = scene.world_sphere(instance);
     let floats = [
-        x.x, y.x, z.x, t.x, x.y, y.y, z.y, t.y, x.z, y.z, z.z, t.z, s.x, s.y, s.z, s.w,
+        x.x, y.x, z.x, t.x, x.y, y.y, z.y, t.y, x.z, y.z, z.z, t.z, s.w,
     ];
-    let mut edit = [slot; 17];
+    let mut edit = [slot; 14];
     edit[1..].copy_from_slice(&floats.map(f32::to_bits));
     edit
-}
-
-/// The world sphere an edit carries.
-pub fn edit_sphere(edit: &Edit) -> glam::Vec4 {
-    glam::Vec4::from_array([edit[13], edit[14], edit[15], edit[16]].map(f32::from_bits))
 }
 
 fn check_finite(t: &Affine3A) -> Result<()> {

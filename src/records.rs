@@ -91,6 +91,9 @@ pub struct CullLayout {
     pub meshes: Vec<MeshRecord>,
     /// [`MAX_LODS`] per mesh.
     pub lods: Vec<LodRecord>,
+    /// Each mesh's local bounding sphere (center, radius): the moves scatter makes a
+    /// moved instance's world center from it.
+    pub mesh_bounds: Vec<Vec4>,
 }
 
 impl CullLayout {
@@ -148,6 +151,7 @@ impl CullLayout {
             mesh_of,
             meshes,
             lods: scene.meshes.iter().flat_map(lod_records).collect(),
+            mesh_bounds: scene.meshes.iter().map(|m| m.bounds).collect(),
         }
     }
 

@@ -1,34 +1,22 @@
-//! Edited instances reach the GPU sparsely: per frame, one buffer of moves (slot, new
-//! transform rows, new world sphere: 68 bytes each, made by
-//! [`crate::live::LiveScene::set_transform`]) and one compute dispatch
-//! (`wgsl/scatter.wgsl`) that writes them into the instance records and, under GPU
-//! culling, the spheres in cull order; then one buffer of whole records (slot and the
-//! 64-byte record: recolors, respawns) and one dispatch that writes them. A frame
-//! without edits uploads and dispatches nothing.
-//!
-//! The spheres are computed on the CPU ([`crate::scene::Scene::world_sphere`]), not in
-//! the scatter pass: WGSL's `sqrt` need not be correctly rounded and drivers may fuse
-//! multiply-adds, so a GPU-computed sphere could differ from the CPU culler's in the last
-//! bit and flip a decision at a tangent; 16 bytes more per edit keep GPU and CPU culls
-//! byte-identical.
-
 //! Edited instances reach the GPU sparsely, in one compute pass per frame with edits
 //! (`wgsl/scatter.wgsl`), three dispatches in this order: places filled or vacated in
 //! the cull order (place and slot: 8 bytes each, from
 //! [`crate::live::LiveScene::insert`] and `remove`), moves (slot, new transform rows,
-//! new world sphere: 68 bytes each, made by [`crate::live::LiveScene::set_transform`]
-//! and inserts) written into the instance records and, under GPU culling, the spheres
-//! in cull order, and whole records (slot and the 64-byte record: recolors, inserts).
-//! A frame without edits uploads and dispatches nothing.
+//! new world sphere's radius: 56 bytes each, made by
+//! [`crate::live::LiveScene::set_transform`] and inserts) written into the instance
+//! records and, under GPU culling, the spheres in cull order, and whole records (slot
+//! and the 64-byte record: recolors, inserts). A frame without edits uploads and
+//! dispatches nothing.
 //!
-//! The spheres are computed on the CPU ([`crate::scene::Scene::world_sphere`]), not in
-//! the scatter pass: WGSL's `sqrt` need not be correctly rounded and drivers may fuse
-//! multiply-adds, so a GPU-computed sphere could differ from the CPU culler's in the last
-//! bit and flip a decision at a tangent; 16 bytes more per edit keep GPU and CPU culls
-//! byte-identical.
+//! The radius is computed on the CPU ([`crate::scene::Scene::world_sphere`]): WGSL's
+//! `sqrt` need not be correctly rounded, so a GPU-computed radius could differ from the
+//! CPU culler's in the last bit and flip a decision at a tangent. The center is one
+//! affine transform of the mesh's local center, in the same products and left-to-right
+//! sums on both sides (no fma, as the plane tests themselves assume), so the scatter
+//! pass computes it and the edit saves 12 bytes.
 
 use crate::buffers::storage_buffer;
-use crate::live::{Edit, PlaceEdit, make_edit};
+use crate::live::{MoveEdit, PlaceEdit, make_edit};
 use crate::places::Places;
 use crate::records::instance_record;
 use crate::scene::Scene;
@@ -46,7 +34,7 @@ const GROUP: u32 = 64;
 pub enum EditKind {
     /// Place and slot ([`PlaceEdit`]).
     Places,
-    /// Slot, transform rows, world sphere ([`make_edit`]).
+    /// Slot, transform rows, world sphere radius ([`make_edit`]).
     Moves,
     /// Slot and the whole record ([`record_edit`]).
     Records,
@@ -67,7 +55,7 @@ impl EditKind {
 /// record, and its record must win).
 pub struct Scatters {
     pub places: Scatter<2>,
-    pub moves: Scatter<17>,
+    pub moves: Scatter<14>,
     pub records: Scatter<17>,
 }
 
@@ -109,11 +97,11 @@ impl Scatters {
 pub type Remake<'a, const W: usize> = &'a dyn Fn(u32) -> [u32; W];
 
 /// Each kind's edits as the scene (and places) hold them now.
-pub fn remake_move(scene: &Scene) -> impl Fn(u32) -> Edit + '_ {
+pub fn remake_move(scene: &Scene) -> impl Fn(u32) -> MoveEdit + '_ {
     move |slot| make_edit(scene, slot)
 }
 
-pub fn remake_record(scene: &Scene) -> impl Fn(u32) -> Edit + '_ {
+pub fn remake_record(scene: &Scene) -> impl Fn(u32) -> RecordEdit + '_ {
     move |slot| record_edit(scene, slot)
 }
 
@@ -141,11 +129,11 @@ pub struct Scatter<const W: usize> {
 }
 
 /// Where the edits go: the instance records, and the spheres in cull order with each
-/// slot's cull position and each place's slot (the GPU culler's, or `None` when
-/// culling on the CPU).
+/// slot's cull position, each place's slot and each mesh's local bounds (the GPU
+/// culler's, or `None` when culling on the CPU).
 pub struct ScatterTargets<'a> {
     pub instances: &'a wgpu::Buffer,
-    pub spheres: Option<[&'a wgpu::Buffer; 3]>,
+    pub spheres: Option<[&'a wgpu::Buffer; 4]>,
 }
 
 impl<const W: usize> Scatter<W> {
@@ -323,16 +311,16 @@ impl<const W: usize> Scatter<W> {
             let usage = wgpu::BufferUsages::STORAGE;
             storage_buffer(device, "stereocull.scatter_stand_in", 0, usage)
         };
-        let (spheres, positions, order);
-        let [s, p, o] = match targets.spheres {
-            Some(three) => three,
+        let stand_ins: [wgpu::Buffer; 4];
+        let [s, p, o, b] = match targets.spheres {
+            Some(four) => four,
             None => {
-                (spheres, positions, order) = (stand_in(), stand_in(), stand_in());
-                [&spheres, &positions, &order]
+                stand_ins = std::array::from_fn(|_| stand_in());
+                stand_ins.each_ref()
             }
         };
         // In SCATTER_BINDINGS order.
-        let buffers = [&self.edits, p, o, targets.instances, s];
+        let buffers = [&self.edits, p, o, b, targets.instances, s];
         let list = (&SCATTER_BINDINGS[..], &self.windows);
         bind_group(device, ("stereocull.scatter", &self.layout), list, buffers)
     }
@@ -343,9 +331,13 @@ fn edits_buffer(device: &wgpu::Device, size: u64) -> wgpu::Buffer {
     storage_buffer(device, "stereocull.edits", size, usage)
 }
 
+/// A rewritten record as the records scatter takes it: the slot, then the 64-byte
+/// instance record (17 words).
+pub type RecordEdit = [u32; 17];
+
 /// The record edit of `slot`: the slot, then its whole 64-byte instance record, as the
 /// records scatter reads them.
-pub fn record_edit(scene: &Scene, slot: u32) -> Edit {
+pub fn record_edit(scene: &Scene, slot: u32) -> RecordEdit {
     let record = instance_record(&scene.instances[slot as usize]);
     let words: [u32; 16] = bytemuck::cast(record);
     let mut edit = [slot; 17];

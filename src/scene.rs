@@ -224,7 +224,7 @@ fn world_sphere_of(meshes: &[Mesh], instance: &Instance) -> Vec4 {
         .length_squared()
         .max(m.y_axis.length_squared())
         .max(m.z_axis.length_squared());
-    let center = instance.world_from_local.transform_point3(local.truncate());
+    let center = transform_center(&instance.world_from_local, local.truncate());
     let animation = instance.animation;
     let orbit = if animation.spin == 0.0 {
         0.0
@@ -234,6 +234,21 @@ fn world_sphere_of(meshes: &[Mesh], instance: &Instance) -> Vec4 {
     let radius = (local.w + orbit) * scale_sq.sqrt() + animation.bob.abs();
     let slack = crate::frustum::ROUNDING_SLACK * (center.abs().element_sum() + radius);
     center.extend(radius + slack)
+}
+
+/// `m` applied to point `p`, row by row, each `x * p.x + y * p.y + z * p.z + t` summed
+/// left to right without fma: the CPU twin of the moves scatter's center
+/// (`wgsl/scatter.wgsl`), so that both make the same world sphere.
+pub fn transform_center(m: &Affine3A, p: Vec3) -> Vec3 {
+    let (x, y, z, t) = (
+        m.matrix3.x_axis,
+        m.matrix3.y_axis,
+        m.matrix3.z_axis,
+        m.translation,
+    );
+    Vec3::from_array(std::array::from_fn(|i| {
+        x[i] * p.x + y[i] * p.y + z[i] * p.z + t[i]
+    }))
 }
 
 fn reversed_winding(indices: &[u32]) -> Vec<u32> {

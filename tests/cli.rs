@@ -563,9 +563,9 @@ fn stress_with_moving_instances_reports_what_they_cost() {
         frame["dispatches"], 4,
         "the scatter, then three cull passes"
     );
-    // 16 bytes of header, 68 per moved instance, then the frame and display contexts.
+    // 16 bytes of header, 56 per moved instance, then the frame and display contexts.
     let contexts = FrameContext::min_size().get() + DisplayContext::min_size().get();
-    assert_eq!(frame["bytes_uploaded"], 16 + 68 * 500 + contexts);
+    assert_eq!(frame["bytes_uploaded"], 16 + 56 * 500 + contexts);
     let summary = &v["summary"];
     assert!(
         summary["triangles_submitted_median"].as_f64().unwrap() > 1000.0,

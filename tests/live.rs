@@ -392,7 +392,7 @@ fn a_moved_instance_renders_like_a_fresh_scene_with_it_there() {
             .unwrap();
         live.set_transform(handles[7], ahead).unwrap();
         let synced = renderer.sync(&gpu.device, &gpu.queue, &mut live).unwrap();
-        assert_eq!((synced.moved, synced.bytes_uploaded), (1, 16 + 68));
+        assert_eq!((synced.moved, synced.bytes_uploaded), (1, 16 + 56));
         let frame = renderer
             .submit_frame(&gpu.device, &gpu.queue, &rig, 0.0, &targets)
             .unwrap();

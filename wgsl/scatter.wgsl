@@ -1,12 +1,15 @@
 // Edits into place, once per frame with edits, before any cull, three entry points in
 // dispatch order (src/scatter.rs): places of the cull order filled or vacated, moved
-// instances, whole records. A moves edit (17 words after the 4-word header) is a slot,
-// the instance's new transform rows and its world bounding sphere, computed on the CPU
-// so that the GPU and the CPU culler test the very same sphere.
+// instances, whole records. A moves edit (14 words after the 4-word header) is a slot,
+// the instance's new transform rows and its world bounding sphere's radius, computed
+// on the CPU; the center is computed here exactly as the CPU does (transform_center in
+// src/scene.rs: same products, sums left to right, no fma), so that the GPU and the CPU
+// culler test the very same sphere.
 // Bindings: SCATTER_BINDINGS in src/shaders/bindings.rs.
 
 const HEADER: u32 = 4u;
-const WORDS_PER_EDIT: u32 = 17u;
+const MOVE_WORDS: u32 = 14u;
+const RECORD_WORDS: u32 = 17u;
 const PLACE_WORDS: u32 = 2u;
 const SCATTER_GROUP: u32 = 64u;
 // A vacant place's slot, and a removed instance's move (see src/places.rs).
@@ -23,16 +26,23 @@ fn scatter(@builtin(workgroup_id) wid: vec3<u32>, @builtin(local_invocation_inde
     if (i >= edits[0]) {
         return;
     }
-    let at = HEADER + i * WORDS_PER_EDIT;
+    let at = HEADER + i * MOVE_WORDS;
     let slot = edits[at];
     if (slot == VACANT) {
         return;
     }
     var record = instances_at(slot);
-    record.world_from_local = array(edit_vec4(at + 1u), edit_vec4(at + 5u), edit_vec4(at + 9u));
+    let rows = array(edit_vec4(at + 1u), edit_vec4(at + 5u), edit_vec4(at + 9u));
+    record.world_from_local = rows;
     instances_set(slot, record);
     if (edits[1] != 0u) {
-        spheres_set(positions[slot], edit_vec4(at + 13u));
+        let l = mesh_centers[record.mesh].xyz;
+        var center: vec3<f32>;
+        for (var r = 0u; r < 3u; r++) {
+            let m = rows[r];
+            center[r] = m.x * l.x + m.y * l.y + m.z * l.z + m.w;
+        }
+        spheres_set(positions[slot], vec4(center, bitcast<f32>(edits[at + 13u])));
     }
 }
 
@@ -44,7 +54,7 @@ fn scatter_records(@builtin(workgroup_id) wid: vec3<u32>, @builtin(local_invocat
     if (i >= edits[0]) {
         return;
     }
-    let at = HEADER + i * WORDS_PER_EDIT;
+    let at = HEADER + i * RECORD_WORDS;
     let rows = array(edit_vec4(at + 1u), edit_vec4(at + 5u), edit_vec4(at + 9u));
     let spin = bitcast<f32>(edits[at + 15u]);
     let bob = bitcast<f32>(edits[at + 16u]);

@@ -70,6 +70,7 @@ pub struct CullScene {
     positions: wgpu::Buffer,
     mesh_of: wgpu::Buffer,
     meshes: wgpu::Buffer,
+    mesh_bounds: wgpu::Buffer,
     lods: wgpu::Buffer,
     local_prefix: wgpu::Buffer,
     block_sums: wgpu::Buffer,
@@ -150,6 +151,11 @@ impl CullScene {
                 4,
             ),
             meshes: room("stereocull.meshes", bytemuck::cast_slice(&layout.meshes), 0),
+            mesh_bounds: room(
+                "stereocull.mesh_bounds",
+                bytemuck::cast_slice(&layout.mesh_bounds),
+                0,
+            ),
             lods: room("stereocull.lods", bytemuck::cast_slice(&layout.lods), 0),
             local_prefix: storage_buffer(
                 device,
@@ -228,10 +234,15 @@ impl CullScene {
             .sum()
     }
 
-    /// Where the scatter passes write: the spheres in cull order, each slot's
-    /// position, each position's slot.
-    pub fn scatter_targets(&self) -> [&wgpu::Buffer; 3] {
-        [&self.spheres, &self.positions, &self.order]
+    /// Where the scatter passes write (the spheres in cull order, each slot's
+    /// position, each position's slot) and what they read (each mesh's local bounds).
+    pub fn scatter_targets(&self) -> [&wgpu::Buffer; 4] {
+        [
+            &self.spheres,
+            &self.positions,
+            &self.order,
+            &self.mesh_bounds,
+        ]
     }
 
     /// Bytes on the GPU per instance for culling with one level of detail (spheres,

@@ -4,11 +4,11 @@
 use super::{Path, Renderer, check_device};
 use crate::cull::gpu::CullScene;
 use crate::error::Result;
-use crate::live::{Changes, Edit, LiveScene, PlaceEdit, edit_sphere};
+use crate::live::{Changes, LiveScene, MoveEdit, PlaceEdit};
 use crate::places::Places;
 use crate::records::{CullLayout, InstanceRecord, instance_records};
 use crate::scatter::{
-    ScatterTargets, Scatters, record_edit, remake_move, remake_place, remake_record,
+    RecordEdit, ScatterTargets, Scatters, record_edit, remake_move, remake_place, remake_record,
 };
 use crate::scene::Scene;
 
@@ -49,7 +49,7 @@ impl Path {
 impl Renderer {
     /// Brings the GPU copy of `live` up to date with its changes since the last sync,
     /// paying for what changed: inserts and removes fill and vacate places of the cull
-    /// order (8 bytes each), moved and inserted instances go up as scatter edits (68
+    /// order (8 bytes each), moved and inserted instances go up as scatter edits (56
     /// bytes each), recolored and inserted ones as records (68 bytes), all applied by
     /// one compute pass in the next `encode`; a mesh out of vacant places lays the cull
     /// order out again (O(instances), with room); a scene that outgrew its buffers, or
@@ -167,10 +167,10 @@ impl Renderer {
         device: &wgpu::Device,
         queue: &wgpu::Queue,
         scene: &Scene,
-        moved: &[Edit],
+        moved: &[MoveEdit],
     ) -> SyncStats {
         // Moves of instances removed since are void (rare: filtered only when present).
-        let kept: Vec<Edit>;
+        let kept: Vec<MoveEdit>;
         let moved = match moved.iter().any(|e| e[0] == Places::VACANT) {
             true => {
                 kept = moved
@@ -194,8 +194,9 @@ impl Renderer {
         let bytes = self.scatter.moves.stage(device, queue, edits, targets);
         if let CullState::Cpu(layout) = culling {
             for edit in moved {
-                let at = layout.positions[edit[0] as usize];
-                layout.set_sphere(at, edit_sphere(edit));
+                let slot = edit[0] as usize;
+                let sphere = scene.world_sphere(&scene.instances[slot]);
+                layout.set_sphere(layout.positions[slot], sphere);
             }
         }
         SyncStats {
@@ -217,7 +218,7 @@ impl Renderer {
         if changes.recolored.is_empty() {
             return 0;
         }
-        let records: Vec<Edit> = changes
+        let records: Vec<RecordEdit> = changes
             .recolored
             .iter()
             .map(|&slot| record_edit(scene, slot))
@@ -234,7 +235,7 @@ impl Renderer {
 
 /// The GPU culler's spheres, cull positions and order, which edits update (`None`
 /// culling on the CPU).
-fn scatter_spheres<'a>(culling: &'a CullState<'_>) -> Option<[&'a wgpu::Buffer; 3]> {
+fn scatter_spheres<'a>(culling: &'a CullState<'_>) -> Option<[&'a wgpu::Buffer; 4]> {
     match culling {
         CullState::Gpu(cull) => Some(cull.scatter_targets()),
         CullState::Cpu(_) => None,

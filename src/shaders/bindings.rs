@@ -253,12 +253,20 @@ pub const DRAW_BINDINGS: [Binding; 4] = [
 
 /// The scatter pass's bindings (`wgsl/scatter.wgsl`): the frame's edits, and where
 /// they go.
-pub const SCATTER_BINDINGS: [Binding; 5] = [
+pub const SCATTER_BINDINGS: [Binding; 6] = [
     binding("edits", Access::StorageRead, "array<u32>", COMPUTE),
     // Cull position of each slot (the places scatter writes, the moves read).
     binding("positions", Access::StorageReadWrite, "array<u32>", COMPUTE),
     // Slot at each cull position.
     binding("order", Access::StorageReadWrite, "array<u32>", COMPUTE),
+    // Each mesh's local bounding sphere (center, radius): where a moved sphere's
+    // center comes from.
+    binding(
+        "mesh_centers",
+        Access::StorageRead,
+        "array<vec4<f32>>",
+        COMPUTE,
+    ),
     windowed(
         "instances",
         Access::StorageReadWrite,
