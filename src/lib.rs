@@ -11,7 +11,8 @@
 //! frame) -> [`frustum`] (eye, display and frame frusta, in f64) -> [`contexts`] (what
 //! shaders read per display and eye) -> [`scene`] (what is drawn; filled by
 //! [`gltf_import`] or [`procedural`], chosen by name in [`scene_spec`]) -> [`records`]
-//! (GPU layouts; [`places`], each instance's place in the cull order) -> [`cull`] (visible lists and draw arguments, CPU or GPU) -> [`draw`]
+//! (GPU layouts; [`places`], each instance's place in the cull order) -> [`cull`]
+//! (visible lists and draw arguments, CPU or GPU) -> [`draw`]
 //! (pipelines, passes, the one indirect call). [`renderer::Renderer`] ties them together
 //! for embedders; [`shaders`] composes the WGSL and declares every binding once.
 

@@ -18,8 +18,9 @@
 //! such sum per plane (over every display) and grows radii by the largest, plus slack
 //! for rounding on both sides, so the guarantee holds in f32 too (tests/coarse.rs tries
 //! to break it); [`CoarseCull::around`] is the same for a display's own planes (weights
-//! of one). A block's sphere holds its members' spheres with room for rounding
-//! ([`block_sphere`]), so a member that passes passes the block too.
+//! of one). A block's box, and the sphere through its corners, hold its members'
+//! spheres with room for rounding ([`block_of`]), so a member that passes passes the
+//! block too: the frame tests the block's sphere, each display its box.
 //! `ResolvedRig::coarse_cull` builds the frame's test.
 
 use glam::{DMat3, DVec3, Vec3, Vec4};
