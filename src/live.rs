@@ -59,8 +59,9 @@ impl Handle {
 /// A moved instance as the scatter pass takes it: its slot, the rows of its new
 /// transform, the radius of its new world sphere (as bits: 14 words, 56 bytes); the
 /// scatter pass computes the sphere's center from the rows as the CPU does
-/// ([`crate::scene::Scene::world_sphere`]). A slot of [`Places::VACANT`] makes it void
-/// (its instance was removed after it moved).
+/// ([`crate::scene::Scene::world_sphere`]). In the edits buffer a slot of
+/// [`Places::VACANT`] makes it void (its instance was removed after an earlier sync
+/// this frame staged it).
 pub type MoveEdit = [u32; 14];
 
 /// A place of the cull order and the slot now there ([`Places::VACANT`]: none).
@@ -74,7 +75,7 @@ pub struct Changes {
     /// move, to its new place.
     pub placed: Vec<PlaceEdit>,
     /// Edits of the instances whose transform changed or that were inserted (each slot
-    /// once, its last move; in first-move order).
+    /// once, its last move; none for slots removed since).
     pub moved: Vec<MoveEdit>,
     /// Slots whose record changed otherwise (color, an insert), each once.
     pub recolored: Vec<u32>,
@@ -301,11 +302,14 @@ impl LiveScene {
         self.vacant.insert(handle.slot);
         let place = self.places.release(handle.slot, removed.mesh);
         self.stage_place([place, Places::VACANT]);
-        if let (epoch, at) = self.moved_at[slot]
+        // A move staged earlier in this change set goes: the slot has no instance.
+        if let (epoch, at) = std::mem::take(&mut self.moved_at[slot])
             && epoch == self.epoch
         {
-            self.changes.moved[at as usize][0] = Places::VACANT;
-            self.moved_at[slot] = (0, 0);
+            self.changes.moved.swap_remove(at as usize);
+            if let Some(shifted) = self.changes.moved.get(at as usize) {
+                self.moved_at[shifted[0] as usize] = (epoch, at);
+            }
         }
         self.changes.removed.push(handle.slot);
         Ok(removed)

@@ -169,19 +169,6 @@ impl Renderer {
         scene: &Scene,
         moved: &[MoveEdit],
     ) -> SyncStats {
-        // Moves of instances removed since are void (rare: filtered only when present).
-        let kept: Vec<MoveEdit>;
-        let moved = match moved.iter().any(|e| e[0] == Places::VACANT) {
-            true => {
-                kept = moved
-                    .iter()
-                    .filter(|e| e[0] != Places::VACANT)
-                    .copied()
-                    .collect();
-                &kept[..]
-            }
-            false => moved,
-        };
         if moved.is_empty() {
             return SyncStats::default();
         }
