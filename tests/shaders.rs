@@ -470,7 +470,7 @@ fn windowed_arrays_take_one_binding_per_window() {
             "edits",
             "positions",
             "order",
-            "mesh_centers",
+            "mesh_bounds",
             "instances_0",
             "instances_1",
             "instances_2",

@@ -15,14 +15,19 @@ const SCATTER_GROUP: u32 = 64u;
 // A vacant place's slot, and a removed instance's move (see src/places.rs).
 const VACANT: u32 = 0xffffffffu;
 
+// This invocation's edit, from the 4-word header: edit count, spheres too (GPU
+// culling), workgroups along x; at or past the count when it has none.
+fn edit_index(wid: vec3<u32>, local: u32) -> u32 {
+    return (wid.y * edits[2] + wid.x) * SCATTER_GROUP + local;
+}
+
 fn edit_vec4(at: u32) -> vec4<f32> {
     return bitcast<vec4<f32>>(vec4(edits[at], edits[at + 1u], edits[at + 2u], edits[at + 3u]));
 }
 
 @compute @workgroup_size(SCATTER_GROUP)
 fn scatter(@builtin(workgroup_id) wid: vec3<u32>, @builtin(local_invocation_index) local: u32) {
-    // Header: edit count, spheres too (GPU culling), workgroups along x.
-    let i = (wid.y * edits[2] + wid.x) * SCATTER_GROUP + local;
+    let i = edit_index(wid, local);
     if (i >= edits[0]) {
         return;
     }
@@ -36,7 +41,7 @@ fn scatter(@builtin(workgroup_id) wid: vec3<u32>, @builtin(local_invocation_inde
     record.world_from_local = rows;
     instances_set(slot, record);
     if (edits[1] != 0u) {
-        let l = mesh_centers[record.mesh].xyz;
+        let l = mesh_bounds[record.mesh].xyz;
         var center: vec3<f32>;
         for (var r = 0u; r < 3u; r++) {
             let m = rows[r];
@@ -50,7 +55,7 @@ fn scatter(@builtin(workgroup_id) wid: vec3<u32>, @builtin(local_invocation_inde
 // 64-byte record (records.wgsl's InstanceRecord, word for word).
 @compute @workgroup_size(SCATTER_GROUP)
 fn scatter_records(@builtin(workgroup_id) wid: vec3<u32>, @builtin(local_invocation_index) local: u32) {
-    let i = (wid.y * edits[2] + wid.x) * SCATTER_GROUP + local;
+    let i = edit_index(wid, local);
     if (i >= edits[0]) {
         return;
     }
@@ -66,7 +71,7 @@ fn scatter_records(@builtin(workgroup_id) wid: vec3<u32>, @builtin(local_invocat
 // infinity fails every plane test). Only the GPU culler has these buffers.
 @compute @workgroup_size(SCATTER_GROUP)
 fn scatter_places(@builtin(workgroup_id) wid: vec3<u32>, @builtin(local_invocation_index) local: u32) {
-    let i = (wid.y * edits[2] + wid.x) * SCATTER_GROUP + local;
+    let i = edit_index(wid, local);
     if (i >= edits[0] || edits[1] == 0u) {
         return;
     }

@@ -183,7 +183,8 @@ fn bounds_avx2(values: &[f32; 64], neg_r: &[f32; 64]) -> (f32, f32) {
 }
 
 /// Comparisons and selects rather than `f32::min`, whose NaN rules keep it from
-/// vectorizing; the entries are finite.
+/// vectorizing; no entry is NaN (a vacant place's infinite radius makes `+inf` and
+/// `-inf`, which drop out).
 #[inline(always)]
 fn bounds_portable(values: &[f32], neg_r: &[f32]) -> (f32, f32) {
     let (mut low, mut high) = ([f32::MAX; 8], [f32::MIN; 8]);

@@ -189,15 +189,10 @@ fn test_chunk(
 /// the GPU's); the loops run plane by plane over 64 lanes of fixed size so that they
 /// vectorize, with AVX2 where the processor has it (the same IEEE operations, wider).
 fn test_group(planes: &[[f32; 4]; 6], cols: [&[f32]; 4]) -> u64 {
-    on_lanes(cols, |lanes| test_lanes(planes, lanes))
-}
-
-/// `test` over up to 64 spheres as columns, on lanes of exactly 64: the last group of a
-/// scene is short, so it is padded and the padding's bits dropped.
-fn on_lanes(cols: [&[f32]; 4], test: impl Fn([&[f32; 64]; 4]) -> u64) -> u64 {
     if let [Ok(x), Ok(y), Ok(z), Ok(r)] = cols.map(<&[f32; 64]>::try_from) {
-        return test([x, y, z, r]);
+        return test_lanes(planes, [x, y, z, r]);
     }
+    // The last group of a scene is short: pad it, then drop the padding's bits.
     let n = cols[0].len();
     let lanes: [[f32; 64]; 4] = cols.map(|c| {
         let mut lane = [0.0; 64];
@@ -205,7 +200,7 @@ fn on_lanes(cols: [&[f32]; 4], test: impl Fn([&[f32; 64]; 4]) -> u64) -> u64 {
         lane
     });
     let [x, y, z, r] = &lanes;
-    test([x, y, z, r]) & ((1u64 << n) - 1)
+    test_lanes(planes, [x, y, z, r]) & ((1u64 << n) - 1)
 }
 
 /// The bits of up to 64 spheres given as columns that `split` keeps ([`Split::keeps`]).

@@ -268,9 +268,7 @@ impl CullTargets {
             counts: storage_buffer(device, "stereocull.counts", COUNTS_BYTES, indirect),
         }
     }
-}
 
-impl CullTargets {
     /// Writes a CPU cull's `out` into these buffers; returns the bytes written.
     pub fn upload(&self, queue: &wgpu::Queue, out: &CullOutput) -> u64 {
         let counts = [out.draw_count, out.visible.len() as u32];

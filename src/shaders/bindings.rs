@@ -262,7 +262,7 @@ pub const SCATTER_BINDINGS: [Binding; 6] = [
     // Each mesh's local bounding sphere (center, radius): where a moved sphere's
     // center comes from.
     binding(
-        "mesh_centers",
+        "mesh_bounds",
         Access::StorageRead,
         "array<vec4<f32>>",
         COMPUTE,
