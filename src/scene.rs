@@ -271,8 +271,25 @@ const MAX_LOD_ERROR: f32 = 0.25;
 /// Up to [`MAX_LODS`] - 1 coarser index lists of a mesh, each about a quarter of the
 /// one before, with their errors relative to `radius`; stops where meshoptimizer can no
 /// longer halve the triangles within [`MAX_LOD_ERROR`]. Vertices are welded by position
-/// first, so that UV and normal seams do not read as borders that must stay.
+/// first, so that UV and normal seams do not read as borders that must stay. A surface
+/// listed in both windings ([`both_windings`]) is simplified one side at a time: welded,
+/// its two sides close every open edge, so its borders would collapse freely (an open
+/// tube fell to four triangles).
 fn lod_chain(vertices: &[Vertex], indices: &[u32], radius: f32) -> Vec<(Vec<u32>, f32)> {
+    let (front, back) = indices.split_at(indices.len() / 2);
+    let two_sided = !indices.is_empty() && reversed_winding(front) == back;
+    let side = if two_sided { front } else { indices };
+    let chain = one_sided_lod_chain(vertices, side, radius);
+    if !two_sided {
+        return chain;
+    }
+    chain
+        .into_iter()
+        .map(|(level, error)| (both_windings(&level), error))
+        .collect()
+}
+
+fn one_sided_lod_chain(vertices: &[Vertex], indices: &[u32], radius: f32) -> Vec<(Vec<u32>, f32)> {
     let Ok(adapter) =
         meshopt::VertexDataAdapter::new(bytemuck::cast_slice(vertices), size_of::<Vertex>(), 0)
     else {

@@ -192,3 +192,46 @@ fn both_eyes_and_every_display_draw_an_instance_at_one_level() {
     }
     assert!(shared > 100, "{shared} instances on two walls");
 }
+
+/// A surface listed in both windings (an open tube, a glTF `doubleSided` primitive) is
+/// simplified one side at a time: every level is again both windings of one side, and
+/// keeps the tube's area (welded, the two sides close the tube's rims, which then
+/// collapsed freely: a 16-sided tube fell to four triangles of a flat strip).
+#[test]
+fn a_two_sided_tube_keeps_both_windings_and_its_shape_at_every_level() {
+    let mut scene = Scene::default();
+    let tube = shapes::cylinder(0.2, 0.8, 32);
+    scene.add_mesh("tube", &tube.vertices, &tube.indices);
+    let mesh = &scene.meshes[0];
+    assert!(
+        !mesh.lods.is_empty(),
+        "a 128-triangle tube has coarser levels"
+    );
+    let area = |first: u32, count: u32| -> f32 {
+        let indices = &scene.indices[first as usize..(first + count) as usize];
+        let at =
+            |i: u32| Vec3::from(scene.vertices[(mesh.base_vertex as u32 + i) as usize].position);
+        indices
+            .chunks_exact(3)
+            .map(|t| 0.5 * (at(t[1]) - at(t[0])).cross(at(t[2]) - at(t[0])).length())
+            .sum()
+    };
+    let full = area(mesh.first_index, mesh.index_count);
+    for lod in &mesh.lods {
+        let indices = &scene.indices[lod.first_index as usize..][..lod.index_count as usize];
+        let (front, back) = indices.split_at(indices.len() / 2);
+        assert_eq!(
+            stereocull::scene::both_windings(front),
+            indices,
+            "level of {} indices is not one side in both windings",
+            lod.index_count
+        );
+        assert!(back.len() < tube.indices.len() / 2, "coarser than the tube");
+        let kept = area(lod.first_index, lod.index_count) / full;
+        assert!(
+            (0.85..=1.0001).contains(&kept),
+            "level of {} indices keeps {kept} of the tube's area",
+            lod.index_count
+        );
+    }
+}
