@@ -99,8 +99,8 @@ fn hilbert_index(mut x: [u32; 3], bits: u32) -> u32 {
 }
 
 /// A city around a room: a tenth of `n` instances are objects of the procedural scene
-/// within 8 m of the viewer's standing point, the rest buildings (facades of 4 x 8
-/// windows, 260 triangles; 8 to 30 m wide, 10 to 120 m tall, on the ground) from 200 m
+/// within 8 m of the viewer's standing point, the rest buildings (facades of 6 x 16
+/// windows, 772 triangles; 8 to 30 m wide, 10 to 120 m tall, on the ground) from 200 m
 /// to 2 km away: most of what a viewer sees is far enough that both eyes see it alike.
 pub fn city(n: u32, seed: u64) -> Scene {
     let room = n / 10;
@@ -112,7 +112,7 @@ pub fn city(n: u32, seed: u64) -> Scene {
         let t = Vec3::from(inst.world_from_local.translation);
         inst.world_from_local.translation = (center + (t - center) * shrink).into();
     }
-    let building = shapes::building(4, 8);
+    let building = shapes::building(6, 16);
     let mesh = scene.add_mesh(
         "building".to_string(),
         &building.vertices,
