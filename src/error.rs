@@ -82,7 +82,11 @@ pub enum Error {
         source: std::io::Error,
     },
 
-    /// Encoding an image failed.
+    /// Two images that should compare have different sizes.
+    #[error("{0}: only images of one size compare")]
+    ImageSizes(String),
+
+    /// Reading or writing an image failed.
     #[error("{path}: {source}")]
     Image {
         path: PathBuf,

@@ -1,6 +1,7 @@
 //! The `stereocull` command line.
 
 mod chart;
+mod diff;
 mod edits;
 mod profile;
 mod profile_report;
@@ -51,6 +52,8 @@ enum Command {
     Stress(stress::StressArgs),
     /// Compare every stereo mode and cull mode across instance counts: table, CSV, JSON, chart.
     Profile(profile::ProfileArgs),
+    /// Compare two images: how many pixels differ and by how much (e.g. LOD on and off).
+    Diff(diff::DiffArgs),
 }
 
 /// Where the scene and viewer come from; shared by every command that draws.
@@ -178,6 +181,7 @@ pub fn run() -> Result<()> {
         Some(Command::Render(args)) => render::render(&args),
         Some(Command::Stress(args)) => stress::stress(&args),
         Some(Command::Profile(args)) => profile::profile(&args),
+        Some(Command::Diff(args)) => diff::diff(&args),
     }
 }
 
