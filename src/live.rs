@@ -339,6 +339,17 @@ impl LiveScene {
         std::mem::take(&mut self.changes)
     }
 
+    /// Gives the next change set emptied lists with the capacity a sync is done with,
+    /// so that a frame's edits land in memory already touched, not fresh pages.
+    pub(crate) fn recycle(&mut self, placed: Vec<PlaceEdit>, moved: Vec<MoveEdit>) {
+        if self.changes.placed.is_empty() && placed.capacity() > self.changes.placed.capacity() {
+            self.changes.placed = placed;
+        }
+        if self.changes.moved.is_empty() && moved.capacity() > self.changes.moved.capacity() {
+            self.changes.moved = moved;
+        }
+    }
+
     fn check(&self, handle: Handle) -> Result<()> {
         let slot = handle.slot as usize;
         match self.generations.get(slot) {

@@ -15,8 +15,9 @@
 //! sums on both sides (no fma, as the plane tests themselves assume), so the scatter
 //! pass computes it and the edit saves 12 bytes.
 
+use wgpu::util::StagingBelt;
+
 use crate::buffers::storage_buffer;
-use crate::live::{MoveEdit, PlaceEdit, make_edit};
 use crate::places::Places;
 use crate::records::instance_record;
 use crate::scene::Scene;
@@ -27,14 +28,17 @@ use crate::shaders::{
 
 const HEADER_BYTES: u64 = 16;
 const GROUP: u32 = 64;
+/// The staging belt's chunk: a frame's edits of up to about 18,000 moves fit one; more
+/// get a chunk of their own size, which the belt keeps for the next frames.
+const BELT_CHUNK: u64 = 1 << 20;
 
 /// What a scatter's edits carry; each edit's first word is its key (a place, or a
 /// slot), at most one edit per key.
 #[derive(Clone, Copy, Debug, PartialEq, Eq)]
 pub enum EditKind {
-    /// Place and slot ([`PlaceEdit`]).
+    /// Place and slot ([`crate::live::PlaceEdit`]).
     Places,
-    /// Slot, transform rows, world sphere radius ([`make_edit`]).
+    /// Slot, transform rows, world sphere radius ([`crate::live::make_edit`]).
     Moves,
     /// Slot and the whole record ([`record_edit`]).
     Records,
@@ -53,10 +57,18 @@ impl EditKind {
 /// A frame's three scatters, dispatched in this order: places (an inserted instance's
 /// place first), moves, then whole records (an inserted instance has both a move and a
 /// record, and its record must win).
+///
+/// A sync keeps the frame's edits on the CPU (taking the live scene's lists, no copy);
+/// the frame's encode copies them once into a staging belt, whose chunks are made once
+/// and reused frame after frame, and records the copies before the dispatches in the
+/// caller's encoder. `queue.write_buffer` made a staging buffer per call, two per
+/// scatter and sync (header and edits); the belt takes about 15 % less CPU per moved
+/// instance (3.96 against 4.63 ns at 10 % moving, 1M `hmd`, three alternating runs).
 pub struct Scatters {
     pub places: Scatter<2>,
     pub moves: Scatter<14>,
     pub records: Scatter<17>,
+    belt: StagingBelt,
 }
 
 impl Scatters {
@@ -65,23 +77,32 @@ impl Scatters {
             places: Scatter::new(device, windows, EditKind::Places),
             moves: Scatter::new(device, windows, EditKind::Moves),
             records: Scatter::new(device, windows, EditKind::Records),
+            belt: StagingBelt::new(device.clone(), BELT_CHUNK),
         }
     }
 
-    /// Records the dispatches of what is staged, in one compute pass (dispatches in a
-    /// pass are ordered); returns them (0 to 3).
+    /// Records the copies of what is staged and its dispatches, in one compute pass
+    /// (dispatches in a pass are ordered); returns the dispatches (0 to 3). The belt's
+    /// chunks come back for reuse once `encoder`'s commands are submitted and done.
     pub fn encode(&mut self, encoder: &mut wgpu::CommandEncoder) -> u32 {
         let pending = self.places.pending() + self.moves.pending() + self.records.pending();
         if pending == 0 {
             return 0;
         }
-        let mut pass = encoder.begin_compute_pass(&wgpu::ComputePassDescriptor {
-            label: Some("stereocull.scatter"),
-            timestamp_writes: None,
-        });
-        self.places.encode(&mut pass)
-            + self.moves.encode(&mut pass)
-            + self.records.encode(&mut pass)
+        self.places.upload(&mut self.belt, encoder);
+        self.moves.upload(&mut self.belt, encoder);
+        self.records.upload(&mut self.belt, encoder);
+        let dispatches = {
+            let mut pass = encoder.begin_compute_pass(&wgpu::ComputePassDescriptor {
+                label: Some("stereocull.scatter"),
+                timestamp_writes: None,
+            });
+            self.places.encode(&mut pass)
+                + self.moves.encode(&mut pass)
+                + self.records.encode(&mut pass)
+        };
+        self.belt.finish_and_recall_on_submit(encoder);
+        dispatches
     }
 
     /// Drops what is staged: the scene was uploaded whole again.
@@ -92,36 +113,18 @@ impl Scatters {
     }
 }
 
-/// How a sync remakes the edits already staged when a second sync before the dispatch
-/// outgrows the buffer: from the scene, and (places) the cull order's places.
-pub type Remake<'a, const W: usize> = &'a dyn Fn(u32) -> [u32; W];
-
-/// Each kind's edits as the scene (and places) hold them now.
-pub fn remake_move(scene: &Scene) -> impl Fn(u32) -> MoveEdit + '_ {
-    move |slot| make_edit(scene, slot)
-}
-
-pub fn remake_record(scene: &Scene) -> impl Fn(u32) -> RecordEdit + '_ {
-    move |slot| record_edit(scene, slot)
-}
-
-pub fn remake_place(places: &Places) -> impl Fn(u32) -> PlaceEdit + '_ {
-    move |place| [place, places.slots()[place as usize]]
-}
-
-/// A scatter pipeline, its edits buffer (`W` words each) and which keys it holds
-/// edits for.
+/// A scatter pipeline, its edits buffer (`W` words each) and the edits staged for it.
 pub struct Scatter<const W: usize> {
     pipeline: wgpu::ComputePipeline,
     layout: wgpu::BindGroupLayout,
     windows: Windows,
     edits: wgpu::Buffer,
     bind_group: Option<wgpu::BindGroup>,
-    /// Keys with an edit in the buffer, in buffer order, and per key 1 + its edit's
+    /// The edits for the next dispatch, in buffer order, and per key 1 + its edit's
     /// index (0: none): a key edited in two syncs before a dispatch keeps one edit. The
     /// index is built only when a second sync comes (`indexed`): one sync per frame
     /// pays no random writes for it.
-    keys: Vec<u32>,
+    staged: Vec<[u32; W]>,
     index: Vec<u32>,
     indexed: bool,
     spheres_too: bool,
@@ -151,7 +154,7 @@ impl<const W: usize> Scatter<W> {
             windows,
             edits: edits_buffer(device, 0),
             bind_group: None,
-            keys: Vec::new(),
+            staged: Vec::new(),
             index: Vec::new(),
             indexed: false,
             spheres_too: false,
@@ -159,51 +162,50 @@ impl<const W: usize> Scatter<W> {
         }
     }
 
-    /// Edits in the buffer, not yet dispatched.
+    /// Edits staged, not yet dispatched.
     pub fn pending(&self) -> usize {
-        self.keys.len()
+        self.staged.len()
     }
 
-    /// Writes `edits` (each key once) into the edits buffer, after or over the ones a
-    /// sync earlier this frame wrote; returns the bytes written. `remake` is called only
-    /// in the rare case of a second sync outgrowing the buffer.
+    /// Stages `edits` (each key once) after or over the ones a sync earlier this frame
+    /// staged; returns the bytes this adds to the frame's upload, and a cleared list for
+    /// the caller to fill next (`edits` itself, kept without a copy, when nothing was
+    /// staged: the common case of one sync per frame).
     pub fn stage(
         &mut self,
         device: &wgpu::Device,
-        queue: &wgpu::Queue,
-        (edits, remake): (&[[u32; W]], Remake<W>),
+        mut edits: Vec<[u32; W]>,
         targets: ScatterTargets,
-    ) -> u64 {
+    ) -> (u64, Vec<[u32; W]>) {
         self.spheres_too = targets.spheres.is_some();
-        let mut bytes = 0;
-        if self.keys.is_empty() {
-            // The common case, one sync per frame: the edits go up as they are.
-            self.grow(device, edits.len());
-            self.keys.extend(edits.iter().map(|e| e[0]));
-            queue.write_buffer(&self.edits, HEADER_BYTES, bytemuck::cast_slice(edits));
-            bytes += Self::EDIT_BYTES * edits.len() as u64;
+        let before = self.staged.len();
+        if before == 0 {
+            std::mem::swap(&mut self.staged, &mut edits);
         } else {
-            bytes += self.merge(device, queue, (edits, remake));
+            self.merge(&edits);
         }
+        edits.clear();
+        self.grow(device, self.staged.len());
         if self.bind_group.is_none() {
             self.bind_group = Some(self.bind(device, &targets));
         }
-        queue.write_buffer(&self.edits, 0, bytemuck::cast_slice(&self.header()));
-        bytes + HEADER_BYTES
+        let header = if before == 0 { HEADER_BYTES } else { 0 };
+        let added = (self.staged.len() - before) as u64;
+        (header + Self::EDIT_BYTES * added, edits)
     }
 
     /// Voids the staged edit of `key`, if any (its instance was removed after an
     /// earlier sync this frame staged its move): the shader skips void keys.
-    pub fn void(&mut self, queue: &wgpu::Queue, key: u32) {
-        if self.keys.is_empty() {
+    pub fn void(&mut self, key: u32) {
+        if self.staged.is_empty() {
             return;
         }
         self.build_index();
-        if let Some(&at) = self.index.get(key as usize)
-            && at != 0
+        if let Some(at) = self.index.get_mut(key as usize)
+            && *at != 0
         {
-            let offset = HEADER_BYTES + Self::EDIT_BYTES * (at as u64 - 1);
-            queue.write_buffer(&self.edits, offset, bytemuck::bytes_of(&Places::VACANT));
+            self.staged[*at as usize - 1][0] = Places::VACANT;
+            *at = 0;
         }
     }
 
@@ -211,54 +213,58 @@ impl<const W: usize> Scatter<W> {
         if self.indexed {
             return;
         }
-        let most = self.keys.iter().map(|&k| k as usize + 1).max().unwrap_or(0);
+        let most = self
+            .staged
+            .iter()
+            .map(|e| e[0] as usize + 1)
+            .max()
+            .unwrap_or(0);
         self.index.resize(self.index.len().max(most), 0);
-        for (k, &key) in self.keys.iter().enumerate() {
-            self.index[key as usize] = k as u32 + 1;
+        for (k, edit) in self.staged.iter().enumerate() {
+            self.index[edit[0] as usize] = k as u32 + 1;
         }
         self.indexed = true;
     }
 
     /// A second sync before the dispatch: keys already staged are overwritten in place,
-    /// new ones appended; a buffer too small is replaced and refilled with `remake`.
-    fn merge(
-        &mut self,
-        device: &wgpu::Device,
-        queue: &wgpu::Queue,
-        (edits, remake): (&[[u32; W]], Remake<W>),
-    ) -> u64 {
+    /// new ones appended.
+    fn merge(&mut self, edits: &[[u32; W]]) {
         self.build_index();
         let most = edits.iter().map(|e| e[0] as usize + 1).max().unwrap_or(0);
         self.index.resize(self.index.len().max(most), 0);
-        let fresh = edits
-            .iter()
-            .filter(|e| self.index[e[0] as usize] == 0)
-            .count();
-        if self.grow(device, self.keys.len() + fresh) {
-            let all: Vec<[u32; W]> = self.keys.iter().map(|&k| remake(k)).collect();
-            queue.write_buffer(&self.edits, HEADER_BYTES, bytemuck::cast_slice(&all));
-        }
         for edit in edits {
             let key = edit[0] as usize;
-            if self.index[key] == 0 {
-                self.keys.push(edit[0]);
-                self.index[key] = self.keys.len() as u32;
+            match self.index[key] {
+                0 => {
+                    self.staged.push(*edit);
+                    self.index[key] = self.staged.len() as u32;
+                }
+                at => self.staged[at as usize - 1] = *edit,
             }
-            let at = HEADER_BYTES + Self::EDIT_BYTES * (self.index[key] as u64 - 1);
-            queue.write_buffer(&self.edits, at, bytemuck::cast_slice(edit));
         }
-        Self::EDIT_BYTES * edits.len() as u64
     }
 
-    /// Makes room for `count` edits; returns whether the buffer is new (and empty).
-    fn grow(&mut self, device: &wgpu::Device, count: usize) -> bool {
+    /// Makes room for `count` edits (the buffer is written whole at each upload).
+    fn grow(&mut self, device: &wgpu::Device, count: usize) {
         let needed = HEADER_BYTES + Self::EDIT_BYTES * count as u64;
-        if needed <= self.edits.size() {
-            return false;
+        if needed > self.edits.size() {
+            self.edits = edits_buffer(device, needed + needed / 2);
+            self.bind_group = None;
         }
-        self.edits = edits_buffer(device, needed + needed / 2);
-        self.bind_group = None;
-        true
+    }
+
+    /// Records the copy of the header and the staged edits into the edits buffer.
+    fn upload(&self, belt: &mut StagingBelt, encoder: &mut wgpu::CommandEncoder) {
+        let size = HEADER_BYTES + Self::EDIT_BYTES * self.staged.len() as u64;
+        let Some(size) = wgpu::BufferSize::new(size).filter(|_| !self.staged.is_empty()) else {
+            return;
+        };
+        let mut view = belt.write_buffer(encoder, &self.edits, 0, size);
+        let header = HEADER_BYTES as usize;
+        view.slice(..header)
+            .copy_from_slice(bytemuck::cast_slice(&self.header()));
+        view.slice(header..)
+            .copy_from_slice(bytemuck::cast_slice(&self.staged));
     }
 
     /// Drops the staged edits and the bind group: the scene was uploaded whole again
@@ -287,12 +293,15 @@ impl<const W: usize> Scatter<W> {
 
     fn clear(&mut self) {
         if self.indexed {
-            for &key in &self.keys {
-                self.index[key as usize] = 0;
+            // Void edits' keys index nothing.
+            for edit in &self.staged {
+                if let Some(at) = self.index.get_mut(edit[0] as usize) {
+                    *at = 0;
+                }
             }
             self.indexed = false;
         }
-        self.keys.clear();
+        self.staged.clear();
     }
 
     fn groups(&self) -> (u32, u32) {

@@ -459,6 +459,54 @@ fn edits_of_two_syncs_before_a_frame_merge() {
     }
 }
 
+/// A move staged by one sync, then its instance removed before the frame (some slots
+/// taken again by inserts): the second sync voids the staged move, so the vacated
+/// place stays vacant (a stale move would put the removed instance's sphere back) and a
+/// reinserted slot gets its new transform. GPU culls equal the reference's.
+#[test]
+fn a_move_staged_then_removed_before_the_frame_is_void() {
+    let gpu = gpu();
+    let rig = support::sized("cave", 32, 32);
+    let mut rng = Pcg64Mcg::seed_from_u64(12);
+    let scene = random_scene(&mut rng, 3000);
+    let mut live = LiveScene::new(scene.clone());
+    let handles = live.handles();
+    let mut renderer =
+        Renderer::new(&gpu.device, &scene, &rig, RendererOptions::default()).unwrap();
+    let moved: Vec<Handle> = handles.iter().copied().step_by(5).collect();
+    for &h in &moved {
+        live.set_transform(h, random_transform(&mut rng)).unwrap();
+    }
+    renderer.sync(&gpu.device, &gpu.queue, &mut live).unwrap();
+    for (k, &h) in moved.iter().enumerate().filter(|(k, _)| k % 2 == 0) {
+        let mut inst = live.remove(h).unwrap();
+        if k % 4 == 0 {
+            inst.world_from_local = random_transform(&mut rng);
+            live.insert(inst).unwrap();
+        }
+    }
+    let second = renderer.sync(&gpu.device, &gpu.queue, &mut live).unwrap();
+    assert!(second.placed > 0 && !second.reloaded, "{second:?}");
+    let targets = renderer.create_targets(&gpu.device);
+    renderer
+        .submit_frame(&gpu.device, &gpu.queue, &rig, 0.0, &targets)
+        .unwrap();
+    let visible: usize = (0..5)
+        .map(|d| {
+            renderer
+                .read_cull(&gpu.device, &gpu.queue, d)
+                .unwrap()
+                .visible
+                .len()
+        })
+        .sum();
+    assert!(visible > 1000, "{visible} visible");
+    for (d, reference) in reference_culls(live.scene(), &rig).into_iter().enumerate() {
+        let got = renderer.read_cull(&gpu.device, &gpu.queue, d).unwrap();
+        assert!(got == reference, "display {d}");
+    }
+}
+
 fn options_for(cull: CullMode) -> RendererOptions {
     RendererOptions {
         cull,

@@ -299,7 +299,9 @@ impl Renderer {
 
     /// Records every display into `targets[i]` for display `i`: its cull dispatches (GPU
     /// culling) and its passes. With a timer, each display is a scope named after it and
-    /// each pass a scope within it, `cull` or `draw`.
+    /// each pass a scope within it, `cull` or `draw`. The edits of the last
+    /// [`Renderer::sync`] are copied into place from staging memory that comes back for
+    /// reuse when `encoder` is submitted: submit every encoder this records into.
     pub fn encode(
         &mut self,
         encoder: &mut wgpu::CommandEncoder,

@@ -7,9 +7,7 @@ use crate::error::Result;
 use crate::live::{Changes, LiveScene, MoveEdit, PlaceEdit};
 use crate::places::Places;
 use crate::records::{CullLayout, InstanceRecord, instance_records};
-use crate::scatter::{
-    RecordEdit, ScatterTargets, Scatters, record_edit, remake_move, remake_place, remake_record,
-};
+use crate::scatter::{RecordEdit, ScatterTargets, Scatters, record_edit};
 use crate::scene::Scene;
 
 /// What edits change in the culling: the GPU culler's buffers, or the CPU culler's layout.
@@ -71,13 +69,15 @@ impl Renderer {
             return Ok(self.reload(queue, scene, places));
         }
         for &slot in &changes.removed {
-            self.scatter.moves.void(queue, slot);
+            self.scatter.moves.void(slot);
         }
-        let mut stats = self.stage_places(device, queue, places, &changes.placed);
-        let moved = self.stage_moves(device, queue, scene, &changes.moved);
+        let records = self.stage_records(device, scene, &changes.recolored);
+        let Changes { placed, moved, .. } = changes;
+        let (mut stats, placed) = self.stage_places(device, placed);
+        let (moved, moved_edits) = self.stage_moves(device, scene, moved);
         stats.moved = moved.moved;
-        stats.bytes_uploaded += moved.bytes_uploaded;
-        stats.bytes_uploaded += self.stage_records(device, queue, scene, &changes);
+        stats.bytes_uploaded += moved.bytes_uploaded + records;
+        live.recycle(placed, moved_edits);
         Ok(stats)
     }
 
@@ -126,87 +126,82 @@ impl Renderer {
     }
 
     /// Stages the places filled and vacated (GPU culling), or applies them to the CPU
-    /// culler's layout.
+    /// culler's layout; returns a cleared list for the live scene to fill next.
     fn stage_places(
         &mut self,
         device: &wgpu::Device,
-        queue: &wgpu::Queue,
-        places: &Places,
-        placed: &[PlaceEdit],
-    ) -> SyncStats {
+        placed: Vec<PlaceEdit>,
+    ) -> (SyncStats, Vec<PlaceEdit>) {
         if placed.is_empty() {
-            return SyncStats::default();
+            return (SyncStats::default(), placed);
         }
+        let count = placed.len() as u32;
         let (instances, culling) = self.path.edit_targets();
-        let bytes = match culling {
+        let (bytes, spare) = match culling {
             CullState::Gpu(cull) => {
                 let targets = ScatterTargets {
                     instances,
                     spheres: Some(cull.scatter_targets()),
                 };
-                let edits = (placed, &remake_place(places) as _);
-                self.scatter.places.stage(device, queue, edits, targets)
+                self.scatter.places.stage(device, placed, targets)
             }
             CullState::Cpu(layout) => {
-                for &[place, slot] in placed {
+                for &[place, slot] in &placed {
                     layout.set_place((place, slot, CullLayout::VACANT_SPHERE));
                 }
-                0
+                let mut spare = placed;
+                spare.clear();
+                (0, spare)
             }
         };
-        SyncStats {
+        let stats = SyncStats {
             bytes_uploaded: bytes,
-            placed: placed.len() as u32,
+            placed: count,
             ..SyncStats::default()
-        }
+        };
+        (stats, spare)
     }
 
     /// Stages the moved instances' edits; a CPU culler's layout takes their new spheres.
+    /// Returns a cleared list for the live scene to fill next.
     fn stage_moves(
         &mut self,
         device: &wgpu::Device,
-        queue: &wgpu::Queue,
         scene: &Scene,
-        moved: &[MoveEdit],
-    ) -> SyncStats {
+        moved: Vec<MoveEdit>,
+    ) -> (SyncStats, Vec<MoveEdit>) {
         if moved.is_empty() {
-            return SyncStats::default();
+            return (SyncStats::default(), moved);
         }
-        let (instances, culling) = self.path.edit_targets();
-        let targets = ScatterTargets {
-            instances,
-            spheres: scatter_spheres(&culling),
-        };
-        let edits = (moved, &remake_move(scene) as _);
-        let bytes = self.scatter.moves.stage(device, queue, edits, targets);
-        if let CullState::Cpu(layout) = culling {
-            for edit in moved {
+        let count = moved.len() as u32;
+        let (instances, mut culling) = self.path.edit_targets();
+        if let CullState::Cpu(layout) = &mut culling {
+            for edit in &moved {
                 let slot = edit[0] as usize;
                 let sphere = scene.world_sphere(&scene.instances[slot]);
                 layout.set_sphere(layout.positions[slot], sphere);
             }
         }
-        SyncStats {
+        let targets = ScatterTargets {
+            instances,
+            spheres: scatter_spheres(&culling),
+        };
+        let (bytes, spare) = self.scatter.moves.stage(device, moved, targets);
+        let stats = SyncStats {
             bytes_uploaded: bytes,
-            moved: moved.len() as u32,
+            moved: count,
             ..SyncStats::default()
-        }
+        };
+        (stats, spare)
     }
 
     /// Stages the rewritten records (recolored and inserted instances); returns the
     /// bytes.
-    fn stage_records(
-        &mut self,
-        device: &wgpu::Device,
-        queue: &wgpu::Queue,
-        scene: &Scene,
-        changes: &Changes,
-    ) -> u64 {
-        if changes.recolored.is_empty() {
+    fn stage_records(&mut self, device: &wgpu::Device, scene: &Scene, recolored: &[u32]) -> u64 {
+        if recolored.is_empty() {
             return 0;
         }
-        let records: Vec<RecordEdit> = changes
-            .recolored
+        let records: Vec<RecordEdit> = recolored
             .iter()
             .map(|&slot| record_edit(scene, slot))
             .collect();
@@ -215,8 +210,7 @@ impl Renderer {
             instances,
             spheres: scatter_spheres(&culling),
         };
-        let edits = (&records[..], &remake_record(scene) as _);
-        self.scatter.records.stage(device, queue, edits, targets)
+        self.scatter.records.stage(device, records, targets).0
     }
 }
 
