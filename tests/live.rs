@@ -19,7 +19,9 @@ use stereocull::live::{Handle, LiveScene};
 use stereocull::places::Places;
 use stereocull::readback::read_rgba8;
 use stereocull::records::CullLayout;
-use stereocull::renderer::{CullMode, Renderer, RendererOptions, StereoMode, SyncStats, frame_lod};
+use stereocull::renderer::{
+    CullMode, FrameStats, Renderer, RendererOptions, StereoMode, SyncStats, frame_lod,
+};
 use stereocull::rig::Rig;
 use stereocull::scene::{Animation, Instance, MAX_LODS, Scene};
 use stereocull::shapes;
@@ -427,18 +429,42 @@ fn a_moved_instance_renders_like_a_fresh_scene_with_it_there() {
     }
 }
 
+/// A live random scene of 3,000 instances (from `seed`) on a 32 x 32 `cave`, and a
+/// GPU-culling renderer of it.
+fn live_on_cave(gpu: &Gpu, seed: u64) -> (Rig, Pcg64Mcg, LiveScene, Renderer) {
+    let rig = support::sized("cave", 32, 32);
+    let mut rng = Pcg64Mcg::seed_from_u64(seed);
+    let scene = random_scene(&mut rng, 3000);
+    let renderer = Renderer::new(&gpu.device, &scene, &rig, RendererOptions::default()).unwrap();
+    (rig, rng, LiveScene::new(scene), renderer)
+}
+
+/// Submits a frame and checks every display's GPU cull against the CPU reference of
+/// the live scene; returns the frame's figures.
+fn frame_matches_reference(
+    gpu: &Gpu,
+    renderer: &mut Renderer,
+    live: &LiveScene,
+    rig: &Rig,
+) -> FrameStats {
+    let targets = renderer.create_targets(&gpu.device);
+    let frame = renderer
+        .submit_frame(&gpu.device, &gpu.queue, rig, 0.0, &targets)
+        .unwrap();
+    for (d, reference) in reference_culls(live.scene(), rig).into_iter().enumerate() {
+        let got = renderer.read_cull(&gpu.device, &gpu.queue, d).unwrap();
+        assert!(got == reference, "display {d}");
+    }
+    frame
+}
+
 /// Two syncs before a frame: the second's edits join the first's in one dispatch (an
 /// instance moved in both keeps its last move), also when they outgrow the edits buffer.
 #[test]
 fn edits_of_two_syncs_before_a_frame_merge() {
     let gpu = gpu();
-    let rig = support::sized("cave", 32, 32);
-    let mut rng = Pcg64Mcg::seed_from_u64(11);
-    let scene = random_scene(&mut rng, 3000);
-    let mut live = LiveScene::new(scene.clone());
+    let (rig, mut rng, mut live, mut renderer) = live_on_cave(&gpu, 11);
     let handles = live.handles();
-    let mut renderer =
-        Renderer::new(&gpu.device, &scene, &rig, RendererOptions::default()).unwrap();
     for &h in handles.iter().step_by(7).take(10) {
         live.set_transform(h, random_transform(&mut rng)).unwrap();
     }
@@ -448,15 +474,8 @@ fn edits_of_two_syncs_before_a_frame_merge() {
     }
     let second = renderer.sync(&gpu.device, &gpu.queue, &mut live).unwrap();
     assert_eq!(second.moved, 1000);
-    let targets = renderer.create_targets(&gpu.device);
-    let frame = renderer
-        .submit_frame(&gpu.device, &gpu.queue, &rig, 0.0, &targets)
-        .unwrap();
+    let frame = frame_matches_reference(&gpu, &mut renderer, &live, &rig);
     assert_eq!(frame.dispatches, 1 + 5 * 3, "one scatter for both syncs");
-    for (d, reference) in reference_culls(live.scene(), &rig).into_iter().enumerate() {
-        let got = renderer.read_cull(&gpu.device, &gpu.queue, d).unwrap();
-        assert!(got == reference, "display {d}");
-    }
 }
 
 /// A move staged by one sync, then its instance removed before the frame (some slots
@@ -466,14 +485,8 @@ fn edits_of_two_syncs_before_a_frame_merge() {
 #[test]
 fn a_move_staged_then_removed_before_the_frame_is_void() {
     let gpu = gpu();
-    let rig = support::sized("cave", 32, 32);
-    let mut rng = Pcg64Mcg::seed_from_u64(12);
-    let scene = random_scene(&mut rng, 3000);
-    let mut live = LiveScene::new(scene.clone());
-    let handles = live.handles();
-    let mut renderer =
-        Renderer::new(&gpu.device, &scene, &rig, RendererOptions::default()).unwrap();
-    let moved: Vec<Handle> = handles.iter().copied().step_by(5).collect();
+    let (rig, mut rng, mut live, mut renderer) = live_on_cave(&gpu, 12);
+    let moved: Vec<Handle> = live.handles().into_iter().step_by(5).collect();
     for &h in &moved {
         live.set_transform(h, random_transform(&mut rng)).unwrap();
     }
@@ -487,10 +500,7 @@ fn a_move_staged_then_removed_before_the_frame_is_void() {
     }
     let second = renderer.sync(&gpu.device, &gpu.queue, &mut live).unwrap();
     assert!(second.placed > 0 && !second.reloaded, "{second:?}");
-    let targets = renderer.create_targets(&gpu.device);
-    renderer
-        .submit_frame(&gpu.device, &gpu.queue, &rig, 0.0, &targets)
-        .unwrap();
+    frame_matches_reference(&gpu, &mut renderer, &live, &rig);
     let visible: usize = (0..5)
         .map(|d| {
             renderer
@@ -501,10 +511,6 @@ fn a_move_staged_then_removed_before_the_frame_is_void() {
         })
         .sum();
     assert!(visible > 1000, "{visible} visible");
-    for (d, reference) in reference_culls(live.scene(), &rig).into_iter().enumerate() {
-        let got = renderer.read_cull(&gpu.device, &gpu.queue, d).unwrap();
-        assert!(got == reference, "display {d}");
-    }
 }
 
 fn options_for(cull: CullMode) -> RendererOptions {

@@ -1,8 +1,8 @@
 //! The frame-level coarse cull (the chapter's section 1.2.3): the cull order is cut into
 //! blocks of [`BLOCK`] positions, each block's bounding sphere is tested once against
 //! the frame frustum (which holds every display frustum) and, when it passes, its
-//! bounding box against each display's frustum; each display's cull then runs over the instances of its own
-//! blocks only. Blocks pay where the cull order is spatially coherent (ids near each
+//! bounding box against each display's frustum; each display's cull then runs over the
+//! instances of its own blocks only. Blocks pay where the cull order is spatially coherent (ids near each
 //! other lie near each other: the procedural scenes are generated so, and an engine
 //! inserting in spatial order gets the same); in a scene shuffled in space every
 //! block spans everything, and the cull stays exact but saves nothing.
