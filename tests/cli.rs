@@ -3,6 +3,8 @@
 
 use std::process::Command;
 
+mod support;
+
 use encase::ShaderType;
 use serde_json::Value;
 use stereocull::contexts::{DisplayContext, FrameContext};
@@ -133,7 +135,6 @@ fn cull_dumps_follow_the_contract_for_every_preset() {
 
 /// The shared Khronos samples (CI has them beside the clone): name and path.
 fn gltf_samples() -> Vec<(&'static str, String)> {
-    let root = concat!(env!("CARGO_MANIFEST_DIR"), "/../shared/gltf-samples");
     [
         "Box",
         "BoxAnimated",
@@ -142,7 +143,12 @@ fn gltf_samples() -> Vec<(&'static str, String)> {
         "AlphaBlendModeTest",
     ]
     .into_iter()
-    .map(|name| (name, format!("{root}/{name}/{name}.glb")))
+    .map(|name| {
+        (
+            name,
+            support::gltf_sample(name, "glb").display().to_string(),
+        )
+    })
     .collect()
 }
 

@@ -271,7 +271,7 @@ fn a_pipeline_of_the_callers_own_draws_the_built_in_image() {
     drop(pass);
     gpu.queue.submit([encoder.finish()]);
     let own = read_rgba8(&gpu.device, &gpu.queue, &targets[0].color).unwrap();
-    assert_images_match("own-pipeline", &own, &built_in, Tolerance::EXACT);
+    assert_images_match("own-pipeline", &own, &built_in, Tolerance::RECOMPILED);
     assert!(
         own.pixels().any(|p| *p != *own.get_pixel(0, 0)),
         "something is drawn"
@@ -396,7 +396,7 @@ fn a_material_hook_shades_every_mode() {
             &name,
             &draw(with(Some(same_as_built_in.clone()))),
             &built_in,
-            Tolerance::EXACT,
+            Tolerance::RECOMPILED,
         );
         let by_eye = draw(with(Some(BY_EYE.into())));
         let background = *built_in.get_pixel(0, 0);

@@ -3,8 +3,6 @@
 
 mod support;
 
-use std::path::Path;
-
 use image::{Rgba, RgbaImage};
 use stereocull::frustum::Fov;
 use stereocull::renderer::RendererOptions;
@@ -30,8 +28,7 @@ fn material(s: Surface) -> vec4<f32> {
 }";
 
 fn box_textured() -> Scene {
-    let path = Path::new(env!("CARGO_MANIFEST_DIR"))
-        .join("../shared/gltf-samples/BoxTextured/BoxTextured.glb");
+    let path = support::gltf_sample("BoxTextured", "glb");
     scene_spec::load(path.to_str().unwrap()).unwrap()
 }
 

@@ -141,10 +141,53 @@ pub struct Tolerance {
 }
 
 impl Tolerance {
+    /// The same compiled shaders on the same inputs: llvmpipe is deterministic, so the
+    /// same pipeline drawing the same draws in the same order writes the same bytes on
+    /// any CPU. For comparisons where only the culler, the draw call's form (count or
+    /// fixed) or the pass that hosts the draw differ.
     pub const EXACT: Tolerance = Tolerance {
         levels: 0,
         share: 0.0,
     };
+
+    /// Two differently compiled shaders doing the same arithmetic (a material hook that
+    /// restates the built-in shading, the caller's own pipeline, bindings read through
+    /// windows): llvmpipe compiles each for the host's vector width (256-bit AVX2 or
+    /// 512-bit AVX-512) and LLVM may contract `a * b + c` into one FMA in one and not in
+    /// the other. A color's last bit then rounds one level apart, and a clip position's
+    /// last bit can flip the coverage of a pixel on an edge. So: one level anywhere,
+    /// and at most 0.1 % of the pixels (edge pixels) beyond it. Seen on an Intel Xeon
+    /// against AMD EPYC: 1 and 2 pixels of 15,360.
+    pub const RECOMPILED: Tolerance = Tolerance {
+        levels: 1,
+        share: 0.001,
+    };
+}
+
+/// The variable that relocates the shared glTF samples.
+pub const SAMPLES_VAR: &str = "STEREOCULL_GLTF_SAMPLES";
+
+/// `<samples>/<name>/<name>.<ext>` in the shared Khronos samples: `../shared/gltf-samples/`
+/// beside the clone, or where [`SAMPLES_VAR`] says. A missing directory fails with one
+/// message that says where the samples come from.
+pub fn gltf_sample(name: &str, ext: &str) -> PathBuf {
+    let root = std::env::var_os(SAMPLES_VAR).map_or_else(
+        || PathBuf::from(env!("CARGO_MANIFEST_DIR")).join("../shared/gltf-samples"),
+        PathBuf::from,
+    );
+    assert!(
+        root.is_dir(),
+        "the shared glTF samples are not at {}: set {SAMPLES_VAR} to their directory \
+         (Khronos glTF sample models; see the README's Test section for where to get them)",
+        root.display()
+    );
+    let path = root.join(name).join(format!("{name}.{ext}"));
+    assert!(
+        path.is_file(),
+        "{} is missing from the samples",
+        path.display()
+    );
+    path
 }
 
 /// Compares `actual` with `reference`; on failure writes `<name>-actual.png`,
