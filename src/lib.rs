@@ -17,6 +17,7 @@
 //! for embedders; [`shaders`] composes the WGSL and declares every binding once.
 
 mod buffers;
+#[cfg(feature = "cli")]
 pub mod cli;
 pub mod contexts;
 pub mod cull;

@@ -13,7 +13,8 @@ use crate::shaders::Windows;
 use crate::shadow::Light;
 
 /// Where the per-display cull runs.
-#[derive(Clone, Copy, Debug, Default, PartialEq, Eq, Hash, clap::ValueEnum, serde::Serialize)]
+#[derive(Clone, Copy, Debug, Default, PartialEq, Eq, Hash, serde::Serialize)]
+#[cfg_attr(feature = "cli", derive(clap::ValueEnum))]
 #[serde(rename_all = "lowercase")]
 pub enum CullMode {
     /// Compute passes on the GPU; nothing per instance crosses the bus each frame.
@@ -27,7 +28,8 @@ pub enum CullMode {
 /// the cull order tested once against the frame frustum and each display's, then each
 /// display's cull over its own blocks only. The draws are the same either way; only the
 /// work differs.
-#[derive(Clone, Copy, Debug, Default, PartialEq, Eq, Hash, clap::ValueEnum, serde::Serialize)]
+#[derive(Clone, Copy, Debug, Default, PartialEq, Eq, Hash, serde::Serialize)]
+#[cfg_attr(feature = "cli", derive(clap::ValueEnum))]
 #[serde(rename_all = "lowercase")]
 pub enum CoarseMode {
     /// On where it is expected to save sphere tests by a fifth or more
