@@ -55,3 +55,24 @@ pub(crate) fn storage_buffer(
         mapped_at_creation: false,
     })
 }
+
+/// A uniform buffer for one `T`.
+pub(crate) fn uniform_buffer<T: encase::ShaderType>(
+    device: &wgpu::Device,
+    label: &str,
+) -> wgpu::Buffer {
+    device.create_buffer(&wgpu::BufferDescriptor {
+        label: Some(label),
+        size: T::min_size().get(),
+        usage: wgpu::BufferUsages::UNIFORM | wgpu::BufferUsages::COPY_DST,
+        mapped_at_creation: false,
+    })
+}
+
+/// Writes `bytes` at the start of `buffer` (nothing for none); returns the bytes written.
+pub(crate) fn write(queue: &wgpu::Queue, buffer: &wgpu::Buffer, bytes: &[u8]) -> u64 {
+    if !bytes.is_empty() {
+        queue.write_buffer(buffer, 0, bytes);
+    }
+    bytes.len() as u64
+}

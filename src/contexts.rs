@@ -187,3 +187,8 @@ impl DisplayContext {
         }
     }
 }
+
+/// A uniform buffer for one [`DisplayContext`].
+pub(crate) fn context_buffer(device: &wgpu::Device) -> wgpu::Buffer {
+    crate::buffers::uniform_buffer::<DisplayContext>(device, "stereocull.display_context")
+}

@@ -13,7 +13,7 @@
 use glam::{DVec3, Vec2};
 
 use crate::contexts::{DisplayContext, EyeContext};
-use crate::cull::{CullJob, Split};
+use crate::cull::Split;
 use crate::frustum::View;
 use crate::rig::{ResolvedDisplay, ResolvedRig, Rig};
 
@@ -133,22 +133,4 @@ pub fn plans(rig: &Rig, resolved: &ResolvedRig, threshold: f32) -> Vec<Option<Fa
         .zip(&resolved.displays)
         .map(|(d, r)| d.stereo.then(|| FarPlan::new(r, d.resolution, threshold)))
         .collect()
-}
-
-/// The CPU culler's jobs with far layers: each display's job in `jobs` keeps its near
-/// side where the display has a plan, then one far job per plan follows, in display
-/// order (instances drawn once, the display frustum, the far side).
-pub fn split_jobs(jobs: &mut Vec<CullJob>, plans: &[Option<FarPlan>]) {
-    let mut far_jobs = Vec::new();
-    for (job, plan) in jobs.iter_mut().zip(plans) {
-        if let Some(plan) = plan {
-            job.split = Some(plan.split(false));
-            far_jobs.push(CullJob {
-                planes: plan.view.frustum().planes,
-                instances_per_object: 1,
-                split: Some(plan.split(true)),
-            });
-        }
-    }
-    jobs.extend(far_jobs);
 }

@@ -81,6 +81,23 @@ impl Scatters {
         }
     }
 
+    /// Stages place edits. They change only the GPU culler's cull order: without its
+    /// buffers (`targets.spheres` is `None`: the CPU culler took the edits into its
+    /// layout) nothing is staged. Returns the bytes and a cleared list, as
+    /// [`Scatter::stage`].
+    pub fn stage_places(
+        &mut self,
+        device: &wgpu::Device,
+        mut placed: Vec<[u32; 2]>,
+        targets: ScatterTargets,
+    ) -> (u64, Vec<[u32; 2]>) {
+        if targets.spheres.is_none() {
+            placed.clear();
+            return (0, placed);
+        }
+        self.places.stage(device, placed, targets)
+    }
+
     /// Records the copies of what is staged and its dispatches, in one compute pass
     /// (dispatches in a pass are ordered); returns the dispatches (0 to 3). The belt's
     /// chunks come back for reuse once `encoder`'s commands are submitted and done.

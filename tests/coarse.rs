@@ -180,8 +180,10 @@ fn auto_runs_the_coarse_cull_where_it_pays() {
         cull,
         ..RendererOptions::default()
     };
-    let on =
-        |preset: &str, cull, device| auto(cull).coarse_for(&Rig::preset(preset).unwrap(), device);
+    let on = |preset: &str, cull, device| {
+        let resolved = Rig::preset(preset).unwrap().resolve().unwrap();
+        auto(cull).coarse_for(&resolved, device)
+    };
     for cull in [CullMode::Gpu, CullMode::Cpu] {
         assert!(on("hmd-peripheral", cull, None));
         assert!(on("cave", cull, None));

@@ -13,14 +13,12 @@ use std::path::{Path, PathBuf};
 use clap::{Args, Parser, Subcommand};
 use serde::Serialize;
 
-use crate::cull::cpu::FrameCull;
 use crate::cull::{CullOutput, cpu};
 use crate::device::{Gpu, OPTIONAL_FEATURES, Tier};
 use crate::error::{Error, Result};
-use crate::far_layer;
 use crate::live::LiveScene;
 use crate::records::CullLayout;
-use crate::renderer::{CoarseMode, CullMode, Renderer, RendererOptions, frame_lod};
+use crate::renderer::{CoarseMode, CullMode, CullView, FramePlan, Renderer, RendererOptions};
 use crate::rig::Rig;
 use crate::scene::Scene;
 use crate::scene_spec::{self, DEFAULT_SCENE};
@@ -202,10 +200,10 @@ fn info() -> Result<()> {
          (sphere tests expected with it / without):"
     );
     for preset in crate::rig::PRESETS {
-        let rig = Rig::preset(preset)?;
-        let expected = rig.resolve()?.expected_coarse_tests();
-        let on = RendererOptions::default().coarse_for(&rig, Some(&gpu.device));
-        let gains = RendererOptions::default().coarse_for(&rig, None);
+        let resolved = Rig::preset(preset)?.resolve()?;
+        let expected = resolved.expected_coarse_tests();
+        let on = RendererOptions::default().coarse_for(&resolved, Some(&gpu.device));
+        let gains = RendererOptions::default().coarse_for(&resolved, None);
         let why = match (on, gains) {
             (false, true) => "; a software adapter: indirect validation costs more",
             _ => "",
@@ -296,30 +294,28 @@ fn cull(args: &CullArgs) -> Result<()> {
     )
 }
 
-/// Every display's cull and, with the far layer, each stereo display's far cull: what
-/// the renderer's CPU path culls.
+/// Every display's cull and, with the far layer, each stereo display's far cull: the
+/// renderer's CPU cull of the frame's plan.
 fn cpu_cull(
     rig: &Rig,
     options: &RendererOptions,
     scene: &Scene,
 ) -> Result<(Vec<CullOutput>, Vec<Option<CullOutput>>)> {
     let resolved = rig.resolve()?;
-    let frame = FrameCull {
-        lod: frame_lod(rig, &resolved, options.lod_levels()),
-        coarse: options
-            .coarse_for(rig, None)
-            .then(|| resolved.coarse_cull(false)),
-    };
-    let plans = match options.far_layer {
-        true => far_layer::plans(rig, &resolved, options.far_threshold_px),
-        false => vec![None; rig.displays.len()],
-    };
-    let mut jobs = rig.cull_jobs()?;
-    far_layer::split_jobs(&mut jobs, &plans);
-    let mut outputs = cpu::cull_frame(&CullLayout::new(scene), &jobs, &frame);
-    let mut far = outputs.split_off(rig.displays.len()).into_iter();
-    let far = plans.iter().map(|p| p.and_then(|_| far.next())).collect();
-    Ok((outputs, far))
+    let coarse = options.coarse_for(&resolved, None);
+    let plan = FramePlan::of(rig, resolved, options, (coarse, 0.0))?;
+    let outputs = cpu::cull_frame(&CullLayout::new(scene), &plan.jobs(), &plan.cull);
+    let mut near = vec![None; rig.displays.len()];
+    let mut far = vec![None; rig.displays.len()];
+    for (cull, out) in plan.culls.iter().zip(outputs) {
+        match cull.view {
+            CullView::Display(i) => near[i] = Some(out),
+            CullView::Far(i) => far[i] = Some(out),
+            CullView::Eye(..) | CullView::Light => {}
+        }
+    }
+    let near = near.into_iter().map(Option::unwrap_or_default).collect();
+    Ok((near, far))
 }
 
 /// `frames` GPU-culled frames, each after its edits are synced; the last frame's cull

@@ -56,7 +56,7 @@ impl Split {
 }
 
 /// One display's cull result, as the draw pass consumes it.
-#[derive(Clone, Debug, PartialEq, Eq)]
+#[derive(Clone, Debug, Default, PartialEq, Eq)]
 pub struct CullOutput {
     /// Visible instance ids (exactly the visible ones; the GPU buffer's capacity is
     /// the instance count and its tail past these is unspecified).

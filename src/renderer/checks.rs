@@ -1,7 +1,7 @@
 //! What a device must have for the options and scene asked of it, said before anything
 //! is built.
 
-use super::{CullMode, RendererOptions};
+use super::options::{CullMode, RendererOptions};
 use crate::draw::DrawScene;
 use crate::error::{Error, Result};
 use crate::modes::StereoMode;

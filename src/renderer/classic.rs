@@ -5,21 +5,22 @@
 
 use std::time::Instant;
 
+use super::culler::{CullShape, Culler};
+use super::frame::{CullView, FramePlan, FrameStats};
+use super::options::RendererOptions;
 use super::passes::{PassRecord, Timing, draw_pass};
-use super::shadow_pass::{LightCull, ShadowPass};
-use super::{FrameStats, RendererOptions, TargetViews, context_buffer, display_contexts, write};
-use crate::buffers::storage_buffer;
-use crate::cull::cpu::FrameCull;
-use crate::cull::{CullJob, CullOutput, cpu};
+use super::shadow_pass::ShadowPass;
+use super::targets::TargetViews;
+use crate::buffers::{storage_buffer, write};
+use crate::contexts::context_buffer;
+use crate::cull::CullOutput;
 use crate::draw::{DrawFeatures, DrawScene, Drawer, set_eye_viewport};
 use crate::error::Result;
 use crate::modes::StereoMode;
 use crate::profiling::GpuTimer;
 use crate::records::{CullLayout, uniform_bytes};
-use crate::rig::{ResolvedRig, Rig};
 use crate::scene::Scene;
 use crate::shaders::DrawKey;
-use crate::shadow::LightView;
 
 /// One eye of a stereo display: its own context (that eye in both eye slots) and, for
 /// multi-camera, its own visible list.
@@ -42,41 +43,57 @@ struct ClassicDisplay {
 
 pub(super) struct ClassicPath {
     mode: StereoMode,
-    pub(super) layout: CullLayout,
+    /// The CPU culler (the classic modes draw per instance from its results).
+    pub(super) culler: Culler,
     drawer: Drawer,
     pub(super) draw_scene: DrawScene,
     displays: Vec<ClassicDisplay>,
-    /// This frame's CPU culls per display: one, or one per eye (multi-camera).
-    culls: Vec<Vec<CullOutput>>,
-    /// With shadows: the frame's shadow pass, culled on the CPU.
+    /// With shadows: the frame's shadow pass.
     shadow: Option<ShadowPass>,
 }
 
+/// What a view the frame did not cull draws: nothing.
+static NOTHING: CullOutput = CullOutput {
+    visible: Vec::new(),
+    draws: Vec::new(),
+    draw_count: 0,
+};
+
 impl ClassicPath {
+    /// The path for `scene` laid out as `layout`, with room for `slots` instances, for
+    /// the displays of `plan`.
     pub(super) fn new(
         device: &wgpu::Device,
         (scene, layout): (&Scene, CullLayout),
-        (rig, frame): (&Rig, &wgpu::Buffer),
+        (plan, frame): (&FramePlan, &wgpu::Buffer),
         (options, slots): (&RendererOptions, u32),
     ) -> Result<ClassicPath> {
         let clip = DrawFeatures::of(device).clip_distances;
+        let windows = options.windows(device, slots);
         let drawer = Drawer::new(
             device,
             options.target_format(),
             (&[DrawKey::new(1, clip)], options.material.as_deref()),
-            (options.shadow_size(), options.windows(device, slots)),
+            (options.shadow_size(), windows),
         );
+        let shape = CullShape {
+            slots,
+            levels: options.lod_levels(),
+            coarse_slots: 0,
+        };
+        let culler = Culler::new(device, options.cull, layout, (shape, windows));
         let draw_scene = DrawScene::new(device, &drawer, scene, slots)?;
         let n = slots as u64;
         let usage = wgpu::BufferUsages::STORAGE | wgpu::BufferUsages::COPY_DST;
         let visible_list = || storage_buffer(device, "stereocull.visible", 4 * n, usage);
-        let displays = rig
+        let displays = plan
             .displays
             .iter()
-            .map(|d| {
+            .zip(&plan.resolved.displays)
+            .map(|(d, r)| {
                 let context = context_buffer(device);
                 let visible = visible_list();
-                let eyes = (0..if d.stereo { 2 } else { 0 })
+                let eyes = (0..if r.eyes.len() == 2 { 2 } else { 0 })
                     .map(|_| {
                         let context = context_buffer(device);
                         let own = (options.mode == StereoMode::MultiCamera).then(visible_list);
@@ -98,57 +115,43 @@ impl ClassicPath {
                     context,
                     visible,
                     eyes,
-                    eye_size: (d.resolution[0], d.resolution[1]),
+                    eye_size: (d.resolution.x as u32, d.resolution.y as u32),
                 }
             })
             .collect();
         let draws = scene.meshes.len() as u32 * options.lod_levels();
-        let shadow = options
-            .shadows
-            .then(|| ShadowPass::new(device, (&drawer, &draw_scene), frame, None, (slots, draws)));
+        let shadow = options.shadows.then(|| {
+            let drawing = (&drawer, &draw_scene);
+            ShadowPass::new(device, drawing, (frame, &culler), (slots, draws))
+        });
         Ok(ClassicPath {
             mode: options.mode,
-            layout,
+            culler,
             drawer,
             draw_scene,
             displays,
-            culls: Vec::new(),
             shadow,
         })
     }
 
-    /// Culls on the CPU (all displays and eyes in one pass over the spheres), writes the
-    /// contexts and uploads the visible lists the draws index.
-    pub(super) fn prepare(
-        &mut self,
-        queue: &wgpu::Queue,
-        rig: &Rig,
-        (resolved, frame, light): (&ResolvedRig, &FrameCull, Option<&LightView>),
-    ) -> FrameStats {
-        let contexts = display_contexts(rig, resolved, |_| 1);
+    /// Culls on the CPU (every display and eye of `plan` in one pass over the spheres),
+    /// writes the contexts and uploads the visible lists the draws index.
+    pub(super) fn prepare(&mut self, queue: &wgpu::Queue, plan: &FramePlan) -> FrameStats {
         let mut stats = FrameStats::default();
         let start = Instant::now();
-        self.culls = self.cull(resolved, frame);
-        if let (Some(shadow), Some(light)) = (&self.shadow, light) {
-            let size = self.draw_scene.shadow_map.size;
-            let cull = LightCull::Cpu(&self.layout);
-            stats.bytes_uploaded += shadow.prepare(queue, (light, size), &cull, &frame.lod);
-        }
+        stats.bytes_uploaded += self.culler.prepare(queue, plan);
         stats.cpu_cull = start.elapsed();
         let start = Instant::now();
-        for ((state, ctx), culls) in self.displays.iter().zip(&contexts).zip(&self.culls) {
+        if let (Some(shadow), Some(_)) = (&self.shadow, &plan.light_cull) {
+            let size = self.draw_scene.shadow_map.size;
+            stats.bytes_uploaded += shadow.prepare(queue, (&plan.light, size), &self.culler);
+        }
+        for (i, (state, ctx)) in self.displays.iter().zip(&plan.displays).enumerate() {
             stats.bytes_uploaded += write(queue, &state.context, &uniform_bytes(ctx));
             for (e, eye) in state.eyes.iter().enumerate() {
                 stats.bytes_uploaded += write(queue, &eye.context, &uniform_bytes(&ctx.for_eye(e)));
             }
-            let lists = match (culls.as_slice(), state.eyes.as_slice()) {
-                ([left, right], [l, r]) => {
-                    vec![(left, l.visible.as_ref()), (right, r.visible.as_ref())]
-                }
-                (all, _) => vec![(&all[0], None)],
-            };
-            for (out, own) in lists {
-                let buffer = own.unwrap_or(&state.visible);
+            for (out, buffer) in self.visible_lists(i) {
                 stats.bytes_uploaded += write(queue, buffer, bytemuck::cast_slice(&out.visible));
             }
         }
@@ -156,29 +159,26 @@ impl ClassicPath {
         stats
     }
 
-    /// Per display one cull against the display frustum; multi-camera culls each eye of
-    /// a stereo display against that eye's own frustum instead.
-    fn cull(&self, resolved: &ResolvedRig, frame: &FrameCull) -> Vec<Vec<CullOutput>> {
-        let mut jobs = Vec::new();
-        let mut per_display = Vec::new();
-        for r in &resolved.displays {
-            if self.mode.culls_per_eye() && r.eyes.len() == 2 {
-                jobs.extend(r.eyes.iter().map(|e| CullJob {
-                    planes: e.frustum().planes,
-                    instances_per_object: 1,
-                    split: None,
-                }));
-                per_display.push(2);
-            } else {
-                jobs.push(r.cull_job(1));
-                per_display.push(1);
-            }
+    /// The visible lists display `index`'s draws index, and the cull each holds: each
+    /// eye's own in multi-camera, else the display's one.
+    fn visible_lists(&self, index: usize) -> Vec<(&CullOutput, &wgpu::Buffer)> {
+        let state = &self.displays[index];
+        let own: Vec<_> = (state.eyes.iter().enumerate())
+            .filter_map(|(e, eye)| Some((self.cull_of(index, Some(e)), eye.visible.as_ref()?)))
+            .collect();
+        match own.is_empty() {
+            true => vec![(self.cull_of(index, None), &state.visible)],
+            false => own,
         }
-        let mut outputs = cpu::cull_frame(&self.layout, &jobs, frame).into_iter();
-        per_display
-            .iter()
-            .map(|&k| outputs.by_ref().take(k).collect())
-            .collect()
+    }
+
+    /// This frame's cull that display `index` (or its eye `eye`, culled on its own in
+    /// multi-camera) draws from: the eye's own where the plan culled it, else the
+    /// display's.
+    fn cull_of(&self, index: usize, eye: Option<usize>) -> &CullOutput {
+        let own = eye.and_then(|e| self.culler.output(CullView::Eye(index, e)));
+        own.or_else(|| self.culler.output(CullView::Display(index)))
+            .unwrap_or(&NOTHING)
     }
 
     /// The frame level's passes: the shadow pass, when on.
@@ -191,8 +191,7 @@ impl ClassicPath {
             return FrameStats::default();
         };
         let scene = (&self.drawer, &self.draw_scene);
-        let cull = LightCull::Cpu(&self.layout);
-        let (dispatches, draw_calls) = shadow.encode(encoder, scene, &cull, timing);
+        let (dispatches, draw_calls) = shadow.encode(encoder, scene, &self.culler, timing);
         FrameStats {
             draw_calls,
             dispatches,
@@ -246,15 +245,15 @@ impl ClassicPath {
     /// the single-pass cadence, or (multi-pass, multi-camera) each eye in turn in its
     /// half. Returns the draw calls.
     pub(super) fn draw(&self, pass: &mut wgpu::RenderPass, index: usize) -> u32 {
-        let (state, culls) = (&self.displays[index], &self.culls[index]);
+        let (state, cull) = (&self.displays[index], self.cull_of(index, None));
         match (self.mode, state.eyes.as_slice()) {
             (_, []) => {
                 self.bind(pass, &state.bind_group);
-                instance_draws(&culls[0]).map(|d| draw(pass, d)).count() as u32
+                instance_draws(cull).map(|d| draw(pass, d)).count() as u32
             }
             (StereoMode::SinglePass, eyes) => {
                 self.bind(pass, &eyes[0].bind_group);
-                single_pass_cadence(pass, &culls[0], eyes, state.eye_size)
+                single_pass_cadence(pass, cull, eyes, state.eye_size)
             }
             (_, eyes) => (0..eyes.len()).map(|e| self.draw_eye(pass, index, e)).sum(),
         }
@@ -263,10 +262,10 @@ impl ClassicPath {
     /// Eye `e` of stereo display `index` into its half, from its cull (multi-camera) or
     /// the display's.
     fn draw_eye(&self, pass: &mut wgpu::RenderPass, index: usize, e: usize) -> u32 {
-        let (state, culls) = (&self.displays[index], &self.culls[index]);
+        let state = &self.displays[index];
         self.bind(pass, &state.eyes[e].bind_group);
         set_eye_viewport(pass, e as u32, state.eye_size);
-        let out = &culls[e.min(culls.len() - 1)];
+        let out = self.cull_of(index, Some(e));
         instance_draws(out).map(|d| draw(pass, d)).count() as u32
     }
 
@@ -277,13 +276,12 @@ impl ClassicPath {
 
     /// This frame's cull of display `index` (multi-camera: its left eye's).
     pub(super) fn cull_output(&self, index: usize) -> CullOutput {
-        self.culls[index][0].clone()
+        self.cull_of(index, Some(0)).clone()
     }
 
     pub(super) fn visible_counts(&self) -> Vec<u32> {
-        self.culls
-            .iter()
-            .map(|c| c[0].visible.len() as u32)
+        (0..self.displays.len())
+            .map(|i| self.cull_of(i, Some(0)).visible.len() as u32)
             .collect()
     }
 }

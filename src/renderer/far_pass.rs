@@ -1,17 +1,14 @@
 //! The far layers of the indirect path ([`crate::far_layer`]): per stereo display, the
-//! far instances' cull (GPU passes or the CPU culler), one pass drawing them once into
-//! the display's far layer, and the composite that opens the display's own pass.
+//! far instances' cull (by the frame's culler), one pass drawing them once into the
+//! display's far layer, and the composite that opens the display's own pass.
 
+use super::culler::Culler;
+use super::frame::{CullView, FramePlan};
 use super::passes::{PassRecord, opener, render_pass};
 use super::view_pass::ViewPass;
-use crate::contexts::DisplayContext;
-use crate::cull::gpu::{CullScene, GpuCuller};
-use crate::cull::{CullJob, CullOutput};
 use crate::draw::{CLEAR_COLOR, DEPTH_FORMAT, DrawScene, Drawer, TargetFormat, cleared_depth};
-use crate::error::Result;
-use crate::far_layer::{self, FarPlan};
+use crate::far_layer::FarPlan;
 use crate::profiling::GpuTimer;
-use crate::rig::{ResolvedRig, Rig};
 use crate::shaders::{DrawKey, far_composite_source};
 use wgpu_profiler::GpuProfilerQuery;
 
@@ -23,8 +20,6 @@ pub(super) struct FarLayers {
     composite_layout: wgpu::BindGroupLayout,
     sampler: wgpu::Sampler,
     color: wgpu::TextureFormat,
-    /// The threshold the far distance is computed for, in pixels.
-    pub(super) threshold: f32,
 }
 
 /// One stereo display's far layer: one more view, and its textures.
@@ -41,7 +36,7 @@ impl FarLayers {
     pub(super) fn new(
         device: &wgpu::Device,
         (format, material): (TargetFormat, Option<&str>),
-        (threshold, windows): (f32, crate::shaders::Windows),
+        windows: crate::shaders::Windows,
     ) -> FarLayers {
         let single = TargetFormat {
             depth: DEPTH_FORMAT,
@@ -62,19 +57,20 @@ impl FarLayers {
                 ..Default::default()
             }),
             color: format.color,
-            threshold,
         }
     }
 
-    /// Display `plan`'s far layer: its textures, context, cull outputs and bindings.
+    /// Display `index`'s far layer for `plan`: its textures, context, cull outputs and
+    /// bindings.
     pub(super) fn display(
         &self,
         device: &wgpu::Device,
         (draw_scene, frame, display): (&DrawScene, &wgpu::Buffer, &wgpu::Buffer),
-        culler: Option<(&GpuCuller, &CullScene)>,
+        (culler, index): (&Culler, usize),
         (plan, sizes): (&FarPlan, (u32, u32)),
     ) -> FarDisplay {
-        let view = ViewPass::new(device, (&self.drawer, draw_scene), frame, culler, sizes);
+        let culled = (frame, culler, CullView::Far(index));
+        let view = ViewPass::new(device, (&self.drawer, draw_scene), culled, sizes);
         let texture = |label, format| {
             device
                 .create_texture(&wgpu::TextureDescriptor {
@@ -119,14 +115,14 @@ impl FarLayers {
         }
     }
 
-    /// Records display `index`'s far cull (GPU culling; with the coarse cull over its
-    /// display's block list) and its far layer pass, timed inside `display`. Returns (dispatches,
-    /// draw calls).
+    /// Records display `index`'s far cull (on the GPU: over its display's blocks with
+    /// the coarse cull) and its far layer pass, timed inside `display`. Returns
+    /// (dispatches, draw calls).
     pub(super) fn encode(
         &self,
         encoder: &mut wgpu::CommandEncoder,
         (index, far, draw_scene): (usize, &FarDisplay, &DrawScene),
-        culler: Option<(&GpuCuller, &CullScene, Option<u32>)>,
+        culler: &Culler,
         (timer, display, log): (
             &mut Option<&mut GpuTimer>,
             &Option<GpuProfilerQuery>,
@@ -177,19 +173,19 @@ impl FarLayers {
 
 impl FarDisplay {
     /// Writes this frame's far context for `plan` (at the layer's fixed size, over the
-    /// coarse cull's `slot`, its display's) and, culled on the CPU, the far cull.
-    /// Returns the bytes written.
+    /// coarse cull's `slot`, its display's) and the culler's far cull. Returns the bytes
+    /// written.
     pub(super) fn prepare(
         &self,
         queue: &wgpu::Queue,
         (plan, slot): (&FarPlan, u32),
-        cpu: Option<&CullOutput>,
+        culler: &Culler,
     ) -> u64 {
         let sized = FarPlan {
             size: self.size,
             ..*plan
         };
-        self.view.prepare(queue, &sized.context(slot), cpu)
+        self.view.prepare(queue, &sized.context(slot), culler)
     }
 }
 
@@ -298,73 +294,52 @@ pub(super) struct Far {
     pub(super) layers: FarLayers,
     /// Per display; `None` for mono displays (nothing to share between eyes).
     pub(super) displays: Vec<Option<FarDisplay>>,
-    /// This frame's plan per display, from `plan`.
-    pub(super) plans: Vec<Option<FarPlan>>,
+    /// The last prepared frame's far distance per display.
+    pub(super) distances: Vec<Option<f32>>,
 }
 
 impl Far {
-    /// Far layers for `rig`'s stereo displays, sized by the plans of its pose as made,
-    /// each composited into the display whose context is `contexts[i]`.
+    /// Far layers for the stereo displays of `plan` (the rig as made, which sizes
+    /// them), each composited into the display whose context is `contexts[i]`.
     pub(super) fn new(
         device: &wgpu::Device,
-        (layers, rig): (FarLayers, &Rig),
+        (layers, plan): (FarLayers, &FramePlan),
         (draw_scene, frame, contexts): (&DrawScene, &wgpu::Buffer, &[&wgpu::Buffer]),
-        culler: Option<(&GpuCuller, &CullScene)>,
-        (slots, max_draws): (u32, u32),
-    ) -> Result<Far> {
-        let resolved = rig.resolve()?;
-        let displays = rig
-            .displays
+        culler: &Culler,
+        sizes: (u32, u32),
+    ) -> Far {
+        let displays = plan
+            .far
             .iter()
-            .zip(&resolved.displays)
             .zip(contexts)
-            .map(|((d, r), context)| {
-                d.stereo.then(|| {
-                    let plan = FarPlan::new(r, d.resolution, layers.threshold);
-                    let bound = (draw_scene, frame, *context);
-                    layers.display(device, bound, culler, (&plan, (slots, max_draws)))
-                })
+            .enumerate()
+            .map(|(i, (far, context))| {
+                let bound = (draw_scene, frame, *context);
+                far.map(|far| layers.display(device, bound, (culler, i), (&far, sizes)))
             })
             .collect();
-        Ok(Far {
+        Far {
             layers,
             displays,
-            plans: Vec::new(),
-        })
-    }
-
-    /// This frame's plans; the near contexts of displays with a far layer keep their
-    /// near instances only.
-    pub(super) fn plan(
-        &mut self,
-        rig: &Rig,
-        resolved: &ResolvedRig,
-        contexts: &mut [DisplayContext],
-    ) {
-        self.plans = far_layer::plans(rig, resolved, self.layers.threshold);
-        for (context, plan) in contexts.iter_mut().zip(&self.plans) {
-            if let Some(plan) = plan {
-                context.split_keep = 1;
-                context.split_distance = plan.distance;
-            }
+            distances: Vec::new(),
         }
     }
 
-    /// The CPU culler's jobs: see [`far_layer::split_jobs`].
-    pub(super) fn split_jobs(&self, jobs: &mut Vec<CullJob>) {
-        far_layer::split_jobs(jobs, &self.plans);
-    }
-
-    /// Writes every far layer's context and (culled on the CPU, `outputs` in display
-    /// order) its cull. Returns the bytes written.
-    pub(super) fn prepare(&self, queue: &wgpu::Queue, outputs: &[CullOutput]) -> u64 {
-        let mut outputs = outputs.iter();
+    /// Writes every far layer's context for `plan` and the culler's far culls. Returns
+    /// the bytes written.
+    pub(super) fn prepare(
+        &mut self,
+        queue: &wgpu::Queue,
+        plan: &FramePlan,
+        culler: &Culler,
+    ) -> u64 {
+        self.distances = plan.far.iter().map(|p| p.map(|p| p.distance)).collect();
         self.displays
             .iter()
-            .zip(&self.plans)
+            .zip(&plan.far)
             .enumerate()
             .filter_map(|(i, (far, plan))| Some((i as u32, far.as_ref()?, plan.as_ref()?)))
-            .map(|(slot, far, plan)| far.prepare(queue, (plan, slot), outputs.next()))
+            .map(|(slot, far, plan)| far.prepare(queue, (plan, slot), culler))
             .sum()
     }
 }

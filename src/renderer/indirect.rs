@@ -7,53 +7,36 @@
 
 use std::time::Instant;
 
+use super::culler::{CullShape, Culler, ViewCull};
 use super::far_pass::{Far, FarLayers};
-use super::passes::{PassRecord, Timing, close, compute_pass, draw_pass, open_display};
-use super::shadow_pass::{LightCull, ShadowPass};
-use super::{
-    CullMode, CullState, FrameStats, RendererOptions, TargetViews, context_buffer,
-    display_contexts, write,
-};
-use crate::cull::cpu;
-use crate::cull::cpu::FrameCull;
-use crate::cull::gpu::{CullScene, CullTargets, GpuCuller};
+use super::frame::{CullView, FramePlan, FrameStats};
+use super::options::RendererOptions;
+use super::passes::{PassRecord, Timing, draw_pass};
+use super::shadow_pass::ShadowPass;
+use super::targets::TargetViews;
+use crate::buffers::write;
+use crate::contexts::context_buffer;
+use crate::cull::gpu::CullTargets;
 use crate::draw::{DrawFeatures, DrawScene, Drawer};
 use crate::error::Result;
 use crate::modes::StereoMode;
 use crate::profiling::GpuTimer;
 use crate::records::{CullLayout, uniform_bytes};
-use crate::rig::{ResolvedRig, Rig};
 use crate::scene::Scene;
 use crate::shaders::DrawKey;
-use crate::shadow::LightView;
-
-/// Where the visible lists and draws come from.
-pub(super) enum Culling {
-    /// Three compute dispatches per display over scene data uploaded once (after three
-    /// per frame for the coarse cull, whose group 1 is `coarse`).
-    Gpu {
-        culler: GpuCuller,
-        scene: Box<CullScene>,
-        coarse: Option<wgpu::BindGroup>,
-    },
-    /// The CPU culler over its own copy of the cull layout; results are uploaded.
-    Cpu { layout: CullLayout },
-}
 
 /// One display's buffers and bindings.
 pub(super) struct IndirectDisplay {
     context: wgpu::Buffer,
-    /// Filled by the cull passes or by the CPU upload; read by the draw.
-    pub(super) cull: CullTargets,
-    /// GPU culling only.
-    cull_bind_group: Option<wgpu::BindGroup>,
+    /// Filled by the culler: its passes, or its upload.
+    pub(super) cull: ViewCull,
     draw_bind_group: wgpu::BindGroup,
     /// The pipeline variant, which also fixes the instances per visible object.
     key: DrawKey,
 }
 
 pub(super) struct IndirectPath {
-    pub(super) culling: Culling,
+    pub(super) culler: Culler,
     drawer: Drawer,
     pub(super) draw_scene: DrawScene,
     /// Draw entries per display: meshes times levels of detail.
@@ -66,40 +49,26 @@ pub(super) struct IndirectPath {
 }
 
 impl IndirectPath {
+    /// The path for `scene` laid out as `layout`, with room for `slots` instances, built
+    /// for `plan` (the rig as made: it sizes the far layers) and its coarse cull.
     pub(super) fn new(
         device: &wgpu::Device,
         (scene, layout): (&Scene, CullLayout),
-        (rig, frame): (&Rig, &wgpu::Buffer),
+        (plan, frame): (&FramePlan, &wgpu::Buffer),
         (options, slots): (&RendererOptions, u32),
     ) -> Result<IndirectPath> {
-        let multiview = options.mode == StereoMode::Multiview;
-        let coarse = options.coarse_for(rig, Some(device));
         let windows = options.windows(device, slots);
-        let culling = match options.cull {
-            CullMode::Gpu => {
-                let culler = GpuCuller::new(device, coarse, windows);
-                let coarse_slots = if coarse { rig.displays.len() as u32 } else { 0 };
-                let shape = (slots, options.lod_levels(), coarse_slots);
-                let scene = Box::new(CullScene::new(device, &layout, shape));
-                let coarse = culler.coarse_bind_group(device, &scene);
-                Culling::Gpu {
-                    culler,
-                    scene,
-                    coarse,
-                }
-            }
-            CullMode::Cpu => Culling::Cpu { layout },
+        let shape = CullShape {
+            slots,
+            levels: options.lod_levels(),
+            coarse_slots: if plan.cull.coarse.is_some() {
+                plan.displays.len() as u32
+            } else {
+                0
+            },
         };
-        let clip = DrawFeatures::of(device).clip_distances;
-        let keys: Vec<DrawKey> = rig
-            .displays
-            .iter()
-            .map(|d| match (d.stereo, multiview) {
-                (true, true) => DrawKey::MULTIVIEW,
-                (true, false) => DrawKey::new(2, clip),
-                (false, _) => DrawKey::new(1, clip),
-            })
-            .collect();
+        let culler = Culler::new(device, options.cull, layout, (shape, windows));
+        let keys = draw_keys(device, plan, options.mode);
         let drawer = Drawer::new(
             device,
             options.target_format(),
@@ -110,54 +79,40 @@ impl IndirectPath {
         let draws = scene.meshes.len() as u32 * options.lod_levels();
         let displays: Vec<IndirectDisplay> = keys
             .iter()
-            .map(|&key| {
+            .enumerate()
+            .map(|(i, &key)| {
                 let context = context_buffer(device);
-                let cull = CullTargets::new(device, slots, draws);
-                let cull_bind_group = match &culling {
-                    Culling::Gpu { culler, scene, .. } => {
-                        Some(culler.bind_group(device, scene, [frame, &context], &cull))
-                    }
-                    Culling::Cpu { .. } => None,
-                };
+                let view = CullView::Display(i);
+                let cull = culler.view(device, view, [frame, &context], (slots, draws));
                 IndirectDisplay {
                     draw_bind_group: drawer.bind_group(
                         device,
                         [frame, &context],
                         &draw_scene,
-                        &cull.visible,
+                        &cull.targets.visible,
                     ),
                     context,
                     cull,
-                    cull_bind_group,
                     key,
                 }
             })
             .collect();
         let shadow = options.shadows.then(|| {
-            let culler = match &culling {
-                Culling::Gpu { culler, scene, .. } => Some((culler, &**scene)),
-                Culling::Cpu { .. } => None,
-            };
-            ShadowPass::new(
-                device,
-                (&drawer, &draw_scene),
-                frame,
-                culler,
-                (slots, draws),
-            )
+            let drawing = (&drawer, &draw_scene);
+            ShadowPass::new(device, drawing, (frame, &culler), (slots, draws))
         });
-        let far = match options.far_layer {
-            false => None,
-            true => Some(far_layers(
+        let far = options.far_layer.then(|| {
+            let layers = FarLayers::new(
                 device,
-                (rig, frame, options),
-                &culling,
-                (&draw_scene, &displays, windows),
-                (slots, draws),
-            )?),
-        };
+                (options.target_format(), options.material.as_deref()),
+                windows,
+            );
+            let contexts: Vec<&wgpu::Buffer> = displays.iter().map(|d| &d.context).collect();
+            let bound = (&draw_scene, frame, &contexts[..]);
+            Far::new(device, (layers, plan), bound, &culler, (slots, draws))
+        });
         Ok(IndirectPath {
-            culling,
+            culler,
             drawer,
             draw_scene,
             max_draws: draws,
@@ -167,125 +122,49 @@ impl IndirectPath {
         })
     }
 
-    /// What edits change: the instance records and the culling state.
-    pub(super) fn edit_targets(&mut self) -> (&wgpu::Buffer, CullState<'_>) {
-        let culling = match &mut self.culling {
-            Culling::Gpu { scene, .. } => CullState::Gpu(scene),
-            Culling::Cpu { layout } => CullState::Cpu(layout),
-        };
-        (&self.draw_scene.instances, culling)
-    }
-
-    /// Writes each display's context and, culling on the CPU, its cull results.
-    pub(super) fn prepare(
-        &mut self,
-        queue: &wgpu::Queue,
-        rig: &Rig,
-        (resolved, frame, light): (&ResolvedRig, &FrameCull, Option<&LightView>),
-    ) -> FrameStats {
-        let mut contexts = display_contexts(rig, resolved, |i| {
-            self.displays[i].key.instances_per_object()
-        });
-        if let Some(far) = &mut self.far {
-            far.plan(rig, resolved, &mut contexts);
-        }
+    /// Writes `plan`'s display contexts and the culler's results for every view: each
+    /// display's, each far layer's, the light's.
+    pub(super) fn prepare(&mut self, queue: &wgpu::Queue, plan: &FramePlan) -> FrameStats {
         let mut stats = FrameStats::default();
         let start = Instant::now();
-        let culls = match &self.culling {
-            Culling::Gpu { scene, .. } => {
-                let planes: Vec<_> = resolved.displays.iter().map(|d| d.planes).collect();
-                stats.bytes_uploaded += scene.write_block_tests(queue, &planes);
-                Vec::new()
-            }
-            Culling::Cpu { layout } => {
-                let mut jobs: Vec<_> = self
-                    .displays
-                    .iter()
-                    .zip(&resolved.displays)
-                    .map(|(state, r)| r.cull_job(state.key.instances_per_object()))
-                    .collect();
-                if let Some(far) = &self.far {
-                    far.split_jobs(&mut jobs);
-                }
-                cpu::cull_frame(layout, &jobs, frame)
-            }
-        };
+        stats.bytes_uploaded += self.culler.prepare(queue, plan);
         stats.cpu_cull = start.elapsed();
         let start = Instant::now();
-        for (state, ctx) in self.displays.iter().zip(&contexts) {
+        for (state, ctx) in self.displays.iter().zip(&plan.displays) {
             stats.bytes_uploaded += write(queue, &state.context, &uniform_bytes(ctx));
+            stats.bytes_uploaded += self.culler.upload(queue, &state.cull);
         }
-        for (state, out) in self.displays.iter().zip(&culls) {
-            stats.bytes_uploaded += state.cull.upload(queue, out);
+        if let Some(far) = &mut self.far {
+            stats.bytes_uploaded += far.prepare(queue, plan, &self.culler);
         }
-        if let Some(far) = &self.far {
-            let outputs = culls.get(self.displays.len()..).unwrap_or(&[]);
-            stats.bytes_uploaded += far.prepare(queue, outputs);
-        }
-        if let (Some(shadow), Some(light)) = (&self.shadow, light) {
-            let cull = match &self.culling {
-                Culling::Gpu { culler, scene, .. } => LightCull::Gpu(culler, scene),
-                Culling::Cpu { layout } => LightCull::Cpu(layout),
-            };
+        if let (Some(shadow), Some(_)) = (&self.shadow, &plan.light_cull) {
             let size = self.draw_scene.shadow_map.size;
-            stats.bytes_uploaded += shadow.prepare(queue, (light, size), &cull, &frame.lod);
+            stats.bytes_uploaded += shadow.prepare(queue, (&plan.light, size), &self.culler);
         }
         stats.cpu_upload = start.elapsed();
         stats
     }
 
-    /// The frame level's passes: the coarse cull (when it runs, on the GPU), timed as
-    /// `coarse_cull` inside a `frame` scope, then the shadow pass (with shadows).
+    /// The frame level's passes: the coarse cull (when it runs, on the GPU), then the
+    /// shadow pass (with shadows).
     pub(super) fn encode_frame(
         &self,
         encoder: &mut wgpu::CommandEncoder,
         (timer, log): (&mut Option<&mut GpuTimer>, &mut Vec<PassRecord>),
     ) -> FrameStats {
+        let any = self.displays.first().map(|d| &d.cull);
         let mut stats = FrameStats {
-            dispatches: self.encode_coarse(encoder, timer, log),
+            dispatches: self.culler.encode_frame(encoder, any, (timer, log)),
             ..Default::default()
         };
         if let Some(shadow) = &self.shadow {
-            let cull = match &self.culling {
-                Culling::Gpu { culler, scene, .. } => LightCull::Gpu(culler, scene),
-                Culling::Cpu { layout } => LightCull::Cpu(layout),
-            };
             let drawing = (&self.drawer, &self.draw_scene);
-            let (dispatches, draw_calls) = shadow.encode(encoder, drawing, &cull, (timer, log));
+            let (dispatches, draw_calls) =
+                shadow.encode(encoder, drawing, &self.culler, (timer, log));
             stats.dispatches += dispatches;
             stats.draw_calls += draw_calls;
         }
         stats
-    }
-
-    fn encode_coarse(
-        &self,
-        encoder: &mut wgpu::CommandEncoder,
-        timer: &mut Option<&mut GpuTimer>,
-        log: &mut Vec<PassRecord>,
-    ) -> u32 {
-        let (
-            Culling::Gpu {
-                culler,
-                scene,
-                coarse: Some(args),
-            },
-            Some(first),
-        ) = (&self.culling, self.displays.first())
-        else {
-            return 0;
-        };
-        let Some(display) = &first.cull_bind_group else {
-            return 0;
-        };
-        let frame = open_display(timer, "frame", encoder);
-        let mut dispatches = 0;
-        let what = (log, PassRecord::frame("coarse_cull"));
-        compute_pass(encoder, (timer, &frame), what, |pass| {
-            dispatches = culler.encode_frame(pass, scene, [display, args]);
-        });
-        close(timer, encoder, frame);
-        dispatches
     }
 
     /// Display `index`: its cull dispatches (GPU culling), then one pass with one draw
@@ -314,9 +193,8 @@ impl IndirectPath {
         }
     }
 
-    /// Display `index`'s cull dispatches (none when culling on the CPU: `prepare`
-    /// uploaded the results) and, with a far layer, its far cull and far layer pass,
-    /// timed inside `display`.
+    /// Display `index`'s cull (on the GPU; the culler's upload wrote a CPU cull) and,
+    /// with a far layer, its far cull and far layer pass, timed inside `display`.
     pub(super) fn encode_cull(
         &self,
         encoder: &mut wgpu::CommandEncoder,
@@ -325,26 +203,18 @@ impl IndirectPath {
         log: &mut Vec<PassRecord>,
     ) -> FrameStats {
         let state = &self.displays[index];
-        let gpu = match &self.culling {
-            Culling::Gpu {
-                culler,
-                scene,
-                coarse,
-            } => Some((culler, &**scene, coarse.is_some().then_some(index as u32))),
-            Culling::Cpu { .. } => None,
+        let what = (&mut *log, PassRecord::display("cull", index));
+        let mut stats = FrameStats {
+            dispatches: self
+                .culler
+                .encode(encoder, &state.cull, (timer, display), what),
+            ..FrameStats::default()
         };
-        let mut stats = FrameStats::default();
-        if let (Some((culler, scene, slot)), Some(bind_group)) = (gpu, &state.cull_bind_group) {
-            let what = (&mut *log, PassRecord::display("cull", index));
-            compute_pass(encoder, (timer, display), what, |pass| {
-                culler.encode(pass, scene, bind_group, slot);
-            });
-            stats.dispatches = GpuCuller::DISPATCHES_PER_DISPLAY;
-        }
         if let Some((far, Some(layer))) = self.far.as_ref().map(|f| (f, &f.displays[index])) {
             let at = (index, layer, &self.draw_scene);
             let (dispatches, draw_calls) =
-                far.layers.encode(encoder, at, gpu, (timer, display, log));
+                far.layers
+                    .encode(encoder, at, &self.culler, (timer, display, log));
             stats.dispatches += dispatches;
             stats.draw_calls += draw_calls;
         }
@@ -356,7 +226,8 @@ impl IndirectPath {
     pub(super) fn draw_with_own_pipeline(&self, pass: &mut wgpu::RenderPass, index: usize) {
         let state = &self.displays[index];
         Drawer::bind_resources(pass, &self.draw_scene, &state.draw_bind_group);
-        self.drawer.draw_indirect(pass, self.max_draws, &state.cull);
+        self.drawer
+            .draw_indirect(pass, self.max_draws, &state.cull.targets);
     }
 
     /// How the instance records are bound.
@@ -369,7 +240,7 @@ impl IndirectPath {
     }
 
     pub(super) fn cull_targets(&self, index: usize) -> &CullTargets {
-        &self.displays[index].cull
+        &self.displays[index].cull.targets
     }
 
     /// Display `index`'s one multi-draw-indirect call into `pass`.
@@ -382,35 +253,22 @@ impl IndirectPath {
         };
         self.drawer
             .bind(pass, state.key, &self.draw_scene, &state.draw_bind_group);
-        self.drawer.draw_indirect(pass, self.max_draws, &state.cull);
+        self.drawer
+            .draw_indirect(pass, self.max_draws, &state.cull.targets);
         composite + 1
     }
 }
 
-/// The far layers of the stereo displays, composited into `displays`' passes.
-fn far_layers(
-    device: &wgpu::Device,
-    (rig, frame, options): (&Rig, &wgpu::Buffer, &RendererOptions),
-    culling: &Culling,
-    (draw_scene, displays, windows): (&DrawScene, &[IndirectDisplay], crate::shaders::Windows),
-    sizes: (u32, u32),
-) -> Result<Far> {
-    let material = options.material.as_deref();
-    let layers = FarLayers::new(
-        device,
-        (options.target_format(), material),
-        (options.far_threshold_px, windows),
-    );
-    let culler = match culling {
-        Culling::Gpu { culler, scene, .. } => Some((culler, &**scene)),
-        Culling::Cpu { .. } => None,
-    };
-    let contexts: Vec<&wgpu::Buffer> = displays.iter().map(|d| &d.context).collect();
-    Far::new(
-        device,
-        (layers, rig),
-        (draw_scene, frame, &contexts),
-        culler,
-        sizes,
-    )
+/// Each display's pipeline variant: multiview for stereo in `multiview`, else one or two
+/// views (with clip distances where the device has them).
+fn draw_keys(device: &wgpu::Device, plan: &FramePlan, mode: StereoMode) -> Vec<DrawKey> {
+    let clip = DrawFeatures::of(device).clip_distances;
+    plan.resolved
+        .displays
+        .iter()
+        .map(|d| match (d.eyes.len(), mode) {
+            (2, StereoMode::Multiview) => DrawKey::MULTIVIEW,
+            (views, _) => DrawKey::new(views as u32, clip),
+        })
+        .collect()
 }

@@ -64,32 +64,32 @@
 //! # Ok(()) }
 //! ```
 //!
-//! The path is chosen once, in [`Renderer::new`]: the GPU-driven one (`indirect.rs`:
-//! `instanced`, `multiview`; per display three cull dispatches, or the CPU culler's
-//! upload, and one multi-draw-indirect call) or the classic per-instance modes
-//! (`classic.rs`). Each frame, [`Renderer::prepare`] resolves the rig once
-//! ([`Rig::resolve`]) and builds every context and cull job from that.
+//! One frame, in the order it runs: [`Renderer::prepare`] makes the frame's plan
+//! (`frame.rs`: the rig resolved once, every context, every cull, the levels of detail,
+//! the coarse cull, the far/near split, the light) and hands it to the path chosen once
+//! in [`Renderer::new`]: the GPU-driven one (`indirect.rs`: `instanced`, `multiview`) or
+//! the classic per-instance modes (`classic.rs`). Both cull every view through the one
+//! culler (`culler.rs`: GPU passes or the CPU culler); [`Renderer::encode`] records the
+//! frame-level passes (scatter, coarse cull, shadow) and then each display's cull and
+//! draw pass (`far_pass.rs`, `shadow_pass.rs` and `view_pass.rs` for the extra views).
 
-use std::time::Duration;
-
-use crate::contexts::{DisplayContext, FrameContext};
-use crate::cull::CoarseCull;
-use crate::cull::cpu::FrameCull;
-use crate::cull::gpu::CullScene;
+use crate::buffers::{uniform_buffer, write};
+use crate::contexts::FrameContext;
 use crate::draw::DrawScene;
 use crate::error::{Error, Result};
 pub use crate::modes::StereoMode;
 use crate::places::Places;
 use crate::profiling::GpuTimer;
 use crate::records::{CullLayout, uniform_bytes};
-use crate::rig::{ResolvedRig, Rig};
+use crate::rig::Rig;
 use crate::scatter::Scatters;
 use crate::scene::Scene;
-use crate::shadow::LightView;
 
 mod checks;
 mod classic;
+mod culler;
 mod far_pass;
+mod frame;
 mod indirect;
 mod options;
 mod own_passes;
@@ -102,28 +102,14 @@ mod view_pass;
 
 use checks::check_device;
 use classic::ClassicPath;
+pub use frame::{CullView, FramePlan, FrameStats, PlannedCull, instances_per_object};
 use indirect::IndirectPath;
 pub use options::{CoarseMode, CullMode, LOD_PIXELS, RendererOptions, frame_lod};
 pub use passes::{Level, PassRecord};
 use passes::{close, open_display};
 pub use readback::FarSplit;
-use sync::CullState;
 pub use sync::SyncStats;
 pub use targets::{DisplayTarget, TargetShape, TargetViews};
-
-/// What one frame recorded and uploaded, and the CPU time of its phases.
-#[derive(Clone, Copy, Debug, Default, PartialEq, serde::Serialize)]
-pub struct FrameStats {
-    pub draw_calls: u32,
-    pub dispatches: u32,
-    pub bytes_uploaded: u64,
-    /// CPU culling (zero on the GPU path).
-    #[serde(skip)]
-    pub cpu_cull: Duration,
-    /// Writing contexts and cull results into buffers.
-    #[serde(skip)]
-    pub cpu_upload: Duration,
-}
 
 /// The path chosen in [`Renderer::new`].
 enum Path {
@@ -133,16 +119,16 @@ enum Path {
 
 impl Path {
     /// The path for `scene` with its instances at `places`, with room for `slots`
-    /// slots and places.
+    /// slots and places, for the displays (and coarse cull) of `plan`.
     fn new(
         device: &wgpu::Device,
         (scene, places): (&Scene, &Places),
-        (rig, frame): (&Rig, &wgpu::Buffer),
+        (plan, frame): (&FramePlan, &wgpu::Buffer),
         (options, slots): (&RendererOptions, u32),
     ) -> Result<Path> {
         let scope = device.push_error_scope(wgpu::ErrorFilter::Validation);
         let layout = CullLayout::with_places(scene, places);
-        let at = (rig, frame);
+        let at = (plan, frame);
         let path =
             match options.mode.per_instance() {
                 false => IndirectPath::new(device, (scene, layout), at, (options, slots))
@@ -163,6 +149,14 @@ impl Path {
             Path::Classic(p) => &mut p.draw_scene,
         }
     }
+
+    /// The instance records and the culler: what edits change.
+    fn edit_targets(&mut self) -> (&wgpu::Buffer, &mut culler::Culler) {
+        match self {
+            Path::Indirect(p) => (&p.draw_scene.instances, &mut p.culler),
+            Path::Classic(p) => (&p.draw_scene.instances, &mut p.culler),
+        }
+    }
 }
 
 pub struct Renderer {
@@ -178,9 +172,10 @@ pub struct Renderer {
     scatter: Scatters,
     /// Instance slots the buffers have room for.
     slots: u32,
-    /// The rig as made: the displays a reallocation rebuilds for.
+    /// The rig as made: the displays (and far layer sizes) a reallocation rebuilds for.
     rig: Rig,
-    /// Whether each frame starts with the coarse cull ([`RendererOptions::coarse_for`]).
+    /// Whether each frame starts with the coarse cull ([`RendererOptions::coarse_for`]),
+    /// decided once: it sizes buffers.
     coarse: bool,
     /// What the last `encode` or `encode_culls` recorded, pass by pass.
     passes: Vec<PassRecord>,
@@ -196,7 +191,9 @@ impl Renderer {
         options: RendererOptions,
     ) -> Result<Renderer> {
         check_device(device, scene, &options)?;
-        let options_coarse = options.coarse_for(rig, Some(device));
+        let resolved = rig.resolve()?;
+        let coarse = options.coarse_for(&resolved, Some(device));
+        let plan = FramePlan::of(rig, resolved, &options, (coarse, 0.0))?;
         let scatter = Scatters::new(
             device,
             options.windows(device, scene.instances.len() as u32),
@@ -204,7 +201,7 @@ impl Renderer {
         let frame = uniform_buffer::<FrameContext>(device, "stereocull.frame_context");
         let slots = scene.instances.len() as u32;
         let places = Places::tight(scene);
-        let path = Path::new(device, (scene, &places), (rig, &frame), (&options, slots))?;
+        let path = Path::new(device, (scene, &places), (&plan, &frame), (&options, slots))?;
         let shapes = rig
             .displays
             .iter()
@@ -223,7 +220,7 @@ impl Renderer {
             scatter,
             slots,
             rig: rig.clone(),
-            coarse: options_coarse,
+            coarse,
             passes: Vec::new(),
         })
     }
@@ -246,18 +243,13 @@ impl Renderer {
     /// GPU bytes per instance: the 64-byte instance record, the GPU culler's layout and
     /// scratch (GPU culling only), and 4 bytes of visible list per display.
     pub fn gpu_bytes_per_instance(&self) -> u64 {
-        let culling = match self.options.cull {
-            CullMode::Gpu => CullScene::BYTES_PER_INSTANCE,
-            CullMode::Cpu => 0,
-        };
+        let culling = culler::Culler::bytes_per_instance(self.options.cull);
         DrawScene::BYTES_PER_INSTANCE + culling + 4 * self.shapes.len() as u64
     }
 
-    /// Writes this frame's contexts (and, culling on the CPU, the cull results), all
-    /// from one resolution of `rig`, which must have the displays the renderer was made
-    /// with; only poses may change. `time` (seconds on the caller's clock) goes into the
-    /// frame context, from which the GPU animates instances.
-    pub fn prepare(&mut self, queue: &wgpu::Queue, rig: &Rig, time: f32) -> Result<FrameStats> {
+    /// What the frame at `time` for `rig`'s pose will do ([`FramePlan`]): what
+    /// [`Renderer::prepare`] writes, for inspection.
+    pub fn plan(&self, rig: &Rig, time: f32) -> Result<FramePlan> {
         let same = rig.displays.len() == self.shapes.len()
             && rig
                 .displays
@@ -270,27 +262,19 @@ impl Renderer {
                 "the rig's displays differ from the renderer's",
             ));
         }
-        let resolved = rig.resolve()?;
-        let cull = FrameCull {
-            lod: frame_lod(rig, &resolved, self.options.lod_levels()),
-            coarse: self
-                .coarse
-                .then(|| resolved.coarse_cull(self.options.mode.culls_per_eye())),
-        };
-        let coarse = cull.coarse.unwrap_or(CoarseCull::EVERYTHING);
-        let light = LightView::fit(&self.options.light, &resolved);
-        let shadows = self.options.shadows;
-        let context = FrameContext::new(
-            &rig.viewer,
-            (time, cull.lod.lod_scale),
-            &coarse,
-            (&light, shadows),
-        );
-        let frame_bytes = write(queue, &self.frame, &uniform_bytes(&context));
-        let frame = (&resolved, &cull, shadows.then_some(&light));
+        FramePlan::new(rig, &self.options, self.coarse, time)
+    }
+
+    /// Writes this frame's contexts (and, culling on the CPU, the cull results), all
+    /// from one plan of `rig`, which must have the displays the renderer was made with;
+    /// only poses may change. `time` (seconds on the caller's clock) goes into the frame
+    /// context, from which the GPU animates instances.
+    pub fn prepare(&mut self, queue: &wgpu::Queue, rig: &Rig, time: f32) -> Result<FrameStats> {
+        let plan = self.plan(rig, time)?;
+        let frame_bytes = write(queue, &self.frame, &uniform_bytes(&plan.frame));
         let mut stats = match &mut self.path {
-            Path::Indirect(p) => p.prepare(queue, rig, frame),
-            Path::Classic(p) => p.prepare(queue, rig, frame),
+            Path::Indirect(p) => p.prepare(queue, &plan),
+            Path::Classic(p) => p.prepare(queue, &plan),
         };
         // Texels go up with the first frame: `new` has no queue.
         stats.bytes_uploaded += frame_bytes + self.path.draw_scene().materials.upload(queue);
@@ -407,44 +391,4 @@ impl Renderer {
             .map(|s| s.create(device, self.options.target_format()))
             .collect()
     }
-}
-
-/// A uniform buffer for one `T`.
-fn uniform_buffer<T: encase::ShaderType>(device: &wgpu::Device, label: &str) -> wgpu::Buffer {
-    device.create_buffer(&wgpu::BufferDescriptor {
-        label: Some(label),
-        size: T::min_size().get(),
-        usage: wgpu::BufferUsages::UNIFORM | wgpu::BufferUsages::COPY_DST,
-        mapped_at_creation: false,
-    })
-}
-
-/// A uniform buffer for one [`DisplayContext`].
-fn context_buffer(device: &wgpu::Device) -> wgpu::Buffer {
-    uniform_buffer::<DisplayContext>(device, "stereocull.display_context")
-}
-
-/// The display contexts of a frame, `instances_per_object[i]` for display `i`.
-fn display_contexts(
-    rig: &Rig,
-    resolved: &ResolvedRig,
-    instances_per_object: impl Fn(usize) -> u32,
-) -> Vec<DisplayContext> {
-    rig.displays
-        .iter()
-        .zip(&resolved.displays)
-        .enumerate()
-        .map(|(i, (d, r))| DisplayContext {
-            cull_slot: i as u32,
-            ..DisplayContext::new(r, d.resolution, instances_per_object(i))
-        })
-        .collect()
-}
-
-/// Writes `bytes` at the start of `buffer` (nothing for none); returns the bytes written.
-fn write(queue: &wgpu::Queue, buffer: &wgpu::Buffer, bytes: &[u8]) -> u64 {
-    if !bytes.is_empty() {
-        queue.write_buffer(buffer, 0, bytes);
-    }
-    bytes.len() as u64
 }

@@ -90,19 +90,17 @@ impl RendererOptions {
         if self.lod { MAX_LODS as u32 } else { 1 }
     }
 
-    /// Whether frames on `rig` run the coarse cull: [`CoarseMode`] decided for the rig
-    /// as it stands (a rig that fails to resolve gets none; `Renderer::new` reports it)
-    /// and, culling on the GPU, for `device`'s adapter (`None`: no GPU culling).
-    pub fn coarse_for(&self, rig: &Rig, device: Option<&wgpu::Device>) -> bool {
+    /// Whether frames on a rig resolved as `resolved` run the coarse cull: [`CoarseMode`]
+    /// decided for the rig as it stands and, culling on the GPU, for `device`'s adapter
+    /// (`None`: no GPU culling).
+    pub fn coarse_for(&self, resolved: &ResolvedRig, device: Option<&wgpu::Device>) -> bool {
         match self.coarse_cull {
             CoarseMode::On => true,
             CoarseMode::Off => false,
             CoarseMode::Auto => {
                 let software =
                     |d: &wgpu::Device| d.adapter_info().device_type == wgpu::DeviceType::Cpu;
-                let gains = rig
-                    .resolve()
-                    .is_ok_and(|r| r.expected_coarse_tests() <= 0.8);
+                let gains = resolved.expected_coarse_tests() <= 0.8;
                 gains && !(self.cull == CullMode::Gpu && device.is_some_and(software))
             }
         }

@@ -2,8 +2,9 @@
 //! into its encoder, then each display's draws inside a render pass it began, with the
 //! built-in pipelines or one of its own.
 
+use super::frame::FrameStats;
 use super::passes::{close, open_display};
-use super::{FrameStats, Path, Renderer};
+use super::{Path, Renderer};
 use crate::cull::gpu::CullTargets;
 use crate::error::{Error, Result};
 use crate::profiling::GpuTimer;

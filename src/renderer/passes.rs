@@ -4,7 +4,7 @@
 
 use wgpu_profiler::GpuProfilerQuery;
 
-use super::TargetViews;
+use super::targets::TargetViews;
 use crate::draw::begin_pass;
 use crate::profiling::GpuTimer;
 

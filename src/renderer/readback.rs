@@ -1,10 +1,9 @@
 //! Reading a submitted frame back: each display's cull buffers (and its far layer's),
 //! visible totals, the far/near split, and what the coarse cull saved.
 
-use super::indirect::{Culling, IndirectPath};
+use super::indirect::IndirectPath;
 use super::{Path, Renderer};
 use crate::cull::CullOutput;
-use crate::cull::coarse::BLOCK;
 use crate::cull::gpu::{COUNTS_BYTES, CullTargets};
 use crate::error::Result;
 use crate::readback::read_pod;
@@ -30,10 +29,8 @@ impl Renderer {
         device: &wgpu::Device,
         queue: &wgpu::Queue,
     ) -> Result<Option<Vec<u32>>> {
-        match &self.path {
-            Path::Indirect(p) => p.read_candidates(device, queue),
-            Path::Classic(_) => Ok(None),
-        }
+        let (culler, displays) = self.culler();
+        culler.read_candidates(device, queue, displays)
     }
 
     /// Sphere-against-frustum tests of the last frame with GPU culling (read back after
@@ -45,10 +42,8 @@ impl Renderer {
         device: &wgpu::Device,
         queue: &wgpu::Queue,
     ) -> Result<Option<u64>> {
-        match &self.path {
-            Path::Indirect(p) => p.read_sphere_tests(device, queue),
-            Path::Classic(_) => Ok(None),
-        }
+        let (culler, displays) = self.culler();
+        culler.read_sphere_tests(device, queue, displays)
     }
 
     /// Display `index`'s cull result of the last frame: on the indirect path its buffers
@@ -121,50 +116,18 @@ impl Renderer {
     }
 }
 
-impl IndirectPath {
-    /// The coarse cull's candidate count per display of the last frame (GPU culling
-    /// with it on), read back after the frame was submitted.
-    pub(super) fn read_candidates(
-        &self,
-        device: &wgpu::Device,
-        queue: &wgpu::Queue,
-    ) -> Result<Option<Vec<u32>>> {
-        match &self.culling {
-            Culling::Gpu {
-                scene,
-                coarse: Some(_),
-                ..
-            } => {
-                let bytes = 4 * self.displays.len() as u64;
-                Ok(Some(read_pod::<u32>(
-                    device,
-                    queue,
-                    &scene.candidate_count,
-                    bytes,
-                )?))
-            }
-            _ => Ok(None),
-        }
-    }
-
-    /// Sphere-against-frustum tests of the last frame on the GPU (`None` culling on the
-    /// CPU): see [`Renderer::read_sphere_tests`].
-    pub(super) fn read_sphere_tests(
-        &self,
-        device: &wgpu::Device,
-        queue: &wgpu::Queue,
-    ) -> Result<Option<u64>> {
-        let Culling::Gpu { scene, .. } = &self.culling else {
-            return Ok(None);
+impl Renderer {
+    /// The frame's culler, and how many displays it culls for.
+    fn culler(&self) -> (&super::culler::Culler, usize) {
+        let culler = match &self.path {
+            Path::Indirect(p) => &p.culler,
+            Path::Classic(p) => &p.culler,
         };
-        let (n, displays) = (scene.instance_count as u64, self.displays.len() as u64);
-        let blocks = n.div_ceil(BLOCK as u64);
-        Ok(Some(match self.read_candidates(device, queue)? {
-            Some(c) => n + blocks * (1 + displays) + c.iter().map(|&c| c as u64).sum::<u64>(),
-            None => displays * n,
-        }))
+        (culler, self.shapes.len())
     }
+}
 
+impl IndirectPath {
     /// Display `index`'s cull buffers, read back after the frame was submitted.
     pub(super) fn read_cull(
         &self,
@@ -172,7 +135,7 @@ impl IndirectPath {
         queue: &wgpu::Queue,
         index: usize,
     ) -> Result<CullOutput> {
-        self.read_targets(device, queue, &self.displays[index].cull)
+        self.read_targets(device, queue, &self.displays[index].cull.targets)
     }
 
     /// Display `index`'s far layer's cull buffers (`None` without one), read back after
@@ -193,7 +156,7 @@ impl IndirectPath {
     /// without one).
     pub(super) fn far_distances(&self) -> Vec<Option<f32>> {
         match &self.far {
-            Some(far) => far.plans.iter().map(|p| p.map(|p| p.distance)).collect(),
+            Some(far) => far.distances.clone(),
             None => vec![None; self.displays.len()],
         }
     }
@@ -225,7 +188,7 @@ impl IndirectPath {
     ) -> Result<Vec<u32>> {
         self.displays
             .iter()
-            .map(|d| Ok(read_counts(device, queue, &d.cull)?[1]))
+            .map(|d| Ok(read_counts(device, queue, &d.cull.targets)?[1]))
             .collect()
     }
 }

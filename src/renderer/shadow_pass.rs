@@ -1,24 +1,15 @@
-//! The frame's shadow pass in either path: the light's cull (the GPU culler's display
-//! passes over every instance, or the CPU culler and an upload) and one depth-only pass
-//! with one multi-draw-indirect call into the shadow map, once per frame, before any
-//! display.
+//! The frame's shadow pass in either path: the light's cull (the frame's culler, never
+//! over the coarse cull's blocks) and one depth-only pass with one multi-draw-indirect
+//! call into the shadow map, once per frame, before any display.
 
+use super::culler::Culler;
+use super::frame::CullView;
 use super::passes::{PassRecord, close, open_display, opener, render_pass};
 use super::view_pass::ViewPass;
 use crate::contexts::DisplayContext;
-use crate::cull::cpu::{self, FrameLod};
-use crate::cull::gpu::{CullScene, GpuCuller};
 use crate::draw::{DrawScene, Drawer, cleared_depth};
 use crate::profiling::GpuTimer;
-use crate::records::CullLayout;
 use crate::shadow::LightView;
-
-/// Where the light's cull comes from: the GPU culler (its passes and scene data), or
-/// the CPU culler's layout.
-pub(super) enum LightCull<'a> {
-    Gpu(&'a GpuCuller, &'a CullScene),
-    Cpu(&'a CullLayout),
-}
 
 /// The light as one more view.
 pub(super) struct ShadowPass {
@@ -29,32 +20,25 @@ impl ShadowPass {
     pub(super) fn new(
         device: &wgpu::Device,
         drawing: (&Drawer, &DrawScene),
-        frame: &wgpu::Buffer,
-        culler: Option<(&GpuCuller, &CullScene)>,
+        (frame, culler): (&wgpu::Buffer, &Culler),
         sizes: (u32, u32),
     ) -> ShadowPass {
+        let view = (frame, culler, CullView::Light);
         ShadowPass {
-            view: ViewPass::new(device, drawing, frame, culler, sizes),
+            view: ViewPass::new(device, drawing, view, sizes),
         }
     }
 
-    /// Writes the light's context for `view` and, culling on the CPU, its cull with the
-    /// frame's levels of detail. Returns the bytes written.
+    /// Writes the light's context for `view` and the culler's result for it. Returns the
+    /// bytes written.
     pub(super) fn prepare(
         &self,
         queue: &wgpu::Queue,
         (view, size): (&LightView, u32),
-        cull: &LightCull,
-        lod: &FrameLod,
+        culler: &Culler,
     ) -> u64 {
-        let cpu = match cull {
-            LightCull::Cpu(layout) => {
-                Some(cpu::cull_many_lod(layout, &[view.cull_job()], lod).remove(0))
-            }
-            LightCull::Gpu(..) => None,
-        };
         let context = DisplayContext::light(view, size);
-        self.view.prepare(queue, &context, cpu.as_ref())
+        self.view.prepare(queue, &context, culler)
     }
 
     /// Records the light's cull (on the GPU) and the shadow pass, timed as
@@ -64,19 +48,17 @@ impl ShadowPass {
         &self,
         encoder: &mut wgpu::CommandEncoder,
         (drawer, draw_scene): (&Drawer, &DrawScene),
-        cull: &LightCull,
+        culler: &Culler,
         (timer, log): (&mut Option<&mut GpuTimer>, &mut Vec<PassRecord>),
     ) -> (u32, u32) {
         let Some(shadow) = &drawer.shadow else {
             return (0, 0);
         };
         let frame = open_display(timer, "shadow", encoder);
-        let gpu = match cull {
-            LightCull::Gpu(culler, scene) => Some((*culler, *scene, None)),
-            LightCull::Cpu(_) => None,
-        };
         let what = (&mut *log, PassRecord::frame("shadow_cull"));
-        let dispatches = self.view.encode_cull(encoder, gpu, (timer, &frame), what);
+        let dispatches = self
+            .view
+            .encode_cull(encoder, culler, (timer, &frame), what);
         let begin = opener(|encoder, writes| {
             encoder
                 .begin_render_pass(&wgpu::RenderPassDescriptor {

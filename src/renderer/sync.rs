@@ -1,20 +1,15 @@
 //! A changing scene reaching the GPU: [`Renderer::sync`] uploads what a
 //! [`LiveScene`] changed since the last sync, sparsely where it can.
 
-use super::{Path, Renderer, check_device};
-use crate::cull::gpu::CullScene;
+use super::checks::check_device;
+use super::frame::FramePlan;
+use super::{Path, Renderer};
 use crate::error::Result;
 use crate::live::{Changes, LiveScene, MoveEdit, PlaceEdit};
 use crate::places::Places;
 use crate::records::{CullLayout, InstanceRecord, instance_records};
 use crate::scatter::{RecordEdit, ScatterTargets, Scatters, record_edit};
 use crate::scene::Scene;
-
-/// What edits change in the culling: the GPU culler's buffers, or the CPU culler's layout.
-pub(super) enum CullState<'a> {
-    Gpu(&'a mut CullScene),
-    Cpu(&'a mut CullLayout),
-}
 
 /// What [`Renderer::sync`] did.
 #[derive(Clone, Copy, Debug, Default, PartialEq, Eq, serde::Serialize)]
@@ -32,16 +27,6 @@ pub struct SyncStats {
     /// The scene outgrew the buffers (or gained meshes): everything was uploaded again,
     /// with room to grow by half.
     pub reallocated: bool,
-}
-
-impl Path {
-    /// The instance records and the culling state: what edits change.
-    fn edit_targets(&mut self) -> (&wgpu::Buffer, CullState<'_>) {
-        match self {
-            Path::Indirect(p) => p.edit_targets(),
-            Path::Classic(p) => (&p.draw_scene.instances, CullState::Cpu(&mut p.layout)),
-        }
-    }
 }
 
 impl Renderer {
@@ -90,7 +75,8 @@ impl Renderer {
     ) -> Result<SyncStats> {
         check_device(device, scene, &self.options)?;
         let room = needed + needed / 2;
-        let at = (&self.rig, &self.frame);
+        let plan = FramePlan::new(&self.rig, &self.options, self.coarse, 0.0)?;
+        let at = (&plan, &self.frame);
         self.path = Path::new(device, (scene, places), at, (&self.options, room))?;
         self.slots = room;
         // The bindings may now need more windows.
@@ -108,16 +94,9 @@ impl Renderer {
     fn reload(&mut self, queue: &wgpu::Queue, scene: &Scene, places: &Places) -> SyncStats {
         self.scatter.reset();
         let records = instance_records(scene);
-        let (instances, culling) = self.path.edit_targets();
+        let (instances, culler) = self.path.edit_targets();
         queue.write_buffer(instances, 0, bytemuck::cast_slice(&records));
-        let layout = CullLayout::with_places(scene, places);
-        let layout_bytes = match culling {
-            CullState::Gpu(cull) => cull.reload(queue, &layout),
-            CullState::Cpu(cpu) => {
-                *cpu = layout;
-                0
-            }
-        };
+        let layout_bytes = culler.reload(queue, CullLayout::with_places(scene, places));
         SyncStats {
             bytes_uploaded: std::mem::size_of_val(&records[..]) as u64 + layout_bytes,
             reloaded: true,
@@ -125,8 +104,9 @@ impl Renderer {
         }
     }
 
-    /// Stages the places filled and vacated (GPU culling), or applies them to the CPU
-    /// culler's layout; returns a cleared list for the live scene to fill next.
+    /// Stages the places filled and vacated for the scatter pass (the GPU culler's), or
+    /// has the CPU culler take them; returns a cleared list for the live scene to fill
+    /// next.
     fn stage_places(
         &mut self,
         device: &wgpu::Device,
@@ -136,24 +116,13 @@ impl Renderer {
             return (SyncStats::default(), placed);
         }
         let count = placed.len() as u32;
-        let (instances, culling) = self.path.edit_targets();
-        let (bytes, spare) = match culling {
-            CullState::Gpu(cull) => {
-                let targets = ScatterTargets {
-                    instances,
-                    spheres: Some(cull.scatter_targets()),
-                };
-                self.scatter.places.stage(device, placed, targets)
-            }
-            CullState::Cpu(layout) => {
-                for &[place, slot] in &placed {
-                    layout.set_place((place, slot, CullLayout::VACANT_SPHERE));
-                }
-                let mut spare = placed;
-                spare.clear();
-                (0, spare)
-            }
+        let (instances, culler) = self.path.edit_targets();
+        culler.place(&placed);
+        let targets = ScatterTargets {
+            instances,
+            spheres: culler.scatter_targets(),
         };
+        let (bytes, spare) = self.scatter.stage_places(device, placed, targets);
         let stats = SyncStats {
             bytes_uploaded: bytes,
             placed: count,
@@ -174,17 +143,11 @@ impl Renderer {
             return (SyncStats::default(), moved);
         }
         let count = moved.len() as u32;
-        let (instances, mut culling) = self.path.edit_targets();
-        if let CullState::Cpu(layout) = &mut culling {
-            for edit in &moved {
-                let slot = edit[0] as usize;
-                let sphere = scene.world_sphere(&scene.instances[slot]);
-                layout.set_sphere(layout.positions[slot], sphere);
-            }
-        }
+        let (instances, culler) = self.path.edit_targets();
+        culler.moved(scene, &moved);
         let targets = ScatterTargets {
             instances,
-            spheres: scatter_spheres(&culling),
+            spheres: culler.scatter_targets(),
         };
         let (bytes, spare) = self.scatter.moves.stage(device, moved, targets);
         let stats = SyncStats {
@@ -205,20 +168,11 @@ impl Renderer {
             .iter()
             .map(|&slot| record_edit(scene, slot))
             .collect();
-        let (instances, culling) = self.path.edit_targets();
+        let (instances, culler) = self.path.edit_targets();
         let targets = ScatterTargets {
             instances,
-            spheres: scatter_spheres(&culling),
+            spheres: culler.scatter_targets(),
         };
         self.scatter.records.stage(device, records, targets).0
-    }
-}
-
-/// The GPU culler's spheres, cull positions and order, which edits update (`None`
-/// culling on the CPU).
-fn scatter_spheres<'a>(culling: &'a CullState<'_>) -> Option<[&'a wgpu::Buffer; 4]> {
-    match culling {
-        CullState::Gpu(cull) => Some(cull.scatter_targets()),
-        CullState::Cpu(_) => None,
     }
 }

@@ -1,22 +1,22 @@
 //! One more view than the displays (the frame's light, a display's far layer): its own
-//! context, culled by the same cull passes as a display (or uploaded from the CPU
-//! culler) into its own cull outputs, and drawn with one multi-draw-indirect call.
+//! context, culled by the frame's culler like a display into its own cull outputs, and
+//! drawn with one multi-draw-indirect call.
 
-use super::passes::{Logged, Timing, compute_pass};
-use super::{context_buffer, write};
+use super::culler::{Culler, ViewCull};
+use super::frame::CullView;
+use super::passes::{Logged, Timing};
+use crate::buffers::write;
 use crate::contexts::DisplayContext;
-use crate::cull::CullOutput;
-use crate::cull::gpu::{CullScene, CullTargets, GpuCuller};
+use crate::contexts::context_buffer;
+use crate::cull::gpu::CullTargets;
 use crate::draw::{DrawScene, Drawer};
 use crate::records::uniform_bytes;
 use crate::shaders::DrawKey;
 
-/// The view's context, cull outputs and bindings.
+/// The view's context, its cull and bindings.
 pub(super) struct ViewPass {
     context: wgpu::Buffer,
-    cull: CullTargets,
-    /// GPU culling only.
-    cull_bind_group: Option<wgpu::BindGroup>,
+    cull: ViewCull,
     draw_bind_group: wgpu::BindGroup,
     /// Draw entries: meshes times levels of detail.
     max_draws: u32,
@@ -26,20 +26,17 @@ impl ViewPass {
     pub(super) fn new(
         device: &wgpu::Device,
         (drawer, draw_scene): (&Drawer, &DrawScene),
-        frame: &wgpu::Buffer,
-        culler: Option<(&GpuCuller, &CullScene)>,
+        (frame, culler, view): (&wgpu::Buffer, &Culler, CullView),
         (slots, max_draws): (u32, u32),
     ) -> ViewPass {
         let context = context_buffer(device);
-        let cull = CullTargets::new(device, slots, max_draws);
+        let cull = culler.view(device, view, [frame, &context], (slots, max_draws));
         ViewPass {
-            cull_bind_group: culler
-                .map(|(c, scene)| c.bind_group(device, scene, [frame, &context], &cull)),
             draw_bind_group: drawer.bind_group(
                 device,
                 [frame, &context],
                 draw_scene,
-                &cull.visible,
+                &cull.targets.visible,
             ),
             context,
             cull,
@@ -54,38 +51,30 @@ impl ViewPass {
 
     /// The view's cull outputs, per the cull contract.
     pub(super) fn cull(&self) -> &CullTargets {
-        &self.cull
+        &self.cull.targets
     }
 
-    /// Writes this frame's `context` and, culled on the CPU, the view's cull; returns
-    /// the bytes written.
+    /// Writes this frame's `context` and the culler's result for the view (nothing on
+    /// the GPU); returns the bytes written.
     pub(super) fn prepare(
         &self,
         queue: &wgpu::Queue,
         context: &DisplayContext,
-        cpu: Option<&CullOutput>,
+        culler: &Culler,
     ) -> u64 {
-        let bytes = write(queue, &self.context, &uniform_bytes(context));
-        bytes + cpu.map_or(0, |out| self.cull.upload(queue, out))
+        write(queue, &self.context, &uniform_bytes(context)) + culler.upload(queue, &self.cull)
     }
 
-    /// Records the view's cull on the GPU (`gpu`: the culler, its scene, and the coarse
-    /// cull's slot whose block list it runs over, if any), timed and logged as `what`; nothing when
-    /// culling on the CPU. Returns the dispatches.
+    /// Records the view's cull (on the GPU), timed and logged as `logged`. Returns the
+    /// dispatches.
     pub(super) fn encode_cull(
         &self,
         encoder: &mut wgpu::CommandEncoder,
-        gpu: Option<(&GpuCuller, &CullScene, Option<u32>)>,
+        culler: &Culler,
         timing: Timing,
         logged: Logged,
     ) -> u32 {
-        let (Some((culler, scene, slot)), Some(group)) = (gpu, &self.cull_bind_group) else {
-            return 0;
-        };
-        compute_pass(encoder, timing, logged, |pass| {
-            culler.encode(pass, scene, group, slot);
-        });
-        GpuCuller::DISPATCHES_PER_DISPLAY
+        culler.encode(encoder, &self.cull, timing, logged)
     }
 
     /// The view's one multi-draw into `pass`: with `drawer`'s pipeline for `key`, or
@@ -100,7 +89,7 @@ impl ViewPass {
             Some(key) => drawer.bind(pass, key, draw_scene, &self.draw_bind_group),
             None => Drawer::bind_resources(pass, draw_scene, &self.draw_bind_group),
         }
-        drawer.draw_indirect(pass, self.max_draws, &self.cull);
+        drawer.draw_indirect(pass, self.max_draws, &self.cull.targets);
         1
     }
 }

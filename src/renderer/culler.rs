@@ -1,0 +1,302 @@
+//! The one culler every view of a frame goes through: each display, each eye in
+//! `multi-camera`, each far layer, the light. On the GPU it is compute passes over scene
+//! data uploaded once (three per view, after the frame's coarse cull when it runs); on
+//! the CPU one parallel pass over the spheres per frame for every view the frame frustum
+//! holds, one for the light, and an upload per view. A view's pass takes the culler and
+//! never asks which it is: this file is the only place that does.
+
+use super::frame::{CullView, FramePlan};
+use super::options::CullMode;
+use super::passes::{Logged, PassRecord, Timing, close, compute_pass, open_display};
+use crate::cull::CullOutput;
+use crate::cull::coarse::BLOCK;
+use crate::cull::cpu;
+use crate::cull::gpu::{CullScene, CullTargets, GpuCuller};
+use crate::error::Result;
+use crate::live::{MoveEdit, PlaceEdit};
+use crate::profiling::GpuTimer;
+use crate::readback::read_pod;
+use crate::records::CullLayout;
+use crate::scene::Scene;
+use crate::shaders::Windows;
+
+pub(super) enum Culler {
+    /// Passes over scene data on the GPU; `coarse` is the coarse cull's group 1, when it
+    /// runs.
+    Gpu {
+        culler: GpuCuller,
+        scene: Box<CullScene>,
+        coarse: Option<wgpu::BindGroup>,
+    },
+    /// The CPU culler over its own copy of the cull layout, and this frame's results.
+    Cpu {
+        layout: CullLayout,
+        outputs: Vec<(CullView, CullOutput)>,
+    },
+}
+
+/// What a culler is made for: the slots of room, the levels of detail, and how many
+/// displays the coarse cull lists blocks for (0: no coarse cull).
+#[derive(Clone, Copy, Debug)]
+pub(super) struct CullShape {
+    pub slots: u32,
+    pub levels: u32,
+    pub coarse_slots: u32,
+}
+
+/// One view's cull outputs (per the cull contract) and, on the GPU, its bindings.
+pub(super) struct ViewCull {
+    pub(super) view: CullView,
+    pub(super) targets: CullTargets,
+    bind_group: Option<wgpu::BindGroup>,
+}
+
+impl Culler {
+    /// The culler `mode` asks for, over `layout`.
+    pub(super) fn new(
+        device: &wgpu::Device,
+        mode: CullMode,
+        layout: CullLayout,
+        (shape, windows): (CullShape, Windows),
+    ) -> Culler {
+        match mode {
+            CullMode::Cpu => Culler::Cpu {
+                layout,
+                outputs: Vec::new(),
+            },
+            CullMode::Gpu => {
+                let culler = GpuCuller::new(device, shape.coarse_slots > 0, windows);
+                let sizes = (shape.slots, shape.levels, shape.coarse_slots);
+                let scene = Box::new(CullScene::new(device, &layout, sizes));
+                let coarse = culler.coarse_bind_group(device, &scene);
+                Culler::Gpu {
+                    culler,
+                    scene,
+                    coarse,
+                }
+            }
+        }
+    }
+
+    /// `view`'s cull outputs, for `draws` draws (meshes times levels) of up to `slots`
+    /// instances, and its bindings to the frame's and the view's contexts.
+    pub(super) fn view(
+        &self,
+        device: &wgpu::Device,
+        view: CullView,
+        contexts: [&wgpu::Buffer; 2],
+        (slots, draws): (u32, u32),
+    ) -> ViewCull {
+        let targets = CullTargets::new(device, slots, draws);
+        let bind_group = match self {
+            Culler::Gpu { culler, scene, .. } => {
+                Some(culler.bind_group(device, scene, contexts, &targets))
+            }
+            Culler::Cpu { .. } => None,
+        };
+        ViewCull {
+            view,
+            targets,
+            bind_group,
+        }
+    }
+
+    /// This frame's culls as `plan` lists them: on the CPU, all of them (and the
+    /// light's); on the GPU, the coarse cull's block tests, one per display. Returns the
+    /// bytes written.
+    pub(super) fn prepare(&mut self, queue: &wgpu::Queue, plan: &FramePlan) -> u64 {
+        match self {
+            Culler::Gpu { scene, .. } => {
+                let planes: Vec<_> = plan.resolved.displays.iter().map(|d| d.planes).collect();
+                scene.write_block_tests(queue, &planes)
+            }
+            Culler::Cpu { layout, outputs } => {
+                let culled = cpu::cull_frame(layout, &plan.jobs(), &plan.cull);
+                *outputs = plan.culls.iter().map(|c| c.view).zip(culled).collect();
+                if let Some(light) = &plan.light_cull {
+                    let out = cpu::cull_many_lod(layout, &[light.job], &plan.cull.lod);
+                    outputs.extend(out.into_iter().map(|o| (light.view, o)));
+                }
+                0
+            }
+        }
+    }
+
+    /// This frame's result for `view` in CPU memory: the CPU culler's (`None` on the GPU,
+    /// whose results stay in its buffers, or for a view the plan does not cull).
+    pub(super) fn output(&self, view: CullView) -> Option<&CullOutput> {
+        match self {
+            Culler::Cpu { outputs, .. } => outputs.iter().find(|(v, _)| *v == view).map(|(_, o)| o),
+            Culler::Gpu { .. } => None,
+        }
+    }
+
+    /// Writes `view`'s CPU result into its outputs (nothing on the GPU, whose passes
+    /// write them); returns the bytes written.
+    pub(super) fn upload(&self, queue: &wgpu::Queue, view: &ViewCull) -> u64 {
+        self.output(view.view)
+            .map_or(0, |out| view.targets.upload(queue, out))
+    }
+
+    /// Records the frame's coarse cull (GPU culling with it on), timed as `coarse_cull`
+    /// inside a `frame` scope; `any` is any display's view (the frame passes read none of
+    /// its bindings). Returns the dispatches.
+    pub(super) fn encode_frame(
+        &self,
+        encoder: &mut wgpu::CommandEncoder,
+        any: Option<&ViewCull>,
+        (timer, log): (&mut Option<&mut GpuTimer>, &mut Vec<PassRecord>),
+    ) -> u32 {
+        let (
+            Culler::Gpu {
+                culler,
+                scene,
+                coarse: Some(args),
+            },
+            Some(ViewCull {
+                bind_group: Some(display),
+                ..
+            }),
+        ) = (self, any)
+        else {
+            return 0;
+        };
+        let frame = open_display(timer, "frame", encoder);
+        let mut dispatches = 0;
+        let what = (log, PassRecord::frame("coarse_cull"));
+        compute_pass(encoder, (timer, &frame), what, |pass| {
+            dispatches = culler.encode_frame(pass, scene, [display, args]);
+        });
+        close(timer, encoder, frame);
+        dispatches
+    }
+
+    /// Records `view`'s cull on the GPU (over its display's blocks with the coarse
+    /// cull), timed and logged as `logged`; nothing on the CPU (`upload` wrote it).
+    /// Returns the dispatches.
+    pub(super) fn encode(
+        &self,
+        encoder: &mut wgpu::CommandEncoder,
+        view: &ViewCull,
+        timing: Timing,
+        logged: Logged,
+    ) -> u32 {
+        let (
+            Culler::Gpu {
+                culler,
+                scene,
+                coarse,
+            },
+            Some(group),
+        ) = (self, &view.bind_group)
+        else {
+            return 0;
+        };
+        let slot = coarse.as_ref().and(view.view.coarse_slot());
+        compute_pass(encoder, timing, logged, |pass| {
+            culler.encode(pass, scene, group, slot);
+        });
+        GpuCuller::DISPATCHES_PER_DISPLAY
+    }
+
+    /// GPU bytes per instance the culler keeps besides the views' outputs.
+    pub(super) fn bytes_per_instance(mode: CullMode) -> u64 {
+        match mode {
+            CullMode::Gpu => CullScene::BYTES_PER_INSTANCE,
+            CullMode::Cpu => 0,
+        }
+    }
+}
+
+/// Edits: what [`super::Renderer::sync`] changes in the culler.
+impl Culler {
+    /// Takes a new `layout` (instances inserted or removed, same room); returns the
+    /// bytes written.
+    pub(super) fn reload(&mut self, queue: &wgpu::Queue, layout: CullLayout) -> u64 {
+        match self {
+            Culler::Gpu { scene, .. } => scene.reload(queue, &layout),
+            Culler::Cpu { layout: own, .. } => {
+                *own = layout;
+                0
+            }
+        }
+    }
+
+    /// The GPU culler's spheres, cull positions, order and mesh bounds, which the
+    /// scatter passes write edits into; `None` for the CPU culler, which takes edits
+    /// into its layout ([`Culler::place`], [`Culler::moved`]).
+    pub(super) fn scatter_targets(&self) -> Option<[&wgpu::Buffer; 4]> {
+        match self {
+            Culler::Gpu { scene, .. } => Some(scene.scatter_targets()),
+            Culler::Cpu { .. } => None,
+        }
+    }
+
+    /// The places filled and vacated, into the CPU culler's layout (the GPU's are
+    /// scattered).
+    pub(super) fn place(&mut self, placed: &[PlaceEdit]) {
+        if let Culler::Cpu { layout, .. } = self {
+            for &[place, slot] in placed {
+                layout.set_place((place, slot, CullLayout::VACANT_SPHERE));
+            }
+        }
+    }
+
+    /// The moved instances' new spheres, into the CPU culler's layout (the GPU's are
+    /// scattered).
+    pub(super) fn moved(&mut self, scene: &Scene, moved: &[MoveEdit]) {
+        if let Culler::Cpu { layout, .. } = self {
+            for edit in moved {
+                let slot = edit[0] as usize;
+                let sphere = scene.world_sphere(&scene.instances[slot]);
+                layout.set_sphere(layout.positions[slot], sphere);
+            }
+        }
+    }
+}
+
+/// Diagnostics read back after a frame was submitted.
+impl Culler {
+    /// The coarse cull's candidates per display (GPU culling with it on).
+    pub(super) fn read_candidates(
+        &self,
+        device: &wgpu::Device,
+        queue: &wgpu::Queue,
+        displays: usize,
+    ) -> Result<Option<Vec<u32>>> {
+        match self {
+            Culler::Gpu {
+                scene,
+                coarse: Some(_),
+                ..
+            } => {
+                let bytes = 4 * displays as u64;
+                read_pod(device, queue, &scene.candidate_count, bytes).map(Some)
+            }
+            _ => Ok(None),
+        }
+    }
+
+    /// Sphere-against-frustum tests of the GPU cull (`None` on the CPU): every
+    /// instance once per display, or with the coarse cull every instance once (for its
+    /// block's sphere), every block once for the frame and once per display, and each
+    /// display's candidates.
+    pub(super) fn read_sphere_tests(
+        &self,
+        device: &wgpu::Device,
+        queue: &wgpu::Queue,
+        displays: usize,
+    ) -> Result<Option<u64>> {
+        let Culler::Gpu { scene, .. } = self else {
+            return Ok(None);
+        };
+        let (n, d) = (scene.instance_count as u64, displays as u64);
+        let blocks = n.div_ceil(BLOCK as u64);
+        Ok(Some(
+            match self.read_candidates(device, queue, displays)? {
+                Some(c) => n + blocks * (1 + d) + c.iter().map(|&c| c as u64).sum::<u64>(),
+                None => d * n,
+            },
+        ))
+    }
+}

@@ -1,0 +1,230 @@
+//! The frame as a plan: everything a frame decides (the rig resolved once, the frame and
+//! display contexts, every cull it runs, the levels of detail, the coarse cull, each
+//! display's far/near split, the light), made once from the rig's pose, the options and
+//! the time, as plain data before any buffer is written. The indirect path, the classic
+//! path and the CLI's CPU cull consume a plan and decide nothing again; a test can build
+//! one and inspect it without a device.
+
+use std::time::Duration;
+
+use super::options::{RendererOptions, frame_lod};
+use crate::contexts::{DisplayContext, FrameContext};
+use crate::cull::cpu::FrameCull;
+use crate::cull::{CoarseCull, CullJob};
+use crate::error::{Error, Result};
+use crate::far_layer::FarPlan;
+use crate::modes::StereoMode;
+use crate::rig::{ResolvedRig, Rig};
+use crate::shadow::LightView;
+
+/// What one frame recorded and uploaded, and the CPU time of its phases.
+#[derive(Clone, Copy, Debug, Default, PartialEq, serde::Serialize)]
+pub struct FrameStats {
+    pub draw_calls: u32,
+    pub dispatches: u32,
+    pub bytes_uploaded: u64,
+    /// CPU culling (zero on the GPU path).
+    #[serde(skip)]
+    pub cpu_cull: Duration,
+    /// Writing contexts and cull results into buffers.
+    #[serde(skip)]
+    pub cpu_upload: Duration,
+}
+
+/// The view a cull is for.
+#[derive(Clone, Copy, Debug, PartialEq, Eq, Hash)]
+pub enum CullView {
+    /// Display `i` against its display frustum (both eyes).
+    Display(usize),
+    /// Eye `e` of stereo display `i` against its own frustum (`multi-camera` only).
+    Eye(usize, usize),
+    /// Display `i`'s far layer: its far instances, drawn once.
+    Far(usize),
+    /// The frame's light (with shadows).
+    Light,
+}
+
+impl CullView {
+    /// The coarse cull's slot whose block list this view's GPU cull runs over, with the
+    /// coarse cull on: its display's (a far layer shares its display's blocks). The
+    /// light's box is not inside the frame frustum, so its cull never takes blocks.
+    pub fn coarse_slot(self) -> Option<u32> {
+        match self {
+            CullView::Display(i) | CullView::Eye(i, _) | CullView::Far(i) => Some(i as u32),
+            CullView::Light => None,
+        }
+    }
+}
+
+/// One cull of the frame.
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub struct PlannedCull {
+    pub view: CullView,
+    pub job: CullJob,
+}
+
+/// Everything one frame decides.
+#[derive(Clone, Debug, PartialEq)]
+pub struct FramePlan {
+    /// The rig's views, resolved once for this frame.
+    pub resolved: ResolvedRig,
+    /// What every pass reads once per frame.
+    pub frame: FrameContext,
+    /// Per display, in the rig's order: its context (with a far layer, its near cull's
+    /// split).
+    pub displays: Vec<DisplayContext>,
+    /// What every cull of the frame shares: the levels of detail, the coarse test.
+    pub cull: FrameCull,
+    /// The culls the frame frustum holds, in the order the CPU culler runs them: each
+    /// display's (each eye's in `multi-camera`), then each far layer's.
+    pub culls: Vec<PlannedCull>,
+    /// Per display: its far layer's plan (stereo displays with the far layer on).
+    pub far: Vec<Option<FarPlan>>,
+    /// The frame's light: it shades every display, and with shadows draws the map.
+    pub light: LightView,
+    /// With shadows: the light's cull, outside the frame frustum (never coarse).
+    pub light_cull: Option<PlannedCull>,
+}
+
+impl FramePlan {
+    /// The plan of the frame at `time` for `rig`'s pose under `options`; `coarse` is
+    /// whether the renderer was built for the coarse cull ([`RendererOptions::coarse_for`],
+    /// decided once: it sizes buffers).
+    pub fn new(rig: &Rig, options: &RendererOptions, coarse: bool, time: f32) -> Result<FramePlan> {
+        FramePlan::of(rig, rig.resolve()?, options, (coarse, time))
+    }
+
+    /// [`FramePlan::new`] for a rig already resolved.
+    pub fn of(
+        rig: &Rig,
+        resolved: ResolvedRig,
+        options: &RendererOptions,
+        (coarse, time): (bool, f32),
+    ) -> Result<FramePlan> {
+        if resolved.displays.len() != rig.displays.len() {
+            return Err(Error::rig("plan", "the resolved rig's displays differ"));
+        }
+        let cull = FrameCull {
+            lod: frame_lod(rig, &resolved, options.lod_levels()),
+            coarse: coarse.then(|| resolved.coarse_cull(options.mode.culls_per_eye())),
+        };
+        let light = LightView::fit(&options.light, &resolved);
+        let frame = FrameContext::new(
+            &rig.viewer,
+            (time, cull.lod.lod_scale),
+            &cull.coarse.unwrap_or(CoarseCull::EVERYTHING),
+            (&light, options.shadows),
+        );
+        let far: Vec<Option<FarPlan>> = match options.far_layer {
+            true => crate::far_layer::plans(rig, &resolved, options.far_threshold_px),
+            false => vec![None; rig.displays.len()],
+        };
+        let displays = display_contexts(rig, &resolved, options.mode, &far);
+        let culls = culls(&resolved, options.mode, &displays, &far);
+        let light_cull = options.shadows.then(|| PlannedCull {
+            view: CullView::Light,
+            job: light.cull_job(),
+        });
+        Ok(FramePlan {
+            resolved,
+            frame,
+            displays,
+            cull,
+            culls,
+            far,
+            light,
+            light_cull,
+        })
+    }
+
+    /// The jobs of [`FramePlan::culls`], in order: what the CPU culler takes.
+    pub fn jobs(&self) -> Vec<CullJob> {
+        self.culls.iter().map(|c| c.job).collect()
+    }
+}
+
+/// How many instances each visible object becomes in `mode`'s draws of a display with
+/// `views` views: doubled for `instanced` stereo; multiview repeats each draw per layer
+/// and the classic modes draw per eye, so one.
+pub fn instances_per_object(mode: StereoMode, views: u32) -> u32 {
+    match mode {
+        StereoMode::Instanced => views,
+        _ => 1,
+    }
+}
+
+/// Each display's context; a display with a far plan keeps its near instances only.
+fn display_contexts(
+    rig: &Rig,
+    resolved: &ResolvedRig,
+    mode: StereoMode,
+    far: &[Option<FarPlan>],
+) -> Vec<DisplayContext> {
+    rig.displays
+        .iter()
+        .zip(&resolved.displays)
+        .zip(far)
+        .enumerate()
+        .map(|(i, ((d, r), far))| {
+            let per_object = instances_per_object(mode, d.views());
+            let context = DisplayContext {
+                cull_slot: i as u32,
+                ..DisplayContext::new(r, d.resolution, per_object)
+            };
+            match far {
+                Some(plan) => DisplayContext {
+                    split_keep: 1,
+                    split_distance: plan.distance,
+                    ..context
+                },
+                None => context,
+            }
+        })
+        .collect()
+}
+
+/// The culls the frame frustum holds: per display one against its display frustum (or,
+/// culling per eye, one per eye of a stereo display), each keeping its near side where
+/// it has a far plan; then one far cull per plan (the display frustum, drawn once).
+fn culls(
+    resolved: &ResolvedRig,
+    mode: StereoMode,
+    contexts: &[DisplayContext],
+    far: &[Option<FarPlan>],
+) -> Vec<PlannedCull> {
+    let mut culls = Vec::new();
+    for (i, (r, context)) in resolved.displays.iter().zip(contexts).enumerate() {
+        let split = far[i].map(|plan| plan.split(false));
+        match (mode.culls_per_eye(), r.eyes.as_slice()) {
+            (true, eyes @ [_, _]) => {
+                culls.extend(eyes.iter().enumerate().map(|(e, eye)| PlannedCull {
+                    view: CullView::Eye(i, e),
+                    job: CullJob {
+                        planes: eye.frustum().planes,
+                        instances_per_object: 1,
+                        split,
+                    },
+                }))
+            }
+            _ => culls.push(PlannedCull {
+                view: CullView::Display(i),
+                job: CullJob {
+                    split,
+                    ..r.cull_job(context.instances_per_object)
+                },
+            }),
+        }
+    }
+    culls.extend(far.iter().enumerate().filter_map(|(i, plan)| {
+        let plan = plan.as_ref()?;
+        Some(PlannedCull {
+            view: CullView::Far(i),
+            job: CullJob {
+                planes: plan.view.frustum().planes,
+                instances_per_object: 1,
+                split: Some(plan.split(true)),
+            },
+        })
+    }));
+    culls
+}

@@ -1,0 +1,157 @@
+//! The frame's plan as plain data, built and inspected without a device: which culls a
+//! frame runs for each mode and rig, with which frusta, splits and instance counts, and
+//! what the frame decides once for all of them.
+
+use stereocull::cull::CoarseCull;
+use stereocull::far_layer;
+use stereocull::renderer::{CullMode, CullView, FramePlan, RendererOptions, StereoMode};
+use stereocull::rig::Rig;
+
+fn plan(preset: &str, options: &RendererOptions, coarse: bool) -> FramePlan {
+    let rig = Rig::preset(preset).unwrap();
+    FramePlan::new(&rig, options, coarse, 0.25).unwrap()
+}
+
+fn mode(mode: StereoMode) -> RendererOptions {
+    RendererOptions {
+        mode,
+        cull: match mode.per_instance() {
+            true => CullMode::Cpu,
+            false => CullMode::Gpu,
+        },
+        ..RendererOptions::default()
+    }
+}
+
+#[test]
+fn instanced_culls_each_display_once_for_both_eyes_as_the_reference_does() {
+    for preset in ["hmd", "cave", "hmd-peripheral"] {
+        let rig = Rig::preset(preset).unwrap();
+        let plan = plan(preset, &RendererOptions::default(), false);
+        let views: Vec<_> = plan.culls.iter().map(|c| c.view).collect();
+        let displays: Vec<_> = (0..rig.displays.len()).map(CullView::Display).collect();
+        assert_eq!(views, displays, "{preset}");
+        assert_eq!(plan.jobs(), rig.cull_jobs().unwrap(), "{preset}");
+        for (d, context) in rig.displays.iter().zip(&plan.displays) {
+            assert_eq!(context.instances_per_object, d.views(), "{preset}");
+        }
+        assert_eq!(plan.light_cull, None, "no shadows, no light cull");
+        assert!(plan.far.iter().all(Option::is_none));
+        assert_eq!(plan.frame.time, 0.25);
+    }
+}
+
+#[test]
+fn multi_camera_culls_each_eye_of_a_stereo_display_against_its_own_frustum() {
+    let plan = plan("hmd-peripheral", &mode(StereoMode::MultiCamera), false);
+    let views: Vec<_> = plan.culls.iter().map(|c| c.view).collect();
+    assert_eq!(
+        views,
+        [
+            CullView::Eye(0, 0),
+            CullView::Eye(0, 1),
+            CullView::Display(1),
+            CullView::Display(2)
+        ]
+    );
+    let eyes = &plan.resolved.displays[0].eyes;
+    assert_eq!(plan.culls[0].job.planes, eyes[0].frustum().planes);
+    assert_eq!(plan.culls[1].job.planes, eyes[1].frustum().planes);
+    assert_ne!(plan.culls[0].job.planes, plan.culls[1].job.planes);
+    assert!(plan.culls.iter().all(|c| c.job.instances_per_object == 1));
+}
+
+#[test]
+fn only_instanced_doubles_the_instances_of_a_stereo_display() {
+    for (m, doubled) in [
+        (StereoMode::Instanced, 2),
+        (StereoMode::Multiview, 1),
+        (StereoMode::SinglePass, 1),
+        (StereoMode::MultiPass, 1),
+    ] {
+        let plan = plan("hmd", &mode(m), false);
+        assert_eq!(plan.culls[0].job.instances_per_object, doubled, "{m:?}");
+        assert_eq!(plan.displays[0].instances_per_object, doubled, "{m:?}");
+    }
+}
+
+#[test]
+fn the_far_layer_splits_each_stereo_display_and_adds_its_far_cull() {
+    let options = RendererOptions {
+        far_layer: true,
+        ..RendererOptions::default()
+    };
+    let rig = Rig::preset("hmd-peripheral").unwrap();
+    let plan = plan("hmd-peripheral", &options, false);
+    let resolved = rig.resolve().unwrap();
+    let want = far_layer::plans(&rig, &resolved, options.far_threshold_px);
+    assert_eq!(plan.far, want);
+    let far = plan.far[0].expect("the stereo display has a far plan");
+    assert!(
+        plan.far[1].is_none() && plan.far[2].is_none(),
+        "mono panels"
+    );
+    let views: Vec<_> = plan.culls.iter().map(|c| c.view).collect();
+    assert_eq!(
+        views,
+        [
+            CullView::Display(0),
+            CullView::Display(1),
+            CullView::Display(2),
+            CullView::Far(0)
+        ]
+    );
+    assert_eq!(plan.culls[0].job.split, Some(far.split(false)));
+    assert_eq!(plan.culls[1].job.split, None);
+    assert_eq!(plan.culls[3].job.split, Some(far.split(true)));
+    assert_eq!(plan.culls[3].job.instances_per_object, 1, "drawn once");
+    assert_eq!(plan.displays[0].split_keep, 1);
+    assert_eq!(plan.displays[0].split_distance, far.distance);
+    assert_eq!(plan.displays[1].split_keep, 0);
+}
+
+#[test]
+fn the_coarse_cull_and_the_light_are_decided_once_for_the_frame() {
+    let shadows = RendererOptions {
+        shadows: true,
+        ..RendererOptions::default()
+    };
+    let on = plan("cave", &shadows, true);
+    let off = plan("cave", &shadows, false);
+    assert!(on.cull.coarse.is_some() && off.cull.coarse.is_none());
+    assert_eq!(off.frame.coarse_planes, CoarseCull::EVERYTHING.planes);
+    assert_eq!(on.frame.shadows, 1);
+    let light = on.light_cull.expect("shadows cull the light");
+    assert_eq!(light.view, CullView::Light);
+    assert_eq!(light.job, on.light.cull_job());
+    assert_eq!(
+        light.view.coarse_slot(),
+        None,
+        "the light never takes blocks"
+    );
+    assert_eq!(
+        on.culls, off.culls,
+        "the coarse cull changes work, not culls"
+    );
+}
+
+#[test]
+fn lod_scales_with_the_sharpest_display_and_is_off_by_default() {
+    let off = plan("hmd", &RendererOptions::default(), false);
+    let lod = RendererOptions {
+        lod: true,
+        ..RendererOptions::default()
+    };
+    let on = plan("hmd", &lod, false);
+    assert_eq!(off.cull.lod.levels, 1);
+    assert!(on.cull.lod.levels > 1);
+    assert!(on.frame.lod_scale > 0.0);
+    assert_eq!(on.frame.lod_scale, on.cull.lod.lod_scale);
+}
+
+#[test]
+fn a_plan_of_a_bad_pose_is_an_error() {
+    let mut rig = Rig::preset("hmd").unwrap();
+    rig.viewer.position = [f32::NAN, 0.0, 0.0];
+    assert!(FramePlan::new(&rig, &RendererOptions::default(), false, 0.0).is_err());
+}
