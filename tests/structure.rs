@@ -1,13 +1,20 @@
-//! The module graph has no circles: each concept's module uses only those below it
-//! (`crate::x` paths outside comments, per top-level module of `src/`).
+//! The module graph has no circles, at two grains: the top-level modules of `src/`
+//! (each concept uses only those below it), and every module file (`renderer::indirect`,
+//! `cli::chart`, ...), where a path names the deepest module it reaches (`crate::x::y`,
+//! `super::y`, or a child module's name). A child module may extend its parent's own
+//! types (`impl Renderer` in `renderer/sync.rs`), so naming an ancestor is not an edge;
+//! the files a frame runs through must not name theirs at all.
 
 use std::collections::{BTreeMap, BTreeSet};
 use std::path::Path;
 
-/// Top-level module -> the top-level modules its code names.
-fn module_graph() -> BTreeMap<String, BTreeSet<String>> {
+type Graph = BTreeMap<String, BTreeSet<String>>;
+
+/// Every module file of `src/` (but `lib` and `main`) as its module path, with its code:
+/// comments and `#[cfg(test)]` modules cut.
+fn module_files() -> Vec<(Vec<String>, String)> {
     let src = Path::new(env!("CARGO_MANIFEST_DIR")).join("src");
-    let mut graph = BTreeMap::new();
+    let mut files = Vec::new();
     let mut stack = vec![src.clone()];
     while let Some(dir) = stack.pop() {
         for entry in std::fs::read_dir(&dir).unwrap() {
@@ -16,71 +23,126 @@ fn module_graph() -> BTreeMap<String, BTreeSet<String>> {
                 stack.push(path);
                 continue;
             }
-            let rel = path
-                .strip_prefix(&src)
-                .unwrap()
-                .to_str()
-                .unwrap()
-                .to_string();
-            let module = rel
-                .split('/')
-                .next()
-                .unwrap()
-                .trim_end_matches(".rs")
-                .to_string();
-            if module == "lib" || module == "main" {
+            let rel = path.strip_prefix(&src).unwrap().with_extension("");
+            let mut module: Vec<String> = rel
+                .iter()
+                .map(|s| s.to_str().unwrap().to_string())
+                .collect();
+            if module.last().is_some_and(|m| m == "mod") {
+                module.pop();
+            }
+            if module == ["lib"] || module == ["main"] {
                 continue;
             }
-            let code: String = std::fs::read_to_string(&path)
-                .unwrap()
+            let text = std::fs::read_to_string(&path).unwrap();
+            let text = text.split("#[cfg(test)]").next().unwrap_or("");
+            let code: Vec<&str> = text
                 .lines()
                 .filter(|l| !l.trim_start().starts_with("//"))
-                .collect::<Vec<_>>()
-                .join("\n");
-            let uses: &mut BTreeSet<String> = graph.entry(module.clone()).or_default();
-            uses.extend(named_modules(&code).into_iter().filter(|m| *m != module));
+                .collect();
+            files.push((module, code.join("\n")));
         }
     }
-    graph
+    files
 }
 
-/// The first segment after every `crate::`, including each item of `crate::{a, b::c}`.
-fn named_modules(code: &str) -> Vec<String> {
+/// The paths `code` names: each `crate::a::b` (every item of `crate::{a, b::c}` too) and
+/// each `super::a`, as segments from the crate root, seen from `module` (its file's
+/// path); and each `child::` of a child module of `module`.
+fn named_paths(module: &[String], code: &str, modules: &BTreeSet<Vec<String>>) -> Vec<Vec<String>> {
     let mut out = Vec::new();
-    for (i, _) in code.match_indices("crate::") {
-        let rest = &code[i + "crate::".len()..];
-        let group = rest
-            .strip_prefix('{')
-            .map(|g| &g[..g.find('}').unwrap_or(g.len())]);
-        let items: Vec<&str> = match group {
-            Some(g) => g.split(',').collect(),
-            None => vec![rest],
-        };
-        for item in items {
-            let name: String = item
-                .trim()
-                .chars()
-                .take_while(|c| c.is_ascii_alphanumeric() || *c == '_')
-                .collect();
-            if !name.is_empty() && name.chars().next().is_some_and(|c| c.is_ascii_lowercase()) {
-                out.push(name);
+    let parent = &module[..module.len().saturating_sub(1)];
+    let starts: [(&str, &[String]); 2] = [("crate::", &[]), ("super::", parent)];
+    for (prefix, base) in starts {
+        for (i, _) in code.match_indices(prefix) {
+            if code[..i].ends_with("::")
+                || code[..i].ends_with(|c: char| c.is_alphanumeric() || c == '_')
+            {
+                continue;
+            }
+            for path in group_items(&code[i + prefix.len()..]) {
+                out.push([base.to_vec(), path].concat());
+            }
+        }
+    }
+    for child in modules
+        .iter()
+        .filter(|m| m.len() == module.len() + 1 && m.starts_with(module))
+    {
+        let name = format!("{}::", child.last().unwrap());
+        for (i, _) in code.match_indices(&name) {
+            let before = code[..i].chars().last();
+            if !before.is_some_and(|c| c.is_alphanumeric() || c == '_' || c == ':') {
+                out.push(child.clone());
             }
         }
     }
     out
 }
 
-#[test]
-fn modules_form_no_circle() {
-    let graph = module_graph();
-    assert!(graph.len() > 10, "{graph:?}");
-    // Depth-first search for a back edge, reporting the circle.
-    fn visit(
-        m: &str,
-        graph: &BTreeMap<String, BTreeSet<String>>,
-        path: &mut Vec<String>,
-        done: &mut BTreeSet<String>,
-    ) {
+/// The paths at the start of `rest`: `a::b::C` -> [a, b, C]; `{a::B, c}` -> both.
+fn group_items(rest: &str) -> Vec<Vec<String>> {
+    let items: Vec<&str> = match rest.strip_prefix('{') {
+        Some(g) => g[..g.find('}').unwrap_or(g.len())].split(',').collect(),
+        None => vec![rest],
+    };
+    items
+        .into_iter()
+        .map(|item| {
+            let path: String = item
+                .trim()
+                .chars()
+                .take_while(|c| c.is_ascii_alphanumeric() || *c == '_' || *c == ':')
+                .collect();
+            path.split("::")
+                .filter(|s| !s.is_empty())
+                .map(str::to_string)
+                .collect()
+        })
+        .filter(|p: &Vec<String>| !p.is_empty())
+        .collect()
+}
+
+/// The deepest module `path` reaches.
+fn resolve(path: &[String], modules: &BTreeSet<Vec<String>>) -> Option<Vec<String>> {
+    (1..=path.len())
+        .rev()
+        .map(|n| path[..n].to_vec())
+        .find(|p| modules.contains(p))
+}
+
+/// Module file -> the modules it names (not itself, not its ancestors).
+fn file_graph() -> Graph {
+    let files = module_files();
+    let modules: BTreeSet<Vec<String>> = files.iter().map(|(m, _)| m.clone()).collect();
+    let mut graph = Graph::new();
+    for (module, code) in &files {
+        let uses = graph.entry(module.join("::")).or_default();
+        for path in named_paths(module, code, &modules) {
+            if let Some(target) = resolve(&path, &modules)
+                && !module.starts_with(&target)
+            {
+                uses.insert(target.join("::"));
+            }
+        }
+    }
+    graph
+}
+
+/// Top-level module -> the top-level modules its files name.
+fn top_level_graph() -> Graph {
+    let mut graph = Graph::new();
+    for (module, uses) in file_graph() {
+        let top = |m: &str| m.split("::").next().unwrap().to_string();
+        let entry = graph.entry(top(&module)).or_default();
+        entry.extend(uses.iter().map(|u| top(u)).filter(|u| *u != top(&module)));
+    }
+    graph
+}
+
+/// Panics naming a circle of `graph`, if it has one (depth-first search for a back edge).
+fn assert_no_circle(graph: &Graph) {
+    fn visit(m: &str, graph: &Graph, path: &mut Vec<String>, done: &mut BTreeSet<String>) {
         if let Some(at) = path.iter().position(|p| p == m) {
             panic!("import circle: {} -> {m}", path[at..].join(" -> "));
         }
@@ -95,12 +157,93 @@ fn modules_form_no_circle() {
     }
     let mut done = BTreeSet::new();
     for m in graph.keys() {
-        visit(m, &graph, &mut Vec::new(), &mut done);
+        visit(m, graph, &mut Vec::new(), &mut done);
     }
 }
 
 #[test]
-fn the_module_reader_sees_grouped_and_nested_paths() {
-    let code = "use crate::{rig::Rig, scene};\nlet x = crate::frustum::ROUNDING_SLACK;";
-    assert_eq!(named_modules(code), ["rig", "scene", "frustum"]);
+fn top_level_modules_form_no_circle() {
+    let graph = top_level_graph();
+    assert!(graph.len() > 10, "{graph:?}");
+    assert!(graph["renderer"].contains("cull"), "{graph:?}");
+    assert_no_circle(&graph);
+}
+
+#[test]
+fn module_files_form_no_circle() {
+    let graph = file_graph();
+    assert!(
+        graph["renderer::indirect"].contains("renderer::culler"),
+        "{graph:?}"
+    );
+    assert!(
+        graph["renderer"].contains("renderer::indirect"),
+        "{graph:?}"
+    );
+    assert_no_circle(&graph);
+}
+
+/// From `Renderer::prepare` to the last draw a reader never climbs back into
+/// `renderer/mod.rs`: the frame's files name siblings and lower modules only.
+#[test]
+fn the_files_a_frame_runs_through_never_name_their_parent() {
+    let files = module_files();
+    let modules: BTreeSet<Vec<String>> = files.iter().map(|(m, _)| m.clone()).collect();
+    let frame = [
+        "frame",
+        "culler",
+        "indirect",
+        "classic",
+        "view_pass",
+        "far_pass",
+        "shadow_pass",
+        "passes",
+        "options",
+        "targets",
+        "checks",
+    ];
+    for (module, code) in files
+        .iter()
+        .filter(|(m, _)| m.len() == 2 && m[0] == "renderer" && frame.contains(&m[1].as_str()))
+    {
+        for path in named_paths(module, code, &modules) {
+            let target = resolve(&path, &modules);
+            assert_ne!(
+                target.as_deref(),
+                Some(&module[..1]),
+                "{} names {}",
+                module.join("::"),
+                path.join("::")
+            );
+        }
+    }
+}
+
+#[test]
+fn the_module_reader_sees_grouped_nested_relative_and_child_paths() {
+    let modules: BTreeSet<Vec<String>> = [
+        vec!["rig"],
+        vec!["scene"],
+        vec!["frustum"],
+        vec!["renderer"],
+        vec!["renderer", "culler"],
+        vec!["renderer", "frame"],
+    ]
+    .into_iter()
+    .map(|m| m.into_iter().map(String::from).collect())
+    .collect();
+    let module = |m: &[&str]| m.iter().map(|s| s.to_string()).collect::<Vec<_>>();
+    let code = "use crate::{rig::Rig, scene};\nlet x = crate::frustum::ROUNDING_SLACK;\nuse super::frame::FramePlan;";
+    let named: Vec<_> = named_paths(&module(&["renderer", "culler"]), code, &modules)
+        .iter()
+        .filter_map(|p| resolve(p, &modules))
+        .map(|m| m.join("::"))
+        .collect();
+    assert_eq!(named, ["rig", "scene", "frustum", "renderer::frame"]);
+    let parent = named_paths(
+        &module(&["renderer"]),
+        "let c = culler::Culler::new();",
+        &modules,
+    );
+    assert_eq!(parent, [module(&["renderer", "culler"])]);
 }

@@ -1,6 +1,6 @@
 //! The profile chart: CPU and GPU milliseconds against instances, as plain SVG.
 
-use super::profile::Row;
+use super::profile_report::Row;
 use crate::renderer::{CullMode, StereoMode};
 
 /// What a chart panel plots of a row.

@@ -6,10 +6,9 @@ use std::time::Instant;
 
 use clap::Args;
 use indicatif::{ProgressBar, ProgressStyle};
-use serde::Serialize;
 
 use super::edits::{EditArgs, EditDriver};
-use super::profile_report::{print_table, write_csv};
+use super::profile_report::{Row, print_table, write_csv};
 use super::render::{PassReport, pass_reports};
 use super::{FRAME_SECONDS, Switch, chart, write_json};
 use crate::device::{Gpu, list_counts};
@@ -17,12 +16,9 @@ use crate::error::{Error, Result};
 use crate::live::LiveScene;
 use crate::procedural;
 use crate::profiling::{GpuTimer, percentile, write_trace};
-use crate::renderer::{
-    CoarseMode, CullMode, FarSplit, Renderer, RendererOptions, StereoMode, SyncStats,
-};
+use crate::renderer::{CoarseMode, CullMode, Renderer, RendererOptions, StereoMode, SyncStats};
 use crate::rig::Rig;
 use crate::scene::Scene;
-use wgpu_profiler::GpuTimerQueryResult;
 
 #[derive(Args)]
 pub struct ProfileArgs {
@@ -91,56 +87,6 @@ pub struct ProfileArgs {
     /// every configuration: per display a scope, per pass (`cull`, `draw`) one inside it.
     #[arg(long)]
     pub trace: Option<PathBuf>,
-}
-
-/// One configuration's figures: the CSV columns first, then the details.
-#[derive(Clone, Debug, Serialize)]
-pub struct Row {
-    pub mode: StereoMode,
-    pub cull: CullMode,
-    pub rig: String,
-    pub instances: u32,
-    /// prepare + encode + submit.
-    pub cpu_ms_median: f64,
-    pub cpu_ms_p95: f64,
-    /// Sum of the timed passes; `None` without timestamp queries.
-    pub gpu_ms_median: Option<f64>,
-    pub gpu_ms_p95: Option<f64>,
-    pub draw_calls: u32,
-    pub dispatches: u32,
-    pub bytes_uploaded: u64,
-    pub adapter: String,
-    pub cull_ms_median: f64,
-    pub upload_ms_median: f64,
-    pub encode_ms_median: f64,
-    pub submit_ms_median: f64,
-    pub gpu_cull_ms_median: Option<f64>,
-    pub gpu_draw_ms_median: Option<f64>,
-    /// Pipeline statistics of the draw passes (last frame); `None` where unavailable.
-    pub vertex_invocations: Option<u64>,
-    pub clipper_primitives: Option<u64>,
-    pub indirect_validation: bool,
-    pub moving_percent: f64,
-    pub churn_percent: f64,
-    /// Of `cpu_ms_median`'s frames, the median sync of the frame's edits.
-    pub sync_ms_median: f64,
-    /// Primitives reaching the clipper in the draw passes (last frame).
-    pub triangles_submitted: Option<u64>,
-    /// Whether the frames ran the coarse cull.
-    pub coarse_cull: bool,
-    /// Sphere-against-frustum tests of the last frame (GPU culling).
-    pub sphere_tests: Option<u64>,
-    pub shadows: bool,
-    pub far_layer: bool,
-    /// The last frame's far/near split per display (with the far layer).
-    pub far_near: Vec<Option<FarSplit>>,
-    /// The last frame's shadow passes (1 with shadows, whatever the rig).
-    pub shadow_passes: usize,
-    /// The last frame's passes, with level and vertex-shader invocations.
-    pub passes: Vec<PassReport>,
-    /// The last timed frame's GPU scopes, for `--trace`.
-    #[serde(skip)]
-    pub trace: Vec<GpuTimerQueryResult>,
 }
 
 pub fn profile(args: &ProfileArgs) -> Result<()> {

@@ -1,7 +1,63 @@
-//! `profile`'s outputs: the table it prints and `profile.csv`.
+//! `profile`'s outputs: one row per configuration, the table it prints and
+//! `profile.csv` (the chart draws the same rows).
 
-use super::profile::Row;
+use serde::Serialize;
+use wgpu_profiler::GpuTimerQueryResult;
+
+use super::render::PassReport;
 use crate::error::{Error, Result};
+use crate::modes::StereoMode;
+use crate::renderer::{CullMode, FarSplit};
+
+/// One configuration's figures: the CSV columns first, then the details.
+#[derive(Clone, Debug, Serialize)]
+pub struct Row {
+    pub mode: StereoMode,
+    pub cull: CullMode,
+    pub rig: String,
+    pub instances: u32,
+    /// prepare + encode + submit.
+    pub cpu_ms_median: f64,
+    pub cpu_ms_p95: f64,
+    /// Sum of the timed passes; `None` without timestamp queries.
+    pub gpu_ms_median: Option<f64>,
+    pub gpu_ms_p95: Option<f64>,
+    pub draw_calls: u32,
+    pub dispatches: u32,
+    pub bytes_uploaded: u64,
+    pub adapter: String,
+    pub cull_ms_median: f64,
+    pub upload_ms_median: f64,
+    pub encode_ms_median: f64,
+    pub submit_ms_median: f64,
+    pub gpu_cull_ms_median: Option<f64>,
+    pub gpu_draw_ms_median: Option<f64>,
+    /// Pipeline statistics of the draw passes (last frame); `None` where unavailable.
+    pub vertex_invocations: Option<u64>,
+    pub clipper_primitives: Option<u64>,
+    pub indirect_validation: bool,
+    pub moving_percent: f64,
+    pub churn_percent: f64,
+    /// Of `cpu_ms_median`'s frames, the median sync of the frame's edits.
+    pub sync_ms_median: f64,
+    /// Primitives reaching the clipper in the draw passes (last frame).
+    pub triangles_submitted: Option<u64>,
+    /// Whether the frames ran the coarse cull.
+    pub coarse_cull: bool,
+    /// Sphere-against-frustum tests of the last frame (GPU culling).
+    pub sphere_tests: Option<u64>,
+    pub shadows: bool,
+    pub far_layer: bool,
+    /// The last frame's far/near split per display (with the far layer).
+    pub far_near: Vec<Option<FarSplit>>,
+    /// The last frame's shadow passes (1 with shadows, whatever the rig).
+    pub shadow_passes: usize,
+    /// The last frame's passes, with level and vertex-shader invocations.
+    pub passes: Vec<PassReport>,
+    /// The last timed frame's GPU scopes, for `--trace`.
+    #[serde(skip)]
+    pub trace: Vec<GpuTimerQueryResult>,
+}
 
 fn opt(v: Option<f64>) -> String {
     v.map_or("n/a".into(), |x| format!("{x:.3}"))
