@@ -57,6 +57,16 @@ pub const OPTIONAL_FEATURES: [(Features, &str, &str); 9] = [
     ),
 ];
 
+/// The optional features ([`OPTIONAL_FEATURES`]) among `adapter`'s: what an embedder
+/// opening its own device asks for, so that every path runs without a fallback it need
+/// not take.
+pub fn features_for(adapter: Features) -> Features {
+    let optional = OPTIONAL_FEATURES
+        .iter()
+        .fold(Features::empty(), |all, (f, ..)| all | *f);
+    adapter & optional
+}
+
 /// Sample counts WebGPU guarantees for rendering `color` with `depth` (what every
 /// device has without `TEXTURE_ADAPTER_SPECIFIC_FORMAT_FEATURES`).
 pub fn guaranteed_sample_counts(
@@ -148,11 +158,7 @@ impl Gpu {
 
     async fn headless_async(backends: Option<wgpu::Backends>, allowed: Features) -> Result<Gpu> {
         let (instance, adapter, flags) = find_adapter(backends).await?;
-        let optional = OPTIONAL_FEATURES
-            .iter()
-            .map(|(f, ..)| *f)
-            .fold(Features::empty(), |a, f| a | f);
-        let features = adapter.features() & optional & allowed;
+        let features = features_for(adapter.features()) & allowed;
         let (device, queue) = adapter
             .request_device(&wgpu::DeviceDescriptor {
                 label: Some("stereocull"),
