@@ -35,7 +35,7 @@ pub struct FarPlan {
     pub distance: f32,
     /// The far layer's view: the display frustum, from its apex.
     pub view: View,
-    /// Texels of the far layer: [`SUPERSAMPLE`] per pixel of the sharpest eye, across.
+    /// Texels of the far layer: `SUPERSAMPLE` per pixel of the sharpest eye, across.
     pub size: (u32, u32),
 }
 

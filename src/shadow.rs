@@ -38,7 +38,7 @@ const CASTER_REACH: f64 = 200.0;
 
 /// The light's view for one frame: an orthographic box along the light, holding a
 /// sphere around every display frustum (cut at the shadow distance) and reaching
-/// [`CASTER_REACH`] further towards the light.
+/// `CASTER_REACH` further towards the light.
 #[derive(Clone, Copy, Debug, PartialEq)]
 pub struct LightView {
     /// World to the shadow map's clip space (x, y in -1..1, depth 0..1).

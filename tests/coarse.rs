@@ -221,7 +221,10 @@ fn culls(
     let gpu = support::gpu();
     let renderer = support::one_frame(&gpu, scene, rig, options);
     let outputs = support::read_culls(&gpu, &renderer, rig);
-    let candidates = renderer.read_candidates(&gpu.device, &gpu.queue).unwrap();
+    let candidates = renderer
+        .diagnostics(&gpu.device, &gpu.queue)
+        .candidates()
+        .unwrap();
     (outputs, candidates)
 }
 
@@ -277,8 +280,14 @@ fn listed(scene: &Scene) -> (Vec<u32>, u64) {
     };
     let gpu = support::gpu();
     let renderer = support::one_frame(&gpu, scene, &rig, options);
-    let candidates = renderer.read_candidates(&gpu.device, &gpu.queue).unwrap();
-    let tests = renderer.read_sphere_tests(&gpu.device, &gpu.queue).unwrap();
+    let candidates = renderer
+        .diagnostics(&gpu.device, &gpu.queue)
+        .candidates()
+        .unwrap();
+    let tests = renderer
+        .diagnostics(&gpu.device, &gpu.queue)
+        .sphere_tests()
+        .unwrap();
     (candidates.unwrap(), tests.unwrap())
 }
 

@@ -18,7 +18,10 @@ fn compare(gpu: &Gpu, scene: &Scene, rig: &Rig, what: &str) -> Vec<usize> {
         .into_iter()
         .enumerate()
         .map(|(d, want)| {
-            let got = renderer.read_cull(&gpu.device, &gpu.queue, d).unwrap();
+            let got = renderer
+                .diagnostics(&gpu.device, &gpu.queue)
+                .cull(d)
+                .unwrap();
             assert_eq!(
                 got.draw_count, want.draw_count,
                 "{what} display {d}: draw_count"

@@ -35,7 +35,12 @@ fn culls(
         ..RendererOptions::default()
     };
     let renderer = support::one_frame(&gpu, scene, rig, options);
-    let far = |d| renderer.read_far_cull(&gpu.device, &gpu.queue, d).unwrap();
+    let far = |d| {
+        renderer
+            .diagnostics(&gpu.device, &gpu.queue)
+            .far_cull(d)
+            .unwrap()
+    };
     let near = support::read_culls(&gpu, &renderer, rig);
     near.into_iter()
         .enumerate()

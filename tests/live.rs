@@ -203,7 +203,10 @@ fn check(
     let reference = cpu::cull_many_lod(&at_places, &jobs, &lod);
     let afresh = cpu::cull_many_lod(&CullLayout::new(want), &jobs, &lod);
     for (d, (reference, afresh)) in reference.into_iter().zip(afresh).enumerate() {
-        let got = renderer.read_cull(&gpu.device, &gpu.queue, d).unwrap();
+        let got = renderer
+            .diagnostics(&gpu.device, &gpu.queue)
+            .cull(d)
+            .unwrap();
         assert_eq!(got.draw_count, reference.draw_count, "{what}: draw count");
         assert_eq!(got.draws, reference.draws, "{what}: draws");
         assert!(got.visible == reference.visible, "{what}: visible ids");
@@ -452,7 +455,10 @@ fn frame_matches_reference(
         .submit_frame(&gpu.device, &gpu.queue, rig, 0.0, &targets)
         .unwrap();
     for (d, reference) in reference_culls(live.scene(), rig).into_iter().enumerate() {
-        let got = renderer.read_cull(&gpu.device, &gpu.queue, d).unwrap();
+        let got = renderer
+            .diagnostics(&gpu.device, &gpu.queue)
+            .cull(d)
+            .unwrap();
         assert!(got == reference, "display {d}");
     }
     frame
@@ -504,7 +510,8 @@ fn a_move_staged_then_removed_before_the_frame_is_void() {
     let visible: usize = (0..5)
         .map(|d| {
             renderer
-                .read_cull(&gpu.device, &gpu.queue, d)
+                .diagnostics(&gpu.device, &gpu.queue)
+                .cull(d)
                 .unwrap()
                 .visible
                 .len()

@@ -252,7 +252,9 @@ fn a_lost_device_is_reported_not_a_hang() {
     assert!(matches!(error, Error::Readback(_)), "{error:?}");
     let lost = gpu.check_lost().unwrap_err();
     assert!(lost.to_string().contains("Destroyed"), "{lost}");
-    let counts = renderer.read_visible_counts(&gpu.device, &gpu.queue);
+    let counts = renderer
+        .diagnostics(&gpu.device, &gpu.queue)
+        .visible_counts();
     assert!(counts.is_err(), "reading counts of a lost device");
 }
 

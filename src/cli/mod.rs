@@ -334,8 +334,8 @@ fn gpu_cull(
         renderer.submit_frame(&gpu.device, &gpu.queue, rig, 0.0, &targets)?;
     }
     let displays = 0..rig.displays.len();
-    let read = |i| renderer.read_cull(&gpu.device, &gpu.queue, i);
-    let far = |i| renderer.read_far_cull(&gpu.device, &gpu.queue, i);
+    let read = |i| renderer.diagnostics(&gpu.device, &gpu.queue).cull(i);
+    let far = |i| renderer.diagnostics(&gpu.device, &gpu.queue).far_cull(i);
     Ok((
         displays.clone().map(read).collect::<Result<_>>()?,
         displays.map(far).collect::<Result<_>>()?,

@@ -322,8 +322,10 @@ fn measure(
             prepared.bytes_uploaded + synced.bytes_uploaded,
         );
     }
-    let sphere_tests = renderer.read_sphere_tests(&gpu.device, &gpu.queue)?;
-    let far_near = renderer.read_far_split(&gpu.device, &gpu.queue)?;
+    let sphere_tests = renderer
+        .diagnostics(&gpu.device, &gpu.queue)
+        .sphere_tests()?;
+    let far_near = renderer.diagnostics(&gpu.device, &gpu.queue).far_split()?;
     let med = |v: &[f64]| percentile(v, 0.5);
     let gpu_med = |v: &[f64]| (!v.is_empty()).then(|| percentile(v, 0.5));
     Ok(Row {

@@ -199,7 +199,10 @@ pub fn pass_reports(
 /// The last frame's far/near split, per display with a far layer, named.
 pub fn far_near(session: &Session) -> Result<Vec<serde_json::Value>> {
     let device = (&session.gpu.device, &session.gpu.queue);
-    let splits = session.renderer.read_far_split(device.0, device.1)?;
+    let splits = session
+        .renderer
+        .diagnostics(device.0, device.1)
+        .far_split()?;
     Ok(session
         .rig
         .displays
@@ -248,10 +251,12 @@ pub fn render(args: &RenderArgs) -> Result<()> {
     std::fs::create_dir_all(&args.out).map_err(|e| Error::io(&args.out, e))?;
     let visible = session
         .renderer
-        .read_visible_counts(&session.gpu.device, &session.gpu.queue)?;
+        .diagnostics(&session.gpu.device, &session.gpu.queue)
+        .visible_counts()?;
     let candidates = session
         .renderer
-        .read_candidates(&session.gpu.device, &session.gpu.queue)?;
+        .diagnostics(&session.gpu.device, &session.gpu.queue)
+        .candidates()?;
     let mut displays = Vec::new();
     for ((display, target), visible) in session
         .rig

@@ -51,7 +51,7 @@ struct FrameRecord {
     /// Until the GPU finished the frame.
     frame_ms: f64,
     visible: Vec<u32>,
-    /// Sphere-against-frustum tests (GPU culling; see `Renderer::read_sphere_tests`).
+    /// Sphere-against-frustum tests (GPU culling; see `Diagnostics::sphere_tests`).
     sphere_tests: Option<u64>,
     /// The passes recorded, with their level and vertex-shader invocations.
     passes: Vec<PassReport>,
@@ -161,10 +161,12 @@ pub fn stress(args: &StressArgs) -> Result<()> {
         let passes = pass_reports(&session.renderer, &session.rig, queries.as_ref());
         let visible = session
             .renderer
-            .read_visible_counts(&session.gpu.device, &session.gpu.queue)?;
+            .diagnostics(&session.gpu.device, &session.gpu.queue)
+            .visible_counts()?;
         let sphere_tests = session
             .renderer
-            .read_sphere_tests(&session.gpu.device, &session.gpu.queue)?;
+            .diagnostics(&session.gpu.device, &session.gpu.queue)
+            .sphere_tests()?;
         let record = FrameRecord {
             frame,
             cpu_ms,

@@ -27,7 +27,7 @@ pub struct CullParams {
     /// The device's limit of workgroups per dimension: the coarse pass splits the
     /// candidates' dispatch into x and y with it.
     pub max_groups: u32,
-    /// Levels of detail in use: 1 (off) or [`MAX_LODS`].
+    /// Levels of detail in use: 1 (off) or [`crate::scene::MAX_LODS`].
     pub lod_levels: u32,
 }
 

@@ -107,7 +107,7 @@ use indirect::IndirectPath;
 pub use options::{CoarseMode, CullMode, LOD_PIXELS, RendererOptions, frame_lod};
 pub use passes::{Level, PassRecord};
 use passes::{close, open_display};
-pub use readback::FarSplit;
+pub use readback::{Diagnostics, FarSplit};
 pub use sync::SyncStats;
 pub use targets::{DisplayTarget, TargetShape, TargetViews};
 

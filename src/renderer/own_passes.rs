@@ -38,8 +38,8 @@ impl Renderer {
 
     /// Draws display `index` into a render pass the caller began, after
     /// [`Renderer::encode_culls`] was recorded for this frame. The pass must render into
-    /// that display's target shape ([`TargetViews`]) with the formats and sample count of
-    /// [`RendererOptions`], and with `multiview_mask` `0b11` for a stereo display in
+    /// that display's target shape ([`super::TargetViews`]) with the formats and sample count of
+    /// [`super::RendererOptions`], and with `multiview_mask` `0b11` for a stereo display in
     /// multiview. Its load and store operations, and whatever the caller draws before and
     /// after (sky, UI, transparent geometry), are the caller's. Returns the draw calls.
     pub fn draw_display(&self, pass: &mut wgpu::RenderPass, index: usize) -> Result<u32> {

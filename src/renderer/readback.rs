@@ -1,5 +1,6 @@
-//! Reading a submitted frame back: each display's cull buffers (and its far layer's),
-//! visible totals, the far/near split, and what the coarse cull saved.
+//! Diagnostics: reading a submitted frame back ([`Renderer::diagnostics`]): each
+//! display's cull buffers (and its far layer's), visible totals, the far/near split,
+//! and what the coarse cull saved. None of it is needed to draw.
 
 use super::indirect::IndirectPath;
 use super::{Path, Renderer};
@@ -9,7 +10,7 @@ use crate::error::Result;
 use crate::readback::read_pod;
 use crate::records::DrawArgs;
 
-/// One display's far/near split in a frame ([`Renderer::read_far_split`]).
+/// One display's far/near split in a frame ([`Diagnostics::far_split`]).
 #[derive(Clone, Copy, Debug, PartialEq, serde::Serialize)]
 pub struct FarSplit {
     /// Meters from the display's apex beyond which whole instances are far.
@@ -20,44 +21,55 @@ pub struct FarSplit {
     pub near: u32,
 }
 
+/// The last submitted frame as the GPU has it, read back (each call waits for the GPU):
+/// for tests, statistics and tools, never needed to draw.
+pub struct Diagnostics<'a> {
+    renderer: &'a Renderer,
+    device: &'a wgpu::Device,
+    queue: &'a wgpu::Queue,
+}
+
 impl Renderer {
+    /// The last submitted frame's diagnostics, read back through `device` and `queue`
+    /// (the renderer's own).
+    pub fn diagnostics<'a>(
+        &'a self,
+        device: &'a wgpu::Device,
+        queue: &'a wgpu::Queue,
+    ) -> Diagnostics<'a> {
+        Diagnostics {
+            renderer: self,
+            device,
+            queue,
+        }
+    }
+}
+
+impl Diagnostics<'_> {
     /// The coarse cull's candidates in the last frame per display, read back after it
     /// was submitted (GPU culling with the coarse cull; `None` otherwise): the cull
     /// positions of the blocks listed for each display, all its cull tested.
-    pub fn read_candidates(
-        &self,
-        device: &wgpu::Device,
-        queue: &wgpu::Queue,
-    ) -> Result<Option<Vec<u32>>> {
-        let (culler, displays) = self.culler();
-        culler.read_candidates(device, queue, displays)
+    pub fn candidates(&self) -> Result<Option<Vec<u32>>> {
+        let (culler, displays) = self.renderer.culler();
+        culler.read_candidates(self.device, self.queue, displays)
     }
 
     /// Sphere-against-frustum tests of the last frame with GPU culling (read back after
     /// it was submitted; `None` otherwise): every instance once per display, or with the
     /// coarse cull every instance once (for its block's sphere), every block once for
     /// the frame and once per display, and each display's candidates.
-    pub fn read_sphere_tests(
-        &self,
-        device: &wgpu::Device,
-        queue: &wgpu::Queue,
-    ) -> Result<Option<u64>> {
-        let (culler, displays) = self.culler();
-        culler.read_sphere_tests(device, queue, displays)
+    pub fn sphere_tests(&self) -> Result<Option<u64>> {
+        let (culler, displays) = self.renderer.culler();
+        culler.read_sphere_tests(self.device, self.queue, displays)
     }
 
     /// Display `index`'s cull result of the last frame: on the indirect path its buffers
     /// read back (after the frame was submitted: the visible list up to the visible
     /// total, all draws, the draw count); in the classic modes the CPU cull they drew
     /// from (multi-camera: the left eye's).
-    pub fn read_cull(
-        &self,
-        device: &wgpu::Device,
-        queue: &wgpu::Queue,
-        index: usize,
-    ) -> Result<CullOutput> {
-        match &self.path {
-            Path::Indirect(p) => p.read_cull(device, queue, index),
+    pub fn cull(&self, index: usize) -> Result<CullOutput> {
+        match &self.renderer.path {
+            Path::Indirect(p) => p.read_cull(self.device, self.queue, index),
             Path::Classic(p) => Ok(p.cull_output(index)),
         }
     }
@@ -65,34 +77,27 @@ impl Renderer {
     /// Display `index`'s far layer cull of the last frame (the far instances, each drawn
     /// once; the contract's buffers with V = 1), read back after it was submitted;
     /// `None` for a display without a far layer.
-    pub fn read_far_cull(
-        &self,
-        device: &wgpu::Device,
-        queue: &wgpu::Queue,
-        index: usize,
-    ) -> Result<Option<CullOutput>> {
-        match &self.path {
-            Path::Indirect(p) if index < self.shapes.len() => p.read_far_cull(device, queue, index),
+    pub fn far_cull(&self, index: usize) -> Result<Option<CullOutput>> {
+        match &self.renderer.path {
+            Path::Indirect(p) if index < self.renderer.shapes.len() => {
+                p.read_far_cull(self.device, self.queue, index)
+            }
             _ => Ok(None),
         }
     }
 
     /// The last frame's far/near split per display (`None` for displays without a far
     /// layer): the far distance and the visible far and near instances, read back.
-    pub fn read_far_split(
-        &self,
-        device: &wgpu::Device,
-        queue: &wgpu::Queue,
-    ) -> Result<Vec<Option<FarSplit>>> {
-        let Path::Indirect(p) = &self.path else {
-            return Ok(vec![None; self.shapes.len()]);
+    pub fn far_split(&self) -> Result<Vec<Option<FarSplit>>> {
+        let Path::Indirect(p) = &self.renderer.path else {
+            return Ok(vec![None; self.renderer.shapes.len()]);
         };
-        let near = p.visible_counts(device, queue)?;
-        (0..self.shapes.len())
+        let near = p.visible_counts(self.device, self.queue)?;
+        (0..self.renderer.shapes.len())
             .zip(p.far_distances())
             .zip(near)
             .map(|((i, distance), near)| {
-                let far = p.read_far_cull(device, queue, i)?;
+                let far = p.read_far_cull(self.device, self.queue, i)?;
                 Ok(distance.zip(far).map(|(distance, far)| FarSplit {
                     distance,
                     far: far.visible.len() as u32,
@@ -104,13 +109,9 @@ impl Renderer {
 
     /// Visible totals of every display: read back from the counts buffers on the
     /// indirect path, taken from this frame's CPU culls in the classic modes.
-    pub fn read_visible_counts(
-        &self,
-        device: &wgpu::Device,
-        queue: &wgpu::Queue,
-    ) -> Result<Vec<u32>> {
-        match &self.path {
-            Path::Indirect(p) => p.visible_counts(device, queue),
+    pub fn visible_counts(&self) -> Result<Vec<u32>> {
+        match &self.renderer.path {
+            Path::Indirect(p) => p.visible_counts(self.device, self.queue),
             Path::Classic(p) => Ok(p.visible_counts()),
         }
     }

@@ -101,7 +101,12 @@ pub fn one_frame(gpu: &Gpu, scene: &Scene, rig: &Rig, options: RendererOptions) 
 /// Every display's cull buffers of `renderer`'s last frame, read back.
 pub fn read_culls(gpu: &Gpu, renderer: &Renderer, rig: &Rig) -> Vec<CullOutput> {
     (0..rig.displays.len())
-        .map(|d| renderer.read_cull(&gpu.device, &gpu.queue, d).unwrap())
+        .map(|d| {
+            renderer
+                .diagnostics(&gpu.device, &gpu.queue)
+                .cull(d)
+                .unwrap()
+        })
         .collect()
 }
 
