@@ -18,7 +18,8 @@ pub struct FrameContext {
     pub viewer_position: Vec3,
     /// Seconds on the caller's clock.
     pub time: f32,
-    /// Where the viewer looks (unit length).
+    /// Where the viewer looks (unit length): for material hooks (head-following
+    /// effects); no built-in pass reads it.
     pub viewer_direction: Vec3,
     /// Level-of-detail scale: (pixels per radian / pixels of error allowed)^2 for the
     /// sharpest display, so that one level per instance serves every display and eye
@@ -60,7 +61,9 @@ impl FrameContext {
     }
 }
 
-/// One eye of a display: only what truly differs per eye.
+/// One eye of a display: only what truly differs per eye. The built-in passes read
+/// `clip_from_world`, `world_from_clip` and `position`; the view and clip matrices and
+/// their inverses are for material hooks (view-space depth, fog, screen-space effects).
 #[derive(Clone, Copy, Debug, PartialEq, ShaderType)]
 pub struct EyeContext {
     pub view_from_world: Mat4,
@@ -87,7 +90,8 @@ impl EyeContext {
     }
 }
 
-/// One display: its combined frustum, both eyes, and what the cull pass needs.
+/// One display: its combined frustum, both eyes, and what the cull pass needs. The
+/// combined frustum's matrices are for material hooks (no built-in pass reads them).
 #[derive(Clone, Copy, Debug, PartialEq, ShaderType)]
 pub struct DisplayContext {
     pub view_from_world: Mat4,

@@ -33,7 +33,7 @@ pub const CLEAR_COLOR: wgpu::Color = wgpu::Color {
 };
 
 /// How the draw pipelines read a [`Vertex`]: `VertexInput` in
-/// `wgsl/shared/draw_common.wgsl` (`tests/shaders.rs` checks both sides).
+/// `wgsl/shared/decode.wgsl` (`tests/shaders.rs` checks both sides).
 pub const VERTEX_ATTRIBUTES: [wgpu::VertexAttribute; 4] =
     wgpu::vertex_attr_array![0 => Float32x3, 1 => Float32x3, 2 => Float32x2, 3 => Uint32];
 
@@ -53,7 +53,6 @@ pub struct DrawScene {
     pub instances: wgpu::Buffer,
     pub materials: GpuMaterials,
     pub shadow_map: ShadowMap,
-    pub mesh_count: u32,
 }
 
 impl DrawScene {
@@ -88,7 +87,6 @@ impl DrawScene {
                 DrawScene::BYTES_PER_INSTANCE * slots as u64,
                 wgpu::BufferUsages::STORAGE | wgpu::BufferUsages::COPY_DST,
             ),
-            mesh_count: scene.meshes.len() as u32,
         })
     }
 

@@ -59,7 +59,6 @@ struct CoarsePipelines {
 /// (displays cull one after another, so one scratch suffices).
 pub struct CullScene {
     pub instance_count: u32,
-    pub mesh_count: u32,
     groups: (u32, u32),
     max_groups: u32,
     /// Levels of detail culled into: the z of the cull and compact dispatches.
@@ -124,7 +123,6 @@ impl CullScene {
         let most_groups = dispatch_size(slots.div_ceil(WORKGROUP_SIZE), max_groups);
         CullScene {
             instance_count: params.instance_count,
-            mesh_count: params.mesh_count,
             groups,
             max_groups,
             levels,

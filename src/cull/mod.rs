@@ -1,10 +1,12 @@
 //! Per-display frustum culling into draw lists, on the CPU ([`cpu`]) or the GPU
 //! ([`gpu`]). Both honour one contract, byte for byte (the README's cull contract):
 //!
-//! - one draw per mesh with at least one visible instance, in ascending mesh id, packed
-//!   at the front of `draws`; the rest of `draws` is zero; `draw_count` is their number;
-//! - within a draw, visible instance ids ascend;
-//! - `instance_count = V * visible_in_mesh`, `first_instance = V * offset`, where V is
+//! - one draw per (level of detail, mesh) with at least one visible instance, levels
+//!   finest first, then ascending mesh id, packed at the front of `draws`; the rest of
+//!   `draws` (meshes times levels entries) is zero; `draw_count` is their number;
+//! - within a draw, visible instances in place order (ids ascending for a scene laid
+//!   out afresh);
+//! - `instance_count = V * visible_in_group`, `first_instance = V * offset`, where V is
 //!   [`CullJob::instances_per_object`].
 
 pub mod coarse;
@@ -61,7 +63,8 @@ pub struct CullOutput {
     /// Visible instance ids (exactly the visible ones; the GPU buffer's capacity is
     /// the instance count and its tail past these is unspecified).
     pub visible: Vec<u32>,
-    /// One entry per mesh: the packed draws, then zeros.
+    /// One entry per (level, mesh), meshes times levels in all: the packed draws, then
+    /// zeros.
     pub draws: Vec<DrawArgs>,
     pub draw_count: u32,
 }

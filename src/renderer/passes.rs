@@ -22,7 +22,8 @@ pub enum Level {
 #[derive(Clone, Copy, Debug, PartialEq, Eq, serde::Serialize)]
 pub struct PassRecord {
     pub level: Level,
-    /// `scatter`, `coarse_cull`, `shadow_cull`, `shadow` (frame); `cull`, `draw`.
+    /// `scatter`, `coarse_cull`, `shadow_cull`, `shadow` (frame); `cull`, `far_cull`,
+    /// `far_layer`, `draw` (display); `draw` (eye, the per-eye classic modes).
     pub name: &'static str,
     pub display: Option<u32>,
     pub eye: Option<u32>,

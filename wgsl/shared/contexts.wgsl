@@ -1,7 +1,11 @@
 // The chapter's Listing 1.3 frame, display and eye contexts. Mirrored by src/contexts.rs (encase); the test
 // `contexts_match_wgsl` compares the two layouts member by member.
 // Names read like the math: view_from_world is the chapter's mLocation,
-// clip_from_view its mProjection, and the *_inverse twins are the other direction.
+// clip_from_view its mProjection, and each X_from_Y has its Y_from_X beside it. The
+// built-in passes read only clip_from_world, world_from_clip, position and the cull's
+// fields; the view and clip matrices (and the frame's viewer_direction) are there for
+// material hooks (RendererOptions::material), which have `frame` and `display` in
+// scope: view-space depth, fog, screen-space effects.
 
 struct EyeContext {
     view_from_world: mat4x4<f32>,
@@ -48,6 +52,7 @@ struct DisplayContext {
 struct FrameContext {
     viewer_position: vec3<f32>,
     time: f32,
+    // Where the viewer looks (for material hooks; no built-in pass reads it).
     viewer_direction: vec3<f32>,
     // (pixels per radian / pixels of error allowed)^2: see lod_level in cull_math.wgsl.
     lod_scale: f32,

@@ -1,5 +1,7 @@
-// Storage records; mirrored by src/records.rs (bytemuck). The test
-// `records_match_wgsl` compares offsets and sizes member by member.
+// Storage records and the cull's uniforms, each mirrored in Rust: InstanceRecord,
+// MeshRecord, LodRecord and DrawArgs by src/records.rs (bytemuck), MaterialRecord by
+// src/materials.rs, CullParams by src/cull/gpu.rs and CoarseTest by src/cull/coarse.rs
+// (encase). tests/shaders.rs compares offsets and sizes member by member.
 
 struct InstanceRecord {
     // Rows of the 3x4 affine world_from_local: world = rows * vec4(local, 1).
