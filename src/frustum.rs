@@ -180,7 +180,17 @@ pub const ROUNDING_SLACK: f32 = 1.0 / (1u32 << 20) as f32;
 pub fn sphere_in_planes(planes: &[Vec4; 6], s: Vec4) -> bool {
     planes
         .iter()
-        .all(|p| p.x * s.x + p.y * s.y + p.z * s.z + p.w >= -s.w)
+        .all(|p| plane_distance(p.to_array(), [s.x, s.y, s.z]) >= -s.w)
+}
+
+/// `p`'s signed distance of `c` (scaled by the normal's length) in the order every plane
+/// test uses: `p.x * c.x + p.y * c.y + p.z * c.z + p.w`, products summed left to right,
+/// no fused multiply-add. The one Rust spelling of it: [`sphere_in_planes`], the CPU
+/// culler's lanes and the coarse test all call it, and WGSL's twins
+/// (`wgsl/shared/cull_math.wgsl`, `cull_coarse.wgsl`) are written in the same order.
+#[inline(always)]
+pub fn plane_distance(p: [f32; 4], c: [f32; 3]) -> f32 {
+    p[0] * c[0] + p[1] * c[1] + p[2] * c[2] + p[3]
 }
 
 /// How far (meters) every side of a combined frustum is pushed out beyond the exact

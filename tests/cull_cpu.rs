@@ -5,6 +5,7 @@ mod support;
 
 use glam::{Vec3, Vec4Swizzles};
 use stereocull::cull::{CullJob, CullOutput, cpu};
+use stereocull::frustum::sphere_in_planes;
 use stereocull::procedural;
 use stereocull::records::{CullLayout, DrawArgs};
 use stereocull::rig::Rig;
@@ -119,10 +120,7 @@ fn naive(scene: &Scene, job: &CullJob) -> CullOutput {
     let mut per_mesh = vec![Vec::new(); scene.meshes.len()];
     for (id, inst) in scene.instances.iter().enumerate() {
         let s = scene.world_sphere(inst);
-        if planes
-            .iter()
-            .all(|p| p.x * s.x + p.y * s.y + p.z * s.z + p.w >= -s.w)
-        {
+        if sphere_in_planes(planes, s) {
             per_mesh[inst.mesh as usize].push(id as u32);
         }
     }

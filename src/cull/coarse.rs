@@ -25,7 +25,7 @@
 
 use glam::{DMat3, DVec3, Vec3, Vec4};
 
-use crate::frustum::{View, round_up};
+use crate::frustum::{View, plane_distance, round_up};
 
 /// A grown sphere test: the frame frustum's (the frame test), or a display's (its
 /// block test), planes pushed out and radii grown so that it keeps what it must. The
@@ -114,7 +114,7 @@ impl CoarseCull {
         let reach = s.w * self.inflation + self.slack * (s.x.abs() + s.y.abs() + s.z.abs());
         self.planes
             .iter()
-            .all(|p| p.x * s.x + p.y * s.y + p.z * s.z + p.w >= -reach)
+            .all(|p| plane_distance(p.to_array(), [s.x, s.y, s.z]) >= -reach)
     }
 
     /// Whether the box of `block` may hold a sphere that these planes keep. Meant for a

@@ -11,6 +11,7 @@ use glam::{Vec3, Vec4};
 
 use super::coarse::{BLOCK, block_of};
 use super::{CoarseCull, CullJob, CullOutput, Split};
+use crate::frustum::plane_distance;
 use crate::records::{CullLayout, DrawArgs, lod_level};
 use crate::scene::MAX_LODS;
 
@@ -233,7 +234,7 @@ fn test_lanes_portable(planes: &[[f32; 4]; 6], [x, y, z, neg_r]: [&[f32; 64]; 4]
     let mut inside = [u32::MAX; 64];
     for p in planes {
         for i in 0..64 {
-            let dist = p[0] * x[i] + p[1] * y[i] + p[2] * z[i] + p[3];
+            let dist = plane_distance(*p, [x[i], y[i], z[i]]);
             inside[i] &= ((dist >= neg_r[i]) as u32).wrapping_neg();
         }
     }
