@@ -56,19 +56,10 @@ impl Handle {
     }
 }
 
-/// A moved instance as the scatter pass takes it: its slot, the rows of its new
-/// transform, the radius of its new world sphere (as bits: 14 words, 56 bytes); the
-/// scatter pass computes the sphere's center from the rows as the CPU does
-/// ([`crate::scene::Scene::world_sphere`]). In the edits buffer a slot of
-/// [`Places::VACANT`] makes it void (its instance was removed after an earlier sync
-/// this frame staged it).
-pub type MoveEdit = [u32; 14];
-
-/// A place of the cull order and the slot now there ([`Places::VACANT`]: none).
-pub type PlaceEdit = [u32; 2];
+pub use crate::records::{MoveEdit, PlaceEdit};
 
 /// What changed since the last sync.
-#[derive(Clone, Debug, Default, PartialEq, Eq)]
+#[derive(Clone, Debug, Default, PartialEq)]
 pub struct Changes {
     /// Places filled or vacated (each place once, its last state; in first-change
     /// order). Applied before the moves: an inserted instance's sphere goes up as its
@@ -221,7 +212,7 @@ impl LiveScene {
         };
         match self.places.take(slot, instance.mesh) {
             Some(place) => {
-                self.stage_place([place, slot]);
+                self.stage_place(PlaceEdit { place, slot });
                 self.stage_move(slot);
                 self.stage_record(slot);
             }
@@ -257,7 +248,7 @@ impl LiveScene {
 
     /// Lists a place's new state in this change set, once (its last).
     fn stage_place(&mut self, edit: PlaceEdit) {
-        let place = edit[0] as usize;
+        let place = edit.place as usize;
         match self.placed_at[place] {
             (epoch, at) if epoch == self.epoch => self.changes.placed[at as usize] = edit,
             _ => {
@@ -301,14 +292,17 @@ impl LiveScene {
         self.generations[slot] = self.generations[slot].wrapping_add(1);
         self.vacant.insert(handle.slot);
         let place = self.places.release(handle.slot, removed.mesh);
-        self.stage_place([place, Places::VACANT]);
+        self.stage_place(PlaceEdit {
+            place,
+            slot: Places::VACANT,
+        });
         // A move staged earlier in this change set goes: the slot has no instance.
         if let (epoch, at) = std::mem::take(&mut self.moved_at[slot])
             && epoch == self.epoch
         {
             self.changes.moved.swap_remove(at as usize);
             if let Some(shifted) = self.changes.moved.get(at as usize) {
-                self.moved_at[shifted[0] as usize] = (epoch, at);
+                self.moved_at[shifted.slot as usize] = (epoch, at);
             }
         }
         self.changes.removed.push(handle.slot);
@@ -378,12 +372,15 @@ pub fn make_edit(scene: &Scene, slot: u32) -> MoveEdit {
         m.translation,
     );
     let s = scene.world_sphere(instance);
-    let floats = [
-        x.x, y.x, z.x, t.x, x.y, y.y, z.y, t.y, x.z, y.z, z.z, t.z, s.w,
-    ];
-    let mut edit = [slot; 14];
-    edit[1..].copy_from_slice(&floats.map(f32::to_bits));
-    edit
+    MoveEdit {
+        slot,
+        rows: [
+            [x.x, y.x, z.x, t.x],
+            [x.y, y.y, z.y, t.y],
+            [x.z, y.z, z.z, t.z],
+        ],
+        radius: s.w,
+    }
 }
 
 fn check_finite(t: &Affine3A) -> Result<()> {

@@ -23,6 +23,66 @@ pub struct InstanceRecord {
     pub bob: f32,
 }
 
+/// The 16 bytes before a scatter's edits (`EditHeader` in `wgsl/shared/scatter.wgsl`).
+#[repr(C)]
+#[derive(Clone, Copy, Debug, PartialEq, Eq, Pod, Zeroable)]
+pub struct EditHeader {
+    pub count: u32,
+    /// 1 when the GPU culler's spheres, order and positions are bound (GPU culling).
+    pub spheres_too: u32,
+    /// Workgroups along x of the dispatch (its y spreads past the device's limit).
+    pub groups_x: u32,
+    pub unused: u32,
+}
+
+/// A moved instance as the moves scatter takes it (56 bytes): the slot
+/// ([`Places::VACANT`]: void, its instance removed after an earlier sync staged it), the
+/// new transform's rows and the world sphere's radius, computed on the CPU
+/// ([`crate::scene::Scene::world_sphere`]).
+#[repr(C)]
+#[derive(Clone, Copy, Debug, PartialEq, Pod, Zeroable)]
+pub struct MoveEdit {
+    pub slot: u32,
+    pub rows: [[f32; 4]; 3],
+    pub radius: f32,
+}
+
+/// A rewritten instance record as the records scatter takes it (68 bytes): the slot,
+/// then [`InstanceRecord`]'s members (flat: WGSL would align a nested record to 16).
+#[repr(C)]
+#[derive(Clone, Copy, Debug, PartialEq, Pod, Zeroable)]
+pub struct RecordEdit {
+    pub slot: u32,
+    pub rows: [[f32; 4]; 3],
+    pub color: u32,
+    pub mesh: u32,
+    pub spin: f32,
+    pub bob: f32,
+}
+
+/// A place of the cull order and the slot now there ([`Places::VACANT`]: none), as the
+/// places scatter takes it (8 bytes).
+#[repr(C)]
+#[derive(Clone, Copy, Debug, PartialEq, Eq, Pod, Zeroable)]
+pub struct PlaceEdit {
+    pub place: u32,
+    pub slot: u32,
+}
+
+impl RecordEdit {
+    /// The edit writing `record` into `slot`.
+    pub fn new(slot: u32, record: InstanceRecord) -> RecordEdit {
+        RecordEdit {
+            slot,
+            rows: record.world_from_local,
+            color: record.color,
+            mesh: record.mesh,
+            spin: record.spin,
+            bob: record.bob,
+        }
+    }
+}
+
 /// A mesh's index range, and its range in the cull order (written once at upload).
 #[repr(C)]
 #[derive(Clone, Copy, Debug, PartialEq, Eq, Pod, Zeroable)]

@@ -1,5 +1,5 @@
 //! Edited instances reach the GPU sparsely, in one compute pass per frame with edits
-//! (`wgsl/scatter.wgsl`), three dispatches in this order: places filled or vacated in
+//! (`wgsl/scatter_*.wgsl`), three dispatches in this order: places filled or vacated in
 //! the cull order (place and slot: 8 bytes each, from
 //! [`crate::live::LiveScene::insert`] and `remove`), moves (slot, new transform rows,
 //! new world sphere's radius: 56 bytes each, made by
@@ -17,40 +17,48 @@
 
 use wgpu::util::StagingBelt;
 
+use bytemuck::Pod;
+
 use crate::buffers::storage_buffer;
 use crate::places::Places;
-use crate::records::instance_record;
+use crate::records::{EditHeader, MoveEdit, PlaceEdit, RecordEdit, instance_record};
 use crate::scene::Scene;
 use crate::shaders::{
-    SCATTER_BINDINGS, Windows, bind_group, bind_group_layout, compute_pipeline, dispatch_size,
-    pipeline_layout, scatter_source,
+    EditKind, SCATTER_BINDINGS, Windows, bind_group, bind_group_layout, compute_pipeline,
+    dispatch_size, pipeline_layout, scatter_source,
 };
 
-const HEADER_BYTES: u64 = 16;
+const HEADER_BYTES: u64 = size_of::<EditHeader>() as u64;
 const GROUP: u32 = 64;
 /// The staging belt's chunk: a frame's edits of up to about 18,000 moves fit one; more
 /// get a chunk of their own size, which the belt keeps for the next frames.
 const BELT_CHUNK: u64 = 1 << 20;
 
-/// What a scatter's edits carry; each edit's first word is its key (a place, or a
-/// slot), at most one edit per key.
-#[derive(Clone, Copy, Debug, PartialEq, Eq)]
-pub enum EditKind {
-    /// Place and slot ([`crate::live::PlaceEdit`]).
-    Places,
-    /// Slot, transform rows, world sphere radius ([`crate::live::make_edit`]).
-    Moves,
-    /// Slot and the whole record ([`record_edit`]).
-    Records,
+/// An edit record of the edits buffer: each edit's key is its place or slot, at most one
+/// edit per key.
+pub trait Edit: Pod {
+    const KIND: EditKind;
+    fn key(&self) -> u32;
 }
 
-impl EditKind {
-    fn entry_point(self) -> &'static str {
-        match self {
-            EditKind::Places => "scatter_places",
-            EditKind::Moves => "scatter",
-            EditKind::Records => "scatter_records",
-        }
+impl Edit for PlaceEdit {
+    const KIND: EditKind = EditKind::Places;
+    fn key(&self) -> u32 {
+        self.place
+    }
+}
+
+impl Edit for MoveEdit {
+    const KIND: EditKind = EditKind::Moves;
+    fn key(&self) -> u32 {
+        self.slot
+    }
+}
+
+impl Edit for RecordEdit {
+    const KIND: EditKind = EditKind::Records;
+    fn key(&self) -> u32 {
+        self.slot
     }
 }
 
@@ -65,18 +73,18 @@ impl EditKind {
 /// scatter and sync (header and edits); the belt takes about 15 % less CPU per moved
 /// instance (3.96 against 4.63 ns at 10 % moving, 1M `hmd`, three alternating runs).
 pub struct Scatters {
-    pub places: Scatter<2>,
-    pub moves: Scatter<14>,
-    pub records: Scatter<17>,
+    pub places: Scatter<PlaceEdit>,
+    pub moves: Scatter<MoveEdit>,
+    pub records: Scatter<RecordEdit>,
     belt: StagingBelt,
 }
 
 impl Scatters {
     pub fn new(device: &wgpu::Device, windows: Windows) -> Scatters {
         Scatters {
-            places: Scatter::new(device, windows, EditKind::Places),
-            moves: Scatter::new(device, windows, EditKind::Moves),
-            records: Scatter::new(device, windows, EditKind::Records),
+            places: Scatter::new(device, windows),
+            moves: Scatter::new(device, windows),
+            records: Scatter::new(device, windows),
             belt: StagingBelt::new(device.clone(), BELT_CHUNK),
         }
     }
@@ -88,9 +96,9 @@ impl Scatters {
     pub fn stage_places(
         &mut self,
         device: &wgpu::Device,
-        mut placed: Vec<[u32; 2]>,
+        mut placed: Vec<PlaceEdit>,
         targets: ScatterTargets,
-    ) -> (u64, Vec<[u32; 2]>) {
+    ) -> (u64, Vec<PlaceEdit>) {
         if targets.spheres.is_none() {
             placed.clear();
             return (0, placed);
@@ -130,8 +138,8 @@ impl Scatters {
     }
 }
 
-/// A scatter pipeline, its edits buffer (`W` words each) and the edits staged for it.
-pub struct Scatter<const W: usize> {
+/// A scatter pipeline, its edits buffer (of `E` records) and the edits staged for it.
+pub struct Scatter<E: Edit> {
     pipeline: wgpu::ComputePipeline,
     layout: wgpu::BindGroupLayout,
     windows: Windows,
@@ -141,7 +149,7 @@ pub struct Scatter<const W: usize> {
     /// index (0: none): a key edited in two syncs before a dispatch keeps one edit. The
     /// index is built only when a second sync comes (`indexed`): one sync per frame
     /// pays no random writes for it.
-    staged: Vec<[u32; W]>,
+    staged: Vec<E>,
     index: Vec<u32>,
     indexed: bool,
     spheres_too: bool,
@@ -156,14 +164,15 @@ pub struct ScatterTargets<'a> {
     pub spheres: Option<[&'a wgpu::Buffer; 4]>,
 }
 
-impl<const W: usize> Scatter<W> {
-    const EDIT_BYTES: u64 = 4 * W as u64;
+impl<E: Edit> Scatter<E> {
+    const EDIT_BYTES: u64 = size_of::<E>() as u64;
 
-    /// The scatter pass of `kind` for instance records and spheres bound in `windows`.
-    pub fn new(device: &wgpu::Device, windows: Windows, kind: EditKind) -> Scatter<W> {
+    /// The scatter pass of `E`'s kind for instance records and spheres bound in
+    /// `windows`.
+    pub fn new(device: &wgpu::Device, windows: Windows) -> Scatter<E> {
         let layout = bind_group_layout(device, "stereocull.scatter", &SCATTER_BINDINGS, &windows);
         let pipeline_layout = pipeline_layout(device, "stereocull.scatter", &layout);
-        let entry = (scatter_source(&windows), kind.entry_point());
+        let entry = (scatter_source(&windows, E::KIND), "scatter");
         let pipeline = compute_pipeline(device, "stereocull.scatter", &pipeline_layout, entry);
         Scatter {
             pipeline,
@@ -191,9 +200,9 @@ impl<const W: usize> Scatter<W> {
     pub fn stage(
         &mut self,
         device: &wgpu::Device,
-        mut edits: Vec<[u32; W]>,
+        mut edits: Vec<E>,
         targets: ScatterTargets,
-    ) -> (u64, Vec<[u32; W]>) {
+    ) -> (u64, Vec<E>) {
         self.spheres_too = targets.spheres.is_some();
         let before = self.staged.len();
         if before == 0 {
@@ -211,21 +220,6 @@ impl<const W: usize> Scatter<W> {
         (header + Self::EDIT_BYTES * added, edits)
     }
 
-    /// Voids the staged edit of `key`, if any (its instance was removed after an
-    /// earlier sync this frame staged its move): the shader skips void keys.
-    pub fn void(&mut self, key: u32) {
-        if self.staged.is_empty() {
-            return;
-        }
-        self.build_index();
-        if let Some(at) = self.index.get_mut(key as usize)
-            && *at != 0
-        {
-            self.staged[*at as usize - 1][0] = Places::VACANT;
-            *at = 0;
-        }
-    }
-
     fn build_index(&mut self) {
         if self.indexed {
             return;
@@ -233,24 +227,28 @@ impl<const W: usize> Scatter<W> {
         let most = self
             .staged
             .iter()
-            .map(|e| e[0] as usize + 1)
+            .map(|e| e.key() as usize + 1)
             .max()
             .unwrap_or(0);
         self.index.resize(self.index.len().max(most), 0);
         for (k, edit) in self.staged.iter().enumerate() {
-            self.index[edit[0] as usize] = k as u32 + 1;
+            self.index[edit.key() as usize] = k as u32 + 1;
         }
         self.indexed = true;
     }
 
     /// A second sync before the dispatch: keys already staged are overwritten in place,
     /// new ones appended.
-    fn merge(&mut self, edits: &[[u32; W]]) {
+    fn merge(&mut self, edits: &[E]) {
         self.build_index();
-        let most = edits.iter().map(|e| e[0] as usize + 1).max().unwrap_or(0);
+        let most = edits
+            .iter()
+            .map(|e| e.key() as usize + 1)
+            .max()
+            .unwrap_or(0);
         self.index.resize(self.index.len().max(most), 0);
         for edit in edits {
-            let key = edit[0] as usize;
+            let key = edit.key() as usize;
             match self.index[key] {
                 0 => {
                     self.staged.push(*edit);
@@ -279,7 +277,7 @@ impl<const W: usize> Scatter<W> {
         let mut view = belt.write_buffer(encoder, &self.edits, 0, size);
         let header = HEADER_BYTES as usize;
         view.slice(..header)
-            .copy_from_slice(bytemuck::cast_slice(&self.header()));
+            .copy_from_slice(bytemuck::bytes_of(&self.header()));
         view.slice(header..)
             .copy_from_slice(bytemuck::cast_slice(&self.staged));
     }
@@ -312,7 +310,7 @@ impl<const W: usize> Scatter<W> {
         if self.indexed {
             // Void edits' keys index nothing.
             for edit in &self.staged {
-                if let Some(at) = self.index.get_mut(edit[0] as usize) {
+                if let Some(at) = self.index.get_mut(edit.key() as usize) {
                     *at = 0;
                 }
             }
@@ -325,10 +323,13 @@ impl<const W: usize> Scatter<W> {
         dispatch_size((self.pending() as u32).div_ceil(GROUP), self.max_groups)
     }
 
-    /// Edit count, spheres too (GPU culling), workgroups along x.
-    fn header(&self) -> [u32; 4] {
-        let count = self.pending() as u32;
-        [count, u32::from(self.spheres_too), self.groups().0, 0]
+    fn header(&self) -> EditHeader {
+        EditHeader {
+            count: self.pending() as u32,
+            spheres_too: u32::from(self.spheres_too),
+            groups_x: self.groups().0,
+            unused: 0,
+        }
     }
 
     fn bind(&self, device: &wgpu::Device, targets: &ScatterTargets) -> wgpu::BindGroup {
@@ -352,21 +353,30 @@ impl<const W: usize> Scatter<W> {
     }
 }
 
+impl Scatter<MoveEdit> {
+    /// Voids the staged edit of `key`, if any (its instance was removed after an
+    /// earlier sync this frame staged its move): the shader skips void keys.
+    pub fn void(&mut self, key: u32) {
+        if self.staged.is_empty() {
+            return;
+        }
+        self.build_index();
+        if let Some(at) = self.index.get_mut(key as usize)
+            && *at != 0
+        {
+            self.staged[*at as usize - 1].slot = Places::VACANT;
+            *at = 0;
+        }
+    }
+}
+
 fn edits_buffer(device: &wgpu::Device, size: u64) -> wgpu::Buffer {
     let usage = wgpu::BufferUsages::STORAGE | wgpu::BufferUsages::COPY_DST;
     storage_buffer(device, "stereocull.edits", size, usage)
 }
 
-/// A rewritten record as the records scatter takes it: the slot, then the 64-byte
-/// instance record (17 words).
-pub type RecordEdit = [u32; 17];
-
 /// The record edit of `slot`: the slot, then its whole 64-byte instance record, as the
 /// records scatter reads them.
 pub fn record_edit(scene: &Scene, slot: u32) -> RecordEdit {
-    let record = instance_record(&scene.instances[slot as usize]);
-    let words: [u32; 16] = bytemuck::cast(record);
-    let mut edit = [slot; 17];
-    edit[1..].copy_from_slice(&words);
-    edit
+    RecordEdit::new(slot, instance_record(&scene.instances[slot as usize]))
 }

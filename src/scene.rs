@@ -238,7 +238,7 @@ fn world_sphere_of(meshes: &[Mesh], instance: &Instance) -> Vec4 {
 
 /// `m` applied to point `p`, row by row, each `x * p.x + y * p.y + z * p.z + t` summed
 /// left to right without fma: the CPU twin of the moves scatter's center
-/// (`wgsl/scatter.wgsl`), so that both make the same world sphere.
+/// (`wgsl/scatter_moves.wgsl`), so that both make the same world sphere.
 pub fn transform_center(m: &Affine3A, p: Vec3) -> Vec3 {
     let (x, y, z, t) = (
         m.matrix3.x_axis,

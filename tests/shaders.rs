@@ -10,11 +10,13 @@ use stereocull::cull::CoarseCull;
 use stereocull::cull::gpu::CullParams;
 use stereocull::draw::VERTEX_ATTRIBUTES;
 use stereocull::materials::MaterialRecord;
-use stereocull::records::{DrawArgs, InstanceRecord, LodRecord, MeshRecord};
+use stereocull::records::{
+    DrawArgs, EditHeader, InstanceRecord, LodRecord, MeshRecord, MoveEdit, PlaceEdit, RecordEdit,
+};
 use stereocull::records::{storage_bytes, uniform_bytes};
 use stereocull::scene::Vertex;
 use stereocull::shaders::{
-    Access, Binding, COARSE_BINDINGS, CULL_BINDINGS, CullPass, DRAW_BINDINGS, DrawKey,
+    Access, Binding, COARSE_BINDINGS, CULL_BINDINGS, CullPass, DRAW_BINDINGS, DrawKey, EditKind,
     SCATTER_BINDINGS, Window, Windows, all_sources, scatter_source, shadow_source,
 };
 
@@ -135,6 +137,96 @@ fn records_match_wgsl() {
     );
     assert_eq!(size_of::<DrawArgs>(), 20);
     assert_eq!(size_of::<InstanceRecord>(), 64);
+}
+
+/// The scatter passes' edit records, each in the module of its kind, packed as the CPU
+/// writes them: 16, 8, 56 and 68 bytes.
+#[test]
+fn edit_records_match_wgsl() {
+    let check = |kind: EditKind, name: &str, size: usize, rust: &[(&str, usize)]| {
+        let module = parse(name, &scatter_source(&Windows::WHOLE, kind));
+        let (members, span) = wgsl_struct(&module, name);
+        assert_eq!(span as usize, size, "{name} size");
+        let found: Vec<(&str, usize)> = members
+            .iter()
+            .map(|(n, o)| (n.as_str(), *o as usize))
+            .collect();
+        assert_eq!(found, rust, "{name} members and offsets");
+    };
+    check(
+        EditKind::Moves,
+        "EditHeader",
+        size_of::<EditHeader>(),
+        &[
+            ("count", offset_of!(EditHeader, count)),
+            ("spheres_too", offset_of!(EditHeader, spheres_too)),
+            ("groups_x", offset_of!(EditHeader, groups_x)),
+            ("unused", offset_of!(EditHeader, unused)),
+        ],
+    );
+    check(
+        EditKind::Places,
+        "PlaceEdit",
+        size_of::<PlaceEdit>(),
+        &[
+            ("place", offset_of!(PlaceEdit, place)),
+            ("slot", offset_of!(PlaceEdit, slot)),
+        ],
+    );
+    check(
+        EditKind::Moves,
+        "MoveEdit",
+        size_of::<MoveEdit>(),
+        &[
+            ("slot", offset_of!(MoveEdit, slot)),
+            ("rows", offset_of!(MoveEdit, rows)),
+            ("radius", offset_of!(MoveEdit, radius)),
+        ],
+    );
+    check(
+        EditKind::Records,
+        "RecordEdit",
+        size_of::<RecordEdit>(),
+        &[
+            ("slot", offset_of!(RecordEdit, slot)),
+            ("rows", offset_of!(RecordEdit, rows)),
+            ("color", offset_of!(RecordEdit, color)),
+            ("mesh", offset_of!(RecordEdit, mesh)),
+            ("spin", offset_of!(RecordEdit, spin)),
+            ("bob", offset_of!(RecordEdit, bob)),
+        ],
+    );
+    // The byte counts the README and SyncStats quote.
+    let sizes = [
+        size_of::<PlaceEdit>(),
+        size_of::<MoveEdit>(),
+        size_of::<RecordEdit>(),
+    ];
+    assert_eq!(sizes, [8, 56, 68]);
+    // Each kind's module lists its own records after the header.
+    for (kind, record) in [
+        (EditKind::Places, "PlaceEdit"),
+        (EditKind::Moves, "MoveEdit"),
+        (EditKind::Records, "RecordEdit"),
+    ] {
+        let module = parse("edits", &scatter_source(&Windows::WHOLE, kind));
+        let (members, _) = wgsl_struct(&module, "Edits");
+        assert_eq!(members[1], ("list".to_string(), 16), "{kind:?}");
+        let list = module
+            .types
+            .iter()
+            .find(|(_, t)| t.name.as_deref() == Some("Edits"));
+        let Some((_, ty)) = list else {
+            panic!("no Edits")
+        };
+        let TypeInner::Struct { members, .. } = &ty.inner else {
+            panic!("Edits")
+        };
+        let TypeInner::Array { base, .. } = module.types[members[1].ty].inner else {
+            panic!("{kind:?}: Edits.list is not an array")
+        };
+        assert_eq!(module.types[base].name.as_deref(), Some(record), "{kind:?}");
+    }
 }
 
 /// A matrix whose every element differs from every other value used here.
@@ -309,18 +401,21 @@ fn every_pass_binds_what_its_list_declares() {
         .into_iter()
         .map(|(p, c)| (p.label(c), p.source(c, &Windows::WHOLE), &CULL_BINDINGS[..]))
         .chain(DrawKey::ALL.map(|k| (k.label(), k.source(), &DRAW_BINDINGS[..])))
-        .chain([
-            (
-                "stereocull.scatter".to_string(),
-                scatter_source(&Windows::WHOLE),
-                &SCATTER_BINDINGS[..],
-            ),
-            (
-                "stereocull.shadow".to_string(),
-                shadow_source(&Windows::WHOLE),
-                &DRAW_BINDINGS[..],
-            ),
-        ]);
+        .chain(
+            [EditKind::Places, EditKind::Moves, EditKind::Records].map(|kind| {
+                let label = format!("stereocull.scatter.{kind:?}");
+                (
+                    label,
+                    scatter_source(&Windows::WHOLE, kind),
+                    &SCATTER_BINDINGS[..],
+                )
+            }),
+        )
+        .chain([(
+            "stereocull.shadow".to_string(),
+            shadow_source(&Windows::WHOLE),
+            &DRAW_BINDINGS[..],
+        )]);
     for (label, source, list) in passes {
         let module = parse(&label, &source);
         let mut seen = Vec::new();
@@ -456,7 +551,7 @@ fn windowed_arrays_take_one_binding_per_window() {
         }
     );
     assert_eq!(Windows::new(1000, 64 << 20), Windows::WHOLE);
-    let module = parse("scatter", &scatter_source(&split));
+    let module = parse("scatter", &scatter_source(&split, EditKind::Moves));
     let mut bound: Vec<(u32, String)> = module
         .global_variables
         .iter()

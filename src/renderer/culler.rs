@@ -13,10 +13,9 @@ use crate::cull::coarse::BLOCK;
 use crate::cull::cpu;
 use crate::cull::gpu::{CullScene, CullTargets, GpuCuller};
 use crate::error::Result;
-use crate::live::{MoveEdit, PlaceEdit};
 use crate::profiling::GpuTimer;
 use crate::readback::read_pod;
-use crate::records::CullLayout;
+use crate::records::{CullLayout, MoveEdit, PlaceEdit};
 use crate::scene::Scene;
 use crate::shaders::Windows;
 
@@ -236,8 +235,8 @@ impl Culler {
     /// scattered).
     pub(super) fn place(&mut self, placed: &[PlaceEdit]) {
         if let Culler::Cpu { layout, .. } = self {
-            for &[place, slot] in placed {
-                layout.set_place((place, slot, CullLayout::VACANT_SPHERE));
+            for edit in placed {
+                layout.set_place((edit.place, edit.slot, CullLayout::VACANT_SPHERE));
             }
         }
     }
@@ -247,7 +246,7 @@ impl Culler {
     pub(super) fn moved(&mut self, scene: &Scene, moved: &[MoveEdit]) {
         if let Culler::Cpu { layout, .. } = self {
             for edit in moved {
-                let slot = edit[0] as usize;
+                let slot = edit.slot as usize;
                 let sphere = scene.world_sphere(&scene.instances[slot]);
                 layout.set_sphere(layout.positions[slot], sphere);
             }

@@ -7,8 +7,8 @@ use super::{Path, Renderer};
 use crate::error::Result;
 use crate::live::{Changes, LiveScene, MoveEdit, PlaceEdit};
 use crate::places::Places;
-use crate::records::{CullLayout, InstanceRecord, instance_records};
-use crate::scatter::{RecordEdit, ScatterTargets, Scatters, record_edit};
+use crate::records::{CullLayout, InstanceRecord, RecordEdit, instance_records};
+use crate::scatter::{ScatterTargets, Scatters, record_edit};
 use crate::scene::Scene;
 
 /// What [`Renderer::sync`] did.

@@ -251,10 +251,11 @@ pub const DRAW_BINDINGS: [Binding; 4] = [
     ),
 ];
 
-/// The scatter pass's bindings (`wgsl/scatter.wgsl`): the frame's edits, and where
+/// The scatter pass's bindings (`wgsl/scatter_*.wgsl`): the frame's edits, and where
 /// they go.
 pub const SCATTER_BINDINGS: [Binding; 6] = [
-    binding("edits", Access::StorageRead, "array<u32>", COMPUTE),
+    // The header and one kind's edits (`Edits` in each wgsl/scatter_*.wgsl).
+    binding("edits", Access::StorageRead, "Edits", COMPUTE),
     // Cull position of each slot (the places scatter writes, the moves read).
     binding("positions", Access::StorageReadWrite, "array<u32>", COMPUTE),
     // Slot at each cull position.

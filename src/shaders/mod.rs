@@ -40,11 +40,29 @@ pub use bindings::{
 };
 pub(crate) use bindings::{compute_pipeline, dispatch_size, pipeline_layout};
 
-/// The scatter pass's source.
-pub fn scatter_source(windows: &Windows) -> String {
+/// What a scatter's edits carry; each edit's first word is its key (a place, or a
+/// slot), at most one edit per key.
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+pub enum EditKind {
+    /// Place and slot ([`crate::records::PlaceEdit`]).
+    Places,
+    /// Slot, transform rows, world sphere radius ([`crate::records::MoveEdit`]).
+    Moves,
+    /// Slot and the whole record ([`crate::records::RecordEdit`]).
+    Records,
+}
+
+/// The scatter pass's source for `kind`'s edits: one module per kind, each
+/// declaring its own `Edits`.
+pub fn scatter_source(windows: &Windows, kind: EditKind) -> String {
     let bindings = declarations(&SCATTER_BINDINGS, 0, windows);
-    let body = include_str!("../../wgsl/scatter.wgsl");
-    [RECORDS, &bindings, body].concat()
+    let body = match kind {
+        EditKind::Places => include_str!("../../wgsl/scatter_places.wgsl"),
+        EditKind::Moves => include_str!("../../wgsl/scatter_moves.wgsl"),
+        EditKind::Records => include_str!("../../wgsl/scatter_records.wgsl"),
+    };
+    let shared = include_str!("../../wgsl/shared/scatter.wgsl");
+    [RECORDS, &bindings, shared, body].concat()
 }
 
 /// The cull passes: two at the frame level (the coarse cull, when on) and three per
@@ -317,7 +335,18 @@ pub fn all_sources() -> Vec<(String, String)> {
                 .map(move |(p, c)| (p.label(c), p.source(c, w)));
             let draw = DrawKey::ALL.map(|k| (k.label(), k.source_with(None, w)));
             let others = [
-                ("stereocull.scatter".to_string(), scatter_source(w)),
+                (
+                    "stereocull.scatter_places".into(),
+                    scatter_source(w, EditKind::Places),
+                ),
+                (
+                    "stereocull.scatter_moves".into(),
+                    scatter_source(w, EditKind::Moves),
+                ),
+                (
+                    "stereocull.scatter_records".into(),
+                    scatter_source(w, EditKind::Records),
+                ),
                 ("stereocull.shadow".to_string(), shadow_source(w)),
                 (
                     "stereocull.far_composite".to_string(),
