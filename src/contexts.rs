@@ -15,6 +15,7 @@ use crate::shadow::LightView;
 /// pipelines. The draw pass animates instances from `time` ([`crate::scene::Animation`]).
 #[derive(Clone, Copy, Debug, PartialEq, ShaderType)]
 pub struct FrameContext {
+    /// The tracked head's position (not an eye's): levels of detail are chosen from it.
     pub viewer_position: Vec3,
     /// Seconds on the caller's clock.
     pub time: f32,
@@ -27,12 +28,16 @@ pub struct FrameContext {
     pub lod_scale: f32,
     /// The frame-level coarse cull's test ([`CoarseCull`]; read only when it is on).
     pub coarse_planes: [Vec4; 6],
+    /// How much the coarse test grows radii (the largest Farkas weight sum).
     pub coarse_inflation: f32,
+    /// The coarse test's rounding slack per unit of a center's coordinates.
     pub coarse_slack: f32,
     /// The frame's light ([`crate::shadow`]): world to its shadow map's clip space,
     /// where it comes from (unit), and 1 when the shadow map was drawn this frame.
     pub light_from_world: Mat4,
+    /// Where the light comes from (unit length).
     pub light_direction: Vec3,
+    /// 1 when the shadow map was drawn this frame, else 0.
     pub shadows: u32,
 }
 
@@ -66,16 +71,24 @@ impl FrameContext {
 /// their inverses are for material hooks (view-space depth, fog, screen-space effects).
 #[derive(Clone, Copy, Debug, PartialEq, ShaderType)]
 pub struct EyeContext {
+    /// World to this eye's view space (the chapter's `mLocation`).
     pub view_from_world: Mat4,
+    /// `view_from_world`'s inverse.
     pub world_from_view: Mat4,
+    /// View to clip space (the chapter's `mProjection`), depth 0 at near.
     pub clip_from_view: Mat4,
+    /// `clip_from_view`'s inverse.
     pub view_from_clip: Mat4,
+    /// World to clip, composed in f64: what vertices use.
     pub clip_from_world: Mat4,
+    /// Clip to world, composed in f64: how fragments find their world position.
     pub world_from_clip: Mat4,
+    /// The eye's center of projection, for specular.
     pub position: Vec3,
 }
 
 impl EyeContext {
+    /// The eye context of view `v`.
     pub fn from_view(v: &View) -> EyeContext {
         let clip_from_view = v.clip_from_view();
         EyeContext {
@@ -94,14 +107,22 @@ impl EyeContext {
 /// combined frustum's matrices are for material hooks (no built-in pass reads them).
 #[derive(Clone, Copy, Debug, PartialEq, ShaderType)]
 pub struct DisplayContext {
+    /// World to the combined frustum's view space.
     pub view_from_world: Mat4,
+    /// `view_from_world`'s inverse.
     pub world_from_view: Mat4,
+    /// The combined frustum's projection.
     pub clip_from_view: Mat4,
+    /// `clip_from_view`'s inverse.
     pub view_from_clip: Mat4,
     /// Left then right; a mono display repeats its one eye.
     pub eye: [EyeContext; 2],
+    /// The combined frustum's apex (behind the eyes): the far split's origin.
     pub position: Vec3,
+    /// Pixels per eye; a stereo target is twice as wide.
     pub resolution: Vec2,
+    /// The display frustum's planes (left, right, bottom, top, near, far): what the cull
+    /// tests.
     pub planes: [Vec4; 6],
     /// Instances drawn per visible object (the cull contract's V): 2 where one
     /// multi-draw covers both eyes (`instanced` stereo), 1 for mono, for multiview
@@ -114,6 +135,7 @@ pub struct DisplayContext {
     /// near, 2 keep far instances, those entirely beyond `split_distance` from
     /// `position` (the display's apex).
     pub split_keep: u32,
+    /// Meters from `position` beyond which whole instances are far.
     pub split_distance: f32,
     /// Which of the frame coarse cull's block lists this cull runs over: its display's
     /// index (the far layer's cull shares its display's). Read only over candidates.

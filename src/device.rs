@@ -99,6 +99,7 @@ pub enum Tier {
 }
 
 impl Tier {
+    /// The tier a device with `features` runs.
     pub fn of(features: Features) -> Tier {
         let drawing = Features::MULTI_DRAW_INDIRECT_COUNT
             | Features::INDIRECT_FIRST_INSTANCE
@@ -113,6 +114,7 @@ impl Tier {
         }
     }
 
+    /// How `info` names the tier.
     pub fn name(self) -> &'static str {
         match self {
             Tier::Full => "full (GPU-driven stereo, no fallbacks)",
@@ -124,8 +126,11 @@ impl Tier {
 
 /// The adapter, device and queue that the CLI and tests use.
 pub struct Gpu {
+    /// The adapter the device was opened on.
     pub adapter: wgpu::Adapter,
+    /// The device, with every optional feature the adapter has.
     pub device: wgpu::Device,
+    /// Its queue.
     pub queue: wgpu::Queue,
     /// The instance's flags: whether wgpu validates indirect draws with an extra pass
     /// (`VALIDATION_INDIRECT_CALL`, on by default, off with
@@ -241,6 +246,7 @@ impl Gpu {
         (flags(color_format) & flags(DEPTH_FORMAT)).supported_sample_counts()
     }
 
+    /// Whether wgpu validates indirect calls (which costs software adapters milliseconds).
     pub fn indirect_validation(&self) -> bool {
         self.flags
             .contains(wgpu::InstanceFlags::VALIDATION_INDIRECT_CALL)

@@ -20,8 +20,11 @@ pub const DEPTH_FORMAT: wgpu::TextureFormat = wgpu::TextureFormat::Depth32Float;
 /// The attachment formats and sample count the draw pipelines are built for.
 #[derive(Clone, Copy, Debug, PartialEq, Eq)]
 pub struct TargetFormat {
+    /// The color attachment's format.
     pub color: wgpu::TextureFormat,
+    /// The depth attachment's format.
     pub depth: wgpu::TextureFormat,
+    /// Samples per pixel (1: no MSAA).
     pub samples: u32,
 }
 /// Dark enough that any lit object stands out in tests.
@@ -48,10 +51,15 @@ pub const VERTEX_BUFFER: wgpu::VertexBufferLayout<'static> = wgpu::VertexBufferL
 /// The scene's geometry, instance records and materials on the GPU, uploaded once, and
 /// the frame's shadow map the draws sample.
 pub struct DrawScene {
+    /// Every mesh's vertices, one buffer.
     pub vertices: wgpu::Buffer,
+    /// Every mesh's indices (and levels of detail), one buffer.
     pub indices: wgpu::Buffer,
+    /// One [`InstanceRecord`] per slot, with room.
     pub instances: wgpu::Buffer,
+    /// Textures and material records (group 1).
     pub materials: GpuMaterials,
+    /// The shadow map (group 2).
     pub shadow_map: ShadowMap,
 }
 
@@ -90,6 +98,7 @@ impl DrawScene {
         })
     }
 
+    /// GPU bytes per instance slot for drawing: its record.
     pub const BYTES_PER_INSTANCE: u64 = size_of::<InstanceRecord>() as u64;
 }
 
@@ -98,10 +107,12 @@ impl DrawScene {
 pub struct DrawFeatures {
     /// `multi_draw_indexed_indirect_count`, else a fixed count over zeroed tails.
     pub indirect_count: bool,
+    /// Hardware clip distances keep each eye in its half, else a fragment discard.
     pub clip_distances: bool,
 }
 
 impl DrawFeatures {
+    /// What `device` has.
     pub fn of(device: &wgpu::Device) -> DrawFeatures {
         let f = device.features();
         DrawFeatures {
@@ -121,12 +132,15 @@ pub struct Drawer {
     pub shadow: Option<ShadowPipeline>,
     /// How the instance records are bound.
     pub windows: Windows,
+    /// How draws are issued on this device.
     pub features: DrawFeatures,
 }
 
 /// The frame's shadow pass pipeline (`wgsl/shadow.wgsl`).
 pub struct ShadowPipeline {
+    /// The depth-only pipeline.
     pub pipeline: wgpu::RenderPipeline,
+    /// The shadow map's texels a side.
     pub size: u32,
 }
 
@@ -235,7 +249,9 @@ impl Drawer {
 /// What a draw pass renders into.
 #[derive(Clone, Copy)]
 pub struct Attachments<'a> {
+    /// Where color is drawn (multisampled under MSAA).
     pub color: &'a wgpu::TextureView,
+    /// The depth attachment.
     pub depth: &'a wgpu::TextureView,
     /// Where a multisampled `color` is resolved at the end of the pass.
     pub resolve: Option<&'a wgpu::TextureView>,

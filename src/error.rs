@@ -6,17 +6,27 @@ use std::path::PathBuf;
 /// Installs the software Vulkan driver on a GPU-less Debian or Ubuntu machine.
 pub const LAVAPIPE_INSTALL: &str = "apt-get install -y mesa-vulkan-drivers";
 
+/// Everything the library can fail with, each naming what failed and, where it helps,
+/// what to do.
 #[derive(Debug, thiserror::Error)]
 pub enum Error {
     /// No adapter on any enabled backend: usually no Vulkan driver is installed.
     #[error(
         "no GPU adapter found (backends {backends}): install a Vulkan driver; on a GPU-less Debian or Ubuntu machine run `{LAVAPIPE_INSTALL}` (lavapipe)"
     )]
-    NoAdapter { backends: String },
+    NoAdapter {
+        /// The backends searched.
+        backends: String,
+    },
 
     /// `WGPU_ADAPTER_NAME` is set but names none of the adapters present.
     #[error("WGPU_ADAPTER_NAME={wanted:?} matches no adapter; present: {present}")]
-    AdapterNotFound { wanted: String, present: String },
+    AdapterNotFound {
+        /// The variable's value.
+        wanted: String,
+        /// The adapters present, by name.
+        present: String,
+    },
 
     /// The adapter refused the device we asked for.
     #[error("the adapter refused the device: {0}")]
@@ -24,11 +34,21 @@ pub enum Error {
 
     /// A rig (preset, file or override) is invalid.
     #[error("rig {origin}: {message}")]
-    Rig { origin: String, message: String },
+    Rig {
+        /// The preset, file or step that failed (`prepare`, a display's name).
+        origin: String,
+        /// What is wrong, with the field.
+        message: String,
+    },
 
     /// A scene file could not be read or makes no sense.
     #[error("scene {path}: {message}")]
-    Scene { path: PathBuf, message: String },
+    Scene {
+        /// The scene file.
+        path: PathBuf,
+        /// What is wrong, naming the part of the file.
+        message: String,
+    },
 
     /// A scene's parts do not fit together (e.g. a vertex naming a material the scene
     /// lacks).
@@ -45,7 +65,12 @@ pub enum Error {
 
     /// A `procedural:N[:M]` scene specification is malformed.
     #[error("scene {spec:?}: {message}")]
-    SceneSpec { spec: String, message: String },
+    SceneSpec {
+        /// The specification as given.
+        spec: String,
+        /// What is wrong with it.
+        message: String,
+    },
 
     /// The device or the chosen mode cannot do what was asked.
     #[error("{0}")]
@@ -57,11 +82,21 @@ pub enum Error {
 
     /// A display index past the renderer's displays.
     #[error("display {index} does not exist: the renderer has {displays} displays")]
-    NoSuchDisplay { index: usize, displays: usize },
+    NoSuchDisplay {
+        /// The index asked for.
+        index: usize,
+        /// The renderer's displays.
+        displays: usize,
+    },
 
     /// `encode` was given a different number of targets than the renderer has displays.
     #[error("{targets} targets for {displays} displays: pass one target per display")]
-    TargetCount { targets: usize, displays: usize },
+    TargetCount {
+        /// The targets given.
+        targets: usize,
+        /// The renderer's displays.
+        displays: usize,
+    },
 
     /// Reading results back from the GPU failed (device lost, map failure).
     #[error("GPU readback failed: {0}")]
@@ -78,7 +113,9 @@ pub enum Error {
     /// Writing an output file failed.
     #[error("{path}: {source}")]
     Io {
+        /// The file.
         path: PathBuf,
+        /// Why.
         source: std::io::Error,
     },
 
@@ -89,7 +126,9 @@ pub enum Error {
     /// Reading or writing an image failed.
     #[error("{path}: {source}")]
     Image {
+        /// The image file.
         path: PathBuf,
+        /// Why.
         source: image::ImageError,
     },
 }
@@ -120,4 +159,5 @@ impl Error {
     }
 }
 
+/// The library's results.
 pub type Result<T, E = Error> = std::result::Result<T, E>;

@@ -17,9 +17,13 @@ use serde::{Deserialize, Serialize};
 #[derive(Clone, Copy, Debug, PartialEq, Serialize, Deserialize)]
 #[serde(deny_unknown_fields)]
 pub struct Fov {
+    /// Tangent of the half-angle to the left edge.
     pub left: f32,
+    /// Tangent of the half-angle to the right edge.
     pub right: f32,
+    /// Tangent of the half-angle to the top edge.
     pub up: f32,
+    /// Tangent of the half-angle to the bottom edge.
     pub down: f32,
 }
 
@@ -33,13 +37,13 @@ impl Fov {
         }
     }
 
-    /// A window that has area and stays in front of the eye (each tangent finite, so
-    /// every half-angle is below 90 degrees and the whole angle below 180).
     /// Left, right, up, down in f64, for building frusta.
     pub fn tangents(&self) -> [f64; 4] {
         [self.left, self.right, self.up, self.down].map(f64::from)
     }
 
+    /// A window that has area and stays in front of the eye (each tangent finite, so
+    /// every half-angle is below 90 degrees and the whole angle below 180).
     pub fn is_valid(&self) -> bool {
         let t = [self.left, self.right, self.up, self.down];
         t.iter().all(|v| v.is_finite()) && self.left + self.right > 0.0 && self.up + self.down > 0.0
@@ -51,8 +55,11 @@ impl Fov {
 pub struct View {
     /// Rigid pose (rotation and translation only), in f64; its translation is the apex.
     pub world_from_view: DAffine3,
+    /// The window through which the view looks.
     pub fov: Fov,
+    /// Near plane distance in meters.
     pub near: f32,
+    /// Far plane distance in meters.
     pub far: f32,
 }
 
@@ -62,10 +69,12 @@ impl View {
         self.world_from_view.translation.as_vec3()
     }
 
+    /// World to view space, rounded to f32.
     pub fn view_from_world(&self) -> Mat4 {
         glam::DMat4::from(self.world_from_view.inverse()).as_mat4()
     }
 
+    /// View to world space, rounded to f32.
     pub fn world_from_view_f32(&self) -> Mat4 {
         glam::DMat4::from(self.world_from_view).as_mat4()
     }
@@ -157,10 +166,12 @@ impl View {
 /// Six planes: left, right, bottom, top, near, far.
 #[derive(Clone, Copy, Debug, PartialEq)]
 pub struct Frustum {
+    /// Inside when `dot(n, p) + d >= 0` for every plane.
     pub planes: [Vec4; 6],
 }
 
 impl Frustum {
+    /// Whether point `p` is inside every plane.
     pub fn contains_point(&self, p: Vec3) -> bool {
         self.planes.iter().all(|pl| pl.xyz().dot(p) + pl.w >= 0.0)
     }

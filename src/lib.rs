@@ -15,9 +15,20 @@
 //! (visible lists and draw arguments, CPU or GPU) -> [`draw`]
 //! (pipelines, passes, the one indirect call). [`renderer::Renderer`] ties them together
 //! for embedders; [`shaders`] composes the WGSL and declares every binding once.
+//!
+//! An embedder needs what the crate root re-exports: a [`Scene`] (or a [`LiveScene`]
+//! that changes), a [`Rig`], a [`Renderer`] made with [`RendererOptions`], and the calls
+//! of [`renderer`]'s documentation in their order (`new`; each frame `sync`, `prepare`,
+//! `encode` or `encode_culls` and `draw_display`; `diagnostics` to read a frame back).
+//! The other modules are the parts, public for tests, benches and tools: the CPU
+//! reference cull ([`cull::cpu`]) is the one to profile the GPU against.
+
+#![warn(missing_docs)]
 
 mod buffers;
+/// The `stereocull` binary's commands (feature `cli`): not part of the library's API.
 #[cfg(feature = "cli")]
+#[doc(hidden)]
 pub mod cli;
 pub mod contexts;
 pub mod cull;
@@ -29,7 +40,7 @@ pub mod frustum;
 pub mod gltf_import;
 pub mod live;
 pub mod materials;
-pub mod modes;
+mod modes;
 pub mod places;
 pub mod procedural;
 pub mod profiling;
@@ -37,7 +48,7 @@ pub mod readback;
 pub mod records;
 pub mod renderer;
 pub mod rig;
-pub mod scatter;
+mod scatter;
 pub mod scene;
 pub mod scene_spec;
 pub mod shaders;
@@ -45,3 +56,10 @@ pub mod shadow;
 pub mod shapes;
 
 pub use error::{Error, Result};
+pub use live::LiveScene;
+pub use renderer::{
+    CullMode, Diagnostics, DisplayTarget, FramePlan, FrameStats, Renderer, RendererOptions,
+    StereoMode, TargetViews,
+};
+pub use rig::Rig;
+pub use scene::Scene;

@@ -80,6 +80,7 @@ pub struct Changes {
 }
 
 impl Changes {
+    /// Whether nothing changed.
     pub fn is_empty(&self) -> bool {
         *self == Changes::default()
     }
@@ -158,10 +159,12 @@ impl LiveScene {
             .collect()
     }
 
+    /// Slots issued so far, occupied or vacant.
     pub fn slot_count(&self) -> u32 {
         self.scene.instances.len() as u32
     }
 
+    /// Whether `slot` holds an instance.
     pub fn occupied(&self, slot: u32) -> bool {
         self.scene
             .instances
@@ -174,10 +177,12 @@ impl LiveScene {
         self.scene.instances.len() - self.vacant.len()
     }
 
+    /// Whether the scene holds no instance.
     pub fn is_empty(&self) -> bool {
         self.len() == 0
     }
 
+    /// The instance behind `handle`.
     pub fn get(&self, handle: Handle) -> Result<&Instance> {
         self.check(handle)?;
         Ok(&self.scene.instances[handle.slot as usize])
@@ -273,6 +278,7 @@ impl LiveScene {
         }
     }
 
+    /// Recolors the instance behind `handle` (linear RGBA): a record edit at the next sync.
     pub fn set_color(&mut self, handle: Handle, color: Vec4) -> Result<()> {
         self.check(handle)?;
         if !color.is_finite() {

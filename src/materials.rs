@@ -27,6 +27,7 @@ pub struct MaterialRecord {
 }
 
 impl MaterialRecord {
+    /// No base color texture: the color alone.
     pub const UNTEXTURED: u32 = u32::MAX;
 }
 
@@ -133,6 +134,7 @@ pub fn mip_chain(image: &RgbaImage, (w, h): (u32, u32)) -> Vec<RgbaImage> {
 /// A scene's materials on the GPU. The texels are written by the first
 /// [`GpuMaterials::upload`] (the renderer's first `prepare`), which has the queue.
 pub struct GpuMaterials {
+    /// Group 1 of the draw pipelines: the texture array, its sampler, the material records.
     pub bind_group: wgpu::BindGroup,
     texture: wgpu::Texture,
     /// Per layer, its mip chain, until uploaded.
@@ -140,6 +142,7 @@ pub struct GpuMaterials {
 }
 
 impl GpuMaterials {
+    /// The GPU side of `scene`'s materials, its texels pending until the first upload.
     pub fn new(
         device: &wgpu::Device,
         layout: &wgpu::BindGroupLayout,

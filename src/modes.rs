@@ -4,6 +4,7 @@
 
 use serde::Serialize;
 
+/// A stereo technique: how much of the work is done per eye.
 #[derive(Clone, Copy, Debug, Default, PartialEq, Eq, Hash, Serialize)]
 #[cfg_attr(feature = "cli", derive(clap::ValueEnum))]
 #[serde(rename_all = "kebab-case")]
@@ -28,6 +29,7 @@ pub enum StereoMode {
 }
 
 impl StereoMode {
+    /// Every mode, classic first.
     pub const ALL: [StereoMode; 5] = [
         StereoMode::MultiCamera,
         StereoMode::MultiPass,
@@ -49,6 +51,7 @@ impl StereoMode {
         self == StereoMode::MultiCamera
     }
 
+    /// The mode as the CLI spells it.
     pub fn name(self) -> &'static str {
         match self {
             StereoMode::MultiCamera => "multi-camera",

@@ -86,6 +86,7 @@ impl Places {
         self.slot_at.len() as u32
     }
 
+    /// Whether there are no places.
     pub fn is_empty(&self) -> bool {
         self.slot_at.is_empty()
     }

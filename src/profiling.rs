@@ -42,6 +42,7 @@ pub struct FrameQueries {
     pub vertex_invocations_per_query: Vec<u64>,
     /// Primitives that reached the clipper: the triangles submitted.
     pub triangles_submitted: Option<u64>,
+    /// Primitives the clipper passed on.
     pub clipper_primitives: Option<u64>,
 }
 
@@ -111,6 +112,7 @@ impl GpuTimer {
             .with_parent(Some(parent))
     }
 
+    /// Closes `query`, a scope or pass opened by this timer.
     pub fn end(&self, encoder: &mut wgpu::CommandEncoder, query: GpuProfilerQuery) {
         self.profiler.end_query(encoder, query);
     }
@@ -129,6 +131,7 @@ impl GpuTimer {
         }
     }
 
+    /// Ends the statistics query [`GpuTimer::begin_statistics`] began in `pass`, if it did.
     pub fn end_statistics(pass: &mut wgpu::RenderPass, begun: bool) {
         if begun {
             pass.end_pipeline_statistics_query();

@@ -16,6 +16,7 @@ pub struct InstanceRecord {
     pub world_from_local: [[f32; 4]; 3],
     /// RGBA8 unorm, linear.
     pub color: u32,
+    /// Index into the scene's meshes.
     pub mesh: u32,
     /// [`crate::scene::Animation::spin`]: radians per second about local +Y.
     pub spin: f32,
@@ -27,11 +28,13 @@ pub struct InstanceRecord {
 #[repr(C)]
 #[derive(Clone, Copy, Debug, PartialEq, Eq, Pod, Zeroable)]
 pub struct EditHeader {
+    /// Edits in the buffer.
     pub count: u32,
     /// 1 when the GPU culler's spheres, order and positions are bound (GPU culling).
     pub spheres_too: u32,
     /// Workgroups along x of the dispatch (its y spreads past the device's limit).
     pub groups_x: u32,
+    /// Zero (the header is 16 bytes).
     pub unused: u32,
 }
 
@@ -42,8 +45,11 @@ pub struct EditHeader {
 #[repr(C)]
 #[derive(Clone, Copy, Debug, PartialEq, Pod, Zeroable)]
 pub struct MoveEdit {
+    /// The instance's slot.
     pub slot: u32,
+    /// The new `world_from_local`'s rows.
     pub rows: [[f32; 4]; 3],
+    /// The new world sphere's radius.
     pub radius: f32,
 }
 
@@ -52,11 +58,17 @@ pub struct MoveEdit {
 #[repr(C)]
 #[derive(Clone, Copy, Debug, PartialEq, Pod, Zeroable)]
 pub struct RecordEdit {
+    /// The instance's slot.
     pub slot: u32,
+    /// [`InstanceRecord::world_from_local`].
     pub rows: [[f32; 4]; 3],
+    /// [`InstanceRecord::color`].
     pub color: u32,
+    /// [`InstanceRecord::mesh`].
     pub mesh: u32,
+    /// [`InstanceRecord::spin`].
     pub spin: f32,
+    /// [`InstanceRecord::bob`].
     pub bob: f32,
 }
 
@@ -65,7 +77,9 @@ pub struct RecordEdit {
 #[repr(C)]
 #[derive(Clone, Copy, Debug, PartialEq, Eq, Pod, Zeroable)]
 pub struct PlaceEdit {
+    /// The place in the cull order.
     pub place: u32,
+    /// The slot now there, or [`Places::VACANT`].
     pub slot: u32,
 }
 
@@ -87,11 +101,15 @@ impl RecordEdit {
 #[repr(C)]
 #[derive(Clone, Copy, Debug, PartialEq, Eq, Pod, Zeroable)]
 pub struct MeshRecord {
+    /// First index of the mesh in the index buffer.
     pub first_index: u32,
+    /// Its indices.
     pub index_count: u32,
+    /// Added to each index.
     pub base_vertex: i32,
     /// First position of this mesh's instances in [`CullLayout::order`].
     pub cull_start: u32,
+    /// How many places of the cull order this mesh has.
     pub cull_count: u32,
 }
 
@@ -100,7 +118,9 @@ pub struct MeshRecord {
 #[repr(C)]
 #[derive(Clone, Copy, Debug, PartialEq, Pod, Zeroable)]
 pub struct LodRecord {
+    /// First index of this level in the index buffer.
     pub first_index: u32,
+    /// Its indices.
     pub index_count: u32,
     /// The level's error relative to the mesh's bounding radius, squared: an instance
     /// with world sphere radius `r` at distance `d` from the viewer takes the level when
@@ -148,6 +168,7 @@ pub struct CullLayout {
     pub positions: Vec<u32>,
     /// Mesh of each cull position: which levels of detail it has.
     pub mesh_of: Vec<u32>,
+    /// Per mesh: its index range and its range of the cull order.
     pub meshes: Vec<MeshRecord>,
     /// [`MAX_LODS`] per mesh.
     pub lods: Vec<LodRecord>,
@@ -157,6 +178,7 @@ pub struct CullLayout {
 }
 
 impl CullLayout {
+    /// A vacant place's slot and a vacant slot's position.
     pub const VACANT: u32 = Places::VACANT;
 
     /// A vacant place's sphere: its radius of minus infinity fails every plane test
@@ -278,10 +300,12 @@ pub fn lod_level(sphere: Vec4, viewer: glam::Vec3, lods: &[LodRecord], lod_scale
     level
 }
 
+/// Every instance's record, in slot order.
 pub fn instance_records(scene: &Scene) -> Vec<InstanceRecord> {
     scene.instances.iter().map(instance_record).collect()
 }
 
+/// The record the GPU reads for `inst`.
 pub fn instance_record(inst: &Instance) -> InstanceRecord {
     let m = glam::Mat4::from(inst.world_from_local);
     InstanceRecord {

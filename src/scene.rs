@@ -12,7 +12,9 @@ use glam::{Affine3A, Mat4, Vec3, Vec4};
 #[repr(C)]
 #[derive(Clone, Copy, Debug, PartialEq, Pod, Zeroable)]
 pub struct Vertex {
+    /// Local space, meters.
     pub position: [f32; 3],
+    /// Local space, not necessarily unit length.
     pub normal: [f32; 3],
     /// Texture coordinates of the base color texture.
     pub uv: [f32; 2],
@@ -36,6 +38,7 @@ impl Vertex {
 /// What a surface is made of, beyond the instance's color (which multiplies it).
 #[derive(Clone, Debug, Default, PartialEq)]
 pub struct Material {
+    /// As the file names it (or empty).
     pub name: String,
     /// Index into [`Scene::textures`], sampled at the vertices' `uv`.
     pub base_color_texture: Option<u32>,
@@ -44,7 +47,9 @@ pub struct Material {
 /// A base color image: sRGB-encoded RGBA, straight alpha.
 #[derive(Clone, Debug, PartialEq)]
 pub struct Texture {
+    /// As the file names it (or empty).
     pub name: String,
+    /// The texels.
     pub image: image::RgbaImage,
 }
 
@@ -58,9 +63,13 @@ pub struct Texture {
 /// The glTF import does both (`doubleSided` materials, mirroring nodes).
 #[derive(Clone, Debug, PartialEq)]
 pub struct Mesh {
+    /// As the file names it (or generated).
     pub name: String,
+    /// First index in [`Scene::indices`].
     pub first_index: u32,
+    /// Its indices (three per triangle).
     pub index_count: u32,
+    /// Added to each index.
     pub base_vertex: i32,
     /// Local-space bounding sphere: center in xyz, radius in w.
     pub bounds: Vec4,
@@ -72,7 +81,9 @@ pub struct Mesh {
 /// A coarser level of a mesh: its triangles, and how far they stray from the mesh's.
 #[derive(Clone, Copy, Debug, PartialEq)]
 pub struct Lod {
+    /// First index in [`Scene::indices`].
     pub first_index: u32,
+    /// Its indices.
     pub index_count: u32,
     /// meshoptimizer's error, as a fraction of the mesh's bounding radius.
     pub error: f32,
@@ -81,9 +92,12 @@ pub struct Lod {
 /// Levels of detail per mesh, the mesh itself included.
 pub const MAX_LODS: usize = 4;
 
+/// One placed copy of a mesh: what culling tests and a draw draws.
 #[derive(Clone, Copy, Debug, PartialEq)]
 pub struct Instance {
+    /// Local to world.
     pub world_from_local: Affine3A,
+    /// Index into [`Scene::meshes`] ([`Instance::VACANT_MESH`] in a vacant slot).
     pub mesh: u32,
     /// Linear RGBA.
     pub color: Vec4,
@@ -118,14 +132,20 @@ impl Animation {
     };
 }
 
+/// What is drawn, as data: meshes in shared buffers, instances, materials, textures.
 #[derive(Clone, Debug, Default)]
 pub struct Scene {
+    /// Every mesh's vertices.
     pub vertices: Vec<Vertex>,
+    /// Every mesh's indices, levels of detail included.
     pub indices: Vec<u32>,
+    /// The meshes, by id.
     pub meshes: Vec<Mesh>,
+    /// The instances, by id.
     pub instances: Vec<Instance>,
     /// May be empty: material 0 is then untextured.
     pub materials: Vec<Material>,
+    /// Base color images, by index.
     pub textures: Vec<Texture>,
 }
 

@@ -149,12 +149,16 @@ pub fn bind_group_layout(device: &wgpu::Device) -> wgpu::BindGroupLayout {
 /// The shadow map on the GPU (1 x 1 and never drawn with shadows off, so that the draw
 /// pipelines bind the same groups either way).
 pub struct ShadowMap {
+    /// The depth texture's view.
     pub view: wgpu::TextureView,
+    /// Group 2 of the draw pipelines: the map and its comparison sampler.
     pub bind_group: wgpu::BindGroup,
+    /// Texels a side.
     pub size: u32,
 }
 
 impl ShadowMap {
+    /// A `size` x `size` shadow map bound for `layout`.
     pub fn new(device: &wgpu::Device, layout: &wgpu::BindGroupLayout, size: u32) -> ShadowMap {
         let texture = device.create_texture(&wgpu::TextureDescriptor {
             label: Some("stereocull.shadow_map"),

@@ -8,7 +8,9 @@ use crate::scene::Vertex;
 
 /// Indexed triangles, counter-clockwise when seen from outside.
 pub struct Shape {
+    /// Local space, meters.
     pub vertices: Vec<Vertex>,
+    /// Three per triangle.
     pub indices: Vec<u32>,
 }
 
@@ -27,6 +29,7 @@ pub fn family(k: u32) -> Shape {
     }
 }
 
+/// A box of half extents `half`, centered on the origin (12 triangles).
 pub fn cuboid(half: Vec3) -> Shape {
     let mut s = Shape {
         vertices: Vec::new(),
@@ -102,6 +105,7 @@ fn grid(columns: u32, rows: u32, f: impl Fn(f32, f32) -> (Vec3, Vec3)) -> Shape 
     Shape { vertices, indices }
 }
 
+/// A UV sphere of `radius`, `segments` around and `rings` from pole to pole.
 pub fn sphere(radius: f32, segments: u32, rings: u32) -> Shape {
     grid(segments, rings, |u, v| {
         let (theta, phi) = (u * TAU, (v - 0.5) * std::f32::consts::PI);
@@ -124,6 +128,8 @@ pub fn cylinder(radius: f32, height: f32, segments: u32) -> Shape {
     }
 }
 
+/// A torus about +Y: ring radius `major`, tube radius `minor`, tessellated `segments`
+/// around and `sides` about the tube.
 pub fn torus(major: f32, minor: f32, segments: u32, sides: u32) -> Shape {
     grid(segments, sides, |u, v| {
         let (theta, phi) = (u * TAU, v * TAU);

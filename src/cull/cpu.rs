@@ -30,8 +30,11 @@ pub fn cull(layout: &CullLayout, job: &CullJob) -> CullOutput {
 /// viewer's position, the scale, and how many levels are culled into (1: LOD off).
 #[derive(Clone, Copy, Debug, PartialEq)]
 pub struct FrameLod {
+    /// The viewer's position: distances are measured from it, not from an eye.
     pub viewer: Vec3,
+    /// (pixels per radian / pixels of error allowed)^2 on the sharpest display.
     pub lod_scale: f32,
+    /// Levels culled into: 1 with LOD off.
     pub levels: u32,
 }
 
@@ -64,7 +67,9 @@ pub fn cull_many_lod(layout: &CullLayout, displays: &[CullJob], lod: &FrameLod) 
 /// the coarse cull's test when it runs.
 #[derive(Clone, Copy, Debug, PartialEq)]
 pub struct FrameCull {
+    /// The levels of detail every cull of the frame picks.
     pub lod: FrameLod,
+    /// The coarse cull's frame test, when it runs.
     pub coarse: Option<CoarseCull>,
 }
 

@@ -22,7 +22,9 @@ use glam::Vec4;
 /// `wgsl/shared/records.wgsl`); encase lays it out as WGSL does.
 #[derive(Clone, Copy, Debug, PartialEq, Eq, encase::ShaderType)]
 pub struct CullParams {
+    /// Places of the cull order (instances when laid out tight).
     pub instance_count: u32,
+    /// Meshes in the scene: draws per level.
     pub mesh_count: u32,
     /// The device's limit of workgroups per dimension: the coarse pass splits the
     /// candidates' dispatch into x and y with it.
@@ -58,6 +60,7 @@ struct CoarsePipelines {
 /// Scene data the cull passes read, uploaded once, plus scratch shared by all displays
 /// (displays cull one after another, so one scratch suffices).
 pub struct CullScene {
+    /// Places of the cull order the passes run over.
     pub instance_count: u32,
     groups: (u32, u32),
     max_groups: u32,
@@ -89,7 +92,9 @@ pub struct CullScene {
 
 /// One display's cull outputs: what its draw pass consumes.
 pub struct CullTargets {
+    /// The visible ids, per the cull contract.
     pub visible: wgpu::Buffer,
+    /// The packed draws (meshes times levels entries), for the multi-draw.
     pub draws: wgpu::Buffer,
     /// [`COUNTS_BYTES`]: the draw count (what `multi_draw_indexed_indirect_count`
     /// reads), then the visible total (for statistics without reading `visible`).
@@ -440,5 +445,6 @@ impl GpuCuller {
         }
     }
 
+    /// Compute dispatches per display: cull, draws, compact.
     pub const DISPATCHES_PER_DISPLAY: u32 = CullPass::DISPLAY.len() as u32;
 }

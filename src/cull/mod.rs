@@ -35,7 +35,9 @@ pub struct CullJob {
 /// from `origin` (the display's apex) are far, the rest near.
 #[derive(Clone, Copy, Debug, PartialEq)]
 pub struct Split {
+    /// The display's apex.
     pub origin: Vec3,
+    /// The far distance in meters.
     pub distance: f32,
     /// Keep the far instances (the far layer's cull), else the near ones.
     pub keep_far: bool,
@@ -66,6 +68,7 @@ pub struct CullOutput {
     /// One entry per (level, mesh), meshes times levels in all: the packed draws, then
     /// zeros.
     pub draws: Vec<DrawArgs>,
+    /// How many of `draws` are packed draws.
     pub draw_count: u32,
 }
 

@@ -22,6 +22,8 @@ use materials::check_images;
 
 const INSTANCING: &str = "EXT_mesh_gpu_instancing";
 
+/// The scene of the glTF or GLB file at `path`: its default scene's nodes, meshes,
+/// instances, materials and textures; malformed input is an error naming it.
 pub fn import(path: &Path) -> Result<Scene> {
     let bytes = std::fs::read(path).map_err(|e| Error::Scene {
         path: path.into(),

@@ -20,8 +20,11 @@ use crate::shadow::LightView;
 /// What one frame recorded and uploaded, and the CPU time of its phases.
 #[derive(Clone, Copy, Debug, Default, PartialEq, serde::Serialize)]
 pub struct FrameStats {
+    /// Draw calls recorded.
     pub draw_calls: u32,
+    /// Compute dispatches recorded.
     pub dispatches: u32,
+    /// Bytes written to GPU buffers (contexts, CPU culls, texels, edits).
     pub bytes_uploaded: u64,
     /// CPU culling (zero on the GPU path).
     #[serde(skip)]
@@ -59,7 +62,9 @@ impl CullView {
 /// One cull of the frame.
 #[derive(Clone, Copy, Debug, PartialEq)]
 pub struct PlannedCull {
+    /// Whom the cull is for.
     pub view: CullView,
+    /// Its frustum, instances per object and far split.
     pub job: CullJob,
 }
 

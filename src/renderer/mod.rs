@@ -159,6 +159,8 @@ impl Path {
     }
 }
 
+/// The scene submission backend: one per scene and rig shape, see the module docs for the
+/// calls in order.
 pub struct Renderer {
     options: RendererOptions,
     /// The frame context's uniform, written once per frame, bound by every pass.
@@ -230,6 +232,7 @@ impl Renderer {
         &self.options
     }
 
+    /// The stereo mode it was made for.
     pub fn mode(&self) -> StereoMode {
         self.options.mode
     }

@@ -39,12 +39,17 @@ pub enum CoarseMode {
     /// costs milliseconds per indirect dispatch, more than the cull saves.
     #[default]
     Auto,
+    /// Always.
     On,
+    /// Never.
     Off,
 }
 
+/// What a [`super::Renderer`] is made with; `Default` is the GPU-driven `instanced` mode
+/// with GPU culling.
 #[derive(Clone, Debug)]
 pub struct RendererOptions {
+    /// The color attachment's format (the caller's, when drawing into its passes).
     pub color_format: wgpu::TextureFormat,
     /// MSAA samples per pixel of the color and depth attachments (1: none). Every device
     /// has 1 and 4; 2, 8 and 16 where the adapter has them and the device was opened with
@@ -59,11 +64,14 @@ pub struct RendererOptions {
     /// scope; `base_color(s)` samples the material's texture. `None`: the built-in
     /// shading.
     pub material: Option<Arc<str>>,
+    /// Where the per-display cull runs (the classic modes cull on the CPU).
     pub cull: CullMode,
+    /// The stereo technique.
     pub mode: StereoMode,
     /// Levels of detail ([`crate::scene::Mesh::lods`]), one per instance and frame from
     /// the viewer's position, at most [`LOD_PIXELS`] of error on the sharpest display.
     pub lod: bool,
+    /// Whether frames start with the coarse cull.
     pub coarse_cull: CoarseMode,
     /// The frame's shadow map ([`crate::shadow`]): drawn once per frame from `light`,
     /// sampled by every display and eye.

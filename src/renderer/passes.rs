@@ -13,25 +13,32 @@ use crate::profiling::GpuTimer;
 #[derive(Clone, Copy, Debug, PartialEq, Eq, serde::Serialize)]
 #[serde(rename_all = "lowercase")]
 pub enum Level {
+    /// Once per frame, whatever the displays.
     Frame,
+    /// Once per display, both eyes.
     Display,
+    /// Once per eye.
     Eye,
 }
 
 /// One pass a frame recorded, in recording order ([`super::Renderer::passes`]).
 #[derive(Clone, Copy, Debug, PartialEq, Eq, serde::Serialize)]
 pub struct PassRecord {
+    /// How often the pass runs.
     pub level: Level,
     /// `scatter`, `coarse_cull`, `shadow_cull`, `shadow` (frame); `cull`, `far_cull`,
     /// `far_layer`, `draw` (display); `draw` (eye, the per-eye classic modes).
     pub name: &'static str,
+    /// The display, for display and eye passes.
     pub display: Option<u32>,
+    /// The eye, for eye passes.
     pub eye: Option<u32>,
     /// Its pipeline-statistics query in the frame's [`GpuTimer`], when counted.
     pub statistics: Option<u32>,
 }
 
 impl PassRecord {
+    /// A frame pass.
     pub fn frame(name: &'static str) -> PassRecord {
         PassRecord {
             level: Level::Frame,
@@ -42,6 +49,7 @@ impl PassRecord {
         }
     }
 
+    /// A pass of display `display`.
     pub fn display(name: &'static str, display: usize) -> PassRecord {
         PassRecord {
             level: Level::Display,
@@ -50,6 +58,7 @@ impl PassRecord {
         }
     }
 
+    /// A pass of eye `eye` of display `display`.
     pub fn eye(name: &'static str, display: usize, eye: usize) -> PassRecord {
         PassRecord {
             level: Level::Eye,

@@ -14,6 +14,7 @@ use crate::scene::Scene;
 /// What [`Renderer::sync`] did.
 #[derive(Clone, Copy, Debug, Default, PartialEq, Eq, serde::Serialize)]
 pub struct SyncStats {
+    /// Bytes staged for upload (places, edits, records).
     pub bytes_uploaded: u64,
     /// Instances whose transform went up sparsely (one scatter edit each; inserted
     /// instances too).

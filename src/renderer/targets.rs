@@ -10,8 +10,11 @@ use crate::draw::{Attachments, TargetFormat};
 /// image; without, `resolve` is `None`.
 #[derive(Clone, Copy)]
 pub struct TargetViews<'a> {
+    /// The color attachment (multisampled under MSAA).
     pub color: &'a wgpu::TextureView,
+    /// The depth attachment.
     pub depth: &'a wgpu::TextureView,
+    /// Under MSAA: the single-sampled view the image is resolved into.
     pub resolve: Option<&'a wgpu::TextureView>,
 }
 
@@ -29,6 +32,7 @@ impl<'a> TargetViews<'a> {
 pub struct DisplayTarget {
     /// The image: single-sampled, `COPY_SRC` (the resolve target under MSAA).
     pub color: wgpu::Texture,
+    /// The depth attachment's texture (multisampled under MSAA).
     pub depth: wgpu::Texture,
     color_view: wgpu::TextureView,
     depth_view: wgpu::TextureView,
@@ -37,6 +41,7 @@ pub struct DisplayTarget {
 }
 
 impl DisplayTarget {
+    /// The views a frame renders into.
     pub fn views(&self) -> TargetViews<'_> {
         match &self.multisampled {
             Some(samples) => TargetViews {

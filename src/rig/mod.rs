@@ -22,11 +22,15 @@ pub use resolve::{ResolvedDisplay, ResolvedRig};
 #[derive(Clone, Copy, Debug, PartialEq, Serialize, Deserialize)]
 #[serde(deny_unknown_fields)]
 pub struct Viewer {
+    /// Meters, in tracking space.
     pub position: [f32; 3],
+    /// Degrees about +Y, positive turns left.
     #[serde(default)]
     pub yaw_deg: f32,
+    /// Degrees about the turned +X, positive looks up.
     #[serde(default)]
     pub pitch_deg: f32,
+    /// Degrees about the view axis.
     #[serde(default)]
     pub roll_deg: f32,
     /// Inter-pupillary distance in meters.
@@ -39,10 +43,12 @@ fn default_ipd() -> f32 {
 }
 
 impl Viewer {
+    /// Yaw, then pitch, then roll.
     pub fn orientation(&self) -> DQuat {
         euler(self.yaw_deg, self.pitch_deg, self.roll_deg)
     }
 
+    /// The position in f64.
     pub fn position(&self) -> DVec3 {
         DVec3::from(self.position.map(f64::from))
     }
@@ -69,6 +75,7 @@ pub struct HeadFixed {
     /// Direction of the panel relative to the head (peripheral panels turn 45 degrees).
     #[serde(default)]
     pub yaw_deg: f32,
+    /// Degrees: the panel tilted up from the head's axis.
     #[serde(default)]
     pub pitch_deg: f32,
     /// Each eye's panel turned outwards by this angle (canted HMD optics).
@@ -81,8 +88,11 @@ pub struct HeadFixed {
 #[derive(Clone, Copy, Debug, PartialEq, Serialize, Deserialize)]
 #[serde(deny_unknown_fields)]
 pub struct Screen {
+    /// The screen's lower left corner, meters in tracking space.
     pub lower_left: [f32; 3],
+    /// Its lower right corner.
     pub lower_right: [f32; 3],
+    /// Its upper left corner.
     pub upper_left: [f32; 3],
 }
 
@@ -95,18 +105,22 @@ pub enum Mount {
     Screen(Screen),
 }
 
+/// One display: a head-fixed panel or a world-fixed screen, stereo or mono.
 #[derive(Clone, Debug, PartialEq, Serialize, Deserialize)]
 #[serde(try_from = "DisplayFile", into = "DisplayFile")]
 pub struct Display {
+    /// Names its image (`<name>.png`) and its timer scope.
     pub name: String,
     /// Two views (left, right) when true, one otherwise.
     pub stereo: bool,
     /// Pixels per eye: the stereo target is twice as wide.
     pub resolution: [u32; 2],
+    /// Where its image is fixed.
     pub mount: Mount,
 }
 
 impl Display {
+    /// Views: 2 for stereo, 1 for mono.
     pub fn views(&self) -> u32 {
         if self.stereo { 2 } else { 1 }
     }
@@ -164,14 +178,19 @@ impl From<Display> for DisplayFile {
     }
 }
 
+/// The tracked viewer and the displays it looks at (a preset or a rig file).
 #[derive(Clone, Debug, PartialEq, Serialize, Deserialize)]
 #[serde(deny_unknown_fields)]
 pub struct Rig {
+    /// The tracked head.
     pub viewer: Viewer,
+    /// Near plane in meters (default 0.05).
     #[serde(default = "default_near")]
     pub near: f32,
+    /// Far plane in meters (default 1000).
     #[serde(default = "default_far")]
     pub far: f32,
+    /// The displays, each drawn into its own target.
     pub displays: Vec<Display>,
 }
 

@@ -6,9 +6,13 @@
 /// one number per window, so windowed bindings come last).
 #[derive(Clone, Copy, Debug, PartialEq, Eq)]
 pub struct Binding {
+    /// The WGSL variable's name.
     pub name: &'static str,
+    /// Its address space and access.
     pub access: Access,
+    /// Its WGSL type.
     pub wgsl_type: &'static str,
+    /// The stages that read it.
     pub stages: wgpu::ShaderStages,
     /// A per-instance array that may outgrow one binding: bound as [`Windows`] says,
     /// read (and written) through `<name>_at(i)` (and `<name>_set(i, v)`).
@@ -25,6 +29,7 @@ pub enum Windowed {
 }
 
 impl Windowed {
+    /// Bytes per element.
     pub fn stride(self) -> u64 {
         match self {
             Windowed::Instances => 64,
@@ -37,11 +42,14 @@ impl Windowed {
 /// (the last may hold fewer); one window binds the buffer whole.
 #[derive(Clone, Copy, Debug, PartialEq, Eq)]
 pub struct Window {
+    /// Bindings.
     pub count: u32,
+    /// Elements per binding: `1 << shift`.
     pub shift: u32,
 }
 
 impl Window {
+    /// One binding over the whole buffer.
     pub const WHOLE: Window = Window {
         count: 1,
         shift: 31,
@@ -64,11 +72,14 @@ impl Window {
 /// How every windowed array of a renderer is bound.
 #[derive(Clone, Copy, Debug, PartialEq, Eq)]
 pub struct Windows {
+    /// The instance records'.
     pub instances: Window,
+    /// The world spheres'.
     pub spheres: Window,
 }
 
 impl Windows {
+    /// Every array bound whole.
     pub const WHOLE: Windows = Windows {
         instances: Window::WHOLE,
         spheres: Window::WHOLE,
@@ -83,6 +94,7 @@ impl Windows {
         }
     }
 
+    /// How `windowed` is bound.
     pub fn of(&self, windowed: Windowed) -> Window {
         match windowed {
             Windowed::Instances => self.instances,
@@ -97,10 +109,14 @@ impl Windows {
     }
 }
 
+/// A binding's address space and access.
 #[derive(Clone, Copy, Debug, PartialEq, Eq)]
 pub enum Access {
+    /// `var<uniform>`.
     Uniform,
+    /// `var<storage, read>`.
     StorageRead,
+    /// `var<storage, read_write>`.
     StorageReadWrite,
 }
 

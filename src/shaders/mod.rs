@@ -83,7 +83,9 @@ pub enum CullPass {
 }
 
 impl CullPass {
+    /// The frame passes (the coarse cull), in dispatch order.
     pub const FRAME: [CullPass; 2] = [CullPass::CoarseBlocks, CullPass::CoarseLists];
+    /// The display passes, in dispatch order.
     pub const DISPLAY: [CullPass; 3] = [CullPass::Cull, CullPass::Draws, CullPass::Compact];
 
     /// The pipeline's label; display passes over the coarse cull's candidates say so.
@@ -103,10 +105,12 @@ impl CullPass {
         format!("stereocull.{name}{tail}")
     }
 
+    /// Whether the pass runs once per frame.
     pub fn is_frame(self) -> bool {
         Self::FRAME.contains(&self)
     }
 
+    /// The pass's WGSL entry point.
     pub fn entry_point(self) -> &'static str {
         match self {
             CullPass::CoarseBlocks => "coarse_blocks",
@@ -182,6 +186,7 @@ impl DrawKey {
         DrawKey::MULTIVIEW,
     ];
 
+    /// Multiview: one view per instance, the view index the eye.
     pub const MULTIVIEW: DrawKey = DrawKey {
         views: 1,
         clip_distances: false,
@@ -212,6 +217,7 @@ impl DrawKey {
         if self.multiview { 1 } else { self.views }
     }
 
+    /// The pipeline's label.
     pub fn label(self) -> String {
         let seam = if self.clip_distances {
             "clip"
