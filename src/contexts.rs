@@ -46,9 +46,11 @@ impl FrameContext {
     /// darkens what it does not reach.
     pub fn new(
         viewer: &Viewer,
-        (time, lod_scale): (f32, f32),
+        time: f32,
+        lod_scale: f32,
         coarse: &CoarseCull,
-        (light, shadows): (&LightView, bool),
+        light: &LightView,
+        shadows: bool,
     ) -> FrameContext {
         let orientation = viewer.orientation();
         FrameContext {

@@ -71,7 +71,8 @@ pub fn features_for(adapter: Features) -> Features {
 /// device has without `TEXTURE_ADAPTER_SPECIFIC_FORMAT_FEATURES`).
 pub fn guaranteed_sample_counts(
     features: Features,
-    (color, depth): (wgpu::TextureFormat, wgpu::TextureFormat),
+    color: wgpu::TextureFormat,
+    depth: wgpu::TextureFormat,
 ) -> Vec<u32> {
     let flags = |f: wgpu::TextureFormat| f.guaranteed_format_features(features).flags;
     (flags(color) & flags(depth)).supported_sample_counts()
@@ -240,7 +241,7 @@ impl Gpu {
     pub fn sample_counts(&self, color_format: wgpu::TextureFormat) -> Vec<u32> {
         let features = self.device.features();
         if !features.contains(Features::TEXTURE_ADAPTER_SPECIFIC_FORMAT_FEATURES) {
-            return guaranteed_sample_counts(features, (color_format, DEPTH_FORMAT));
+            return guaranteed_sample_counts(features, color_format, DEPTH_FORMAT);
         }
         let flags = |f| self.adapter.get_texture_format_features(f).flags;
         (flags(color_format) & flags(DEPTH_FORMAT)).supported_sample_counts()

@@ -48,6 +48,15 @@ pub const VERTEX_BUFFER: wgpu::VertexBufferLayout<'static> = wgpu::VertexBufferL
     attributes: &VERTEX_ATTRIBUTES,
 };
 
+/// What a view's draw draws with: the pipelines and the scene on the GPU.
+#[derive(Clone, Copy)]
+pub struct Drawing<'a> {
+    /// The pipelines and their layouts.
+    pub drawer: &'a Drawer,
+    /// The geometry, instance records, materials and shadow map.
+    pub scene: &'a DrawScene,
+}
+
 /// The scene's geometry, instance records and materials on the GPU, uploaded once, and
 /// the frame's shadow map the draws sample.
 pub struct DrawScene {
@@ -156,8 +165,10 @@ impl Drawer {
     pub fn new(
         device: &wgpu::Device,
         target: TargetFormat,
-        (keys, material): (&[DrawKey], Option<&str>),
-        (shadow_size, windows): (Option<u32>, Windows),
+        keys: &[DrawKey],
+        material: Option<&str>,
+        shadow_size: Option<u32>,
+        windows: Windows,
     ) -> Drawer {
         let layout = bind_group_layout(device, "stereocull.draw", &DRAW_BINDINGS, &windows);
         let materials_layout = materials::bind_group_layout(device);
@@ -173,7 +184,7 @@ impl Drawer {
                 let source = key.source_with(material, &windows);
                 (
                     key,
-                    pipeline(device, &pipeline_layout, (key, &source), target),
+                    pipeline(device, &pipeline_layout, key, &source, target),
                 )
             })
             .collect();
@@ -207,8 +218,15 @@ impl Drawer {
     ) -> wgpu::BindGroup {
         // In DRAW_BINDINGS order.
         let buffers = [frame_context, display_context, visible, &scene.instances];
-        let list = (&DRAW_BINDINGS[..], &self.windows);
-        bind_group(device, ("stereocull.draw", &self.layout), list, buffers)
+        let (label, layout) = ("stereocull.draw", &self.layout);
+        bind_group(
+            device,
+            label,
+            layout,
+            &DRAW_BINDINGS,
+            &self.windows,
+            buffers,
+        )
     }
 
     /// Sets the pipeline, geometry and bindings on `pass`.
@@ -364,7 +382,8 @@ fn shadow_pipeline(
 fn pipeline(
     device: &wgpu::Device,
     layout: &wgpu::PipelineLayout,
-    (key, source): (DrawKey, &str),
+    key: DrawKey,
+    source: &str,
     target: TargetFormat,
 ) -> wgpu::RenderPipeline {
     let label = key.label();

@@ -172,8 +172,9 @@ impl<E: Edit> Scatter<E> {
     pub fn new(device: &wgpu::Device, windows: Windows) -> Scatter<E> {
         let layout = bind_group_layout(device, "stereocull.scatter", &SCATTER_BINDINGS, &windows);
         let pipeline_layout = pipeline_layout(device, "stereocull.scatter", &layout);
-        let entry = (scatter_source(&windows, E::KIND), "scatter");
-        let pipeline = compute_pipeline(device, "stereocull.scatter", &pipeline_layout, entry);
+        let source = scatter_source(&windows, E::KIND);
+        let label = "stereocull.scatter";
+        let pipeline = compute_pipeline(device, label, &pipeline_layout, source, "scatter");
         Scatter {
             pipeline,
             layout,
@@ -348,8 +349,15 @@ impl<E: Edit> Scatter<E> {
         };
         // In SCATTER_BINDINGS order.
         let buffers = [&self.edits, p, o, b, targets.instances, s];
-        let list = (&SCATTER_BINDINGS[..], &self.windows);
-        bind_group(device, ("stereocull.scatter", &self.layout), list, buffers)
+        let (label, layout) = ("stereocull.scatter", &self.layout);
+        bind_group(
+            device,
+            label,
+            layout,
+            &SCATTER_BINDINGS,
+            &self.windows,
+            buffers,
+        )
     }
 }
 

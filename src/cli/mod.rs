@@ -270,7 +270,7 @@ fn cull(args: &CullArgs) -> Result<()> {
             }
             cpu_cull(&rig, &options, live.scene())?
         }
-        CullMode::Gpu => gpu_cull((&rig, options), &mut live, (&mut driver, args.frames))?,
+        CullMode::Gpu => gpu_cull(&rig, options, &mut live, &mut driver, args.frames)?,
     };
     let scene = live.scene();
     let near = rig
@@ -303,7 +303,7 @@ fn cpu_cull(
 ) -> Result<(Vec<CullOutput>, Vec<Option<CullOutput>>)> {
     let resolved = rig.resolve()?;
     let coarse = options.coarse_for(&resolved, None);
-    let plan = FramePlan::of(rig, resolved, options, (coarse, 0.0))?;
+    let plan = FramePlan::of(rig, resolved, options, coarse, 0.0)?;
     let outputs = cpu::cull_frame(&CullLayout::new(scene), &plan.jobs(), &plan.cull);
     let mut near = vec![None; rig.displays.len()];
     let mut far = vec![None; rig.displays.len()];
@@ -321,9 +321,11 @@ fn cpu_cull(
 /// `frames` GPU-culled frames, each after its edits are synced; the last frame's cull
 /// buffers (and far layers' culls) read back.
 fn gpu_cull(
-    (rig, options): (&Rig, RendererOptions),
+    rig: &Rig,
+    options: RendererOptions,
     live: &mut LiveScene,
-    (driver, frames): (&mut edits::EditDriver, u32),
+    driver: &mut edits::EditDriver,
+    frames: u32,
 ) -> Result<(Vec<CullOutput>, Vec<Option<CullOutput>>)> {
     let gpu = Gpu::headless()?;
     let mut renderer = Renderer::new(&gpu.device, live.scene(), rig, options)?;

@@ -84,7 +84,9 @@ impl Session {
     /// [`default_msaa`]).
     pub fn open(
         args: &SceneArgs,
-        (cull, mode, msaa): (CullMode, StereoMode, Option<u32>),
+        cull: CullMode,
+        mode: StereoMode,
+        msaa: Option<u32>,
         edits: &EditArgs,
     ) -> Result<Session> {
         let rig = args.load_rig()?;
@@ -146,7 +148,8 @@ impl Session {
         let mut stats = self.renderer.submit_frame_timed(
             &self.gpu.device,
             &self.gpu.queue,
-            (&self.rig, time),
+            &self.rig,
+            time,
             &self.targets,
             self.timer.as_mut(),
         )?;
@@ -234,7 +237,7 @@ struct DisplayStats {
 
 pub fn render(args: &RenderArgs) -> Result<()> {
     let edits = EditArgs::default();
-    let mut session = Session::open(&args.scene, (args.cull, args.mode, args.msaa), &edits)?;
+    let mut session = Session::open(&args.scene, args.cull, args.mode, args.msaa, &edits)?;
     // Room for every display's draw passes (one per eye at most) and the shadow pass.
     let counted = 2 * session.rig.displays.len() as u32 + 1;
     session.timer = GpuTimer::new(&session.gpu.device, &session.gpu.queue, counted);

@@ -125,8 +125,8 @@ impl MemorySample {
 }
 
 pub fn stress(args: &StressArgs) -> Result<()> {
-    let mode = (args.cull, args.mode, Some(args.msaa));
-    let mut session = Session::open(&args.scene, mode, &args.edits)?;
+    let msaa = Some(args.msaa);
+    let mut session = Session::open(&args.scene, args.cull, args.mode, msaa, &args.edits)?;
     // Room for every display's draw passes (one per eye at most) and the shadow pass.
     let counted = 2 * session.rig.displays.len() as u32 + 1;
     session.timer = GpuTimer::new(&session.gpu.device, &session.gpu.queue, counted);
@@ -206,7 +206,7 @@ pub fn stress(args: &StressArgs) -> Result<()> {
     bar.finish_and_clear();
     memory.dedup_by_key(|m| m.frame);
     let far_near = far_near(&session)?;
-    let summary = summarize(&session, args, (&records, far_near), memory);
+    let summary = summarize(&session, args, &records, far_near, memory);
     if args.json {
         let all = serde_json::json!({ "frames": records, "summary": summary });
         println!("{all}");
@@ -219,7 +219,8 @@ pub fn stress(args: &StressArgs) -> Result<()> {
 fn summarize(
     session: &Session,
     args: &StressArgs,
-    (records, far_near): (&[FrameRecord], Vec<serde_json::Value>),
+    records: &[FrameRecord],
+    far_near: Vec<serde_json::Value>,
     memory: Vec<MemorySample>,
 ) -> Summary {
     let of = |f: fn(&FrameRecord) -> f64| records.iter().map(f).collect::<Vec<f64>>();

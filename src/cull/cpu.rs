@@ -135,7 +135,7 @@ pub fn cull_frame(layout: &CullLayout, displays: &[CullJob], frame: &FrameCull) 
                     build_output(layout, &mask, &chunk_counts, job.instances_per_object)
                 }
                 Some((levels, n)) => {
-                    build_output_lod(layout, &mask, (levels, *n), job.instances_per_object)
+                    build_output_lod(layout, &mask, levels, *n, job.instances_per_object)
                 }
             }
         })
@@ -314,7 +314,8 @@ fn build_output(
 fn build_output_lod(
     layout: &CullLayout,
     mask: &[u64],
-    (levels, level_count): (&[u8], u32),
+    levels: &[u8],
+    level_count: u32,
     instances_per_object: u32,
 ) -> CullOutput {
     let l_count = level_count as usize;

@@ -108,7 +108,9 @@ impl CullScene {
     pub fn new(
         device: &wgpu::Device,
         layout: &CullLayout,
-        (slots, levels, coarse_slots): (u32, u32, u32),
+        slots: u32,
+        levels: u32,
+        coarse_slots: u32,
     ) -> CullScene {
         let slots = slots
             .max(layout.positions.len() as u32)
@@ -310,8 +312,9 @@ impl GpuCuller {
         let layout = bind_group_layout(device, "stereocull.cull", &CULL_BINDINGS, &windows);
         let build = |passes: &[CullPass], candidates: bool, with: &wgpu::PipelineLayout| {
             let build_one = |pass: &CullPass| {
-                let entry = (pass.source(candidates, &windows), pass.entry_point());
-                compute_pipeline(device, &pass.label(candidates), with, entry)
+                let source = pass.source(candidates, &windows);
+                let label = pass.label(candidates);
+                compute_pipeline(device, &label, with, source, pass.entry_point())
             };
             passes.iter().map(build_one).collect()
         };
@@ -370,8 +373,15 @@ impl GpuCuller {
             &scene.block_tests,
             &scene.spheres,
         ];
-        let list = (&CULL_BINDINGS[..], &self.windows);
-        bind_group(device, ("stereocull.cull", &self.layout), list, buffers)
+        let (label, layout) = ("stereocull.cull", &self.layout);
+        bind_group(
+            device,
+            label,
+            layout,
+            &CULL_BINDINGS,
+            &self.windows,
+            buffers,
+        )
     }
 
     /// Group 1 of the frame passes (with the coarse cull).
@@ -383,8 +393,10 @@ impl GpuCuller {
         let coarse = self.coarse.as_ref()?;
         Some(bind_group(
             device,
-            ("stereocull.coarse", &coarse.args_layout),
-            (&COARSE_BINDINGS[..], &Windows::WHOLE),
+            "stereocull.coarse",
+            &coarse.args_layout,
+            &COARSE_BINDINGS,
+            &Windows::WHOLE,
             [&scene.coarse_args],
         ))
     }

@@ -19,7 +19,8 @@ fn check_sample_count(features: wgpu::Features, options: &RendererOptions) -> Re
         true => vec![1, 2, 4, 8, 16],
         false => crate::device::guaranteed_sample_counts(
             features,
-            (options.color_format, options.depth_format),
+            options.color_format,
+            options.depth_format,
         ),
     };
     if !counts.contains(&n) {

@@ -7,19 +7,17 @@ use std::time::Instant;
 
 use super::culler::{CullShape, Culler};
 use super::frame::{CullView, FramePlan, FrameStats};
-use super::options::RendererOptions;
-use super::passes::{PassRecord, Timing, draw_pass};
+use super::inputs::PathInputs;
+use super::passes::{PassRecord, Recording, Timing, draw_pass};
 use super::shadow_pass::ShadowPass;
 use super::targets::TargetViews;
 use crate::buffers::{storage_buffer, write};
 use crate::contexts::context_buffer;
 use crate::cull::CullOutput;
-use crate::draw::{DrawFeatures, DrawScene, Drawer, set_eye_viewport};
+use crate::draw::{DrawFeatures, DrawScene, Drawer, Drawing, set_eye_viewport};
 use crate::error::Result;
 use crate::modes::StereoMode;
-use crate::profiling::GpuTimer;
-use crate::records::{CullLayout, uniform_bytes};
-use crate::scene::Scene;
+use crate::records::uniform_bytes;
 use crate::shaders::DrawKey;
 
 /// One eye of a stereo display: its own context (that eye in both eye slots) and, for
@@ -60,70 +58,45 @@ static NOTHING: CullOutput = CullOutput {
 };
 
 impl ClassicPath {
-    /// The path for `scene` laid out as `layout`, with room for `slots` instances, for
-    /// the displays of `plan`.
-    pub(super) fn new(
-        device: &wgpu::Device,
-        (scene, layout): (&Scene, CullLayout),
-        (plan, frame): (&FramePlan, &wgpu::Buffer),
-        (options, slots): (&RendererOptions, u32),
-    ) -> Result<ClassicPath> {
+    /// The path for `inputs`, for the displays of its plan.
+    pub(super) fn new(device: &wgpu::Device, inputs: PathInputs) -> Result<ClassicPath> {
+        let PathInputs {
+            scene,
+            layout,
+            plan,
+            frame,
+            options,
+            slots,
+        } = inputs;
         let clip = DrawFeatures::of(device).clip_distances;
         let windows = options.windows(device, slots);
+        let keys = [DrawKey::new(1, clip)];
+        let material = options.material.as_deref();
+        let target = options.target_format();
         let drawer = Drawer::new(
             device,
-            options.target_format(),
-            (&[DrawKey::new(1, clip)], options.material.as_deref()),
-            (options.shadow_size(), windows),
+            target,
+            &keys,
+            material,
+            options.shadow_size(),
+            windows,
         );
         let shape = CullShape {
             slots,
             levels: options.lod_levels(),
             coarse_slots: 0,
         };
-        let culler = Culler::new(device, options.cull, layout, (shape, windows));
+        let culler = Culler::new(device, options.cull, layout, shape, windows);
         let draw_scene = DrawScene::new(device, &drawer, scene, slots)?;
-        let n = slots as u64;
-        let usage = wgpu::BufferUsages::STORAGE | wgpu::BufferUsages::COPY_DST;
-        let visible_list = || storage_buffer(device, "stereocull.visible", 4 * n, usage);
-        let displays = plan
-            .displays
-            .iter()
-            .zip(&plan.resolved.displays)
-            .map(|(d, r)| {
-                let context = context_buffer(device);
-                let visible = visible_list();
-                let eyes = (0..if r.eyes.len() == 2 { 2 } else { 0 })
-                    .map(|_| {
-                        let context = context_buffer(device);
-                        let own = (options.mode == StereoMode::MultiCamera).then(visible_list);
-                        let list = own.as_ref().unwrap_or(&visible);
-                        EyeState {
-                            bind_group: drawer.bind_group(
-                                device,
-                                [frame, &context],
-                                &draw_scene,
-                                list,
-                            ),
-                            context,
-                            visible: own,
-                        }
-                    })
-                    .collect();
-                ClassicDisplay {
-                    bind_group: drawer.bind_group(device, [frame, &context], &draw_scene, &visible),
-                    context,
-                    visible,
-                    eyes,
-                    eye_size: (d.resolution.x as u32, d.resolution.y as u32),
-                }
-            })
-            .collect();
-        let draws = scene.meshes.len() as u32 * options.lod_levels();
-        let shadow = options.shadows.then(|| {
-            let drawing = (&drawer, &draw_scene);
-            ShadowPass::new(device, drawing, (frame, &culler), (slots, draws))
-        });
+        let drawing = Drawing {
+            drawer: &drawer,
+            scene: &draw_scene,
+        };
+        let per_eye_lists = options.mode == StereoMode::MultiCamera;
+        let displays = classic_displays(device, plan, drawing, frame, slots, per_eye_lists);
+        let shadow = options
+            .shadows
+            .then(|| ShadowPass::new(device, drawing, frame, &culler));
         Ok(ClassicPath {
             mode: options.mode,
             culler,
@@ -144,7 +117,7 @@ impl ClassicPath {
         let start = Instant::now();
         if let (Some(shadow), Some(_)) = (&self.shadow, &plan.light_cull) {
             let size = self.draw_scene.shadow_map.size;
-            stats.bytes_uploaded += shadow.prepare(queue, (&plan.light, size), &self.culler);
+            stats.bytes_uploaded += shadow.prepare(queue, &plan.light, size, &self.culler);
         }
         for (i, (state, ctx)) in self.displays.iter().zip(&plan.displays).enumerate() {
             stats.bytes_uploaded += write(queue, &state.context, &uniform_bytes(ctx));
@@ -185,13 +158,16 @@ impl ClassicPath {
     pub(super) fn encode_frame(
         &self,
         encoder: &mut wgpu::CommandEncoder,
-        timing: (&mut Option<&mut GpuTimer>, &mut Vec<PassRecord>),
+        recording: Recording,
     ) -> FrameStats {
         let Some(shadow) = &self.shadow else {
             return FrameStats::default();
         };
-        let scene = (&self.drawer, &self.draw_scene);
-        let (dispatches, draw_calls) = shadow.encode(encoder, scene, &self.culler, timing);
+        let drawing = Drawing {
+            drawer: &self.drawer,
+            scene: &self.draw_scene,
+        };
+        let (dispatches, draw_calls) = shadow.encode(encoder, drawing, &self.culler, recording);
         FrameStats {
             draw_calls,
             dispatches,
@@ -204,7 +180,8 @@ impl ClassicPath {
     pub(super) fn encode_display(
         &self,
         encoder: &mut wgpu::CommandEncoder,
-        (index, target): (usize, &TargetViews),
+        index: usize,
+        target: &TargetViews,
         (timer, display): Timing,
         log: &mut Vec<PassRecord>,
     ) -> FrameStats {
@@ -216,7 +193,8 @@ impl ClassicPath {
                     draw_pass(
                         encoder,
                         target,
-                        (e == 0, false),
+                        e == 0,
+                        false,
                         (timer, display),
                         what,
                         |pass| self.draw_eye(pass, index, e),
@@ -228,7 +206,8 @@ impl ClassicPath {
                 draw_pass(
                     encoder,
                     target,
-                    (true, false),
+                    true,
+                    false,
                     (timer, display),
                     what,
                     |pass| self.draw(pass, index),
@@ -284,6 +263,51 @@ impl ClassicPath {
             .map(|i| self.cull_of(i, Some(0)).visible.len() as u32)
             .collect()
     }
+}
+
+/// Each display's contexts, visible lists and bindings: a stereo display's eyes get
+/// their own contexts, and with `per_eye_lists` (multi-camera) their own visible lists
+/// of `slots` instances.
+fn classic_displays(
+    device: &wgpu::Device,
+    plan: &FramePlan,
+    drawing: Drawing,
+    frame: &wgpu::Buffer,
+    slots: u32,
+    per_eye_lists: bool,
+) -> Vec<ClassicDisplay> {
+    let usage = wgpu::BufferUsages::STORAGE | wgpu::BufferUsages::COPY_DST;
+    let visible_list = || storage_buffer(device, "stereocull.visible", 4 * slots as u64, usage);
+    let bind = |context: &wgpu::Buffer, list: &wgpu::Buffer| {
+        (drawing.drawer).bind_group(device, [frame, context], drawing.scene, list)
+    };
+    let stereo = plan.resolved.displays.iter().map(|r| r.eyes.len() == 2);
+    plan.displays
+        .iter()
+        .zip(stereo)
+        .map(|(d, stereo)| {
+            let context = context_buffer(device);
+            let visible = visible_list();
+            let eyes = (0..if stereo { 2 } else { 0 })
+                .map(|_| {
+                    let context = context_buffer(device);
+                    let own = per_eye_lists.then(visible_list);
+                    EyeState {
+                        bind_group: bind(&context, own.as_ref().unwrap_or(&visible)),
+                        context,
+                        visible: own,
+                    }
+                })
+                .collect();
+            ClassicDisplay {
+                bind_group: bind(&context, &visible),
+                context,
+                visible,
+                eyes,
+                eye_size: (d.resolution.x as u32, d.resolution.y as u32),
+            }
+        })
+        .collect()
 }
 
 /// Single-pass stereo: each instance drawn for both eyes in the left, right, right,

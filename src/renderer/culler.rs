@@ -7,19 +7,26 @@
 
 use super::frame::{CullView, FramePlan};
 use super::options::CullMode;
-use super::passes::{Logged, PassRecord, Timing, close, compute_pass, open_display};
+use super::passes::{Logged, PassRecord, Recording, Timing, close, compute_pass, open_display};
 use crate::cull::CullOutput;
 use crate::cull::coarse::BLOCK;
 use crate::cull::cpu;
 use crate::cull::gpu::{CullScene, CullTargets, GpuCuller};
 use crate::error::Result;
-use crate::profiling::GpuTimer;
 use crate::readback::read_pod;
 use crate::records::{CullLayout, MoveEdit, PlaceEdit};
 use crate::scene::Scene;
 use crate::shaders::Windows;
 
-pub(super) enum Culler {
+pub(super) struct Culler {
+    kind: Kind,
+    /// Instance slots of room, and draw entries per view (meshes times levels): what
+    /// every view's outputs hold.
+    slots: u32,
+    draws: u32,
+}
+
+enum Kind {
     /// Passes over scene data on the GPU; `coarse` is the coarse cull's group 1, when it
     /// runs.
     Gpu {
@@ -56,42 +63,54 @@ impl Culler {
         device: &wgpu::Device,
         mode: CullMode,
         layout: CullLayout,
-        (shape, windows): (CullShape, Windows),
+        shape: CullShape,
+        windows: Windows,
     ) -> Culler {
-        match mode {
-            CullMode::Cpu => Culler::Cpu {
+        let draws = layout.meshes.len() as u32 * shape.levels;
+        let kind = match mode {
+            CullMode::Cpu => Kind::Cpu {
                 layout,
                 outputs: Vec::new(),
             },
             CullMode::Gpu => {
                 let culler = GpuCuller::new(device, shape.coarse_slots > 0, windows);
-                let sizes = (shape.slots, shape.levels, shape.coarse_slots);
-                let scene = Box::new(CullScene::new(device, &layout, sizes));
+                let (slots, levels) = (shape.slots, shape.levels);
+                let scene = CullScene::new(device, &layout, slots, levels, shape.coarse_slots);
+                let scene = Box::new(scene);
                 let coarse = culler.coarse_bind_group(device, &scene);
-                Culler::Gpu {
+                Kind::Gpu {
                     culler,
                     scene,
                     coarse,
                 }
             }
+        };
+        Culler {
+            kind,
+            slots: shape.slots,
+            draws,
         }
     }
 
-    /// `view`'s cull outputs, for `draws` draws (meshes times levels) of up to `slots`
-    /// instances, and its bindings to the frame's and the view's contexts.
+    /// Draw entries of every view's outputs: meshes times levels of detail.
+    pub(super) fn draws(&self) -> u32 {
+        self.draws
+    }
+
+    /// `view`'s cull outputs (room for every slot and draw) and its bindings to the
+    /// frame's and the view's contexts.
     pub(super) fn view(
         &self,
         device: &wgpu::Device,
         view: CullView,
         contexts: [&wgpu::Buffer; 2],
-        (slots, draws): (u32, u32),
     ) -> ViewCull {
-        let targets = CullTargets::new(device, slots, draws);
-        let bind_group = match self {
-            Culler::Gpu { culler, scene, .. } => {
+        let targets = CullTargets::new(device, self.slots, self.draws);
+        let bind_group = match &self.kind {
+            Kind::Gpu { culler, scene, .. } => {
                 Some(culler.bind_group(device, scene, contexts, &targets))
             }
-            Culler::Cpu { .. } => None,
+            Kind::Cpu { .. } => None,
         };
         ViewCull {
             view,
@@ -104,12 +123,12 @@ impl Culler {
     /// light's); on the GPU, the coarse cull's block tests, one per display. Returns the
     /// bytes written.
     pub(super) fn prepare(&mut self, queue: &wgpu::Queue, plan: &FramePlan) -> u64 {
-        match self {
-            Culler::Gpu { scene, .. } => {
+        match &mut self.kind {
+            Kind::Gpu { scene, .. } => {
                 let planes: Vec<_> = plan.resolved.displays.iter().map(|d| d.planes).collect();
                 scene.write_block_tests(queue, &planes)
             }
-            Culler::Cpu { layout, outputs } => {
+            Kind::Cpu { layout, outputs } => {
                 let culled = cpu::cull_frame(layout, &plan.jobs(), &plan.cull);
                 *outputs = plan.culls.iter().map(|c| c.view).zip(culled).collect();
                 if let Some(light) = &plan.light_cull {
@@ -124,9 +143,9 @@ impl Culler {
     /// This frame's result for `view` in CPU memory: the CPU culler's (`None` on the GPU,
     /// whose results stay in its buffers, or for a view the plan does not cull).
     pub(super) fn output(&self, view: CullView) -> Option<&CullOutput> {
-        match self {
-            Culler::Cpu { outputs, .. } => outputs.iter().find(|(v, _)| *v == view).map(|(_, o)| o),
-            Culler::Gpu { .. } => None,
+        match &self.kind {
+            Kind::Cpu { outputs, .. } => outputs.iter().find(|(v, _)| *v == view).map(|(_, o)| o),
+            Kind::Gpu { .. } => None,
         }
     }
 
@@ -144,10 +163,10 @@ impl Culler {
         &self,
         encoder: &mut wgpu::CommandEncoder,
         any: Option<&ViewCull>,
-        (timer, log): (&mut Option<&mut GpuTimer>, &mut Vec<PassRecord>),
+        Recording { timer, log }: Recording,
     ) -> u32 {
         let (
-            Culler::Gpu {
+            Kind::Gpu {
                 culler,
                 scene,
                 coarse: Some(args),
@@ -156,7 +175,7 @@ impl Culler {
                 bind_group: Some(display),
                 ..
             }),
-        ) = (self, any)
+        ) = (&self.kind, any)
         else {
             return 0;
         };
@@ -181,13 +200,13 @@ impl Culler {
         logged: Logged,
     ) -> u32 {
         let (
-            Culler::Gpu {
+            Kind::Gpu {
                 culler,
                 scene,
                 coarse,
             },
             Some(group),
-        ) = (self, &view.bind_group)
+        ) = (&self.kind, &view.bind_group)
         else {
             return 0;
         };
@@ -212,9 +231,9 @@ impl Culler {
     /// Takes a new `layout` (instances inserted or removed, same room); returns the
     /// bytes written.
     pub(super) fn reload(&mut self, queue: &wgpu::Queue, layout: CullLayout) -> u64 {
-        match self {
-            Culler::Gpu { scene, .. } => scene.reload(queue, &layout),
-            Culler::Cpu { layout: own, .. } => {
+        match &mut self.kind {
+            Kind::Gpu { scene, .. } => scene.reload(queue, &layout),
+            Kind::Cpu { layout: own, .. } => {
                 *own = layout;
                 0
             }
@@ -225,16 +244,16 @@ impl Culler {
     /// scatter passes write edits into; `None` for the CPU culler, which takes edits
     /// into its layout ([`Culler::place`], [`Culler::moved`]).
     pub(super) fn scatter_targets(&self) -> Option<[&wgpu::Buffer; 4]> {
-        match self {
-            Culler::Gpu { scene, .. } => Some(scene.scatter_targets()),
-            Culler::Cpu { .. } => None,
+        match &self.kind {
+            Kind::Gpu { scene, .. } => Some(scene.scatter_targets()),
+            Kind::Cpu { .. } => None,
         }
     }
 
     /// The places filled and vacated, into the CPU culler's layout (the GPU's are
     /// scattered).
     pub(super) fn place(&mut self, placed: &[PlaceEdit]) {
-        if let Culler::Cpu { layout, .. } = self {
+        if let Kind::Cpu { layout, .. } = &mut self.kind {
             for edit in placed {
                 layout.set_place((edit.place, edit.slot, CullLayout::VACANT_SPHERE));
             }
@@ -244,7 +263,7 @@ impl Culler {
     /// The moved instances' new spheres, into the CPU culler's layout (the GPU's are
     /// scattered).
     pub(super) fn moved(&mut self, scene: &Scene, moved: &[MoveEdit]) {
-        if let Culler::Cpu { layout, .. } = self {
+        if let Kind::Cpu { layout, .. } = &mut self.kind {
             for edit in moved {
                 let slot = edit.slot as usize;
                 let sphere = scene.world_sphere(&scene.instances[slot]);
@@ -263,8 +282,8 @@ impl Culler {
         queue: &wgpu::Queue,
         displays: usize,
     ) -> Result<Option<Vec<u32>>> {
-        match self {
-            Culler::Gpu {
+        match &self.kind {
+            Kind::Gpu {
                 scene,
                 coarse: Some(_),
                 ..
@@ -286,7 +305,7 @@ impl Culler {
         queue: &wgpu::Queue,
         displays: usize,
     ) -> Result<Option<u64>> {
-        let Culler::Gpu { scene, .. } = self else {
+        let Kind::Gpu { scene, .. } = &self.kind else {
             return Ok(None);
         };
         let (n, d) = (scene.instance_count as u64, displays as u64);

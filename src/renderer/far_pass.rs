@@ -4,11 +4,12 @@
 
 use super::culler::Culler;
 use super::frame::{CullView, FramePlan};
-use super::passes::{PassRecord, opener, render_pass};
+use super::passes::{PassRecord, Recording, opener, render_pass};
 use super::view_pass::ViewPass;
-use crate::draw::{CLEAR_COLOR, DEPTH_FORMAT, DrawScene, Drawer, TargetFormat, cleared_depth};
+use crate::draw::{
+    CLEAR_COLOR, DEPTH_FORMAT, DrawScene, Drawer, Drawing, TargetFormat, cleared_depth,
+};
 use crate::far_layer::FarPlan;
-use crate::profiling::GpuTimer;
 use crate::shaders::{DrawKey, far_composite_source};
 use wgpu_profiler::GpuProfilerQuery;
 
@@ -24,6 +25,8 @@ pub(super) struct FarLayers {
 
 /// One stereo display's far layer: one more view, and its textures.
 pub(super) struct FarDisplay {
+    /// The display it belongs to (and whose coarse blocks its cull runs over).
+    index: usize,
     pub(super) view: ViewPass,
     color: wgpu::TextureView,
     depth: wgpu::TextureView,
@@ -35,7 +38,8 @@ pub(super) struct FarDisplay {
 impl FarLayers {
     pub(super) fn new(
         device: &wgpu::Device,
-        (format, material): (TargetFormat, Option<&str>),
+        format: TargetFormat,
+        material: Option<&str>,
         windows: crate::shaders::Windows,
     ) -> FarLayers {
         let single = TargetFormat {
@@ -44,7 +48,7 @@ impl FarLayers {
             ..format
         };
         let key = DrawKey::new(1, false);
-        let drawer = Drawer::new(device, single, (&[key], material), (None, windows));
+        let drawer = Drawer::new(device, single, &[key], material, None, windows);
         let composite_layout = composite_layout(device);
         FarLayers {
             composite: composite_pipeline(device, &composite_layout, format),
@@ -60,17 +64,16 @@ impl FarLayers {
         }
     }
 
-    /// Display `index`'s far layer for `plan`: its textures, context, cull outputs and
-    /// bindings.
+    /// Display `index`'s far layer for `plan`, drawn as `view`: its textures and the
+    /// composite's bindings (`display` is the display's context, which it reads).
     pub(super) fn display(
         &self,
         device: &wgpu::Device,
-        (draw_scene, frame, display): (&DrawScene, &wgpu::Buffer, &wgpu::Buffer),
-        (culler, index): (&Culler, usize),
-        (plan, sizes): (&FarPlan, (u32, u32)),
+        index: usize,
+        view: ViewPass,
+        display: &wgpu::Buffer,
+        plan: &FarPlan,
     ) -> FarDisplay {
-        let culled = (frame, culler, CullView::Far(index));
-        let view = ViewPass::new(device, (&self.drawer, draw_scene), culled, sizes);
         let texture = |label, format| {
             device
                 .create_texture(&wgpu::TextureDescriptor {
@@ -107,6 +110,7 @@ impl FarLayers {
             ],
         });
         FarDisplay {
+            index,
             view,
             color,
             depth,
@@ -115,20 +119,18 @@ impl FarLayers {
         }
     }
 
-    /// Records display `index`'s far cull (on the GPU: over its display's blocks with
-    /// the coarse cull) and its far layer pass, timed inside `display`. Returns
-    /// (dispatches, draw calls).
+    /// Records `far`'s cull (on the GPU: over its display's blocks with the coarse cull)
+    /// and its far layer pass, timed inside `display`. Returns (dispatches, draw calls).
     pub(super) fn encode(
         &self,
         encoder: &mut wgpu::CommandEncoder,
-        (index, far, draw_scene): (usize, &FarDisplay, &DrawScene),
+        far: &FarDisplay,
+        scene: &DrawScene,
         culler: &Culler,
-        (timer, display, log): (
-            &mut Option<&mut GpuTimer>,
-            &Option<GpuProfilerQuery>,
-            &mut Vec<PassRecord>,
-        ),
+        Recording { timer, log }: Recording,
+        display: &Option<GpuProfilerQuery>,
     ) -> (u32, u32) {
+        let index = far.index;
         let what = (&mut *log, PassRecord::display("far_cull", index));
         let dispatches = far
             .view
@@ -154,11 +156,18 @@ impl FarLayers {
                 .forget_lifetime()
         });
         let logged = (log, PassRecord::display("far_layer", index));
-        let drawing = (&self.drawer, draw_scene);
+        let drawing = self.drawing(scene);
         let draw_calls = render_pass(encoder, begin, ((timer, display), logged), |pass| {
             far.view.draw(pass, drawing, Some(DrawKey::new(1, false)))
         });
         (dispatches, draw_calls)
+    }
+
+    fn drawing<'a>(&'a self, scene: &'a DrawScene) -> Drawing<'a> {
+        Drawing {
+            drawer: &self.drawer,
+            scene,
+        }
     }
 
     /// The composite into the display's pass, before its near geometry: one draw, one
@@ -175,16 +184,12 @@ impl FarDisplay {
     /// Writes this frame's far context for `plan` (at the layer's fixed size, over the
     /// coarse cull's `slot`, its display's) and the culler's far cull. Returns the bytes
     /// written.
-    pub(super) fn prepare(
-        &self,
-        queue: &wgpu::Queue,
-        (plan, slot): (&FarPlan, u32),
-        culler: &Culler,
-    ) -> u64 {
+    pub(super) fn prepare(&self, queue: &wgpu::Queue, plan: &FarPlan, culler: &Culler) -> u64 {
         let sized = FarPlan {
             size: self.size,
             ..*plan
         };
+        let slot = self.index as u32;
         self.view.prepare(queue, &sized.context(slot), culler)
     }
 }
@@ -300,13 +305,16 @@ pub(super) struct Far {
 
 impl Far {
     /// Far layers for the stereo displays of `plan` (the rig as made, which sizes
-    /// them), each composited into the display whose context is `contexts[i]`.
+    /// them), each composited into the display whose context is `contexts[i]`, culled
+    /// by `culler` and drawn from `scene` with the frame context `frame`.
     pub(super) fn new(
         device: &wgpu::Device,
-        (layers, plan): (FarLayers, &FramePlan),
-        (draw_scene, frame, contexts): (&DrawScene, &wgpu::Buffer, &[&wgpu::Buffer]),
+        layers: FarLayers,
+        plan: &FramePlan,
+        scene: &DrawScene,
+        frame: &wgpu::Buffer,
+        contexts: &[&wgpu::Buffer],
         culler: &Culler,
-        sizes: (u32, u32),
     ) -> Far {
         let displays = plan
             .far
@@ -314,8 +322,10 @@ impl Far {
             .zip(contexts)
             .enumerate()
             .map(|(i, (far, context))| {
-                let bound = (draw_scene, frame, *context);
-                far.map(|far| layers.display(device, bound, (culler, i), (&far, sizes)))
+                let far = far.as_ref()?;
+                let drawing = layers.drawing(scene);
+                let view = ViewPass::new(device, drawing, frame, culler, CullView::Far(i));
+                Some(layers.display(device, i, view, context, far))
             })
             .collect();
         Far {
@@ -337,9 +347,8 @@ impl Far {
         self.displays
             .iter()
             .zip(&plan.far)
-            .enumerate()
-            .filter_map(|(i, (far, plan))| Some((i as u32, far.as_ref()?, plan.as_ref()?)))
-            .map(|(slot, far, plan)| far.prepare(queue, (plan, slot), culler))
+            .filter_map(|(far, plan)| Some((far.as_ref()?, plan.as_ref()?)))
+            .map(|(far, plan)| far.prepare(queue, plan, culler))
             .sum()
     }
 }

@@ -96,7 +96,7 @@ impl FramePlan {
     /// whether the renderer was built for the coarse cull ([`RendererOptions::coarse_for`],
     /// decided once: it sizes buffers).
     pub fn new(rig: &Rig, options: &RendererOptions, coarse: bool, time: f32) -> Result<FramePlan> {
-        FramePlan::of(rig, rig.resolve()?, options, (coarse, time))
+        FramePlan::of(rig, rig.resolve()?, options, coarse, time)
     }
 
     /// [`FramePlan::new`] for a rig already resolved.
@@ -104,7 +104,8 @@ impl FramePlan {
         rig: &Rig,
         resolved: ResolvedRig,
         options: &RendererOptions,
-        (coarse, time): (bool, f32),
+        coarse: bool,
+        time: f32,
     ) -> Result<FramePlan> {
         if resolved.displays.len() != rig.displays.len() {
             return Err(Error::rig("plan", "the resolved rig's displays differ"));
@@ -116,9 +117,11 @@ impl FramePlan {
         let light = LightView::fit(&options.light, &resolved);
         let frame = FrameContext::new(
             &rig.viewer,
-            (time, cull.lod.lod_scale),
+            time,
+            cull.lod.lod_scale,
             &cull.coarse.unwrap_or(CoarseCull::EVERYTHING),
-            (&light, options.shadows),
+            &light,
+            options.shadows,
         );
         let far: Vec<Option<FarPlan>> = match options.far_layer {
             true => crate::far_layer::plans(rig, &resolved, options.far_threshold_px),

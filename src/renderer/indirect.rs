@@ -10,19 +10,17 @@ use std::time::Instant;
 use super::culler::{CullShape, Culler, ViewCull};
 use super::far_pass::{Far, FarLayers};
 use super::frame::{CullView, FramePlan, FrameStats};
-use super::options::RendererOptions;
-use super::passes::{PassRecord, Timing, draw_pass};
+use super::inputs::PathInputs;
+use super::passes::{PassRecord, Recording, Timing, draw_pass};
 use super::shadow_pass::ShadowPass;
 use super::targets::TargetViews;
 use crate::buffers::write;
 use crate::contexts::context_buffer;
 use crate::cull::gpu::CullTargets;
-use crate::draw::{DrawFeatures, DrawScene, Drawer};
+use crate::draw::{DrawFeatures, DrawScene, Drawer, Drawing};
 use crate::error::Result;
 use crate::modes::StereoMode;
-use crate::profiling::GpuTimer;
-use crate::records::{CullLayout, uniform_bytes};
-use crate::scene::Scene;
+use crate::records::uniform_bytes;
 use crate::shaders::DrawKey;
 
 /// One display's buffers and bindings.
@@ -49,73 +47,58 @@ pub(super) struct IndirectPath {
 }
 
 impl IndirectPath {
-    /// The path for `scene` laid out as `layout`, with room for `slots` instances, built
-    /// for `plan` (the rig as made: it sizes the far layers) and its coarse cull.
-    pub(super) fn new(
-        device: &wgpu::Device,
-        (scene, layout): (&Scene, CullLayout),
-        (plan, frame): (&FramePlan, &wgpu::Buffer),
-        (options, slots): (&RendererOptions, u32),
-    ) -> Result<IndirectPath> {
+    /// The path for `inputs`: built for its plan (the rig as made, which sizes the far
+    /// layers) and its coarse cull.
+    pub(super) fn new(device: &wgpu::Device, inputs: PathInputs) -> Result<IndirectPath> {
+        let PathInputs {
+            scene,
+            layout,
+            plan,
+            frame,
+            options,
+            slots,
+        } = inputs;
         let windows = options.windows(device, slots);
+        let coarse_slots = match plan.cull.coarse {
+            Some(_) => plan.displays.len() as u32,
+            None => 0,
+        };
         let shape = CullShape {
             slots,
             levels: options.lod_levels(),
-            coarse_slots: if plan.cull.coarse.is_some() {
-                plan.displays.len() as u32
-            } else {
-                0
-            },
+            coarse_slots,
         };
-        let culler = Culler::new(device, options.cull, layout, (shape, windows));
+        let culler = Culler::new(device, options.cull, layout, shape, windows);
         let keys = draw_keys(device, plan, options.mode);
+        let material = options.material.as_deref();
+        let target = options.target_format();
         let drawer = Drawer::new(
             device,
-            options.target_format(),
-            (&keys, options.material.as_deref()),
-            (options.shadow_size(), windows),
+            target,
+            &keys,
+            material,
+            options.shadow_size(),
+            windows,
         );
         let draw_scene = DrawScene::new(device, &drawer, scene, slots)?;
-        let draws = scene.meshes.len() as u32 * options.lod_levels();
-        let displays: Vec<IndirectDisplay> = keys
-            .iter()
-            .enumerate()
-            .map(|(i, &key)| {
-                let context = context_buffer(device);
-                let view = CullView::Display(i);
-                let cull = culler.view(device, view, [frame, &context], (slots, draws));
-                IndirectDisplay {
-                    draw_bind_group: drawer.bind_group(
-                        device,
-                        [frame, &context],
-                        &draw_scene,
-                        &cull.targets.visible,
-                    ),
-                    context,
-                    cull,
-                    key,
-                }
-            })
-            .collect();
-        let shadow = options.shadows.then(|| {
-            let drawing = (&drawer, &draw_scene);
-            ShadowPass::new(device, drawing, (frame, &culler), (slots, draws))
-        });
+        let drawing = Drawing {
+            drawer: &drawer,
+            scene: &draw_scene,
+        };
+        let displays = indirect_displays(device, &keys, drawing, frame, &culler);
+        let shadow = options
+            .shadows
+            .then(|| ShadowPass::new(device, drawing, frame, &culler));
         let far = options.far_layer.then(|| {
-            let layers = FarLayers::new(
-                device,
-                (options.target_format(), options.material.as_deref()),
-                windows,
-            );
+            let layers = FarLayers::new(device, target, material, windows);
             let contexts: Vec<&wgpu::Buffer> = displays.iter().map(|d| &d.context).collect();
-            let bound = (&draw_scene, frame, &contexts[..]);
-            Far::new(device, (layers, plan), bound, &culler, (slots, draws))
+            Far::new(device, layers, plan, &draw_scene, frame, &contexts, &culler)
         });
         Ok(IndirectPath {
+            max_draws: culler.draws(),
             culler,
             drawer,
             draw_scene,
-            max_draws: draws,
             displays,
             shadow,
             far,
@@ -139,7 +122,7 @@ impl IndirectPath {
         }
         if let (Some(shadow), Some(_)) = (&self.shadow, &plan.light_cull) {
             let size = self.draw_scene.shadow_map.size;
-            stats.bytes_uploaded += shadow.prepare(queue, (&plan.light, size), &self.culler);
+            stats.bytes_uploaded += shadow.prepare(queue, &plan.light, size, &self.culler);
         }
         stats.cpu_upload = start.elapsed();
         stats
@@ -150,17 +133,19 @@ impl IndirectPath {
     pub(super) fn encode_frame(
         &self,
         encoder: &mut wgpu::CommandEncoder,
-        (timer, log): (&mut Option<&mut GpuTimer>, &mut Vec<PassRecord>),
+        mut recording: Recording,
     ) -> FrameStats {
         let any = self.displays.first().map(|d| &d.cull);
         let mut stats = FrameStats {
-            dispatches: self.culler.encode_frame(encoder, any, (timer, log)),
+            dispatches: self.culler.encode_frame(encoder, any, recording.again()),
             ..Default::default()
         };
         if let Some(shadow) = &self.shadow {
-            let drawing = (&self.drawer, &self.draw_scene);
-            let (dispatches, draw_calls) =
-                shadow.encode(encoder, drawing, &self.culler, (timer, log));
+            let drawing = Drawing {
+                drawer: &self.drawer,
+                scene: &self.draw_scene,
+            };
+            let (dispatches, draw_calls) = shadow.encode(encoder, drawing, &self.culler, recording);
             stats.dispatches += dispatches;
             stats.draw_calls += draw_calls;
         }
@@ -172,7 +157,8 @@ impl IndirectPath {
     pub(super) fn encode_display(
         &self,
         encoder: &mut wgpu::CommandEncoder,
-        (index, target): (usize, &TargetViews),
+        index: usize,
+        target: &TargetViews,
         (timer, display): Timing,
         log: &mut Vec<PassRecord>,
     ) -> FrameStats {
@@ -182,7 +168,8 @@ impl IndirectPath {
         let draw_calls = draw_pass(
             encoder,
             target,
-            (true, multiview),
+            true,
+            multiview,
             (timer, display),
             what,
             |pass| self.draw(pass, index),
@@ -211,10 +198,15 @@ impl IndirectPath {
             ..FrameStats::default()
         };
         if let Some((far, Some(layer))) = self.far.as_ref().map(|f| (f, &f.displays[index])) {
-            let at = (index, layer, &self.draw_scene);
-            let (dispatches, draw_calls) =
-                far.layers
-                    .encode(encoder, at, &self.culler, (timer, display, log));
+            let recording = Recording { timer, log };
+            let (dispatches, draw_calls) = far.layers.encode(
+                encoder,
+                layer,
+                &self.draw_scene,
+                &self.culler,
+                recording,
+                display,
+            );
             stats.dispatches += dispatches;
             stats.draw_calls += draw_calls;
         }
@@ -257,6 +249,34 @@ impl IndirectPath {
             .draw_indirect(pass, self.max_draws, &state.cull.targets);
         composite + 1
     }
+}
+
+/// Each display's context, cull and draw bindings, for its pipeline variant `keys[i]`.
+fn indirect_displays(
+    device: &wgpu::Device,
+    keys: &[DrawKey],
+    drawing: Drawing,
+    frame: &wgpu::Buffer,
+    culler: &Culler,
+) -> Vec<IndirectDisplay> {
+    keys.iter()
+        .enumerate()
+        .map(|(i, &key)| {
+            let context = context_buffer(device);
+            let cull = culler.view(device, CullView::Display(i), [frame, &context]);
+            IndirectDisplay {
+                draw_bind_group: drawing.drawer.bind_group(
+                    device,
+                    [frame, &context],
+                    drawing.scene,
+                    &cull.targets.visible,
+                ),
+                context,
+                cull,
+                key,
+            }
+        })
+        .collect()
 }
 
 /// Each display's pipeline variant: multiview for stereo in `multiview`, else one or two

@@ -91,6 +91,7 @@ mod culler;
 mod far_pass;
 mod frame;
 mod indirect;
+mod inputs;
 mod options;
 mod own_passes;
 mod passes;
@@ -104,9 +105,10 @@ use checks::check_device;
 use classic::ClassicPath;
 pub use frame::{CullView, FramePlan, FrameStats, PlannedCull, instances_per_object};
 use indirect::IndirectPath;
+use inputs::PathInputs;
 pub use options::{CoarseMode, CullMode, LOD_PIXELS, RendererOptions, frame_lod};
 pub use passes::{Level, PassRecord};
-use passes::{close, open_display};
+use passes::{Recording, close, open_display};
 pub use readback::{Diagnostics, FarSplit};
 pub use sync::SyncStats;
 pub use targets::{DisplayTarget, TargetShape, TargetViews};
@@ -118,24 +120,14 @@ enum Path {
 }
 
 impl Path {
-    /// The path for `scene` with its instances at `places`, with room for `slots`
-    /// slots and places, for the displays (and coarse cull) of `plan`.
-    fn new(
-        device: &wgpu::Device,
-        (scene, places): (&Scene, &Places),
-        (plan, frame): (&FramePlan, &wgpu::Buffer),
-        (options, slots): (&RendererOptions, u32),
-    ) -> Result<Path> {
+    /// The path `inputs.options` choose, for the displays (and coarse cull) of
+    /// `inputs.plan`.
+    fn new(device: &wgpu::Device, inputs: PathInputs) -> Result<Path> {
         let scope = device.push_error_scope(wgpu::ErrorFilter::Validation);
-        let layout = CullLayout::with_places(scene, places);
-        let at = (plan, frame);
-        let path =
-            match options.mode.per_instance() {
-                false => IndirectPath::new(device, (scene, layout), at, (options, slots))
-                    .map(Path::Indirect),
-                true => ClassicPath::new(device, (scene, layout), at, (options, slots))
-                    .map(Path::Classic),
-            };
+        let path = match inputs.options.mode.per_instance() {
+            false => IndirectPath::new(device, inputs).map(Path::Indirect),
+            true => ClassicPath::new(device, inputs).map(Path::Classic),
+        };
         // Popped before returning any error, so the caller's device keeps its scopes.
         if let Some(e) = pollster::block_on(scope.pop()) {
             return Err(Error::Wgpu(e));
@@ -195,7 +187,7 @@ impl Renderer {
         check_device(device, scene, &options)?;
         let resolved = rig.resolve()?;
         let coarse = options.coarse_for(&resolved, Some(device));
-        let plan = FramePlan::of(rig, resolved, &options, (coarse, 0.0))?;
+        let plan = FramePlan::of(rig, resolved, &options, coarse, 0.0)?;
         let scatter = Scatters::new(
             device,
             options.windows(device, scene.instances.len() as u32),
@@ -203,7 +195,15 @@ impl Renderer {
         let frame = uniform_buffer::<FrameContext>(device, "stereocull.frame_context");
         let slots = scene.instances.len() as u32;
         let places = Places::tight(scene);
-        let path = Path::new(device, (scene, &places), (&plan, &frame), (&options, slots))?;
+        let inputs = PathInputs {
+            scene,
+            layout: CullLayout::with_places(scene, &places),
+            plan: &plan,
+            frame: &frame,
+            options: &options,
+            slots,
+        };
+        let path = Path::new(device, inputs)?;
         let shapes = rig
             .displays
             .iter()
@@ -307,8 +307,8 @@ impl Renderer {
             let timing = (&mut timer, &display);
             let log = &mut self.passes;
             let recorded = match &self.path {
-                Path::Indirect(p) => p.encode_display(encoder, (i, target), timing, log),
-                Path::Classic(p) => p.encode_display(encoder, (i, target), timing, log),
+                Path::Indirect(p) => p.encode_display(encoder, i, target, timing, log),
+                Path::Classic(p) => p.encode_display(encoder, i, target, timing, log),
             };
             stats.draw_calls += recorded.draw_calls;
             stats.dispatches += recorded.dispatches;
@@ -332,10 +332,13 @@ impl Renderer {
         if scattered > 0 {
             self.passes.push(PassRecord::frame("scatter"));
         }
-        let log = (timer, &mut self.passes);
+        let recording = Recording {
+            timer,
+            log: &mut self.passes,
+        };
         let stats = match &self.path {
-            Path::Indirect(p) => p.encode_frame(encoder, log),
-            Path::Classic(p) => p.encode_frame(encoder, log),
+            Path::Indirect(p) => p.encode_frame(encoder, recording),
+            Path::Classic(p) => p.encode_frame(encoder, recording),
         };
         FrameStats {
             dispatches: stats.dispatches + scattered,
@@ -360,7 +363,7 @@ impl Renderer {
         time: f32,
         targets: &[DisplayTarget],
     ) -> Result<FrameStats> {
-        self.submit_frame_timed(device, queue, (rig, time), targets, None)
+        self.submit_frame_timed(device, queue, rig, time, targets, None)
     }
 
     /// [`Renderer::submit_frame`] with GPU timing and pipeline statistics recorded into
@@ -369,7 +372,8 @@ impl Renderer {
         &mut self,
         device: &wgpu::Device,
         queue: &wgpu::Queue,
-        (rig, time): (&Rig, f32),
+        rig: &Rig,
+        time: f32,
         targets: &[DisplayTarget],
         timer: Option<&mut GpuTimer>,
     ) -> Result<FrameStats> {

@@ -73,7 +73,8 @@ impl PassRecord {
 pub(super) fn draw_pass(
     encoder: &mut wgpu::CommandEncoder,
     target: &TargetViews,
-    (clear, multiview): (bool, bool),
+    clear: bool,
+    multiview: bool,
     timing: Timing,
     logged: Logged,
     record: impl FnOnce(&mut wgpu::RenderPass) -> u32,
@@ -82,6 +83,23 @@ pub(super) fn draw_pass(
         begin_pass(encoder, target.attachments(), clear, multiview, writes).forget_lifetime()
     });
     render_pass(encoder, begin, (timing, logged), record)
+}
+
+/// Where a frame's passes are recorded besides the encoder: the frame's timer, if any,
+/// and the pass log.
+pub(super) struct Recording<'a, 'b> {
+    pub(super) timer: &'a mut Option<&'b mut GpuTimer>,
+    pub(super) log: &'a mut Vec<PassRecord>,
+}
+
+impl<'b> Recording<'_, 'b> {
+    /// The same recording, for one more pass (a shorter reborrow).
+    pub(super) fn again(&mut self) -> Recording<'_, 'b> {
+        Recording {
+            timer: &mut *self.timer,
+            log: &mut *self.log,
+        }
+    }
 }
 
 /// The frame's timer, if any, and the scope a pass nests in.

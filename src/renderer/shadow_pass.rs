@@ -4,11 +4,10 @@
 
 use super::culler::Culler;
 use super::frame::CullView;
-use super::passes::{PassRecord, close, open_display, opener, render_pass};
+use super::passes::{PassRecord, Recording, close, open_display, opener, render_pass};
 use super::view_pass::ViewPass;
 use crate::contexts::DisplayContext;
-use crate::draw::{DrawScene, Drawer, cleared_depth};
-use crate::profiling::GpuTimer;
+use crate::draw::{Drawing, cleared_depth};
 use crate::shadow::LightView;
 
 /// The light as one more view.
@@ -19,13 +18,12 @@ pub(super) struct ShadowPass {
 impl ShadowPass {
     pub(super) fn new(
         device: &wgpu::Device,
-        drawing: (&Drawer, &DrawScene),
-        (frame, culler): (&wgpu::Buffer, &Culler),
-        sizes: (u32, u32),
+        drawing: Drawing,
+        frame: &wgpu::Buffer,
+        culler: &Culler,
     ) -> ShadowPass {
-        let view = (frame, culler, CullView::Light);
         ShadowPass {
-            view: ViewPass::new(device, drawing, view, sizes),
+            view: ViewPass::new(device, drawing, frame, culler, CullView::Light),
         }
     }
 
@@ -34,7 +32,8 @@ impl ShadowPass {
     pub(super) fn prepare(
         &self,
         queue: &wgpu::Queue,
-        (view, size): (&LightView, u32),
+        view: &LightView,
+        size: u32,
         culler: &Culler,
     ) -> u64 {
         let context = DisplayContext::light(view, size);
@@ -47,11 +46,11 @@ impl ShadowPass {
     pub(super) fn encode(
         &self,
         encoder: &mut wgpu::CommandEncoder,
-        (drawer, draw_scene): (&Drawer, &DrawScene),
+        drawing: Drawing,
         culler: &Culler,
-        (timer, log): (&mut Option<&mut GpuTimer>, &mut Vec<PassRecord>),
+        Recording { timer, log }: Recording,
     ) -> (u32, u32) {
-        let Some(shadow) = &drawer.shadow else {
+        let Some(shadow) = &drawing.drawer.shadow else {
             return (0, 0);
         };
         let frame = open_display(timer, "shadow", encoder);
@@ -64,7 +63,7 @@ impl ShadowPass {
                 .begin_render_pass(&wgpu::RenderPassDescriptor {
                     label: Some("stereocull.shadow"),
                     color_attachments: &[],
-                    depth_stencil_attachment: Some(cleared_depth(&draw_scene.shadow_map.view)),
+                    depth_stencil_attachment: Some(cleared_depth(&drawing.scene.shadow_map.view)),
                     timestamp_writes: writes,
                     occlusion_query_set: None,
                     multiview_mask: None,
@@ -74,7 +73,7 @@ impl ShadowPass {
         let logged = (log, PassRecord::frame("shadow"));
         let draw_calls = render_pass(encoder, begin, ((timer, &frame), logged), |pass| {
             pass.set_pipeline(&shadow.pipeline);
-            self.view.draw(pass, (drawer, draw_scene), None)
+            self.view.draw(pass, drawing, None)
         });
         close(timer, encoder, frame);
         (dispatches, draw_calls)

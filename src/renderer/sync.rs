@@ -3,6 +3,7 @@
 
 use super::checks::check_device;
 use super::frame::FramePlan;
+use super::inputs::PathInputs;
 use super::{Path, Renderer};
 use crate::error::Result;
 use crate::live::{Changes, LiveScene, MoveEdit, PlaceEdit};
@@ -49,7 +50,7 @@ impl Renderer {
         let (scene, places) = (live.scene(), live.places());
         let needed = (scene.instances.len() as u32).max(places.len());
         if changes.geometry || needed > self.slots {
-            return self.reallocate(device, (scene, places), needed);
+            return self.reallocate(device, scene, places, needed);
         }
         if changes.restructured {
             return Ok(self.reload(queue, scene, places));
@@ -71,14 +72,22 @@ impl Renderer {
     fn reallocate(
         &mut self,
         device: &wgpu::Device,
-        (scene, places): (&Scene, &Places),
+        scene: &Scene,
+        places: &Places,
         needed: u32,
     ) -> Result<SyncStats> {
         check_device(device, scene, &self.options)?;
         let room = needed + needed / 2;
         let plan = FramePlan::new(&self.rig, &self.options, self.coarse, 0.0)?;
-        let at = (&plan, &self.frame);
-        self.path = Path::new(device, (scene, places), at, (&self.options, room))?;
+        let inputs = PathInputs {
+            scene,
+            layout: CullLayout::with_places(scene, places),
+            plan: &plan,
+            frame: &self.frame,
+            options: &self.options,
+            slots: room,
+        };
+        self.path = Path::new(device, inputs)?;
         self.slots = room;
         // The bindings may now need more windows.
         self.scatter = Scatters::new(device, self.options.windows(device, room));

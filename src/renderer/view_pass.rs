@@ -9,7 +9,7 @@ use crate::buffers::write;
 use crate::contexts::DisplayContext;
 use crate::contexts::context_buffer;
 use crate::cull::gpu::CullTargets;
-use crate::draw::{DrawScene, Drawer};
+use crate::draw::{Drawer, Drawing};
 use crate::records::uniform_bytes;
 use crate::shaders::DrawKey;
 
@@ -23,24 +23,27 @@ pub(super) struct ViewPass {
 }
 
 impl ViewPass {
+    /// `view`, culled by `culler` and drawn with `drawing` (both bound to `frame`, the
+    /// frame context).
     pub(super) fn new(
         device: &wgpu::Device,
-        (drawer, draw_scene): (&Drawer, &DrawScene),
-        (frame, culler, view): (&wgpu::Buffer, &Culler, CullView),
-        (slots, max_draws): (u32, u32),
+        drawing: Drawing,
+        frame: &wgpu::Buffer,
+        culler: &Culler,
+        view: CullView,
     ) -> ViewPass {
         let context = context_buffer(device);
-        let cull = culler.view(device, view, [frame, &context], (slots, max_draws));
+        let cull = culler.view(device, view, [frame, &context]);
         ViewPass {
-            draw_bind_group: drawer.bind_group(
+            draw_bind_group: drawing.drawer.bind_group(
                 device,
                 [frame, &context],
-                draw_scene,
+                drawing.scene,
                 &cull.targets.visible,
             ),
             context,
             cull,
-            max_draws,
+            max_draws: culler.draws(),
         }
     }
 
@@ -82,12 +85,12 @@ impl ViewPass {
     pub(super) fn draw(
         &self,
         pass: &mut wgpu::RenderPass,
-        (drawer, draw_scene): (&Drawer, &DrawScene),
+        Drawing { drawer, scene }: Drawing,
         key: Option<DrawKey>,
     ) -> u32 {
         match key {
-            Some(key) => drawer.bind(pass, key, draw_scene, &self.draw_bind_group),
-            None => Drawer::bind_resources(pass, draw_scene, &self.draw_bind_group),
+            Some(key) => drawer.bind(pass, key, scene, &self.draw_bind_group),
+            None => Drawer::bind_resources(pass, scene, &self.draw_bind_group),
         }
         drawer.draw_indirect(pass, self.max_draws, &self.cull.targets);
         1

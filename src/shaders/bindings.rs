@@ -139,7 +139,8 @@ const fn windowed(
     name: &'static str,
     access: Access,
     wgsl_type: &'static str,
-    (stages, which): (wgpu::ShaderStages, Windowed),
+    stages: wgpu::ShaderStages,
+    which: Windowed,
 ) -> Binding {
     Binding {
         windowed: Some(which),
@@ -225,7 +226,8 @@ pub const CULL_BINDINGS: [Binding; 18] = [
         "spheres",
         Access::StorageRead,
         "array<vec4<f32>>",
-        (COMPUTE, Windowed::Spheres),
+        COMPUTE,
+        Windowed::Spheres,
     ),
 ];
 
@@ -263,7 +265,8 @@ pub const DRAW_BINDINGS: [Binding; 4] = [
         "instances",
         Access::StorageRead,
         "array<InstanceRecord>",
-        (wgpu::ShaderStages::VERTEX_FRAGMENT, Windowed::Instances),
+        wgpu::ShaderStages::VERTEX_FRAGMENT,
+        Windowed::Instances,
     ),
 ];
 
@@ -288,14 +291,16 @@ pub const SCATTER_BINDINGS: [Binding; 6] = [
         "instances",
         Access::StorageReadWrite,
         "array<InstanceRecord>",
-        (COMPUTE, Windowed::Instances),
+        COMPUTE,
+        Windowed::Instances,
     ),
     // World bounding spheres in cull order (the GPU culler's; a stand-in otherwise).
     windowed(
         "spheres",
         Access::StorageReadWrite,
         "array<vec4<f32>>",
-        (COMPUTE, Windowed::Spheres),
+        COMPUTE,
+        Windowed::Spheres,
     ),
 ];
 
@@ -317,7 +322,8 @@ pub(crate) fn compute_pipeline(
     device: &wgpu::Device,
     label: &str,
     layout: &wgpu::PipelineLayout,
-    (source, entry): (String, &str),
+    source: String,
+    entry: &str,
 ) -> wgpu::ComputePipeline {
     let module = device.create_shader_module(wgpu::ShaderModuleDescriptor {
         label: Some(label),
@@ -458,8 +464,10 @@ pub fn bind_group_layout(
 /// whole, or a windowed one as its windows, each `1 << shift` elements further.
 pub fn bind_group<const N: usize>(
     device: &wgpu::Device,
-    (label, layout): (&str, &wgpu::BindGroupLayout),
-    (bindings, windows): (&[Binding], &Windows),
+    label: &str,
+    layout: &wgpu::BindGroupLayout,
+    bindings: &[Binding],
+    windows: &Windows,
     buffers: [&wgpu::Buffer; N],
 ) -> wgpu::BindGroup {
     let mut entries = Vec::new();
