@@ -212,6 +212,23 @@ fn bad_input_prints_one_line_and_fails() {
     }
 }
 
+/// Every fuzzing finding renders as one line and exit code 1, never a panic (101).
+#[test]
+fn hostile_gltf_findings_render_as_one_line_errors() {
+    let dir = concat!(env!("CARGO_MANIFEST_DIR"), "/fuzz/regressions/gltf_import");
+    let out_dir = tempfile::tempdir().unwrap();
+    let out_dir = out_dir.path().to_str().unwrap();
+    for entry in std::fs::read_dir(dir).unwrap() {
+        let path = entry.unwrap().path();
+        let scene = path.to_str().unwrap();
+        let out = stereocull(&["render", "--scene", scene, "--out", out_dir]);
+        let err = String::from_utf8_lossy(&out.stderr);
+        assert_eq!(out.status.code(), Some(1), "{scene}: {err}");
+        assert_eq!(err.trim_end().lines().count(), 1, "{scene}: {err}");
+        assert!(err.starts_with("stereocull: scene "), "{scene}: {err}");
+    }
+}
+
 fn drawn_pixels(path: &std::path::Path, x0: u32, width: u32) -> usize {
     let image = image::open(path).unwrap().to_rgba8();
     let clear = *image.get_pixel(0, 0);

@@ -291,6 +291,55 @@ fn float_indices_are_an_error_naming_the_accessor() {
     );
 }
 
+/// Found by the `gltf_import` fuzz target (a misspelled source field): the gltf crate
+/// unwrapped the missing `uri` of an image without a `bufferView`.
+#[test]
+fn an_image_without_a_source_is_an_error_naming_the_image() {
+    let msg = regression_error("image-with-mime-type-but-neither-uri-nor-buffer-view.glb");
+    assert!(
+        msg.contains("images[0] (\"lens\") has neither a uri nor a bufferView"),
+        "{msg}"
+    );
+}
+
+/// Found by the `gltf_import` fuzz target in fork mode: the gltf crate unwrapped the
+/// missing `mimeType` of an image in a buffer view.
+#[test]
+fn an_image_in_a_buffer_view_needs_a_mime_type() {
+    let msg = regression_error("image-in-buffer-view-without-mime-type.glb");
+    assert!(
+        msg.contains("images[0] lies in a bufferView but has no mimeType"),
+        "{msg}"
+    );
+    let msg = regression_error("image-with-both-uri-and-buffer-view.gltf");
+    assert!(
+        msg.contains("images[0] has both a uri and a bufferView"),
+        "{msg}"
+    );
+}
+
+/// Found reading the gltf crate: `import_buffers` unwrapped the percent-decoding of a
+/// relative buffer uri, which fails when the bytes are not UTF-8.
+#[test]
+fn a_buffer_uri_that_decodes_to_invalid_utf8_is_an_error_naming_it() {
+    let msg = regression_error("buffer-uri-percent-decoding-to-invalid-utf8.gltf");
+    assert!(
+        msg.contains("buffers[0].uri \"mesh%FF%FE.bin\" percent-decodes"),
+        "{msg}"
+    );
+}
+
+/// Found reading the gltf crate: an animation's validator skips its channels' targets,
+/// which `Channel::target().node()` unwraps (the skins and animations issue reads them).
+#[test]
+fn an_animation_channel_targeting_no_node_is_an_error() {
+    let msg = regression_error("animation-channel-targeting-a-node-that-does-not-exist.gltf");
+    assert!(
+        msg.contains("animations[0].channels[0].target.node: node 7 does not exist"),
+        "{msg}"
+    );
+}
+
 /// Back faces are culled, so the import keeps what the author meant: a node that mirrors
 /// gets the mesh's reversed twin (shared by every mirroring node), a `doubleSided`
 /// material both windings.

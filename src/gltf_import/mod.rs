@@ -17,6 +17,7 @@ use crate::error::{Error, Result};
 use crate::scene::{Animation, Instance, Scene, Vertex, both_windings};
 
 mod materials;
+mod preconditions;
 
 use materials::check_images;
 
@@ -73,11 +74,12 @@ pub fn import_bytes(bytes: &[u8], base: Option<&Path>, origin: &Path) -> Result<
     Ok(importer.scene)
 }
 
-/// `gltf::Gltf::from_slice`, with two inputs that make gltf 1.4 panic turned into errors
-/// (both found by the `gltf_import` fuzz target; regressions in
+/// `gltf::Gltf::from_slice`, with the inputs that make gltf 1.4 panic turned into errors
+/// (found by the `gltf_import` fuzz target; regressions in
 /// `fuzz/regressions/gltf_import/`): a GLB header length shorter than the header (an
-/// unchecked subtraction) and a POSITION accessor index out of range (its validator
-/// indexes that accessor unchecked).
+/// unchecked subtraction), a POSITION accessor index out of range (its validator
+/// indexes that accessor unchecked), and what the crate's accessors unwrap unvalidated
+/// ([`preconditions`]).
 fn parse(bytes: &[u8]) -> Step<gltf::Gltf> {
     const GLB_HEADER: u32 = 12;
     if let Some(length) = bytes.strip_prefix(b"glTF").and_then(|b| b.get(4..8)) {
@@ -103,6 +105,7 @@ fn parse(bytes: &[u8]) -> Step<gltf::Gltf> {
             }
         }
     }
+    preconditions::check(&json)?;
     let document = gltf::Document::from_json(json).map_err(|e| e.to_string())?;
     Ok(gltf::Gltf {
         document,
