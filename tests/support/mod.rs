@@ -155,14 +155,14 @@ impl Tolerance {
         share: 0.0,
     };
 
-    /// Two differently compiled shaders doing the same arithmetic (a material hook that
-    /// restates the built-in shading, the caller's own pipeline, bindings read through
-    /// windows): llvmpipe compiles each for the host's vector width (256-bit AVX2 or
-    /// 512-bit AVX-512) and LLVM may contract `a * b + c` into one FMA in one and not in
-    /// the other. A color's last bit then rounds one level apart, and a clip position's
-    /// last bit can flip the coverage of a pixel on an edge. So: one level anywhere,
-    /// and at most 0.1 % of the pixels (edge pixels) beyond it. Seen on an Intel Xeon
-    /// against AMD EPYC: 1 and 2 pixels of 15,360.
+    /// Two shaders that compute the same values with differently written code (a
+    /// material hook that restates the built-in shading, the caller's own pipeline):
+    /// LLVM may contract `a * b + c` into one FMA in one expression tree and not in the
+    /// other, and whether it does depends on the host (llvmpipe compiles for its vector
+    /// width). A color's last bit then rounds one level apart, and a clip position's last
+    /// bit can flip the coverage of a pixel on an edge. So: one level anywhere, and at
+    /// most 0.1 % of the pixels (edge pixels) beyond it. Seen on an Intel Xeon, exact on
+    /// AMD EPYC: 1 and 2 pixels of 24,000, each one level off (`stereocull diff`).
     pub const RECOMPILED: Tolerance = Tolerance {
         levels: 1,
         share: 0.001,
