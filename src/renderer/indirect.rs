@@ -7,29 +7,24 @@
 
 use std::time::Instant;
 
-use super::culler::{CullShape, Culler, ViewCull};
+use super::culler::{CullShape, Culler};
 use super::far_pass::{Far, FarLayers};
 use super::frame::{CullView, FramePlan, FrameStats};
 use super::inputs::PathInputs;
 use super::passes::{PassRecord, Recording, Timing, draw_pass};
 use super::shadow_pass::ShadowPass;
 use super::targets::TargetViews;
-use crate::buffers::write;
-use crate::contexts::context_buffer;
+use super::view_pass::ViewPass;
 use crate::cull::gpu::CullTargets;
 use crate::draw::{DrawFeatures, DrawScene, Drawer, Drawing};
 use crate::error::Result;
 use crate::modes::StereoMode;
-use crate::records::uniform_bytes;
 use crate::shaders::DrawKey;
 
-/// One display's buffers and bindings.
+/// One display: a view (its context, cull and draw bindings) and its pipeline variant,
+/// which also fixes the instances per visible object.
 pub(super) struct IndirectDisplay {
-    context: wgpu::Buffer,
-    /// Filled by the culler: its passes, or its upload.
-    pub(super) cull: ViewCull,
-    draw_bind_group: wgpu::BindGroup,
-    /// The pipeline variant, which also fixes the instances per visible object.
+    pub(super) view: ViewPass,
     key: DrawKey,
 }
 
@@ -91,7 +86,7 @@ impl IndirectPath {
             .then(|| ShadowPass::new(device, drawing, frame, &culler));
         let far = options.far_layer.then(|| {
             let layers = FarLayers::new(device, target, material, windows);
-            let contexts: Vec<&wgpu::Buffer> = displays.iter().map(|d| &d.context).collect();
+            let contexts: Vec<&wgpu::Buffer> = displays.iter().map(|d| d.view.context()).collect();
             Far::new(device, layers, plan, &draw_scene, frame, &contexts, &culler)
         });
         Ok(IndirectPath {
@@ -114,8 +109,7 @@ impl IndirectPath {
         stats.cpu_cull = start.elapsed();
         let start = Instant::now();
         for (state, ctx) in self.displays.iter().zip(&plan.displays) {
-            stats.bytes_uploaded += write(queue, &state.context, &uniform_bytes(ctx));
-            stats.bytes_uploaded += self.culler.upload(queue, &state.cull);
+            stats.bytes_uploaded += state.view.prepare(queue, ctx, &self.culler);
         }
         if let Some(far) = &mut self.far {
             stats.bytes_uploaded += far.prepare(queue, plan, &self.culler);
@@ -135,7 +129,7 @@ impl IndirectPath {
         encoder: &mut wgpu::CommandEncoder,
         mut recording: Recording,
     ) -> FrameStats {
-        let any = self.displays.first().map(|d| &d.cull);
+        let any = self.displays.first().map(|d| d.view.view_cull());
         let mut stats = FrameStats {
             dispatches: self.culler.encode_frame(encoder, any, recording.again()),
             ..Default::default()
@@ -189,12 +183,10 @@ impl IndirectPath {
         (timer, display): Timing,
         log: &mut Vec<PassRecord>,
     ) -> FrameStats {
-        let state = &self.displays[index];
+        let view = &self.displays[index].view;
         let what = (&mut *log, PassRecord::display("cull", index));
         let mut stats = FrameStats {
-            dispatches: self
-                .culler
-                .encode(encoder, &state.cull, (timer, display), what),
+            dispatches: view.encode_cull(encoder, &self.culler, (timer, display), what),
             ..FrameStats::default()
         };
         if let Some((far, Some(layer))) = self.far.as_ref().map(|f| (f, &f.displays[index])) {
@@ -216,10 +208,7 @@ impl IndirectPath {
     /// Display `index`'s one multi-draw-indirect call into `pass`, whose pipeline the
     /// caller set (built on [`Drawer::layout`] and the decode).
     pub(super) fn draw_with_own_pipeline(&self, pass: &mut wgpu::RenderPass, index: usize) {
-        let state = &self.displays[index];
-        Drawer::bind_resources(pass, &self.draw_scene, &state.draw_bind_group);
-        self.drawer
-            .draw_indirect(pass, self.max_draws, &state.cull.targets);
+        self.displays[index].view.draw(pass, self.drawing(), None);
     }
 
     /// How the instance records are bound.
@@ -232,7 +221,7 @@ impl IndirectPath {
     }
 
     pub(super) fn cull_targets(&self, index: usize) -> &CullTargets {
-        &self.displays[index].cull.targets
+        self.displays[index].view.cull()
     }
 
     /// Display `index`'s one multi-draw-indirect call into `pass`.
@@ -243,15 +232,18 @@ impl IndirectPath {
             Some((far, Some(layer))) => far.layers.composite(pass, layer),
             _ => 0,
         };
-        self.drawer
-            .bind(pass, state.key, &self.draw_scene, &state.draw_bind_group);
-        self.drawer
-            .draw_indirect(pass, self.max_draws, &state.cull.targets);
-        composite + 1
+        composite + state.view.draw(pass, self.drawing(), Some(state.key))
+    }
+
+    fn drawing(&self) -> Drawing<'_> {
+        Drawing {
+            drawer: &self.drawer,
+            scene: &self.draw_scene,
+        }
     }
 }
 
-/// Each display's context, cull and draw bindings, for its pipeline variant `keys[i]`.
+/// Each display's view, for its pipeline variant `keys[i]`.
 fn indirect_displays(
     device: &wgpu::Device,
     keys: &[DrawKey],
@@ -259,23 +251,9 @@ fn indirect_displays(
     frame: &wgpu::Buffer,
     culler: &Culler,
 ) -> Vec<IndirectDisplay> {
-    keys.iter()
-        .enumerate()
-        .map(|(i, &key)| {
-            let context = context_buffer(device);
-            let cull = culler.view(device, CullView::Display(i), [frame, &context]);
-            IndirectDisplay {
-                draw_bind_group: drawing.drawer.bind_group(
-                    device,
-                    [frame, &context],
-                    drawing.scene,
-                    &cull.targets.visible,
-                ),
-                context,
-                cull,
-                key,
-            }
-        })
+    let view = |i| ViewPass::new(device, drawing, frame, culler, CullView::Display(i));
+    (keys.iter().enumerate())
+        .map(|(i, &key)| IndirectDisplay { view: view(i), key })
         .collect()
 }
 

@@ -136,7 +136,7 @@ impl IndirectPath {
         queue: &wgpu::Queue,
         index: usize,
     ) -> Result<CullOutput> {
-        self.read_targets(device, queue, &self.displays[index].cull.targets)
+        self.read_targets(device, queue, self.displays[index].view.cull())
     }
 
     /// Display `index`'s far layer's cull buffers (`None` without one), read back after
@@ -189,7 +189,7 @@ impl IndirectPath {
     ) -> Result<Vec<u32>> {
         self.displays
             .iter()
-            .map(|d| Ok(read_counts(device, queue, &d.cull.targets)?[1]))
+            .map(|d| Ok(read_counts(device, queue, d.view.cull())?[1]))
             .collect()
     }
 }

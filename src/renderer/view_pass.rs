@@ -52,6 +52,11 @@ impl ViewPass {
         &self.context
     }
 
+    /// The view's cull, as the culler keeps it.
+    pub(super) fn view_cull(&self) -> &ViewCull {
+        &self.cull
+    }
+
     /// The view's cull outputs, per the cull contract.
     pub(super) fn cull(&self) -> &CullTargets {
         &self.cull.targets
