@@ -1,6 +1,8 @@
 //! The binding lists of the buffer-bound pipeline families, and everything made from
 //! them: WGSL declarations, bind-group layouts and bind groups, pipelines.
 
+use super::windows::{Windowed, Windows};
+
 /// One buffer binding of group 0: its WGSL declaration and its layout entry both come
 /// from here; its binding number is its position in the list (a windowed binding takes
 /// one number per window, so windowed bindings come last).
@@ -19,94 +21,10 @@ pub struct Binding {
     pub windowed: Option<Windowed>,
 }
 
-/// The per-instance arrays that may outgrow the device's largest storage binding.
-#[derive(Clone, Copy, Debug, PartialEq, Eq)]
-pub enum Windowed {
-    /// Instance records, 64 bytes each.
-    Instances,
-    /// World bounding spheres, 16 bytes each.
-    Spheres,
-}
-
-impl Windowed {
-    /// Bytes per element.
-    pub fn stride(self) -> u64 {
-        match self {
-            Windowed::Instances => 64,
-            Windowed::Spheres => 16,
-        }
-    }
-}
-
-/// How one windowed array is bound: `count` bindings of `1 << shift` elements each
-/// (the last may hold fewer); one window binds the buffer whole.
-#[derive(Clone, Copy, Debug, PartialEq, Eq)]
-pub struct Window {
-    /// Bindings.
-    pub count: u32,
-    /// Elements per binding: `1 << shift`.
-    pub shift: u32,
-}
-
-impl Window {
-    /// One binding over the whole buffer.
-    pub const WHOLE: Window = Window {
-        count: 1,
-        shift: 31,
-    };
-
-    /// Windows for `slots` elements of `stride` bytes, at most `limit` bytes a binding.
-    pub fn new(slots: u32, stride: u64, limit: u64) -> Window {
-        let per = (limit / stride).max(1);
-        let shift = (u64::BITS - 1 - per.leading_zeros()).min(31);
-        match (slots as u64).div_ceil(1 << shift) {
-            0 | 1 => Window::WHOLE,
-            count => Window {
-                count: count as u32,
-                shift,
-            },
-        }
-    }
-}
-
-/// How every windowed array of a renderer is bound.
-#[derive(Clone, Copy, Debug, PartialEq, Eq)]
-pub struct Windows {
-    /// The instance records'.
-    pub instances: Window,
-    /// The world spheres'.
-    pub spheres: Window,
-}
-
-impl Windows {
-    /// Every array bound whole.
-    pub const WHOLE: Windows = Windows {
-        instances: Window::WHOLE,
-        spheres: Window::WHOLE,
-    };
-
-    /// For `slots` instances with bindings of at most `limit` bytes.
-    pub fn new(slots: u32, limit: u64) -> Windows {
-        let of = |w: Windowed| Window::new(slots, w.stride(), limit);
-        Windows {
-            instances: of(Windowed::Instances),
-            spheres: of(Windowed::Spheres),
-        }
-    }
-
-    /// How `windowed` is bound.
-    pub fn of(&self, windowed: Windowed) -> Window {
-        match windowed {
-            Windowed::Instances => self.instances,
-            Windowed::Spheres => self.spheres,
-        }
-    }
-
-    /// The window count of each binding of `list`, in order (1 for plain ones).
-    fn counts(&self, list: &[Binding]) -> impl Iterator<Item = u32> {
-        list.iter()
-            .map(|b| b.windowed.map_or(1, |w| self.of(w).count))
-    }
+/// The window count of each binding of `list`, in order (1 for plain ones).
+fn window_counts<'a>(windows: &'a Windows, list: &'a [Binding]) -> impl Iterator<Item = u32> + 'a {
+    list.iter()
+        .map(|b| b.windowed.map_or(1, |w| windows.of(w).count))
 }
 
 /// A binding's address space and access.
@@ -350,7 +268,7 @@ pub(crate) fn dispatch_size(groups: u32, max_per_dimension: u32) -> (u32, u32) {
 pub(super) fn declarations(bindings: &[Binding], group: u32, windows: &Windows) -> String {
     let mut number = 0;
     let mut out = String::new();
-    for (b, count) in bindings.iter().zip(windows.counts(bindings)) {
+    for (b, count) in bindings.iter().zip(window_counts(windows, bindings)) {
         let space = match b.access {
             Access::Uniform => "uniform",
             Access::StorageRead => "storage, read",
@@ -434,7 +352,7 @@ pub fn bind_group_layout(
     windows: &Windows,
 ) -> wgpu::BindGroupLayout {
     let mut entries = Vec::new();
-    for (b, count) in bindings.iter().zip(windows.counts(bindings)) {
+    for (b, count) in bindings.iter().zip(window_counts(windows, bindings)) {
         for _ in 0..count {
             entries.push(wgpu::BindGroupLayoutEntry {
                 binding: entries.len() as u32,

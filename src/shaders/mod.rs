@@ -32,13 +32,15 @@ const DRAW: &str = include_str!("../../wgsl/draw.wgsl");
 const DRAW_MULTIVIEW: &str = include_str!("../../wgsl/draw_multiview.wgsl");
 
 mod bindings;
+mod windows;
 
 use bindings::declarations;
 pub use bindings::{
-    Access, Binding, COARSE_BINDINGS, CULL_BINDINGS, DRAW_BINDINGS, SCATTER_BINDINGS, Window,
-    Windowed, Windows, bind_group, bind_group_layout,
+    Access, Binding, COARSE_BINDINGS, CULL_BINDINGS, DRAW_BINDINGS, SCATTER_BINDINGS, bind_group,
+    bind_group_layout,
 };
 pub(crate) use bindings::{compute_pipeline, dispatch_size, pipeline_layout};
+pub use windows::{Window, Windowed, Windows};
 
 /// What a scatter's edits carry; each edit's first word is its key (a place, or a
 /// slot), at most one edit per key.
