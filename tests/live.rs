@@ -407,6 +407,8 @@ fn a_moved_instance_renders_like_a_fresh_scene_with_it_there() {
         let want = support::render(&gpu, &fresh, &rig, options)
             .unwrap()
             .remove(0);
+        // Exact on any CPU: the scatter writes the same record rows a fresh upload holds,
+        // and the same pipeline draws the same draws.
         assert_images_match(
             &format!("moved-{}", mode.name()),
             &moved,
@@ -574,6 +576,7 @@ fn respawns_are_sparse_edits() {
             read_rgba8(&gpu.device, &gpu.queue, &targets[0].color).unwrap()
         };
         let fresh = &mut Renderer::new(&gpu.device, live.scene(), &rig, options_for(cull)).unwrap();
+        // Exact on any CPU: the same records and culls, drawn by the same pipelines.
         assert_images_match(
             &format!("respawned-{cull:?}"),
             &draw(&mut renderer),

@@ -141,6 +141,7 @@ fn windowed_bindings_draw_what_whole_ones_draw() {
             images(&gpu, &mut renderer, (&rig, &mut Some(&mut live)))
         });
         let name = format!("windows-moved-{cull:?}");
+        // Exact for the reason above.
         assert_images_match(&name, &windowed[0], &whole[0], Tolerance::EXACT);
     }
 }
