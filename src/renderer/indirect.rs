@@ -32,8 +32,6 @@ pub(super) struct IndirectPath {
     pub(super) culler: Culler,
     drawer: Drawer,
     pub(super) draw_scene: DrawScene,
-    /// Draw entries per display: meshes times levels of detail.
-    pub(super) max_draws: u32,
     pub(super) displays: Vec<IndirectDisplay>,
     /// With shadows: the frame's shadow pass.
     shadow: Option<ShadowPass>,
@@ -90,7 +88,6 @@ impl IndirectPath {
             Far::new(device, layers, plan, &draw_scene, frame, &contexts, &culler)
         });
         Ok(IndirectPath {
-            max_draws: culler.draws(),
             culler,
             drawer,
             draw_scene,

@@ -173,7 +173,7 @@ impl IndirectPath {
             0 => Vec::new(),
             n => read_pod(device, queue, &cull.visible, 4 * n as u64)?,
         };
-        let draws_bytes = (size_of::<DrawArgs>() as u32 * self.max_draws) as u64;
+        let draws_bytes = (size_of::<DrawArgs>() as u32 * self.culler.draws()) as u64;
         Ok(CullOutput {
             visible,
             draws: read_pod(device, queue, &cull.draws, draws_bytes)?,

@@ -213,12 +213,6 @@ impl DrawKey {
         }
     }
 
-    /// Instances per visible object in this variant's draws: 2 when one draw covers
-    /// both eyes by doubled instances, else 1.
-    pub fn instances_per_object(self) -> u32 {
-        if self.multiview { 1 } else { self.views }
-    }
-
     /// The pipeline's label.
     pub fn label(self) -> String {
         let seam = if self.clip_distances {
