@@ -384,8 +384,8 @@ fn stress_reports_per_frame_and_summary_figures() {
     assert_eq!(s["draw_calls_per_frame"].as_u64(), Some(5), "one per wall");
     assert_eq!(
         s["dispatches_per_frame"].as_u64(),
-        Some(15),
-        "three per wall"
+        Some(20),
+        "four per wall: cull, scan, draws, compact"
     );
     assert!(s["cpu_ms_median"].as_f64().unwrap() > 0.0);
     assert_eq!(
@@ -480,13 +480,17 @@ fn profile_writes_table_csv_json_and_chart() {
         .iter()
         .position(|n| *n == "hmd instanced gpu 900")
         .unwrap();
-    assert_eq!(names[instanced + 1..instanced + 4], ["hmd", "cull", "draw"]);
+    // GPU culling times the floor kernel in the frame scope, before the display.
+    assert_eq!(
+        names[instanced + 1..instanced + 6],
+        ["frame", "cull_floor", "hmd", "cull", "draw"]
+    );
     let csv = std::fs::read_to_string(dir.path().join("profile.csv")).unwrap();
     let mut lines = csv.lines();
     assert_eq!(
         lines.next(),
         Some(
-            "mode,cull,rig,instances,cpu_ms_median,cpu_ms_p95,gpu_ms_median,gpu_ms_p95,draw_calls,dispatches,bytes_uploaded,adapter,moving_percent,churn_percent,sync_ms_median,triangles_submitted,coarse_cull,sphere_tests,shadows,shadow_passes"
+            "mode,cull,rig,instances,cpu_ms_median,cpu_ms_p95,gpu_ms_median,gpu_ms_p95,draw_calls,dispatches,bytes_uploaded,adapter,moving_percent,churn_percent,sync_ms_median,triangles_submitted,coarse_cull,sphere_tests,shadows,shadow_passes,floor_ms_median,cull_over_floor"
         )
     );
     // 3 classic modes (CPU cull only) + instanced and multiview with both culls, per count.
@@ -508,6 +512,15 @@ fn profile_writes_table_csv_json_and_chart() {
             r["gpu_ms_median"].as_f64().unwrap() > 0.0,
             "lavapipe has timestamps: {r}"
         );
+        let over_floor = r["cull_over_floor"].as_array().unwrap();
+        match r["cull"].as_str().unwrap() {
+            "gpu" => {
+                assert!(r["floor_ms_median"].as_f64().unwrap() > 0.0, "{r}");
+                assert_eq!(over_floor.len(), 1, "one display: {r}");
+                assert!(over_floor[0]["ratio"].as_f64().unwrap() > 0.0, "{r}");
+            }
+            _ => assert!(over_floor.is_empty() && r["floor_ms_median"].is_null(), "{r}"),
+        }
     }
     let svg = std::fs::read_to_string(dir.path().join("profile.svg")).unwrap();
     assert!(
@@ -582,10 +595,7 @@ fn stress_with_moving_instances_reports_what_they_cost() {
     let v: Value = serde_json::from_slice(&out.stdout).unwrap();
     let frame = &v["frames"][2];
     assert_eq!(frame["moved"], 500);
-    assert_eq!(
-        frame["dispatches"], 4,
-        "the scatter, then three cull passes"
-    );
+    assert_eq!(frame["dispatches"], 5, "the scatter, then four cull passes");
     // 16 bytes of header, 56 per moved instance, then the frame and display contexts.
     let contexts = FrameContext::min_size().get() + DisplayContext::min_size().get();
     assert_eq!(frame["bytes_uploaded"], 16 + 56 * 500 + contexts);

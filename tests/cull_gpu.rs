@@ -1,13 +1,17 @@
 //! GPU culling against the CPU reference, byte for byte: random scenes (fixed seeds) on
-//! every preset, up to 200k instances and 300 meshes, and the edge cases.
+//! every preset, up to 200k instances and 300 meshes, the edge cases, and the prefix
+//! sums' edges up to 2^20 + 3 instances.
 
 mod support;
 
 use glam::Vec3;
+use stereocull::cull::cpu;
 use stereocull::device::Gpu;
 use stereocull::procedural;
-use stereocull::renderer::RendererOptions;
+use stereocull::records::CullLayout;
+use stereocull::renderer::{RendererOptions, frame_lod};
 use stereocull::rig::Rig;
+use stereocull::scene::MAX_LODS;
 use stereocull::scene::Scene;
 use support::{cubes, gpu, reference_culls};
 
@@ -102,4 +106,49 @@ fn gpu_matches_cpu_on_edge_cases() {
         }
     }
     compare(&gpu, &cubes(&straddling, 4), &rig, "straddling planes");
+}
+
+/// The prefix sums' edges (issue 24): nothing, one instance, a workgroup and one past it,
+/// a span (128 positions) and one past it, a group of spans (the draws pass's unit,
+/// 256 spans) and one past it, and 2^20 + 3, with LOD off and on (where the entries'
+/// per-level fields carry the prefixes: at least two levels must be drawn).
+#[test]
+fn gpu_matches_cpu_at_the_scans_edges() {
+    let gpu = gpu();
+    let rig = support::sized("hmd", 256, 256);
+    let jobs = rig.cull_jobs().unwrap();
+    let lod = frame_lod(&rig, &rig.resolve().unwrap(), MAX_LODS as u32);
+    let group = 128 * 256;
+    for n in [0, 1, 128, 129, 256, 257, group, group + 1, (1 << 20) + 3] {
+        // The one instance straight ahead, so that it is drawn.
+        let scene = match n {
+            1 => cubes(&[(Vec3::new(0.0, 1.6, -3.0), 0)], 1),
+            _ => procedural::scene(n, 6, n as u64 + 7),
+        };
+        let layout = CullLayout::new(&scene);
+        for on in [false, true] {
+            let options = RendererOptions {
+                lod: on,
+                ..Default::default()
+            };
+            let renderer = support::one_frame(&gpu, &scene, &rig, options);
+            let got = support::read_culls(&gpu, &renderer, &rig);
+            let want = match on {
+                true => cpu::cull_many_lod(&layout, &jobs, &lod),
+                false => cpu::cull_many(&layout, &jobs),
+            };
+            let what = format!("n={n} lod={on}");
+            assert_eq!(got, want, "{what}");
+            // Some mesh drawn at two levels: more draws than meshes drawn.
+            let mut meshes = want[0].draw_meshes(2, |id| scene.instances[id as usize].mesh);
+            let draws = meshes.len();
+            meshes.sort();
+            meshes.dedup();
+            if on && n >= 256 {
+                assert!(draws > meshes.len(), "{what}: one level only");
+            }
+            assert_eq!(want[0].visible.is_empty(), n == 0, "{what}");
+            eprintln!("{what}: visible {}", want[0].visible.len());
+        }
+    }
 }

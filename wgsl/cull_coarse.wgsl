@@ -32,6 +32,9 @@ fn block_test(t: CoarseTest, c: vec4<f32>, e: vec3<f32>) -> bool {
     return true;
 }
 
+// Bit 31 of a block mark: the block is kept.
+const KEPT_BIT: u32 = 0x80000000u;
+
 var<workgroup> low: array<vec3<f32>, WORKGROUP_SIZE>;
 var<workgroup> high: array<vec3<f32>, WORKGROUP_SIZE>;
 
@@ -73,7 +76,7 @@ fn coarse_blocks(
     let in_frame = grown_test(frame.coarse_planes, frame.coarse_inflation, frame.coarse_slack, sphere);
     for (var slot = 0u; slot < arrayLength(&block_tests); slot++) {
         let kept = in_frame && block_test(block_tests[slot], sphere, extent);
-        block_marks[slot * blocks + block] = select(0u, VISIBLE_BIT, kept);
+        block_marks[slot * blocks + block] = select(0u, KEPT_BIT, kept);
     }
 }
 
@@ -119,7 +122,7 @@ fn coarse_lists(
         let x = min(needed, params.max_groups);
         coarse_args[slot * 3u] = x;
         coarse_args[slot * 3u + 1u] = select(0u, (needed + x - 1u) / x, x > 0u);
-        coarse_args[slot * 3u + 2u] = params.lod_levels;
+        coarse_args[slot * 3u + 2u] = 1u;
     }
 }
 
@@ -129,6 +132,6 @@ fn listed_before(first: u32, pos: u32, listed: u32) -> u32 {
         return listed * BLOCK;
     }
     let mark = block_marks[first + pos / BLOCK];
-    let within = select(0u, pos % BLOCK, (mark & VISIBLE_BIT) != 0u);
-    return (mark & ~VISIBLE_BIT) * BLOCK + within;
+    let within = select(0u, pos % BLOCK, (mark & KEPT_BIT) != 0u);
+    return (mark & ~KEPT_BIT) * BLOCK + within;
 }

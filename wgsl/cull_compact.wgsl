@@ -1,6 +1,7 @@
-// Pass 3 of 3 per display: every visible instance writes its id to its slot, one z
-// slice per level of detail. Slots ascend with cull position within a (level, mesh)
-// group, so each draw's ids are contiguous and ascending.
+// Pass 4 of 4 per display: every visible instance writes its id to its slot (its
+// level's group prefix + its span's prefix + its own prefix within the span, one read
+// of its entry). Slots ascend with cull position within a (level, mesh) group, so each
+// draw's ids are contiguous and ascending.
 // Bindings (all cull passes share them): CULL_BINDINGS in src/shaders/bindings.rs.
 
 @compute @workgroup_size(WORKGROUP_SIZE)
@@ -9,16 +10,14 @@ fn compact(
     @builtin(num_workgroups) groups: vec3<u32>,
     @builtin(local_invocation_index) local: u32,
 ) {
-    let block = wid.y * groups.x + wid.x;
-    let level = wid.z;
     let n = cull_count();
-    let j = block * WORKGROUP_SIZE + local;
+    let j = (wid.y * groups.x + wid.x) * WORKGROUP_SIZE + local;
     if (j >= n) {
         return;
     }
-    let blocks = (n + WORKGROUP_SIZE - 1u) / WORKGROUP_SIZE;
-    let entry = local_prefix[level * n + j];
-    if ((entry & VISIBLE_BIT) != 0u) {
-        visible[block_sums[level * blocks + block] + (entry & ~VISIBLE_BIT)] = order[cull_position(j)];
+    let entry = entries[j];
+    if ((entry & ENTRY_VISIBLE) != 0u) {
+        let level = (entry >> ENTRY_LEVEL_SHIFT) & 3u;
+        visible[flagged_before(level, j, n, 0u)] = order[cull_position(j)];
     }
 }

@@ -1,18 +1,19 @@
-// Pass 2 of 3 per display, one workgroup: per level of detail, finest first, turn the
-// level's block sums into block prefixes (after every finer level's instances), then
+// Pass 3 of 4 per display, one workgroup: per level of detail, finest first, turn the
+// level's group totals into group prefixes (after every finer level's instances), then
 // build one draw per mesh with visible instances at that level, packed in ascending
-// mesh id after the finer levels' draws; zero the rest and write the counts.
+// mesh id after the finer levels' draws; zero the rest and write the counts. It walks
+// group totals (one per WORKGROUP_SIZE * SPAN positions), never every span.
 // Deterministic: no atomics anywhere.
 // Bindings (all cull passes share them): CULL_BINDINGS in src/shaders/bindings.rs.
 
 @compute @workgroup_size(WORKGROUP_SIZE)
 fn draws_main(@builtin(local_invocation_index) local: u32) {
     let n = workgroup_cull_count(local);
-    let blocks = (n + WORKGROUP_SIZE - 1u) / WORKGROUP_SIZE;
+    let groups = group_count(span_count(n));
     var carry = 0u;
     var packed = 0u;
     for (var level = 0u; level < params.lod_levels; level++) {
-        carry = prefix_blocks(level * blocks, blocks, carry, local);
+        carry = prefix_groups(group_slot(n, level, 0u), groups, carry, local);
         let total = carry;
         storageBarrier();
         packed += pack_draws(level, n, total, packed, local);

@@ -8,7 +8,7 @@ use clap::Args;
 use indicatif::{ProgressBar, ProgressStyle};
 
 use super::edits::{EditArgs, EditDriver};
-use super::profile_report::{Row, print_table, write_csv};
+use super::profile_report::{CullOverFloor, Row, print_table, write_csv};
 use super::render::{PassReport, pass_reports};
 use super::{FRAME_SECONDS, Switch, chart, write_json};
 use crate::device::{Gpu, list_counts};
@@ -19,6 +19,7 @@ use crate::profiling::{GpuTimer, percentile, write_trace};
 use crate::renderer::{CoarseMode, CullMode, Renderer, RendererOptions, StereoMode, SyncStats};
 use crate::rig::Rig;
 use crate::scene::Scene;
+use wgpu_profiler::GpuTimerQueryResult;
 
 #[derive(Args)]
 pub struct ProfileArgs {
@@ -253,6 +254,7 @@ fn measure(
         shadows: args.shadows.on(),
         far_layer: far,
         far_threshold_px: args.far_threshold,
+        cull_floor: timer.is_some() && cull == CullMode::Gpu && !mode.per_instance(),
         ..Default::default()
     };
     let mut renderer = Renderer::new(&gpu.device, scene, rig, options)?;
@@ -312,9 +314,15 @@ fn measure(
             };
             samples.gpu_cull.push(of("cull"));
             samples.gpu_draw.push(of("draw"));
-            samples.gpu.push(q.passes.iter().map(|(_, v)| v).sum());
+            // The floor kernel is the yardstick, not part of the frame.
+            samples
+                .gpu
+                .push(q.passes.iter().map(|(_, v)| v).sum::<f64>() - of("cull_floor"));
             samples.statistics = q.vertex_invocations.zip(q.clipper_primitives);
             samples.triangles = q.triangles_submitted;
+        }
+        if let Some(t) = timer.as_deref() {
+            samples.floors.push(cull_and_floor(t.last_frame(), rig));
         }
         samples.last = (
             recorded.draw_calls,
@@ -327,6 +335,7 @@ fn measure(
         .sphere_tests()?;
     let far_near = renderer.diagnostics(&gpu.device, &gpu.queue).far_split()?;
     let med = |v: &[f64]| percentile(v, 0.5);
+    let over_floor = floor_ratios(&samples.floors, rig);
     let gpu_med = |v: &[f64]| (!v.is_empty()).then(|| percentile(v, 0.5));
     Ok(Row {
         mode,
@@ -360,6 +369,8 @@ fn measure(
         far_layer: far,
         far_near,
         shadow_passes: samples.passes.iter().filter(|p| p.name == "shadow").count(),
+        floor_ms_median: over_floor.as_ref().map(|f| f.0),
+        cull_over_floor: over_floor.map_or(Vec::new(), |f| f.1),
         passes: samples.passes,
         trace: timer.map(|t| t.last_frame().to_vec()).unwrap_or_default(),
     })
@@ -382,4 +393,45 @@ struct Samples {
     /// Vertex-shader invocations and clipped primitives of the last frame.
     statistics: Option<(u64, u64)>,
     passes: Vec<PassReport>,
+    /// Per frame, each display's GPU cull ms and the floor kernel's (when it ran).
+    floors: Vec<(Vec<f64>, Option<f64>)>,
+}
+
+/// One frame's GPU cull ms per display (the `cull` pass in the display's scope) and the
+/// floor kernel's (`cull_floor` in the frame scope), from the timer's scopes.
+fn cull_and_floor(scopes: &[GpuTimerQueryResult], rig: &Rig) -> (Vec<f64>, Option<f64>) {
+    let ms = |scope: &str, pass: &str| {
+        let outer = scopes.iter().find(|s| s.label == scope)?;
+        let inner = outer.nested_queries.iter().find(|s| s.label == pass)?;
+        inner.time.as_ref().map(|t| (t.end - t.start) * 1e3)
+    };
+    let culls = rig
+        .displays
+        .iter()
+        .map(|d| ms(&d.name, "cull").unwrap_or(0.0))
+        .collect();
+    (culls, ms("frame", "cull_floor"))
+}
+
+/// The floor kernel's median ms and, per display, its median GPU cull over that floor
+/// (medians over the frames; `None` where the floor did not run).
+fn floor_ratios(
+    frames: &[(Vec<f64>, Option<f64>)],
+    rig: &Rig,
+) -> Option<(f64, Vec<CullOverFloor>)> {
+    let floors: Vec<f64> = frames.iter().filter_map(|f| f.1).collect();
+    if floors.is_empty() {
+        return None;
+    }
+    let floor = percentile(&floors, 0.5);
+    let displays = rig.displays.iter().enumerate().map(|(d, display)| {
+        let culls: Vec<f64> = frames.iter().filter_map(|f| f.0.get(d).copied()).collect();
+        let cull_ms = percentile(&culls, 0.5);
+        CullOverFloor {
+            display: display.name.clone(),
+            cull_ms,
+            ratio: cull_ms / floor,
+        }
+    });
+    Some((floor, displays.collect()))
 }

@@ -52,11 +52,34 @@ pub struct Row {
     pub far_near: Vec<Option<FarSplit>>,
     /// The last frame's shadow passes (1 with shadows, whatever the rig).
     pub shadow_passes: usize,
+    /// The floor kernel's median GPU ms (one read of every sphere, one flag written per
+    /// instance: the least a cull could do), timed in the same frames (GPU culling).
+    pub floor_ms_median: Option<f64>,
+    /// Per display, its median GPU cull ms and that over `floor_ms_median`.
+    pub cull_over_floor: Vec<CullOverFloor>,
     /// The last frame's passes, with level and vertex-shader invocations.
     pub passes: Vec<PassReport>,
     /// The last timed frame's GPU scopes, for `--trace`.
     #[serde(skip)]
     pub trace: Vec<GpuTimerQueryResult>,
+}
+
+/// One display's GPU cull against the floor kernel of the same frames.
+#[derive(Clone, Debug, Serialize)]
+pub struct CullOverFloor {
+    pub display: String,
+    pub cull_ms: f64,
+    pub ratio: f64,
+}
+
+impl Row {
+    /// The largest display's cull over the floor: the CSV's `cull_over_floor`.
+    pub fn worst_cull_over_floor(&self) -> Option<f64> {
+        self.cull_over_floor
+            .iter()
+            .map(|c| c.ratio)
+            .reduce(f64::max)
+    }
 }
 
 fn opt(v: Option<f64>) -> String {
@@ -72,7 +95,7 @@ pub(super) fn print_table(rows: &[Row]) {
         );
     }
     println!(
-        "{:>14} {:>13} {:>4} {:>9} {:>6} | {:>9} {:>9} | {:>9} {:>9} | {:>8} {:>8} {:>8} {:>8} | {:>9} {:>5} {:>10} | {:>11} {:>11}",
+        "{:>14} {:>13} {:>4} {:>9} {:>6} | {:>9} {:>9} | {:>9} {:>9} | {:>8} {:>8} {:>8} {:>8} | {:>9} {:>5} {:>10} | {:>11} {:>11} | {:>7}",
         "rig",
         "mode",
         "cull",
@@ -90,14 +113,15 @@ pub(super) fn print_table(rows: &[Row]) {
         "disp",
         "uploaded",
         "vs invoc",
-        "clip prims"
+        "clip prims",
+        "c/floor"
     );
     for r in rows {
         let rig = std::path::Path::new(&r.rig)
             .file_stem()
             .map_or(r.rig.clone(), |s| s.to_string_lossy().into());
         println!(
-            "{:>14} {:>13} {:>4} {:>9} {:>6} | {:>9.3} {:>9.3} | {:>9} {:>9} | {:>8.3} {:>8.3} {:>8.3} {:>8.3} | {:>9} {:>5} {:>10} | {:>11} {:>11}",
+            "{:>14} {:>13} {:>4} {:>9} {:>6} | {:>9.3} {:>9.3} | {:>9} {:>9} | {:>8.3} {:>8.3} {:>8.3} {:>8.3} | {:>9} {:>5} {:>10} | {:>11} {:>11} | {:>7}",
             rig,
             r.mode.name(),
             format!("{:?}", r.cull).to_lowercase(),
@@ -115,7 +139,8 @@ pub(super) fn print_table(rows: &[Row]) {
             r.dispatches,
             r.bytes_uploaded,
             count(r.vertex_invocations),
-            count(r.clipper_primitives)
+            count(r.clipper_primitives),
+            opt(r.worst_cull_over_floor())
         );
     }
 }
@@ -126,12 +151,12 @@ fn count(v: Option<u64>) -> String {
 
 pub(super) fn write_csv(path: &std::path::Path, rows: &[Row]) -> Result<()> {
     let mut text = String::from(
-        "mode,cull,rig,instances,cpu_ms_median,cpu_ms_p95,gpu_ms_median,gpu_ms_p95,draw_calls,dispatches,bytes_uploaded,adapter,moving_percent,churn_percent,sync_ms_median,triangles_submitted,coarse_cull,sphere_tests,shadows,shadow_passes\n",
+        "mode,cull,rig,instances,cpu_ms_median,cpu_ms_p95,gpu_ms_median,gpu_ms_p95,draw_calls,dispatches,bytes_uploaded,adapter,moving_percent,churn_percent,sync_ms_median,triangles_submitted,coarse_cull,sphere_tests,shadows,shadow_passes,floor_ms_median,cull_over_floor\n",
     );
     let field = |v: Option<f64>| v.map_or(String::new(), |x| format!("{x:.4}"));
     for r in rows {
         text += &format!(
-            "{},{},{},{},{:.4},{:.4},{},{},{},{},{},\"{}\",{},{},{:.4},{},{},{},{},{}\n",
+            "{},{},{},{},{:.4},{:.4},{},{},{},{},{},\"{}\",{},{},{:.4},{},{},{},{},{},{},{}\n",
             r.mode.name(),
             format!("{:?}", r.cull).to_lowercase(),
             r.rig,
@@ -152,7 +177,9 @@ pub(super) fn write_csv(path: &std::path::Path, rows: &[Row]) -> Result<()> {
             r.coarse_cull,
             r.sphere_tests.map_or(String::new(), |t| t.to_string()),
             r.shadows,
-            r.shadow_passes
+            r.shadow_passes,
+            field(r.floor_ms_median),
+            field(r.worst_cull_over_floor())
         );
     }
     std::fs::write(path, text).map_err(|e| Error::io(path, e))

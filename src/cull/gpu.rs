@@ -1,6 +1,9 @@
-//! GPU culling: per display, three compute dispatches (`wgsl/cull.wgsl`,
-//! `cull_draws.wgsl`, `cull_compact.wgsl`) that write the visible list, the draws and the
-//! draw count per the contract in [`super`], byte-identical to [`super::cpu`]. With the
+//! GPU culling: per display, four compute dispatches (`wgsl/cull.wgsl`,
+//! `cull_scan.wgsl`, `cull_draws.wgsl`, `cull_compact.wgsl`) that write the visible
+//! list, the draws and the draw count per the contract in [`super`], byte-identical to
+//! [`super::cpu`]. Each sphere is read once per display whatever the levels of detail,
+//! into one word per position; the prefix sums run as a tree (spans, groups of spans,
+//! then one workgroup over the groups), never one workgroup over every block. With the
 //! frame-level coarse cull ([`super::coarse`]), two dispatches per frame first
 //! (`wgsl/cull_coarse.wgsl`) list each display's blocks, and each display's passes run
 //! over its blocks' positions, dispatched indirectly from their count.
@@ -12,7 +15,7 @@ use crate::cull::coarse::{BLOCK, CoarseCull};
 use crate::records::{CullLayout, DrawArgs};
 use crate::records::{storage_bytes, uniform_bytes};
 use crate::shaders::{
-    COARSE_BINDINGS, CULL_BINDINGS, CullPass, WORKGROUP_SIZE, Windows, bind_group,
+    COARSE_BINDINGS, CULL_BINDINGS, CullPass, SPAN, WORKGROUP_SIZE, Windows, bind_group,
     bind_group_layout, compute_pipeline, dispatch_size, pipeline_layout,
 };
 use encase::ShaderType;
@@ -45,6 +48,8 @@ pub struct GpuCuller {
     /// the coarse cull; the light's always).
     pipelines: Vec<wgpu::ComputePipeline>,
     coarse: Option<CoarsePipelines>,
+    /// The floor kernel, when asked for (`profile`).
+    floor: Option<wgpu::ComputePipeline>,
 }
 
 /// The coarse cull's pipelines.
@@ -64,8 +69,10 @@ pub struct CullScene {
     pub instance_count: u32,
     groups: (u32, u32),
     max_groups: u32,
-    /// Levels of detail culled into: the z of the cull and compact dispatches.
+    /// Levels of detail culled into: the y of the scan dispatch.
     pub levels: u32,
+    /// Groups of spans at most: the x of the scan dispatch.
+    scan_groups: u32,
     params: wgpu::Buffer,
     spheres: wgpu::Buffer,
     order: wgpu::Buffer,
@@ -74,8 +81,8 @@ pub struct CullScene {
     meshes: wgpu::Buffer,
     mesh_bounds: wgpu::Buffer,
     lods: wgpu::Buffer,
-    local_prefix: wgpu::Buffer,
-    block_sums: wgpu::Buffer,
+    entries: wgpu::Buffer,
+    span_sums: wgpu::Buffer,
     /// The coarse cull's slots (displays; 0 without it) and its buffers per slot.
     coarse_slots: u32,
     block_marks: wgpu::Buffer,
@@ -127,12 +134,13 @@ impl CullScene {
         let per_slot = |bytes: u64| bytes * coarse_slots as u64;
         let block_bytes = per_slot(4 * slots.div_ceil(BLOCK) as u64);
         let meshes = layout.meshes.len() as u64;
-        let most_groups = dispatch_size(slots.div_ceil(WORKGROUP_SIZE), max_groups);
+        let (spans, scan_groups) = span_shape(positions as u32);
         CullScene {
             instance_count: params.instance_count,
             groups,
             max_groups,
             levels,
+            scan_groups,
             params: init_buffer(
                 device,
                 "stereocull.cull_params",
@@ -162,16 +170,11 @@ impl CullScene {
                 0,
             ),
             lods: room("stereocull.lods", bytemuck::cast_slice(&layout.lods), 0),
-            local_prefix: storage_buffer(
+            entries: storage_buffer(device, "stereocull.entries", 4 * positions, scratch),
+            span_sums: storage_buffer(
                 device,
-                "stereocull.local_prefix",
-                4 * positions * levels as u64,
-                scratch,
-            ),
-            block_sums: storage_buffer(
-                device,
-                "stereocull.block_sums",
-                4 * (most_groups.0 * most_groups.1 * levels) as u64,
+                "stereocull.span_sums",
+                4 * ((spans + scan_groups) * levels) as u64,
                 scratch,
             ),
             coarse_slots,
@@ -250,8 +253,9 @@ impl CullScene {
         ]
     }
 
-    /// Bytes on the GPU per instance for culling with one level of detail (spheres,
-    /// order, positions, mesh, scratch); each further level adds 4 bytes of scratch.
+    /// Bytes on the GPU per instance for culling (spheres, order, positions, mesh, the
+    /// entry), whatever the levels of detail (their span sums add 4 bytes per level per
+    /// [`SPAN`] instances).
     pub const BYTES_PER_INSTANCE: u64 = 16 + 4 + 4 + 4 + 4;
 }
 
@@ -293,6 +297,13 @@ impl CullTargets {
     }
 }
 
+/// Spans and groups of spans (the scan's x) over `positions` cull positions, as
+/// `span_count` and `group_count` in `wgsl/shared/cull_math.wgsl` count them.
+fn span_shape(positions: u32) -> (u32, u32) {
+    let spans = positions.div_ceil(SPAN);
+    (spans, spans.div_ceil(WORKGROUP_SIZE))
+}
+
 fn cull_params(layout: &CullLayout, (max_groups, levels): (u32, u32)) -> (CullParams, (u32, u32)) {
     let n = layout.spheres.len() as u32;
     let groups = dispatch_size(n.div_ceil(WORKGROUP_SIZE), max_groups);
@@ -307,8 +318,12 @@ fn cull_params(layout: &CullLayout, (max_groups, levels): (u32, u32)) -> (CullPa
 
 impl GpuCuller {
     /// The display passes, and with `coarse` the frame passes and the display passes
-    /// over their candidates too.
-    pub fn new(device: &wgpu::Device, coarse: bool, windows: Windows) -> GpuCuller {
+    /// over their candidates too; with `floor` the floor kernel.
+    pub fn new(
+        device: &wgpu::Device,
+        (coarse, floor): (bool, bool),
+        windows: Windows,
+    ) -> GpuCuller {
         let layout = bind_group_layout(device, "stereocull.cull", &CULL_BINDINGS, &windows);
         let build = |passes: &[CullPass], candidates: bool, with: &wgpu::PipelineLayout| {
             let build_one = |pass: &CullPass| {
@@ -335,11 +350,13 @@ impl GpuCuller {
                 args_layout,
             }
         });
+        let floor = floor.then(|| build(&[CullPass::Floor], false, &display_layout).remove(0));
         GpuCuller {
             layout,
             windows,
             pipelines,
             coarse,
+            floor,
         }
     }
 
@@ -361,8 +378,8 @@ impl GpuCuller {
             &scene.meshes,
             &scene.lods,
             &scene.mesh_of,
-            &scene.local_prefix,
-            &scene.block_sums,
+            &scene.entries,
+            &scene.span_sums,
             &targets.visible,
             &targets.draws,
             &targets.counts,
@@ -429,9 +446,10 @@ impl GpuCuller {
         pipelines.len() as u32
     }
 
-    /// Records the three dispatches for one display: a fixed count, whatever the
+    /// Records the four dispatches for one display: a fixed count, whatever the
     /// number of instances; with the coarse cull's `slot` they run over that slot's
-    /// listed blocks, dispatched as the coarse passes sized them.
+    /// listed blocks, dispatched as the coarse passes sized them (the scan's groups
+    /// past the listed ones return at once).
     pub fn encode(
         &self,
         pass: &mut wgpu::ComputePass,
@@ -449,14 +467,38 @@ impl GpuCuller {
             pass.set_pipeline(pipeline);
             match (kind, slot) {
                 (CullPass::Draws, _) => pass.dispatch_workgroups(1, 1, 1),
+                (CullPass::Scan, _) => pass.dispatch_workgroups(scene.scan_groups, scene.levels, 1),
                 (_, Some(s)) => {
                     pass.dispatch_workgroups_indirect(&scene.coarse_args, 12 * s as u64)
                 }
-                (_, None) => pass.dispatch_workgroups(x, y, scene.levels),
+                (_, None) => pass.dispatch_workgroups(x, y, 1),
             }
         }
     }
 
-    /// Compute dispatches per display: cull, draws, compact.
+    /// Whether the floor kernel was built.
+    pub fn has_floor(&self) -> bool {
+        self.floor.is_some()
+    }
+
+    /// Records the floor kernel over every instance with `bind_group` (any display's;
+    /// it writes that display's scratch). Returns whether it was built.
+    pub fn encode_floor(
+        &self,
+        pass: &mut wgpu::ComputePass,
+        scene: &CullScene,
+        bind_group: &wgpu::BindGroup,
+    ) -> bool {
+        let Some(floor) = &self.floor else {
+            return false;
+        };
+        pass.set_bind_group(0, bind_group, &[]);
+        pass.set_pipeline(floor);
+        let (x, y) = scene.groups;
+        pass.dispatch_workgroups(x, y, 1);
+        true
+    }
+
+    /// Compute dispatches per display: cull, scan, draws, compact.
     pub const DISPATCHES_PER_DISPLAY: u32 = CullPass::DISPLAY.len() as u32;
 }

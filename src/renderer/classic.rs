@@ -85,6 +85,7 @@ impl ClassicPath {
             slots,
             levels: options.lod_levels(),
             coarse_slots: 0,
+            floor: false,
         };
         let culler = Culler::new(device, options.cull, layout, shape, windows);
         let draw_scene = DrawScene::new(device, &drawer, scene, slots)?;

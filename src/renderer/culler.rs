@@ -1,6 +1,6 @@
 //! The one culler every view of a frame goes through: each display, each eye in
 //! `multi-camera`, each far layer, the light. On the GPU it is compute passes over scene
-//! data uploaded once (three per view, after the frame's coarse cull when it runs); on
+//! data uploaded once (four per view, after the frame's coarse cull when it runs); on
 //! the CPU one parallel pass over the spheres per frame for every view the frame frustum
 //! holds, one for the light, and an upload per view. A view's pass takes the culler and
 //! never asks which it is: this file is the only place that does.
@@ -41,13 +41,15 @@ enum Kind {
     },
 }
 
-/// What a culler is made for: the slots of room, the levels of detail, and how many
-/// displays the coarse cull lists blocks for (0: no coarse cull).
+/// What a culler is made for: the slots of room, the levels of detail, how many
+/// displays the coarse cull lists blocks for (0: no coarse cull), and whether it times
+/// the floor kernel ([`super::RendererOptions::cull_floor`]).
 #[derive(Clone, Copy, Debug)]
 pub(super) struct CullShape {
     pub slots: u32,
     pub levels: u32,
     pub coarse_slots: u32,
+    pub floor: bool,
 }
 
 /// One view's cull outputs (per the cull contract) and, on the GPU, its bindings.
@@ -73,7 +75,7 @@ impl Culler {
                 outputs: Vec::new(),
             },
             CullMode::Gpu => {
-                let culler = GpuCuller::new(device, shape.coarse_slots > 0, windows);
+                let culler = GpuCuller::new(device, (shape.coarse_slots > 0, shape.floor), windows);
                 let (slots, levels) = (shape.slots, shape.levels);
                 let scene = CullScene::new(device, &layout, slots, levels, shape.coarse_slots);
                 let scene = Box::new(scene);
@@ -157,8 +159,10 @@ impl Culler {
     }
 
     /// Records the frame's coarse cull (GPU culling with it on), timed as `coarse_cull`
-    /// inside a `frame` scope; `any` is any display's view (the frame passes read none of
-    /// its bindings). Returns the dispatches.
+    /// inside a `frame` scope, and the floor kernel when asked for, timed as
+    /// `cull_floor`; `any` is any display's view (the frame passes read none of its
+    /// bindings; the floor writes its scratch, which its cull overwrites). Returns the
+    /// dispatches.
     pub(super) fn encode_frame(
         &self,
         encoder: &mut wgpu::CommandEncoder,
@@ -169,7 +173,7 @@ impl Culler {
             Kind::Gpu {
                 culler,
                 scene,
-                coarse: Some(args),
+                coarse,
             },
             Some(ViewCull {
                 bind_group: Some(display),
@@ -179,12 +183,23 @@ impl Culler {
         else {
             return 0;
         };
+        if coarse.is_none() && !culler.has_floor() {
+            return 0;
+        }
         let frame = open_display(timer, "frame", encoder);
         let mut dispatches = 0;
-        let what = (log, PassRecord::frame("coarse_cull"));
-        compute_pass(encoder, (timer, &frame), what, |pass| {
-            dispatches = culler.encode_frame(pass, scene, [display, args]);
-        });
+        if let Some(args) = coarse {
+            let what = (&mut *log, PassRecord::frame("coarse_cull"));
+            compute_pass(encoder, (timer, &frame), what, |pass| {
+                dispatches += culler.encode_frame(pass, scene, [display, args]);
+            });
+        }
+        if culler.has_floor() {
+            let what = (&mut *log, PassRecord::frame("cull_floor"));
+            compute_pass(encoder, (timer, &frame), what, |pass| {
+                dispatches += u32::from(culler.encode_floor(pass, scene, display));
+            });
+        }
         close(timer, encoder, frame);
         dispatches
     }

@@ -87,6 +87,11 @@ pub struct RendererOptions {
     /// arrays larger than this are bound as several windows of one buffer
     /// ([`Windows`]); a smaller value than the device's exercises that on small scenes.
     pub binding_limit: Option<u64>,
+    /// Also run, each frame, the floor kernel the GPU cull is measured against (one read
+    /// of every sphere, one flag written per instance), timed as the frame pass
+    /// `cull_floor`: for `profile`'s `cull_over_floor`. GPU culling, `instanced` and
+    /// `multiview` only; it draws nothing.
+    pub cull_floor: bool,
 }
 
 /// Screen-space error, in pixels, a level of detail may show.
@@ -157,6 +162,7 @@ impl Default for RendererOptions {
             far_layer: false,
             far_threshold_px: FAR_THRESHOLD_PX,
             binding_limit: None,
+            cull_floor: false,
         }
     }
 }

@@ -82,20 +82,12 @@ pub const CULL_BINDINGS: [Binding; 18] = [
     binding("lods", Access::StorageRead, "array<LodRecord>", COMPUTE),
     // Mesh of each cull position.
     binding("mesh_of", Access::StorageRead, "array<u32>", COMPUTE),
-    // Per level of detail and instance: visibility bit and prefix within the workgroup.
-    binding(
-        "local_prefix",
-        Access::StorageReadWrite,
-        "array<u32>",
-        COMPUTE,
-    ),
-    // Per level of detail and workgroup: its total, then (after the draws pass) its prefix.
-    binding(
-        "block_sums",
-        Access::StorageReadWrite,
-        "array<u32>",
-        COMPUTE,
-    ),
+    // Per position culled: its entry (visible bit, level, per level its prefix in its
+    // span; see ENTRY_VISIBLE in wgsl/shared/cull_math.wgsl).
+    binding("entries", Access::StorageReadWrite, "array<u32>", COMPUTE),
+    // Per level, each span's count then prefix in its group; then each group's total
+    // then prefix.
+    binding("span_sums", Access::StorageReadWrite, "array<u32>", COMPUTE),
     binding("visible", Access::StorageReadWrite, "array<u32>", COMPUTE),
     binding(
         "draws",

@@ -7,6 +7,13 @@
 /// one entry per invocation. 256 is the largest size every WebGPU adapter must support.
 pub const WORKGROUP_SIZE: u32 = 256;
 
+/// Cull positions per span, the unit of the cull's first prefix sums: small enough that
+/// a span's count per level (at most `SPAN - 1` before a position) fits the 7-bit
+/// fields of a cull entry, four levels to a word (`wgsl/shared/cull_math.wgsl`).
+pub const SPAN: u32 = 128;
+const _: () =
+    assert!(SPAN <= 128 && WORKGROUP_SIZE.is_multiple_of(SPAN) && crate::scene::MAX_LODS <= 4);
+
 /// Cull positions per block of the frame's coarse cull ([`crate::cull::coarse`]): the
 /// CPU culler's 64 lanes.
 pub const BLOCK: u32 = 64;
@@ -67,8 +74,8 @@ pub fn scatter_source(windows: &Windows, kind: EditKind) -> String {
     [RECORDS, &bindings, shared, body].concat()
 }
 
-/// The cull passes: two at the frame level (the coarse cull, when on) and three per
-/// display, each list in dispatch order.
+/// The cull passes: two at the frame level (the coarse cull, when on) and four per
+/// display, each list in dispatch order; and the floor kernel `profile` times beside them.
 #[derive(Clone, Copy, Debug, PartialEq, Eq)]
 pub enum CullPass {
     /// Every block's sphere, tested against the frame frustum and each slot's.
@@ -76,19 +83,29 @@ pub enum CullPass {
     /// Per slot (one workgroup each): the listed blocks, each mesh's range among their
     /// positions, the count and the display passes' indirect dispatch.
     CoarseLists,
-    /// Sphere tests, flags and per-workgroup prefixes.
+    /// Sphere tests and levels, once per sphere: entries and span counts.
     Cull,
-    /// Block prefixes, then the packed draws and the draw count (one workgroup).
+    /// Span prefixes within groups of spans, and each group's total (a workgroup per
+    /// group and level).
+    Scan,
+    /// Group prefixes, then the packed draws and the draw count (one workgroup).
     Draws,
     /// Visible ids into their slots.
     Compact,
+    /// One read and one flag per instance: the least a cull could do (`profile`).
+    Floor,
 }
 
 impl CullPass {
     /// The frame passes (the coarse cull), in dispatch order.
     pub const FRAME: [CullPass; 2] = [CullPass::CoarseBlocks, CullPass::CoarseLists];
     /// The display passes, in dispatch order.
-    pub const DISPLAY: [CullPass; 3] = [CullPass::Cull, CullPass::Draws, CullPass::Compact];
+    pub const DISPLAY: [CullPass; 4] = [
+        CullPass::Cull,
+        CullPass::Scan,
+        CullPass::Draws,
+        CullPass::Compact,
+    ];
 
     /// The pipeline's label; display passes over the coarse cull's candidates say so.
     pub fn label(self, over_candidates: bool) -> String {
@@ -96,8 +113,10 @@ impl CullPass {
             CullPass::CoarseBlocks => "coarse_blocks",
             CullPass::CoarseLists => "coarse_lists",
             CullPass::Cull => "cull",
+            CullPass::Scan => "cull_scan",
             CullPass::Draws => "cull_draws",
             CullPass::Compact => "cull_compact",
+            CullPass::Floor => "cull_floor",
         };
         let tail = if over_candidates && !self.is_frame() {
             ".candidates"
@@ -118,8 +137,10 @@ impl CullPass {
             CullPass::CoarseBlocks => "coarse_blocks",
             CullPass::CoarseLists => "coarse_lists",
             CullPass::Cull => "cull",
+            CullPass::Scan => "scan_spans",
             CullPass::Draws => "draws_main",
             CullPass::Compact => "compact",
+            CullPass::Floor => "floor",
         }
     }
 
@@ -131,8 +152,10 @@ impl CullPass {
                 include_str!("../../wgsl/cull_coarse.wgsl")
             }
             CullPass::Cull => include_str!("../../wgsl/cull.wgsl"),
+            CullPass::Scan => include_str!("../../wgsl/cull_scan.wgsl"),
             CullPass::Draws => include_str!("../../wgsl/cull_draws.wgsl"),
             CullPass::Compact => include_str!("../../wgsl/cull_compact.wgsl"),
+            CullPass::Floor => include_str!("../../wgsl/cull_floor.wgsl"),
         };
         let coarse = format!(
             "const COARSE: bool = {};\n",
@@ -154,8 +177,8 @@ impl CullPass {
         .concat()
     }
 
-    /// Every cull pipeline variant: the frame passes, and the display passes over
-    /// everything and over candidates.
+    /// Every cull pipeline variant: the frame passes, the display passes over
+    /// everything and over candidates, and the floor kernel.
     pub fn variants() -> Vec<(CullPass, bool)> {
         let display = [false, true]
             .into_iter()
@@ -164,6 +187,7 @@ impl CullPass {
             .map(|p| (p, false))
             .into_iter()
             .chain(display)
+            .chain([(CullPass::Floor, false)])
             .collect()
     }
 }
@@ -281,7 +305,7 @@ fn constants() -> String {
     let lods = crate::scene::MAX_LODS;
     format!(
         "\nconst WORKGROUP_SIZE: u32 = {WORKGROUP_SIZE}u;\nconst MAX_LODS: u32 = {lods}u;\n\
-         const BLOCK: u32 = {BLOCK}u;\nconst BLOCK_GROWTH: f32 = {BLOCK_GROWTH:?};\n\
+         const BLOCK: u32 = {BLOCK}u;\nconst SPAN: u32 = {SPAN}u;\nconst BLOCK_GROWTH: f32 = {BLOCK_GROWTH:?};\n\
          const BLOCK_SLACK: f32 = {BLOCK_SLACK:?};\n"
     )
 }

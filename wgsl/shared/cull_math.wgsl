@@ -23,14 +23,13 @@ fn in_split(s: vec4<f32>) -> bool {
     return (d2 >= reach * reach) == (display.split_keep == 2u);
 }
 
-// The level of detail of cull position k's sphere, from the viewer's position (the
-// frame context, never an eye's: both eyes and every display draw the same level). The
-// CPU twin is records::lod_level: same operations, same order.
-fn lod_level(k: u32) -> u32 {
+// The level of detail of cull position k, whose sphere is s, from the viewer's position
+// (the frame context, never an eye's: both eyes and every display draw the same level).
+// The CPU twin is records::lod_level: same operations, same order.
+fn lod_level(k: u32, s: vec4<f32>) -> u32 {
     if (params.lod_levels == 1u) {
         return 0u;
     }
-    let s = spheres_at(k);
     let d = s.xyz - frame.viewer_position;
     let d2 = d.x * d.x + d.y * d.y + d.z * d.z;
     let r2 = s.w * s.w;
@@ -85,49 +84,77 @@ fn workgroup_cull_count(local: u32) -> u32 {
     return workgroupUniformLoad(&uniform_count);
 }
 
-// Flagged entries of `level` before position `pos` of the n run over, plus every finer
-// level's (pos may be n, which gives `total`). Block sums must hold block prefixes.
+// A display's scratch, per position the passes run over: its entry, one word whatever
+// the number of levels: bit 31 visible, bits 28-29 its level, and for each level a 7-bit
+// field (level 0 lowest) counting that level's visible positions before it in its span
+// of SPAN positions (127 at most). Then `span_sums`: per level, each span's count (the
+// cull pass), turned into its prefix within its group of WORKGROUP_SIZE spans (the scan
+// pass); after them (group_slot), per level, each group's total, turned into its prefix
+// among all the visible instances, finer levels first (the draws pass).
+const ENTRY_VISIBLE: u32 = 0x80000000u;
+const ENTRY_LEVEL_SHIFT: u32 = 28u;
+
+// Four 8-bit counts (each < 128) narrowed to the entry's four 7-bit fields.
+fn narrow_fields(p: u32) -> u32 {
+    return (p & 0x7fu) | ((p >> 1u) & 0x3f80u) | ((p >> 2u) & 0x1fc000u) | ((p >> 3u) & 0xfe00000u);
+}
+
+fn span_count(n: u32) -> u32 {
+    return (n + SPAN - 1u) / SPAN;
+}
+
+fn group_count(spans: u32) -> u32 {
+    return (spans + WORKGROUP_SIZE - 1u) / WORKGROUP_SIZE;
+}
+
+// Where group g's total (then prefix) of `level` lies in span_sums.
+fn group_slot(n: u32, level: u32, g: u32) -> u32 {
+    let spans = span_count(n);
+    return params.lod_levels * spans + level * group_count(spans) + g;
+}
+
+// Visible entries of `level` before position `pos` of the n run over, plus every finer
+// level's (pos may be n, which gives `total`). After the draws pass's group prefixes.
 fn flagged_before(level: u32, pos: u32, n: u32, total: u32) -> u32 {
     if (pos >= n) {
         return total;
     }
-    let blocks = (n + WORKGROUP_SIZE - 1u) / WORKGROUP_SIZE;
-    return block_sums[level * blocks + pos / WORKGROUP_SIZE] + (local_prefix[level * n + pos] & ~VISIBLE_BIT);
+    let span = pos / SPAN;
+    let within = (entries[pos] >> (7u * level)) & 0x7fu;
+    return span_sums[group_slot(n, level, span / WORKGROUP_SIZE)] + span_sums[level * span_count(n) + span] + within;
 }
 
-// Turns `blocks` block sums from block_sums[first] on into block prefixes starting at
+// Turns `groups` group totals from span_sums[first] on into prefixes starting at
 // `carry`, in one workgroup; returns carry plus their total.
-fn prefix_blocks(first: u32, blocks: u32, carry_in: u32, local: u32) -> u32 {
+fn prefix_groups(first: u32, groups: u32, carry_in: u32, local: u32) -> u32 {
     var carry = carry_in;
-    for (var base = 0u; base < blocks; base += WORKGROUP_SIZE) {
-        let b = base + local;
+    for (var base = 0u; base < groups; base += WORKGROUP_SIZE) {
+        let g = base + local;
         var sum = 0u;
-        if (b < blocks) {
-            sum = block_sums[first + b];
+        if (g < groups) {
+            sum = span_sums[first + g];
         }
         let scan = workgroup_exclusive_scan(local, sum);
-        if (b < blocks) {
-            block_sums[first + b] = carry + scan.x;
+        if (g < groups) {
+            span_sums[first + g] = carry + scan.x;
         }
         carry += scan.y;
     }
     return carry;
 }
 
-// Bit 31 of a local_prefix entry is the instance's visibility flag; the low bits are
-// its exclusive prefix within its workgroup (< WORKGROUP_SIZE).
-const VISIBLE_BIT: u32 = 0x80000000u;
-
 var<workgroup> scan_scratch: array<u32, WORKGROUP_SIZE>;
 
-// Exclusive prefix sum of `value` over the workgroup (Hillis-Steele); every
-// invocation must call it. Returns (exclusive prefix, workgroup total).
-fn workgroup_exclusive_scan(local: u32, value: u32) -> vec2<u32> {
+// Exclusive prefix sums of `value` over each run of `width` invocations (a power of
+// two dividing WORKGROUP_SIZE; Hillis-Steele); every invocation must call it. Returns
+// (exclusive prefix within its run, its run's total).
+fn segmented_exclusive_scan(local: u32, value: u32, width: u32) -> vec2<u32> {
     scan_scratch[local] = value;
     workgroupBarrier();
-    for (var offset = 1u; offset < WORKGROUP_SIZE; offset <<= 1u) {
+    let lane = local % width;
+    for (var offset = 1u; offset < width; offset <<= 1u) {
         var add = 0u;
-        if (local >= offset) {
+        if (lane >= offset) {
             add = scan_scratch[local - offset];
         }
         workgroupBarrier();
@@ -135,7 +162,12 @@ fn workgroup_exclusive_scan(local: u32, value: u32) -> vec2<u32> {
         workgroupBarrier();
     }
     let inclusive = scan_scratch[local];
-    let total = scan_scratch[WORKGROUP_SIZE - 1u];
+    let total = scan_scratch[local | (width - 1u)];
     workgroupBarrier();
     return vec2(inclusive - value, total);
+}
+
+// Exclusive prefix sum of `value` over the workgroup: (exclusive prefix, total).
+fn workgroup_exclusive_scan(local: u32, value: u32) -> vec2<u32> {
+    return segmented_exclusive_scan(local, value, WORKGROUP_SIZE);
 }

@@ -54,7 +54,7 @@ struct CullParams {
     instance_count: u32,
     mesh_count: u32,
     // The device's limit of workgroups per dimension: how the coarse pass splits each
-    // display's dispatch over its blocks into x and y (z is the level of detail).
+    // display's dispatch over its blocks into x and y.
     max_groups: u32,
     // Levels of detail in use: 1 (LOD off) or MAX_LODS.
     lod_levels: u32,
