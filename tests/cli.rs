@@ -490,7 +490,7 @@ fn profile_writes_table_csv_json_and_chart() {
     assert_eq!(
         lines.next(),
         Some(
-            "mode,cull,rig,instances,cpu_ms_median,cpu_ms_p95,gpu_ms_median,gpu_ms_p95,draw_calls,dispatches,bytes_uploaded,adapter,moving_percent,churn_percent,sync_ms_median,triangles_submitted,coarse_cull,sphere_tests,shadows,shadow_passes,floor_ms_median,cull_over_floor"
+            "mode,cull,rig,instances,cpu_ms_median,cpu_ms_p95,gpu_ms_median,gpu_ms_p95,draw_calls,dispatches,bytes_uploaded,adapter,moving_percent,churn_percent,sync_ms_median,triangles_submitted,coarse_cull,sphere_tests,shadows,shadow_passes,floor_ms_median,cull_over_floor,cull_over_floor_wall"
         )
     );
     // 3 classic modes (CPU cull only) + instanced and multiview with both culls, per count.
@@ -518,8 +518,12 @@ fn profile_writes_table_csv_json_and_chart() {
                 assert!(r["floor_ms_median"].as_f64().unwrap() > 0.0, "{r}");
                 assert_eq!(over_floor.len(), 1, "one display: {r}");
                 assert!(over_floor[0]["ratio"].as_f64().unwrap() > 0.0, "{r}");
+                assert!(over_floor[0]["wall_ratio"].as_f64().unwrap() > 0.0, "{r}");
             }
-            _ => assert!(over_floor.is_empty() && r["floor_ms_median"].is_null(), "{r}"),
+            _ => assert!(
+                over_floor.is_empty() && r["floor_ms_median"].is_null(),
+                "{r}"
+            ),
         }
     }
     let svg = std::fs::read_to_string(dir.path().join("profile.svg")).unwrap();

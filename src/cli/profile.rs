@@ -335,7 +335,10 @@ fn measure(
         .sphere_tests()?;
     let far_near = renderer.diagnostics(&gpu.device, &gpu.queue).far_split()?;
     let med = |v: &[f64]| percentile(v, 0.5);
-    let over_floor = floor_ratios(&samples.floors, rig);
+    let wall = renderer
+        .diagnostics(&gpu.device, &gpu.queue)
+        .cull_against_floor(args.frames)?;
+    let over_floor = floor_ratios(&samples.floors, rig, wall.as_ref());
     let gpu_med = |v: &[f64]| (!v.is_empty()).then(|| percentile(v, 0.5));
     Ok(Row {
         mode,
@@ -370,6 +373,7 @@ fn measure(
         far_near,
         shadow_passes: samples.passes.iter().filter(|p| p.name == "shadow").count(),
         floor_ms_median: over_floor.as_ref().map(|f| f.0),
+        wall_floor_ms_median: wall.as_ref().map(|w| w.0),
         cull_over_floor: over_floor.map_or(Vec::new(), |f| f.1),
         passes: samples.passes,
         trace: timer.map(|t| t.last_frame().to_vec()).unwrap_or_default(),
@@ -414,10 +418,12 @@ fn cull_and_floor(scopes: &[GpuTimerQueryResult], rig: &Rig) -> (Vec<f64>, Optio
 }
 
 /// The floor kernel's median ms and, per display, its median GPU cull over that floor
-/// (medians over the frames; `None` where the floor did not run).
+/// (medians over the frames; `None` where the floor did not run), beside the same by
+/// the wall clock (`wall`: the floor's ms and each display's cull's).
 fn floor_ratios(
     frames: &[(Vec<f64>, Option<f64>)],
     rig: &Rig,
+    wall: Option<&(f64, Vec<f64>)>,
 ) -> Option<(f64, Vec<CullOverFloor>)> {
     let floors: Vec<f64> = frames.iter().filter_map(|f| f.1).collect();
     if floors.is_empty() {
@@ -427,10 +433,13 @@ fn floor_ratios(
     let displays = rig.displays.iter().enumerate().map(|(d, display)| {
         let culls: Vec<f64> = frames.iter().filter_map(|f| f.0.get(d).copied()).collect();
         let cull_ms = percentile(&culls, 0.5);
+        let wall_cull_ms = wall.and_then(|w| w.1.get(d).copied());
         CullOverFloor {
             display: display.name.clone(),
             cull_ms,
             ratio: cull_ms / floor,
+            wall_cull_ms,
+            wall_ratio: wall.zip(wall_cull_ms).map(|(w, c)| c / w.0),
         }
     });
     Some((floor, displays.collect()))

@@ -55,6 +55,9 @@ pub struct Row {
     /// The floor kernel's median GPU ms (one read of every sphere, one flag written per
     /// instance: the least a cull could do), timed in the same frames (GPU culling).
     pub floor_ms_median: Option<f64>,
+    /// The floor kernel by the wall clock, submitted alone and waited for (median over
+    /// `--frames` submissions): what it costs where timestamps mislead (lavapipe).
+    pub wall_floor_ms_median: Option<f64>,
     /// Per display, its median GPU cull ms and that over `floor_ms_median`.
     pub cull_over_floor: Vec<CullOverFloor>,
     /// The last frame's passes, with level and vertex-shader invocations.
@@ -70,6 +73,9 @@ pub struct CullOverFloor {
     pub display: String,
     pub cull_ms: f64,
     pub ratio: f64,
+    /// The display's cull alone by the wall clock, and that over the floor's.
+    pub wall_cull_ms: Option<f64>,
+    pub wall_ratio: Option<f64>,
 }
 
 impl Row {
@@ -78,6 +84,14 @@ impl Row {
         self.cull_over_floor
             .iter()
             .map(|c| c.ratio)
+            .reduce(f64::max)
+    }
+
+    /// The same by the wall clock: the CSV's `cull_over_floor_wall`.
+    pub fn worst_wall_cull_over_floor(&self) -> Option<f64> {
+        self.cull_over_floor
+            .iter()
+            .filter_map(|c| c.wall_ratio)
             .reduce(f64::max)
     }
 }
@@ -95,7 +109,7 @@ pub(super) fn print_table(rows: &[Row]) {
         );
     }
     println!(
-        "{:>14} {:>13} {:>4} {:>9} {:>6} | {:>9} {:>9} | {:>9} {:>9} | {:>8} {:>8} {:>8} {:>8} | {:>9} {:>5} {:>10} | {:>11} {:>11} | {:>7}",
+        "{:>14} {:>13} {:>4} {:>9} {:>6} | {:>9} {:>9} | {:>9} {:>9} | {:>8} {:>8} {:>8} {:>8} | {:>9} {:>5} {:>10} | {:>11} {:>11} | {:>7} {:>7}",
         "rig",
         "mode",
         "cull",
@@ -114,14 +128,15 @@ pub(super) fn print_table(rows: &[Row]) {
         "uploaded",
         "vs invoc",
         "clip prims",
-        "c/floor"
+        "c/floor",
+        "wall"
     );
     for r in rows {
         let rig = std::path::Path::new(&r.rig)
             .file_stem()
             .map_or(r.rig.clone(), |s| s.to_string_lossy().into());
         println!(
-            "{:>14} {:>13} {:>4} {:>9} {:>6} | {:>9.3} {:>9.3} | {:>9} {:>9} | {:>8.3} {:>8.3} {:>8.3} {:>8.3} | {:>9} {:>5} {:>10} | {:>11} {:>11} | {:>7}",
+            "{:>14} {:>13} {:>4} {:>9} {:>6} | {:>9.3} {:>9.3} | {:>9} {:>9} | {:>8.3} {:>8.3} {:>8.3} {:>8.3} | {:>9} {:>5} {:>10} | {:>11} {:>11} | {:>7} {:>7}",
             rig,
             r.mode.name(),
             format!("{:?}", r.cull).to_lowercase(),
@@ -140,7 +155,8 @@ pub(super) fn print_table(rows: &[Row]) {
             r.bytes_uploaded,
             count(r.vertex_invocations),
             count(r.clipper_primitives),
-            opt(r.worst_cull_over_floor())
+            opt(r.worst_cull_over_floor()),
+            opt(r.worst_wall_cull_over_floor())
         );
     }
 }
@@ -151,12 +167,12 @@ fn count(v: Option<u64>) -> String {
 
 pub(super) fn write_csv(path: &std::path::Path, rows: &[Row]) -> Result<()> {
     let mut text = String::from(
-        "mode,cull,rig,instances,cpu_ms_median,cpu_ms_p95,gpu_ms_median,gpu_ms_p95,draw_calls,dispatches,bytes_uploaded,adapter,moving_percent,churn_percent,sync_ms_median,triangles_submitted,coarse_cull,sphere_tests,shadows,shadow_passes,floor_ms_median,cull_over_floor\n",
+        "mode,cull,rig,instances,cpu_ms_median,cpu_ms_p95,gpu_ms_median,gpu_ms_p95,draw_calls,dispatches,bytes_uploaded,adapter,moving_percent,churn_percent,sync_ms_median,triangles_submitted,coarse_cull,sphere_tests,shadows,shadow_passes,floor_ms_median,cull_over_floor,cull_over_floor_wall\n",
     );
     let field = |v: Option<f64>| v.map_or(String::new(), |x| format!("{x:.4}"));
     for r in rows {
         text += &format!(
-            "{},{},{},{},{:.4},{:.4},{},{},{},{},{},\"{}\",{},{},{:.4},{},{},{},{},{},{},{}\n",
+            "{},{},{},{},{:.4},{:.4},{},{},{},{},{},\"{}\",{},{},{:.4},{},{},{},{},{},{},{},{}\n",
             r.mode.name(),
             format!("{:?}", r.cull).to_lowercase(),
             r.rig,
@@ -179,7 +195,8 @@ pub(super) fn write_csv(path: &std::path::Path, rows: &[Row]) -> Result<()> {
             r.shadows,
             r.shadow_passes,
             field(r.floor_ms_median),
-            field(r.worst_cull_over_floor())
+            field(r.worst_cull_over_floor()),
+            field(r.worst_wall_cull_over_floor())
         );
     }
     std::fs::write(path, text).map_err(|e| Error::io(path, e))

@@ -13,6 +13,7 @@ use crate::cull::coarse::BLOCK;
 use crate::cull::cpu;
 use crate::cull::gpu::{CullScene, CullTargets, GpuCuller};
 use crate::error::Result;
+use crate::profiling::percentile;
 use crate::readback::read_pod;
 use crate::records::{CullLayout, MoveEdit, PlaceEdit};
 use crate::scene::Scene;
@@ -290,6 +291,61 @@ impl Culler {
 
 /// Diagnostics read back after a frame was submitted.
 impl Culler {
+    /// Wall-clock medians over `rounds` submissions each (submit, then wait): the floor
+    /// kernel alone, then each of `views`' culls alone (over the last frame's coarse
+    /// lists, with the coarse cull). `None` without the floor kernel (GPU culling with
+    /// [`super::RendererOptions::cull_floor`]). For adapters whose in-pass timestamps do
+    /// not bracket a compute pass's first dispatch (lavapipe): on a CPU device the wall
+    /// clock is the cost. The culls rewrite the same outputs.
+    pub(super) fn time_against_floor(
+        &self,
+        device: &wgpu::Device,
+        queue: &wgpu::Queue,
+        views: &[&ViewCull],
+        rounds: u32,
+    ) -> Result<Option<(f64, Vec<f64>)>> {
+        let (
+            Kind::Gpu {
+                culler,
+                scene,
+                coarse,
+            },
+            Some(any),
+        ) = (&self.kind, views.first())
+        else {
+            return Ok(None);
+        };
+        let Some(group) = any.bind_group.as_ref().filter(|_| culler.has_floor()) else {
+            return Ok(None);
+        };
+        let time = |record: &dyn Fn(&mut wgpu::ComputePass)| -> Result<f64> {
+            let mut samples = Vec::new();
+            for _ in 0..rounds.max(1) {
+                let mut encoder = device.create_command_encoder(&Default::default());
+                record(&mut encoder.begin_compute_pass(&Default::default()));
+                let start = std::time::Instant::now();
+                queue.submit([encoder.finish()]);
+                device
+                    .poll(wgpu::PollType::wait_indefinitely())
+                    .map_err(|e| crate::error::Error::Readback(e.to_string()))?;
+                samples.push(start.elapsed().as_secs_f64() * 1e3);
+            }
+            Ok(percentile(&samples, 0.5))
+        };
+        let floor = time(&|pass| {
+            culler.encode_floor(pass, scene, group);
+        })?;
+        let culls = views
+            .iter()
+            .filter_map(|v| Some((v, v.bind_group.as_ref()?)))
+            .map(|(v, group)| {
+                let slot = coarse.as_ref().and(v.view.coarse_slot());
+                time(&|pass| culler.encode(pass, scene, group, slot))
+            })
+            .collect::<Result<Vec<f64>>>()?;
+        Ok(Some((floor, culls)))
+    }
+
     /// The coarse cull's candidates per display (GPU culling with it on).
     pub(super) fn read_candidates(
         &self,

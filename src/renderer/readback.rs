@@ -107,6 +107,20 @@ impl Diagnostics<'_> {
             .collect()
     }
 
+    /// The floor kernel's and each display's GPU cull's wall-clock milliseconds, medians
+    /// over `rounds` submissions each, submitted and waited for alone (made with
+    /// [`super::RendererOptions::cull_floor`] on the indirect path; `None` otherwise).
+    /// Where timestamps are unreliable (lavapipe), this is the cost; on a GPU it adds a
+    /// submission's latency to each.
+    pub fn cull_against_floor(&self, rounds: u32) -> Result<Option<(f64, Vec<f64>)>> {
+        let Path::Indirect(p) = &self.renderer.path else {
+            return Ok(None);
+        };
+        let views: Vec<_> = p.displays.iter().map(|d| d.view.view_cull()).collect();
+        p.culler
+            .time_against_floor(self.device, self.queue, &views, rounds)
+    }
+
     /// Visible totals of every display: read back from the counts buffers on the
     /// indirect path, taken from this frame's CPU culls in the classic modes.
     pub fn visible_counts(&self) -> Result<Vec<u32>> {
