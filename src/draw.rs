@@ -6,7 +6,7 @@ use std::collections::HashMap;
 use std::num::NonZeroU32;
 
 use crate::buffers::{init_buffer, init_buffer_with_room};
-use crate::cull::gpu::CullTargets;
+use crate::cull::gpu_buffers::CullTargets;
 use crate::error::Result;
 use crate::materials::{self, GpuMaterials};
 use crate::records::{InstanceRecord, instance_records};

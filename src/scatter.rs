@@ -15,6 +15,8 @@
 //! sums on both sides (no fma, as the plane tests themselves assume), so the scatter
 //! pass computes it and the edit saves 12 bytes.
 
+use std::time::{Duration, Instant};
+
 use wgpu::util::StagingBelt;
 
 use bytemuck::Pod;
@@ -107,16 +109,19 @@ impl Scatters {
     }
 
     /// Records the copies of what is staged and its dispatches, in one compute pass
-    /// (dispatches in a pass are ordered); returns the dispatches (0 to 3). The belt's
-    /// chunks come back for reuse once `encoder`'s commands are submitted and done.
-    pub fn encode(&mut self, encoder: &mut wgpu::CommandEncoder) -> u32 {
+    /// (dispatches in a pass are ordered); returns the dispatches (0 to 3) and the CPU
+    /// time of copying the edits into staging memory. The belt's chunks come back for
+    /// reuse once `encoder`'s commands are submitted and done.
+    pub fn encode(&mut self, encoder: &mut wgpu::CommandEncoder) -> (u32, Duration) {
         let pending = self.places.pending() + self.moves.pending() + self.records.pending();
         if pending == 0 {
-            return 0;
+            return (0, Duration::ZERO);
         }
+        let start = Instant::now();
         self.places.upload(&mut self.belt, encoder);
         self.moves.upload(&mut self.belt, encoder);
         self.records.upload(&mut self.belt, encoder);
+        let staging = start.elapsed();
         let dispatches = {
             let mut pass = encoder.begin_compute_pass(&wgpu::ComputePassDescriptor {
                 label: Some("stereocull.scatter"),
@@ -127,7 +132,7 @@ impl Scatters {
                 + self.records.encode(&mut pass)
         };
         self.belt.finish_and_recall_on_submit(encoder);
-        dispatches
+        (dispatches, staging)
     }
 
     /// Drops what is staged: the scene was uploaded whole again.

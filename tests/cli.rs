@@ -490,7 +490,7 @@ fn profile_writes_table_csv_json_and_chart() {
     assert_eq!(
         lines.next(),
         Some(
-            "mode,cull,rig,instances,cpu_ms_median,cpu_ms_p95,gpu_ms_median,gpu_ms_p95,draw_calls,dispatches,bytes_uploaded,adapter,moving_percent,churn_percent,sync_ms_median,triangles_submitted,coarse_cull,sphere_tests,shadows,shadow_passes,floor_ms_median,cull_over_floor,cull_over_floor_wall"
+            "mode,cull,rig,instances,cpu_ms_median,cpu_ms_p95,gpu_ms_median,gpu_ms_p95,draw_calls,dispatches,bytes_uploaded,adapter,moving_percent,churn_percent,sync_ms_median,triangles_submitted,coarse_cull,sphere_tests,shadows,shadow_passes,floor_ms_median,cull_over_floor,cull_over_floor_wall,moved,staging_ms_median,copy_ms_median,sync_staging_ns_per_move,extra_ns_per_move"
         )
     );
     // 3 classic modes (CPU cull only) + instanced and multiview with both culls, per count.
@@ -530,6 +530,84 @@ fn profile_writes_table_csv_json_and_chart() {
     assert!(
         svg.starts_with("<svg") && svg.contains("polyline") && svg.contains("instanced / gpu cull")
     );
+}
+
+/// `profile --moving 0,5`: the moving row is priced against the static one of the same
+/// run, per move and beside a plain copy of the same bytes, phase by phase; the static
+/// row stages nothing.
+#[test]
+fn profile_prices_moves_against_a_plain_copy() {
+    let dir = tempfile::tempdir().unwrap();
+    let out = stereocull(&[
+        "profile",
+        "--instances",
+        "2000",
+        "--rig",
+        "hmd",
+        "--modes",
+        "instanced",
+        "--cull",
+        "gpu,cpu",
+        "--moving",
+        "0,5",
+        "--frames",
+        "3",
+        "--warmup",
+        "1",
+        "--width",
+        "8",
+        "--height",
+        "8",
+        "--out",
+        dir.path().to_str().unwrap(),
+    ]);
+    let text = String::from_utf8_lossy(&out.stdout);
+    assert!(
+        out.status.success(),
+        "{}",
+        String::from_utf8_lossy(&out.stderr)
+    );
+    let rows: Value =
+        serde_json::from_slice(&std::fs::read(dir.path().join("profile.json")).unwrap()).unwrap();
+    let rows = rows.as_array().unwrap();
+    assert_eq!(rows.len(), 4, "two culls, two percents");
+    for r in rows {
+        let moving = r["moving_percent"].as_f64().unwrap();
+        let edits = &r["edits"];
+        if moving == 0.0 {
+            assert_eq!(r["moved"], 0, "{r}");
+            assert_eq!(r["staging_ms_median"].as_f64().unwrap(), 0.0, "{r}");
+            assert!(edits.is_null() && r["copy_ms_median"].is_null(), "{r}");
+            continue;
+        }
+        assert_eq!(r["moved"], 100, "5 % of 2,000: {r}");
+        let positive = |key: &str| edits[key].as_f64().is_some_and(|v| v > 0.0);
+        for key in [
+            "copy_ns_per_move",
+            "sync_staging_ns_per_move",
+            "sync_staging_over_copy",
+        ] {
+            assert!(positive(key), "{key}: {r}");
+        }
+        // The GPU culler stages the moves (the CPU one takes them into its layout and
+        // uploads its cull results instead).
+        if r["cull"] == "gpu" {
+            assert!(r["staging_ms_median"].as_f64().unwrap() > 0.0, "{r}");
+        }
+        for phase in [
+            "sync_ms",
+            "prepare_ms",
+            "staging_ms",
+            "encode_ms",
+            "submit_ms",
+        ] {
+            assert!(
+                edits[phase].as_f64().is_some_and(f64::is_finite),
+                "{phase}: {r}"
+            );
+        }
+    }
+    assert_eq!(text.matches("\nedits hmd instanced").count(), 2, "{text}");
 }
 
 /// `cull --frames N --moving P --churn P`: the GPU's buffers after N frames of seeded

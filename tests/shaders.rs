@@ -7,7 +7,7 @@ use glam::{Mat4, Vec2, Vec3, Vec4};
 use naga::{Module, TypeInner};
 use stereocull::contexts::{DisplayContext, EyeContext, FrameContext};
 use stereocull::cull::CoarseCull;
-use stereocull::cull::gpu::CullParams;
+use stereocull::cull::gpu_buffers::CullParams;
 use stereocull::draw::VERTEX_ATTRIBUTES;
 use stereocull::materials::MaterialRecord;
 use stereocull::records::{

@@ -8,7 +8,7 @@ use clap::Args;
 use indicatif::{ProgressBar, ProgressStyle};
 
 use super::edits::{EditArgs, EditDriver};
-use super::profile_report::{CullOverFloor, Row, print_table, write_csv};
+use super::profile_report::{CullOverFloor, Row, price_edits, print_table, write_csv};
 use super::render::{PassReport, pass_reports};
 use super::{FRAME_SECONDS, Switch, chart, write_json};
 use crate::device::{Gpu, list_counts};
@@ -171,6 +171,7 @@ pub fn profile(args: &ProfileArgs) -> Result<()> {
         }
     }
     bar.finish_and_clear();
+    price_edits(&mut rows);
     print_table(&rows);
     std::fs::create_dir_all(&args.out).map_err(|e| Error::io(&args.out, e))?;
     write_csv(&args.out.join("profile.csv"), &rows)?;
@@ -261,6 +262,7 @@ fn measure(
     let targets = renderer.create_targets(&gpu.device);
     let views: Vec<_> = targets.iter().map(|t| t.views()).collect();
     let mut samples = Samples::default();
+    let mut copy = PlainCopy::default();
     let mut live = match edits.any() {
         true => {
             let live = LiveScene::new(scene.clone());
@@ -274,12 +276,16 @@ fn measure(
         if let Some((live, driver)) = &mut live {
             driver.apply(live, frame)?;
         }
+        // Where the sync would run, with the caches as it finds them: the last frame's
+        // edit bytes (the same count every frame).
+        let copied = copy.time();
         let start = Instant::now();
         let synced = match &mut live {
             Some((live, _)) => renderer.sync(&gpu.device, &gpu.queue, live)?,
             None => SyncStats::default(),
         };
         let sync_end = Instant::now();
+        copy.bytes = synced.bytes_uploaded as usize;
         let prepared = renderer.prepare(&gpu.queue, rig, frame as f32 * FRAME_SECONDS)?;
         let encode_start = Instant::now();
         let mut encoder = gpu.device.create_command_encoder(&Default::default());
@@ -302,6 +308,11 @@ fn measure(
         samples.cull.push(prepared.cpu_cull.as_secs_f64() * 1e3);
         samples.upload.push(prepared.cpu_upload.as_secs_f64() * 1e3);
         samples.encode.push(ms(encode_start, submit_start));
+        samples
+            .staging
+            .push(recorded.cpu_staging.as_secs_f64() * 1e3);
+        samples.copy.extend(copied);
+        samples.moved = synced.moved;
         samples.submit.push(ms(submit_start, end));
         samples.passes = pass_reports(&renderer, rig, queries.as_ref());
         if let Some(q) = queries {
@@ -356,6 +367,10 @@ fn measure(
         cull_ms_median: med(&samples.cull),
         upload_ms_median: med(&samples.upload),
         encode_ms_median: med(&samples.encode),
+        staging_ms_median: med(&samples.staging),
+        moved: samples.moved,
+        copy_ms_median: gpu_med(&samples.copy),
+        edits: None,
         submit_ms_median: med(&samples.submit),
         gpu_cull_ms_median: gpu_med(&samples.gpu_cull),
         gpu_draw_ms_median: gpu_med(&samples.gpu_draw),
@@ -388,6 +403,11 @@ struct Samples {
     cull: Vec<f64>,
     upload: Vec<f64>,
     encode: Vec<f64>,
+    staging: Vec<f64>,
+    /// A plain copy of each frame's edit bytes ([`PlainCopy`]).
+    copy: Vec<f64>,
+    /// Instances the last frame synced as moves.
+    moved: u32,
     submit: Vec<f64>,
     gpu: Vec<f64>,
     gpu_cull: Vec<f64>,
@@ -443,4 +463,37 @@ fn floor_ratios(
         }
     });
     Some((floor, displays.collect()))
+}
+
+/// The yardstick of an edit's CPU cost: the same bytes copied, in the same run on the
+/// same host at the same point of the frame, from memory just written (as the caller
+/// just wrote its edits) into memory last touched a frame ago (as the staging belt's
+/// chunk was): what the edits' trip to the GPU cannot beat on the CPU.
+#[derive(Default)]
+struct PlainCopy {
+    /// The bytes to copy: the last sync's.
+    bytes: usize,
+    from: Vec<u8>,
+    to: Vec<u8>,
+}
+
+impl PlainCopy {
+    /// Milliseconds to copy `bytes` bytes (`None` before any).
+    fn time(&mut self) -> Option<f64> {
+        let n = self.bytes;
+        if n == 0 {
+            return None;
+        }
+        if self.from.len() < n {
+            (self.from, self.to) = (vec![0; n], vec![0; n]);
+        }
+        // Patterned, not zero: nothing may take a shortcut over zero pages.
+        for (i, b) in self.from[..n].iter_mut().enumerate() {
+            *b = (i * 31 + 7) as u8;
+        }
+        let start = Instant::now();
+        self.to[..n].copy_from_slice(std::hint::black_box(&self.from[..n]));
+        std::hint::black_box(&self.to);
+        Some(start.elapsed().as_secs_f64() * 1e3)
+    }
 }

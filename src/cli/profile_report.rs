@@ -29,6 +29,15 @@ pub struct Row {
     pub cull_ms_median: f64,
     pub upload_ms_median: f64,
     pub encode_ms_median: f64,
+    /// Of `encode_ms_median`, copying the edits into staging memory.
+    pub staging_ms_median: f64,
+    /// Instances the last frame synced as moves (inserted ones too).
+    pub moved: u32,
+    /// A plain copy of the frame's edit bytes from one warm buffer into another (with
+    /// edits).
+    pub copy_ms_median: Option<f64>,
+    /// With moves and a 0 % row of the same configuration: what they cost.
+    pub edits: Option<EditCost>,
     pub submit_ms_median: f64,
     pub gpu_cull_ms_median: Option<f64>,
     pub gpu_draw_ms_median: Option<f64>,
@@ -65,6 +74,83 @@ pub struct Row {
     /// The last timed frame's GPU scopes, for `--trace`.
     #[serde(skip)]
     pub trace: Vec<GpuTimerQueryResult>,
+}
+
+/// A moving configuration's CPU against the same configuration at 0 % moving in the
+/// same run, per moved instance and beside a plain copy of the same bytes.
+#[derive(Clone, Debug, Serialize)]
+pub struct EditCost {
+    /// `cpu_ms_median` minus the static row's, per moved instance.
+    pub extra_ns_per_move: f64,
+    /// The phases that do the edits' work (sync and the staging copy; the rest records
+    /// one dispatch and its copy commands whatever the moves), per moved instance:
+    /// measured directly, so free of the noise in a difference of two frames' totals.
+    pub sync_staging_ns_per_move: f64,
+    /// `copy_ms_median` per moved instance.
+    pub copy_ns_per_move: f64,
+    /// `extra_ns_per_move` and `sync_staging_ns_per_move` over `copy_ns_per_move`.
+    pub over_copy: f64,
+    pub sync_staging_over_copy: f64,
+    /// Where the extra goes: each phase's median minus the static row's, ms.
+    pub sync_ms: f64,
+    pub prepare_ms: f64,
+    pub staging_ms: f64,
+    /// `encode` without the staging copy.
+    pub encode_ms: f64,
+    pub submit_ms: f64,
+}
+
+/// Fills [`Row::edits`] of every row with moves from the row of the same configuration
+/// without them, where the run has one (`--moving 0,1,10`).
+pub fn price_edits(rows: &mut [Row]) {
+    let same = |a: &Row, b: &Row| {
+        (
+            a.mode,
+            a.cull,
+            &a.rig,
+            a.instances,
+            a.coarse_cull,
+            a.far_layer,
+            a.churn_percent,
+        ) == (
+            b.mode,
+            b.cull,
+            &b.rig,
+            b.instances,
+            b.coarse_cull,
+            b.far_layer,
+            b.churn_percent,
+        )
+    };
+    let costs: Vec<Option<EditCost>> = rows
+        .iter()
+        .map(|r| {
+            let base = rows
+                .iter()
+                .find(|b| b.moving_percent == 0.0 && same(b, r))?;
+            let copy = r.copy_ms_median.filter(|_| r.moved > 0)?;
+            let per_move = |ms: f64| ms * 1e6 / r.moved as f64;
+            let extra = per_move(r.cpu_ms_median - base.cpu_ms_median);
+            let prepare = |x: &Row| x.cull_ms_median + x.upload_ms_median;
+            let staging = r.staging_ms_median - base.staging_ms_median;
+            let own = per_move(r.sync_ms_median + r.staging_ms_median);
+            Some(EditCost {
+                extra_ns_per_move: extra,
+                sync_staging_ns_per_move: own,
+                copy_ns_per_move: per_move(copy),
+                over_copy: extra / per_move(copy),
+                sync_staging_over_copy: own / per_move(copy),
+                sync_ms: r.sync_ms_median - base.sync_ms_median,
+                prepare_ms: prepare(r) - prepare(base),
+                staging_ms: staging,
+                encode_ms: r.encode_ms_median - base.encode_ms_median - staging,
+                submit_ms: r.submit_ms_median - base.submit_ms_median,
+            })
+        })
+        .collect();
+    for (r, c) in rows.iter_mut().zip(costs) {
+        r.edits = c;
+    }
 }
 
 /// One display's GPU cull against the floor kernel of the same frames.
@@ -159,6 +245,35 @@ pub(super) fn print_table(rows: &[Row]) {
             opt(r.worst_wall_cull_over_floor())
         );
     }
+    print_edit_costs(rows);
+}
+
+/// Per moving row with a static twin: the extra CPU per moved instance, where it goes,
+/// and the plain copy of the same bytes.
+fn print_edit_costs(rows: &[Row]) {
+    for r in rows {
+        let Some(e) = &r.edits else { continue };
+        println!(
+            "edits {} {} {} {} {}%: {} moves, {} bytes; per move: plain copy {:.2} ns, sync + staging {:.2} ns ({:.2}x), frame over static {:+.1} ns ({:.1}x); ms over static: sync {:+.3}, prepare {:+.3}, staging {:+.3}, rest of encode {:+.3}, submit {:+.3}",
+            r.rig,
+            r.mode.name(),
+            format!("{:?}", r.cull).to_lowercase(),
+            r.instances,
+            r.moving_percent,
+            r.moved,
+            r.bytes_uploaded,
+            e.copy_ns_per_move,
+            e.sync_staging_ns_per_move,
+            e.sync_staging_over_copy,
+            e.extra_ns_per_move,
+            e.over_copy,
+            e.sync_ms,
+            e.prepare_ms,
+            e.staging_ms,
+            e.encode_ms,
+            e.submit_ms
+        );
+    }
 }
 
 fn count(v: Option<u64>) -> String {
@@ -167,12 +282,12 @@ fn count(v: Option<u64>) -> String {
 
 pub(super) fn write_csv(path: &std::path::Path, rows: &[Row]) -> Result<()> {
     let mut text = String::from(
-        "mode,cull,rig,instances,cpu_ms_median,cpu_ms_p95,gpu_ms_median,gpu_ms_p95,draw_calls,dispatches,bytes_uploaded,adapter,moving_percent,churn_percent,sync_ms_median,triangles_submitted,coarse_cull,sphere_tests,shadows,shadow_passes,floor_ms_median,cull_over_floor,cull_over_floor_wall\n",
+        "mode,cull,rig,instances,cpu_ms_median,cpu_ms_p95,gpu_ms_median,gpu_ms_p95,draw_calls,dispatches,bytes_uploaded,adapter,moving_percent,churn_percent,sync_ms_median,triangles_submitted,coarse_cull,sphere_tests,shadows,shadow_passes,floor_ms_median,cull_over_floor,cull_over_floor_wall,moved,staging_ms_median,copy_ms_median,sync_staging_ns_per_move,extra_ns_per_move\n",
     );
     let field = |v: Option<f64>| v.map_or(String::new(), |x| format!("{x:.4}"));
     for r in rows {
         text += &format!(
-            "{},{},{},{},{:.4},{:.4},{},{},{},{},{},\"{}\",{},{},{:.4},{},{},{},{},{},{},{},{}\n",
+            "{},{},{},{},{:.4},{:.4},{},{},{},{},{},\"{}\",{},{},{:.4},{},{},{},{},{},{},{},{},{},{:.4},{},{},{}\n",
             r.mode.name(),
             format!("{:?}", r.cull).to_lowercase(),
             r.rig,
@@ -196,7 +311,12 @@ pub(super) fn write_csv(path: &std::path::Path, rows: &[Row]) -> Result<()> {
             r.shadow_passes,
             field(r.floor_ms_median),
             field(r.worst_cull_over_floor()),
-            field(r.worst_wall_cull_over_floor())
+            field(r.worst_wall_cull_over_floor()),
+            r.moved,
+            r.staging_ms_median,
+            field(r.copy_ms_median),
+            field(r.edits.as_ref().map(|e| e.sync_staging_ns_per_move)),
+            field(r.edits.as_ref().map(|e| e.extra_ns_per_move))
         );
     }
     std::fs::write(path, text).map_err(|e| Error::io(path, e))

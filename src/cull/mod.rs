@@ -12,6 +12,7 @@
 pub mod coarse;
 pub mod cpu;
 pub mod gpu;
+pub mod gpu_buffers;
 
 pub use coarse::CoarseCull;
 

@@ -11,7 +11,8 @@ use super::passes::{Logged, PassRecord, Recording, Timing, close, compute_pass, 
 use crate::cull::CullOutput;
 use crate::cull::coarse::BLOCK;
 use crate::cull::cpu;
-use crate::cull::gpu::{CullScene, CullTargets, GpuCuller};
+use crate::cull::gpu::GpuCuller;
+use crate::cull::gpu_buffers::{CullScene, CullTargets};
 use crate::error::Result;
 use crate::profiling::percentile;
 use crate::readback::read_pod;

@@ -32,6 +32,10 @@ pub struct FrameStats {
     /// Writing contexts and cull results into buffers.
     #[serde(skip)]
     pub cpu_upload: Duration,
+    /// Copying the last sync's edits into staging memory (in `encode`; zero without
+    /// edits).
+    #[serde(skip)]
+    pub cpu_staging: Duration,
 }
 
 /// The view a cull is for.

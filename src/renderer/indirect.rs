@@ -15,7 +15,7 @@ use super::passes::{PassRecord, Recording, Timing, draw_pass};
 use super::shadow_pass::ShadowPass;
 use super::targets::TargetViews;
 use super::view_pass::ViewPass;
-use crate::cull::gpu::CullTargets;
+use crate::cull::gpu_buffers::CullTargets;
 use crate::draw::{DrawFeatures, DrawScene, Drawer, Drawing};
 use crate::error::Result;
 use crate::modes::StereoMode;

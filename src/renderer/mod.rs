@@ -328,7 +328,7 @@ impl Renderer {
         timer: &mut Option<&mut GpuTimer>,
     ) -> FrameStats {
         self.passes.clear();
-        let scattered = self.scatter.encode(encoder);
+        let (scattered, cpu_staging) = self.scatter.encode(encoder);
         if scattered > 0 {
             self.passes.push(PassRecord::frame("scatter"));
         }
@@ -342,6 +342,7 @@ impl Renderer {
         };
         FrameStats {
             dispatches: stats.dispatches + scattered,
+            cpu_staging,
             ..stats
         }
     }

@@ -5,7 +5,7 @@
 use super::frame::FrameStats;
 use super::passes::{close, open_display};
 use super::{Path, Renderer};
-use crate::cull::gpu::CullTargets;
+use crate::cull::gpu_buffers::CullTargets;
 use crate::error::{Error, Result};
 use crate::profiling::GpuTimer;
 

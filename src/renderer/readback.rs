@@ -5,7 +5,7 @@
 use super::indirect::IndirectPath;
 use super::{Path, Renderer};
 use crate::cull::CullOutput;
-use crate::cull::gpu::{COUNTS_BYTES, CullTargets};
+use crate::cull::gpu_buffers::{COUNTS_BYTES, CullTargets};
 use crate::error::Result;
 use crate::readback::read_pod;
 use crate::records::DrawArgs;

@@ -8,7 +8,7 @@ use super::passes::{Logged, Timing};
 use crate::buffers::write;
 use crate::contexts::DisplayContext;
 use crate::contexts::context_buffer;
-use crate::cull::gpu::CullTargets;
+use crate::cull::gpu_buffers::CullTargets;
 use crate::draw::{Drawer, Drawing};
 use crate::records::uniform_bytes;
 use crate::shaders::DrawKey;

@@ -1,0 +1,284 @@
+//! The GPU culler's buffers: the scene data its passes read (uploaded once, written
+//! again by a reload or a scatter) with the scratch all displays share, and each
+//! display's outputs, which its draw pass consumes.
+
+use crate::buffers::{init_buffer, init_buffer_with_room, storage_buffer};
+use crate::cull::CullOutput;
+use crate::cull::coarse::{BLOCK, CoarseCull};
+use crate::records::{CullLayout, DrawArgs};
+use crate::records::{storage_bytes, uniform_bytes};
+use crate::shaders::{SPAN, WORKGROUP_SIZE, dispatch_size};
+use encase::ShaderType;
+use glam::Vec4;
+
+/// The uniform the cull passes read besides the display context (`CullParams` in
+/// `wgsl/shared/records.wgsl`); encase lays it out as WGSL does.
+#[derive(Clone, Copy, Debug, PartialEq, Eq, encase::ShaderType)]
+pub struct CullParams {
+    /// Places of the cull order (instances when laid out tight).
+    pub instance_count: u32,
+    /// Meshes in the scene: draws per level.
+    pub mesh_count: u32,
+    /// The device's limit of workgroups per dimension: the coarse pass splits the
+    /// candidates' dispatch into x and y with it.
+    pub max_groups: u32,
+    /// Levels of detail in use: 1 (off) or [`crate::scene::MAX_LODS`].
+    pub lod_levels: u32,
+}
+
+/// Bytes of the counts buffer: the draw count, then the visible total.
+pub const COUNTS_BYTES: u64 = 8;
+
+/// Scene data the cull passes read, uploaded once, plus scratch shared by all displays
+/// (displays cull one after another, so one scratch suffices).
+pub struct CullScene {
+    /// Places of the cull order the passes run over.
+    pub instance_count: u32,
+    pub(super) groups: (u32, u32),
+    pub(super) max_groups: u32,
+    /// Levels of detail culled into: the y of the scan dispatch.
+    pub levels: u32,
+    /// Groups of spans at most: the x of the scan dispatch.
+    pub(super) scan_groups: u32,
+    pub(super) params: wgpu::Buffer,
+    pub(super) spheres: wgpu::Buffer,
+    pub(super) order: wgpu::Buffer,
+    pub(super) positions: wgpu::Buffer,
+    pub(super) mesh_of: wgpu::Buffer,
+    pub(super) meshes: wgpu::Buffer,
+    pub(super) mesh_bounds: wgpu::Buffer,
+    pub(super) lods: wgpu::Buffer,
+    pub(super) entries: wgpu::Buffer,
+    pub(super) span_sums: wgpu::Buffer,
+    /// The coarse cull's slots (displays; 0 without it) and its buffers per slot.
+    pub(super) coarse_slots: u32,
+    pub(super) block_marks: wgpu::Buffer,
+    pub(super) block_list: wgpu::Buffer,
+    /// Each slot's listed positions (the coarse passes write it; read back for
+    /// statistics).
+    pub candidate_count: wgpu::Buffer,
+    pub(super) candidate_ranges: wgpu::Buffer,
+    pub(super) block_tests: wgpu::Buffer,
+    /// The display passes' indirect dispatches, one per slot, written by the coarse
+    /// passes.
+    pub(super) coarse_args: wgpu::Buffer,
+}
+
+/// One display's cull outputs: what its draw pass consumes.
+pub struct CullTargets {
+    /// The visible ids, per the cull contract.
+    pub visible: wgpu::Buffer,
+    /// The packed draws (meshes times levels entries), for the multi-draw.
+    pub draws: wgpu::Buffer,
+    /// [`COUNTS_BYTES`]: the draw count (what `multi_draw_indexed_indirect_count`
+    /// reads), then the visible total (for statistics without reading `visible`).
+    pub counts: wgpu::Buffer,
+}
+
+impl CullScene {
+    /// Uploads `layout`, with room for `slots` instances (a live scene's capacity), for
+    /// culling into `levels` levels of detail (1: LOD off), with room for the coarse
+    /// cull's lists of `coarse_slots` displays (0: no coarse cull).
+    pub fn new(
+        device: &wgpu::Device,
+        layout: &CullLayout,
+        slots: u32,
+        levels: u32,
+        coarse_slots: u32,
+    ) -> CullScene {
+        let slots = slots
+            .max(layout.positions.len() as u32)
+            .max(layout.order.len() as u32);
+        let max_groups = device.limits().max_compute_workgroups_per_dimension;
+        let (params, groups) = cull_params(layout, (max_groups, levels));
+        let room = |label: &str, contents: &[u8], per_slot: u64| {
+            let usage = wgpu::BufferUsages::STORAGE | wgpu::BufferUsages::COPY_DST;
+            init_buffer_with_room(device, label, contents, per_slot * slots as u64, usage)
+        };
+        let scratch = wgpu::BufferUsages::STORAGE;
+        // The display passes may run past the last instance to the end of its block.
+        let positions = slots.next_multiple_of(BLOCK) as u64;
+        let per_slot = |bytes: u64| bytes * coarse_slots as u64;
+        let block_bytes = per_slot(4 * slots.div_ceil(BLOCK) as u64);
+        let meshes = layout.meshes.len() as u64;
+        let (spans, scan_groups) = span_shape(positions as u32);
+        CullScene {
+            instance_count: params.instance_count,
+            groups,
+            max_groups,
+            levels,
+            scan_groups,
+            params: init_buffer(
+                device,
+                "stereocull.cull_params",
+                &uniform_bytes(&params),
+                wgpu::BufferUsages::UNIFORM | wgpu::BufferUsages::COPY_DST,
+            ),
+            spheres: room(
+                "stereocull.spheres",
+                bytemuck::cast_slice(&layout.spheres),
+                16,
+            ),
+            order: room("stereocull.order", bytemuck::cast_slice(&layout.order), 4),
+            positions: room(
+                "stereocull.positions",
+                bytemuck::cast_slice(&layout.positions),
+                4,
+            ),
+            mesh_of: room(
+                "stereocull.mesh_of",
+                bytemuck::cast_slice(&layout.mesh_of),
+                4,
+            ),
+            meshes: room("stereocull.meshes", bytemuck::cast_slice(&layout.meshes), 0),
+            mesh_bounds: room(
+                "stereocull.mesh_bounds",
+                bytemuck::cast_slice(&layout.mesh_bounds),
+                0,
+            ),
+            lods: room("stereocull.lods", bytemuck::cast_slice(&layout.lods), 0),
+            entries: storage_buffer(device, "stereocull.entries", 4 * positions, scratch),
+            span_sums: storage_buffer(
+                device,
+                "stereocull.span_sums",
+                4 * ((spans + scan_groups) * levels) as u64,
+                scratch,
+            ),
+            coarse_slots,
+            block_marks: storage_buffer(device, "stereocull.block_marks", block_bytes, scratch),
+            block_list: storage_buffer(device, "stereocull.block_list", block_bytes, scratch),
+            candidate_count: storage_buffer(
+                device,
+                "stereocull.candidate_count",
+                per_slot(4),
+                scratch | wgpu::BufferUsages::COPY_SRC,
+            ),
+            candidate_ranges: storage_buffer(
+                device,
+                "stereocull.candidate_ranges",
+                per_slot(8 * meshes),
+                scratch,
+            ),
+            block_tests: storage_buffer(
+                device,
+                "stereocull.block_tests",
+                per_slot(CoarseCull::min_size().get()),
+                scratch | wgpu::BufferUsages::COPY_DST,
+            ),
+            coarse_args: storage_buffer(
+                device,
+                "stereocull.coarse_args",
+                per_slot(12),
+                scratch | wgpu::BufferUsages::INDIRECT,
+            ),
+        }
+    }
+
+    /// Writes this frame's block tests, one per coarse slot (display, in order): the
+    /// display frustums' planes grown for rounding ([`CoarseCull::around`]). Returns the
+    /// bytes written; nothing without the coarse cull.
+    pub fn write_block_tests(&self, queue: &wgpu::Queue, planes: &[[Vec4; 6]]) -> u64 {
+        if self.coarse_slots == 0 {
+            return 0;
+        }
+        let tests: Vec<CoarseCull> = planes.iter().map(|p| CoarseCull::around(*p)).collect();
+        let bytes = storage_bytes(&tests);
+        queue.write_buffer(&self.block_tests, 0, &bytes);
+        bytes.len() as u64
+    }
+
+    /// Writes a new `layout` (instances inserted or removed) into the buffers, which must
+    /// have room for it (same meshes, no more slots than made for); returns the bytes.
+    pub fn reload(&mut self, queue: &wgpu::Queue, layout: &CullLayout) -> u64 {
+        let (params, groups) = cull_params(layout, (self.max_groups, self.levels));
+        (self.instance_count, self.groups) = (params.instance_count, groups);
+        let writes: [(&wgpu::Buffer, &[u8]); 6] = [
+            (&self.params, &uniform_bytes(&params)),
+            (&self.spheres, bytemuck::cast_slice(&layout.spheres)),
+            (&self.order, bytemuck::cast_slice(&layout.order)),
+            (&self.positions, bytemuck::cast_slice(&layout.positions)),
+            (&self.mesh_of, bytemuck::cast_slice(&layout.mesh_of)),
+            (&self.meshes, bytemuck::cast_slice(&layout.meshes)),
+        ];
+        writes
+            .iter()
+            .map(|(buffer, bytes)| {
+                queue.write_buffer(buffer, 0, bytes);
+                bytes.len() as u64
+            })
+            .sum()
+    }
+
+    /// Where the scatter passes write (the spheres in cull order, each slot's
+    /// position, each position's slot) and what they read (each mesh's local bounds).
+    pub fn scatter_targets(&self) -> [&wgpu::Buffer; 4] {
+        [
+            &self.spheres,
+            &self.positions,
+            &self.order,
+            &self.mesh_bounds,
+        ]
+    }
+
+    /// Bytes on the GPU per instance for culling (spheres, order, positions, mesh, the
+    /// entry), whatever the levels of detail (their span sums add 4 bytes per level per
+    /// [`SPAN`] instances).
+    pub const BYTES_PER_INSTANCE: u64 = 16 + 4 + 4 + 4 + 4;
+}
+
+impl CullTargets {
+    /// Sized for every instance visible and `draws` draws (meshes times levels).
+    pub fn new(device: &wgpu::Device, instance_count: u32, draws: u32) -> CullTargets {
+        let out = wgpu::BufferUsages::STORAGE
+            | wgpu::BufferUsages::COPY_SRC
+            | wgpu::BufferUsages::COPY_DST;
+        let indirect = out | wgpu::BufferUsages::INDIRECT;
+        CullTargets {
+            visible: storage_buffer(device, "stereocull.visible", 4 * instance_count as u64, out),
+            draws: storage_buffer(
+                device,
+                "stereocull.draws",
+                (size_of::<DrawArgs>() as u32 * draws) as u64,
+                indirect,
+            ),
+            counts: storage_buffer(device, "stereocull.counts", COUNTS_BYTES, indirect),
+        }
+    }
+
+    /// Writes a CPU cull's `out` into these buffers; returns the bytes written.
+    pub fn upload(&self, queue: &wgpu::Queue, out: &CullOutput) -> u64 {
+        let counts = [out.draw_count, out.visible.len() as u32];
+        let writes: [(&wgpu::Buffer, &[u8]); 3] = [
+            (&self.visible, bytemuck::cast_slice(&out.visible)),
+            (&self.draws, bytemuck::cast_slice(&out.draws)),
+            (&self.counts, bytemuck::cast_slice(&counts)),
+        ];
+        writes
+            .iter()
+            .filter(|(_, bytes)| !bytes.is_empty())
+            .map(|(buffer, bytes)| {
+                queue.write_buffer(buffer, 0, bytes);
+                bytes.len() as u64
+            })
+            .sum()
+    }
+}
+
+/// Spans and groups of spans (the scan's x) over `positions` cull positions, as
+/// `span_count` and `group_count` in `wgsl/shared/cull_math.wgsl` count them.
+fn span_shape(positions: u32) -> (u32, u32) {
+    let spans = positions.div_ceil(SPAN);
+    (spans, spans.div_ceil(WORKGROUP_SIZE))
+}
+
+fn cull_params(layout: &CullLayout, (max_groups, levels): (u32, u32)) -> (CullParams, (u32, u32)) {
+    let n = layout.spheres.len() as u32;
+    let groups = dispatch_size(n.div_ceil(WORKGROUP_SIZE), max_groups);
+    let params = CullParams {
+        instance_count: n,
+        mesh_count: layout.meshes.len() as u32,
+        max_groups,
+        lod_levels: levels,
+    };
+    (params, groups)
+}
