@@ -113,9 +113,9 @@ fn display_frustum_is_not_much_larger_than_the_union_of_its_eyes() {
                 "{name} {}: display / union volume = {factor:.4}",
                 rig.displays[d].name
             );
-            let cant = match rig.displays[d].mount {
+            let cant = match &rig.displays[d].mount {
                 Mount::Head(h) => h.cant_deg,
-                Mount::Screen(_) => 0.0,
+                Mount::Screen(_) | Mount::Views(_) => 0.0,
             };
             let worst = if cant > 0.0 {
                 &mut canted
@@ -144,7 +144,7 @@ fn off_axis_screen_corners_project_to_ndc_corners() {
     {
         let resolved = rig.resolve().unwrap();
         for (display, r) in rig.displays.iter().zip(&resolved.displays) {
-            let Mount::Screen(s) = display.mount else {
+            let Mount::Screen(s) = &display.mount else {
                 panic!("a cave wall is a screen")
             };
             let (ll, lr, ul) = (

@@ -75,7 +75,7 @@ fn out_of_range_values_are_refused_with_the_field_named() {
     let fov =
         |r: &mut Rig, f: &dyn Fn(&mut stereocull::frustum::Fov)| match &mut r.displays[0].mount {
             Mount::Head(h) => f(&mut h.fov),
-            Mount::Screen(_) => panic!("hmd is head-fixed"),
+            Mount::Screen(_) | Mount::Views(_) => panic!("hmd is head-fixed"),
         };
     check(&|r| fov(r, &|f| f.left = f32::INFINITY), "fov");
     check(&|r| fov(r, &|f| f.right = -2.0), "fov");

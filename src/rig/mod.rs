@@ -1,5 +1,6 @@
 //! The viewing rig: a tracked viewer and its displays, each stereo or mono, head-fixed
-//! (an HMD panel) or world-fixed (a CAVE wall given by its corners).
+//! (an HMD panel), world-fixed (a CAVE wall given by its corners), or given as an XR
+//! runtime's posed views.
 //!
 //! Everything is in meters, in tracking space, which is also world space here: the
 //! scene is authored at real scale and nothing rescales it.
@@ -12,9 +13,11 @@ use serde::{Deserialize, Serialize};
 use crate::error::{Error, Result};
 use crate::frustum::Fov;
 
+mod posed;
 mod presets;
 mod resolve;
 
+pub use posed::{FovAngles, PosedView};
 pub use resolve::{ResolvedDisplay, ResolvedRig};
 
 /// The tracked head. Orientation is yaw (about +Y, positive turns left), then pitch
@@ -96,13 +99,18 @@ pub struct Screen {
     pub upper_left: [f32; 3],
 }
 
-/// Where a display's image is fixed: to the head, or in the world.
-#[derive(Clone, Copy, Debug, PartialEq)]
+/// Where a display's image is fixed: to the head, or in the world; or its views as
+/// an XR runtime gives them each frame.
+#[derive(Clone, Debug, PartialEq)]
 pub enum Mount {
     /// An HMD panel: moves with the viewer's head.
     Head(HeadFixed),
     /// A CAVE wall: fixed in tracking space, seen off-axis from each eye.
     Screen(Screen),
+    /// Each view's pose and field-of-view angles, in the runtime's order (left, then
+    /// right), replaced every frame by the caller; the viewer's pose still places the
+    /// frame (levels of detail, the frame frustum, the shadow fit).
+    Views(Vec<PosedView>),
 }
 
 /// One display: a head-fixed panel or a world-fixed screen, stereo or mono.
@@ -137,18 +145,21 @@ struct DisplayFile {
     head: Option<HeadFixed>,
     #[serde(default, skip_serializing_if = "Option::is_none")]
     screen: Option<Screen>,
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    views: Option<Vec<PosedView>>,
 }
 
 impl TryFrom<DisplayFile> for Display {
     type Error = String;
 
     fn try_from(f: DisplayFile) -> std::result::Result<Display, String> {
-        let mount = match (f.head, f.screen) {
-            (Some(h), None) => Mount::Head(h),
-            (None, Some(s)) => Mount::Screen(s),
+        let mount = match (f.head, f.screen, f.views) {
+            (Some(h), None, None) => Mount::Head(h),
+            (None, Some(s), None) => Mount::Screen(s),
+            (None, None, Some(v)) => Mount::Views(v),
             _ => {
                 return Err(format!(
-                    "display {:?} needs exactly one of `head` or `screen`",
+                    "display {:?} needs exactly one of `head`, `screen` or `views`",
                     f.name
                 ));
             }
@@ -164,9 +175,10 @@ impl TryFrom<DisplayFile> for Display {
 
 impl From<Display> for DisplayFile {
     fn from(d: Display) -> DisplayFile {
-        let (head, screen) = match d.mount {
-            Mount::Head(h) => (Some(h), None),
-            Mount::Screen(s) => (None, Some(s)),
+        let (head, screen, views) = match d.mount {
+            Mount::Head(h) => (Some(h), None, None),
+            Mount::Screen(s) => (None, Some(s), None),
+            Mount::Views(v) => (None, None, Some(v)),
         };
         DisplayFile {
             name: d.name,
@@ -174,6 +186,7 @@ impl From<Display> for DisplayFile {
             resolution: d.resolution,
             head,
             screen,
+            views,
         }
     }
 }
@@ -287,6 +300,7 @@ fn validate_display(d: &Display) -> std::result::Result<(), String> {
     match &d.mount {
         Mount::Head(h) => validate_head(h),
         Mount::Screen(s) => validate_screen(s),
+        Mount::Views(v) => posed::check_views(v, d.views()),
     }
 }
 

@@ -3,6 +3,7 @@
 
 use glam::{DAffine3, DMat3, DQuat, DVec3, Vec4};
 
+use super::posed::{self, PosedView};
 use super::{Display, HeadFixed, Mount, Rig, Screen, Viewer, euler};
 use crate::cull::coarse::expected_tests;
 use crate::cull::{CoarseCull, CullJob};
@@ -41,31 +42,29 @@ impl Rig {
 
     fn resolve_display(&self, d: &Display) -> std::result::Result<ResolvedDisplay, String> {
         let eyes = self
-            .viewer
-            .eye_positions(d.views())
+            .eye_bases(d)?
             .into_iter()
-            .enumerate()
-            .map(|(e, position)| {
-                let (orientation, fov) = match &d.mount {
-                    Mount::Head(h) => head_fixed_basis(&self.viewer, h, e, d.views()),
-                    Mount::Screen(s) => screen_basis(s, position)?,
-                };
-                Ok(View {
-                    world_from_view: DAffine3::from_rotation_translation(orientation, position),
-                    fov,
-                    near: self.near,
-                    far: self.far,
-                })
+            .map(|(position, orientation, fov)| View {
+                world_from_view: DAffine3::from_rotation_translation(orientation, position),
+                fov,
+                near: self.near,
+                far: self.far,
             })
-            .collect::<std::result::Result<Vec<View>, String>>()?;
+            .collect::<Vec<View>>();
         let combined = match (eyes.as_slice(), &d.mount) {
             ([mono], _) => Some(*mono),
             (_, mount) => {
-                let orientation = match mount {
-                    Mount::Head(h) => head_panel_orientation(&self.viewer, h),
-                    Mount::Screen(_) => DQuat::from_mat3(&eyes[0].world_from_view.matrix3),
+                let (orientation, origin) = match mount {
+                    Mount::Head(h) => (
+                        head_panel_orientation(&self.viewer, h),
+                        self.viewer.position(),
+                    ),
+                    Mount::Screen(_) => (
+                        DQuat::from_mat3(&eyes[0].world_from_view.matrix3),
+                        self.viewer.position(),
+                    ),
+                    Mount::Views(v) => (posed::middle_rotation(v), posed::middle_position(v)),
                 };
-                let origin = self.viewer.position();
                 let corners: Vec<_> = eyes.iter().map(|e| e.corners_from(origin)).collect();
                 enclosing_view(orientation, origin, &corners)
             }
@@ -78,6 +77,28 @@ impl Rig {
             combined,
             planes,
         })
+    }
+
+    /// Each eye's position, orientation and window: from the viewer and the panel, from
+    /// the viewer and the screen, or as the runtime posed them.
+    fn eye_bases(&self, d: &Display) -> std::result::Result<Vec<(DVec3, DQuat, Fov)>, String> {
+        let positions = self.viewer.eye_positions(d.views()).into_iter();
+        match &d.mount {
+            Mount::Head(h) => Ok(positions
+                .enumerate()
+                .map(|(e, p)| {
+                    let (orientation, fov) = head_fixed_basis(&self.viewer, h, e, d.views());
+                    (p, orientation, fov)
+                })
+                .collect()),
+            Mount::Screen(s) => positions
+                .map(|p| screen_basis(s, p).map(|(orientation, fov)| (p, orientation, fov)))
+                .collect(),
+            Mount::Views(views) => Ok(views
+                .iter()
+                .map(|v: &PosedView| (v.position(), v.rotation(), v.fov.tangents()))
+                .collect()),
+        }
     }
 }
 
