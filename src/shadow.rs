@@ -53,9 +53,10 @@ pub struct LightView {
 impl LightView {
     /// Fitted to `resolved`'s displays (every eye, each cut at the shadow distance).
     pub fn fit(light: &Light, resolved: &ResolvedRig) -> LightView {
+        // Fitted to every display planned for, drawn or not: a subset casts the shadows
+        // the whole rig does.
         let points: Vec<DVec3> = resolved
-            .displays
-            .iter()
+            .frame_displays()
             .flat_map(|d| d.eyes.iter())
             .flat_map(|e| {
                 let mut near = *e;

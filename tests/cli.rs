@@ -133,6 +133,56 @@ fn cull_dumps_follow_the_contract_for_every_preset() {
     }
 }
 
+/// `cull --displays A,B`: those displays' dumps equal their entries in the full rig's
+/// dump, byte for byte, culled on the GPU and on the CPU, with levels of detail (whose
+/// density the whole rig decides: a side panel alone would pick coarser levels) and the
+/// far layer.
+#[test]
+fn a_subset_of_displays_culls_as_the_full_rig() {
+    for (rig, subset) in [
+        ("cave", "front,left"),
+        ("hmd-peripheral", "peripheral-left"),
+    ] {
+        for cull in ["gpu", "cpu"] {
+            let args = [
+                "cull",
+                "--scene",
+                "procedural:20000:8:3",
+                "--rig",
+                rig,
+                "--cull",
+                cull,
+                "--lod",
+                "on",
+                "--far-layer",
+                "on",
+            ];
+            let full = dump(&args);
+            let part = dump(&[&args[..], &["--displays", subset]].concat());
+            let names: Vec<&str> = subset.split(',').collect();
+            let of = |v: &Value| -> Vec<Value> {
+                let list = v["displays"].as_array().unwrap().iter();
+                list.filter(|d| {
+                    let name = d["name"].as_str().unwrap();
+                    names
+                        .iter()
+                        .any(|n| name == *n || name == format!("{n}.far"))
+                })
+                .cloned()
+                .collect()
+            };
+            let (expected, got) = (of(&full), of(&part));
+            assert!(!expected.is_empty(), "{rig} {subset}");
+            assert_eq!(
+                got.len(),
+                part["displays"].as_array().unwrap().len(),
+                "{rig}: only the subset"
+            );
+            assert_eq!(got, expected, "{rig} {subset} {cull}");
+        }
+    }
+}
+
 /// The shared Khronos samples (CI has them beside the clone): name and path.
 fn gltf_samples() -> Vec<(&'static str, String)> {
     [

@@ -155,3 +155,65 @@ fn a_plan_of_a_bad_pose_is_an_error() {
     rig.viewer.position = [f32::NAN, 0.0, 0.0];
     assert!(FramePlan::new(&rig, &RendererOptions::default(), false, 0.0).is_err());
 }
+
+/// A subset of a rig's displays is planned as the whole rig: the frame's decisions
+/// (level-of-detail density, the light's fit, the frame frustum) and each drawn
+/// display's context and culls are the full plan's.
+#[test]
+fn a_subset_is_planned_as_the_whole_rig() {
+    let options = RendererOptions {
+        lod: true,
+        shadows: true,
+        far_layer: true,
+        ..RendererOptions::default()
+    };
+    for (preset, names) in [
+        ("hmd-peripheral", vec!["peripheral-left"]),
+        ("cave", vec!["front", "floor"]),
+    ] {
+        let rig = Rig::preset(preset).unwrap();
+        let names: Vec<String> = names.into_iter().map(String::from).collect();
+        let subset = rig.subset(&names, preset).unwrap();
+        let full = FramePlan::new(&rig, &options, true, 0.5).unwrap();
+        let part = FramePlan::new(&subset, &options, true, 0.5).unwrap();
+        assert_eq!(part.frame, full.frame, "{preset}");
+        assert_eq!(part.light, full.light, "{preset}");
+        assert_eq!(part.cull.lod, full.cull.lod, "{preset}");
+        for (k, d) in subset.displays.iter().enumerate() {
+            let i = rig.displays.iter().position(|x| x.name == d.name).unwrap();
+            // The coarse cull's slot is the drawn display's index in this process.
+            let mut expected = full.displays[i];
+            expected.cull_slot = k as u32;
+            assert_eq!(part.displays[k], expected, "{preset} {}", d.name);
+            assert_eq!(part.far[k], full.far[i], "{preset} {}", d.name);
+        }
+        // Drawn alone, without the rest of the rig, the side panel would decide otherwise.
+        let mut alone = subset.clone();
+        alone.frame_only.clear();
+        let lone = FramePlan::new(&alone, &options, true, 0.5).unwrap();
+        assert_ne!(
+            lone.frame, full.frame,
+            "{preset}: the test must be able to fail"
+        );
+    }
+}
+
+#[test]
+fn a_subset_naming_no_display_of_the_rig_is_an_error() {
+    let rig = Rig::preset("cave").unwrap();
+    let names = |n: &[&str]| n.iter().map(|s| s.to_string()).collect::<Vec<_>>();
+    for (bad, expected) in [
+        (
+            names(&["front", "back"]),
+            "no display \"back\" (it has front, left, right, floor, ceiling)",
+        ),
+        (names(&["left", "left"]), "\"left\" named twice"),
+        (names(&[]), "at least one"),
+    ] {
+        let message = rig.subset(&bad, "cave").unwrap_err().to_string();
+        assert!(
+            message.contains(expected) && message.contains("cave"),
+            "{message}"
+        );
+    }
+}

@@ -428,3 +428,34 @@ fn assert_modes_agree_under_msaa(gpu: &Gpu, scene: &Scene, rig: &Rig, label: &st
         "{edges} pixels changed by MSAA"
     );
 }
+
+/// A process drawing a subset of a rig's displays (`Rig::subset`, one process per CAVE
+/// wall) draws each of them as the full rig does: the shadow map is fitted to the whole
+/// rig and the levels of detail chosen for it.
+#[test]
+fn a_subset_of_displays_draws_as_the_full_rig() {
+    let gpu = gpu_with(wgpu::Features::all());
+    let scene = scene_spec::load("procedural:3000:8:5").unwrap();
+    for (preset, names) in [
+        ("cave", ["left", "floor"]),
+        ("hmd-peripheral", ["peripheral-right", "center"]),
+    ] {
+        let rig = support::sized(preset, 64, 64);
+        let names = names.map(String::from);
+        let subset = rig.subset(&names, preset).unwrap();
+        let options = RendererOptions {
+            shadows: true,
+            lod: true,
+            ..options(CullMode::Gpu, StereoMode::Instanced, 1)
+        };
+        let full = support::render(&gpu, &scene, &rig, options.clone()).unwrap();
+        let part = support::render(&gpu, &scene, &subset, options).unwrap();
+        for (k, d) in subset.displays.iter().enumerate() {
+            let i = rig.displays.iter().position(|x| x.name == d.name).unwrap();
+            // Exact on any CPU: the same plan for this display (tests/frame_plan.rs), so
+            // the same pipelines draw the same draws from the same contexts and shadow map.
+            let name = format!("subset-{preset}-{}", d.name);
+            assert_images_match(&name, &part[k], &full[i], Tolerance::EXACT);
+        }
+    }
+}

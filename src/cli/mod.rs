@@ -63,6 +63,10 @@ pub struct SceneArgs {
     /// A preset (hmd, cave, hmd-peripheral) or a .json/.toml rig file.
     #[arg(long, default_value = "hmd")]
     pub rig: String,
+    /// Draw only these displays of the rig (names, comma-separated), the frame planned
+    /// as for the whole rig: one process per CAVE wall (default: every display).
+    #[arg(long, value_delimiter = ',')]
+    pub displays: Vec<String>,
     /// Viewer position override: x,y,z in meters.
     #[arg(long, value_parser = parse_vec3, allow_hyphen_values = true)]
     pub viewer: Option<[f32; 3]>,
@@ -139,7 +143,10 @@ impl SceneArgs {
             ];
         }
         rig.validate(&self.rig)?;
-        Ok(rig)
+        match self.displays.is_empty() {
+            true => Ok(rig),
+            false => rig.subset(&self.displays, &self.rig),
+        }
     }
 }
 

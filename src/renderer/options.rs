@@ -170,10 +170,10 @@ impl Default for RendererOptions {
 /// The frame's level-of-detail choice for `rig`: the viewer, and the scale that holds
 /// the error under [`LOD_PIXELS`] on the display with the most pixels per radian.
 pub fn frame_lod(rig: &Rig, resolved: &ResolvedRig, levels: u32) -> FrameLod {
+    // Over every display planned for, drawn or not: a subset decides as the whole rig.
     let pixels_per_radian = rig
-        .displays
-        .iter()
-        .zip(&resolved.displays)
+        .frame_displays()
+        .zip(resolved.frame_displays())
         .flat_map(|(d, r)| {
             r.eyes.iter().map(move |e| {
                 let across = e.fov.left.atan() + e.fov.right.atan();

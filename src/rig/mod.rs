@@ -205,6 +205,12 @@ pub struct Rig {
     pub far: f32,
     /// The displays, each drawn into its own target.
     pub displays: Vec<Display>,
+    /// Displays of the whole rig that this process does not draw ([`Rig::subset`]):
+    /// their views still shape what the frame decides once for all displays (the
+    /// level-of-detail density, the shadow fit, the frame frustum), so that each process
+    /// of a clustered CAVE decides as the whole rig would. Not part of rig files.
+    #[serde(skip)]
+    pub frame_only: Vec<Display>,
 }
 
 fn default_near() -> f32 {
@@ -263,6 +269,46 @@ impl Rig {
         }
     }
 
+    /// The rig with only the displays named in `names` drawn, in the rig's order; the
+    /// others become [`Rig::frame_only`], so the frame is planned as for the whole rig and
+    /// each drawn display culls and draws byte for byte as it does in a full run.
+    pub fn subset(&self, names: &[String], origin: &str) -> Result<Rig> {
+        let known: Vec<&str> = self.displays.iter().map(|d| d.name.as_str()).collect();
+        if names.is_empty() {
+            return Err(Error::rig(origin, "--displays: name at least one display"));
+        }
+        for (i, name) in names.iter().enumerate() {
+            if !known.contains(&name.as_str()) {
+                let list = known.join(", ");
+                let m = format!("--displays: the rig has no display {name:?} (it has {list})");
+                return Err(Error::rig(origin, m));
+            }
+            if names[..i].contains(name) {
+                return Err(Error::rig(
+                    origin,
+                    format!("--displays: {name:?} named twice"),
+                ));
+            }
+        }
+        let (drawn, others) = self
+            .displays
+            .iter()
+            .cloned()
+            .partition(|d| names.contains(&d.name));
+        let mut frame_only: Vec<Display> = others;
+        frame_only.extend(self.frame_only.iter().cloned());
+        Ok(Rig {
+            displays: drawn,
+            frame_only,
+            ..self.clone()
+        })
+    }
+
+    /// Every display the frame is planned for: the drawn ones, then the frame-only ones.
+    pub fn frame_displays(&self) -> impl Iterator<Item = &Display> {
+        self.displays.iter().chain(&self.frame_only)
+    }
+
     /// Checks what serde cannot: numbers in range, one placement per display, screens
     /// with area. `origin` names the rig in the error.
     pub fn validate(&self, origin: &str) -> Result<()> {
@@ -284,7 +330,7 @@ impl Rig {
         if self.displays.is_empty() {
             return fail("displays: at least one display is needed".into());
         }
-        self.displays.iter().enumerate().try_for_each(|(i, d)| {
+        self.frame_displays().enumerate().try_for_each(|(i, d)| {
             validate_display(d).or_else(|m| fail(format!("displays[{i}] ({}): {m}", d.name)))
         })
     }

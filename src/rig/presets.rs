@@ -16,6 +16,7 @@ pub(super) fn hmd() -> Rig {
         },
         near: default_near(),
         far: default_far(),
+        frame_only: Vec::new(),
         displays: vec![Display {
             name: "hmd".into(),
             stereo: true,
@@ -60,6 +61,7 @@ pub(super) fn cave() -> Rig {
         },
         near: default_near(),
         far: default_far(),
+        frame_only: Vec::new(),
         displays: vec![
             wall("front", [-h, 0.0, -h], [h, 0.0, -h], [-h, 2.0 * h, -h]),
             wall("left", [-h, 0.0, h], [-h, 0.0, -h], [-h, 2.0 * h, h]),

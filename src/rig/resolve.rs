@@ -16,13 +16,16 @@ impl Rig {
     /// from the result (contexts, cull jobs) cannot fail.
     pub fn resolve(&self) -> Result<ResolvedRig> {
         self.validate("(this frame's pose)")?;
+        let resolve = |d: &Display| self.resolve_display(d).map_err(|m| Error::rig(&d.name, m));
         let displays = self
             .displays
             .iter()
-            .map(|d| self.resolve_display(d).map_err(|m| Error::rig(&d.name, m)))
+            .map(resolve)
             .collect::<Result<Vec<_>>>()?;
+        let frame_only = self.frame_only.iter().map(resolve).collect::<Result<_>>()?;
         Ok(ResolvedRig {
             displays,
+            frame_only,
             viewer_position: self.viewer.position(),
             viewer_orientation: self.viewer.orientation(),
         })
@@ -107,6 +110,8 @@ impl Rig {
 pub struct ResolvedRig {
     /// In the rig's display order.
     pub displays: Vec<ResolvedDisplay>,
+    /// [`Rig::frame_only`]'s, in order: planned for, not drawn.
+    pub frame_only: Vec<ResolvedDisplay>,
     viewer_position: DVec3,
     viewer_orientation: DQuat,
 }
@@ -118,11 +123,15 @@ impl ResolvedRig {
     pub fn frame(&self) -> Option<View> {
         let origin = self.viewer_position;
         let corners: Vec<_> = self
-            .displays
-            .iter()
+            .frame_displays()
             .map(|d| d.combined.corners_from(origin))
             .collect();
         enclosing_view(self.viewer_orientation, origin, &corners)
+    }
+
+    /// Every display the frame is planned for: the drawn ones, then the frame-only ones.
+    pub fn frame_displays(&self) -> impl Iterator<Item = &ResolvedDisplay> {
+        self.displays.iter().chain(&self.frame_only)
     }
 
     /// The frame's coarse cull test: the frame frustum's planes made safe for every
