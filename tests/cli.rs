@@ -731,7 +731,12 @@ fn stress_with_moving_instances_reports_what_they_cost() {
     // 16 bytes of header, 56 per moved instance, then the frame and display contexts.
     let contexts = FrameContext::min_size().get() + DisplayContext::min_size().get();
     assert_eq!(frame["bytes_uploaded"], 16 + 56 * 500 + contexts);
+    assert!(frame["staging_ms"].as_f64().unwrap() > 0.0, "{frame}");
     let summary = &v["summary"];
+    assert!(
+        summary["staging_ms_median"].as_f64().unwrap() > 0.0,
+        "{summary}"
+    );
     assert!(
         summary["triangles_submitted_median"].as_f64().unwrap() > 1000.0,
         "{summary}"

@@ -182,7 +182,7 @@ pub fn profile(args: &ProfileArgs) -> Result<()> {
         let frames = rows
             .iter()
             .map(|r| {
-                let cull = format!("{:?}", r.cull).to_lowercase();
+                let cull = r.cull_name();
                 let label = format!("{} {} {cull} {}", r.rig, r.mode.name(), r.instances);
                 (label, r.trace.clone())
             })

@@ -165,6 +165,11 @@ pub struct CullOverFloor {
 }
 
 impl Row {
+    /// `gpu` or `cpu`, as the table, the CSV and the trace spell the cull.
+    pub fn cull_name(&self) -> String {
+        format!("{:?}", self.cull).to_lowercase()
+    }
+
     /// The largest display's cull over the floor: the CSV's `cull_over_floor`.
     pub fn worst_cull_over_floor(&self) -> Option<f64> {
         self.cull_over_floor
@@ -225,7 +230,7 @@ pub(super) fn print_table(rows: &[Row]) {
             "{:>14} {:>13} {:>4} {:>9} {:>6} | {:>9.3} {:>9.3} | {:>9} {:>9} | {:>8.3} {:>8.3} {:>8.3} {:>8.3} | {:>9} {:>5} {:>10} | {:>11} {:>11} | {:>7} {:>7}",
             rig,
             r.mode.name(),
-            format!("{:?}", r.cull).to_lowercase(),
+            r.cull_name(),
             r.instances,
             format!("{}%", r.moving_percent),
             r.cpu_ms_median,
@@ -257,7 +262,7 @@ fn print_edit_costs(rows: &[Row]) {
             "edits {} {} {} {} {}%: {} moves, {} bytes; per move: plain copy {:.2} ns, sync + staging {:.2} ns ({:.2}x), frame over static {:+.1} ns ({:.1}x); ms over static: sync {:+.3}, prepare {:+.3}, staging {:+.3}, rest of encode {:+.3}, submit {:+.3}",
             r.rig,
             r.mode.name(),
-            format!("{:?}", r.cull).to_lowercase(),
+            r.cull_name(),
             r.instances,
             r.moving_percent,
             r.moved,
@@ -289,7 +294,7 @@ pub(super) fn write_csv(path: &std::path::Path, rows: &[Row]) -> Result<()> {
         text += &format!(
             "{},{},{},{},{:.4},{:.4},{},{},{},{},{},\"{}\",{},{},{:.4},{},{},{},{},{},{},{},{},{},{:.4},{},{},{}\n",
             r.mode.name(),
-            format!("{:?}", r.cull).to_lowercase(),
+            r.cull_name(),
             r.rig,
             r.instances,
             r.cpu_ms_median,

@@ -40,6 +40,8 @@ struct FrameRecord {
     cpu_ms: f64,
     /// Of `cpu_ms`, syncing the frame's edits (0 without `--moving` / `--churn`).
     sync_ms: f64,
+    /// Of `cpu_ms`, copying them into staging memory (in `encode`).
+    staging_ms: f64,
     /// Making the frame's edits (the caller's work, not in `cpu_ms`).
     edit_ms: f64,
     /// Instances synced as scatter edits; whether the cull order was rewritten.
@@ -72,6 +74,7 @@ struct Summary {
     cpu_ms_median: f64,
     cpu_ms_p95: f64,
     sync_ms_median: f64,
+    staging_ms_median: f64,
     edit_ms_median: f64,
     moving_percent: f64,
     churn_percent: f64,
@@ -171,6 +174,7 @@ pub fn stress(args: &StressArgs) -> Result<()> {
             frame,
             cpu_ms,
             sync_ms: figures.sync_ms,
+            staging_ms: stats.cpu_staging.as_secs_f64() * 1e3,
             edit_ms: figures.edit_ms,
             moved: figures.sync.moved,
             reloaded: figures.sync.reloaded,
@@ -244,6 +248,7 @@ fn summarize(
         cpu_ms_median: percentile(&cpu, 0.5),
         cpu_ms_p95: percentile(&cpu, 0.95),
         sync_ms_median: percentile(&of(|r| r.sync_ms), 0.5),
+        staging_ms_median: percentile(&of(|r| r.staging_ms), 0.5),
         edit_ms_median: percentile(&of(|r| r.edit_ms), 0.5),
         moving_percent: args.edits.moving,
         churn_percent: args.edits.churn,
@@ -293,8 +298,12 @@ fn print_summary(s: &Summary) {
     );
     if s.moving_percent > 0.0 || s.churn_percent > 0.0 {
         println!(
-            "edits ({} % moving, {} % churn): making them {:.3} ms, sync {:.3} ms (medians)",
-            s.moving_percent, s.churn_percent, s.edit_ms_median, s.sync_ms_median
+            "edits ({} % moving, {} % churn): making them {:.3} ms, sync {:.3} ms, staging {:.3} ms (medians)",
+            s.moving_percent,
+            s.churn_percent,
+            s.edit_ms_median,
+            s.sync_ms_median,
+            s.staging_ms_median
         );
     }
     println!(
