@@ -200,9 +200,7 @@ impl Gpu {
     /// Waits until the GPU has finished all submitted work, then [`Gpu::check_lost`]:
     /// what every CLI frame loop does at the end of a frame.
     pub fn wait(&self) -> Result<()> {
-        self.device
-            .poll(wgpu::PollType::wait_indefinitely())
-            .map_err(|e| Error::Readback(e.to_string()))?;
+        crate::readback::wait_idle(&self.device)?;
         self.check_lost()
     }
 

@@ -8,7 +8,7 @@ use std::path::Path;
 use wgpu_profiler::{GpuProfiler, GpuProfilerQuery, GpuProfilerSettings, GpuTimerQueryResult};
 
 use crate::error::{Error, Result};
-use crate::readback::read_pod;
+use crate::readback::{read_pod, wait_idle};
 
 /// Timestamp scopes around passes, resolved once per frame. `None` from [`GpuTimer::new`]
 /// when the device has no `TIMESTAMP_QUERY`: reports then say so instead of printing zeros.
@@ -152,9 +152,7 @@ impl GpuTimer {
         self.profiler
             .end_frame()
             .map_err(|e| Error::Readback(format!("GPU timer: {e}")))?;
-        device
-            .poll(wgpu::PollType::wait_indefinitely())
-            .map_err(|e| Error::Readback(e.to_string()))?;
+        wait_idle(device)?;
         self.last = self
             .profiler
             .process_finished_frame(self.period)

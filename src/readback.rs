@@ -2,6 +2,14 @@
 
 use crate::error::{Error, Result};
 
+/// Blocks until `device` has finished all submitted work.
+pub fn wait_idle(device: &wgpu::Device) -> Result<()> {
+    device
+        .poll(wgpu::PollType::wait_indefinitely())
+        .map(drop)
+        .map_err(|e| Error::Readback(e.to_string()))
+}
+
 /// Copies `size` bytes of `buffer` into a mappable buffer and waits for them.
 pub fn read_buffer(
     device: &wgpu::Device,
@@ -46,9 +54,7 @@ fn map(device: &wgpu::Device, staging: &wgpu::Buffer, size: u64) -> Result<Vec<u
     if let Some(e) = pollster::block_on(scope.pop()) {
         return Err(Error::Readback(format!("{e} (was the device lost?)")));
     }
-    device
-        .poll(wgpu::PollType::wait_indefinitely())
-        .map_err(|e| Error::Readback(e.to_string()))?;
+    wait_idle(device)?;
     receiver
         .recv()
         .map_err(|e| Error::Readback(e.to_string()))?

@@ -15,7 +15,7 @@ use crate::cull::gpu::GpuCuller;
 use crate::cull::gpu_buffers::{CullScene, CullTargets};
 use crate::error::Result;
 use crate::profiling::percentile;
-use crate::readback::read_pod;
+use crate::readback::{read_pod, wait_idle};
 use crate::records::{CullLayout, MoveEdit, PlaceEdit};
 use crate::scene::Scene;
 use crate::shaders::Windows;
@@ -326,9 +326,7 @@ impl Culler {
                 record(&mut encoder.begin_compute_pass(&Default::default()));
                 let start = std::time::Instant::now();
                 queue.submit([encoder.finish()]);
-                device
-                    .poll(wgpu::PollType::wait_indefinitely())
-                    .map_err(|e| crate::error::Error::Readback(e.to_string()))?;
+                wait_idle(device)?;
                 samples.push(start.elapsed().as_secs_f64() * 1e3);
             }
             Ok(percentile(&samples, 0.5))

@@ -95,8 +95,8 @@ pub(super) fn check_views(views: &[PosedView], expected: u32) -> Result<(), Stri
         ));
     }
     views.iter().enumerate().try_for_each(|(i, v)| {
-        let numbers = v.position.iter().chain(&v.orientation);
-        if !numbers.into_iter().all(|x| x.is_finite()) {
+        let mut numbers = v.position.iter().chain(&v.orientation);
+        if !numbers.all(|x| x.is_finite()) {
             return Err(format!(
                 "views[{i}]: position and orientation must be finite"
             ));
