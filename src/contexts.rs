@@ -8,7 +8,7 @@ use glam::{Mat4, Vec2, Vec3, Vec4};
 
 use crate::cull::CoarseCull;
 use crate::frustum::View;
-use crate::rig::{ResolvedDisplay, Viewer};
+use crate::rig::{ResolvedDisplay, ViewLayout, Viewer};
 use crate::shadow::LightView;
 
 /// Once per frame: the viewer (not any eye) and the time, bound to the cull and draw
@@ -87,6 +87,12 @@ pub struct EyeContext {
     pub world_from_clip: Mat4,
     /// The eye's center of projection, for specular.
     pub position: Vec3,
+    /// Where this view lies in its display's target: x, y, width, height in pixels.
+    pub viewport: Vec4,
+    /// How the view's clip space is placed into its viewport of a shared target (the
+    /// instanced path, one draw for every view): `x' = x * p.x + w * p.y`,
+    /// `y' = y * p.z + w * p.w`. Identity (1, 0, 1, 0) for a view that fills its target.
+    pub placement: Vec4,
 }
 
 impl EyeContext {
@@ -101,9 +107,33 @@ impl EyeContext {
             clip_from_world: v.clip_from_world(),
             world_from_clip: v.world_from_clip(),
             position: v.position(),
+            viewport: Vec4::ZERO,
+            placement: IDENTITY_PLACEMENT,
+        }
+    }
+
+    /// This eye drawn into `viewport` (`[x, y, width, height]` pixels) of a target of
+    /// `size` pixels. The placement is exact in f32 where the rectangle halves the target
+    /// (0.5 and -+0.5 for double-wide stereo), so such draws land as a full-target draw
+    /// with that viewport would.
+    pub fn placed(self, viewport: [u32; 4], size: (u32, u32)) -> EyeContext {
+        let [x, y, w, h] = viewport.map(f64::from);
+        let (tw, th) = (size.0 as f64, size.1 as f64);
+        EyeContext {
+            viewport: Vec4::new(x as f32, y as f32, w as f32, h as f32),
+            placement: Vec4::new(
+                (w / tw) as f32,
+                ((2.0 * x + w) / tw - 1.0) as f32,
+                (h / th) as f32,
+                (1.0 - (2.0 * y + h) / th) as f32,
+            ),
+            ..self
         }
     }
 }
+
+/// A view that fills its target.
+const IDENTITY_PLACEMENT: Vec4 = Vec4::new(1.0, 0.0, 1.0, 0.0);
 
 /// One display: its combined frustum, both eyes, and what the cull pass needs. The
 /// combined frustum's matrices are for material hooks (no built-in pass reads them).
@@ -117,11 +147,13 @@ pub struct DisplayContext {
     pub clip_from_view: Mat4,
     /// `clip_from_view`'s inverse.
     pub view_from_clip: Mat4,
-    /// Left then right; a mono display repeats its one eye.
-    pub eye: [EyeContext; 2],
+    /// Left then right, then (foveated) the left and right insets; a display of fewer
+    /// views repeats its last.
+    pub eye: [EyeContext; MAX_VIEWS],
     /// The combined frustum's apex (behind the eyes): the far split's origin.
     pub position: Vec3,
-    /// Pixels per eye; a stereo target is twice as wide.
+    /// Pixels of one eye's view (a foveated display's outer view); a stereo target is
+    /// twice as wide.
     pub resolution: Vec2,
     /// The display frustum's planes (left, right, bottom, top, near, far): what the cull
     /// tests.
@@ -144,24 +176,32 @@ pub struct DisplayContext {
     pub cull_slot: u32,
 }
 
+/// Views a display context holds: four for foveated stereo.
+pub const MAX_VIEWS: usize = 4;
+
 impl DisplayContext {
-    /// The context of a resolved display of `resolution` pixels per eye.
+    /// The context of a resolved display whose views lie in its target as `layout` says.
     pub fn new(
         display: &ResolvedDisplay,
-        resolution: [u32; 2],
+        layout: &ViewLayout,
         instances_per_object: u32,
     ) -> DisplayContext {
         let combined = EyeContext::from_view(&display.combined);
         let eyes = &display.eyes;
-        let eye = |e: usize| EyeContext::from_view(&eyes[e.min(eyes.len() - 1)]);
+        let viewports = layout.viewports();
+        let eye = |e: usize| {
+            let e = e.min(eyes.len() - 1);
+            EyeContext::from_view(&eyes[e]).placed(viewports[e], layout.size)
+        };
+        let [_, _, w, h] = viewports[0];
         DisplayContext {
             view_from_world: combined.view_from_world,
             world_from_view: combined.world_from_view,
             clip_from_view: combined.clip_from_view,
             view_from_clip: combined.view_from_clip,
-            eye: [eye(0), eye(1)],
+            eye: std::array::from_fn(eye),
             position: combined.position,
-            resolution: Vec2::new(resolution[0] as f32, resolution[1] as f32),
+            resolution: Vec2::new(w as f32, h as f32),
             planes: display.planes,
             instances_per_object,
             first_eye: 0,
@@ -171,11 +211,11 @@ impl DisplayContext {
         }
     }
 
-    /// This context narrowed to eye `e`: both eye slots hold that eye (the classic
+    /// This context narrowed to eye `e`: every eye slot holds that eye (the classic
     /// modes bind one eye at a time), and `first_eye` says which it is.
     pub fn for_eye(&self, e: usize) -> DisplayContext {
         DisplayContext {
-            eye: [self.eye[e]; 2],
+            eye: [self.eye[e]; MAX_VIEWS],
             first_eye: e as u32,
             ..*self
         }
@@ -197,13 +237,15 @@ impl DisplayContext {
             clip_from_world,
             world_from_clip,
             position: Vec3::ZERO,
+            viewport: Vec4::new(0.0, 0.0, size as f32, size as f32),
+            placement: IDENTITY_PLACEMENT,
         };
         DisplayContext {
             view_from_world: Mat4::IDENTITY,
             world_from_view: Mat4::IDENTITY,
             clip_from_view: clip_from_world,
             view_from_clip: world_from_clip,
-            eye: [eye; 2],
+            eye: [eye; MAX_VIEWS],
             position: Vec3::ZERO,
             resolution: Vec2::splat(size as f32),
             planes: view.planes,

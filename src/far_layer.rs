@@ -83,17 +83,18 @@ impl FarPlan {
         }
     }
 
-    /// The far layer's display context: its one view in both eye slots, culling the far
+    /// The far layer's display context: its one view in every eye slot, culling the far
     /// instances of the display frustum, each drawn once, over the coarse cull's
     /// `cull_slot` (its display's).
     pub fn context(&self, cull_slot: u32) -> DisplayContext {
-        let eye = EyeContext::from_view(&self.view);
+        let eye =
+            EyeContext::from_view(&self.view).placed([0, 0, self.size.0, self.size.1], self.size);
         DisplayContext {
             view_from_world: eye.view_from_world,
             world_from_view: eye.world_from_view,
             clip_from_view: eye.clip_from_view,
             view_from_clip: eye.view_from_clip,
-            eye: [eye; 2],
+            eye: [eye; crate::contexts::MAX_VIEWS],
             position: eye.position,
             resolution: Vec2::new(self.size.0 as f32, self.size.1 as f32),
             planes: self.view.frustum().planes,
@@ -125,12 +126,13 @@ impl FarPlan {
     }
 }
 
-/// Each display's far plan for a frame: stereo displays only (a mono display has no
-/// two images to share).
+/// Each display's far plan for a frame: two-view stereo displays only (a mono display
+/// has no two images to share; a foveated one's views differ in density, so one far
+/// image would be too coarse for the insets or wasted on the outer views).
 pub fn plans(rig: &Rig, resolved: &ResolvedRig, threshold: f32) -> Vec<Option<FarPlan>> {
     rig.displays
         .iter()
         .zip(&resolved.displays)
-        .map(|(d, r)| d.stereo.then(|| FarPlan::new(r, d.resolution, threshold)))
+        .map(|(d, r)| (d.views() == 2).then(|| FarPlan::new(r, d.resolution, threshold)))
         .collect()
 }

@@ -30,6 +30,7 @@ mod buffers;
 #[cfg(feature = "cli")]
 #[doc(hidden)]
 pub mod cli;
+pub mod composite;
 pub mod contexts;
 pub mod cull;
 pub mod device;

@@ -243,6 +243,8 @@ fn eye(seed: f32) -> EyeContext {
         clip_from_world: distinct_mat(seed + 4.0),
         world_from_clip: distinct_mat(seed + 5.0),
         position: Vec3::new(seed + 6.0, seed + 6.1, seed + 6.2),
+        viewport: Vec4::new(seed + 7.0, seed + 7.1, seed + 7.2, seed + 7.3),
+        placement: Vec4::new(seed + 8.0, seed + 8.1, seed + 8.2, seed + 8.3),
     }
 }
 
@@ -278,6 +280,8 @@ fn contexts_match_wgsl() {
             ("clip_from_world", 14.0),
             ("world_from_clip", 15.0),
             ("position", 16.0),
+            ("viewport", 17.0),
+            ("placement", 18.0),
         ],
     );
     let d = DisplayContext {
@@ -285,7 +289,7 @@ fn contexts_match_wgsl() {
         world_from_view: distinct_mat(2.0),
         clip_from_view: distinct_mat(3.0),
         view_from_clip: distinct_mat(4.0),
-        eye: [eye(10.0), eye(20.0)],
+        eye: [eye(10.0), eye(20.0), eye(30.0), eye(40.0)],
         position: Vec3::new(5.0, 5.1, 5.2),
         resolution: Vec2::new(6.0, 6.1),
         planes: std::array::from_fn(|i| Vec4::splat(7.0 + i as f32)),
@@ -315,13 +319,14 @@ fn contexts_match_wgsl() {
             ("cull_slot", f32::from_bits(3)),
         ],
     );
-    // The second eye sits one EyeContext span after the first, and the last plane five
-    // vec4s after the first.
+    // Each eye sits one EyeContext span after the one before (the fourth, a foveated
+    // display's right inset, three), and the last plane five vec4s after the first.
     let (members, _) = wgsl_struct(&module(), "DisplayContext");
     let at = |n: &str| members.iter().find(|(m, _)| m == n).unwrap().1;
     let (_, eye_span) = wgsl_struct(&module(), "EyeContext");
     assert_eq!(f32_at(&bytes, at("eye") + eye_span), 20.0);
     assert_eq!(f32_at(&bytes, at("eye") + eye_span + 4 * 64), 24.0);
+    assert_eq!(f32_at(&bytes, at("eye") + 3 * eye_span), 40.0);
     assert_eq!(f32_at(&bytes, at("planes") + 5 * 16), 12.0);
 
     let f = FrameContext {

@@ -14,5 +14,5 @@ fn vs_main(
 // hands some fragments of clipped triangles the other view's value.
 @fragment
 fn fs_main(in: FragmentInput, @builtin(view_index) view_index: u32) -> @location(0) vec4<f32> {
-    return fragment(in, view_index + display.first_eye, 0.0);
+    return fragment(in, view_index + display.first_eye, vec4(0.0, 0.0, display.resolution));
 }

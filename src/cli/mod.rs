@@ -19,7 +19,7 @@ use crate::error::{Error, Result};
 use crate::live::LiveScene;
 use crate::records::CullLayout;
 use crate::renderer::{CoarseMode, CullMode, CullView, FramePlan, Renderer, RendererOptions};
-use crate::rig::Rig;
+use crate::rig::{Gaze, Rig};
 use crate::scene::Scene;
 use crate::scene_spec::{self, DEFAULT_SCENE};
 
@@ -60,7 +60,7 @@ pub struct SceneArgs {
     /// `default` (the built-in room), a .gltf/.glb file, or `procedural:N[:MESHES[:SEED]]`.
     #[arg(long, default_value = DEFAULT_SCENE)]
     pub scene: String,
-    /// A preset (hmd, cave, hmd-peripheral) or a .json/.toml rig file.
+    /// A preset (hmd, cave, hmd-peripheral, hmd-foveated) or a .json/.toml rig file.
     #[arg(long, default_value = "hmd")]
     pub rig: String,
     /// Draw only these displays of the rig (names, comma-separated), the frame planned
@@ -76,6 +76,10 @@ pub struct SceneArgs {
     /// Viewer pitch override in degrees (positive looks up).
     #[arg(long, allow_hyphen_values = true)]
     pub pitch: Option<f32>,
+    /// Both eyes' gaze for the foveated displays: yaw,pitch in degrees from each eye's
+    /// axis; their insets follow it (default: fixed foveation, larger insets).
+    #[arg(long, value_parser = parse_pair, allow_hyphen_values = true)]
+    pub gaze: Option<[f32; 2]>,
     /// Per-eye width in pixels for every display (default: the rig's).
     #[arg(long)]
     pub width: Option<u32>,
@@ -142,6 +146,10 @@ impl SceneArgs {
                 self.height.unwrap_or(d.resolution[1]),
             ];
         }
+        if let Some([yaw, pitch]) = self.gaze {
+            rig.set_gaze(Gaze::both(yaw, pitch))
+                .map_err(|m| Error::rig(&self.rig, format!("--gaze: {m}")))?;
+        }
         rig.validate(&self.rig)?;
         match self.displays.is_empty() {
             true => Ok(rig),
@@ -175,6 +183,17 @@ fn parse_vec3(s: &str) -> std::result::Result<[f32; 3], String> {
     match parts.as_slice() {
         [x, y, z] if parts.iter().all(|v| v.is_finite()) => Ok([*x, *y, *z]),
         _ => Err(format!("{s:?}: expected three finite numbers x,y,z")),
+    }
+}
+
+fn parse_pair(s: &str) -> std::result::Result<[f32; 2], String> {
+    let parts: Vec<f32> = s
+        .split(',')
+        .map(|p| p.trim().parse::<f32>().map_err(|e| format!("{p:?}: {e}")))
+        .collect::<std::result::Result<_, _>>()?;
+    match parts.as_slice() {
+        [a, b] if parts.iter().all(|v| v.is_finite()) => Ok([*a, *b]),
+        _ => Err(format!("{s:?}: expected two finite numbers yaw,pitch")),
     }
 }
 

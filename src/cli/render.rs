@@ -8,6 +8,7 @@ use serde::Serialize;
 
 use super::edits::{EditArgs, EditDriver};
 use super::{SceneArgs, write_json};
+use crate::composite::{CompositeParams, FoveatedComposite};
 use crate::device::{Gpu, list_counts};
 use crate::error::{Error, Result};
 use crate::live::LiveScene;
@@ -233,6 +234,46 @@ struct DisplayStats {
     width: u32,
     height: u32,
     visible: u32,
+    /// Each view's `[x, y, width, height]` in the display's target.
+    viewports: Vec<[u32; 4]>,
+    /// Pixels of all views together: what the frame shades (per sample).
+    pixels: u64,
+    /// Foveated displays: the target as drawn (`<name>-views.png`); `image` is then the
+    /// composite of each eye's inset over its outer view.
+    #[serde(skip_serializing_if = "Option::is_none")]
+    views_image: Option<String>,
+    /// Foveated displays: whether the gaze was moved to keep an inset inside its view.
+    #[serde(skip_serializing_if = "Option::is_none")]
+    gaze_clamped: Option<bool>,
+}
+
+/// Display `index`'s image as drawn and, for a foveated display, its composite (each
+/// eye's inset over its outer view, by the GPU composite).
+fn display_images(
+    session: &Session,
+    index: usize,
+) -> Result<(image::RgbaImage, Option<image::RgbaImage>)> {
+    let (device, queue) = (&session.gpu.device, &session.gpu.queue);
+    let target = &session.targets[index];
+    let drawn = read_rgba8(device, queue, &target.color)?;
+    let Some(params) = CompositeParams::of_display(&session.rig, index)? else {
+        return Ok((drawn, None));
+    };
+    let format = target.color.format();
+    let output = FoveatedComposite::create_output(device, &params, format);
+    let mut encoder = device.create_command_encoder(&Default::default());
+    let source = target.color.create_view(&Default::default());
+    let view = output.create_view(&Default::default());
+    FoveatedComposite::new(device, format).encode(device, &mut encoder, &source, &params, &view);
+    queue.submit([encoder.finish()]);
+    Ok((drawn, Some(read_rgba8(device, queue, &output)?)))
+}
+
+fn save(image: &image::RgbaImage, path: &std::path::Path) -> Result<()> {
+    image.save(path).map_err(|source| Error::Image {
+        path: path.to_path_buf(),
+        source,
+    })
 }
 
 pub fn render(args: &RenderArgs) -> Result<()> {
@@ -260,20 +301,27 @@ pub fn render(args: &RenderArgs) -> Result<()> {
         .renderer
         .diagnostics(&session.gpu.device, &session.gpu.queue)
         .candidates()?;
+    let resolved = session.rig.resolve()?;
     let mut displays = Vec::new();
-    for ((display, target), visible) in session
-        .rig
-        .displays
-        .iter()
-        .zip(&session.targets)
-        .zip(visible)
-    {
+    for (index, (display, visible)) in session.rig.displays.iter().zip(visible).enumerate() {
         let path = args.out.join(format!("{}.png", display.name));
-        let image = read_rgba8(&session.gpu.device, &session.gpu.queue, &target.color)?;
-        image.save(&path).map_err(|source| Error::Image {
-            path: path.clone(),
-            source,
-        })?;
+        let (drawn, composite) = display_images(&session, index)?;
+        let views_path = composite
+            .as_ref()
+            .map(|_| args.out.join(format!("{}-views.png", display.name)));
+        if let Some(views_path) = &views_path {
+            save(&drawn, views_path)?;
+        }
+        let image = composite.unwrap_or(drawn);
+        save(&image, &path)?;
+        let gaze_clamped = (display.views() == 4).then(|| resolved.displays[index].gaze_clamped);
+        if gaze_clamped == Some(true) {
+            eprintln!(
+                "{}: the gaze would put an inset outside its eye's view; the inset was moved inside",
+                display.name
+            );
+        }
+        let layout = display.layout();
         println!(
             "{:>18}: {} views, {}x{}, {visible} visible -> {}",
             display.name,
@@ -289,6 +337,10 @@ pub fn render(args: &RenderArgs) -> Result<()> {
             width: image.width(),
             height: image.height(),
             visible,
+            viewports: layout.viewports().to_vec(),
+            pixels: layout.pixels(),
+            views_image: views_path.map(|p| p.display().to_string()),
+            gaze_clamped,
         });
     }
     println!(

@@ -6,6 +6,7 @@ use crate::draw::DrawScene;
 use crate::error::{Error, Result};
 use crate::modes::StereoMode;
 use crate::records::MeshRecord;
+use crate::rig::Rig;
 use crate::scene::{Scene, Vertex};
 use crate::shaders::Windowed;
 
@@ -39,6 +40,33 @@ fn check_sample_count(features: wgpu::Features, options: &RendererOptions) -> Re
         ));
     }
     Ok(())
+}
+
+/// What the mode cannot draw of the rig: foveated displays (four views of two sizes)
+/// are drawn by the instanced path only, whose one draw places each view in its own
+/// viewport; multiview layers share one size, and the classic modes' per-eye passes are
+/// not generalized past two eyes.
+pub(super) fn check_rig(rig: &Rig, options: &RendererOptions) -> Result<()> {
+    let Some(d) = rig.displays.iter().find(|d| d.views() > 2) else {
+        return Ok(());
+    };
+    let why = match options.mode {
+        StereoMode::Instanced => return Ok(()),
+        StereoMode::Multiview => {
+            let sizes: Vec<String> = (d.layout().viewports().iter())
+                .map(|v| format!("{}x{}", v[2], v[3]))
+                .collect();
+            format!(
+                "multiview draws every layer at one size, and its views differ ({}): use --mode instanced",
+                sizes.join(", ")
+            )
+        }
+        mode => format!(
+            "{} draws two eyes, not four views: use --mode instanced",
+            mode.name()
+        ),
+    };
+    Err(Error::rig(&d.name, format!("foveated display: {why}")))
 }
 
 /// What a mode cannot do without, said before anything is built.

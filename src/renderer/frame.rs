@@ -181,7 +181,7 @@ fn display_contexts(
             let per_object = instances_per_object(mode, d.views());
             let context = DisplayContext {
                 cull_slot: i as u32,
-                ..DisplayContext::new(r, d.resolution, per_object)
+                ..DisplayContext::new(r, &d.layout(), per_object)
             };
             match far {
                 Some(plan) => DisplayContext {

@@ -101,7 +101,7 @@ mod sync;
 mod targets;
 mod view_pass;
 
-use checks::check_device;
+use checks::{check_device, check_rig};
 use classic::ClassicPath;
 pub use frame::{CullView, FramePlan, FrameStats, PlannedCull, instances_per_object};
 use indirect::IndirectPath;
@@ -185,6 +185,7 @@ impl Renderer {
         options: RendererOptions,
     ) -> Result<Renderer> {
         check_device(device, scene, &options)?;
+        check_rig(rig, &options)?;
         let resolved = rig.resolve()?;
         let coarse = options.coarse_for(&resolved, Some(device));
         let plan = FramePlan::of(rig, resolved, &options, coarse, 0.0)?;
@@ -208,8 +209,7 @@ impl Renderer {
             .displays
             .iter()
             .map(|d| TargetShape {
-                eye_size: (d.resolution[0], d.resolution[1]),
-                views: d.views(),
+                layout: d.layout(),
                 layered: options.mode == StereoMode::Multiview && d.stereo,
             })
             .collect();
@@ -253,16 +253,15 @@ impl Renderer {
     /// What the frame at `time` for `rig`'s pose will do ([`FramePlan`]): what
     /// [`Renderer::prepare`] writes, for inspection.
     pub fn plan(&self, rig: &Rig, time: f32) -> Result<FramePlan> {
-        let same = rig.displays.len() == self.shapes.len()
-            && rig
-                .displays
-                .iter()
-                .zip(&self.shapes)
-                .all(|(d, s)| d.views() == s.views);
+        let same =
+            rig.displays.len() == self.shapes.len()
+                && rig.displays.iter().zip(&self.shapes).all(|(d, s)| {
+                    d.views() == s.views() && (d.views() < 4 || d.layout() == s.layout)
+                });
         if !same {
             return Err(Error::rig(
                 "prepare",
-                "the rig's displays differ from the renderer's",
+                "the rig's displays differ from the renderer's (in number or views, or a foveated display's layout: it has a gaze or none for the renderer's life)",
             ));
         }
         FramePlan::new(rig, &self.options, self.coarse, time)

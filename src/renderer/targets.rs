@@ -2,9 +2,11 @@
 //! of the right shape for callers that have none.
 
 use crate::draw::{Attachments, TargetFormat};
+use crate::rig::ViewLayout;
 
 /// The views one display renders into: `2W x H` for stereo, `W x H` for mono, where
-/// `W x H` is the display's per-eye resolution; in multiview a stereo display's views are
+/// `W x H` is the display's per-eye resolution, and for foveated stereo its four
+/// viewports side by side ([`crate::rig::Display::layout`]); in multiview a stereo display's views are
 /// `W x H` with two array layers (left, right). With MSAA, `color` and `depth` have the
 /// renderer's sample count and `resolve` is the single-sampled view that receives the
 /// image; without, `resolve` is `None`.
@@ -30,7 +32,8 @@ impl<'a> TargetViews<'a> {
 
 /// Textures made by `Renderer::create_targets` for callers that have none.
 pub struct DisplayTarget {
-    /// The image: single-sampled, `COPY_SRC` (the resolve target under MSAA).
+    /// The image: single-sampled, `COPY_SRC` and `TEXTURE_BINDING` (the resolve target
+    /// under MSAA; a foveated display's composite reads it).
     pub color: wgpu::Texture,
     /// The depth attachment's texture (multisampled under MSAA).
     pub depth: wgpu::Texture,
@@ -61,28 +64,33 @@ impl DisplayTarget {
 /// The shape of one display's target, fixed when the renderer is made.
 #[derive(Clone, Copy, Debug, PartialEq, Eq)]
 pub struct TargetShape {
-    /// Pixels per eye.
-    pub eye_size: (u32, u32),
-    /// 2 for stereo, 1 for mono.
-    pub views: u32,
+    /// Where each view lies (pixels per eye, side by side).
+    pub layout: ViewLayout,
     /// Stereo as two array layers (multiview) instead of two halves side by side.
     pub layered: bool,
 }
 
 impl TargetShape {
+    /// Pixels of one eye's view (a foveated display's outer view).
+    pub fn eye_size(&self) -> (u32, u32) {
+        let [_, _, w, h] = self.layout.viewports[0];
+        (w, h)
+    }
+
+    /// Views: 1 mono, 2 stereo, 4 foveated stereo.
+    pub fn views(&self) -> u32 {
+        self.layout.views
+    }
+
     fn extent(self) -> wgpu::Extent3d {
-        let (w, h) = self.eye_size;
-        match self.layered {
-            true => wgpu::Extent3d {
-                width: w,
-                height: h,
-                depth_or_array_layers: 2,
-            },
-            false => wgpu::Extent3d {
-                width: w * self.views,
-                height: h,
-                depth_or_array_layers: 1,
-            },
+        let ((w, h), layers) = match self.layered {
+            true => (self.eye_size(), 2),
+            false => (self.layout.size, 1),
+        };
+        wgpu::Extent3d {
+            width: w,
+            height: h,
+            depth_or_array_layers: layers,
         }
     }
 
@@ -102,10 +110,11 @@ impl TargetShape {
             })
         };
         let attachment = wgpu::TextureUsages::RENDER_ATTACHMENT;
+        // TEXTURE_BINDING: a foveated display's composite reads it.
         let color = texture(
             "stereocull.color",
             format.color,
-            attachment | wgpu::TextureUsages::COPY_SRC,
+            attachment | wgpu::TextureUsages::COPY_SRC | wgpu::TextureUsages::TEXTURE_BINDING,
             1,
         );
         let depth = texture("stereocull.depth", format.depth, attachment, format.samples);

@@ -13,10 +13,12 @@ use serde::{Deserialize, Serialize};
 use crate::error::{Error, Result};
 use crate::frustum::Fov;
 
+mod foveation;
 mod posed;
 mod presets;
 mod resolve;
 
+pub use foveation::{Foveation, Gaze, ViewLayout};
 pub use posed::{FovAngles, PosedView};
 pub use resolve::{ResolvedDisplay, ResolvedRig};
 
@@ -56,12 +58,15 @@ impl Viewer {
         DVec3::from(self.position.map(f64::from))
     }
 
-    /// Eye centers: left then right for stereo, the cyclopean point for mono.
+    /// Eye centers, one per view: the cyclopean point for mono, left then right for
+    /// stereo, and for foveated stereo left, right, left, right (the insets share their
+    /// eye's center).
     pub fn eye_positions(&self, views: u32) -> Vec<DVec3> {
         let right = self.orientation() * DVec3::X * (0.5 * self.ipd as f64);
+        let pair = [self.position() - right, self.position() + right];
         match views {
             1 => vec![self.position()],
-            _ => vec![self.position() - right, self.position() + right],
+            _ => pair.into_iter().cycle().take(views as usize).collect(),
         }
     }
 }
@@ -125,12 +130,33 @@ pub struct Display {
     pub resolution: [u32; 2],
     /// Where its image is fixed.
     pub mount: Mount,
+    /// Four views instead of two: an outer pair at a peripheral density and an inset
+    /// per eye at the focus density (stereo displays only).
+    pub foveation: Option<Foveation>,
 }
 
 impl Display {
-    /// Views: 2 for stereo, 1 for mono.
+    /// Views: 1 for mono, 2 for stereo, 4 for foveated stereo (outer left, outer right,
+    /// inset left, inset right).
     pub fn views(&self) -> u32 {
-        if self.stereo { 2 } else { 1 }
+        match (self.stereo, self.foveation) {
+            (false, _) => 1,
+            (true, None) => 2,
+            (true, Some(_)) => 4,
+        }
+    }
+
+    /// Where each view lies in the display's target: one eye's resolution per view,
+    /// side by side; a foveated display's outer pair then its insets, at their densities.
+    pub fn layout(&self) -> ViewLayout {
+        let (w, h) = (self.resolution[0], self.resolution[1]);
+        match (self.views(), self.foveation) {
+            (4, Some(f)) => {
+                let [outer, inset] = f.view_sizes(self.resolution);
+                ViewLayout::side_by_side(&[outer, outer, inset, inset])
+            }
+            (views, _) => ViewLayout::side_by_side(&vec![(w, h); views as usize]),
+        }
     }
 }
 
@@ -147,6 +173,8 @@ struct DisplayFile {
     screen: Option<Screen>,
     #[serde(default, skip_serializing_if = "Option::is_none")]
     views: Option<Vec<PosedView>>,
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    foveation: Option<Foveation>,
 }
 
 impl TryFrom<DisplayFile> for Display {
@@ -169,6 +197,7 @@ impl TryFrom<DisplayFile> for Display {
             stereo: f.stereo,
             resolution: f.resolution,
             mount,
+            foveation: f.foveation,
         })
     }
 }
@@ -187,6 +216,7 @@ impl From<Display> for DisplayFile {
             head,
             screen,
             views,
+            foveation: d.foveation,
         }
     }
 }
@@ -221,15 +251,16 @@ fn default_far() -> f32 {
 }
 
 /// The preset names `Rig::preset` knows.
-pub const PRESETS: [&str; 3] = ["hmd", "cave", "hmd-peripheral"];
+pub const PRESETS: [&str; 4] = ["hmd", "cave", "hmd-peripheral", "hmd-foveated"];
 
 impl Rig {
-    /// `hmd`, `cave` or `hmd-peripheral`; see the README for what each is.
+    /// `hmd`, `cave`, `hmd-peripheral` or `hmd-foveated`; see the README for what each is.
     pub fn preset(name: &str) -> Result<Rig> {
         let rig = match name {
             "hmd" => presets::hmd(),
             "cave" => presets::cave(),
             "hmd-peripheral" => presets::hmd_peripheral(),
+            "hmd-foveated" => presets::hmd_foveated(),
             _ => {
                 return Err(Error::rig(
                     name,
@@ -304,6 +335,22 @@ impl Rig {
         })
     }
 
+    /// Sets where the eyes look on every foveated display (the drawn and the frame-only
+    /// ones); an error naming the rig's displays when none is foveated.
+    pub fn set_gaze(&mut self, gaze: Gaze) -> std::result::Result<(), String> {
+        let mut foveated = self
+            .displays
+            .iter_mut()
+            .chain(&mut self.frame_only)
+            .filter_map(|d| d.foveation.as_mut())
+            .peekable();
+        if foveated.peek().is_none() {
+            return Err("the rig has no foveated display (e.g. --rig hmd-foveated)".into());
+        }
+        foveated.for_each(|f| f.gaze = Some(gaze));
+        Ok(())
+    }
+
     /// Every display the frame is planned for: the drawn ones, then the frame-only ones.
     pub fn frame_displays(&self) -> impl Iterator<Item = &Display> {
         self.displays.iter().chain(&self.frame_only)
@@ -342,6 +389,12 @@ fn validate_display(d: &Display) -> std::result::Result<(), String> {
             "resolution {:?} must be at least 1x1",
             d.resolution
         ));
+    }
+    if let Some(f) = &d.foveation {
+        if !d.stereo {
+            return Err("foveation needs a stereo display (an inset per eye)".into());
+        }
+        f.check()?;
     }
     match &d.mount {
         Mount::Head(h) => validate_head(h),

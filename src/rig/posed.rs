@@ -84,16 +84,36 @@ impl PosedView {
     }
 }
 
-/// What serde cannot check: as many views as the display has (1 mono, 2 stereo, in
-/// the runtime's order: left, then right), finite poses, quaternions with a length,
-/// windows with area.
+/// What serde cannot check: as many views as the display has (1 mono, 2 stereo, 4
+/// foveated, in the runtime's order: left, right, then the left and right insets),
+/// finite poses, quaternions with a length, windows with area, insets inside their
+/// eye's outer view.
 pub(super) fn check_views(views: &[PosedView], expected: u32) -> Result<(), String> {
     if views.len() != expected as usize {
         return Err(format!(
-            "views: {} given, the display has {expected} (1 mono, 2 stereo: left, then right)",
+            "views: {} given, the display has {expected} (1 mono, 2 stereo: left, then right; 4 foveated: left, right, left inset, right inset)",
             views.len()
         ));
     }
+    check_each(views)?;
+    for (i, (inset, outer)) in views.iter().skip(2).zip(views).enumerate() {
+        let inside = super::foveation::inset_inside(
+            inset.fov.tangents(),
+            inset.rotation(),
+            outer.fov.tangents(),
+            outer.rotation(),
+        );
+        if !inside {
+            return Err(format!(
+                "views[{}]: the inset is not inside its eye's outer view (views[{i}])",
+                i + 2
+            ));
+        }
+    }
+    Ok(())
+}
+
+fn check_each(views: &[PosedView]) -> Result<(), String> {
     views.iter().enumerate().try_for_each(|(i, v)| {
         let mut numbers = v.position.iter().chain(&v.orientation);
         if !numbers.all(|x| x.is_finite()) {
@@ -111,18 +131,19 @@ pub(super) fn check_views(views: &[PosedView], expected: u32) -> Result<(), Stri
     })
 }
 
-/// The display frustum's orientation for posed views: halfway between the first and
-/// last view's (the eyes of a stereo pair may be canted apart).
+/// The display frustum's orientation for posed views: halfway between the left and
+/// right eye's outer views (the eyes of a stereo pair may be canted apart).
 pub(super) fn middle_rotation(views: &[PosedView]) -> DQuat {
     match views {
-        [first, .., last] => first.rotation().slerp(last.rotation(), 0.5),
+        [left, right, ..] => left.rotation().slerp(right.rotation(), 0.5),
         [only] => only.rotation(),
         [] => DQuat::IDENTITY,
     }
 }
 
-/// The display frustum's apex for posed views: the mean of the eyes.
+/// The display frustum's apex for posed views: the mean of the eyes' outer views.
 pub(super) fn middle_position(views: &[PosedView]) -> DVec3 {
-    let sum: DVec3 = views.iter().map(PosedView::position).sum();
-    sum / views.len().max(1) as f64
+    let eyes = &views[..views.len().min(2)];
+    let sum: DVec3 = eyes.iter().map(PosedView::position).sum();
+    sum / eyes.len().max(1) as f64
 }

@@ -1,7 +1,8 @@
 //! The rigs `Rig::preset` knows.
 
 use super::{
-    Display, HeadFixed, Mount, Rig, Screen, Viewer, default_far, default_ipd, default_near,
+    Display, Foveation, HeadFixed, Mount, Rig, Screen, Viewer, default_far, default_ipd,
+    default_near,
 };
 use crate::frustum::Fov;
 
@@ -22,6 +23,7 @@ pub(super) fn hmd() -> Rig {
             stereo: true,
             resolution: [1440, 1600],
             // Outer half-angle wider than the nasal one, like shipping headsets.
+            foveation: None,
             mount: Mount::Head(HeadFixed {
                 fov: Fov {
                     left: 1.19,
@@ -45,6 +47,7 @@ pub(super) fn cave() -> Rig {
         name: name.into(),
         stereo: true,
         resolution: [1024, 1024],
+        foveation: None,
         mount: Mount::Screen(Screen {
             lower_left: ll,
             lower_right: lr,
@@ -93,6 +96,7 @@ pub(super) fn hmd_peripheral() -> Rig {
         name: name.into(),
         stereo: false,
         resolution: [480, 800],
+        foveation: None,
         mount: Mount::Head(HeadFixed {
             fov: Fov {
                 left: 0.58,
@@ -108,5 +112,14 @@ pub(super) fn hmd_peripheral() -> Rig {
     };
     rig.displays.push(side("peripheral-left", 45.0));
     rig.displays.push(side("peripheral-right", -45.0));
+    rig
+}
+
+/// The `hmd` with foveated insets at the defaults of shipping runtimes: the outer pair
+/// at half the panel's density, an inset per eye at full density over half the width
+/// and 45 % of the height of each eye's window (fixed foveation: no gaze).
+pub(super) fn hmd_foveated() -> Rig {
+    let mut rig = hmd();
+    rig.displays[0].foveation = Some(Foveation::default());
     rig
 }

@@ -44,8 +44,8 @@ impl Rig {
     }
 
     fn resolve_display(&self, d: &Display) -> std::result::Result<ResolvedDisplay, String> {
-        let eyes = self
-            .eye_bases(d)?
+        let (bases, gaze_clamped) = self.view_bases(d)?;
+        let eyes = bases
             .into_iter()
             .map(|(position, orientation, fov)| View {
                 world_from_view: DAffine3::from_rotation_translation(orientation, position),
@@ -79,18 +79,42 @@ impl Rig {
             eyes,
             combined,
             planes,
+            gaze_clamped,
         })
+    }
+
+    /// [`Rig::eye_bases`] with a foveated display's insets after its eyes (each inside
+    /// its eye's window, around the gaze), and whether a gaze was moved to keep an inset
+    /// inside. Posed views bring their insets with them.
+    #[allow(clippy::type_complexity)]
+    fn view_bases(
+        &self,
+        d: &Display,
+    ) -> std::result::Result<(Vec<(DVec3, DQuat, Fov)>, bool), String> {
+        let mut bases = self.eye_bases(d)?;
+        let (Some(foveation), false) = (d.foveation, matches!(d.mount, Mount::Views(_))) else {
+            return Ok((bases, false));
+        };
+        let mut clamped = false;
+        for e in 0..2 {
+            let (position, orientation, window) = bases[e];
+            let (inset, moved) = foveation.inset(window, e);
+            clamped |= moved;
+            bases.push((position, orientation, inset));
+        }
+        Ok((bases, clamped))
     }
 
     /// Each eye's position, orientation and window: from the viewer and the panel, from
     /// the viewer and the screen, or as the runtime posed them.
     fn eye_bases(&self, d: &Display) -> std::result::Result<Vec<(DVec3, DQuat, Fov)>, String> {
-        let positions = self.viewer.eye_positions(d.views()).into_iter();
+        let eyes = d.views().min(2);
+        let positions = self.viewer.eye_positions(eyes).into_iter();
         match &d.mount {
             Mount::Head(h) => Ok(positions
                 .enumerate()
                 .map(|(e, p)| {
-                    let (orientation, fov) = head_fixed_basis(&self.viewer, h, e, d.views());
+                    let (orientation, fov) = head_fixed_basis(&self.viewer, h, e, eyes);
                     (p, orientation, fov)
                 })
                 .collect()),
@@ -163,13 +187,17 @@ impl ResolvedRig {
 /// One display's views for a frame.
 #[derive(Clone, Debug, PartialEq)]
 pub struct ResolvedDisplay {
-    /// Left then right for stereo; the one eye for mono.
+    /// Left then right for stereo; the one eye for mono; for foveated stereo the outer
+    /// left and right, then the insets of the left and right eye.
     pub eyes: Vec<View>,
     /// The display frustum's view: one frustum holding every eye of the display, the
     /// only one culling ever uses (never per eye).
     pub combined: View,
     /// `combined`'s planes, built once for the context and the cull of this frame.
     pub planes: [Vec4; 6],
+    /// A foveated display's gaze fell where an inset would leave its eye's window, and
+    /// the inset was moved back inside.
+    pub gaze_clamped: bool,
 }
 
 impl ResolvedDisplay {

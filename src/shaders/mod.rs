@@ -33,6 +33,7 @@ const RECORDS: &str = include_str!("../../wgsl/shared/records.wgsl");
 const CULL_MATH: &str = include_str!("../../wgsl/shared/cull_math.wgsl");
 const DRAW_CLIP_DISTANCES: &str = include_str!("../../wgsl/shared/draw_clip_distances.wgsl");
 const DRAW_NO_CLIP_DISTANCES: &str = include_str!("../../wgsl/shared/draw_no_clip_distances.wgsl");
+const DRAW_CLIP_RECT: &str = include_str!("../../wgsl/shared/draw_clip_rect.wgsl");
 const DECODE: &str = include_str!("../../wgsl/shared/decode.wgsl");
 const DRAW_COMMON: &str = include_str!("../../wgsl/shared/draw_common.wgsl");
 const DRAW: &str = include_str!("../../wgsl/draw.wgsl");
@@ -205,9 +206,11 @@ pub struct DrawKey {
 
 impl DrawKey {
     /// Every variant, for validation.
-    pub const ALL: [DrawKey; 4] = [
+    pub const ALL: [DrawKey; 6] = [
         DrawKey::new(2, true),
         DrawKey::new(2, false),
+        DrawKey::new(4, true),
+        DrawKey::new(4, false),
         DrawKey::new(1, false),
         DrawKey::MULTIVIEW,
     ];
@@ -227,12 +230,12 @@ impl DrawKey {
         (!self.multiview).then_some(wgpu::Face::Back)
     }
 
-    /// The variant for `views` on a device with or without clip distances (one view
-    /// never needs them).
+    /// The variant for `views` (1, 2, or 4 for foveated stereo) on a device with or
+    /// without clip distances (one view never needs them).
     pub const fn new(views: u32, clip_distances_available: bool) -> DrawKey {
         DrawKey {
             views,
-            clip_distances: views == 2 && clip_distances_available,
+            clip_distances: views >= 2 && clip_distances_available,
             multiview: false,
         }
     }
@@ -247,6 +250,7 @@ impl DrawKey {
         match (self.multiview, self.views) {
             (true, _) => "stereocull.draw.multiview".into(),
             (false, 1) => "stereocull.draw.mono".into(),
+            (false, 4) => format!("stereocull.draw.foveated.{seam}"),
             _ => format!("stereocull.draw.stereo.{seam}"),
         }
     }
@@ -259,10 +263,10 @@ impl DrawKey {
     /// The variant's source; `material` (WGSL defining `fn material(s: Surface) ->
     /// vec4<f32>`, see `wgsl/shared/draw_common.wgsl`) replaces the built-in shading.
     pub fn source_with(self, material: Option<&str>, windows: &Windows) -> String {
-        let prelude = if self.clip_distances {
-            DRAW_CLIP_DISTANCES
-        } else {
-            DRAW_NO_CLIP_DISTANCES
+        let prelude = match (self.clip_distances, self.views) {
+            (true, 4) => DRAW_CLIP_RECT,
+            (true, _) => DRAW_CLIP_DISTANCES,
+            (false, _) => DRAW_NO_CLIP_DISTANCES,
         };
         let entry = if self.multiview { DRAW_MULTIVIEW } else { DRAW };
         let shading = match material {
@@ -334,6 +338,10 @@ pub fn far_composite_source() -> String {
     [&constants(), CONTEXTS, FAR_DECLARATIONS, body].concat()
 }
 
+/// A foveated display's views composited per eye (`crate::composite`): self-contained,
+/// its one bind group declared in the file.
+pub const FOVEATED_COMPOSITE: &str = include_str!("../../wgsl/foveated_composite.wgsl");
+
 /// The frame's shadow pass: depth only, the light as the display's eye 0
 /// (`wgsl/shadow.wgsl` after the mono decode).
 pub fn shadow_source(windows: &Windows) -> String {
@@ -377,6 +385,10 @@ pub fn all_sources() -> Vec<(String, String)> {
                 (
                     "stereocull.far_composite".to_string(),
                     far_composite_source(),
+                ),
+                (
+                    "stereocull.foveated_composite".to_string(),
+                    FOVEATED_COMPOSITE.to_string(),
                 ),
             ];
             cull.chain(draw)

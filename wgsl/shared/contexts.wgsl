@@ -18,6 +18,11 @@ struct EyeContext {
     world_from_clip: mat4x4<f32>,
     // The eyeball: apex of this eye's frustum, used for specular.
     position: vec3<f32>,
+    // Where this view lies in the display's target: x, y, width, height in pixels.
+    viewport: vec4<f32>,
+    // The view's clip space placed into its viewport of a shared target (one draw for
+    // every view): x' = x * p.x + w * p.y, y' = y * p.z + w * p.w.
+    placement: vec4<f32>,
 }
 
 struct DisplayContext {
@@ -26,15 +31,18 @@ struct DisplayContext {
     world_from_view: mat4x4<f32>,
     clip_from_view: mat4x4<f32>,
     view_from_clip: mat4x4<f32>,
-    eye: array<EyeContext, 2>,
+    // Left, right, then (foveated) the left and right insets; fewer views repeat the last.
+    eye: array<EyeContext, 4>,
     position: vec3<f32>,
-    // Pixels per eye; a stereo target is 2 * resolution.x wide.
+    // Pixels of one eye's view (a foveated display's outer view); a stereo target is
+    // 2 * resolution.x wide.
     resolution: vec2<f32>,
     // Display frustum planes (left, right, bottom, top, near, far), inside when
     // dot(n, p) + d >= 0: what the cull pass tests.
     planes: array<vec4<f32>, 6>,
     // Instances drawn per visible object (the cull contract's V): 2 for instanced
-    // stereo (instance_index >> 1 the object, & 1 the eye), else 1.
+    // stereo (instance_index >> 1 the object, & 1 the eye), 4 for instanced foveated
+    // stereo (/ 4 the object, % 4 the view), else 1.
     instances_per_object: u32,
     // Which eye eye[0] is: 1 in the classic modes' right-eye contexts (both slots hold
     // that eye), else 0.

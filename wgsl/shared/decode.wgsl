@@ -29,11 +29,15 @@ fn spin(angle: f32) -> mat3x3<f32> {
     return mat3x3(vec3(c, 0.0, -s), vec3(0.0, 1.0, 0.0), vec3(s, 0.0, c));
 }
 
-// (slot in the visible list, eye) of an instance_index: with `views` = 2 (one draw
-// for both eyes) instance_index >> 1 is the slot and instance_index & 1 the eye.
+// (slot in the visible list, view) of an instance_index when one draw covers `views`
+// views: instance_index / views the slot and instance_index % views the view (for
+// stereo, instance_index >> 1 and & 1; foveated stereo has 4 views).
 fn decode_instance(instance_index: u32, views: u32) -> vec2<u32> {
     if (views == 2u) {
         return vec2(instance_index >> 1u, instance_index & 1u);
+    }
+    if (views == 4u) {
+        return vec2(instance_index >> 2u, instance_index & 3u);
     }
     return vec2(instance_index, 0u);
 }
@@ -44,20 +48,25 @@ struct Decoded {
     // Distance inside the eye's half (>= 0 keeps the vertex's side), for
     // @builtin(clip_distances)[0]; 1 when not double-wide.
     seam: f32,
+    // Distances inside the view's own clip rectangle (left, right, bottom, top edges;
+    // >= 0 inside), for clip distances where views of several sizes share a target.
+    edges: vec4<f32>,
     world_position: vec3<f32>,
     world_normal: vec3<f32>,
     // The instance record's color, unpacked.
     color: vec4<f32>,
     // The instance id (its slot).
     instance: u32,
-    // The eye: 0 left, 1 right (display.eye[eye] is its context).
+    // The view: 0 left, 1 right, 2 and 3 the left and right insets of a foveated
+    // display (display.eye[eye] is its context).
     eye: u32,
     uv: vec2<f32>,
     material: u32,
 }
 
-// Visible slot `slot` for eye `eye`, animated by the frame's time; `double_wide`
-// remaps x into that eye's half of a 2W-wide target.
+// Visible slot `slot` for view `eye`, animated by the frame's time; `double_wide`
+// places the view's clip space into its viewport of the shared target (for stereo,
+// that eye's half of a 2W-wide target).
 fn decode(v: VertexInput, slot: u32, eye: u32, double_wide: bool) -> Decoded {
     let id = visible[slot];
     let inst = instances_at(id);
@@ -75,14 +84,15 @@ fn decode(v: VertexInput, slot: u32, eye: u32, double_wide: bool) -> Decoded {
     let e = display.eye[eye];
     var clip = e.clip_from_world * vec4(world, 1.0);
     var seam = 1.0;
+    let edges = vec4(clip.w + clip.x, clip.w - clip.x, clip.w + clip.y, clip.w - clip.y);
     if (double_wide) {
-        // Exact two-viewport remap: x' = x/2 -+ w/2 lands where a W-wide viewport would.
-        let x_eye = clip.x;
-        clip.x = 0.5 * clip.x + select(0.5, -0.5, eye == 0u) * clip.w;
-        seam = select(clip.w + x_eye, clip.w - x_eye, eye == 0u);
+        // For stereo exactly x' = x/2 -+ w/2: where a W-wide viewport would land it.
+        let p = e.placement;
+        clip = vec4(clip.x * p.x + clip.w * p.y, clip.y * p.z + clip.w * p.w, clip.zw);
+        seam = select(edges.x, edges.y, eye == 0u);
     }
     let normal = world_normal(rows, spun * v.normal);
     let true_eye = eye + display.first_eye;
     let color = unpack4x8unorm(inst.color);
-    return Decoded(clip, seam, world, normal, color, id, true_eye, v.uv, v.material);
+    return Decoded(clip, seam, edges, world, normal, color, id, true_eye, v.uv, v.material);
 }

@@ -12,8 +12,8 @@ struct VertexOutput {
     @location(2) uv: vec2<f32>,
 }
 
-fn set_seam_distance(out: ptr<function, VertexOutput>, distance: f32) {
-    (*out).seam[0] = distance;
+fn set_view_clip(out: ptr<function, VertexOutput>, d: Decoded) {
+    (*out).seam[0] = d.seam;
 }
 
-const DISCARD_OTHER_HALF: bool = false;
+const DISCARD_OUTSIDE_VIEWPORT: bool = false;

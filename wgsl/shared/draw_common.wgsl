@@ -9,7 +9,7 @@ fn vertex(v: VertexInput, slot: u32, eye: u32, double_wide: bool) -> VertexOutpu
     let d = decode(v, slot, eye, double_wide);
     var out: VertexOutput;
     if (double_wide) {
-        set_seam_distance(&out, d.seam);
+        set_view_clip(&out, d);
     }
     out.position = d.clip;
     out.normal = d.world_normal;
@@ -80,23 +80,27 @@ fn light_reaching(p: vec3<f32>, n: vec3<f32>) -> f32 {
     return lit / 9.0;
 }
 
-// The fragment stage of every built-in pipeline, for eye `eye` (its entry point says
-// where the eye comes from), whose view starts `eye_x` pixels into the target.
-fn fragment(in: FragmentInput, eye: u32, eye_x: f32) -> vec4<f32> {
-    if (DISCARD_OTHER_HALF && ((in.position.x < display.resolution.x) != (eye == 0u))) {
+// The fragment stage of every built-in pipeline, for view `eye` (its entry point says
+// where the view comes from), whose pixels are `viewport` (x, y, width, height) of the
+// target.
+fn fragment(in: FragmentInput, eye: u32, viewport: vec4<f32>) -> vec4<f32> {
+    let p = in.position.xy;
+    if (DISCARD_OUTSIDE_VIEWPORT && (any(p < viewport.xy) || any(p >= viewport.xy + viewport.zw))) {
         discard;
     }
     let color = unpack4x8unorm(instances_at(in.ids.y).color);
-    let world = world_position(in.position, eye, eye_x);
+    let world = world_position(in.position, eye, viewport);
     let s = Surface(world, in.normal, color, eye, in.ids.y, in.uv, in.ids.z);
     return surface_color(s);
 }
 
-// The world position under a fragment of eye `eye`: its pixel and depth back through
-// the eye's projection (world_from_clip, composed in f64 on the CPU).
-fn world_position(frag: vec4<f32>, eye: u32, eye_x: f32) -> vec3<f32> {
-    let size = display.resolution;
-    let ndc = vec2((frag.x - eye_x) / size.x * 2.0 - 1.0, 1.0 - frag.y / size.y * 2.0);
+// The world position under a fragment of view `eye` drawn into `viewport`: its pixel
+// and depth back through the view's projection (world_from_clip, composed in f64 on the
+// CPU).
+fn world_position(frag: vec4<f32>, eye: u32, viewport: vec4<f32>) -> vec3<f32> {
+    let size = viewport.zw;
+    let at = frag.xy - viewport.xy;
+    let ndc = vec2(at.x / size.x * 2.0 - 1.0, 1.0 - at.y / size.y * 2.0);
     let world = display.eye[eye].world_from_clip * vec4(ndc, frag.z, 1.0);
     return world.xyz / world.w;
 }

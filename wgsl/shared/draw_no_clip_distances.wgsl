@@ -1,5 +1,6 @@
 // Draw-pipeline prelude without CLIP_DISTANCES (and for mono, which needs none): a
-// stereo fragment outside its eye's half is discarded instead.
+// fragment of a view outside that view's viewport (for stereo, its eye's half) is
+// discarded instead.
 
 struct VertexOutput {
     @builtin(position) position: vec4<f32>,
@@ -10,6 +11,6 @@ struct VertexOutput {
     @location(2) uv: vec2<f32>,
 }
 
-fn set_seam_distance(out: ptr<function, VertexOutput>, distance: f32) {}
+fn set_view_clip(out: ptr<function, VertexOutput>, d: Decoded) {}
 
-const DISCARD_OTHER_HALF: bool = VIEWS == 2u;
+const DISCARD_OUTSIDE_VIEWPORT: bool = VIEWS >= 2u;
