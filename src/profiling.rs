@@ -44,14 +44,18 @@ pub struct FrameQueries {
     pub triangles_submitted: Option<u64>,
     /// Primitives the clipper passed on.
     pub clipper_primitives: Option<u64>,
+    /// Fragment-shader invocations: the pixels (samples, under per-sample shading)
+    /// shaded, which a foveated display's smaller views cut.
+    pub fragment_invocations: Option<u64>,
 }
 
 /// The statistics gathered; query results list them in bit order.
 const STATISTICS: wgpu::PipelineStatisticsTypes =
     wgpu::PipelineStatisticsTypes::VERTEX_SHADER_INVOCATIONS
         .union(wgpu::PipelineStatisticsTypes::CLIPPER_INVOCATIONS)
-        .union(wgpu::PipelineStatisticsTypes::CLIPPER_PRIMITIVES_OUT);
-const STATISTICS_PER_QUERY: usize = 3;
+        .union(wgpu::PipelineStatisticsTypes::CLIPPER_PRIMITIVES_OUT)
+        .union(wgpu::PipelineStatisticsTypes::FRAGMENT_SHADER_INVOCATIONS);
+const STATISTICS_PER_QUERY: usize = 4;
 
 impl GpuTimer {
     /// Room for pipeline statistics over `passes` draw passes per frame (timestamps
@@ -180,6 +184,7 @@ impl GpuTimer {
                 .collect();
             frame.triangles_submitted = sum(1);
             frame.clipper_primitives = sum(2);
+            frame.fragment_invocations = sum(3);
             s.used = 0;
         }
         Ok(frame)

@@ -186,7 +186,7 @@ fn parse_vec3(s: &str) -> std::result::Result<[f32; 3], String> {
     }
 }
 
-fn parse_pair(s: &str) -> std::result::Result<[f32; 2], String> {
+pub(crate) fn parse_pair(s: &str) -> std::result::Result<[f32; 2], String> {
     let parts: Vec<f32> = s
         .split(',')
         .map(|p| p.trim().parse::<f32>().map_err(|e| format!("{p:?}: {e}")))

@@ -26,9 +26,14 @@ pub struct ProfileArgs {
     /// Instance counts (procedural scenes, seed 1).
     #[arg(long, value_delimiter = ',', default_value = "1000,10000,100000")]
     pub instances: Vec<u32>,
-    /// Presets or rig files (several compare rigs in one run: stereo against mono).
+    /// Presets or rig files (several compare rigs in one run: stereo against mono,
+    /// foveated against uniform).
     #[arg(long, value_delimiter = ',', default_value = "hmd")]
     pub rig: Vec<String>,
+    /// Both eyes' gaze (yaw,pitch degrees) on the foveated rigs' displays: insets that
+    /// follow it (smaller) instead of fixed foveation. Other rigs are unaffected.
+    #[arg(long, value_parser = super::parse_pair, allow_hyphen_values = true)]
+    pub gaze: Option<[f32; 2]>,
     #[arg(
         long,
         value_delimiter = ',',
@@ -99,6 +104,9 @@ pub fn profile(args: &ProfileArgs) -> Result<()> {
             let mut rig = Rig::load(spec)?;
             for d in &mut rig.displays {
                 d.resolution = [args.width, args.height];
+                if let (Some(f), Some([yaw, pitch])) = (&mut d.foveation, args.gaze) {
+                    f.gaze = Some(crate::rig::Gaze::both(yaw, pitch));
+                }
             }
             rig.validate(spec)?;
             Ok((spec.as_str(), rig))
@@ -154,6 +162,17 @@ pub fn profile(args: &ProfileArgs) -> Result<()> {
                     "{spec} {n} {} {cull:?} {moving} % moving",
                     mode.name()
                 ));
+                let refused = crate::renderer::check_rig(
+                    rig,
+                    &RendererOptions {
+                        mode,
+                        ..Default::default()
+                    },
+                );
+                if let Err(e) = refused {
+                    println!("skipped {} on {spec}: {e}", mode.name());
+                    continue;
+                }
                 let config = Config {
                     spec,
                     rig,
@@ -330,6 +349,7 @@ fn measure(
                 .gpu
                 .push(q.passes.iter().map(|(_, v)| v).sum::<f64>() - of("cull_floor"));
             samples.statistics = q.vertex_invocations.zip(q.clipper_primitives);
+            samples.fragments = q.fragment_invocations;
             samples.triangles = q.triangles_submitted;
         }
         if let Some(t) = timer.as_deref() {
@@ -376,6 +396,8 @@ fn measure(
         gpu_draw_ms_median: gpu_med(&samples.gpu_draw),
         vertex_invocations: samples.statistics.map(|s| s.0),
         clipper_primitives: samples.statistics.map(|s| s.1),
+        fragment_invocations: samples.fragments,
+        target_pixels: rig.displays.iter().map(|d| d.layout().pixels()).sum(),
         indirect_validation: gpu.indirect_validation(),
         moving_percent: edits.moving,
         churn_percent: edits.churn,
@@ -397,6 +419,7 @@ fn measure(
 
 #[derive(Default)]
 struct Samples {
+    fragments: Option<u64>,
     cpu: Vec<f64>,
     sync: Vec<f64>,
     triangles: Option<u64>,

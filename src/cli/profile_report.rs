@@ -44,6 +44,10 @@ pub struct Row {
     /// Pipeline statistics of the draw passes (last frame); `None` where unavailable.
     pub vertex_invocations: Option<u64>,
     pub clipper_primitives: Option<u64>,
+    /// Fragment-shader invocations of the draw passes (last frame): pixels shaded.
+    pub fragment_invocations: Option<u64>,
+    /// Pixels of every display's views together (target memory scales with it).
+    pub target_pixels: u64,
     pub indirect_validation: bool,
     pub moving_percent: f64,
     pub churn_percent: f64,
@@ -287,12 +291,12 @@ fn count(v: Option<u64>) -> String {
 
 pub(super) fn write_csv(path: &std::path::Path, rows: &[Row]) -> Result<()> {
     let mut text = String::from(
-        "mode,cull,rig,instances,cpu_ms_median,cpu_ms_p95,gpu_ms_median,gpu_ms_p95,draw_calls,dispatches,bytes_uploaded,adapter,moving_percent,churn_percent,sync_ms_median,triangles_submitted,coarse_cull,sphere_tests,shadows,shadow_passes,floor_ms_median,cull_over_floor,cull_over_floor_wall,moved,staging_ms_median,copy_ms_median,sync_staging_ns_per_move,extra_ns_per_move\n",
+        "mode,cull,rig,instances,cpu_ms_median,cpu_ms_p95,gpu_ms_median,gpu_ms_p95,draw_calls,dispatches,bytes_uploaded,adapter,moving_percent,churn_percent,sync_ms_median,triangles_submitted,coarse_cull,sphere_tests,shadows,shadow_passes,floor_ms_median,cull_over_floor,cull_over_floor_wall,moved,staging_ms_median,copy_ms_median,sync_staging_ns_per_move,extra_ns_per_move,fragment_invocations,target_pixels\n",
     );
     let field = |v: Option<f64>| v.map_or(String::new(), |x| format!("{x:.4}"));
     for r in rows {
         text += &format!(
-            "{},{},{},{},{:.4},{:.4},{},{},{},{},{},\"{}\",{},{},{:.4},{},{},{},{},{},{},{},{},{},{:.4},{},{},{}\n",
+            "{},{},{},{},{:.4},{:.4},{},{},{},{},{},\"{}\",{},{},{:.4},{},{},{},{},{},{},{},{},{},{:.4},{},{},{},{},{}\n",
             r.mode.name(),
             r.cull_name(),
             r.rig,
@@ -321,7 +325,10 @@ pub(super) fn write_csv(path: &std::path::Path, rows: &[Row]) -> Result<()> {
             r.staging_ms_median,
             field(r.copy_ms_median),
             field(r.edits.as_ref().map(|e| e.sync_staging_ns_per_move)),
-            field(r.edits.as_ref().map(|e| e.extra_ns_per_move))
+            field(r.edits.as_ref().map(|e| e.extra_ns_per_move)),
+            r.fragment_invocations
+                .map_or(String::new(), |t| t.to_string()),
+            r.target_pixels
         );
     }
     std::fs::write(path, text).map_err(|e| Error::io(path, e))

@@ -46,7 +46,7 @@ fn check_sample_count(features: wgpu::Features, options: &RendererOptions) -> Re
 /// are drawn by the instanced path only, whose one draw places each view in its own
 /// viewport; multiview layers share one size, and the classic modes' per-eye passes are
 /// not generalized past two eyes.
-pub(super) fn check_rig(rig: &Rig, options: &RendererOptions) -> Result<()> {
+pub fn check_rig(rig: &Rig, options: &RendererOptions) -> Result<()> {
     let Some(d) = rig.displays.iter().find(|d| d.views() > 2) else {
         return Ok(());
     };

@@ -101,7 +101,8 @@ mod sync;
 mod targets;
 mod view_pass;
 
-use checks::{check_device, check_rig};
+use checks::check_device;
+pub use checks::check_rig;
 use classic::ClassicPath;
 pub use frame::{CullView, FramePlan, FrameStats, PlannedCull, instances_per_object};
 use indirect::IndirectPath;
