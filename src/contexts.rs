@@ -211,6 +211,21 @@ impl DisplayContext {
         }
     }
 
+    /// A foveated display's inset context (from its own, `self`): the insets in the eye
+    /// slots the decode reads (0, 1) and in their own (2, 3), so that `first_eye = 2`
+    /// makes the views' true indices 2 and 3; culled against `insets`, the frustum
+    /// holding both, each visible object drawn twice.
+    pub fn insets(&self, insets: &View) -> DisplayContext {
+        let [_, _, left, right] = self.eye;
+        DisplayContext {
+            eye: [left, right, left, right],
+            first_eye: 2,
+            planes: insets.frustum().planes,
+            instances_per_object: 2,
+            ..*self
+        }
+    }
+
     /// This context narrowed to eye `e`: every eye slot holds that eye (the classic
     /// modes bind one eye at a time), and `first_eye` says which it is.
     pub fn for_eye(&self, e: usize) -> DisplayContext {

@@ -9,7 +9,7 @@ use image::{RgbaImage, imageops};
 use rand::{Rng, SeedableRng};
 use rand_pcg::Pcg64Mcg;
 use stereocull::composite::{CompositeParams, FoveatedComposite, composite_cpu};
-use stereocull::frustum::Fov;
+use stereocull::frustum::{Fov, sphere_in_planes};
 use stereocull::readback::read_rgba8;
 use stereocull::renderer::{CullMode, RendererOptions, StereoMode};
 use stereocull::rig::{FovAngles, Foveation, Gaze, Mount, PosedView, Rig};
@@ -477,4 +477,99 @@ fn upload(
         wgpu::util::TextureDataOrder::LayerMajor,
         image.as_raw(),
     )
+}
+
+fn inset_culled(cull: CullMode) -> RendererOptions {
+    RendererOptions {
+        inset_cull: true,
+        ..options(cull)
+    }
+}
+
+/// With the inset cull the insets draw from their own cull (a second multi-draw in the
+/// same pass), and the image is the one-draw image. Not to the byte: the inset pair is
+/// drawn by a pipeline compiled apart (two views per object, not four), and in another
+/// order, so a clip position's last bit or an exact depth tie can differ on an edge
+/// pixel (`PLACED`).
+#[test]
+fn the_inset_cull_draws_what_four_views_draw() {
+    let gpu = gpu();
+    let scene = scene_spec::load("procedural:4000:8").unwrap();
+    for gaze in [None, Some(Gaze::both(-12.0, 6.0))] {
+        let mut rig = foveated(192, 160);
+        rig.displays[0].foveation.as_mut().unwrap().gaze = gaze;
+        for cull in [CullMode::Gpu, CullMode::Cpu] {
+            let one = support::render(&gpu, &scene, &rig, options(cull)).unwrap();
+            let two = support::render(&gpu, &scene, &rig, inset_culled(cull)).unwrap();
+            assert!(drawn_pixels(&one[0]) > one[0].len() / 40);
+            let name = format!("inset-cull-{cull:?}-{}", gaze.is_some());
+            assert_images_match(&name, &two[0], &one[0], PLACED);
+        }
+    }
+}
+
+/// The inset cull keeps what meets the insets' frustum, no more: GPU as CPU to the
+/// byte, a subset of the display's, two instances per object, and fewer objects than the
+/// display frustum keeps (the insets see less); the display's own cull then draws the
+/// outer pair only (two per object).
+#[test]
+fn the_inset_cull_is_exact_and_smaller() {
+    let gpu = gpu();
+    let scene = scene_spec::load("procedural:20000:8").unwrap();
+    let mut rig = foveated(64, 64);
+    rig.set_gaze(Gaze::both(5.0, 0.0)).unwrap();
+    let renderer = support::one_frame(&gpu, &scene, &rig, inset_culled(CullMode::Gpu));
+    let diagnostics = renderer.diagnostics(&gpu.device, &gpu.queue);
+    let (display, inset) = (
+        diagnostics.cull(0).unwrap(),
+        diagnostics.inset_cull(0).unwrap().unwrap(),
+    );
+    let plan = renderer.plan(&rig, 0.0).unwrap();
+    let layout = stereocull::records::CullLayout::new(&scene);
+    let jobs: Vec<_> = plan.inset_culls.iter().map(|c| c.job).collect();
+    let reference = stereocull::cull::cpu::cull_many(&layout, &jobs);
+    assert_eq!(inset, reference[0], "GPU inset cull == CPU");
+    assert!(inset.visible.iter().all(|id| display.visible.contains(id)));
+    assert!(
+        inset.visible.len() * 2 < display.visible.len(),
+        "{} of {}",
+        inset.visible.len(),
+        display.visible.len()
+    );
+    for cull in [&display, &inset] {
+        let drawn = &cull.draws[..cull.draw_count as usize];
+        let instances: u32 = drawn.iter().map(|d| d.instance_count).sum();
+        assert_eq!(instances as usize, 2 * cull.visible.len());
+    }
+    // Every object whose sphere meets either inset's own frustum is kept.
+    let resolved = rig.resolve().unwrap();
+    for (id, instance) in scene.instances.iter().enumerate() {
+        let sphere = scene.world_sphere(instance);
+        let planes = |e: &stereocull::frustum::View| e.frustum().planes;
+        let eyes = &resolved.displays[0].eyes[2..];
+        let seen = eyes.iter().any(|e| sphere_in_planes(&planes(e), sphere));
+        if seen {
+            assert!(
+                inset.visible.contains(&(id as u32)),
+                "instance {id} in an inset, not kept"
+            );
+        }
+    }
+}
+
+/// One pass, two multi-draws (the outer pair's, the insets'), two culls.
+#[test]
+fn the_inset_cull_adds_one_cull_and_one_draw() {
+    let gpu = gpu();
+    let scene = scene_spec::load("procedural:2000:8").unwrap();
+    let rig = foveated(64, 64);
+    let mut renderer =
+        stereocull::Renderer::new(&gpu.device, &scene, &rig, inset_culled(CullMode::Gpu)).unwrap();
+    let targets = renderer.create_targets(&gpu.device);
+    let stats = renderer
+        .submit_frame(&gpu.device, &gpu.queue, &rig, 0.0, &targets)
+        .unwrap();
+    assert_eq!(stats.draw_calls, 2);
+    let names: Vec<_> = renderer.passes().iter().map(|p| p.name).collect();
+    assert_eq!(names, ["cull", "inset_cull", "draw"]);
 }

@@ -101,6 +101,10 @@ pub struct SceneArgs {
     /// Pixels the eyes' images of a far instance may differ by (sets the far distance).
     #[arg(long, default_value_t = crate::far_layer::FAR_THRESHOLD_PX)]
     pub far_threshold: f32,
+    /// Foveated displays: cull the insets' frustum too, so the inset pair draws only what
+    /// it can show (one more cull and multi-draw per display).
+    #[arg(long, value_enum, default_value = "off")]
+    pub inset_cull: Switch,
 }
 
 #[derive(Clone, Copy, Debug, PartialEq, Eq, clap::ValueEnum, Serialize)]
@@ -125,6 +129,7 @@ impl SceneArgs {
             shadows: self.shadows.on(),
             far_layer: self.far_layer.on(),
             far_threshold_px: self.far_threshold,
+            inset_cull: self.inset_cull.on(),
             ..Default::default()
         }
     }
@@ -289,70 +294,90 @@ fn cull(args: &CullArgs) -> Result<()> {
     let mut live = LiveScene::new(scene_spec::load(&args.scene.scene)?);
     let mut driver = edits::EditDriver::new(&live, &args.edits)?;
     let options = args.scene.options();
-    let (outputs, far) = match args.cull {
+    let culls = match args.cull {
         CullMode::Cpu => {
             for frame in 0..args.frames {
                 driver.apply(&mut live, frame)?;
             }
             cpu_cull(&rig, &options, live.scene())?
         }
-        CullMode::Gpu => gpu_cull(&rig, options, &mut live, &mut driver, args.frames)?,
+        CullMode::Gpu => gpu_cull(&rig, options.clone(), &mut live, &mut driver, args.frames)?,
     };
     let scene = live.scene();
+    let views = |d: &crate::rig::Display| match (options.inset_cull, d.views()) {
+        (true, 4) => 2,
+        (_, views) => views,
+    };
     let near = rig
         .displays
         .iter()
-        .zip(&outputs)
-        .map(|(d, out)| display_dump(&d.name, d.views(), out, scene));
-    // With the far layer, each stereo display's far cull follows as `<name>.far`.
-    let far_dumps = rig.displays.iter().zip(&far).filter_map(|(d, out)| {
-        Some(display_dump(
-            &format!("{}.far", d.name),
-            1,
-            out.as_ref()?,
-            scene,
-        ))
-    });
-    let displays: Vec<_> = near.chain(far_dumps).collect();
+        .zip(&culls.near)
+        .map(|(d, out)| display_dump(&d.name, views(d), out, scene));
+    // With the far layer, each stereo display's far cull follows as `<name>.far`; with
+    // the inset cull, each foveated display's inset cull as `<name>.inset`.
+    let extra = |list: &[Option<CullOutput>], tag: &str, v: u32| {
+        let dumps = rig.displays.iter().zip(list).filter_map(|(d, out)| {
+            Some(display_dump(
+                &format!("{}.{tag}", d.name),
+                v,
+                out.as_ref()?,
+                scene,
+            ))
+        });
+        dumps.collect::<Vec<_>>()
+    };
+    let displays: Vec<_> = near
+        .chain(extra(&culls.far, "far", 1))
+        .chain(extra(&culls.inset, "inset", 2))
+        .collect();
     write_json(
         &args.dump_visible,
         &serde_json::json!({ "displays": displays }),
     )
 }
 
-/// Every display's cull and, with the far layer, each stereo display's far cull: the
-/// renderer's CPU cull of the frame's plan.
-fn cpu_cull(
-    rig: &Rig,
-    options: &RendererOptions,
-    scene: &Scene,
-) -> Result<(Vec<CullOutput>, Vec<Option<CullOutput>>)> {
+/// A frame's culls per display: its own, its far layer's and its insets'.
+struct Culls {
+    near: Vec<CullOutput>,
+    far: Vec<Option<CullOutput>>,
+    inset: Vec<Option<CullOutput>>,
+}
+
+/// Every display's cull and, with the far layer, each stereo display's far cull (with
+/// the inset cull, each foveated display's inset cull): the renderer's CPU cull of the
+/// frame's plan.
+fn cpu_cull(rig: &Rig, options: &RendererOptions, scene: &Scene) -> Result<Culls> {
     let resolved = rig.resolve()?;
     let coarse = options.coarse_for(&resolved, None);
     let plan = FramePlan::of(rig, resolved, options, coarse, 0.0)?;
-    let outputs = cpu::cull_frame(&CullLayout::new(scene), &plan.jobs(), &plan.cull);
-    let mut near = vec![None; rig.displays.len()];
-    let mut far = vec![None; rig.displays.len()];
-    for (cull, out) in plan.culls.iter().zip(outputs) {
+    let layout = CullLayout::new(scene);
+    let outputs = cpu::cull_frame(&layout, &plan.jobs(), &plan.cull);
+    let apart: Vec<_> = plan.inset_culls.iter().map(|c| c.job).collect();
+    let insets = cpu::cull_many_lod(&layout, &apart, &plan.cull.lod);
+    let n = rig.displays.len();
+    let (mut near, mut far, mut inset) = (vec![None; n], vec![None; n], vec![None; n]);
+    let planned = plan.culls.iter().chain(&plan.inset_culls);
+    for (cull, out) in planned.zip(outputs.into_iter().chain(insets)) {
         match cull.view {
             CullView::Display(i) => near[i] = Some(out),
             CullView::Far(i) => far[i] = Some(out),
+            CullView::Inset(i) => inset[i] = Some(out),
             CullView::Eye(..) | CullView::Light => {}
         }
     }
     let near = near.into_iter().map(Option::unwrap_or_default).collect();
-    Ok((near, far))
+    Ok(Culls { near, far, inset })
 }
 
 /// `frames` GPU-culled frames, each after its edits are synced; the last frame's cull
-/// buffers (and far layers' culls) read back.
+/// buffers (and far layers' and insets' culls) read back.
 fn gpu_cull(
     rig: &Rig,
     options: RendererOptions,
     live: &mut LiveScene,
     driver: &mut edits::EditDriver,
     frames: u32,
-) -> Result<(Vec<CullOutput>, Vec<Option<CullOutput>>)> {
+) -> Result<Culls> {
     let gpu = Gpu::headless()?;
     let mut renderer = Renderer::new(&gpu.device, live.scene(), rig, options)?;
     let targets = renderer.create_targets(&gpu.device);
@@ -362,12 +387,20 @@ fn gpu_cull(
         renderer.submit_frame(&gpu.device, &gpu.queue, rig, 0.0, &targets)?;
     }
     let displays = 0..rig.displays.len();
-    let read = |i| renderer.diagnostics(&gpu.device, &gpu.queue).cull(i);
-    let far = |i| renderer.diagnostics(&gpu.device, &gpu.queue).far_cull(i);
-    Ok((
-        displays.clone().map(read).collect::<Result<_>>()?,
-        displays.map(far).collect::<Result<_>>()?,
-    ))
+    let diagnostics = renderer.diagnostics(&gpu.device, &gpu.queue);
+    Ok(Culls {
+        near: displays
+            .clone()
+            .map(|i| diagnostics.cull(i))
+            .collect::<Result<_>>()?,
+        far: displays
+            .clone()
+            .map(|i| diagnostics.far_cull(i))
+            .collect::<Result<_>>()?,
+        inset: displays
+            .map(|i| diagnostics.inset_cull(i))
+            .collect::<Result<_>>()?,
+    })
 }
 
 pub fn write_json(path: &Path, value: &impl Serialize) -> Result<()> {

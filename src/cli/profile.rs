@@ -83,6 +83,10 @@ pub struct ProfileArgs {
     /// The far layer, one configuration each (`on,off` compares them).
     #[arg(long, value_delimiter = ',', value_enum, default_value = "off")]
     pub far_layer: Vec<Switch>,
+    /// Foveated rigs' inset cull, one configuration each (`on,off` compares them; rigs
+    /// without a foveated display run `off` only).
+    #[arg(long, value_delimiter = ',', value_enum, default_value = "off")]
+    pub inset_cull: Vec<Switch>,
     /// Pixels the eyes' images of a far instance may differ by.
     #[arg(long, default_value_t = crate::far_layer::FAR_THRESHOLD_PX)]
     pub far_threshold: f32,
@@ -130,7 +134,8 @@ pub fn profile(args: &ProfileArgs) -> Result<()> {
     if timer.is_none() {
         println!("GPU timings unavailable: the adapter has no TIMESTAMP_QUERY; CPU timings only");
     }
-    let variants = args.moving.len() * args.coarse_cull.len() * args.far_layer.len();
+    let variants =
+        args.moving.len() * args.coarse_cull.len() * args.far_layer.len() * args.inset_cull.len();
     let total = (rigs.len() * args.instances.len() * configs.len() * variants) as u64
         * (args.frames + args.warmup) as u64;
     let bar = ProgressBar::new(total);
@@ -153,8 +158,10 @@ pub fn profile(args: &ProfileArgs) -> Result<()> {
                 .iter()
                 .flat_map(|m| args.coarse_cull.iter().map(move |c| (*m, *c)))
                 .flat_map(|(m, c)| args.far_layer.iter().map(move |f| (m, c, f.on())))
+                .flat_map(|v| args.inset_cull.iter().map(move |i| (v, i.on())))
+                .filter(|(_, inset)| !inset || rig.displays.iter().any(|d| d.views() == 4))
                 .collect();
-            for (&(mode, cull), &(moving, coarse, far)) in configs
+            for (&(mode, cull), &((moving, coarse, far), inset)) in configs
                 .iter()
                 .flat_map(|c| variants.iter().map(move |v| (c, v)))
             {
@@ -180,6 +187,7 @@ pub fn profile(args: &ProfileArgs) -> Result<()> {
                     cull,
                     coarse,
                     far,
+                    inset,
                     edits: EditArgs {
                         moving,
                         churn: args.churn,
@@ -246,6 +254,7 @@ struct Config<'a> {
     cull: CullMode,
     coarse: CoarseMode,
     far: bool,
+    inset: bool,
     edits: EditArgs,
 }
 
@@ -259,6 +268,7 @@ fn measure(
         cull,
         coarse,
         far,
+        inset,
         edits,
     }: &Config,
     args: &ProfileArgs,
@@ -274,6 +284,7 @@ fn measure(
         shadows: args.shadows.on(),
         far_layer: far,
         far_threshold_px: args.far_threshold,
+        inset_cull: inset,
         cull_floor: timer.is_some() && cull == CullMode::Gpu && !mode.per_instance(),
         ..Default::default()
     };
@@ -407,6 +418,7 @@ fn measure(
         sphere_tests,
         shadows: args.shadows.on(),
         far_layer: far,
+        inset_cull: inset,
         far_near,
         shadow_passes: samples.passes.iter().filter(|p| p.name == "shadow").count(),
         floor_ms_median: over_floor.as_ref().map(|f| f.0),

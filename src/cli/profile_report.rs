@@ -61,6 +61,8 @@ pub struct Row {
     pub sphere_tests: Option<u64>,
     pub shadows: bool,
     pub far_layer: bool,
+    /// Foveated displays' inset cull.
+    pub inset_cull: bool,
     /// The last frame's far/near split per display (with the far layer).
     pub far_near: Vec<Option<FarSplit>>,
     /// The last frame's shadow passes (1 with shadows, whatever the rig).
@@ -115,6 +117,7 @@ pub fn price_edits(rows: &mut [Row]) {
             a.instances,
             a.coarse_cull,
             a.far_layer,
+            a.inset_cull,
             a.churn_percent,
         ) == (
             b.mode,
@@ -123,6 +126,7 @@ pub fn price_edits(rows: &mut [Row]) {
             b.instances,
             b.coarse_cull,
             b.far_layer,
+            b.inset_cull,
             b.churn_percent,
         )
     };
@@ -230,6 +234,11 @@ pub(super) fn print_table(rows: &[Row]) {
         let rig = std::path::Path::new(&r.rig)
             .file_stem()
             .map_or(r.rig.clone(), |s| s.to_string_lossy().into());
+        let rig = if r.inset_cull {
+            format!("{rig}+inset")
+        } else {
+            rig
+        };
         println!(
             "{:>14} {:>13} {:>4} {:>9} {:>6} | {:>9.3} {:>9.3} | {:>9} {:>9} | {:>8.3} {:>8.3} {:>8.3} {:>8.3} | {:>9} {:>5} {:>10} | {:>11} {:>11} | {:>7} {:>7}",
             rig,

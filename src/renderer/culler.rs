@@ -135,9 +135,12 @@ impl Culler {
             Kind::Cpu { layout, outputs } => {
                 let culled = cpu::cull_frame(layout, &plan.jobs(), &plan.cull);
                 *outputs = plan.culls.iter().map(|c| c.view).zip(culled).collect();
-                if let Some(light) = &plan.light_cull {
-                    let out = cpu::cull_many_lod(layout, &[light.job], &plan.cull.lod);
-                    outputs.extend(out.into_iter().map(|o| (light.view, o)));
+                // Outside the coarse cull: one more pass for the light and the insets.
+                let apart: Vec<_> = plan.light_cull.iter().chain(&plan.inset_culls).collect();
+                if !apart.is_empty() {
+                    let jobs: Vec<_> = apart.iter().map(|c| c.job).collect();
+                    let out = cpu::cull_many_lod(layout, &jobs, &plan.cull.lod);
+                    outputs.extend(apart.iter().map(|c| c.view).zip(out));
                 }
                 0
             }

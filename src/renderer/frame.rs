@@ -47,6 +47,8 @@ pub enum CullView {
     Eye(usize, usize),
     /// Display `i`'s far layer: its far instances, drawn once.
     Far(usize),
+    /// Foveated display `i`'s insets (with the inset cull): the inset pair's frustum.
+    Inset(usize),
     /// The frame's light (with shadows).
     Light,
 }
@@ -54,11 +56,13 @@ pub enum CullView {
 impl CullView {
     /// The coarse cull's slot whose block list this view's GPU cull runs over, with the
     /// coarse cull on: its display's (a far layer shares its display's blocks). The
-    /// light's box is not inside the frame frustum, so its cull never takes blocks.
+    /// light's box is not inside the frame frustum, so its cull never takes blocks; the
+    /// inset cull takes none either (its planes are not the display's, whose grown block
+    /// test the coarse cull's guarantee is stated for).
     pub fn coarse_slot(self) -> Option<u32> {
         match self {
             CullView::Display(i) | CullView::Eye(i, _) | CullView::Far(i) => Some(i as u32),
-            CullView::Light => None,
+            CullView::Inset(_) | CullView::Light => None,
         }
     }
 }
@@ -93,6 +97,11 @@ pub struct FramePlan {
     pub light: LightView,
     /// With shadows: the light's cull, outside the frame frustum (never coarse).
     pub light_cull: Option<PlannedCull>,
+    /// Per display: with the inset cull, a foveated display's inset context (the inset
+    /// pair in the eye slots, the inset frustum's planes).
+    pub insets: Vec<Option<DisplayContext>>,
+    /// The inset culls (never coarse), one per display with an inset context.
+    pub inset_culls: Vec<PlannedCull>,
 }
 
 impl FramePlan {
@@ -131,8 +140,20 @@ impl FramePlan {
             true => crate::far_layer::plans(rig, &resolved, options.far_threshold_px),
             false => vec![None; rig.displays.len()],
         };
-        let displays = display_contexts(rig, &resolved, options.mode, &far);
+        let inset_cull = options.inset_cull && options.mode == StereoMode::Instanced;
+        let displays = display_contexts(rig, &resolved, options.mode, &far, inset_cull);
         let culls = culls(&resolved, options.mode, &displays, &far);
+        let insets: Vec<Option<DisplayContext>> = (displays.iter().zip(&resolved.displays))
+            .map(|(context, r)| {
+                r.insets
+                    .as_ref()
+                    .filter(|_| inset_cull)
+                    .map(|v| context.insets(v))
+            })
+            .collect();
+        let inset_culls = (insets.iter().enumerate())
+            .filter_map(|(i, c)| Some(inset_job(i, c.as_ref()?)))
+            .collect();
         let light_cull = options.shadows.then(|| PlannedCull {
             view: CullView::Light,
             job: light.cull_job(),
@@ -146,6 +167,8 @@ impl FramePlan {
             far,
             light,
             light_cull,
+            insets,
+            inset_culls,
         })
     }
 
@@ -165,12 +188,26 @@ pub fn instances_per_object(mode: StereoMode, views: u32) -> u32 {
     }
 }
 
-/// Each display's context; a display with a far plan keeps its near instances only.
+/// The cull of display `i`'s insets, from their context.
+fn inset_job(i: usize, context: &DisplayContext) -> PlannedCull {
+    PlannedCull {
+        view: CullView::Inset(i),
+        job: CullJob {
+            planes: context.planes,
+            instances_per_object: context.instances_per_object,
+            split: None,
+        },
+    }
+}
+
+/// Each display's context; a display with a far plan keeps its near instances only, and
+/// with `inset_cull` a foveated display's own cull draws its outer pair only.
 fn display_contexts(
     rig: &Rig,
     resolved: &ResolvedRig,
     mode: StereoMode,
     far: &[Option<FarPlan>],
+    inset_cull: bool,
 ) -> Vec<DisplayContext> {
     rig.displays
         .iter()
@@ -178,7 +215,12 @@ fn display_contexts(
         .zip(far)
         .enumerate()
         .map(|(i, ((d, r), far))| {
-            let per_object = instances_per_object(mode, d.views());
+            let views = if inset_cull {
+                d.views().min(2)
+            } else {
+                d.views()
+            };
+            let per_object = instances_per_object(mode, views);
             let context = DisplayContext {
                 cull_slot: i as u32,
                 ..DisplayContext::new(r, &d.layout(), per_object)

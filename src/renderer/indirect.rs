@@ -22,10 +22,12 @@ use crate::modes::StereoMode;
 use crate::shaders::DrawKey;
 
 /// One display: a view (its context, cull and draw bindings) and its pipeline variant,
-/// which also fixes the instances per visible object.
+/// which also fixes the instances per visible object; with the inset cull, a foveated
+/// display's inset pair is one more view, drawn by the same pipeline in the same pass.
 pub(super) struct IndirectDisplay {
     pub(super) view: ViewPass,
     key: DrawKey,
+    pub(super) inset: Option<ViewPass>,
 }
 
 pub(super) struct IndirectPath {
@@ -79,7 +81,7 @@ impl IndirectPath {
             drawer: &drawer,
             scene: &draw_scene,
         };
-        let displays = indirect_displays(device, &keys, drawing, frame, &culler);
+        let displays = indirect_displays(device, (&keys, plan), drawing, frame, &culler);
         let shadow = options
             .shadows
             .then(|| ShadowPass::new(device, drawing, frame, &culler));
@@ -106,8 +108,11 @@ impl IndirectPath {
         stats.bytes_uploaded += self.culler.prepare(queue, plan);
         stats.cpu_cull = start.elapsed();
         let start = Instant::now();
-        for (state, ctx) in self.displays.iter().zip(&plan.displays) {
+        for ((state, ctx), inset) in self.displays.iter().zip(&plan.displays).zip(&plan.insets) {
             stats.bytes_uploaded += state.view.prepare(queue, ctx, &self.culler);
+            if let (Some(view), Some(inset)) = (&state.inset, inset) {
+                stats.bytes_uploaded += view.prepare(queue, inset, &self.culler);
+            }
         }
         if let Some(far) = &mut self.far {
             stats.bytes_uploaded += far.prepare(queue, plan, &self.culler);
@@ -181,12 +186,18 @@ impl IndirectPath {
         (timer, display): Timing,
         log: &mut Vec<PassRecord>,
     ) -> FrameStats {
-        let view = &self.displays[index].view;
+        let state = &self.displays[index];
         let what = (&mut *log, PassRecord::display("cull", index));
         let mut stats = FrameStats {
-            dispatches: view.encode_cull(encoder, &self.culler, (timer, display), what),
+            dispatches: state
+                .view
+                .encode_cull(encoder, &self.culler, (timer, display), what),
             ..FrameStats::default()
         };
+        if let Some(inset) = &state.inset {
+            let what = (&mut *log, PassRecord::display("inset_cull", index));
+            stats.dispatches += inset.encode_cull(encoder, &self.culler, (timer, display), what);
+        }
         if let Some((far, Some(layer))) = self.far.as_ref().map(|f| (f, &f.displays[index])) {
             let recording = Recording { timer, log };
             let (dispatches, draw_calls) = far.layers.encode(
@@ -223,14 +234,20 @@ impl IndirectPath {
     }
 
     /// Display `index`'s one multi-draw-indirect call into `pass`.
-    /// With a far layer, its composite goes first (one more draw call).
+    /// With a far layer, its composite goes first (one more draw call); with an inset
+    /// cull, the inset pair's multi-draw follows (one more).
     pub(super) fn draw(&self, pass: &mut wgpu::RenderPass, index: usize) -> u32 {
         let state = &self.displays[index];
         let composite = match self.far.as_ref().map(|f| (f, &f.displays[index])) {
             Some((far, Some(layer))) => far.layers.composite(pass, layer),
             _ => 0,
         };
-        composite + state.view.draw(pass, self.drawing(), Some(state.key))
+        let outer = state.view.draw(pass, self.drawing(), Some(state.key));
+        let insets = match &state.inset {
+            Some(inset) => inset.draw(pass, self.drawing(), Some(state.key)),
+            None => 0,
+        };
+        composite + outer + insets
     }
 
     fn drawing(&self) -> Drawing<'_> {
@@ -241,30 +258,36 @@ impl IndirectPath {
     }
 }
 
-/// Each display's view, for its pipeline variant `keys[i]`.
+/// Each display's view, for its pipeline variant `keys[i]`, and its inset view where
+/// `plan` culls the display's insets.
 fn indirect_displays(
     device: &wgpu::Device,
-    keys: &[DrawKey],
+    (keys, plan): (&[DrawKey], &FramePlan),
     drawing: Drawing,
     frame: &wgpu::Buffer,
     culler: &Culler,
 ) -> Vec<IndirectDisplay> {
-    let view = |i| ViewPass::new(device, drawing, frame, culler, CullView::Display(i));
+    let view = |v| ViewPass::new(device, drawing, frame, culler, v);
     (keys.iter().enumerate())
-        .map(|(i, &key)| IndirectDisplay { view: view(i), key })
+        .map(|(i, &key)| IndirectDisplay {
+            view: view(CullView::Display(i)),
+            key,
+            inset: plan.insets[i].map(|_| view(CullView::Inset(i))),
+        })
         .collect()
 }
 
-/// Each display's pipeline variant: multiview for stereo in `multiview`, else one or two
-/// views (with clip distances where the device has them).
+/// Each display's pipeline variant: multiview for stereo in `multiview`, else one, two
+/// or (foveated) four views per visible object, with clip distances where the device
+/// has them; a foveated display with the inset cull draws two per cull, each view into
+/// its own viewport.
 fn draw_keys(device: &wgpu::Device, plan: &FramePlan, mode: StereoMode) -> Vec<DrawKey> {
     let clip = DrawFeatures::of(device).clip_distances;
-    plan.resolved
-        .displays
-        .iter()
-        .map(|d| match (d.eyes.len(), mode) {
-            (2, StereoMode::Multiview) => DrawKey::MULTIVIEW,
-            (views, _) => DrawKey::new(views as u32, clip),
+    (plan.resolved.displays.iter().zip(&plan.insets))
+        .map(|(d, inset)| match (d.eyes.len(), mode, inset) {
+            (2, StereoMode::Multiview, _) => DrawKey::MULTIVIEW,
+            (4, _, Some(_)) => DrawKey::placed(2, clip),
+            (views, _, _) => DrawKey::new(views as u32, clip),
         })
         .collect()
 }

@@ -83,6 +83,10 @@ pub struct RendererOptions {
     pub far_layer: bool,
     /// Pixels the eyes' images of a far instance may differ by: sets the far distance.
     pub far_threshold_px: f32,
+    /// Foveated displays (`instanced`): cull the insets' frustum too, so that the inset
+    /// pair draws only what it can show (a second cull and a second multi-draw in the
+    /// display's one pass) instead of every visible object four times (one multi-draw).
+    pub inset_cull: bool,
     /// Bytes one storage binding may hold; `None`: the device's limit. Per-instance
     /// arrays larger than this are bound as several windows of one buffer
     /// ([`Windows`]); a smaller value than the device's exercises that on small scenes.
@@ -161,6 +165,7 @@ impl Default for RendererOptions {
             light: Light::default(),
             far_layer: false,
             far_threshold_px: FAR_THRESHOLD_PX,
+            inset_cull: false,
             binding_limit: None,
             cull_floor: false,
         }

@@ -86,6 +86,18 @@ impl Diagnostics<'_> {
         }
     }
 
+    /// Display `index`'s inset cull of the last frame (a foveated display's inset pair,
+    /// with [`super::RendererOptions::inset_cull`]; the contract's buffers with V = 2),
+    /// read back after it was submitted; `None` for a display without one.
+    pub fn inset_cull(&self, index: usize) -> Result<Option<CullOutput>> {
+        match &self.renderer.path {
+            Path::Indirect(p) if index < self.renderer.shapes.len() => {
+                p.read_inset_cull(self.device, self.queue, index)
+            }
+            _ => Ok(None),
+        }
+    }
+
     /// The last frame's far/near split per display (`None` for displays without a far
     /// layer): the far distance and the visible far and near instances, read back.
     pub fn far_split(&self) -> Result<Vec<Option<FarSplit>>> {
@@ -163,6 +175,20 @@ impl IndirectPath {
     ) -> Result<Option<CullOutput>> {
         match self.far.as_ref().and_then(|f| f.displays[index].as_ref()) {
             Some(far) => self.read_targets(device, queue, far.view.cull()).map(Some),
+            None => Ok(None),
+        }
+    }
+
+    /// Display `index`'s inset cull buffers (`None` without an inset cull), read back
+    /// after the frame was submitted.
+    pub(super) fn read_inset_cull(
+        &self,
+        device: &wgpu::Device,
+        queue: &wgpu::Queue,
+        index: usize,
+    ) -> Result<Option<CullOutput>> {
+        match &self.displays[index].inset {
+            Some(inset) => self.read_targets(device, queue, inset.cull()).map(Some),
             None => Ok(None),
         }
     }

@@ -75,11 +75,20 @@ impl Rig {
         let combined = combined
             .ok_or("the eyes' frusta span 180 degrees or more; no display frustum holds them")?;
         let planes = combined.frustum().planes;
+        // The inset pair from the display frustum's apex and orientation: inside the
+        // display frustum, so it exists whenever that does.
+        let insets = eyes.get(2..).map(|insets| {
+            let origin = combined.world_from_view.translation;
+            let orientation = DQuat::from_mat3(&combined.world_from_view.matrix3);
+            let corners: Vec<_> = insets.iter().map(|e| e.corners_from(origin)).collect();
+            enclosing_view(orientation, origin, &corners)
+        });
         Ok(ResolvedDisplay {
             eyes,
             combined,
             planes,
             gaze_clamped,
+            insets: insets.flatten(),
         })
     }
 
@@ -198,6 +207,9 @@ pub struct ResolvedDisplay {
     /// A foveated display's gaze fell where an inset would leave its eye's window, and
     /// the inset was moved back inside.
     pub gaze_clamped: bool,
+    /// A foveated display's inset frustum: one frustum holding both insets (what the
+    /// inset cull tests, [`crate::renderer::RendererOptions::inset_cull`]).
+    pub insets: Option<View>,
 }
 
 impl ResolvedDisplay {

@@ -202,15 +202,20 @@ pub struct DrawKey {
     pub clip_distances: bool,
     /// One view per instance into a two-layer target, the eye from `view_index`.
     pub multiview: bool,
+    /// Views of their own sizes share the target (foveated): each is clipped at its
+    /// viewport's four edges, not at one seam.
+    pub viewports: bool,
 }
 
 impl DrawKey {
     /// Every variant, for validation.
-    pub const ALL: [DrawKey; 6] = [
+    pub const ALL: [DrawKey; 8] = [
         DrawKey::new(2, true),
         DrawKey::new(2, false),
         DrawKey::new(4, true),
         DrawKey::new(4, false),
+        DrawKey::placed(2, true),
+        DrawKey::placed(2, false),
         DrawKey::new(1, false),
         DrawKey::MULTIVIEW,
     ];
@@ -220,6 +225,7 @@ impl DrawKey {
         views: 1,
         clip_distances: false,
         multiview: true,
+        viewports: false,
     };
 
     /// Back faces are culled (counter-clockwise is front, in world space: see
@@ -237,6 +243,16 @@ impl DrawKey {
             views,
             clip_distances: views >= 2 && clip_distances_available,
             multiview: false,
+            viewports: views == 4,
+        }
+    }
+
+    /// `views` per visible object, each into its own viewport of a foveated target (two:
+    /// the outer pair, or with the inset cull the inset pair, from their own cull).
+    pub const fn placed(views: u32, clip_distances_available: bool) -> DrawKey {
+        DrawKey {
+            viewports: true,
+            ..DrawKey::new(views, clip_distances_available)
         }
     }
 
@@ -251,6 +267,7 @@ impl DrawKey {
             (true, _) => "stereocull.draw.multiview".into(),
             (false, 1) => "stereocull.draw.mono".into(),
             (false, 4) => format!("stereocull.draw.foveated.{seam}"),
+            _ if self.viewports => format!("stereocull.draw.placed.{seam}"),
             _ => format!("stereocull.draw.stereo.{seam}"),
         }
     }
@@ -263,9 +280,9 @@ impl DrawKey {
     /// The variant's source; `material` (WGSL defining `fn material(s: Surface) ->
     /// vec4<f32>`, see `wgsl/shared/draw_common.wgsl`) replaces the built-in shading.
     pub fn source_with(self, material: Option<&str>, windows: &Windows) -> String {
-        let prelude = match (self.clip_distances, self.views) {
-            (true, 4) => DRAW_CLIP_RECT,
-            (true, _) => DRAW_CLIP_DISTANCES,
+        let prelude = match (self.clip_distances, self.viewports) {
+            (true, true) => DRAW_CLIP_RECT,
+            (true, false) => DRAW_CLIP_DISTANCES,
             (false, _) => DRAW_NO_CLIP_DISTANCES,
         };
         let entry = if self.multiview { DRAW_MULTIVIEW } else { DRAW };
