@@ -72,17 +72,19 @@ impl CompositeParams {
         })
     }
 
-    /// The composite of display `index` of `rig` (its pose as it stands), into the
-    /// display's resolution per eye; `None` for a display without four views.
+    /// The composite of display `index` of `rig` (its pose as it stands), drawn as
+    /// `layout` says (`Renderer::layout`), into the display's resolution per eye; `None`
+    /// for a display without four views.
     pub fn of_display(
         rig: &crate::rig::Rig,
         index: usize,
+        layout: &ViewLayout,
     ) -> crate::Result<Option<CompositeParams>> {
         let resolved = rig.resolve()?;
         let display = &rig.displays[index];
         Ok(CompositeParams::new(
             &resolved.displays[index],
-            &display.layout(),
+            layout,
             display.resolution,
         ))
     }

@@ -276,13 +276,13 @@ pub struct Attachments<'a> {
 }
 
 /// Opens a render pass on `target`, clearing it or keeping what earlier passes drew
-/// (multisampled color is kept too, then resolved again); `multiview` renders both
-/// layers of two-layer targets.
+/// (multisampled color is kept too, then resolved again); `multiview_mask` renders
+/// those layers of a layered target (multiview; `DrawKey::multiview_mask`).
 pub fn begin_pass<'e>(
     encoder: &'e mut wgpu::CommandEncoder,
     target: Attachments,
     clear: bool,
-    multiview: bool,
+    multiview_mask: Option<NonZeroU32>,
     timestamp_writes: Option<wgpu::RenderPassTimestampWrites>,
 ) -> wgpu::RenderPass<'e> {
     let (color_load, depth_load) = if clear {
@@ -311,11 +311,7 @@ pub fn begin_pass<'e>(
         }),
         timestamp_writes,
         occlusion_query_set: None,
-        multiview_mask: if multiview {
-            NonZeroU32::new(0b11)
-        } else {
-            None
-        },
+        multiview_mask,
     })
 }
 
@@ -421,11 +417,7 @@ fn pipeline(
             compilation_options: Default::default(),
             targets: &[Some(target.color.into())],
         }),
-        multiview_mask: if key.multiview {
-            NonZeroU32::new(0b11)
-        } else {
-            None
-        },
+        multiview_mask: key.multiview_mask(),
         cache: None,
     })
 }

@@ -175,6 +175,7 @@ pub fn profile(args: &ProfileArgs) -> Result<()> {
                         mode,
                         ..Default::default()
                     },
+                    gpu.device.limits().max_multiview_view_count,
                 );
                 if let Err(e) = refused {
                     println!("skipped {} on {spec}: {e}", mode.name());

@@ -8,7 +8,7 @@ use serde::Serialize;
 
 use super::edits::{EditArgs, EditDriver};
 use super::{SceneArgs, write_json};
-use crate::composite::{CompositeParams, FoveatedComposite};
+use crate::composite::{CompositeParams, FoveatedComposite, composite_cpu};
 use crate::device::{Gpu, list_counts};
 use crate::error::{Error, Result};
 use crate::live::LiveScene;
@@ -256,9 +256,19 @@ fn display_images(
     let (device, queue) = (&session.gpu.device, &session.gpu.queue);
     let target = &session.targets[index];
     let drawn = read_rgba8(device, queue, &target.color)?;
-    let Some(params) = CompositeParams::of_display(&session.rig, index)? else {
+    let layout = session
+        .renderer
+        .layout(index)
+        .unwrap_or(session.rig.displays[index].layout());
+    let Some(params) = CompositeParams::of_display(&session.rig, index, &layout)? else {
         return Ok((drawn, None));
     };
+    // Multiview's layers are no 2D texture the GPU composite could read: the CPU twin
+    // composites them as read back, side by side.
+    if target.color.depth_or_array_layers() > 1 {
+        let composite = composite_cpu(&drawn, &params);
+        return Ok((drawn, Some(composite)));
+    }
     let format = target.color.format();
     let output = FoveatedComposite::create_output(device, &params, format);
     let mut encoder = device.create_command_encoder(&Default::default());

@@ -43,26 +43,24 @@ fn check_sample_count(features: wgpu::Features, options: &RendererOptions) -> Re
 }
 
 /// What the mode cannot draw of the rig: foveated displays (four views of two sizes)
-/// are drawn by the instanced path only, whose one draw places each view in its own
-/// viewport; multiview layers share one size, and the classic modes' per-eye passes are
-/// not generalized past two eyes.
-pub fn check_rig(rig: &Rig, options: &RendererOptions) -> Result<()> {
+/// are drawn by the instanced path (each view placed in its own viewport) and by
+/// multiview where the device has four views (layers of one size); the classic modes'
+/// per-eye passes are not generalized past two eyes. `max_multiview_views` is the
+/// device's `max_multiview_view_count`.
+pub fn check_rig(rig: &Rig, options: &RendererOptions, max_multiview_views: u32) -> Result<()> {
     let Some(d) = rig.displays.iter().find(|d| d.views() > 2) else {
         return Ok(());
     };
     let why = match options.mode {
         StereoMode::Instanced => return Ok(()),
-        StereoMode::Multiview => {
-            let sizes: Vec<String> = (d.layout().viewports().iter())
-                .map(|v| format!("{}x{}", v[2], v[3]))
-                .collect();
-            format!(
-                "multiview draws every layer at one size, and its views differ ({}): use --mode instanced",
-                sizes.join(", ")
-            )
-        }
+        StereoMode::Multiview if max_multiview_views >= d.views() => return Ok(()),
+        StereoMode::Multiview => format!(
+            "multiview of {} views needs max_multiview_view_count >= {}, and this device has {max_multiview_views}: use --mode instanced",
+            d.views(),
+            d.views()
+        ),
         mode => format!(
-            "{} draws two eyes, not four views: use --mode instanced",
+            "{} draws two eyes, not four views: use --mode instanced or multiview",
             mode.name()
         ),
     };

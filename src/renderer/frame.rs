@@ -221,9 +221,10 @@ fn display_contexts(
                 d.views()
             };
             let per_object = instances_per_object(mode, views);
+            let layered = mode == StereoMode::Multiview && d.stereo;
             let context = DisplayContext {
                 cull_slot: i as u32,
-                ..DisplayContext::new(r, &d.layout(), per_object)
+                ..DisplayContext::new(r, &d.layout_in(layered), per_object)
             };
             match far {
                 Some(plan) => DisplayContext {

@@ -160,7 +160,7 @@ impl IndirectPath {
         log: &mut Vec<PassRecord>,
     ) -> FrameStats {
         let culled = self.encode_cull(encoder, index, (timer, display), log);
-        let multiview = self.displays[index].key.multiview;
+        let multiview = self.displays[index].key.multiview_mask();
         let what = (log, PassRecord::display("draw", index));
         let draw_calls = draw_pass(
             encoder,
@@ -286,6 +286,7 @@ fn draw_keys(device: &wgpu::Device, plan: &FramePlan, mode: StereoMode) -> Vec<D
     (plan.resolved.displays.iter().zip(&plan.insets))
         .map(|(d, inset)| match (d.eyes.len(), mode, inset) {
             (2, StereoMode::Multiview, _) => DrawKey::MULTIVIEW,
+            (4, StereoMode::Multiview, _) => DrawKey::MULTIVIEW_QUAD,
             (4, _, Some(_)) => DrawKey::placed(2, clip),
             (views, _, _) => DrawKey::new(views as u32, clip),
         })

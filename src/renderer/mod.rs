@@ -186,7 +186,7 @@ impl Renderer {
         options: RendererOptions,
     ) -> Result<Renderer> {
         check_device(device, scene, &options)?;
-        check_rig(rig, &options)?;
+        check_rig(rig, &options, device.limits().max_multiview_view_count)?;
         let resolved = rig.resolve()?;
         let coarse = options.coarse_for(&resolved, Some(device));
         let plan = FramePlan::of(rig, resolved, &options, coarse, 0.0)?;
@@ -209,9 +209,12 @@ impl Renderer {
         let shapes = rig
             .displays
             .iter()
-            .map(|d| TargetShape {
-                layout: d.layout(),
-                layered: options.mode == StereoMode::Multiview && d.stereo,
+            .map(|d| {
+                let layered = options.mode == StereoMode::Multiview && d.stereo;
+                TargetShape {
+                    layout: d.layout_in(layered),
+                    layered,
+                }
             })
             .collect();
         Ok(Renderer {
@@ -226,6 +229,14 @@ impl Renderer {
             coarse,
             passes: Vec::new(),
         })
+    }
+
+    /// Where display `index`'s views lie in its target: side by side at their own sizes,
+    /// or in multiview one layer each (read back side by side, as
+    /// [`crate::readback::read_rgba8`] places them). What a foveated display's composite
+    /// takes ([`crate::composite::CompositeParams::new`]).
+    pub fn layout(&self, index: usize) -> Option<crate::rig::ViewLayout> {
+        self.shapes.get(index).map(|s| s.layout)
     }
 
     /// The options the renderer was made with.
@@ -254,11 +265,11 @@ impl Renderer {
     /// What the frame at `time` for `rig`'s pose will do ([`FramePlan`]): what
     /// [`Renderer::prepare`] writes, for inspection.
     pub fn plan(&self, rig: &Rig, time: f32) -> Result<FramePlan> {
-        let same =
-            rig.displays.len() == self.shapes.len()
-                && rig.displays.iter().zip(&self.shapes).all(|(d, s)| {
-                    d.views() == s.views() && (d.views() < 4 || d.layout() == s.layout)
-                });
+        let same = rig.displays.len() == self.shapes.len()
+            && rig.displays.iter().zip(&self.shapes).all(|(d, s)| {
+                let same_layout = d.layout_in(s.layered) == s.layout;
+                d.views() == s.views() && (d.views() < 4 || same_layout)
+            });
         if !same {
             return Err(Error::rig(
                 "prepare",

@@ -74,13 +74,13 @@ pub(super) fn draw_pass(
     encoder: &mut wgpu::CommandEncoder,
     target: &TargetViews,
     clear: bool,
-    multiview: bool,
+    multiview_mask: Option<std::num::NonZeroU32>,
     timing: Timing,
     logged: Logged,
     record: impl FnOnce(&mut wgpu::RenderPass) -> u32,
 ) -> u32 {
     let begin = opener(|encoder, writes| {
-        begin_pass(encoder, target.attachments(), clear, multiview, writes).forget_lifetime()
+        begin_pass(encoder, target.attachments(), clear, multiview_mask, writes).forget_lifetime()
     });
     render_pass(encoder, begin, (timing, logged), record)
 }

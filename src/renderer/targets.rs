@@ -66,12 +66,14 @@ impl DisplayTarget {
 pub struct TargetShape {
     /// Where each view lies (pixels per eye, side by side).
     pub layout: ViewLayout,
-    /// Stereo as two array layers (multiview) instead of two halves side by side.
+    /// One array layer per view (multiview), each the size of the largest view, instead
+    /// of the views side by side.
     pub layered: bool,
 }
 
 impl TargetShape {
-    /// Pixels of one eye's view (a foveated display's outer view).
+    /// Pixels of one eye's view (a foveated display's outer view; in multiview, every
+    /// layer's).
     pub fn eye_size(&self) -> (u32, u32) {
         let [_, _, w, h] = self.layout.viewports[0];
         (w, h)
@@ -84,7 +86,7 @@ impl TargetShape {
 
     fn extent(self) -> wgpu::Extent3d {
         let ((w, h), layers) = match self.layered {
-            true => (self.eye_size(), 2),
+            true => (self.eye_size(), self.views()),
             false => (self.layout.size, 1),
         };
         wgpu::Extent3d {

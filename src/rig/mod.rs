@@ -158,6 +158,20 @@ impl Display {
             (views, _) => ViewLayout::side_by_side(&vec![(w, h); views as usize]),
         }
     }
+
+    /// The layout of the display's views, as layers of one size (`layered`: multiview,
+    /// whose layers share one size, the largest view's, read back side by side) or
+    /// packed side by side at their own sizes ([`Display::layout`]).
+    pub fn layout_in(&self, layered: bool) -> ViewLayout {
+        let packed = self.layout();
+        if !layered {
+            return packed;
+        }
+        let size = |v: &[u32; 4]| (v[2], v[3]);
+        let (w, h) = (packed.viewports().iter().map(size))
+            .fold((0, 0), |(w, h), (x, y)| (w.max(x), h.max(y)));
+        ViewLayout::side_by_side(&vec![(w, h); packed.views as usize])
+    }
 }
 
 /// A display as rig files spell it: the mount is a `head` or a `screen` table.

@@ -205,11 +205,14 @@ pub struct DrawKey {
     /// Views of their own sizes share the target (foveated): each is clipped at its
     /// viewport's four edges, not at one seam.
     pub viewports: bool,
+    /// Multiview: the target's layers, one per view (2 for stereo, 4 foveated); 1
+    /// otherwise.
+    pub layers: u32,
 }
 
 impl DrawKey {
     /// Every variant, for validation.
-    pub const ALL: [DrawKey; 8] = [
+    pub const ALL: [DrawKey; 9] = [
         DrawKey::new(2, true),
         DrawKey::new(2, false),
         DrawKey::new(4, true),
@@ -218,6 +221,7 @@ impl DrawKey {
         DrawKey::placed(2, false),
         DrawKey::new(1, false),
         DrawKey::MULTIVIEW,
+        DrawKey::MULTIVIEW_QUAD,
     ];
 
     /// Multiview: one view per instance, the view index the eye.
@@ -226,7 +230,23 @@ impl DrawKey {
         clip_distances: false,
         multiview: true,
         viewports: false,
+        layers: 2,
     };
+
+    /// Multiview of a foveated display: four layers of one size, each view filling its
+    /// layer (the same shader; the pipeline's view mask differs).
+    pub const MULTIVIEW_QUAD: DrawKey = DrawKey {
+        layers: 4,
+        ..DrawKey::MULTIVIEW
+    };
+
+    /// The view mask of a multiview pipeline and its pass: one bit per layer.
+    pub fn multiview_mask(self) -> Option<std::num::NonZeroU32> {
+        match self.multiview {
+            true => std::num::NonZeroU32::new((1 << self.layers) - 1),
+            false => None,
+        }
+    }
 
     /// Back faces are culled (counter-clockwise is front, in world space: see
     /// [`crate::scene::Mesh`]), which halves the triangles that reach rasterization,
@@ -244,6 +264,7 @@ impl DrawKey {
             clip_distances: views >= 2 && clip_distances_available,
             multiview: false,
             viewports: views == 4,
+            layers: 1,
         }
     }
 
@@ -264,6 +285,7 @@ impl DrawKey {
             "discard"
         };
         match (self.multiview, self.views) {
+            (true, _) if self.layers == 4 => "stereocull.draw.multiview.quad".into(),
             (true, _) => "stereocull.draw.multiview".into(),
             (false, 1) => "stereocull.draw.mono".into(),
             (false, 4) => format!("stereocull.draw.foveated.{seam}"),
