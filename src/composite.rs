@@ -109,7 +109,7 @@ impl FoveatedComposite {
         let layout = bind_group_layout(device);
         let module = device.create_shader_module(wgpu::ShaderModuleDescriptor {
             label: Some(label),
-            source: wgpu::ShaderSource::Wgsl(crate::shaders::FOVEATED_COMPOSITE.into()),
+            source: wgpu::ShaderSource::Wgsl(crate::shaders::foveated_composite_source().into()),
         });
         let pipeline_layout = crate::shaders::pipeline_layout(device, label, &layout);
         let pipeline = device.create_render_pipeline(&wgpu::RenderPipelineDescriptor {

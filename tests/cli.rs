@@ -549,7 +549,7 @@ fn profile_writes_table_csv_json_and_chart() {
     assert_eq!(
         lines.next(),
         Some(
-            "mode,cull,rig,instances,cpu_ms_median,cpu_ms_p95,gpu_ms_median,gpu_ms_p95,draw_calls,dispatches,bytes_uploaded,adapter,moving_percent,churn_percent,sync_ms_median,triangles_submitted,coarse_cull,sphere_tests,shadows,shadow_passes,floor_ms_median,cull_over_floor,cull_over_floor_wall,moved,staging_ms_median,copy_ms_median,sync_staging_ns_per_move,extra_ns_per_move"
+            "mode,cull,rig,instances,cpu_ms_median,cpu_ms_p95,gpu_ms_median,gpu_ms_p95,draw_calls,dispatches,bytes_uploaded,adapter,moving_percent,churn_percent,sync_ms_median,triangles_submitted,coarse_cull,sphere_tests,shadows,shadow_passes,floor_ms_median,cull_over_floor,cull_over_floor_wall,moved,staging_ms_median,copy_ms_median,sync_staging_ns_per_move,extra_ns_per_move,fragment_invocations,target_pixels"
         )
     );
     // 3 classic modes (CPU cull only) + instanced and multiview with both culls, per count.
@@ -941,4 +941,103 @@ fn diff_counts_the_pixels_lod_changes() {
     assert!(!out.status.success());
     assert_eq!(err.trim_end().lines().count(), 1, "{err}");
     assert!(err.contains("only images of one size compare"), "{err}");
+}
+
+/// A foveated rig renders its composite as `<name>.png` (each eye at the display's
+/// resolution) and its four views as drawn as `<name>-views.png`, and `stats.json` gives
+/// the views and where each lies; a gaze far off the axis is clamped and said so; a gaze
+/// on a rig without foveation is one line.
+#[test]
+fn render_composites_a_foveated_display() {
+    let dir = tempfile::tempdir().unwrap();
+    let out_dir = dir.path().to_str().unwrap();
+    let args = [
+        "render",
+        "--rig",
+        "hmd-foveated",
+        "--width",
+        "64",
+        "--height",
+        "48",
+    ];
+    for (gaze, clamped) in [("5,2", false), ("60,0", true)] {
+        let out = stereocull(&[&args[..], &["--gaze", gaze, "--out", out_dir]].concat());
+        let stderr = String::from_utf8_lossy(&out.stderr);
+        assert!(out.status.success(), "{stderr}");
+        assert_eq!(stderr.contains("moved inside"), clamped, "{stderr}");
+        let size = |name: &str| image::image_dimensions(dir.path().join(name)).unwrap();
+        assert_eq!(
+            size("hmd.png"),
+            (128, 48),
+            "each eye at the display's resolution"
+        );
+        // Outer views at half density (32 x 24), insets at 0.35 of 64 x 48 (22 x 17).
+        assert_eq!(size("hmd-views.png"), (2 * 32 + 2 * 22, 24));
+        let stats: Value =
+            serde_json::from_slice(&std::fs::read(dir.path().join("stats.json")).unwrap()).unwrap();
+        let display = &stats["displays"][0];
+        assert_eq!(display["views"], 4);
+        assert_eq!(display["gaze_clamped"], clamped);
+        assert_eq!(display["pixels"], 2 * 32 * 24 + 2 * 22 * 17);
+        assert_eq!(display["viewports"][2], serde_json::json!([64, 0, 22, 17]));
+    }
+    let out = stereocull(&["render", "--gaze", "1,1", "--width", "16", "--height", "16"]);
+    let err = String::from_utf8_lossy(&out.stderr);
+    assert!(!out.status.success());
+    assert_eq!(err.lines().count(), 1, "{err}");
+    assert!(
+        err.contains("--gaze") && err.contains("no foveated display"),
+        "{err}"
+    );
+}
+
+/// The inset cull's dump (`<name>.inset`) is the same from the GPU and the CPU.
+#[test]
+fn cull_dumps_inset_culls_alike_on_gpu_and_cpu() {
+    let dir = tempfile::tempdir().unwrap();
+    let path = |cull: &str| dir.path().join(format!("{cull}.json"));
+    for cull in ["gpu", "cpu"] {
+        let out = stereocull(&[
+            "cull",
+            "--scene",
+            "procedural:20000:8",
+            "--rig",
+            "hmd-foveated",
+            "--gaze",
+            "8,3",
+            "--inset-cull",
+            "on",
+            "--cull",
+            cull,
+            "--dump-visible",
+            path(cull).to_str().unwrap(),
+        ]);
+        assert!(
+            out.status.success(),
+            "{}",
+            String::from_utf8_lossy(&out.stderr)
+        );
+    }
+    let read = |cull: &str| -> Value {
+        serde_json::from_slice(&std::fs::read(path(cull)).unwrap()).unwrap()
+    };
+    let (gpu, cpu) = (read("gpu"), read("cpu"));
+    assert_eq!(gpu, cpu);
+    let names: Vec<_> = gpu["displays"]
+        .as_array()
+        .unwrap()
+        .iter()
+        .map(|d| d["name"].clone())
+        .collect();
+    assert_eq!(names, ["hmd", "hmd.inset"]);
+    let visible: Vec<usize> = (gpu["displays"].as_array().unwrap().iter())
+        .map(|d| {
+            assert_eq!(d["views"], 2);
+            check_display(d, None)
+        })
+        .collect();
+    assert!(
+        visible[1] > 0 && 2 * visible[1] < visible[0],
+        "{visible:?}: the insets see less"
+    );
 }

@@ -108,7 +108,13 @@ fn material(s: Surface) -> vec4<f32> {
 
 #[test]
 fn every_view_stays_in_its_viewport() {
-    let gpu = gpu();
+    let with = wgpu::Features::all();
+    views_stay_in_their_viewports(&support::gpu_with(with));
+    // Without clip distances a fragment outside its view's viewport is discarded.
+    views_stay_in_their_viewports(&support::gpu_with(with - wgpu::Features::CLIP_DISTANCES));
+}
+
+fn views_stay_in_their_viewports(gpu: &stereocull::device::Gpu) {
     let scene = scene_spec::load("procedural:4000:8").unwrap();
     let rig = foveated(160, 120);
     let layout = rig.displays[0].layout();
@@ -116,7 +122,7 @@ fn every_view_stays_in_its_viewport() {
         material: Some(BY_VIEW.into()),
         ..options(CullMode::Gpu)
     };
-    let image = &support::render(&gpu, &scene, &rig, options).unwrap()[0];
+    let image = &support::render(gpu, &scene, &rig, options).unwrap()[0];
     assert_eq!(image.dimensions(), layout.size);
     let clear = image[(layout.size.0 - 1, layout.size.1 - 1)];
     let mut colors = Vec::new();

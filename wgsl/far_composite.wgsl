@@ -7,18 +7,7 @@
 // fragment is discarded and the clear color stays.
 // Bindings: FAR_DECLARATIONS in src/shaders/mod.rs (group 0).
 
-struct CompositeVarying {
-    @builtin(position) position: vec4<f32>,
-    @location(0) @interpolate(flat) eye: u32,
-}
-
-@vertex
-fn vs_main(@builtin(vertex_index) v: u32, @builtin(instance_index) eye: u32) -> CompositeVarying {
-    // A triangle over clip x, y in [-1, 1], then x moved into the eye's half.
-    let xy = vec2(f32((v << 1u) & 2u), f32(v & 2u)) * 2.0 - 1.0;
-    let x = 0.5 * xy.x + select(0.5, -0.5, eye == 0u);
-    return CompositeVarying(vec4(x, xy.y, 0.0, 1.0), eye);
-}
+// The vertex stage: wgsl/shared/eye_halves.wgsl.
 
 // The far layer's coordinates (0..1 from the top left) of the direction through pixel
 // `pixel` of eye `eye` (pixels from its half's top left); outside 0..1 when the far
@@ -39,7 +28,7 @@ struct CompositeOutput {
 }
 
 @fragment
-fn fs_main(in: CompositeVarying) -> CompositeOutput {
+fn fs_main(in: EyeHalf) -> CompositeOutput {
     let pixel = vec2(in.position.x - f32(in.eye) * display.resolution.x, in.position.y);
     if (pixel.x < 0.0 || pixel.x >= display.resolution.x) {
         discard;

@@ -31,18 +31,7 @@ struct CompositeParams {
 @group(0) @binding(0) var<uniform> params: CompositeParams;
 @group(0) @binding(1) var source: texture_2d<f32>;
 
-struct Varying {
-    @builtin(position) position: vec4<f32>,
-    @location(0) @interpolate(flat) eye: u32,
-}
-
-@vertex
-fn vs_main(@builtin(vertex_index) v: u32, @builtin(instance_index) eye: u32) -> Varying {
-    // A triangle over clip x, y in [-1, 1], then x moved into the eye's half.
-    let xy = vec2(f32((v << 1u) & 2u), f32(v & 2u)) * 2.0 - 1.0;
-    let x = 0.5 * xy.x + select(0.5, -0.5, eye == 0u);
-    return Varying(vec4(x, xy.y, 0.0, 1.0), eye);
-}
+// The vertex stage: wgsl/shared/eye_halves.wgsl.
 
 // Bilinear at `at` (source pixels, centers at i + 0.5), clamped to the centers of
 // `viewport`'s outermost texels.
@@ -64,7 +53,7 @@ fn smooth_edge(t: f32) -> f32 {
 }
 
 @fragment
-fn fs_main(in: Varying) -> @location(0) vec4<f32> {
+fn fs_main(in: EyeHalf) -> @location(0) vec4<f32> {
     let e = params.eye[in.eye];
     let uv = (in.position.xy - vec2(f32(in.eye) * params.eye_size.x, 0.0)) / params.eye_size;
     let outer = bilinear(e.outer_viewport, e.outer_viewport.xy + uv * e.outer_viewport.zw);

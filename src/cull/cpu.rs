@@ -78,6 +78,9 @@ pub struct FrameCull {
 /// then each display's (or eye's), and each display tests only its blocks' spheres.
 /// The outputs are the same as without it; that is the block tests' guarantee.
 pub fn cull_frame(layout: &CullLayout, displays: &[CullJob], frame: &FrameCull) -> Vec<CullOutput> {
+    if displays.is_empty() {
+        return Vec::new();
+    }
     let (lod, coarse) = (&frame.lod, frame.coarse.as_ref());
     let levels: Option<(Vec<u8>, u32)> = (lod.levels > 1).then(|| {
         let level_of = |(s, &m): (&Vec4, &u32)| {

@@ -374,12 +374,17 @@ pub const FAR_DECLARATIONS: &str = "\
 /// The far layer's composite into a stereo display (`wgsl/far_composite.wgsl`).
 pub fn far_composite_source() -> String {
     let body = include_str!("../../wgsl/far_composite.wgsl");
-    [&constants(), CONTEXTS, FAR_DECLARATIONS, body].concat()
+    [&constants(), CONTEXTS, FAR_DECLARATIONS, EYE_HALVES, body].concat()
 }
 
-/// A foveated display's views composited per eye (`crate::composite`): self-contained,
-/// its one bind group declared in the file.
-pub const FOVEATED_COMPOSITE: &str = include_str!("../../wgsl/foveated_composite.wgsl");
+const EYE_HALVES: &str = include_str!("../../wgsl/shared/eye_halves.wgsl");
+
+/// A foveated display's views composited per eye (`crate::composite`): its one bind
+/// group declared in the file.
+pub fn foveated_composite_source() -> String {
+    let body = include_str!("../../wgsl/foveated_composite.wgsl");
+    [EYE_HALVES, body].concat()
+}
 
 /// The frame's shadow pass: depth only, the light as the display's eye 0
 /// (`wgsl/shadow.wgsl` after the mono decode).
@@ -427,7 +432,7 @@ pub fn all_sources() -> Vec<(String, String)> {
                 ),
                 (
                     "stereocull.foveated_composite".to_string(),
-                    FOVEATED_COMPOSITE.to_string(),
+                    foveated_composite_source(),
                 ),
             ];
             cull.chain(draw)
