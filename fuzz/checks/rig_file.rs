@@ -4,8 +4,9 @@
 use stereocull::rig::Rig;
 
 /// Any bytes as a rig file (the first byte picks TOML or JSON): an error, or a rig
-/// whose every display frustum, and the frame frustum, is finite (or a typed error
-/// saying why none exists).
+/// whose every display frustum, foveated inset frustum and the frame frustum, is finite
+/// (or a typed error saying why none exists), and whose displays lay their views out
+/// side by side and in layers.
 pub fn rig_file(data: &[u8]) {
     let Some((&kind, rest)) = data.split_first() else {
         return;
@@ -23,7 +24,14 @@ pub fn rig_file(data: &[u8]) {
     let Ok(resolved) = rig.resolve() else {
         return;
     };
-    let displays = resolved.displays.iter().map(|d| d.combined);
+    for d in &rig.displays {
+        for layered in [false, true] {
+            let layout = d.layout_in(layered);
+            assert_eq!(layout.viewports().len() as u32, d.views());
+        }
+    }
+    let insets = resolved.displays.iter().filter_map(|d| d.insets);
+    let displays = resolved.displays.iter().map(|d| d.combined).chain(insets);
     for (index, view) in displays.chain(resolved.frame()).enumerate() {
         let planes = view.frustum().planes;
         assert!(

@@ -104,7 +104,8 @@ impl ViewLayout {
         let mut x = 0;
         for (slot, &(w, h)) in viewports.iter_mut().zip(sizes) {
             *slot = [x, 0, w, h];
-            x += w;
+            // Saturating: a rig file may ask for any size (the device then refuses it).
+            x = x.saturating_add(w);
         }
         let height = sizes.iter().map(|s| s.1).max().unwrap_or(0);
         ViewLayout {
