@@ -327,11 +327,11 @@ pub fn cleared_depth(view: &wgpu::TextureView) -> wgpu::RenderPassDepthStencilAt
     }
 }
 
-/// Restricts drawing to eye `eye`'s half of a double-wide target of per-eye size `eye_size`.
-pub fn set_eye_viewport(pass: &mut wgpu::RenderPass, eye: u32, eye_size: (u32, u32)) {
-    let (w, h) = eye_size;
-    pass.set_viewport((eye * w) as f32, 0.0, w as f32, h as f32, 0.0, 1.0);
-    pass.set_scissor_rect(eye * w, 0, w, h);
+/// Restricts drawing to one view's `[x, y, width, height]` of its display's target (an
+/// eye's half of a double-wide target, a foveated display's viewport).
+pub fn set_viewport(pass: &mut wgpu::RenderPass, [x, y, w, h]: [u32; 4]) {
+    pass.set_viewport(x as f32, y as f32, w as f32, h as f32, 0.0, 1.0);
+    pass.set_scissor_rect(x, y, w, h);
 }
 
 /// Depth only, both faces (open meshes cast shadows too), biased by slope so that lit

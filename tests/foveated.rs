@@ -349,26 +349,55 @@ fn bad_foveated_views_are_clear_errors() {
     check(&share, "foveation.inset_fixed");
 }
 
+/// The classic modes draw the four views too, each view's draws in its own viewport
+/// (the pass's), and give the instanced image: the same shading from a pipeline
+/// compiled apart (one view per context, no placement): `PLACED`.
 #[test]
-fn modes_that_cannot_draw_four_views_say_so() {
+fn every_mode_draws_the_foveated_image() {
     let gpu = gpu();
-    let scene = scene_spec::load("procedural:100:4").unwrap();
-    let rig = foveated(64, 64);
-    for (mode, want) in [
-        (StereoMode::MultiPass, "draws two eyes, not four views"),
-        (StereoMode::SinglePass, "draws two eyes, not four views"),
+    let scene = scene_spec::load("procedural:2000:8").unwrap();
+    let mut rig = foveated(128, 96);
+    rig.set_gaze(Gaze::both(-6.0, 3.0)).unwrap();
+    let reference = &support::render(&gpu, &scene, &rig, options(CullMode::Gpu)).unwrap()[0];
+    assert!(drawn_pixels(reference) > reference.len() / 40);
+    for mode in [
+        StereoMode::MultiCamera,
+        StereoMode::MultiPass,
+        StereoMode::SinglePass,
     ] {
         let options = RendererOptions {
             mode,
-            cull: support::cull_for(mode),
+            cull: CullMode::Cpu,
             ..Default::default()
         };
-        let err = stereocull::Renderer::new(&gpu.device, &scene, &rig, options)
-            .err()
-            .expect("refused")
-            .to_string();
-        assert!(err.contains(want) && err.contains("hmd"), "{err}");
+        let image = &support::render(&gpu, &scene, &rig, options).unwrap()[0];
+        assert_images_match(
+            &format!("foveated-{}", mode.name()),
+            image,
+            reference,
+            PLACED,
+        );
     }
+}
+
+/// Multiview needs as many views as the display has; a device with fewer says so.
+#[test]
+fn multiview_names_the_view_limit_it_lacks() {
+    let rig = foveated(64, 64);
+    let options = RendererOptions {
+        mode: StereoMode::Multiview,
+        ..Default::default()
+    };
+    let err = stereocull::renderer::check_rig(&rig, &options, 2)
+        .unwrap_err()
+        .to_string();
+    assert!(
+        err.contains("max_multiview_view_count >= 4") && err.contains("hmd"),
+        "{err}"
+    );
+    stereocull::renderer::check_rig(&rig, &options, 4).unwrap();
+    let instanced = RendererOptions::default();
+    stereocull::renderer::check_rig(&rig, &instanced, 2).unwrap();
 }
 
 /// Random colors in a foveated target's layout, composited on the GPU and by the CPU

@@ -3,7 +3,7 @@
 // the eye, whose half of the double-wide target the clip-space placement selects;
 // foveated stereo (VIEWS = 4) the same with / 4 and % 4 and four viewports of their own
 // sizes. Mono (VIEWS = 1): the slot is the instance index and the eye is eye[0] of the
-// context, drawn into the eye's half by the pass's viewport (classic modes).
+// context, drawn into its view's viewport by the pass (classic modes).
 
 @vertex
 fn vs_main(v: VertexInput, @builtin(instance_index) instance_index: u32) -> VertexOutput {
@@ -11,12 +11,10 @@ fn vs_main(v: VertexInput, @builtin(instance_index) instance_index: u32) -> Vert
     return vertex(v, at.x, at.y, VIEWS >= 2u);
 }
 
+// Every view's context says where its pixels lie: its viewport of the shared target,
+// or (the classic modes, one view per context) the viewport its pass set.
 @fragment
 fn fs_main(in: FragmentInput) -> @location(0) vec4<f32> {
     let eye = in.ids.x;
-    if (VIEWS >= 2u) {
-        return fragment(in, eye, display.eye[eye].viewport);
-    }
-    let size = display.resolution;
-    return fragment(in, eye, vec4(f32(eye) * size.x, 0.0, size));
+    return fragment(in, eye, display.eye[eye].viewport);
 }

@@ -42,29 +42,25 @@ fn check_sample_count(features: wgpu::Features, options: &RendererOptions) -> Re
     Ok(())
 }
 
-/// What the mode cannot draw of the rig: foveated displays (four views of two sizes)
-/// are drawn by the instanced path (each view placed in its own viewport) and by
-/// multiview where the device has four views (layers of one size); the classic modes'
-/// per-eye passes are not generalized past two eyes. `max_multiview_views` is the
-/// device's `max_multiview_view_count`.
+/// What the mode cannot draw of the rig: multiview draws a foveated display's four
+/// views as four layers, which the device must have (`max_multiview_views`, its
+/// `max_multiview_view_count`); every other mode draws any number of views.
 pub fn check_rig(rig: &Rig, options: &RendererOptions, max_multiview_views: u32) -> Result<()> {
-    let Some(d) = rig.displays.iter().find(|d| d.views() > 2) else {
+    let too_many = |d: &&crate::rig::Display| d.views() > max_multiview_views.max(2);
+    let Some(d) = rig.displays.iter().find(too_many) else {
         return Ok(());
     };
-    let why = match options.mode {
-        StereoMode::Instanced => return Ok(()),
-        StereoMode::Multiview if max_multiview_views >= d.views() => return Ok(()),
-        StereoMode::Multiview => format!(
-            "multiview of {} views needs max_multiview_view_count >= {}, and this device has {max_multiview_views}: use --mode instanced",
+    if options.mode != StereoMode::Multiview {
+        return Ok(());
+    }
+    Err(Error::rig(
+        &d.name,
+        format!(
+            "foveated display: multiview of {} views needs max_multiview_view_count >= {}, and this device has {max_multiview_views}: use --mode instanced",
             d.views(),
             d.views()
         ),
-        mode => format!(
-            "{} draws two eyes, not four views: use --mode instanced or multiview",
-            mode.name()
-        ),
-    };
-    Err(Error::rig(&d.name, format!("foveated display: {why}")))
+    ))
 }
 
 /// What a mode cannot do without, said before anything is built.

@@ -14,18 +14,21 @@ use super::targets::TargetViews;
 use crate::buffers::{storage_buffer, write};
 use crate::contexts::context_buffer;
 use crate::cull::CullOutput;
-use crate::draw::{DrawFeatures, DrawScene, Drawer, Drawing, set_eye_viewport};
+use crate::draw::{DrawFeatures, DrawScene, Drawer, Drawing, set_viewport};
 use crate::error::Result;
 use crate::modes::StereoMode;
 use crate::records::uniform_bytes;
 use crate::shaders::DrawKey;
 
-/// One eye of a stereo display: its own context (that eye in both eye slots) and, for
-/// multi-camera, its own visible list.
+/// One view of a stereo display (an eye, or a foveated display's inset): its own
+/// context (that view in every eye slot), its viewport, and for multi-camera its own
+/// visible list.
 struct EyeState {
     context: wgpu::Buffer,
     visible: Option<wgpu::Buffer>,
     bind_group: wgpu::BindGroup,
+    /// `[x, y, width, height]` in the display's target.
+    viewport: [u32; 4],
 }
 
 struct ClassicDisplay {
@@ -34,9 +37,8 @@ struct ClassicDisplay {
     visible: wgpu::Buffer,
     /// Mono displays draw with this; stereo ones with their eyes'.
     bind_group: wgpu::BindGroup,
-    /// Two for stereo displays, none for mono.
+    /// Two for stereo displays, four for foveated ones, none for mono.
     eyes: Vec<EyeState>,
-    eye_size: (u32, u32),
 }
 
 pub(super) struct ClassicPath {
@@ -186,9 +188,9 @@ impl ClassicPath {
         (timer, display): Timing,
         log: &mut Vec<PassRecord>,
     ) -> FrameStats {
-        let stereo = self.displays[index].eyes.len() == 2;
+        let views = self.displays[index].eyes.len();
         let draw_calls = match self.mode {
-            StereoMode::MultiCamera | StereoMode::MultiPass if stereo => (0..2)
+            StereoMode::MultiCamera | StereoMode::MultiPass if views > 0 => (0..views)
                 .map(|e| {
                     let what = (&mut *log, PassRecord::eye("draw", index, e));
                     draw_pass(
@@ -233,18 +235,18 @@ impl ClassicPath {
             }
             (StereoMode::SinglePass, eyes) => {
                 self.bind(pass, &eyes[0].bind_group);
-                single_pass_cadence(pass, cull, eyes, state.eye_size)
+                single_pass_cadence(pass, cull, eyes)
             }
             (_, eyes) => (0..eyes.len()).map(|e| self.draw_eye(pass, index, e)).sum(),
         }
     }
 
-    /// Eye `e` of stereo display `index` into its half, from its cull (multi-camera) or
-    /// the display's.
+    /// View `e` of stereo display `index` into its viewport, from its cull
+    /// (multi-camera) or the display's.
     fn draw_eye(&self, pass: &mut wgpu::RenderPass, index: usize, e: usize) -> u32 {
         let state = &self.displays[index];
         self.bind(pass, &state.eyes[e].bind_group);
-        set_eye_viewport(pass, e as u32, state.eye_size);
+        set_viewport(pass, state.eyes[e].viewport);
         let out = self.cull_of(index, Some(e));
         instance_draws(out).map(|d| draw(pass, d)).count() as u32
     }
@@ -282,21 +284,22 @@ fn classic_displays(
     let bind = |context: &wgpu::Buffer, list: &wgpu::Buffer| {
         (drawing.drawer).bind_group(device, [frame, context], drawing.scene, list)
     };
-    let stereo = plan.resolved.displays.iter().map(|r| r.eyes.len() == 2);
+    let views = plan.resolved.displays.iter().map(|r| r.eyes.len());
     plan.displays
         .iter()
-        .zip(stereo)
-        .map(|(d, stereo)| {
+        .zip(views)
+        .map(|(d, views)| {
             let context = context_buffer(device);
             let visible = visible_list();
-            let eyes = (0..if stereo { 2 } else { 0 })
-                .map(|_| {
+            let eyes = (0..if views > 1 { views } else { 0 })
+                .map(|e| {
                     let context = context_buffer(device);
                     let own = per_eye_lists.then(visible_list);
                     EyeState {
                         bind_group: bind(&context, own.as_ref().unwrap_or(&visible)),
                         context,
                         visible: own,
+                        viewport: d.eye[e].viewport.to_array().map(|v| v as u32),
                     }
                 })
                 .collect();
@@ -305,29 +308,29 @@ fn classic_displays(
                 context,
                 visible,
                 eyes,
-                eye_size: (d.resolution.x as u32, d.resolution.y as u32),
             }
         })
         .collect()
 }
 
-/// Single-pass stereo: each instance drawn for both eyes in the left, right, right,
-/// left cadence so that the eye (viewport and binding) switches once per instance, not
-/// twice. Multi-pass and multi-camera instead draw one pass per eye into its half.
-fn single_pass_cadence(
-    pass: &mut wgpu::RenderPass,
-    out: &CullOutput,
-    eyes: &[EyeState],
-    eye_size: (u32, u32),
-) -> u32 {
+/// Single-pass stereo: each instance drawn for every view in the left, right, right,
+/// left cadence (foveated: 0 1 2 3, then 3 2 1 0) so that the view (viewport and
+/// binding) switches once per view per instance, not once more. Multi-pass and
+/// multi-camera instead draw one pass per view into its viewport.
+fn single_pass_cadence(pass: &mut wgpu::RenderPass, out: &CullOutput, eyes: &[EyeState]) -> u32 {
     let mut current = usize::MAX;
     let mut calls = 0;
     for (k, d) in instance_draws(out).enumerate() {
-        let order = if k % 2 == 0 { [0, 1] } else { [1, 0] };
+        let up = 0..eyes.len();
+        let order: Vec<usize> = if k % 2 == 0 {
+            up.collect()
+        } else {
+            up.rev().collect()
+        };
         for e in order {
             if e != current {
                 pass.set_bind_group(0, &eyes[e].bind_group, &[]);
-                set_eye_viewport(pass, e as u32, eye_size);
+                set_viewport(pass, eyes[e].viewport);
                 current = e;
             }
             draw(pass, d.clone());

@@ -251,7 +251,7 @@ fn culls(
     for (i, (r, context)) in resolved.displays.iter().zip(contexts).enumerate() {
         let split = far[i].map(|plan| plan.split(false));
         match (mode.culls_per_eye(), r.eyes.as_slice()) {
-            (true, eyes @ [_, _]) => {
+            (true, eyes) if eyes.len() > 1 => {
                 culls.extend(eyes.iter().enumerate().map(|(e, eye)| PlannedCull {
                     view: CullView::Eye(i, e),
                     job: CullJob {
