@@ -189,10 +189,11 @@ impl DisplayContext {
         let combined = EyeContext::from_view(&display.combined);
         let eyes = &display.eyes;
         let viewports = layout.viewports();
-        let eye = |e: usize| {
-            let e = e.min(eyes.len() - 1);
-            EyeContext::from_view(&eyes[e]).placed(viewports[e], layout.size)
-        };
+        // Each view's context once (its f64 compositions and inverses), then repeated.
+        let placed: Vec<EyeContext> = (eyes.iter().zip(viewports))
+            .map(|(v, &viewport)| EyeContext::from_view(v).placed(viewport, layout.size))
+            .collect();
+        let eye = |e: usize| placed[e.min(placed.len() - 1)];
         let [_, _, w, h] = viewports[0];
         DisplayContext {
             view_from_world: combined.view_from_world,

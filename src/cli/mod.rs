@@ -4,6 +4,7 @@ mod chart;
 mod diff;
 mod edits;
 mod profile;
+mod profile_measure;
 mod profile_report;
 mod render;
 mod stress;
@@ -181,24 +182,22 @@ struct CullArgs {
 }
 
 fn parse_vec3(s: &str) -> std::result::Result<[f32; 3], String> {
-    let parts: Vec<f32> = s
-        .split(',')
-        .map(|p| p.trim().parse::<f32>().map_err(|e| format!("{p:?}: {e}")))
-        .collect::<std::result::Result<_, _>>()?;
-    match parts.as_slice() {
-        [x, y, z] if parts.iter().all(|v| v.is_finite()) => Ok([*x, *y, *z]),
-        _ => Err(format!("{s:?}: expected three finite numbers x,y,z")),
-    }
+    parse_finite(s, "three finite numbers x,y,z")
 }
 
 pub(crate) fn parse_pair(s: &str) -> std::result::Result<[f32; 2], String> {
+    parse_finite(s, "two finite numbers yaw,pitch")
+}
+
+/// `N` comma-separated finite numbers; `expected` says what they are in the error.
+fn parse_finite<const N: usize>(s: &str, expected: &str) -> std::result::Result<[f32; N], String> {
     let parts: Vec<f32> = s
         .split(',')
         .map(|p| p.trim().parse::<f32>().map_err(|e| format!("{p:?}: {e}")))
         .collect::<std::result::Result<_, _>>()?;
-    match parts.as_slice() {
-        [a, b] if parts.iter().all(|v| v.is_finite()) => Ok([*a, *b]),
-        _ => Err(format!("{s:?}: expected two finite numbers yaw,pitch")),
+    match <[f32; N]>::try_from(parts) {
+        Ok(v) if v.iter().all(|x| x.is_finite()) => Ok(v),
+        _ => Err(format!("{s:?}: expected {expected}")),
     }
 }
 

@@ -1,0 +1,388 @@
+//! What `stereocull profile` is asked ([`ProfileArgs`]) and one configuration of it
+//! measured: its renderer made, warm-up and timed frames run (with their edits), and the
+//! frames' samples reduced to a report [`Row`] (CPU phases, GPU passes, pipeline
+//! statistics, the cull against its floor).
+
+use std::path::PathBuf;
+use std::time::Instant;
+
+use clap::Args;
+use indicatif::ProgressBar;
+
+use super::edits::{EditArgs, EditDriver};
+use super::profile_report::{CullOverFloor, Row};
+use super::render::{PassReport, pass_reports};
+use super::{FRAME_SECONDS, Switch};
+use crate::device::Gpu;
+use crate::error::Result;
+use crate::live::LiveScene;
+use crate::profiling::{GpuTimer, percentile};
+use crate::renderer::{CoarseMode, CullMode, Renderer, RendererOptions, StereoMode, SyncStats};
+use crate::rig::Rig;
+use crate::scene::Scene;
+use wgpu_profiler::GpuTimerQueryResult;
+
+#[derive(Args)]
+pub struct ProfileArgs {
+    /// Instance counts (procedural scenes, seed 1).
+    #[arg(long, value_delimiter = ',', default_value = "1000,10000,100000")]
+    pub instances: Vec<u32>,
+    /// Presets or rig files (several compare rigs in one run: stereo against mono,
+    /// foveated against uniform).
+    #[arg(long, value_delimiter = ',', default_value = "hmd")]
+    pub rig: Vec<String>,
+    /// Both eyes' gaze (yaw,pitch degrees) on the foveated rigs' displays: insets that
+    /// follow it (smaller) instead of fixed foveation. Other rigs are unaffected.
+    #[arg(long, value_parser = super::parse_pair, allow_hyphen_values = true)]
+    pub gaze: Option<[f32; 2]>,
+    #[arg(
+        long,
+        value_delimiter = ',',
+        value_enum,
+        default_value = "multi-camera,multi-pass,single-pass,instanced,multiview"
+    )]
+    pub modes: Vec<StereoMode>,
+    #[arg(long, value_delimiter = ',', value_enum, default_value = "gpu,cpu")]
+    pub cull: Vec<CullMode>,
+    #[arg(long, default_value = "profile")]
+    pub out: PathBuf,
+    /// Timed frames per configuration, after the warm-up.
+    #[arg(long, default_value_t = 10)]
+    pub frames: u32,
+    #[arg(long, default_value_t = 3)]
+    pub warmup: u32,
+    /// Per-eye resolution of every display (small keeps software rasterizers quick).
+    #[arg(long, default_value_t = 128)]
+    pub width: u32,
+    #[arg(long, default_value_t = 128)]
+    pub height: u32,
+    /// Built-in meshes in the procedural scenes.
+    #[arg(long, default_value_t = 8)]
+    pub meshes: u32,
+    /// MSAA samples per pixel (1: none).
+    #[arg(long, default_value_t = 1)]
+    pub msaa: u32,
+    /// Give every mesh a base color texture (`procedural:N:M:1:textured`).
+    #[arg(long)]
+    pub textured: bool,
+    /// Profile `city:N` scenes (a room and buildings 200 m to 2 km away) instead.
+    #[arg(long)]
+    pub city: bool,
+    /// Levels of detail chosen on the GPU from the viewer's position.
+    #[arg(long, value_enum, default_value = "off")]
+    pub lod: Switch,
+    /// Percents of instances moved every frame, one configuration each (`0,1,10`
+    /// measures what moves cost against the static scene in one run).
+    #[arg(long, value_delimiter = ',', default_value = "0")]
+    pub moving: Vec<f64>,
+    /// Percent of instances removed and inserted again every frame.
+    #[arg(long, default_value_t = 0.0)]
+    pub churn: f64,
+    /// The frame's shadow map, drawn once per frame.
+    #[arg(long, value_enum, default_value = "off")]
+    pub shadows: Switch,
+    /// The far layer, one configuration each (`on,off` compares them).
+    #[arg(long, value_delimiter = ',', value_enum, default_value = "off")]
+    pub far_layer: Vec<Switch>,
+    /// Foveated rigs' inset cull, one configuration each (`on,off` compares them; rigs
+    /// without a foveated display run `off` only).
+    #[arg(long, value_delimiter = ',', value_enum, default_value = "off")]
+    pub inset_cull: Vec<Switch>,
+    /// Pixels the eyes' images of a far instance may differ by.
+    #[arg(long, default_value_t = crate::far_layer::FAR_THRESHOLD_PX)]
+    pub far_threshold: f32,
+    /// The frame-level coarse cull, one configuration each (`on,off` compares them).
+    #[arg(long, value_delimiter = ',', value_enum, default_value = "auto")]
+    pub coarse_cull: Vec<CoarseMode>,
+    /// Also write a Chrome trace (chrome://tracing, Perfetto) of the last timed frame of
+    /// every configuration: per display a scope, per pass (`cull`, `draw`) one inside it.
+    #[arg(long)]
+    pub trace: Option<PathBuf>,
+}
+
+/// One measured configuration.
+pub(super) struct Config<'a> {
+    pub(super) spec: &'a str,
+    pub(super) rig: &'a Rig,
+    pub(super) mode: StereoMode,
+    pub(super) cull: CullMode,
+    pub(super) coarse: CoarseMode,
+    pub(super) far: bool,
+    pub(super) inset: bool,
+    pub(super) edits: EditArgs,
+}
+
+pub(super) fn measure(
+    gpu: &Gpu,
+    scene: &Scene,
+    &Config {
+        spec,
+        rig,
+        mode,
+        cull,
+        coarse,
+        far,
+        inset,
+        edits,
+    }: &Config,
+    args: &ProfileArgs,
+    mut timer: Option<&mut GpuTimer>,
+    bar: &ProgressBar,
+) -> Result<Row> {
+    let options = RendererOptions {
+        cull,
+        mode,
+        sample_count: args.msaa,
+        lod: args.lod.on(),
+        coarse_cull: coarse,
+        shadows: args.shadows.on(),
+        far_layer: far,
+        far_threshold_px: args.far_threshold,
+        inset_cull: inset,
+        cull_floor: timer.is_some() && cull == CullMode::Gpu && !mode.per_instance(),
+        ..Default::default()
+    };
+    let mut renderer = Renderer::new(&gpu.device, scene, rig, options)?;
+    let targets = renderer.create_targets(&gpu.device);
+    let views: Vec<_> = targets.iter().map(|t| t.views()).collect();
+    let mut samples = Samples::default();
+    let mut copy = PlainCopy::default();
+    let mut live = match edits.any() {
+        true => {
+            let live = LiveScene::new(scene.clone());
+            let driver = EditDriver::new(&live, &edits)?;
+            Some((live, driver))
+        }
+        false => None,
+    };
+    for frame in 0..args.warmup + args.frames {
+        // The edits themselves are the caller's work: made before the clock starts.
+        if let Some((live, driver)) = &mut live {
+            driver.apply(live, frame)?;
+        }
+        // Where the sync would run, with the caches as it finds them: the last frame's
+        // edit bytes (the same count every frame).
+        let copied = copy.time();
+        let start = Instant::now();
+        let synced = match &mut live {
+            Some((live, _)) => renderer.sync(&gpu.device, &gpu.queue, live)?,
+            None => SyncStats::default(),
+        };
+        let sync_end = Instant::now();
+        copy.bytes = synced.bytes_uploaded as usize;
+        let prepared = renderer.prepare(&gpu.queue, rig, frame as f32 * FRAME_SECONDS)?;
+        let encode_start = Instant::now();
+        let mut encoder = gpu.device.create_command_encoder(&Default::default());
+        let recorded = renderer.encode(&mut encoder, &views, timer.as_deref_mut())?;
+        let submit_start = Instant::now();
+        gpu.queue.submit([encoder.finish()]);
+        let end = Instant::now();
+        gpu.wait()?;
+        let queries = match timer.as_deref_mut() {
+            Some(t) => Some(t.read(&gpu.device, &gpu.queue)?),
+            None => None,
+        };
+        bar.inc(1);
+        if frame < args.warmup {
+            continue;
+        }
+        let ms = |a: Instant, b: Instant| (b - a).as_secs_f64() * 1e3;
+        samples.cpu.push(ms(start, end));
+        samples.sync.push(ms(start, sync_end));
+        samples.cull.push(prepared.cpu_cull.as_secs_f64() * 1e3);
+        samples.upload.push(prepared.cpu_upload.as_secs_f64() * 1e3);
+        samples.encode.push(ms(encode_start, submit_start));
+        samples
+            .staging
+            .push(recorded.cpu_staging.as_secs_f64() * 1e3);
+        samples.copy.extend(copied);
+        samples.moved = synced.moved;
+        samples.submit.push(ms(submit_start, end));
+        samples.passes = pass_reports(&renderer, rig, queries.as_ref());
+        if let Some(q) = queries {
+            let of = |label| {
+                q.passes
+                    .iter()
+                    .filter(|(l, _)| *l == label)
+                    .map(|(_, v)| v)
+                    .sum::<f64>()
+            };
+            samples.gpu_cull.push(of("cull"));
+            samples.gpu_draw.push(of("draw"));
+            // The floor kernel is the yardstick, not part of the frame.
+            samples
+                .gpu
+                .push(q.passes.iter().map(|(_, v)| v).sum::<f64>() - of("cull_floor"));
+            samples.statistics = q.vertex_invocations.zip(q.clipper_primitives);
+            samples.fragments = q.fragment_invocations;
+            samples.triangles = q.triangles_submitted;
+        }
+        if let Some(t) = timer.as_deref() {
+            samples.floors.push(cull_and_floor(t.last_frame(), rig));
+        }
+        samples.last = (
+            recorded.draw_calls,
+            recorded.dispatches,
+            prepared.bytes_uploaded + synced.bytes_uploaded,
+        );
+    }
+    let sphere_tests = renderer
+        .diagnostics(&gpu.device, &gpu.queue)
+        .sphere_tests()?;
+    let far_near = renderer.diagnostics(&gpu.device, &gpu.queue).far_split()?;
+    let med = |v: &[f64]| percentile(v, 0.5);
+    let wall = renderer
+        .diagnostics(&gpu.device, &gpu.queue)
+        .cull_against_floor(args.frames)?;
+    let over_floor = floor_ratios(&samples.floors, rig, wall.as_ref());
+    let gpu_med = |v: &[f64]| (!v.is_empty()).then(|| percentile(v, 0.5));
+    Ok(Row {
+        mode,
+        cull,
+        rig: spec.to_string(),
+        instances: scene.instances.len() as u32,
+        cpu_ms_median: med(&samples.cpu),
+        cpu_ms_p95: percentile(&samples.cpu, 0.95),
+        gpu_ms_median: gpu_med(&samples.gpu),
+        gpu_ms_p95: (!samples.gpu.is_empty()).then(|| percentile(&samples.gpu, 0.95)),
+        draw_calls: samples.last.0,
+        dispatches: samples.last.1,
+        bytes_uploaded: samples.last.2,
+        adapter: gpu.adapter_line(),
+        cull_ms_median: med(&samples.cull),
+        upload_ms_median: med(&samples.upload),
+        encode_ms_median: med(&samples.encode),
+        staging_ms_median: med(&samples.staging),
+        moved: samples.moved,
+        copy_ms_median: gpu_med(&samples.copy),
+        edits: None,
+        submit_ms_median: med(&samples.submit),
+        gpu_cull_ms_median: gpu_med(&samples.gpu_cull),
+        gpu_draw_ms_median: gpu_med(&samples.gpu_draw),
+        vertex_invocations: samples.statistics.map(|s| s.0),
+        clipper_primitives: samples.statistics.map(|s| s.1),
+        fragment_invocations: samples.fragments,
+        target_pixels: rig.displays.iter().map(|d| d.layout().pixels()).sum(),
+        indirect_validation: gpu.indirect_validation(),
+        moving_percent: edits.moving,
+        churn_percent: edits.churn,
+        sync_ms_median: med(&samples.sync),
+        triangles_submitted: samples.triangles,
+        coarse_cull: renderer.coarse_cull(),
+        sphere_tests,
+        shadows: args.shadows.on(),
+        far_layer: far,
+        inset_cull: inset,
+        far_near,
+        shadow_passes: samples.passes.iter().filter(|p| p.name == "shadow").count(),
+        floor_ms_median: over_floor.as_ref().map(|f| f.0),
+        wall_floor_ms_median: wall.as_ref().map(|w| w.0),
+        cull_over_floor: over_floor.map_or(Vec::new(), |f| f.1),
+        passes: samples.passes,
+        trace: timer.map(|t| t.last_frame().to_vec()).unwrap_or_default(),
+    })
+}
+
+#[derive(Default)]
+struct Samples {
+    fragments: Option<u64>,
+    cpu: Vec<f64>,
+    sync: Vec<f64>,
+    triangles: Option<u64>,
+    cull: Vec<f64>,
+    upload: Vec<f64>,
+    encode: Vec<f64>,
+    staging: Vec<f64>,
+    /// A plain copy of each frame's edit bytes ([`PlainCopy`]).
+    copy: Vec<f64>,
+    /// Instances the last frame synced as moves.
+    moved: u32,
+    submit: Vec<f64>,
+    gpu: Vec<f64>,
+    gpu_cull: Vec<f64>,
+    gpu_draw: Vec<f64>,
+    /// Draw calls, dispatches and bytes uploaded of the last frame (the same every frame).
+    last: (u32, u32, u64),
+    /// Vertex-shader invocations and clipped primitives of the last frame.
+    statistics: Option<(u64, u64)>,
+    passes: Vec<PassReport>,
+    /// Per frame, each display's GPU cull ms and the floor kernel's (when it ran).
+    floors: Vec<(Vec<f64>, Option<f64>)>,
+}
+
+/// One frame's GPU cull ms per display (the `cull` pass in the display's scope) and the
+/// floor kernel's (`cull_floor` in the frame scope), from the timer's scopes.
+fn cull_and_floor(scopes: &[GpuTimerQueryResult], rig: &Rig) -> (Vec<f64>, Option<f64>) {
+    let ms = |scope: &str, pass: &str| {
+        let outer = scopes.iter().find(|s| s.label == scope)?;
+        let inner = outer.nested_queries.iter().find(|s| s.label == pass)?;
+        inner.time.as_ref().map(|t| (t.end - t.start) * 1e3)
+    };
+    let culls = rig
+        .displays
+        .iter()
+        .map(|d| ms(&d.name, "cull").unwrap_or(0.0))
+        .collect();
+    (culls, ms("frame", "cull_floor"))
+}
+
+/// The floor kernel's median ms and, per display, its median GPU cull over that floor
+/// (medians over the frames; `None` where the floor did not run), beside the same by
+/// the wall clock (`wall`: the floor's ms and each display's cull's).
+fn floor_ratios(
+    frames: &[(Vec<f64>, Option<f64>)],
+    rig: &Rig,
+    wall: Option<&(f64, Vec<f64>)>,
+) -> Option<(f64, Vec<CullOverFloor>)> {
+    let floors: Vec<f64> = frames.iter().filter_map(|f| f.1).collect();
+    if floors.is_empty() {
+        return None;
+    }
+    let floor = percentile(&floors, 0.5);
+    let displays = rig.displays.iter().enumerate().map(|(d, display)| {
+        let culls: Vec<f64> = frames.iter().filter_map(|f| f.0.get(d).copied()).collect();
+        let cull_ms = percentile(&culls, 0.5);
+        let wall_cull_ms = wall.and_then(|w| w.1.get(d).copied());
+        CullOverFloor {
+            display: display.name.clone(),
+            cull_ms,
+            ratio: cull_ms / floor,
+            wall_cull_ms,
+            wall_ratio: wall.zip(wall_cull_ms).map(|(w, c)| c / w.0),
+        }
+    });
+    Some((floor, displays.collect()))
+}
+
+/// The yardstick of an edit's CPU cost: the same bytes copied, in the same run on the
+/// same host at the same point of the frame, from memory just written (as the caller
+/// just wrote its edits) into memory last touched a frame ago (as the staging belt's
+/// chunk was): what the edits' trip to the GPU cannot beat on the CPU.
+#[derive(Default)]
+struct PlainCopy {
+    /// The bytes to copy: the last sync's.
+    bytes: usize,
+    from: Vec<u8>,
+    to: Vec<u8>,
+}
+
+impl PlainCopy {
+    /// Milliseconds to copy `bytes` bytes (`None` before any).
+    fn time(&mut self) -> Option<f64> {
+        let n = self.bytes;
+        if n == 0 {
+            return None;
+        }
+        if self.from.len() < n {
+            (self.from, self.to) = (vec![0; n], vec![0; n]);
+        }
+        // Patterned, not zero: nothing may take a shortcut over zero pages.
+        for (i, b) in self.from[..n].iter_mut().enumerate() {
+            *b = (i * 31 + 7) as u8;
+        }
+        let start = Instant::now();
+        self.to[..n].copy_from_slice(std::hint::black_box(&self.from[..n]));
+        std::hint::black_box(&self.to);
+        Some(start.elapsed().as_secs_f64() * 1e3)
+    }
+}
