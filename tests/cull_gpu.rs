@@ -13,6 +13,7 @@ use stereocull::renderer::{RendererOptions, frame_lod};
 use stereocull::rig::Rig;
 use stereocull::scene::MAX_LODS;
 use stereocull::scene::Scene;
+use stereocull::shaders::{SPAN, WORKGROUP_SIZE};
 use support::{cubes, gpu, reference_culls};
 
 /// Runs one GPU-culled frame and compares every display's buffers with the CPU's.
@@ -108,18 +109,30 @@ fn gpu_matches_cpu_on_edge_cases() {
     compare(&gpu, &cubes(&straddling, 4), &rig, "straddling planes");
 }
 
-/// The prefix sums' edges (issue 24): nothing, one instance, a workgroup and one past it,
-/// a span (128 positions) and one past it, a group of spans (the draws pass's unit,
-/// 256 spans) and one past it, and 2^20 + 3, with LOD off and on (where the entries'
-/// per-level fields carry the prefixes: at least two levels must be drawn).
+/// The prefix sums' edges (issue 24): nothing, one instance, a span (16 positions, one
+/// invocation's walk) and one past it, a workgroup of positions and one past it, a
+/// group of spans (the cull pass's workgroup, 4,096 positions: the draws pass's unit)
+/// and one past it, and 2^20 + 3, with LOD off and on (where the entries' per-level
+/// fields carry the prefixes: at least two levels must be drawn).
 #[test]
 fn gpu_matches_cpu_at_the_scans_edges() {
     let gpu = gpu();
     let rig = support::sized("hmd", 256, 256);
     let jobs = rig.cull_jobs().unwrap();
     let lod = frame_lod(&rig, &rig.resolve().unwrap(), MAX_LODS as u32);
-    let group = 128 * 256;
-    for n in [0, 1, 128, 129, 256, 257, group, group + 1, (1 << 20) + 3] {
+    let group = SPAN * WORKGROUP_SIZE;
+    let span = SPAN;
+    for n in [
+        0,
+        1,
+        span,
+        span + 1,
+        256,
+        257,
+        group,
+        group + 1,
+        (1 << 20) + 3,
+    ] {
         // The one instance straight ahead, so that it is drawn.
         let scene = match n {
             1 => cubes(&[(Vec3::new(0.0, 1.6, -3.0), 0)], 1),

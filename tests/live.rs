@@ -483,7 +483,7 @@ fn edits_of_two_syncs_before_a_frame_merge() {
     let second = renderer.sync(&gpu.device, &gpu.queue, &mut live).unwrap();
     assert_eq!(second.moved, 1000);
     let frame = frame_matches_reference(&gpu, &mut renderer, &live, &rig);
-    assert_eq!(frame.dispatches, 1 + 5 * 4, "one scatter for both syncs");
+    assert_eq!(frame.dispatches, 1 + 5 * 3, "one scatter for both syncs");
 }
 
 /// A move staged by one sync, then its instance removed before the frame (some slots

@@ -1,8 +1,12 @@
-// Pass 1 of 4 per display: test every instance's world sphere (or those of the blocks
-// the frame's coarse cull listed for this display) against the display frustum (never
-// per eye), choose its level of detail from the viewer, and write its entry (one word,
-// whatever the number of levels: see ENTRY_VISIBLE in cull_math.wgsl) plus, per span of
-// SPAN positions and level, the span's visible count. Each sphere is read once.
+// Pass 1 of 3 per display: each invocation walks one span of SPAN cull positions in
+// order (or the positions of the blocks the frame's coarse cull listed for this
+// display), tests each world sphere against the display frustum (never per eye),
+// chooses its level of detail from the viewer and writes its entry (one word, whatever
+// the number of levels: see ENTRY_VISIBLE in cull_math.wgsl). Each sphere is read once.
+// The workgroup then scans its spans' per-level counts: each span's prefix within the
+// workgroup and the workgroup's totals go to span_sums for the draws pass.
+// A span per invocation, not a position: the workgroup scan's barriers then come once
+// per SPAN positions (on lavapipe they cost more than the sphere tests themselves).
 // Bindings (all cull passes share them): CULL_BINDINGS in src/shaders/bindings.rs.
 
 @compute @workgroup_size(WORKGROUP_SIZE)
@@ -11,30 +15,43 @@ fn cull(
     @builtin(num_workgroups) groups: vec3<u32>,
     @builtin(local_invocation_index) local: u32,
 ) {
-    let n = cull_count();
-    let j = (wid.y * groups.x + wid.x) * WORKGROUP_SIZE + local;
-    var visible = false;
-    var level = 0u;
-    if (j < n) {
-        let k = cull_position(j);
-        if (k < params.instance_count) {
-            let s = spheres_at(k);
-            visible = sphere_in_planes(display.planes, s) && in_split(s);
-            if (visible) {
-                level = lod_level(k, s);
-            }
+    let n = workgroup_cull_count(local);
+    let group = wid.y * groups.x + wid.x;
+    let span = group * WORKGROUP_SIZE + local;
+    // Per level, the span's visible positions so far, in the entry's 7-bit fields.
+    var fields = 0u;
+    for (var j = span * SPAN; j < min(span * SPAN + SPAN, n); j++) {
+        let entry = cull_entry(j);
+        entries[j] = fields | entry;
+        if ((entry & ENTRY_VISIBLE) != 0u) {
+            fields += 1u << (7u * ((entry >> ENTRY_LEVEL_SHIFT) & 3u));
         }
     }
-    // One 8-bit count per level in one word: a span's counts reach SPAN = 128 at most.
-    let scan = segmented_exclusive_scan(local, select(0u, 1u << (8u * level), visible), SPAN);
-    if (j >= n) {
+    let counts = (vec4(fields) >> vec4(0u, 7u, 14u, 21u)) & vec4(0x7fu);
+    let scan = workgroup_exclusive_scan4(local, counts);
+    let spans = span_count(n);
+    if (group >= group_count(spans)) {
         return;
     }
-    entries[j] = narrow_fields(scan.x) | (level << ENTRY_LEVEL_SHIFT) | select(0u, ENTRY_VISIBLE, visible);
-    if (j % SPAN == 0u) {
-        let spans = span_count(n);
-        for (var l = 0u; l < params.lod_levels; l++) {
-            span_sums[l * spans + j / SPAN] = (scan.y >> (8u * l)) & 0xffu;
+    for (var l = 0u; l < params.lod_levels; l++) {
+        if (span < spans) {
+            span_sums[l * spans + span] = scan.before[l];
+        }
+        if (local == 0u) {
+            span_sums[group_slot(n, l, group)] = scan.total[l];
         }
     }
+}
+
+// Cull position j's visible bit and level (no span fields yet).
+fn cull_entry(j: u32) -> u32 {
+    let k = cull_position(j);
+    if (k >= params.instance_count) {
+        return 0u;
+    }
+    let s = spheres_at(k);
+    if (!(sphere_in_planes(display.planes, s) && in_split(s))) {
+        return 0u;
+    }
+    return ENTRY_VISIBLE | (lod_level(k, s) << ENTRY_LEVEL_SHIFT);
 }

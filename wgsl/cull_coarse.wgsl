@@ -117,13 +117,19 @@ fn coarse_lists(
     if (local == 0u) {
         let count = listed * BLOCK;
         candidate_count[slot] = count;
-        // The display passes' grid: x within the device's limit, y the rest.
-        let needed = (count + WORKGROUP_SIZE - 1u) / WORKGROUP_SIZE;
-        let x = min(needed, params.max_groups);
-        coarse_args[slot * 3u] = x;
-        coarse_args[slot * 3u + 1u] = select(0u, (needed + x - 1u) / x, x > 0u);
-        coarse_args[slot * 3u + 2u] = 1u;
+        // The display passes' grids, x within the device's limit, y the rest: the
+        // cull pass's over spans, then the compact pass's over positions.
+        grid(slot * 6u, group_count(span_count(count)));
+        grid(slot * 6u + 3u, (count + WORKGROUP_SIZE - 1u) / WORKGROUP_SIZE);
     }
+}
+
+// Writes a dispatch of `needed` workgroups at coarse_args[at].
+fn grid(at: u32, needed: u32) {
+    let x = min(needed, params.max_groups);
+    coarse_args[at] = x;
+    coarse_args[at + 1u] = select(0u, (needed + x - 1u) / x, x > 0u);
+    coarse_args[at + 2u] = 1u;
 }
 
 // Listed positions before cull position `pos` of the slot whose marks start at `first`.

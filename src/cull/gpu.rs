@@ -1,9 +1,10 @@
-//! GPU culling: per display, four compute dispatches (`wgsl/cull.wgsl`,
-//! `cull_scan.wgsl`, `cull_draws.wgsl`, `cull_compact.wgsl`) that write the visible
-//! list, the draws and the draw count per the contract in [`super`], byte-identical to
-//! [`super::cpu`]. Each sphere is read once per display whatever the levels of detail,
-//! into one word per position; the prefix sums run as a tree (spans, groups of spans,
-//! then one workgroup over the groups), never one workgroup over every block. With the
+//! GPU culling: per display, three compute dispatches (`wgsl/cull.wgsl`,
+//! `cull_draws.wgsl`, `cull_compact.wgsl`) that write the visible list, the draws and
+//! the draw count per the contract in [`super`], byte-identical to [`super::cpu`]. Each
+//! sphere is read once per display whatever the levels of detail, into one word per
+//! position; the prefix sums run as a tree (a span per invocation, its workgroup's
+//! spans, then one workgroup over the workgroups' totals), never one workgroup over
+//! every span. With the
 //! frame-level coarse cull ([`super::coarse`]), two dispatches per frame first
 //! (`wgsl/cull_coarse.wgsl`) list each display's blocks, and each display's passes run
 //! over its blocks' positions, dispatched indirectly from their count. The buffers they
@@ -157,7 +158,7 @@ impl GpuCuller {
         };
         pass.set_bind_group(0, display, &[]);
         pass.set_bind_group(1, args, &[]);
-        let (x, y) = scene.groups;
+        let (x, y) = scene.groups.positions;
         for (pipeline, kind) in pipelines.iter().zip(CullPass::FRAME) {
             pass.set_pipeline(pipeline);
             match kind {
@@ -168,10 +169,9 @@ impl GpuCuller {
         pipelines.len() as u32
     }
 
-    /// Records the four dispatches for one display: a fixed count, whatever the
+    /// Records the three dispatches for one display: a fixed count, whatever the
     /// number of instances; with the coarse cull's `slot` they run over that slot's
-    /// listed blocks, dispatched as the coarse passes sized them (the scan's groups
-    /// past the listed ones return at once).
+    /// listed blocks, dispatched as the coarse passes sized them.
     pub fn encode(
         &self,
         pass: &mut wgpu::ComputePass,
@@ -180,20 +180,25 @@ impl GpuCuller {
         slot: Option<u32>,
     ) {
         pass.set_bind_group(0, bind_group, &[]);
-        let (x, y) = scene.groups;
         let (pipelines, slot) = match (&self.coarse, slot) {
             (Some(c), Some(slot)) => (&c.display, Some(slot)),
             _ => (&self.pipelines, None),
         };
         for (pipeline, kind) in pipelines.iter().zip(CullPass::DISPLAY) {
             pass.set_pipeline(pipeline);
-            match (kind, slot) {
-                (CullPass::Draws, _) => pass.dispatch_workgroups(1, 1, 1),
-                (CullPass::Scan, _) => pass.dispatch_workgroups(scene.scan_groups, scene.levels, 1),
-                (_, Some(s)) => {
-                    pass.dispatch_workgroups_indirect(&scene.coarse_args, 12 * s as u64)
+            let (grid, args) = match kind {
+                CullPass::Draws => {
+                    pass.dispatch_workgroups(1, 1, 1);
+                    continue;
                 }
-                (_, None) => pass.dispatch_workgroups(x, y, 1),
+                CullPass::Cull => (scene.groups.spans, 0),
+                _ => (scene.groups.positions, 12),
+            };
+            match slot {
+                Some(s) => {
+                    pass.dispatch_workgroups_indirect(&scene.coarse_args, 24 * s as u64 + args)
+                }
+                None => pass.dispatch_workgroups(grid.0, grid.1, 1),
             }
         }
     }
@@ -216,11 +221,11 @@ impl GpuCuller {
         };
         pass.set_bind_group(0, bind_group, &[]);
         pass.set_pipeline(floor);
-        let (x, y) = scene.groups;
+        let (x, y) = scene.groups.positions;
         pass.dispatch_workgroups(x, y, 1);
         true
     }
 
-    /// Compute dispatches per display: cull, scan, draws, compact.
+    /// Compute dispatches per display: cull, draws, compact.
     pub const DISPATCHES_PER_DISPLAY: u32 = CullPass::DISPLAY.len() as u32;
 }

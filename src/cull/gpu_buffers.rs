@@ -34,12 +34,12 @@ pub const COUNTS_BYTES: u64 = 8;
 pub struct CullScene {
     /// Places of the cull order the passes run over.
     pub instance_count: u32,
-    pub(super) groups: (u32, u32),
+    /// The grid over every position (one invocation each: the compact pass, the floor,
+    /// the coarse cull's blocks) and over every span (the cull pass).
+    pub(super) groups: Grids,
     pub(super) max_groups: u32,
-    /// Levels of detail culled into: the y of the scan dispatch.
+    /// Levels of detail culled into.
     pub levels: u32,
-    /// Groups of spans at most: the x of the scan dispatch.
-    pub(super) scan_groups: u32,
     pub(super) params: wgpu::Buffer,
     pub(super) spheres: wgpu::Buffer,
     pub(super) order: wgpu::Buffer,
@@ -59,8 +59,8 @@ pub struct CullScene {
     pub candidate_count: wgpu::Buffer,
     pub(super) candidate_ranges: wgpu::Buffer,
     pub(super) block_tests: wgpu::Buffer,
-    /// The display passes' indirect dispatches, one per slot, written by the coarse
-    /// passes.
+    /// The display passes' indirect dispatches, two per slot (the cull pass's over
+    /// spans, then the compact pass's over positions), written by the coarse passes.
     pub(super) coarse_args: wgpu::Buffer,
 }
 
@@ -107,7 +107,6 @@ impl CullScene {
             groups,
             max_groups,
             levels,
-            scan_groups,
             params: init_buffer(
                 device,
                 "stereocull.cull_params",
@@ -168,7 +167,7 @@ impl CullScene {
             coarse_args: storage_buffer(
                 device,
                 "stereocull.coarse_args",
-                per_slot(12),
+                per_slot(2 * 12),
                 scratch | wgpu::BufferUsages::INDIRECT,
             ),
         }
@@ -264,16 +263,26 @@ impl CullTargets {
     }
 }
 
-/// Spans and groups of spans (the scan's x) over `positions` cull positions, as
+/// Spans and groups of spans (the cull pass's workgroups) over `positions` cull positions, as
 /// `span_count` and `group_count` in `wgsl/shared/cull_math.wgsl` count them.
 fn span_shape(positions: u32) -> (u32, u32) {
     let spans = positions.div_ceil(SPAN);
     (spans, spans.div_ceil(WORKGROUP_SIZE))
 }
 
-fn cull_params(layout: &CullLayout, (max_groups, levels): (u32, u32)) -> (CullParams, (u32, u32)) {
+/// A pass's workgroups as (x, y), x within the device's limit.
+#[derive(Clone, Copy, Debug)]
+pub(super) struct Grids {
+    pub positions: (u32, u32),
+    pub spans: (u32, u32),
+}
+
+fn cull_params(layout: &CullLayout, (max_groups, levels): (u32, u32)) -> (CullParams, Grids) {
     let n = layout.spheres.len() as u32;
-    let groups = dispatch_size(n.div_ceil(WORKGROUP_SIZE), max_groups);
+    let groups = Grids {
+        positions: dispatch_size(n.div_ceil(WORKGROUP_SIZE), max_groups),
+        spans: dispatch_size(span_shape(n).1, max_groups),
+    };
     let params = CullParams {
         instance_count: n,
         mesh_count: layout.meshes.len() as u32,

@@ -1,5 +1,5 @@
 //! The GPU-driven path (`instanced` and `multiview`): per display, culling into a
-//! visible list and per-mesh draws (four compute dispatches, or the CPU culler and an
+//! visible list and per-mesh draws (three compute dispatches, or the CPU culler and an
 //! upload), then one render pass with one multi-draw-indirect call.
 //!
 //! Per frame on the GPU-culled path the CPU writes one display context per display and

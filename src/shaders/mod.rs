@@ -3,16 +3,19 @@
 //! generated from the one binding list per pipeline family ([`CULL_BINDINGS`],
 //! [`DRAW_BINDINGS`]), from which the bind-group layouts are built too.
 
-/// Invocations per cull workgroup: one instance each, and the scan's shared array holds
-/// one entry per invocation. 256 is the largest size every WebGPU adapter must support.
+/// Invocations per cull workgroup (the cull pass: a span of [`SPAN`] positions each),
+/// and the scans' shared array holds one entry per invocation. 256 is the largest size
+/// every WebGPU adapter must support.
 pub const WORKGROUP_SIZE: u32 = 256;
 
-/// Cull positions per span, the unit of the cull's first prefix sums: small enough that
-/// a span's count per level (at most `SPAN - 1` before a position) fits the 7-bit
-/// fields of a cull entry, four levels to a word (`wgsl/shared/cull_math.wgsl`).
-pub const SPAN: u32 = 128;
-const _: () =
-    assert!(SPAN <= 128 && WORKGROUP_SIZE.is_multiple_of(SPAN) && crate::scene::MAX_LODS <= 4);
+/// Cull positions per span, the unit of the cull's first prefix sums, walked in order by
+/// one invocation of the cull pass: its count per level (at most `SPAN - 1` before a
+/// position) fits the 7-bit fields of a cull entry, four levels to a word
+/// (`wgsl/shared/cull_math.wgsl`). 16: on lavapipe the workgroup scan's barriers cost
+/// more than the sphere tests, so they come once per 16 positions; on a GPU 16 spheres
+/// per invocation still leave 65,536 invocations at 1M instances.
+pub const SPAN: u32 = 16;
+const _: () = assert!(SPAN <= 128 && crate::scene::MAX_LODS <= 4);
 
 /// Cull positions per block of the frame's coarse cull ([`crate::cull::coarse`]): the
 /// CPU culler's 64 lanes.
@@ -84,11 +87,9 @@ pub enum CullPass {
     /// Per slot (one workgroup each): the listed blocks, each mesh's range among their
     /// positions, the count and the display passes' indirect dispatch.
     CoarseLists,
-    /// Sphere tests and levels, once per sphere: entries and span counts.
+    /// Sphere tests and levels, once per sphere, a span per invocation: entries, span
+    /// prefixes within their workgroup and each workgroup's totals.
     Cull,
-    /// Span prefixes within groups of spans, and each group's total (a workgroup per
-    /// group and level).
-    Scan,
     /// Group prefixes, then the packed draws and the draw count (one workgroup).
     Draws,
     /// Visible ids into their slots.
@@ -101,12 +102,7 @@ impl CullPass {
     /// The frame passes (the coarse cull), in dispatch order.
     pub const FRAME: [CullPass; 2] = [CullPass::CoarseBlocks, CullPass::CoarseLists];
     /// The display passes, in dispatch order.
-    pub const DISPLAY: [CullPass; 4] = [
-        CullPass::Cull,
-        CullPass::Scan,
-        CullPass::Draws,
-        CullPass::Compact,
-    ];
+    pub const DISPLAY: [CullPass; 3] = [CullPass::Cull, CullPass::Draws, CullPass::Compact];
 
     /// The pipeline's label; display passes over the coarse cull's candidates say so.
     pub fn label(self, over_candidates: bool) -> String {
@@ -114,7 +110,6 @@ impl CullPass {
             CullPass::CoarseBlocks => "coarse_blocks",
             CullPass::CoarseLists => "coarse_lists",
             CullPass::Cull => "cull",
-            CullPass::Scan => "cull_scan",
             CullPass::Draws => "cull_draws",
             CullPass::Compact => "cull_compact",
             CullPass::Floor => "cull_floor",
@@ -138,7 +133,6 @@ impl CullPass {
             CullPass::CoarseBlocks => "coarse_blocks",
             CullPass::CoarseLists => "coarse_lists",
             CullPass::Cull => "cull",
-            CullPass::Scan => "scan_spans",
             CullPass::Draws => "draws_main",
             CullPass::Compact => "compact",
             CullPass::Floor => "floor",
@@ -153,7 +147,6 @@ impl CullPass {
                 include_str!("../../wgsl/cull_coarse.wgsl")
             }
             CullPass::Cull => include_str!("../../wgsl/cull.wgsl"),
-            CullPass::Scan => include_str!("../../wgsl/cull_scan.wgsl"),
             CullPass::Draws => include_str!("../../wgsl/cull_draws.wgsl"),
             CullPass::Compact => include_str!("../../wgsl/cull_compact.wgsl"),
             CullPass::Floor => include_str!("../../wgsl/cull_floor.wgsl"),

@@ -87,17 +87,12 @@ fn workgroup_cull_count(local: u32) -> u32 {
 // A display's scratch, per position the passes run over: its entry, one word whatever
 // the number of levels: bit 31 visible, bits 28-29 its level, and for each level a 7-bit
 // field (level 0 lowest) counting that level's visible positions before it in its span
-// of SPAN positions (127 at most). Then `span_sums`: per level, each span's count (the
-// cull pass), turned into its prefix within its group of WORKGROUP_SIZE spans (the scan
-// pass); after them (group_slot), per level, each group's total, turned into its prefix
-// among all the visible instances, finer levels first (the draws pass).
+// of SPAN positions. Then `span_sums`: per level, each span's prefix within its group
+// of WORKGROUP_SIZE spans (both from the cull pass, a span per invocation, a group per
+// workgroup); after them (group_slot), per level, each group's total, turned into its
+// prefix among all the visible instances, finer levels first (the draws pass).
 const ENTRY_VISIBLE: u32 = 0x80000000u;
 const ENTRY_LEVEL_SHIFT: u32 = 28u;
-
-// Four 8-bit counts (each < 128) narrowed to the entry's four 7-bit fields.
-fn narrow_fields(p: u32) -> u32 {
-    return (p & 0x7fu) | ((p >> 1u) & 0x3f80u) | ((p >> 2u) & 0x1fc000u) | ((p >> 3u) & 0xfe00000u);
-}
 
 fn span_count(n: u32) -> u32 {
     return (n + SPAN - 1u) / SPAN;
@@ -143,24 +138,26 @@ fn prefix_groups(first: u32, groups: u32, carry_in: u32, local: u32) -> u32 {
     return carry;
 }
 
-var<workgroup> scan_scratch: array<u32, WORKGROUP_SIZE>;
+var<workgroup> scan_scratch: array<vec4<u32>, WORKGROUP_SIZE>;
 
 // Invocations per chunk of the scans: WORKGROUP_SIZE / SCAN_CHUNK chunk sums.
 const SCAN_CHUNK: u32 = 16u;
-var<workgroup> chunk_sums: array<u32, WORKGROUP_SIZE / SCAN_CHUNK>;
+var<workgroup> chunk_sums: array<vec4<u32>, WORKGROUP_SIZE / SCAN_CHUNK>;
 
-// Exclusive prefix sums of `value` over each run of `width` invocations (a power of
-// two, a multiple of SCAN_CHUNK dividing WORKGROUP_SIZE); every invocation must call
-// it. Returns (exclusive prefix within its run, its run's total). Three barriers
-// whatever the width: chunk sums, then each invocation adds the chunks before its own
-// in its run and the values before it in its chunk (at most 30 reads). A Hillis-Steele
-// scan takes two barriers per doubling; on lavapipe this one took the 1M-instance
-// cull from 246 to 223 ms by the wall clock (LOD off), the same buffers.
-fn segmented_exclusive_scan(local: u32, value: u32, width: u32) -> vec2<u32> {
+struct Scan4 {
+    before: vec4<u32>,
+    total: vec4<u32>,
+}
+
+// Exclusive prefix sums of four values at once over the workgroup (the cull's four
+// levels of detail in one pass). Each invocation adds the chunk sums before its chunk
+// and the values before it in its chunk (at most 30 reads): three barriers, where a
+// Hillis-Steele scan takes two per doubling.
+fn workgroup_exclusive_scan4(local: u32, value: vec4<u32>) -> Scan4 {
     scan_scratch[local] = value;
     workgroupBarrier();
     if (local < WORKGROUP_SIZE / SCAN_CHUNK) {
-        var sum = 0u;
+        var sum = vec4(0u);
         for (var i = 0u; i < SCAN_CHUNK; i++) {
             sum += scan_scratch[local * SCAN_CHUNK + i];
         }
@@ -168,23 +165,23 @@ fn segmented_exclusive_scan(local: u32, value: u32, width: u32) -> vec2<u32> {
     }
     workgroupBarrier();
     let chunk = local / SCAN_CHUNK;
-    let first_chunk = (local - local % width) / SCAN_CHUNK;
-    var before = 0u;
-    for (var c = first_chunk; c < chunk; c++) {
+    var before = vec4(0u);
+    for (var c = 0u; c < chunk; c++) {
         before += chunk_sums[c];
     }
     for (var i = chunk * SCAN_CHUNK; i < local; i++) {
         before += scan_scratch[i];
     }
-    var total = 0u;
-    for (var c = first_chunk; c < first_chunk + width / SCAN_CHUNK; c++) {
+    var total = vec4(0u);
+    for (var c = 0u; c < WORKGROUP_SIZE / SCAN_CHUNK; c++) {
         total += chunk_sums[c];
     }
     workgroupBarrier();
-    return vec2(before, total);
+    return Scan4(before, total);
 }
 
 // Exclusive prefix sum of `value` over the workgroup: (exclusive prefix, total).
 fn workgroup_exclusive_scan(local: u32, value: u32) -> vec2<u32> {
-    return segmented_exclusive_scan(local, value, WORKGROUP_SIZE);
+    let scan = workgroup_exclusive_scan4(local, vec4(value, 0u, 0u, 0u));
+    return vec2(scan.before.x, scan.total.x);
 }
