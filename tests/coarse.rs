@@ -12,6 +12,7 @@ use proptest::prelude::*;
 use rand::{Rng, SeedableRng};
 use stereocull::cull::coarse::{BLOCK, block_of};
 use stereocull::cull::{CoarseCull, CullOutput};
+use stereocull::device::Gpu;
 use stereocull::frustum::{View, sphere_in_planes};
 use stereocull::renderer::{CoarseMode, CullMode, RendererOptions, StereoMode};
 use stereocull::rig::Rig;
@@ -218,9 +219,17 @@ fn culls(
     rig: &Rig,
     options: RendererOptions,
 ) -> (Vec<CullOutput>, Option<Vec<u32>>) {
-    let gpu = support::gpu();
-    let renderer = support::one_frame(&gpu, scene, rig, options);
-    let outputs = support::read_culls(&gpu, &renderer, rig);
+    culls_on(&support::gpu(), scene, rig, options)
+}
+
+fn culls_on(
+    gpu: &Gpu,
+    scene: &Scene,
+    rig: &Rig,
+    options: RendererOptions,
+) -> (Vec<CullOutput>, Option<Vec<u32>>) {
+    let renderer = support::one_frame(gpu, scene, rig, options);
+    let outputs = support::read_culls(gpu, &renderer, rig);
     let candidates = renderer
         .diagnostics(&gpu.device, &gpu.queue)
         .candidates()
@@ -312,4 +321,44 @@ fn blocks_of_a_coherent_scene_narrow_each_display() {
     eprintln!("shuffled: {candidates:?} candidates of {n}, {tests} sphere tests");
     assert!(candidates.iter().all(|&c| c > n * 9 / 10), "{candidates:?}");
     assert!(tests > 3 * n as u64, "{tests}");
+}
+
+/// The coarse lists' prefix sums at their edges (issue 24: the coarse cull through the
+/// display cull's tree): a block, a workgroup of blocks (256 blocks, 16,384 positions)
+/// and one past each, and three workgroups, on `cave` (five slots) and
+/// `hmd-peripheral`, with LOD off and on: with the coarse cull on, the
+/// GPU's buffers equal its own without it and (LOD off) the CPU reference; on these
+/// coherent scenes some display lists a fraction of the positions, so the lists have
+/// gaps.
+#[test]
+fn coarse_lists_match_at_their_edges() {
+    let gpu = support::gpu();
+    let group = (BLOCK * 256) as u32;
+    let edges = [1, BLOCK as u32, BLOCK as u32 + 1, group, group + 1, 40_003];
+    let cases = ["cave", "hmd-peripheral"].into_iter().flat_map(|rig| {
+        edges
+            .iter()
+            .flat_map(move |&n| [(rig, n, false), (rig, n, true)])
+    });
+    for (rig, n, lod) in cases {
+        let rig = support::sized(rig, 64, 64);
+        let scene = stereocull::procedural::scene(n, 6, n as u64 + 5);
+        let options = |coarse_cull| RendererOptions {
+            lod,
+            coarse_cull,
+            ..RendererOptions::default()
+        };
+        let (got, candidates) = culls_on(&gpu, &scene, &rig, options(CoarseMode::On));
+        let (want, _) = culls_on(&gpu, &scene, &rig, options(CoarseMode::Off));
+        let case = format!("n={n} lod={lod}");
+        assert_eq!(got, want, "{case}");
+        if !lod {
+            assert_eq!(got, support::reference_culls(&scene, &rig), "{case}");
+        }
+        let candidates = candidates.unwrap_or_else(|| panic!("{case}: no candidates"));
+        eprintln!("{case}: {candidates:?} candidates");
+        if n >= group {
+            assert!(candidates.iter().any(|&c| c < n * 9 / 10), "{case}");
+        }
+    }
 }

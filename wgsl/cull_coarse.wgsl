@@ -2,8 +2,11 @@
 // cut into blocks of BLOCK positions; each block's sphere is tested once against the
 // frame frustum and, when it passes, against each display's frustum (its slot); each
 // display's passes then run over the positions of its own blocks, dispatched
-// indirectly from their count. Two entry points, in dispatch order: coarse_blocks (one
-// invocation per cull position) and coarse_lists (one workgroup per slot).
+// indirectly from their count. Three entry points, in dispatch order, the display
+// cull's tree of prefix sums again: coarse_blocks (a block per invocation; each
+// workgroup's blocks' prefixes and totals per slot), coarse_lists (one workgroup per
+// slot, over the workgroup totals only) and coarse_place (a block per invocation: each
+// kept block into its slot's list).
 // Bindings: CULL_BINDINGS in group 0, COARSE_BINDINGS in group 1 (src/shaders/bindings.rs).
 
 // The CPU twin is CoarseCull::test: same operations, same order, no fma.
@@ -32,86 +35,84 @@ fn block_test(t: CoarseTest, c: vec4<f32>, e: vec3<f32>) -> bool {
     return true;
 }
 
-// Bit 31 of a block mark: the block is kept.
+// Bit 31 of a block mark: the block is kept. The rest: kept blocks of the slot
+// before it in its group of WORKGROUP_SIZE blocks (coarse_blocks), then before it in
+// the slot (coarse_place).
 const KEPT_BIT: u32 = 0x80000000u;
 
-var<workgroup> low: array<vec3<f32>, WORKGROUP_SIZE>;
-var<workgroup> high: array<vec3<f32>, WORKGROUP_SIZE>;
+// Where a slot's group totals (then prefixes) lie in block_marks: after every slot's
+// marks.
+fn group_sums(slot: u32) -> u32 {
+    let blocks = block_count();
+    return arrayLength(&block_tests) * blocks + slot * group_count(blocks);
+}
 
 // The twin of block_of in src/cull/coarse.rs (each holds its members on its own; they
-// need not agree bit for bit): the box of the members' spheres, reduced over the
-// block's invocations, grown, and the sphere through its corners.
+// need not agree bit for bit): the box of the members' spheres, grown, and the sphere
+// through its corners; then per slot, the block's mark and its group's total.
 @compute @workgroup_size(WORKGROUP_SIZE)
 fn coarse_blocks(
     @builtin(workgroup_id) wid: vec3<u32>,
     @builtin(num_workgroups) groups: vec3<u32>,
     @builtin(local_invocation_index) local: u32,
 ) {
-    let k = (wid.y * groups.x + wid.x) * WORKGROUP_SIZE + local;
-    low[local] = vec3(3.0e38);
-    high[local] = vec3(-3.0e38);
-    if (k < params.instance_count) {
-        let s = spheres_at(k);
-        low[local] = s.xyz - s.w;
-        high[local] = s.xyz + s.w;
-    }
-    workgroupBarrier();
-    let lane = local % BLOCK;
-    for (var step = BLOCK / 2u; step > 0u; step >>= 1u) {
-        if (lane < step) {
-            low[local] = min(low[local], low[local + step]);
-            high[local] = max(high[local], high[local + step]);
-        }
-        workgroupBarrier();
-    }
-    let block = k / BLOCK;
+    let group = wid.y * groups.x + wid.x;
+    let block = group * WORKGROUP_SIZE + local;
     let blocks = block_count();
-    if (lane != 0u || block >= blocks) {
-        return;
+    var low = vec3(3.0e38);
+    var high = vec3(-3.0e38);
+    for (var k = block * BLOCK; k < min(block * BLOCK + BLOCK, params.instance_count); k++) {
+        let s = spheres_at(k);
+        low = min(low, s.xyz - s.w);
+        high = max(high, s.xyz + s.w);
     }
-    let center = (low[local] + high[local]) * 0.5;
+    let center = (low + high) * 0.5;
     let magnitude = abs(center.x) + abs(center.y) + abs(center.z);
-    let extent = (high[local] - low[local]) * 0.5 * BLOCK_GROWTH + magnitude * BLOCK_SLACK;
+    let extent = (high - low) * 0.5 * BLOCK_GROWTH + magnitude * BLOCK_SLACK;
     let sphere = vec4(center, length(extent) * BLOCK_GROWTH);
-    let in_frame = grown_test(frame.coarse_planes, frame.coarse_inflation, frame.coarse_slack, sphere);
+    let in_frame = block < blocks
+        && grown_test(frame.coarse_planes, frame.coarse_inflation, frame.coarse_slack, sphere);
     for (var slot = 0u; slot < arrayLength(&block_tests); slot++) {
         let kept = in_frame && block_test(block_tests[slot], sphere, extent);
-        block_marks[slot * blocks + block] = select(0u, KEPT_BIT, kept);
+        let scan = workgroup_exclusive_scan(local, select(0u, 1u, kept));
+        if (block < blocks) {
+            block_marks[slot * blocks + block] = scan.x | select(0u, KEPT_BIT, kept);
+        }
+        if (local == 0u && group < group_count(blocks)) {
+            block_marks[group_sums(slot) + group] = scan.y;
+        }
     }
 }
 
-// Per slot, one workgroup: its blocks' marks become (blocks kept before) | kept bit,
-// the kept blocks are listed in ascending order, each mesh's range among the listed
-// positions is found, and the display passes' count and indirect dispatch written.
+// Per slot, one workgroup: its group totals become prefixes, each mesh's range among
+// the listed positions is found, and the display passes' count and indirect dispatches
+// written. It walks group totals (one per WORKGROUP_SIZE blocks), never every block.
 @compute @workgroup_size(WORKGROUP_SIZE)
 fn coarse_lists(
     @builtin(workgroup_id) wid: vec3<u32>,
     @builtin(local_invocation_index) local: u32,
 ) {
     let slot = wid.x;
-    let blocks = block_count();
-    let first = slot * blocks;
+    let first = group_sums(slot);
+    let groups = group_count(block_count());
     var listed = 0u;
-    for (var base = 0u; base < blocks; base += WORKGROUP_SIZE) {
-        let b = base + local;
-        var kept = 0u;
-        if (b < blocks) {
-            kept = block_marks[first + b] >> 31u;
+    for (var base = 0u; base < groups; base += WORKGROUP_SIZE) {
+        let g = base + local;
+        var total = 0u;
+        if (g < groups) {
+            total = block_marks[first + g];
         }
-        let scan = workgroup_exclusive_scan(local, kept);
-        if (b < blocks) {
-            block_marks[first + b] = (listed + scan.x) | (kept << 31u);
-            if (kept == 1u) {
-                block_list[first + listed + scan.x] = b;
-            }
+        let scan = workgroup_exclusive_scan(local, total);
+        if (g < groups) {
+            block_marks[first + g] = listed + scan.x;
         }
         listed += scan.y;
     }
     storageBarrier();
     for (var m = local; m < params.mesh_count; m += WORKGROUP_SIZE) {
         let mesh = meshes[m];
-        let start = listed_before(first, mesh.cull_start, listed);
-        let end = listed_before(first, mesh.cull_start + mesh.cull_count, listed);
+        let start = listed_before(slot, mesh.cull_start, listed);
+        let end = listed_before(slot, mesh.cull_start + mesh.cull_count, listed);
         candidate_ranges[slot * params.mesh_count + m] = vec2(start, end - start);
     }
     if (local == 0u) {
@@ -124,6 +125,26 @@ fn coarse_lists(
     }
 }
 
+// Per slot (y) and group of WORKGROUP_SIZE blocks (x), a block per invocation: a kept
+// block goes into its slot's list at its place (its group's prefix and its own).
+@compute @workgroup_size(WORKGROUP_SIZE)
+fn coarse_place(
+    @builtin(workgroup_id) wid: vec3<u32>,
+    @builtin(local_invocation_index) local: u32,
+) {
+    let slot = wid.y;
+    let blocks = block_count();
+    let block = wid.x * WORKGROUP_SIZE + local;
+    if (block >= blocks) {
+        return;
+    }
+    let mark = block_marks[slot * blocks + block];
+    if ((mark & KEPT_BIT) != 0u) {
+        let place = block_marks[group_sums(slot) + wid.x] + (mark & ~KEPT_BIT);
+        block_list[slot * blocks + place] = block;
+    }
+}
+
 // Writes a dispatch of `needed` workgroups at coarse_args[at].
 fn grid(at: u32, needed: u32) {
     let x = min(needed, params.max_groups);
@@ -132,12 +153,14 @@ fn grid(at: u32, needed: u32) {
     coarse_args[at + 2u] = 1u;
 }
 
-// Listed positions before cull position `pos` of the slot whose marks start at `first`.
-fn listed_before(first: u32, pos: u32, listed: u32) -> u32 {
+// Listed positions of `slot` before cull position `pos` (after its group prefixes).
+fn listed_before(slot: u32, pos: u32, listed: u32) -> u32 {
     if (pos >= params.instance_count) {
         return listed * BLOCK;
     }
-    let mark = block_marks[first + pos / BLOCK];
+    let block = pos / BLOCK;
+    let mark = block_marks[slot * block_count() + block];
     let within = select(0u, pos % BLOCK, (mark & KEPT_BIT) != 0u);
-    return (mark & ~KEPT_BIT) * BLOCK + within;
+    let before = block_marks[group_sums(slot) + block / WORKGROUP_SIZE] + (mark & ~KEPT_BIT);
+    return before * BLOCK + within;
 }

@@ -5,7 +5,7 @@
 //! position; the prefix sums run as a tree (a span per invocation, its workgroup's
 //! spans, then one workgroup over the workgroups' totals), never one workgroup over
 //! every span. With the
-//! frame-level coarse cull ([`super::coarse`]), two dispatches per frame first
+//! frame-level coarse cull ([`super::coarse`]), three dispatches per frame first
 //! (`wgsl/cull_coarse.wgsl`) list each display's blocks, and each display's passes run
 //! over its blocks' positions, dispatched indirectly from their count. The buffers they
 //! read and write are [`super::gpu_buffers`]'s.
@@ -158,12 +158,13 @@ impl GpuCuller {
         };
         pass.set_bind_group(0, display, &[]);
         pass.set_bind_group(1, args, &[]);
-        let (x, y) = scene.groups.positions;
+        let (blocks, slots) = (scene.groups.blocks, scene.coarse_slots);
         for (pipeline, kind) in pipelines.iter().zip(CullPass::FRAME) {
             pass.set_pipeline(pipeline);
             match kind {
-                CullPass::CoarseLists => pass.dispatch_workgroups(scene.coarse_slots, 1, 1),
-                _ => pass.dispatch_workgroups(x, y, 1),
+                CullPass::CoarseLists => pass.dispatch_workgroups(slots, 1, 1),
+                CullPass::CoarsePlace => pass.dispatch_workgroups(blocks, slots, 1),
+                _ => pass.dispatch_workgroups(blocks, 1, 1),
             }
         }
         pipelines.len() as u32

@@ -34,8 +34,8 @@ pub const COUNTS_BYTES: u64 = 8;
 pub struct CullScene {
     /// Places of the cull order the passes run over.
     pub instance_count: u32,
-    /// The grid over every position (one invocation each: the compact pass, the floor,
-    /// the coarse cull's blocks) and over every span (the cull pass).
+    /// The grids over every position (the compact pass, the floor), every span (the
+    /// cull pass) and every block (the coarse cull).
     pub(super) groups: Grids,
     pub(super) max_groups: u32,
     /// Levels of detail culled into.
@@ -99,7 +99,10 @@ impl CullScene {
         // The display passes may run past the last instance to the end of its block.
         let positions = slots.next_multiple_of(BLOCK) as u64;
         let per_slot = |bytes: u64| bytes * coarse_slots as u64;
-        let block_bytes = per_slot(4 * slots.div_ceil(BLOCK) as u64);
+        let blocks = slots.div_ceil(BLOCK);
+        let block_bytes = per_slot(4 * blocks as u64);
+        // Each slot's marks, then each slot's totals per group of blocks.
+        let mark_bytes = per_slot(4 * (blocks + blocks.div_ceil(WORKGROUP_SIZE)) as u64);
         let meshes = layout.meshes.len() as u64;
         let (spans, scan_groups) = span_shape(positions as u32);
         CullScene {
@@ -144,7 +147,7 @@ impl CullScene {
                 scratch,
             ),
             coarse_slots,
-            block_marks: storage_buffer(device, "stereocull.block_marks", block_bytes, scratch),
+            block_marks: storage_buffer(device, "stereocull.block_marks", mark_bytes, scratch),
             block_list: storage_buffer(device, "stereocull.block_list", block_bytes, scratch),
             candidate_count: storage_buffer(
                 device,
@@ -273,8 +276,13 @@ fn span_shape(positions: u32) -> (u32, u32) {
 /// A pass's workgroups as (x, y), x within the device's limit.
 #[derive(Clone, Copy, Debug)]
 pub(super) struct Grids {
+    /// An invocation per position.
     pub positions: (u32, u32),
+    /// An invocation per span of [`SPAN`] positions.
     pub spans: (u32, u32),
+    /// An invocation per coarse block of [`BLOCK`] positions, along x alone (the
+    /// limit of 65,535 workgroups is a billion positions).
+    pub blocks: u32,
 }
 
 fn cull_params(layout: &CullLayout, (max_groups, levels): (u32, u32)) -> (CullParams, Grids) {
@@ -282,6 +290,7 @@ fn cull_params(layout: &CullLayout, (max_groups, levels): (u32, u32)) -> (CullPa
     let groups = Grids {
         positions: dispatch_size(n.div_ceil(WORKGROUP_SIZE), max_groups),
         spans: dispatch_size(span_shape(n).1, max_groups),
+        blocks: n.div_ceil(BLOCK).div_ceil(WORKGROUP_SIZE).max(1),
     };
     let params = CullParams {
         instance_count: n,

@@ -82,11 +82,15 @@ pub fn scatter_source(windows: &Windows, kind: EditKind) -> String {
 /// display, each list in dispatch order; and the floor kernel `profile` times beside them.
 #[derive(Clone, Copy, Debug, PartialEq, Eq)]
 pub enum CullPass {
-    /// Every block's sphere, tested against the frame frustum and each slot's.
+    /// Every block's sphere (a block per invocation), tested against the frame frustum
+    /// and each slot's: marks, and per slot each workgroup's kept blocks.
     CoarseBlocks,
-    /// Per slot (one workgroup each): the listed blocks, each mesh's range among their
-    /// positions, the count and the display passes' indirect dispatch.
+    /// Per slot (one workgroup each): prefixes of the workgroups' totals, each mesh's
+    /// range among the listed positions, the count and the display passes' indirect
+    /// dispatches.
     CoarseLists,
+    /// Per slot, each kept block into the slot's list (a block per invocation).
+    CoarsePlace,
     /// Sphere tests and levels, once per sphere, a span per invocation: entries, span
     /// prefixes within their workgroup and each workgroup's totals.
     Cull,
@@ -100,7 +104,11 @@ pub enum CullPass {
 
 impl CullPass {
     /// The frame passes (the coarse cull), in dispatch order.
-    pub const FRAME: [CullPass; 2] = [CullPass::CoarseBlocks, CullPass::CoarseLists];
+    pub const FRAME: [CullPass; 3] = [
+        CullPass::CoarseBlocks,
+        CullPass::CoarseLists,
+        CullPass::CoarsePlace,
+    ];
     /// The display passes, in dispatch order.
     pub const DISPLAY: [CullPass; 3] = [CullPass::Cull, CullPass::Draws, CullPass::Compact];
 
@@ -109,6 +117,7 @@ impl CullPass {
         let name = match self {
             CullPass::CoarseBlocks => "coarse_blocks",
             CullPass::CoarseLists => "coarse_lists",
+            CullPass::CoarsePlace => "coarse_place",
             CullPass::Cull => "cull",
             CullPass::Draws => "cull_draws",
             CullPass::Compact => "cull_compact",
@@ -132,6 +141,7 @@ impl CullPass {
         match self {
             CullPass::CoarseBlocks => "coarse_blocks",
             CullPass::CoarseLists => "coarse_lists",
+            CullPass::CoarsePlace => "coarse_place",
             CullPass::Cull => "cull",
             CullPass::Draws => "draws_main",
             CullPass::Compact => "compact",
@@ -143,7 +153,7 @@ impl CullPass {
     /// `over_candidates` over the frame's coarse cull candidates.
     pub fn source(self, over_candidates: bool, windows: &Windows) -> String {
         let body = match self {
-            CullPass::CoarseBlocks | CullPass::CoarseLists => {
+            CullPass::CoarseBlocks | CullPass::CoarseLists | CullPass::CoarsePlace => {
                 include_str!("../../wgsl/cull_coarse.wgsl")
             }
             CullPass::Cull => include_str!("../../wgsl/cull.wgsl"),
