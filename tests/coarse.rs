@@ -333,8 +333,8 @@ fn blocks_of_a_coherent_scene_narrow_each_display() {
 #[test]
 fn coarse_lists_match_at_their_edges() {
     let gpu = support::gpu();
-    let group = (BLOCK * 256) as u32;
-    let edges = [1, BLOCK as u32, BLOCK as u32 + 1, group, group + 1, 40_003];
+    let group = BLOCK * 256;
+    let edges = [1, BLOCK, BLOCK + 1, group, group + 1, 40_003];
     let cases = ["cave", "hmd-peripheral"].into_iter().flat_map(|rig| {
         edges
             .iter()
