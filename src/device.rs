@@ -9,7 +9,7 @@ use crate::draw::DEPTH_FORMAT;
 use crate::error::{Error, Result};
 
 /// Optional features the pipeline uses when present, with what it does without them.
-pub const OPTIONAL_FEATURES: [(Features, &str, &str); 9] = [
+pub const OPTIONAL_FEATURES: [(Features, &str, &str); 10] = [
     (
         Features::MULTI_DRAW_INDIRECT_COUNT,
         "multi_draw_indirect_count",
@@ -54,6 +54,11 @@ pub const OPTIONAL_FEATURES: [(Features, &str, &str); 9] = [
         Features::PIPELINE_STATISTICS_QUERY,
         "pipeline_statistics_query",
         "no vertex-invocation counts",
+    ),
+    (
+        Features::SUBGROUP,
+        "subgroup",
+        "the cull's workgroup scans go through workgroup memory alone (same buffers)",
     ),
 ];
 

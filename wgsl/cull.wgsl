@@ -17,7 +17,13 @@ fn cull(
 ) {
     let n = workgroup_cull_count(local);
     let group = wid.y * groups.x + wid.x;
-    let span = group * WORKGROUP_SIZE + local;
+    let counts = cull_span(group * WORKGROUP_SIZE + local, n);
+    write_span_sums(group, local, n, workgroup_exclusive_scan4(local, counts));
+}
+
+// Walks span `span` of the n positions run over, writing each entry; returns the span's
+// visible count per level.
+fn cull_span(span: u32, n: u32) -> vec4<u32> {
     // Per level, the span's visible positions so far, in the entry's 7-bit fields.
     var fields = 0u;
     for (var j = span * SPAN; j < min(span * SPAN + SPAN, n); j++) {
@@ -27,17 +33,22 @@ fn cull(
             fields += 1u << (7u * ((entry >> ENTRY_LEVEL_SHIFT) & 3u));
         }
     }
-    let counts = (vec4(fields) >> vec4(0u, 7u, 14u, 21u)) & vec4(0x7fu);
-    let scan = workgroup_exclusive_scan4(local, counts);
+    return (vec4(fields) >> vec4(0u, 7u, 14u, 21u)) & vec4(0x7fu);
+}
+
+// The span at `index` of workgroup `group`: its prefix within the workgroup per level,
+// and (index 0) the workgroup's totals.
+fn write_span_sums(group: u32, index: u32, n: u32, scan: Scan4) {
     let spans = span_count(n);
     if (group >= group_count(spans)) {
         return;
     }
+    let span = group * WORKGROUP_SIZE + index;
     for (var l = 0u; l < params.lod_levels; l++) {
         if (span < spans) {
             span_sums[l * spans + span] = scan.before[l];
         }
-        if (local == 0u) {
+        if (index == 0u) {
             span_sums[group_slot(n, l, group)] = scan.total[l];
         }
     }

@@ -225,6 +225,14 @@ fn info() -> Result<()> {
             println!("  {name:40} no  (costs: {without})");
         }
     }
+    let info = gpu.device.adapter_info();
+    let (low, high) = (info.subgroup_min_size, info.subgroup_max_size);
+    match crate::shaders::subgroup_tier(&gpu.device) {
+        true => println!("GPU cull's workgroup scan: subgroup operations (subgroups of {low})"),
+        false => println!(
+            "GPU cull's workgroup scan: workgroup memory (subgroups {low} to {high}, or none)"
+        ),
+    }
     println!(
         "coarse cull with --coarse-cull auto, GPU culling on this adapter \
          (sphere tests expected with it / without):"

@@ -13,7 +13,7 @@
 use crate::cull::gpu_buffers::{CullScene, CullTargets};
 use crate::shaders::{
     COARSE_BINDINGS, CULL_BINDINGS, CullPass, Windows, bind_group, bind_group_layout,
-    compute_pipeline, pipeline_layout,
+    compute_pipeline, pipeline_layout, subgroup_tier,
 };
 
 /// The cull pipelines and their shared bind-group layout.
@@ -57,7 +57,12 @@ impl GpuCuller {
             passes.iter().map(build_one).collect()
         };
         let display_layout = pipeline_layout(device, "stereocull.cull", &layout);
-        let pipelines = build(&CullPass::DISPLAY, false, &display_layout);
+        let subgroups = subgroup_tier(device);
+        let display = CullPass::DISPLAY.map(|p| match p {
+            CullPass::Cull if subgroups => CullPass::CullSubgroups,
+            p => p,
+        });
+        let pipelines = build(&display, false, &display_layout);
         let coarse = coarse.then(|| {
             let whole = &Windows::WHOLE;
             let args_layout =
@@ -68,7 +73,7 @@ impl GpuCuller {
                 immediate_size: 0,
             });
             CoarsePipelines {
-                display: build(&CullPass::DISPLAY, true, &display_layout),
+                display: build(&display, true, &display_layout),
                 frame: build(&CullPass::FRAME, false, &both),
                 args_layout,
             }
@@ -187,6 +192,7 @@ impl GpuCuller {
         };
         for (pipeline, kind) in pipelines.iter().zip(CullPass::DISPLAY) {
             pass.set_pipeline(pipeline);
+            // The subgroup tier stands where CullPass::Cull does, on the same grid.
             let (grid, args) = match kind {
                 CullPass::Draws => {
                     pass.dispatch_workgroups(1, 1, 1);

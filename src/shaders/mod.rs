@@ -34,6 +34,10 @@ pub const BLOCK_SLACK: f32 = 1.0 / 1048576.0;
 const CONTEXTS: &str = include_str!("../../wgsl/shared/contexts.wgsl");
 const RECORDS: &str = include_str!("../../wgsl/shared/records.wgsl");
 const CULL_MATH: &str = include_str!("../../wgsl/shared/cull_math.wgsl");
+const CULL_SUBGROUPS: &str = concat!(
+    include_str!("../../wgsl/cull.wgsl"),
+    include_str!("../../wgsl/cull_subgroups.wgsl")
+);
 const DRAW_CLIP_DISTANCES: &str = include_str!("../../wgsl/shared/draw_clip_distances.wgsl");
 const DRAW_NO_CLIP_DISTANCES: &str = include_str!("../../wgsl/shared/draw_no_clip_distances.wgsl");
 const DRAW_CLIP_RECT: &str = include_str!("../../wgsl/shared/draw_clip_rect.wgsl");
@@ -94,6 +98,9 @@ pub enum CullPass {
     /// Sphere tests and levels, once per sphere, a span per invocation: entries, span
     /// prefixes within their workgroup and each workgroup's totals.
     Cull,
+    /// [`CullPass::Cull`] with its workgroup scan done by subgroup operations: the
+    /// same buffers, on adapters with one subgroup size ([`subgroup_tier`]).
+    CullSubgroups,
     /// Group prefixes, then the packed draws and the draw count (one workgroup).
     Draws,
     /// Visible ids into their slots.
@@ -119,6 +126,7 @@ impl CullPass {
             CullPass::CoarseLists => "coarse_lists",
             CullPass::CoarsePlace => "coarse_place",
             CullPass::Cull => "cull",
+            CullPass::CullSubgroups => "cull_subgroups",
             CullPass::Draws => "cull_draws",
             CullPass::Compact => "cull_compact",
             CullPass::Floor => "cull_floor",
@@ -143,6 +151,7 @@ impl CullPass {
             CullPass::CoarseLists => "coarse_lists",
             CullPass::CoarsePlace => "coarse_place",
             CullPass::Cull => "cull",
+            CullPass::CullSubgroups => "cull_subgroups",
             CullPass::Draws => "draws_main",
             CullPass::Compact => "compact",
             CullPass::Floor => "floor",
@@ -157,6 +166,7 @@ impl CullPass {
                 include_str!("../../wgsl/cull_coarse.wgsl")
             }
             CullPass::Cull => include_str!("../../wgsl/cull.wgsl"),
+            CullPass::CullSubgroups => CULL_SUBGROUPS,
             CullPass::Draws => include_str!("../../wgsl/cull_draws.wgsl"),
             CullPass::Compact => include_str!("../../wgsl/cull_compact.wgsl"),
             CullPass::Floor => include_str!("../../wgsl/cull_floor.wgsl"),
@@ -181,12 +191,15 @@ impl CullPass {
         .concat()
     }
 
-    /// Every cull pipeline variant: the frame passes, the display passes over
-    /// everything and over candidates, and the floor kernel.
+    /// Every cull pipeline variant: the frame passes, the display passes (both tiers
+    /// of the cull pass) over everything and over candidates, and the floor kernel.
     pub fn variants() -> Vec<(CullPass, bool)> {
-        let display = [false, true]
-            .into_iter()
-            .flat_map(|c| Self::DISPLAY.map(|p| (p, c)));
+        let display = [false, true].into_iter().flat_map(|c| {
+            Self::DISPLAY
+                .into_iter()
+                .chain([CullPass::CullSubgroups])
+                .map(move |p| (p, c))
+        });
         Self::FRAME
             .map(|p| (p, false))
             .into_iter()
@@ -194,6 +207,19 @@ impl CullPass {
             .chain([(CullPass::Floor, false)])
             .collect()
     }
+}
+
+/// Whether the cull pass runs its subgroup tier on `device`: subgroup operations, and
+/// one subgroup size that divides [`WORKGROUP_SIZE`], so that every workgroup is made
+/// of full subgroups of that size (what `wgsl/cull_subgroups.wgsl` needs). Adapters
+/// whose size varies (AMD: 32 or 64) take the workgroup-memory scan.
+pub fn subgroup_tier(device: &wgpu::Device) -> bool {
+    let info = device.adapter_info();
+    let size = info.subgroup_min_size;
+    device.features().contains(wgpu::Features::SUBGROUP)
+        && size == info.subgroup_max_size
+        && size > 0
+        && WORKGROUP_SIZE.is_multiple_of(size)
 }
 
 /// Names a draw-pipeline variant; produces its source and a readable label.
