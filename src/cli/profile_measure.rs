@@ -160,9 +160,6 @@ pub(super) fn measure(
         if let Some((live, driver)) = &mut live {
             driver.apply(live, frame)?;
         }
-        // Where the sync would run, with the caches as it finds them: the last frame's
-        // edit bytes (the same count every frame).
-        let copied = copy.time();
         let start = Instant::now();
         let synced = match &mut live {
             Some((live, _)) => renderer.sync(&gpu.device, &gpu.queue, live)?,
@@ -178,6 +175,10 @@ pub(super) fn measure(
         gpu.queue.submit([encoder.finish()]);
         let end = Instant::now();
         gpu.wait()?;
+        // The plain copy of the last frame's edit bytes (the same count every frame),
+        // after the frame: timed in the frame's place, it would leave the frame caches
+        // a megabyte colder than the static row's.
+        let copied = copy.time();
         let queries = match timer.as_deref_mut() {
             Some(t) => Some(t.read(&gpu.device, &gpu.queue)?),
             None => None,
@@ -355,9 +356,10 @@ fn floor_ratios(
 }
 
 /// The yardstick of an edit's CPU cost: the same bytes copied, in the same run on the
-/// same host at the same point of the frame, from memory just written (as the caller
-/// just wrote its edits) into memory last touched a frame ago (as the staging belt's
-/// chunk was): what the edits' trip to the GPU cannot beat on the CPU.
+/// same host once per frame (after it, so that its megabyte of traffic does not cool
+/// the frame's caches), from memory just written (as the caller just wrote its edits)
+/// into memory last touched a frame ago (as the staging belt's chunk was): what the
+/// edits' trip to the GPU cannot beat on the CPU.
 #[derive(Default)]
 struct PlainCopy {
     /// The bytes to copy: the last sync's.
