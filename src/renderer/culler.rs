@@ -295,9 +295,9 @@ impl Culler {
 
 /// Diagnostics read back after a frame was submitted.
 impl Culler {
-    /// Wall-clock medians over `rounds` submissions each (submit, then wait): the floor
-    /// kernel alone, then each of `views`' culls alone (over the last frame's coarse
-    /// lists, with the coarse cull). `None` without the floor kernel (GPU culling with
+    /// Wall-clock medians over `rounds` submissions each (submit, then wait) of the
+    /// floor kernel alone and of each of `views`' culls alone (over the last frame's
+    /// coarse lists, with the coarse cull), a round being one of each. `None` without the floor kernel (GPU culling with
     /// [`super::RendererOptions::cull_floor`]). For adapters whose in-pass timestamps do
     /// not bracket a compute pass's first dispatch (lavapipe): on a CPU device the wall
     /// clock is the cost. The culls rewrite the same outputs.
@@ -322,29 +322,33 @@ impl Culler {
         let Some(group) = any.bind_group.as_ref().filter(|_| culler.has_floor()) else {
             return Ok(None);
         };
-        let time = |record: &dyn Fn(&mut wgpu::ComputePass)| -> Result<f64> {
-            let mut samples = Vec::new();
-            for _ in 0..rounds.max(1) {
-                let mut encoder = device.create_command_encoder(&Default::default());
-                record(&mut encoder.begin_compute_pass(&Default::default()));
-                let start = std::time::Instant::now();
-                queue.submit([encoder.finish()]);
-                wait_idle(device)?;
-                samples.push(start.elapsed().as_secs_f64() * 1e3);
-            }
-            Ok(percentile(&samples, 0.5))
+        let once = |record: &dyn Fn(&mut wgpu::ComputePass)| -> Result<f64> {
+            let mut encoder = device.create_command_encoder(&Default::default());
+            record(&mut encoder.begin_compute_pass(&Default::default()));
+            let start = std::time::Instant::now();
+            queue.submit([encoder.finish()]);
+            wait_idle(device)?;
+            Ok(start.elapsed().as_secs_f64() * 1e3)
         };
-        let floor = time(&|pass| {
-            culler.encode_floor(pass, scene, group);
-        })?;
-        let culls = views
+        let groups: Vec<_> = views
             .iter()
             .filter_map(|v| Some((v, v.bind_group.as_ref()?)))
-            .map(|(v, group)| {
+            .collect();
+        // Rounds interleave the floor and every cull, so that each sees the host as the
+        // others do (a 2-core VM's neighbours move a median by a third between seconds).
+        let mut samples = vec![Vec::new(); 1 + groups.len()];
+        for _ in 0..rounds.max(1) {
+            samples[0].push(once(&|pass| {
+                culler.encode_floor(pass, scene, group);
+            })?);
+            for ((v, group), s) in groups.iter().zip(&mut samples[1..]) {
                 let slot = coarse.as_ref().and(v.view.coarse_slot());
-                time(&|pass| culler.encode(pass, scene, group, slot))
-            })
-            .collect::<Result<Vec<f64>>>()?;
+                s.push(once(&|pass| culler.encode(pass, scene, group, slot))?);
+            }
+        }
+        let mut medians = samples.iter().map(|s| percentile(s, 0.5));
+        let floor = medians.next().unwrap_or_default();
+        let culls = medians.collect();
         Ok(Some((floor, culls)))
     }
 
