@@ -40,11 +40,10 @@ fn block_test(t: CoarseTest, c: vec4<f32>, e: vec3<f32>) -> bool {
 // the slot (coarse_place).
 const KEPT_BIT: u32 = 0x80000000u;
 
-// Where a slot's group totals (then prefixes) lie in block_marks: after every slot's
-// marks.
+// Where a slot's group totals (then prefixes) lie in span_sums, the display culls'
+// scratch, free until the first display cull (after every frame pass).
 fn group_sums(slot: u32) -> u32 {
-    let blocks = block_count();
-    return arrayLength(&block_tests) * blocks + slot * group_count(blocks);
+    return slot * group_count(block_count());
 }
 
 // The twin of block_of in src/cull/coarse.rs (each holds its members on its own; they
@@ -79,7 +78,7 @@ fn coarse_blocks(
             block_marks[slot * blocks + block] = scan.x | select(0u, KEPT_BIT, kept);
         }
         if (local == 0u && group < group_count(blocks)) {
-            block_marks[group_sums(slot) + group] = scan.y;
+            span_sums[group_sums(slot) + group] = scan.y;
         }
     }
 }
@@ -93,21 +92,7 @@ fn coarse_lists(
     @builtin(local_invocation_index) local: u32,
 ) {
     let slot = wid.x;
-    let first = group_sums(slot);
-    let groups = group_count(block_count());
-    var listed = 0u;
-    for (var base = 0u; base < groups; base += WORKGROUP_SIZE) {
-        let g = base + local;
-        var total = 0u;
-        if (g < groups) {
-            total = block_marks[first + g];
-        }
-        let scan = workgroup_exclusive_scan(local, total);
-        if (g < groups) {
-            block_marks[first + g] = listed + scan.x;
-        }
-        listed += scan.y;
-    }
+    let listed = prefix_groups(group_sums(slot), group_count(block_count()), 0u, local);
     storageBarrier();
     for (var m = local; m < params.mesh_count; m += WORKGROUP_SIZE) {
         let mesh = meshes[m];
@@ -140,7 +125,7 @@ fn coarse_place(
     }
     let mark = block_marks[slot * blocks + block];
     if ((mark & KEPT_BIT) != 0u) {
-        let place = block_marks[group_sums(slot) + wid.x] + (mark & ~KEPT_BIT);
+        let place = span_sums[group_sums(slot) + wid.x] + (mark & ~KEPT_BIT);
         block_list[slot * blocks + place] = block;
     }
 }
@@ -161,6 +146,6 @@ fn listed_before(slot: u32, pos: u32, listed: u32) -> u32 {
     let block = pos / BLOCK;
     let mark = block_marks[slot * block_count() + block];
     let within = select(0u, pos % BLOCK, (mark & KEPT_BIT) != 0u);
-    let before = block_marks[group_sums(slot) + block / WORKGROUP_SIZE] + (mark & ~KEPT_BIT);
+    let before = span_sums[group_sums(slot) + block / WORKGROUP_SIZE] + (mark & ~KEPT_BIT);
     return before * BLOCK + within;
 }

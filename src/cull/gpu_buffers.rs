@@ -99,10 +99,7 @@ impl CullScene {
         // The display passes may run past the last instance to the end of its block.
         let positions = slots.next_multiple_of(BLOCK) as u64;
         let per_slot = |bytes: u64| bytes * coarse_slots as u64;
-        let blocks = slots.div_ceil(BLOCK);
-        let block_bytes = per_slot(4 * blocks as u64);
-        // Each slot's marks, then each slot's totals per group of blocks.
-        let mark_bytes = per_slot(4 * (blocks + blocks.div_ceil(WORKGROUP_SIZE)) as u64);
+        let block_bytes = per_slot(4 * slots.div_ceil(BLOCK) as u64);
         let meshes = layout.meshes.len() as u64;
         let (spans, scan_groups) = span_shape(positions as u32);
         CullScene {
@@ -143,11 +140,14 @@ impl CullScene {
             span_sums: storage_buffer(
                 device,
                 "stereocull.span_sums",
-                4 * ((spans + scan_groups) * levels) as u64,
+                // The coarse cull's group totals use it before the display culls do.
+                4 * ((spans + scan_groups) * levels)
+                    .max(coarse_slots * slots.div_ceil(BLOCK).div_ceil(WORKGROUP_SIZE))
+                    as u64,
                 scratch,
             ),
             coarse_slots,
-            block_marks: storage_buffer(device, "stereocull.block_marks", mark_bytes, scratch),
+            block_marks: storage_buffer(device, "stereocull.block_marks", block_bytes, scratch),
             block_list: storage_buffer(device, "stereocull.block_list", block_bytes, scratch),
             candidate_count: storage_buffer(
                 device,

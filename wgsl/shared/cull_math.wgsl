@@ -120,7 +120,8 @@ fn flagged_before(level: u32, pos: u32, n: u32, total: u32) -> u32 {
 }
 
 // Turns `groups` group totals from span_sums[first] on into prefixes starting at
-// `carry`, in one workgroup; returns carry plus their total.
+// `carry`, in one workgroup; returns carry plus their total. The draws pass's over
+// its cull's workgroups, the coarse lists' over their workgroups of blocks.
 fn prefix_groups(first: u32, groups: u32, carry_in: u32, local: u32) -> u32 {
     var carry = carry_in;
     for (var base = 0u; base < groups; base += WORKGROUP_SIZE) {
