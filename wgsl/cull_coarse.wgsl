@@ -36,14 +36,19 @@ fn block_test(t: CoarseTest, c: vec4<f32>, e: vec3<f32>) -> bool {
 }
 
 // Bit 31 of a block mark: the block is kept. The rest: kept blocks of the slot
-// before it in its group of WORKGROUP_SIZE blocks (coarse_blocks), then before it in
-// the slot (coarse_place).
+// before it in its group of WORKGROUP_SIZE blocks (kept_before adds the group's prefix).
 const KEPT_BIT: u32 = 0x80000000u;
 
 // Where a slot's group totals (then prefixes) lie in span_sums, the display culls'
 // scratch, free until the first display cull (after every frame pass).
 fn group_sums(slot: u32) -> u32 {
     return slot * group_count(block_count());
+}
+
+// Kept blocks of `slot` before `block`, whose mark is `mark` (after coarse_lists turned
+// the group totals into prefixes).
+fn kept_before(slot: u32, block: u32, mark: u32) -> u32 {
+    return span_sums[group_sums(slot) + block / WORKGROUP_SIZE] + (mark & ~KEPT_BIT);
 }
 
 // The twin of block_of in src/cull/coarse.rs (each holds its members on its own; they
@@ -125,8 +130,7 @@ fn coarse_place(
     }
     let mark = block_marks[slot * blocks + block];
     if ((mark & KEPT_BIT) != 0u) {
-        let place = span_sums[group_sums(slot) + wid.x] + (mark & ~KEPT_BIT);
-        block_list[slot * blocks + place] = block;
+        block_list[slot * blocks + kept_before(slot, block, mark)] = block;
     }
 }
 
@@ -146,6 +150,5 @@ fn listed_before(slot: u32, pos: u32, listed: u32) -> u32 {
     let block = pos / BLOCK;
     let mark = block_marks[slot * block_count() + block];
     let within = select(0u, pos % BLOCK, (mark & KEPT_BIT) != 0u);
-    let before = span_sums[group_sums(slot) + block / WORKGROUP_SIZE] + (mark & ~KEPT_BIT);
-    return before * BLOCK + within;
+    return kept_before(slot, block, mark) * BLOCK + within;
 }

@@ -4,11 +4,10 @@
 //! sphere is read once per display whatever the levels of detail, into one word per
 //! position; the prefix sums run as a tree (a span per invocation, its workgroup's
 //! spans, then one workgroup over the workgroups' totals), never one workgroup over
-//! every span. With the
-//! frame-level coarse cull ([`super::coarse`]), three dispatches per frame first
-//! (`wgsl/cull_coarse.wgsl`) list each display's blocks, and each display's passes run
-//! over its blocks' positions, dispatched indirectly from their count. The buffers they
-//! read and write are [`super::gpu_buffers`]'s.
+//! every span. With the frame-level coarse cull ([`super::coarse`]), three dispatches
+//! per frame first (`wgsl/cull_coarse.wgsl`) list each display's blocks, and each
+//! display's passes run over its blocks' positions, dispatched indirectly from their
+//! count. The buffers they read and write are [`super::gpu_buffers`]'s.
 
 use crate::cull::gpu_buffers::{CullScene, CullTargets};
 use crate::shaders::{

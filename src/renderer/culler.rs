@@ -297,10 +297,11 @@ impl Culler {
 impl Culler {
     /// Wall-clock medians over `rounds` submissions each (submit, then wait) of the
     /// floor kernel alone and of each of `views`' culls alone (over the last frame's
-    /// coarse lists, with the coarse cull), a round being one of each. `None` without the floor kernel (GPU culling with
-    /// [`super::RendererOptions::cull_floor`]). For adapters whose in-pass timestamps do
-    /// not bracket a compute pass's first dispatch (lavapipe): on a CPU device the wall
-    /// clock is the cost. The culls rewrite the same outputs.
+    /// coarse lists, with the coarse cull), a round being one of each. `None` without
+    /// the floor kernel (GPU culling with [`super::RendererOptions::cull_floor`]). For
+    /// adapters whose in-pass timestamps do not bracket a compute pass's first dispatch
+    /// (lavapipe): on a CPU device the wall clock is the cost. The culls rewrite the
+    /// same outputs.
     pub(super) fn time_against_floor(
         &self,
         device: &wgpu::Device,
