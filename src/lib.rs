@@ -42,6 +42,7 @@ pub mod gltf_import;
 pub mod live;
 pub mod materials;
 mod modes;
+pub mod occlusion;
 pub mod places;
 pub mod procedural;
 pub mod profiling;

@@ -139,6 +139,100 @@ pub fn city(n: u32, seed: u64) -> Scene {
     scene
 }
 
+/// Rooms' side, height, walls' thickness, and their doorways' width and height, in
+/// meters: a house's proportions.
+const ROOM: f32 = 6.0;
+const ROOM_HEIGHT: f32 = 3.0;
+const WALL: f32 = 0.15;
+const DOOR: [f32; 2] = [1.0, 2.2];
+
+/// An occluder-heavy interior: `n` props (the procedural scene's shapes, 0.15 to 0.6 m,
+/// on the floor or up to 2 m high) spread over a square grid of rooms 6 m a side and
+/// 3 m high, about 24 to a room, the viewer's standing point in the middle room. Every
+/// wall between two rooms has a doorway at a random place along it; the outer walls are
+/// whole. From inside a room most props of the others are behind a wall, and the
+/// doorways let some be seen, some by one eye only. Ids follow a Hilbert curve, as in
+/// [`scene`].
+pub fn rooms(n: u32, seed: u64) -> Scene {
+    let mut scene = scene(0, 8, seed);
+    let c = shapes::cuboid(Vec3::splat(0.5));
+    let wall_mesh = scene.add_mesh("wall".to_string(), &c.vertices, &c.indices);
+    let side = ((n as f32 / 24.0).sqrt().ceil() as u32).max(1) | 1;
+    let half = side as f32 * ROOM * 0.5;
+    let mut rng = Pcg64Mcg::seed_from_u64(seed ^ 0x2007);
+    let mut walls = Vec::new();
+    for line in 0..=side {
+        let at = line as f32 * ROOM - half;
+        let outer = line == 0 || line == side;
+        for cell in 0..side {
+            let from = cell as f32 * ROOM - half;
+            let door = (!outer).then(|| rng.random_range(DOOR[0]..ROOM - DOOR[0]));
+            for (start, length, bottom, top) in wall_pieces(door) {
+                let mid = from + start + length * 0.5;
+                let size = Vec3::new(length, top - bottom, WALL);
+                let y = (bottom + top) * 0.5;
+                walls.push((Vec3::new(mid, y, at), size, false));
+                walls.push((Vec3::new(at, y, mid), size, true));
+            }
+        }
+    }
+    let mut add = |at: Vec3, size: Vec3, turned: bool, mesh: u32, color: Vec4| {
+        let rotation = match turned {
+            true => Quat::from_rotation_y(std::f32::consts::FRAC_PI_2),
+            false => Quat::IDENTITY,
+        };
+        scene.instances.push(Instance {
+            world_from_local: Affine3A::from_scale_rotation_translation(size, rotation, at),
+            mesh,
+            color,
+            animation: Animation::NONE,
+        });
+    };
+    let plaster = Vec4::new(0.85, 0.82, 0.76, 1.0);
+    for (at, size, turned) in walls {
+        add(at, size, turned, wall_mesh, plaster);
+    }
+    let cells = side * side;
+    for cell in 0..cells {
+        let corner = Vec3::new(
+            (cell % side) as f32 * ROOM - half,
+            0.0,
+            (cell / side) as f32 * ROOM - half,
+        );
+        let props = n * (cell + 1) / cells - n * cell / cells;
+        for _ in 0..props {
+            let margin = 0.5;
+            let at = corner
+                + Vec3::new(
+                    rng.random_range(margin..ROOM - margin),
+                    rng.random_range(0.3..2.0),
+                    rng.random_range(margin..ROOM - margin),
+                );
+            let size = Vec3::splat(rng.random_range(0.15..0.6));
+            let mesh = rng.random_range(0..wall_mesh);
+            let color = Vec4::new(rng.random(), rng.random(), rng.random(), 1.0);
+            add(at, size, false, mesh, color);
+        }
+    }
+    let offset = |i: &Instance| Vec3::from(i.world_from_local.translation) / half.max(1.0);
+    scene.instances.sort_by_cached_key(|i| hilbert(offset(i)));
+    scene
+}
+
+/// The pieces of one room's wall along its length ([`ROOM`]): `(start, length, bottom,
+/// top)`, whole, or around a doorway centered `door` along it.
+fn wall_pieces(door: Option<f32>) -> Vec<(f32, f32, f32, f32)> {
+    let Some(center) = door else {
+        return vec![(0.0, ROOM, 0.0, ROOM_HEIGHT)];
+    };
+    let (left, right) = (center - DOOR[0] * 0.5, center + DOOR[0] * 0.5);
+    vec![
+        (0.0, left, 0.0, ROOM_HEIGHT),
+        (right, ROOM - right, 0.0, ROOM_HEIGHT),
+        (left, DOOR[0], DOOR[1], ROOM_HEIGHT),
+    ]
+}
+
 /// Gives every mesh of `scene` one base color texture (a generated 256 x 256 pattern of
 /// colored tiles and stripes, so that filtering and mipmaps have work to do).
 pub fn texture(scene: &mut Scene) {

@@ -1,6 +1,6 @@
 //! Scenes by name, above the importers: `default` (the built-in room),
-//! `procedural:N[:MESHES[:SEED[:textured]]]`, `city:N[:SEED]`, or a `.gltf` / `.glb`
-//! file.
+//! `procedural:N[:MESHES[:SEED[:textured]]]`, `city:N[:SEED]`, `rooms:N[:SEED]`, or a
+//! `.gltf` / `.glb` file.
 
 use std::path::Path;
 
@@ -28,6 +28,9 @@ pub const ROOM_GLB: &[u8] = include_bytes!("../assets/room.glb");
 pub fn load(spec: &str) -> Result<Scene> {
     if let Some(rest) = spec.strip_prefix("city:") {
         return checked(spec, parse_city(spec, rest)?);
+    }
+    if let Some(rest) = spec.strip_prefix("rooms:") {
+        return checked(spec, parse_rooms(spec, rest)?);
     }
     let scene = match spec.strip_prefix("procedural:") {
         Some(rest) => {
@@ -68,6 +71,15 @@ fn parse_city(spec: &str, rest: &str) -> Result<Scene> {
     let seed = fields.seed()?;
     fields.end()?;
     Ok(procedural::city(n, seed))
+}
+
+/// `rooms:N[:SEED]`: [`procedural::rooms`].
+fn parse_rooms(spec: &str, rest: &str) -> Result<Scene> {
+    let mut fields = Fields::new(spec, rest, "rooms:N[:SEED]");
+    let n = fields.count()?;
+    let seed = fields.seed()?;
+    fields.end()?;
+    Ok(procedural::rooms(n, seed))
 }
 
 fn parse_procedural(spec: &str, rest: &str) -> Result<(u32, u32, u64, bool)> {

@@ -385,6 +385,8 @@ fn contexts_match_wgsl() {
         mesh_count: 5,
         max_groups: 7,
         lod_levels: 4,
+        visibility_words: 9,
+        pyramid_offset: 128,
     };
     check_uniform(
         "CullParams",
@@ -394,6 +396,8 @@ fn contexts_match_wgsl() {
             ("mesh_count", f32::from_bits(5)),
             ("max_groups", f32::from_bits(7)),
             ("lod_levels", f32::from_bits(4)),
+            ("visibility_words", f32::from_bits(9)),
+            ("pyramid_offset", f32::from_bits(128)),
         ],
     );
 }

@@ -26,12 +26,22 @@ fn cull(
 fn cull_span(span: u32, n: u32) -> vec4<u32> {
     // Per level, the span's visible positions so far, in the entry's 7-bit fields.
     var fields = 0u;
-    for (var j = span * SPAN; j < min(span * SPAN + SPAN, n); j++) {
-        let entry = cull_entry(j);
+    // The late occlusion phase: which of the span's positions the pyramids do not hide.
+    var seen = 0u;
+    let first = span * SPAN;
+    for (var j = first; j < min(first + SPAN, n); j++) {
+        let tested = cull_entry(j);
+        let entry = tested & ~ENTRY_SEEN;
+        seen |= select(0u, 1u << (j - first), tested != entry);
         entries[j] = fields | entry;
         if ((entry & ENTRY_VISIBLE) != 0u) {
             fields += 1u << (7u * ((entry >> ENTRY_LEVEL_SHIFT) & 3u));
         }
+    }
+    // A span's positions are SPAN consecutive places, aligned (a coarse block is a
+    // whole number of spans): one word of bits, which this invocation alone writes.
+    if (OCCLUSION == 2u && first < n) {
+        occlusion[display.cull_slot * params.visibility_words + cull_position(first) / SPAN] = seen;
     }
     return (vec4(fields) >> vec4(0u, 7u, 14u, 21u)) & vec4(0x7fu);
 }
@@ -54,7 +64,8 @@ fn write_span_sums(group: u32, index: u32, n: u32, scan: Scan4) {
     }
 }
 
-// Cull position j's visible bit and level (no span fields yet).
+// Cull position j's visible bit and level (no span fields yet), and in the late
+// occlusion phase ENTRY_SEEN where the pyramids do not hide it.
 fn cull_entry(j: u32) -> u32 {
     let k = cull_position(j);
     if (k >= params.instance_count) {
@@ -64,5 +75,5 @@ fn cull_entry(j: u32) -> u32 {
     if (!(sphere_in_planes(display.planes, s) && in_split(s))) {
         return 0u;
     }
-    return ENTRY_VISIBLE | (lod_level(k, s) << ENTRY_LEVEL_SHIFT);
+    return occlusion_entry(k, s, ENTRY_VISIBLE | (lod_level(k, s) << ENTRY_LEVEL_SHIFT));
 }

@@ -19,7 +19,9 @@ use crate::device::{Gpu, OPTIONAL_FEATURES, Tier};
 use crate::error::{Error, Result};
 use crate::live::LiveScene;
 use crate::records::CullLayout;
-use crate::renderer::{CoarseMode, CullMode, CullView, FramePlan, Renderer, RendererOptions};
+use crate::renderer::{
+    CoarseMode, CullMode, CullView, FramePlan, OcclusionMode, Renderer, RendererOptions,
+};
 use crate::rig::{Gaze, Rig};
 use crate::scene::Scene;
 use crate::scene_spec::{self, DEFAULT_SCENE};
@@ -58,7 +60,8 @@ enum Command {
 /// Where the scene and viewer come from; shared by every command that draws.
 #[derive(Args, Clone, Debug)]
 pub struct SceneArgs {
-    /// `default` (the built-in room), a .gltf/.glb file, or `procedural:N[:MESHES[:SEED]]`.
+    /// `default` (the built-in room), a .gltf/.glb file, `procedural:N[:MESHES[:SEED]]`,
+    /// `city:N[:SEED]` or `rooms:N[:SEED]` (rooms with doorways: occluders).
     #[arg(long, default_value = DEFAULT_SCENE)]
     pub scene: String,
     /// A preset (hmd, cave, hmd-peripheral, hmd-foveated) or a .json/.toml rig file.
@@ -93,6 +96,10 @@ pub struct SceneArgs {
     /// The frame-level coarse cull before the display culls (auto: where the rig gains).
     #[arg(long, value_enum, default_value = "auto")]
     pub coarse_cull: CoarseMode,
+    /// Occlusion culling: what the display drew last frame first, then the rest against
+    /// each eye's depth pyramid (auto: off; on where it applies: GPU cull, instanced).
+    #[arg(long, value_enum, default_value = "auto")]
+    pub occlusion: OcclusionMode,
     /// The frame's shadow map: drawn once per frame, sampled by every display and eye.
     #[arg(long, value_enum, default_value = "off")]
     pub shadows: Switch,
@@ -127,6 +134,7 @@ impl SceneArgs {
         RendererOptions {
             lod: self.lod.on(),
             coarse_cull: self.coarse_cull,
+            occlusion: self.occlusion,
             shadows: self.shadows.on(),
             far_layer: self.far_layer.on(),
             far_threshold_px: self.far_threshold,
@@ -369,7 +377,7 @@ fn cpu_cull(rig: &Rig, options: &RendererOptions, scene: &Scene) -> Result<Culls
             CullView::Display(i) => near[i] = Some(out),
             CullView::Far(i) => far[i] = Some(out),
             CullView::Inset(i) => inset[i] = Some(out),
-            CullView::Eye(..) | CullView::Light => {}
+            CullView::Eye(..) | CullView::Late(_) | CullView::Light => {}
         }
     }
     let near = near.into_iter().map(Option::unwrap_or_default).collect();

@@ -145,6 +145,30 @@ pub fn cull_frame(layout: &CullLayout, displays: &[CullJob], frame: &FrameCull) 
         .collect()
 }
 
+/// The contract's buffers for the cull positions set in `mask` (bit `p % 64` of word
+/// `p / 64`), with `lod`'s levels: what a cull that keeps those positions writes. For
+/// tests that a filter of positions (occlusion's phases) keeps the contract.
+pub fn cull_masked(
+    layout: &CullLayout,
+    mask: &[u64],
+    lod: &FrameLod,
+    instances_per_object: u32,
+) -> CullOutput {
+    if lod.levels > 1 {
+        let levels: Vec<u8> = (layout.spheres.iter().zip(&layout.mesh_of))
+            .map(|(s, &m)| {
+                let lods = &layout.lods[m as usize * MAX_LODS..][..MAX_LODS];
+                lod_level(*s, lod.viewer, lods, lod.lod_scale) as u8
+            })
+            .collect();
+        return build_output_lod(layout, mask, &levels, lod.levels, instances_per_object);
+    }
+    let counts: Vec<u32> = (mask.chunks(WORDS_PER_CHUNK))
+        .map(|c| c.iter().map(|w| w.count_ones()).sum())
+        .collect();
+    build_output(layout, mask, &counts, instances_per_object)
+}
+
 /// What each sphere is tested against: every display's planes and far split, after
 /// its block's tests when the coarse cull runs (the frame's, then each display's).
 #[derive(Clone, Copy)]

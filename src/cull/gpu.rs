@@ -10,6 +10,7 @@
 //! count. The buffers they read and write are [`super::gpu_buffers`]'s.
 
 use crate::cull::gpu_buffers::{CullScene, CullTargets};
+use crate::occlusion::Phase;
 use crate::shaders::{
     COARSE_BINDINGS, CULL_BINDINGS, CullPass, Windows, bind_group, bind_group_layout,
     compute_pipeline, pipeline_layout, subgroup_tier,
@@ -26,6 +27,20 @@ pub struct GpuCuller {
     coarse: Option<CoarsePipelines>,
     /// The floor kernel, when asked for (`profile`).
     floor: Option<wgpu::ComputePipeline>,
+    /// With occlusion: the cull pass's early and late phases, over everything and (with
+    /// the coarse cull) over candidates.
+    phases: Vec<((bool, Phase), wgpu::ComputePipeline)>,
+}
+
+/// What a [`GpuCuller`] is built for besides the display passes.
+#[derive(Clone, Copy, Debug, Default, PartialEq, Eq)]
+pub struct CullerFeatures {
+    /// The frame's coarse cull.
+    pub coarse: bool,
+    /// The floor kernel (`profile`).
+    pub floor: bool,
+    /// Two-phase occlusion culling.
+    pub occlusion: bool,
 }
 
 /// The coarse cull's pipelines.
@@ -41,11 +56,12 @@ struct CoarsePipelines {
 impl GpuCuller {
     /// The display passes, and with `coarse` the frame passes and the display passes
     /// over their candidates too; with `floor` the floor kernel.
-    pub fn new(
-        device: &wgpu::Device,
-        (coarse, floor): (bool, bool),
-        windows: Windows,
-    ) -> GpuCuller {
+    pub fn new(device: &wgpu::Device, features: CullerFeatures, windows: Windows) -> GpuCuller {
+        let CullerFeatures {
+            coarse,
+            floor,
+            occlusion,
+        } = features;
         let layout = bind_group_layout(device, "stereocull.cull", &CULL_BINDINGS, &windows);
         let build = |passes: &[CullPass], candidates: bool, with: &wgpu::PipelineLayout| {
             let build_one = |pass: &CullPass| {
@@ -78,12 +94,27 @@ impl GpuCuller {
             }
         });
         let floor = floor.then(|| build(&[CullPass::Floor], false, &display_layout).remove(0));
+        let cull = display[0];
+        let phased = |candidates: bool, phase: Phase| {
+            let source = cull.phased_source(candidates, phase, &windows);
+            let label = phase.label(&cull.label(candidates));
+            let pipeline =
+                compute_pipeline(device, &label, &display_layout, source, cull.entry_point());
+            ((candidates, phase), pipeline)
+        };
+        let over = [Some(false), features.coarse.then_some(true)];
+        let phases = (over.into_iter().flatten())
+            .flat_map(|c| [Phase::Early, Phase::Late].map(|p| (c, p)))
+            .filter(|_| occlusion)
+            .map(|(c, p)| phased(c, p))
+            .collect();
         GpuCuller {
             layout,
             windows,
             pipelines,
             coarse,
             floor,
+            phases,
         }
     }
 
@@ -115,6 +146,7 @@ impl GpuCuller {
             &scene.candidate_count,
             &scene.candidate_ranges,
             &scene.block_tests,
+            &scene.occlusion,
             &scene.spheres,
         ];
         let (label, layout) = ("stereocull.cull", &self.layout);
@@ -176,21 +208,29 @@ impl GpuCuller {
 
     /// Records the three dispatches for one display: a fixed count, whatever the
     /// number of instances; with the coarse cull's `slot` they run over that slot's
-    /// listed blocks, dispatched as the coarse passes sized them.
+    /// listed blocks, dispatched as the coarse passes sized them. The cull pass runs in
+    /// occlusion `phase` (built with occlusion, else the frustum alone).
     pub fn encode(
         &self,
         pass: &mut wgpu::ComputePass,
         scene: &CullScene,
         bind_group: &wgpu::BindGroup,
-        slot: Option<u32>,
+        (slot, phase): (Option<u32>, Phase),
     ) {
         pass.set_bind_group(0, bind_group, &[]);
         let (pipelines, slot) = match (&self.coarse, slot) {
             (Some(c), Some(slot)) => (&c.display, Some(slot)),
             _ => (&self.pipelines, None),
         };
+        let candidates = slot.is_some();
+        let phased = (self.phases.iter())
+            .find(|(key, _)| *key == (candidates, phase))
+            .map(|(_, p)| p);
         for (pipeline, kind) in pipelines.iter().zip(CullPass::DISPLAY) {
-            pass.set_pipeline(pipeline);
+            match (kind, phased) {
+                (CullPass::Cull, Some(p)) => pass.set_pipeline(p),
+                _ => pass.set_pipeline(pipeline),
+            }
             // The subgroup tier stands where CullPass::Cull does, on the same grid.
             let (grid, args) = match kind {
                 CullPass::Draws => {

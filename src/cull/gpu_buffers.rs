@@ -24,6 +24,10 @@ pub struct CullParams {
     pub max_groups: u32,
     /// Levels of detail in use: 1 (off) or [`crate::scene::MAX_LODS`].
     pub lod_levels: u32,
+    /// Words of the occlusion bits per display slot: one per span of places.
+    pub visibility_words: u32,
+    /// Where the depth pyramids start in the occlusion buffer, in words.
+    pub pyramid_offset: u32,
 }
 
 /// Bytes of the counts buffer: the draw count, then the visible total.
@@ -62,6 +66,21 @@ pub struct CullScene {
     /// The display passes' indirect dispatches, two per slot (the cull pass's over
     /// spans, then the compact pass's over positions), written by the coarse passes.
     pub(super) coarse_args: wgpu::Buffer,
+    /// Occlusion: per display slot, a word of bits per span of places (what the display
+    /// drew last frame), then the display's depth pyramids
+    /// ([`crate::occlusion::PyramidShape`]), which every display rebuilds in turn.
+    pub(super) occlusion: wgpu::Buffer,
+    occlusion_layout: (u32, u32),
+}
+
+/// What occlusion culling needs room for: how many displays keep visibility bits and
+/// the most texels of any display's pyramids (both 0 without occlusion).
+#[derive(Clone, Copy, Debug, Default, PartialEq, Eq)]
+pub struct OcclusionRoom {
+    /// Display slots with bits.
+    pub displays: u32,
+    /// Texels of the largest display's pyramids.
+    pub pyramid_texels: u32,
 }
 
 /// One display's cull outputs: what its draw pass consumes.
@@ -84,13 +103,19 @@ impl CullScene {
         layout: &CullLayout,
         slots: u32,
         levels: u32,
-        coarse_slots: u32,
+        (coarse_slots, occlusion): (u32, OcclusionRoom),
     ) -> CullScene {
         let slots = slots
             .max(layout.positions.len() as u32)
             .max(layout.order.len() as u32);
         let max_groups = device.limits().max_compute_workgroups_per_dimension;
-        let (params, groups) = cull_params(layout, (max_groups, levels));
+        let words = slots.next_multiple_of(BLOCK) / SPAN;
+        // The pyramids are bound on their own from here: a storage binding's offset is
+        // aligned.
+        let align = device.limits().min_storage_buffer_offset_alignment / 4;
+        let pyramid_offset = (occlusion.displays * words).next_multiple_of(align);
+        let occlusion_layout = (words, pyramid_offset);
+        let (params, groups) = cull_params(layout, (max_groups, levels, occlusion_layout));
         let room = |label: &str, contents: &[u8], per_slot: u64| {
             let usage = wgpu::BufferUsages::STORAGE | wgpu::BufferUsages::COPY_DST;
             init_buffer_with_room(device, label, contents, per_slot * slots as u64, usage)
@@ -173,6 +198,13 @@ impl CullScene {
                 per_slot(2 * 12),
                 scratch | wgpu::BufferUsages::INDIRECT,
             ),
+            occlusion: storage_buffer(
+                device,
+                "stereocull.occlusion",
+                4 * (pyramid_offset + occlusion.pyramid_texels).max(1) as u64,
+                scratch | wgpu::BufferUsages::COPY_SRC,
+            ),
+            occlusion_layout,
         }
     }
 
@@ -192,7 +224,8 @@ impl CullScene {
     /// Writes a new `layout` (instances inserted or removed) into the buffers, which must
     /// have room for it (same meshes, no more slots than made for); returns the bytes.
     pub fn reload(&mut self, queue: &wgpu::Queue, layout: &CullLayout) -> u64 {
-        let (params, groups) = cull_params(layout, (self.max_groups, self.levels));
+        let room = (self.max_groups, self.levels, self.occlusion_layout);
+        let (params, groups) = cull_params(layout, room);
         (self.instance_count, self.groups) = (params.instance_count, groups);
         let writes: [(&wgpu::Buffer, &[u8]); 6] = [
             (&self.params, &uniform_bytes(&params)),
@@ -226,6 +259,23 @@ impl CullScene {
     /// entry), whatever the levels of detail (their span sums add 4 bytes per level per
     /// [`SPAN`] instances).
     pub const BYTES_PER_INSTANCE: u64 = 16 + 4 + 4 + 4 + 4;
+
+    /// The occlusion buffer: per display slot [`CullScene::visibility_words`] words of
+    /// visibility bits, then from [`CullScene::pyramid_offset`] the depth pyramids.
+    pub fn occlusion(&self) -> &wgpu::Buffer {
+        &self.occlusion
+    }
+
+    /// Words of visibility bits per display slot.
+    pub fn visibility_words(&self) -> u32 {
+        self.occlusion_layout.0
+    }
+
+    /// Where the pyramids start in [`CullScene::occlusion`], in bytes (aligned for a
+    /// storage binding).
+    pub fn pyramid_offset(&self) -> u64 {
+        4 * self.occlusion_layout.1 as u64
+    }
 }
 
 impl CullTargets {
@@ -285,7 +335,10 @@ pub(super) struct Grids {
     pub blocks: u32,
 }
 
-fn cull_params(layout: &CullLayout, (max_groups, levels): (u32, u32)) -> (CullParams, Grids) {
+fn cull_params(
+    layout: &CullLayout,
+    (max_groups, levels, (visibility_words, pyramid_offset)): (u32, u32, (u32, u32)),
+) -> (CullParams, Grids) {
     let n = layout.spheres.len() as u32;
     let groups = Grids {
         positions: dispatch_size(n.div_ceil(WORKGROUP_SIZE), max_groups),
@@ -297,6 +350,8 @@ fn cull_params(layout: &CullLayout, (max_groups, levels): (u32, u32)) -> (CullPa
         mesh_count: layout.meshes.len() as u32,
         max_groups,
         lod_levels: levels,
+        visibility_words,
+        pyramid_offset,
     };
     (params, groups)
 }

@@ -88,6 +88,7 @@ impl ClassicPath {
             levels: options.lod_levels(),
             coarse_slots: 0,
             floor: false,
+            occlusion: Default::default(),
         };
         let culler = Culler::new(device, options.cull, layout, shape, windows);
         let draw_scene = DrawScene::new(device, &drawer, scene, slots)?;

@@ -11,9 +11,10 @@ use super::passes::{Logged, PassRecord, Recording, Timing, close, compute_pass, 
 use crate::cull::CullOutput;
 use crate::cull::coarse::BLOCK;
 use crate::cull::cpu;
-use crate::cull::gpu::GpuCuller;
-use crate::cull::gpu_buffers::{CullScene, CullTargets};
+use crate::cull::gpu::{CullerFeatures, GpuCuller};
+use crate::cull::gpu_buffers::{CullScene, CullTargets, OcclusionRoom};
 use crate::error::Result;
+use crate::occlusion::Phase;
 use crate::profiling::percentile;
 use crate::readback::{read_pod, wait_idle};
 use crate::records::{CullLayout, MoveEdit, PlaceEdit};
@@ -52,11 +53,14 @@ pub(super) struct CullShape {
     pub levels: u32,
     pub coarse_slots: u32,
     pub floor: bool,
+    pub occlusion: OcclusionRoom,
 }
 
 /// One view's cull outputs (per the cull contract) and, on the GPU, its bindings.
 pub(super) struct ViewCull {
     pub(super) view: CullView,
+    /// Which part of a two-phase cull it is (the frustum alone without occlusion).
+    phase: Phase,
     pub(super) targets: CullTargets,
     bind_group: Option<wgpu::BindGroup>,
 }
@@ -77,9 +81,15 @@ impl Culler {
                 outputs: Vec::new(),
             },
             CullMode::Gpu => {
-                let culler = GpuCuller::new(device, (shape.coarse_slots > 0, shape.floor), windows);
+                let features = CullerFeatures {
+                    coarse: shape.coarse_slots > 0,
+                    floor: shape.floor,
+                    occlusion: shape.occlusion.displays > 0,
+                };
+                let culler = GpuCuller::new(device, features, windows);
                 let (slots, levels) = (shape.slots, shape.levels);
-                let scene = CullScene::new(device, &layout, slots, levels, shape.coarse_slots);
+                let room = (shape.coarse_slots, shape.occlusion);
+                let scene = CullScene::new(device, &layout, slots, levels, room);
                 let scene = Box::new(scene);
                 let coarse = culler.coarse_bind_group(device, &scene);
                 Kind::Gpu {
@@ -106,7 +116,7 @@ impl Culler {
     pub(super) fn view(
         &self,
         device: &wgpu::Device,
-        view: CullView,
+        (view, phase): (CullView, Phase),
         contexts: [&wgpu::Buffer; 2],
     ) -> ViewCull {
         let targets = CullTargets::new(device, self.slots, self.draws);
@@ -118,6 +128,7 @@ impl Culler {
         };
         ViewCull {
             view,
+            phase,
             targets,
             bind_group,
         }
@@ -215,7 +226,7 @@ impl Culler {
     pub(super) fn encode(
         &self,
         encoder: &mut wgpu::CommandEncoder,
-        view: &ViewCull,
+        (view, phase): (&ViewCull, Phase),
         timing: Timing,
         logged: Logged,
     ) -> u32 {
@@ -232,9 +243,22 @@ impl Culler {
         };
         let slot = coarse.as_ref().and(view.view.coarse_slot());
         compute_pass(encoder, timing, logged, |pass| {
-            culler.encode(pass, scene, group, slot);
+            culler.encode(pass, scene, group, (slot, phase));
         });
         GpuCuller::DISPATCHES_PER_DISPLAY
+    }
+
+    /// The occlusion buffer, the words of visibility bits per display in it and where
+    /// the displays' shared depth pyramids start (bytes), GPU culling.
+    pub(super) fn occlusion(&self) -> Option<(&wgpu::Buffer, u32, u64)> {
+        match &self.kind {
+            Kind::Gpu { scene, .. } => Some((
+                scene.occlusion(),
+                scene.visibility_words(),
+                scene.pyramid_offset(),
+            )),
+            Kind::Cpu { .. } => None,
+        }
     }
 
     /// GPU bytes per instance the culler keeps besides the views' outputs.
@@ -293,6 +317,13 @@ impl Culler {
     }
 }
 
+impl ViewCull {
+    /// Which part of a two-phase cull the view is.
+    pub(super) fn phase(&self) -> Phase {
+        self.phase
+    }
+}
+
 /// Diagnostics read back after a frame was submitted.
 impl Culler {
     /// Wall-clock medians over `rounds` submissions each (submit, then wait) of the
@@ -344,7 +375,8 @@ impl Culler {
             })?);
             for ((v, group), s) in groups.iter().zip(&mut samples[1..]) {
                 let slot = coarse.as_ref().and(v.view.coarse_slot());
-                s.push(once(&|pass| culler.encode(pass, scene, group, slot))?);
+                let phased = (slot, v.phase);
+                s.push(once(&|pass| culler.encode(pass, scene, group, phased))?);
             }
         }
         let mut medians = samples.iter().map(|s| percentile(s, 0.5));

@@ -47,6 +47,9 @@ pub enum CullView {
     Eye(usize, usize),
     /// Display `i`'s far layer: its far instances, drawn once.
     Far(usize),
+    /// Display `i`'s late occlusion phase: what the early phase did not draw and its
+    /// depth pyramids do not hide (the display frustum, both eyes).
+    Late(usize),
     /// Foveated display `i`'s insets (with the inset cull): the inset pair's frustum.
     Inset(usize),
     /// The frame's light (with shadows).
@@ -61,7 +64,9 @@ impl CullView {
     /// test the coarse cull's guarantee is stated for).
     pub fn coarse_slot(self) -> Option<u32> {
         match self {
-            CullView::Display(i) | CullView::Eye(i, _) | CullView::Far(i) => Some(i as u32),
+            CullView::Display(i) | CullView::Eye(i, _) | CullView::Far(i) | CullView::Late(i) => {
+                Some(i as u32)
+            }
             CullView::Inset(_) | CullView::Light => None,
         }
     }

@@ -11,14 +11,18 @@ use super::culler::{CullShape, Culler};
 use super::far_pass::{Far, FarLayers};
 use super::frame::{CullView, FramePlan, FrameStats};
 use super::inputs::PathInputs;
-use super::passes::{PassRecord, Recording, Timing, draw_pass};
+use super::options::RendererOptions;
+use super::passes::{PassRecord, Recording, Timing, compute_pass, draw_pass};
 use super::shadow_pass::ShadowPass;
 use super::targets::TargetViews;
 use super::view_pass::ViewPass;
-use crate::cull::gpu_buffers::CullTargets;
+use crate::contexts::context_buffer;
+use crate::cull::gpu_buffers::{CullTargets, OcclusionRoom};
+use crate::cull::pyramid::PyramidPass;
 use crate::draw::{DrawFeatures, DrawScene, Drawer, Drawing};
 use crate::error::Result;
 use crate::modes::StereoMode;
+use crate::occlusion::{Phase, PyramidShape};
 use crate::shaders::DrawKey;
 
 /// One display: a view (its context, cull and draw bindings) and its pipeline variant,
@@ -28,6 +32,9 @@ pub(super) struct IndirectDisplay {
     pub(super) view: ViewPass,
     key: DrawKey,
     pub(super) inset: Option<ViewPass>,
+    /// With occlusion: the late phase (`view` is then the early one) and the shape of
+    /// the display's pyramids.
+    pub(super) late: Option<(ViewPass, PyramidShape)>,
 }
 
 pub(super) struct IndirectPath {
@@ -39,6 +46,9 @@ pub(super) struct IndirectPath {
     shadow: Option<ShadowPass>,
     /// With the far layer: the stereo displays' far layers.
     pub(super) far: Option<Far>,
+    /// With occlusion: the depth pyramids' passes, and the device that binds each
+    /// frame's depth target to them (the caller may hand a different target each frame).
+    pyramid: Option<Box<(PyramidPass, wgpu::Device)>>,
 }
 
 impl IndirectPath {
@@ -58,11 +68,17 @@ impl IndirectPath {
             Some(_) => plan.displays.len() as u32,
             None => 0,
         };
+        let shapes = pyramid_shapes(plan, options);
+        let occlusion = OcclusionRoom {
+            displays: plan.displays.len() as u32 * u32::from(shapes.iter().any(Option::is_some)),
+            pyramid_texels: shapes.iter().flatten().map(|s| s.len()).max().unwrap_or(0),
+        };
         let shape = CullShape {
             slots,
             levels: options.lod_levels(),
             coarse_slots,
             floor: options.cull_floor,
+            occlusion,
         };
         let culler = Culler::new(device, options.cull, layout, shape, windows);
         let keys = draw_keys(device, plan, options.mode);
@@ -81,7 +97,11 @@ impl IndirectPath {
             drawer: &drawer,
             scene: &draw_scene,
         };
-        let displays = indirect_displays(device, (&keys, plan), drawing, frame, &culler);
+        let displays = indirect_displays(device, (&keys, plan, &shapes), drawing, frame, &culler);
+        let pyramid = (occlusion.displays > 0).then(|| {
+            let pass = PyramidPass::new(device, options.sample_count);
+            Box::new((pass, device.clone()))
+        });
         let shadow = options
             .shadows
             .then(|| ShadowPass::new(device, drawing, frame, &culler));
@@ -97,6 +117,7 @@ impl IndirectPath {
             displays,
             shadow,
             far,
+            pyramid,
         })
     }
 
@@ -161,7 +182,7 @@ impl IndirectPath {
     ) -> FrameStats {
         let culled = self.encode_cull(encoder, index, (timer, display), log);
         let multiview = self.displays[index].key.multiview_mask();
-        let what = (log, PassRecord::display("draw", index));
+        let what = (&mut *log, PassRecord::display("draw", index));
         let draw_calls = draw_pass(
             encoder,
             target,
@@ -171,9 +192,59 @@ impl IndirectPath {
             what,
             |pass| self.draw(pass, index),
         );
+        let late = self.encode_late(encoder, (index, target), (timer, display), log);
         FrameStats {
-            draw_calls: culled.draw_calls + draw_calls,
+            draw_calls: culled.draw_calls + draw_calls + late.draw_calls,
+            dispatches: culled.dispatches + late.dispatches,
             ..culled
+        }
+    }
+
+    /// With occlusion, display `index`'s second phase after its early draw into
+    /// `target`: the pyramids of the early depth, the late cull, and a draw pass that
+    /// keeps what the early one drew.
+    fn encode_late(
+        &self,
+        encoder: &mut wgpu::CommandEncoder,
+        (index, target): (usize, &TargetViews),
+        (timer, display): Timing,
+        log: &mut Vec<PassRecord>,
+    ) -> FrameStats {
+        let state = &self.displays[index];
+        let (Some((late, shape)), Some((pyramid, device)), Some((buffer, _, offset))) = (
+            &state.late,
+            self.pyramid.as_deref(),
+            self.culler.occlusion(),
+        ) else {
+            return FrameStats::default();
+        };
+        let texels = wgpu::BufferBinding {
+            buffer,
+            offset,
+            size: std::num::NonZeroU64::new(4 * shape.len() as u64),
+        };
+        let group = pyramid.bind_group(device, state.view.context(), texels, target.depth);
+        let mut dispatches = 0;
+        let what = (&mut *log, PassRecord::display("pyramid", index));
+        compute_pass(encoder, (&mut *timer, display), what, |pass| {
+            dispatches += pyramid.encode(pass, &group, *shape);
+        });
+        let what = (&mut *log, PassRecord::display("late_cull", index));
+        dispatches += late.encode_cull(encoder, &self.culler, (&mut *timer, display), what);
+        let what = (log, PassRecord::display("late_draw", index));
+        let draw_calls = draw_pass(
+            encoder,
+            target,
+            false,
+            None,
+            (timer, display),
+            what,
+            |pass| late.draw(pass, self.drawing(), Some(state.key)),
+        );
+        FrameStats {
+            draw_calls,
+            dispatches,
+            ..FrameStats::default()
         }
     }
 
@@ -183,15 +254,43 @@ impl IndirectPath {
         &self,
         encoder: &mut wgpu::CommandEncoder,
         index: usize,
+        timing: Timing,
+        log: &mut Vec<PassRecord>,
+    ) -> FrameStats {
+        self.encode_cull_as(encoder, (index, false), timing, log)
+    }
+
+    /// [`IndirectPath::encode_cull`] for a display drawn in one pass (the caller's):
+    /// with occlusion, its cull is then the frustum's alone, which draws everything in
+    /// that pass.
+    pub(super) fn encode_cull_in_one_pass(
+        &self,
+        encoder: &mut wgpu::CommandEncoder,
+        index: usize,
+        timing: Timing,
+        log: &mut Vec<PassRecord>,
+    ) -> FrameStats {
+        self.encode_cull_as(encoder, (index, true), timing, log)
+    }
+
+    fn encode_cull_as(
+        &self,
+        encoder: &mut wgpu::CommandEncoder,
+        (index, one_pass): (usize, bool),
         (timer, display): Timing,
         log: &mut Vec<PassRecord>,
     ) -> FrameStats {
         let state = &self.displays[index];
         let what = (&mut *log, PassRecord::display("cull", index));
-        let mut stats = FrameStats {
-            dispatches: state
+        let timing = (&mut *timer, display);
+        let dispatches = match one_pass {
+            true => state
                 .view
-                .encode_cull(encoder, &self.culler, (timer, display), what),
+                .encode_frustum_cull(encoder, &self.culler, timing, what),
+            false => state.view.encode_cull(encoder, &self.culler, timing, what),
+        };
+        let mut stats = FrameStats {
+            dispatches,
             ..FrameStats::default()
         };
         if let Some(inset) = &state.inset {
@@ -262,17 +361,43 @@ impl IndirectPath {
 /// `plan` culls the display's insets.
 fn indirect_displays(
     device: &wgpu::Device,
-    (keys, plan): (&[DrawKey], &FramePlan),
+    (keys, plan, shapes): (&[DrawKey], &FramePlan, &[Option<PyramidShape>]),
     drawing: Drawing,
     frame: &wgpu::Buffer,
     culler: &Culler,
 ) -> Vec<IndirectDisplay> {
     let view = |v| ViewPass::new(device, drawing, frame, culler, v);
-    (keys.iter().enumerate())
-        .map(|(i, &key)| IndirectDisplay {
-            view: view(CullView::Display(i)),
-            key,
-            inset: plan.insets[i].map(|_| view(CullView::Inset(i))),
+    let phased = |v, context| ViewPass::phased(device, drawing, frame, culler, v, context);
+    (keys.iter().enumerate().zip(shapes))
+        .map(|((i, &key), shape)| {
+            let (display, late) = match shape {
+                Some(shape) => {
+                    let early =
+                        phased((CullView::Display(i), Phase::Early), context_buffer(device));
+                    let context = early.context().clone();
+                    let late = phased((CullView::Late(i), Phase::Late), context);
+                    (early, Some((late, *shape)))
+                }
+                None => (view(CullView::Display(i)), None),
+            };
+            IndirectDisplay {
+                view: display,
+                key,
+                inset: plan.insets[i].map(|_| view(CullView::Inset(i))),
+                late,
+            }
+        })
+        .collect()
+}
+
+/// Each display's pyramid shape where it culls by occlusion ([`RendererOptions::occludes`]).
+fn pyramid_shapes(plan: &FramePlan, options: &RendererOptions) -> Vec<Option<PyramidShape>> {
+    (plan.resolved.displays.iter().zip(&plan.displays))
+        .map(|(d, context)| {
+            options.occludes(d.eyes.len()).then(|| PyramidShape {
+                eye: context.resolution.as_uvec2(),
+                eyes: d.eyes.len() as u32,
+            })
         })
         .collect()
 }

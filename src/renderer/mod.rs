@@ -107,7 +107,7 @@ use classic::ClassicPath;
 pub use frame::{CullView, FramePlan, FrameStats, PlannedCull, instances_per_object};
 use indirect::IndirectPath;
 use inputs::PathInputs;
-pub use options::{CoarseMode, CullMode, LOD_PIXELS, RendererOptions, frame_lod};
+pub use options::{CoarseMode, CullMode, LOD_PIXELS, OcclusionMode, RendererOptions, frame_lod};
 pub use passes::{Level, PassRecord};
 use passes::{Recording, close, open_display};
 pub use readback::{Diagnostics, FarSplit};

@@ -45,6 +45,24 @@ pub enum CoarseMode {
     Off,
 }
 
+/// Whether displays cull what nearer geometry hides ([`crate::occlusion`]): two phases
+/// per display (what it drew last frame, then the rest against the early depth's
+/// pyramids, one per eye). The image is the same either way.
+#[derive(Clone, Copy, Debug, Default, PartialEq, Eq, Hash, serde::Serialize)]
+#[cfg_attr(feature = "cli", derive(clap::ValueEnum))]
+#[serde(rename_all = "lowercase")]
+pub enum OcclusionMode {
+    /// Off: occlusion pays only where a scene hides much of what the frustum keeps,
+    /// which the renderer cannot know; an engine with interiors turns it on.
+    #[default]
+    Auto,
+    /// On wherever it applies: GPU culling in `instanced` mode, displays of one or two
+    /// views, without the far layer (not composed with it yet).
+    On,
+    /// Never.
+    Off,
+}
+
 /// What a [`super::Renderer`] is made with; `Default` is the GPU-driven `instanced` mode
 /// with GPU culling.
 #[derive(Clone, Debug)]
@@ -96,6 +114,8 @@ pub struct RendererOptions {
     /// `cull_floor`: for `profile`'s `cull_over_floor`. GPU culling, `instanced` and
     /// `multiview` only; it draws nothing.
     pub cull_floor: bool,
+    /// Occlusion culling ([`OcclusionMode`]).
+    pub occlusion: OcclusionMode,
 }
 
 /// Screen-space error, in pixels, a level of detail may show.
@@ -140,6 +160,17 @@ impl RendererOptions {
         self.shadows.then_some(self.light.shadow_map_size)
     }
 
+    /// Whether display `views` (views of one display) culls by occlusion: asked for, on
+    /// the GPU, in `instanced` mode, one or two views (a foveated display's insets see
+    /// through gaps its outer views' pixels miss), no far layer (not composed yet).
+    pub fn occludes(&self, views: usize) -> bool {
+        self.occlusion == OcclusionMode::On
+            && self.cull == CullMode::Gpu
+            && self.mode == StereoMode::Instanced
+            && views <= 2
+            && !self.far_layer
+    }
+
     /// The attachments the draw pipelines are built for.
     pub fn target_format(&self) -> TargetFormat {
         TargetFormat {
@@ -168,6 +199,7 @@ impl Default for RendererOptions {
             inset_cull: false,
             binding_limit: None,
             cull_floor: false,
+            occlusion: OcclusionMode::Auto,
         }
     }
 }

@@ -24,7 +24,7 @@ impl Renderer {
             for i in 0..self.shapes.len() {
                 let display = open_display(&timer, &self.names[i], encoder);
                 let timing = (&mut timer, &display);
-                let culled = p.encode_cull(encoder, i, timing, &mut self.passes);
+                let culled = p.encode_cull_in_one_pass(encoder, i, timing, &mut self.passes);
                 stats.dispatches += culled.dispatches;
                 stats.draw_calls += culled.draw_calls;
                 close(&timer, encoder, display);

@@ -7,6 +7,7 @@ use super::{Path, Renderer};
 use crate::cull::CullOutput;
 use crate::cull::gpu_buffers::{COUNTS_BYTES, CullTargets};
 use crate::error::Result;
+use crate::occlusion::PyramidShape;
 use crate::readback::read_pod;
 use crate::records::DrawArgs;
 
@@ -96,6 +97,59 @@ impl Diagnostics<'_> {
             }
             _ => Ok(None),
         }
+    }
+
+    /// Display `index`'s late occlusion phase of the last frame (what its early phase
+    /// did not draw and its pyramids do not hide; the contract's buffers), read back
+    /// after it was submitted; `None` for a display without occlusion.
+    pub fn late_cull(&self, index: usize) -> Result<Option<CullOutput>> {
+        match &self.renderer.path {
+            Path::Indirect(p) if index < self.renderer.shapes.len() => {
+                match &p.displays[index].late {
+                    Some((late, _)) => p
+                        .read_targets(self.device, self.queue, late.cull())
+                        .map(Some),
+                    None => Ok(None),
+                }
+            }
+            _ => Ok(None),
+        }
+    }
+
+    /// Display `index`'s occlusion state after the last frame: its pyramids' shape and
+    /// its visibility words (one per span of [`crate::shaders::SPAN`] places, bit `k %
+    /// SPAN` of word `k / SPAN` set where the late phase found place `k` not hidden),
+    /// read back; `None` for a display without occlusion.
+    pub fn visibility(&self, index: usize) -> Result<Option<(PyramidShape, Vec<u32>)>> {
+        let Path::Indirect(p) = &self.renderer.path else {
+            return Ok(None);
+        };
+        let Some((_, shape)) = p.displays.get(index).and_then(|d| d.late.as_ref()) else {
+            return Ok(None);
+        };
+        let Some((buffer, words, _)) = p.culler.occlusion() else {
+            return Ok(None);
+        };
+        let bytes = 4 * words as u64;
+        let all: Vec<u32> = read_pod(self.device, self.queue, buffer, bytes * (index as u64 + 1))?;
+        Ok(Some((*shape, all[index * words as usize..].to_vec())))
+    }
+
+    /// The depth pyramids the last display with occlusion built in the last frame (the
+    /// displays share one buffer), read back; `None` without occlusion.
+    pub fn pyramid(&self) -> Result<Option<Vec<f32>>> {
+        let Path::Indirect(p) = &self.renderer.path else {
+            return Ok(None);
+        };
+        let (Some((_, shape)), Some((buffer, _, offset))) = (
+            p.displays.iter().rev().find_map(|d| d.late.as_ref()),
+            p.culler.occlusion(),
+        ) else {
+            return Ok(None);
+        };
+        let bytes = offset + 4 * shape.len() as u64;
+        let all: Vec<f32> = read_pod(self.device, self.queue, buffer, bytes)?;
+        Ok(Some(all[offset as usize / 4..].to_vec()))
     }
 
     /// The last frame's far/near split per display (`None` for displays without a far
@@ -202,7 +256,7 @@ impl IndirectPath {
         }
     }
 
-    fn read_targets(
+    pub(super) fn read_targets(
         &self,
         device: &wgpu::Device,
         queue: &wgpu::Queue,

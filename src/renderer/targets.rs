@@ -119,7 +119,15 @@ impl TargetShape {
             attachment | wgpu::TextureUsages::COPY_SRC | wgpu::TextureUsages::TEXTURE_BINDING,
             1,
         );
-        let depth = texture("stereocull.depth", format.depth, attachment, format.samples);
+        // TEXTURE_BINDING: occlusion reduces it into pyramids; COPY_SRC: tests read it.
+        let depth_usage =
+            attachment | wgpu::TextureUsages::TEXTURE_BINDING | wgpu::TextureUsages::COPY_SRC;
+        let depth = texture(
+            "stereocull.depth",
+            format.depth,
+            depth_usage,
+            format.samples,
+        );
         let multisampled = (format.samples > 1).then(|| {
             texture(
                 "stereocull.color_msaa",

@@ -10,6 +10,7 @@ use crate::contexts::DisplayContext;
 use crate::contexts::context_buffer;
 use crate::cull::gpu_buffers::CullTargets;
 use crate::draw::{Drawer, Drawing};
+use crate::occlusion::Phase;
 use crate::records::uniform_bytes;
 use crate::shaders::DrawKey;
 
@@ -33,6 +34,26 @@ impl ViewPass {
         view: CullView,
     ) -> ViewPass {
         let context = context_buffer(device);
+        ViewPass::phased(
+            device,
+            drawing,
+            frame,
+            culler,
+            (view, Phase::Frustum),
+            context,
+        )
+    }
+
+    /// `view` in occlusion `phase`, with `context` for its context buffer (the late
+    /// phase shares its display's).
+    pub(super) fn phased(
+        device: &wgpu::Device,
+        drawing: Drawing,
+        frame: &wgpu::Buffer,
+        culler: &Culler,
+        view: (CullView, Phase),
+        context: wgpu::Buffer,
+    ) -> ViewPass {
         let cull = culler.view(device, view, [frame, &context]);
         ViewPass {
             draw_bind_group: drawing.drawer.bind_group(
@@ -73,8 +94,8 @@ impl ViewPass {
         write(queue, &self.context, &uniform_bytes(context)) + culler.upload(queue, &self.cull)
     }
 
-    /// Records the view's cull (on the GPU), timed and logged as `logged`. Returns the
-    /// dispatches.
+    /// Records the view's cull (on the GPU) in its phase, timed and logged as `logged`.
+    /// Returns the dispatches.
     pub(super) fn encode_cull(
         &self,
         encoder: &mut wgpu::CommandEncoder,
@@ -82,7 +103,19 @@ impl ViewPass {
         timing: Timing,
         logged: Logged,
     ) -> u32 {
-        culler.encode(encoder, &self.cull, timing, logged)
+        culler.encode(encoder, (&self.cull, self.cull.phase()), timing, logged)
+    }
+
+    /// [`ViewPass::encode_cull`] by the frustum alone, whatever the view's phase: for
+    /// a display drawn in one pass (the caller's).
+    pub(super) fn encode_frustum_cull(
+        &self,
+        encoder: &mut wgpu::CommandEncoder,
+        culler: &Culler,
+        timing: Timing,
+        logged: Logged,
+    ) -> u32 {
+        culler.encode(encoder, (&self.cull, Phase::Frustum), timing, logged)
     }
 
     /// The view's one multi-draw into `pass`: with `drawer`'s pipeline for `key`, or

@@ -71,7 +71,7 @@ const COMPUTE: wgpu::ShaderStages = wgpu::ShaderStages::COMPUTE;
 /// Every cull pass's bindings: the frame context, per display its context and outputs,
 /// the scene data uploaded once, scratch shared by all displays, and the frame's coarse
 /// cull results.
-pub const CULL_BINDINGS: [Binding; 18] = [
+pub const CULL_BINDINGS: [Binding; 19] = [
     binding("frame", Access::Uniform, "FrameContext", COMPUTE),
     binding("display", Access::Uniform, "DisplayContext", COMPUTE),
     binding("params", Access::Uniform, "CullParams", COMPUTE),
@@ -131,6 +131,11 @@ pub const CULL_BINDINGS: [Binding; 18] = [
         "array<CoarseTest>",
         COMPUTE,
     ),
+    // Occlusion (wgsl/shared/occlusion.wgsl): per display slot, a word per span of
+    // places whose low SPAN bits say which places that display drew last frame; then,
+    // from params.pyramid_offset, the display's eyes' depth pyramids (src/occlusion.rs,
+    // f32 bits), rebuilt per display. One binding: GL has 16 storage buffers a stage.
+    binding("occlusion", Access::StorageReadWrite, "array<u32>", COMPUTE),
     // World bounding spheres in cull order.
     windowed(
         "spheres",

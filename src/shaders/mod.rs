@@ -34,6 +34,8 @@ pub const BLOCK_SLACK: f32 = 1.0 / 1048576.0;
 const CONTEXTS: &str = include_str!("../../wgsl/shared/contexts.wgsl");
 const RECORDS: &str = include_str!("../../wgsl/shared/records.wgsl");
 const CULL_MATH: &str = include_str!("../../wgsl/shared/cull_math.wgsl");
+const PYRAMID: &str = include_str!("../../wgsl/shared/pyramid.wgsl");
+const OCCLUSION: &str = include_str!("../../wgsl/shared/occlusion.wgsl");
 const CULL_SUBGROUPS: &str = concat!(
     include_str!("../../wgsl/cull.wgsl"),
     include_str!("../../wgsl/cull_subgroups.wgsl")
@@ -56,6 +58,8 @@ pub use bindings::{
 };
 pub(crate) use bindings::{compute_pipeline, dispatch_size, pipeline_layout};
 pub use windows::{Window, Windowed, Windows};
+
+use crate::occlusion::Phase;
 
 /// What a scatter's edits carry; each edit's first word is its key (a place, or a
 /// slot), at most one edit per key.
@@ -161,6 +165,11 @@ impl CullPass {
     /// The pass's source: a display pass runs over every instance, or with
     /// `over_candidates` over the frame's coarse cull candidates.
     pub fn source(self, over_candidates: bool, windows: &Windows) -> String {
+        self.phased_source(over_candidates, Phase::Frustum, windows)
+    }
+
+    /// [`CullPass::source`] in occlusion `phase` (which only the cull pass reads).
+    pub fn phased_source(self, over_candidates: bool, phase: Phase, windows: &Windows) -> String {
         let body = match self {
             CullPass::CoarseBlocks | CullPass::CoarseLists | CullPass::CoarsePlace => {
                 include_str!("../../wgsl/cull_coarse.wgsl")
@@ -172,8 +181,9 @@ impl CullPass {
             CullPass::Floor => include_str!("../../wgsl/cull_floor.wgsl"),
         };
         let coarse = format!(
-            "const COARSE: bool = {};\n",
-            over_candidates && !self.is_frame()
+            "const COARSE: bool = {};\nconst OCCLUSION: u32 = {}u;\n",
+            over_candidates && !self.is_frame(),
+            phase as u32
         );
         let mut bindings = declarations(&CULL_BINDINGS, 0, windows);
         if self.is_frame() {
@@ -186,9 +196,22 @@ impl CullPass {
             RECORDS,
             &bindings,
             CULL_MATH,
+            PYRAMID,
+            OCCLUSION,
             body,
         ]
         .concat()
+    }
+
+    /// The cull passes' occlusion variants: both tiers, over everything and over
+    /// candidates, early and late.
+    pub fn occlusion_variants() -> Vec<(CullPass, bool, Phase)> {
+        let passes = [CullPass::Cull, CullPass::CullSubgroups];
+        let phases = [Phase::Early, Phase::Late];
+        (passes.into_iter())
+            .flat_map(|p| [false, true].map(|c| (p, c)))
+            .flat_map(|(p, c)| phases.map(|phase| (p, c, phase)))
+            .collect()
     }
 
     /// Every cull pipeline variant: the frame passes, the display passes (both tiers
@@ -382,6 +405,24 @@ fn constants() -> String {
     )
 }
 
+/// The depth pyramid's passes (`wgsl/occlusion_pyramid.wgsl`) over a depth target of
+/// `samples` samples per pixel; the layout is [`crate::cull::pyramid`]'s.
+pub fn pyramid_source(samples: u32) -> String {
+    let depth = match samples {
+        1 => "texture_depth_2d",
+        _ => "texture_depth_multisampled_2d",
+    };
+    let bindings = format!(
+        "const DEPTH_SAMPLES: u32 = {samples}u;\n\
+         @group(0) @binding(0) var<uniform> display: DisplayContext;\n\
+         @group(0) @binding(1) var<uniform> level: PyramidLevel;\n\
+         @group(0) @binding(2) var<storage, read_write> pyramid: array<f32>;\n\
+         @group(0) @binding(3) var depth: {depth};\n"
+    );
+    let body = include_str!("../../wgsl/occlusion_pyramid.wgsl");
+    [CONTEXTS, &bindings, PYRAMID, body].concat()
+}
+
 /// Group 2 of the built-in draw pipelines: the frame's shadow map and its comparison
 /// sampler (`light_reaching` in `wgsl/shared/draw_common.wgsl`; the layout is
 /// `shadow::bind_group_layout`).
@@ -440,6 +481,8 @@ pub fn all_sources() -> Vec<(String, String)> {
             let cull = CullPass::variants()
                 .into_iter()
                 .map(move |(p, c)| (p.label(c), p.source(c, w)));
+            let occlusion = (CullPass::occlusion_variants().into_iter())
+                .map(move |(p, c, phase)| (phase.label(&p.label(c)), p.phased_source(c, phase, w)));
             let draw = DrawKey::ALL.map(|k| (k.label(), k.source_with(None, w)));
             let others = [
                 (
@@ -464,8 +507,14 @@ pub fn all_sources() -> Vec<(String, String)> {
                     foveated_composite_source(),
                 ),
             ];
-            cull.chain(draw)
+            let pyramids = [1, 4].map(|samples| {
+                let label = format!("stereocull.occlusion_pyramid.x{samples}");
+                (label, pyramid_source(samples))
+            });
+            cull.chain(occlusion)
+                .chain(draw)
                 .chain(others)
+                .chain(pyramids)
                 .map(move |(label, source)| (format!("{label}{tag}"), source))
                 .collect::<Vec<_>>()
         })

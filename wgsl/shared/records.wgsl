@@ -58,6 +58,10 @@ struct CullParams {
     max_groups: u32,
     // Levels of detail in use: 1 (LOD off) or MAX_LODS.
     lod_levels: u32,
+    // Occlusion: words of visibility bits per display slot, and where the pyramids
+    // start in `occlusion`.
+    visibility_words: u32,
+    pyramid_offset: u32,
 }
 
 // One slot's block test of the coarse cull (src/cull/coarse.rs): a display's planes

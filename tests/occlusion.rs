@@ -1,0 +1,460 @@
+//! Occlusion culling: the image is the image without it, the GPU's phases are the CPU
+//! twin's byte for byte, the pyramids are the CPU reduction's, and the stereo rule keeps
+//! what one eye alone sees.
+
+mod support;
+
+use glam::{Affine3A, Vec3, Vec4};
+use rand::{Rng, SeedableRng};
+use rand_pcg::Pcg64Mcg;
+use stereocull::cull::CullOutput;
+use stereocull::device::Gpu;
+use stereocull::live::LiveScene;
+use stereocull::occlusion::{self, PyramidShape};
+use stereocull::procedural;
+use stereocull::records::CullLayout;
+use stereocull::renderer::{CoarseMode, DisplayTarget, OcclusionMode, Renderer, RendererOptions};
+use stereocull::rig::{Mount, Rig};
+use stereocull::scene::{Animation, Instance, Scene};
+use stereocull::shapes;
+use support::{Tolerance, assert_images_match, gpu, sized};
+
+fn options(occlusion: OcclusionMode) -> RendererOptions {
+    RendererOptions {
+        occlusion,
+        ..Default::default()
+    }
+}
+
+/// A renderer of its own targets, frame after frame.
+struct Session {
+    renderer: Renderer,
+    targets: Vec<DisplayTarget>,
+}
+
+impl Session {
+    fn new(gpu: &Gpu, scene: &Scene, rig: &Rig, options: RendererOptions) -> Session {
+        let renderer = Renderer::new(&gpu.device, scene, rig, options).unwrap();
+        let targets = renderer.create_targets(&gpu.device);
+        Session { renderer, targets }
+    }
+
+    fn frame(&mut self, gpu: &Gpu, rig: &Rig) -> Vec<image::RgbaImage> {
+        (self.renderer)
+            .submit_frame(&gpu.device, &gpu.queue, rig, 0.0, &self.targets)
+            .unwrap();
+        (self.targets.iter())
+            .map(|t| stereocull::readback::read_rgba8(&gpu.device, &gpu.queue, &t.color).unwrap())
+            .collect()
+    }
+
+    /// Display `d`'s early and late culls of the last frame.
+    fn phases(&self, gpu: &Gpu, d: usize) -> (CullOutput, CullOutput) {
+        let diagnostics = self.renderer.diagnostics(&gpu.device, &gpu.queue);
+        let early = diagnostics.cull(d).unwrap();
+        let late = diagnostics.late_cull(d).unwrap().expect("a late phase");
+        (early, late)
+    }
+}
+
+fn at(rig: &Rig, position: [f32; 3], yaw: f32) -> Rig {
+    let mut moved = rig.clone();
+    moved.viewer.position = position;
+    moved.viewer.yaw_deg = yaw;
+    moved
+}
+
+/// Poses through the rooms: for a head-mounted rig the start, a turn, a teleport two
+/// rooms over (across walls), then steps through a doorway's room and back; for a
+/// CAVE (whose screens stand in the room) steps and turns inside it.
+fn walk(rig: &Rig) -> Vec<Rig> {
+    let cave = [
+        ([0.2, 1.6, 0.3], 10.0),
+        ([0.2, 1.6, 0.3], 60.0),
+        ([-1.0, 1.2, 1.0], 120.0),
+        ([1.0, 1.6, -1.0], 200.0),
+        ([0.0, 1.7, 0.0], 300.0),
+    ];
+    if (rig.displays.iter()).any(|d| matches!(d.mount, Mount::Screen(_))) {
+        return cave.map(|(p, yaw)| at(rig, p, yaw)).to_vec();
+    }
+    [
+        ([0.0, 1.6, 2.0], 0.0),
+        ([0.0, 1.6, 2.0], 60.0),
+        ([12.5, 1.6, -11.0], 200.0),
+        ([12.5, 1.6, -11.0], 230.0),
+        ([1.0, 1.6, 1.0], 90.0),
+        ([0.5, 1.6, -0.5], 100.0),
+        ([0.0, 1.6, -2.5], 10.0),
+    ]
+    .map(|(p, yaw)| at(rig, p, yaw))
+    .to_vec()
+}
+
+/// What the walk and edit tests vary: the rig, levels of detail, MSAA, the coarse cull.
+const CASES: [(&str, bool, u32, CoarseMode); 5] = [
+    ("hmd", false, 1, CoarseMode::Off),
+    ("hmd", true, 4, CoarseMode::Off),
+    ("cave", true, 1, CoarseMode::On),
+    ("hmd-peripheral", false, 1, CoarseMode::On),
+    ("hmd-foveated", false, 1, CoarseMode::Off),
+];
+
+/// Frame after frame over a walk through the rooms, every preset (the foveated one
+/// runs without occlusion: see `RendererOptions::occludes`): each image with occlusion
+/// equals the image without it, and somewhere along the walk occlusion culls something
+/// and the late phase draws something (what came out from behind a wall in that frame).
+#[test]
+fn occlusion_changes_no_pixel_over_a_walk() {
+    let gpu = gpu();
+    let scene = procedural::rooms(600, 3);
+    for (preset, lod, samples, coarse) in CASES {
+        let rig = sized(preset, 96, 80);
+        let made = |occlusion| RendererOptions {
+            lod,
+            sample_count: samples,
+            coarse_cull: coarse,
+            ..options(occlusion)
+        };
+        let mut on = Session::new(&gpu, &scene, &rig, made(OcclusionMode::On));
+        let mut off = Session::new(&gpu, &scene, &rig, made(OcclusionMode::Off));
+        let mut counted = Counted::default();
+        for (step, pose) in walk(&rig).iter().enumerate() {
+            let what = format!("occlusion-{preset}-step{step}");
+            compare_frames(&gpu, (&mut on, &mut off), pose, &what, &mut counted);
+        }
+        let occludes = preset != "hmd-foveated";
+        assert_eq!(
+            counted.culled > 0,
+            occludes,
+            "{preset}: culled {}",
+            counted.culled
+        );
+        assert_eq!(
+            counted.late > 0,
+            occludes,
+            "{preset}: drew {} late",
+            counted.late
+        );
+    }
+}
+
+/// The same through a live scene's edits: props moved out from behind walls into view
+/// and back, props inserted and removed, frame after frame.
+#[test]
+fn occlusion_changes_no_pixel_through_edits() {
+    let gpu = gpu();
+    let scene = procedural::rooms(400, 4);
+    let rig = sized("hmd", 96, 80);
+    let mut live = LiveScene::new(scene.clone());
+    let mut on = Session::new(&gpu, &scene, &rig, options(OcclusionMode::On));
+    let mut off = Session::new(&gpu, &scene, &rig, options(OcclusionMode::Off));
+    let mut rng = Pcg64Mcg::seed_from_u64(11);
+    let mut counted = Counted::default();
+    for step in 0..6 {
+        if step > 0 {
+            edit(&mut live, &mut rng);
+        }
+        let mut twin = live.clone();
+        on.renderer
+            .sync(&gpu.device, &gpu.queue, &mut live)
+            .unwrap();
+        off.renderer
+            .sync(&gpu.device, &gpu.queue, &mut twin)
+            .unwrap();
+        let what = format!("occlusion-edits-step{step}");
+        compare_frames(&gpu, (&mut on, &mut off), &rig, &what, &mut counted);
+    }
+    assert!(counted.culled > 0 && counted.late > 0, "{counted:?}");
+}
+
+/// Moves a dozen props into view in front of the viewer (from wherever they were,
+/// behind walls mostly) and a dozen out of it, inserts eight and removes eight.
+fn edit(live: &mut LiveScene, rng: &mut Pcg64Mcg) {
+    let handles = live.handles();
+    let mut place = |h, near: bool| {
+        let at = match near {
+            true => Vec3::new(
+                rng.random_range(-2.0..2.0),
+                rng.random_range(0.5..2.5),
+                rng.random_range(-2.5..0.5),
+            ),
+            false => Vec3::new(
+                rng.random_range(-8.0..8.0),
+                1.0,
+                rng.random_range(-9.0..-4.0),
+            ),
+        };
+        let moved =
+            Affine3A::from_scale_rotation_translation(Vec3::splat(0.3), glam::Quat::IDENTITY, at);
+        live.set_transform(h, moved).unwrap();
+    };
+    for k in 0..24 {
+        place(handles[(k * 37 + 11) % handles.len()], k % 2 == 0);
+    }
+    for k in 0..8 {
+        let at = Vec3::new(
+            rng.random_range(-2.5..2.5),
+            1.2,
+            rng.random_range(-8.0..0.0),
+        );
+        live.insert(Instance {
+            world_from_local: Affine3A::from_translation(at)
+                * Affine3A::from_scale(Vec3::splat(0.4)),
+            mesh: k % 4,
+            color: Vec4::new(0.9, 0.3, 0.1, 1.0),
+            animation: Animation::NONE,
+        })
+        .unwrap();
+        let gone = live.handles()[rng.random_range(0..handles.len())];
+        live.remove(gone).unwrap();
+    }
+}
+
+/// Occlusion's work summed over frames: instances culled by it, and drawn late after
+/// the first frame.
+#[derive(Debug, Default)]
+struct Counted {
+    culled: usize,
+    late: usize,
+    frames: usize,
+}
+
+/// One frame of `pose` with occlusion (`on`) and without (`off`): the images equal
+/// (the same pipelines drawing the same visible surfaces: exact), and with occlusion
+/// no more drawn than the frustum keeps.
+fn compare_frames(
+    gpu: &Gpu,
+    (on, off): (&mut Session, &mut Session),
+    pose: &Rig,
+    what: &str,
+    counted: &mut Counted,
+) {
+    let with = on.frame(gpu, pose);
+    let without = off.frame(gpu, pose);
+    for (d, (a, b)) in with.iter().zip(&without).enumerate() {
+        let what = format!("{what}-display{d}");
+        assert_images_match(&what, a, b, Tolerance::EXACT);
+        let diagnostics = on.renderer.diagnostics(&gpu.device, &gpu.queue);
+        let Some(late) = diagnostics.late_cull(d).unwrap() else {
+            continue;
+        };
+        let early = diagnostics.cull(d).unwrap();
+        let frustum = (off.renderer.diagnostics(&gpu.device, &gpu.queue))
+            .cull(d)
+            .unwrap();
+        let drawn = early.visible.len() + late.visible.len();
+        assert!(
+            drawn <= frustum.visible.len(),
+            "{what}: drew more than the frustum keeps"
+        );
+        counted.culled += frustum.visible.len() - drawn;
+        counted.late += usize::from(counted.frames > 0) * late.visible.len();
+    }
+    counted.frames += 1;
+}
+
+/// Given the same depth pyramids and the same bits from last frame, the CPU twin
+/// ([`occlusion::cull_phases`]) writes the GPU's early and late buffers and bits, on
+/// random scenes of rooms and props, LOD off and on.
+#[test]
+fn gpu_phases_match_the_cpu_twin() {
+    let gpu = gpu();
+    for (seed, lod) in [(1, false), (2, true), (5, false)] {
+        let mut scene = procedural::rooms(300, seed);
+        scene
+            .instances
+            .extend(
+                procedural::scene(200, 4, seed)
+                    .instances
+                    .iter()
+                    .map(|i| Instance {
+                        mesh: i.mesh % 4,
+                        ..*i
+                    }),
+            );
+        let rig = sized("hmd", 80 + seed as u32, 61);
+        let options = RendererOptions {
+            lod,
+            ..options(OcclusionMode::On)
+        };
+        let mut session = Session::new(&gpu, &scene, &rig, options);
+        let layout = CullLayout::new(&scene);
+        let poses = walk(&rig);
+        session.frame(&gpu, &poses[0]);
+        for pose in &poses[1..4] {
+            let diagnostics = session.renderer.diagnostics(&gpu.device, &gpu.queue);
+            let (_, drawn) = diagnostics.visibility(0).unwrap().unwrap();
+            session.frame(&gpu, pose);
+            let diagnostics = session.renderer.diagnostics(&gpu.device, &gpu.queue);
+            let (shape, seen) = diagnostics.visibility(0).unwrap().unwrap();
+            let pyramid = diagnostics.pyramid().unwrap().unwrap();
+            let plan = session.renderer.plan(pose, 0.0).unwrap();
+            let job = (&plan.culls[0].job, &plan.displays[0]);
+            let twin =
+                occlusion::cull_phases(&layout, job, &plan.cull.lod, &drawn, (&pyramid, shape));
+            let (early, late) = session.phases(&gpu, 0);
+            assert_eq!(early, twin.early, "seed {seed}: early phase");
+            assert_eq!(late, twin.late, "seed {seed}: late phase");
+            assert_eq!(seen, twin.seen, "seed {seed}: visibility bits");
+            assert!(!late.visible.is_empty() || !early.visible.is_empty());
+        }
+    }
+}
+
+/// The GPU's pyramids equal the CPU reduction of the depth they were built from, on
+/// depth images of odd sizes (random scenes rendered at odd eye sizes). The pose holds
+/// still for three frames, so the third frame's late phase draws nothing and the depth
+/// read after it is the depth its pyramids were built from (asserted).
+#[test]
+fn pyramids_match_the_cpu_reduction() {
+    let gpu = gpu();
+    for (seed, [w, h]) in [(7, [37, 23]), (8, [64, 9]), (9, [1, 5])] {
+        let scene = procedural::scene(400, 6, seed);
+        let rig = sized("hmd", w, h);
+        let mut session = Session::new(&gpu, &scene, &rig, options(OcclusionMode::On));
+        for _ in 0..3 {
+            session.frame(&gpu, &rig);
+        }
+        let (_, late) = session.phases(&gpu, 0);
+        assert!(
+            late.visible.is_empty(),
+            "the third frame drew late: {:?}",
+            late.visible
+        );
+        let depth = read_depth(&gpu, &session.targets[0].depth);
+        let shape = PyramidShape {
+            eye: glam::UVec2::new(w, h),
+            eyes: 2,
+        };
+        let diagnostics = session.renderer.diagnostics(&gpu.device, &gpu.queue);
+        let pyramid = diagnostics.pyramid().unwrap().unwrap();
+        assert!(depth.iter().any(|&d| d < 1.0), "{w}x{h}: nothing drawn");
+        assert_eq!(pyramid, occlusion::reduce(&depth, 2 * w, shape), "{w}x{h}");
+    }
+}
+
+/// A wall half a meter ahead ends straight ahead of the viewer; a small cube 8 m ahead
+/// just behind its edge is seen by the right eye only. Occlusion draws it (in the right half
+/// of the image); moved well behind the wall it is culled, while the frustum keeps it.
+#[test]
+fn what_one_eye_sees_around_an_edge_is_drawn() {
+    let gpu = gpu();
+    let rig = sized("hmd", 384, 384);
+    let eye = Vec3::from(rig.viewer.position);
+    let scene = |x: f32| {
+        let mut s = Scene::default();
+        let cube = shapes::cuboid(Vec3::splat(0.5));
+        s.add_mesh("cube".to_string(), &cube.vertices, &cube.indices);
+        let instance = |at: Vec3, size: Vec3, color: Vec4| Instance {
+            world_from_local: Affine3A::from_scale_rotation_translation(
+                size,
+                glam::Quat::IDENTITY,
+                at,
+            ),
+            mesh: 0,
+            color,
+            animation: Animation::NONE,
+        };
+        s.instances = vec![
+            instance(
+                eye + Vec3::new(-2.0, 0.0, -0.5),
+                Vec3::new(4.0, 4.0, 0.05),
+                Vec4::ONE,
+            ),
+            instance(
+                eye + Vec3::new(x, 0.0, -8.0),
+                Vec3::splat(0.04),
+                Vec4::new(1.0, 0.0, 0.0, 1.0),
+            ),
+        ];
+        s
+    };
+    let red = |image: &image::RgbaImage, half: u32| {
+        let w = image.width() / 2;
+        (image.enumerate_pixels())
+            .filter(|(x, _, p)| x / w == half && p[0] > 150 && p[1] < 60)
+            .count()
+    };
+    let mut session = Session::new(&gpu, &scene(0.0), &rig, options(OcclusionMode::On));
+    for _ in 0..2 {
+        let image = session.frame(&gpu, &rig).remove(0);
+        assert!(red(&image, 1) > 0, "the right eye's view lacks the cube");
+        assert_eq!(red(&image, 0), 0, "the left eye should not see the cube");
+    }
+    let (early, late) = session.phases(&gpu, 0);
+    assert!(early.visible.contains(&1) || late.visible.contains(&1));
+    // One eye's test would drop it: the left eye alone finds it hidden.
+    let diagnostics = session.renderer.diagnostics(&gpu.device, &gpu.queue);
+    let (shape, _) = diagnostics.visibility(0).unwrap().unwrap();
+    let pyramid = diagnostics.pyramid().unwrap().unwrap();
+    let plan = session.renderer.plan(&rig, 0.0).unwrap();
+    let sphere = CullLayout::new(&scene(0.0)).spheres[1];
+    let eyes = &plan.displays[0].eye;
+    assert!(occlusion::occluded_in_eye(
+        sphere,
+        &eyes[0],
+        (&pyramid, shape),
+        0
+    ));
+    assert!(!occlusion::occluded_in_eye(
+        sphere,
+        &eyes[1],
+        (&pyramid, shape),
+        1
+    ));
+
+    let hidden = scene(-3.0);
+    let mut session = Session::new(&gpu, &hidden, &rig, options(OcclusionMode::On));
+    // The first frame draws everything late (nothing was drawn before it to hide
+    // behind), the second early (drawn last frame) and finds it hidden, the third not.
+    for _ in 0..3 {
+        session.frame(&gpu, &rig);
+    }
+    let (early, late) = session.phases(&gpu, 0);
+    let frustum = support::reference_culls(&hidden, &rig).remove(0);
+    assert!(
+        frustum.visible.contains(&1),
+        "the frustum should keep the hidden cube"
+    );
+    assert!(
+        !early.visible.contains(&1) && !late.visible.contains(&1),
+        "the hidden cube was drawn"
+    );
+}
+
+/// The display's depth target, read back row by row (`Depth32Float`).
+fn read_depth(gpu: &Gpu, texture: &wgpu::Texture) -> Vec<f32> {
+    let (w, h) = (texture.width(), texture.height());
+    let row = (4 * w).next_multiple_of(wgpu::COPY_BYTES_PER_ROW_ALIGNMENT);
+    let buffer = gpu.device.create_buffer(&wgpu::BufferDescriptor {
+        label: Some("depth readback"),
+        size: (row * h) as u64,
+        usage: wgpu::BufferUsages::COPY_DST | wgpu::BufferUsages::COPY_SRC,
+        mapped_at_creation: false,
+    });
+    let mut encoder = gpu.device.create_command_encoder(&Default::default());
+    encoder.copy_texture_to_buffer(
+        wgpu::TexelCopyTextureInfo {
+            texture,
+            mip_level: 0,
+            origin: wgpu::Origin3d::ZERO,
+            aspect: wgpu::TextureAspect::DepthOnly,
+        },
+        wgpu::TexelCopyBufferInfo {
+            buffer: &buffer,
+            layout: wgpu::TexelCopyBufferLayout {
+                offset: 0,
+                bytes_per_row: Some(row),
+                rows_per_image: Some(h),
+            },
+        },
+        texture.size(),
+    );
+    gpu.queue.submit([encoder.finish()]);
+    let size = (row * h) as u64;
+    let bytes = stereocull::readback::read_buffer(&gpu.device, &gpu.queue, &buffer, size).unwrap();
+    (bytes.chunks(row as usize))
+        .flat_map(|r| bytemuck::cast_slice::<u8, f32>(&r[..4 * w as usize]).to_vec())
+        .collect()
+}

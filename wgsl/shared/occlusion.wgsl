@@ -1,0 +1,138 @@
+// Occlusion culling's late test (src/occlusion.rs is its CPU twin: same operations, same
+// order, no fused multiply-add). OCCLUSION is 0 (frustum only), 1 (the early phase:
+// keep what the display drew last frame) or 2 (the late phase: keep what it did not
+// draw and the depth pyramids do not hide; record what they do not hide).
+// Composed after pyramid.wgsl, whose layout the pyramids have in `occlusion` from
+// params.pyramid_offset on (depths as bits: non-negative floats order as their bits).
+
+const ENTRY_SEEN: u32 = 0x40000000u;
+const BOUNDS_GROWTH_PX: f32 = 1.0;
+const DEPTH_SLACK: f32 = 1.0 / 65536.0;
+const DEPTH_MARGIN: f32 = 1.0 / 1048576.0;
+
+// Whether the display drew cull position k last frame.
+fn drawn_last_frame(k: u32) -> bool {
+    let word = occlusion[display.cull_slot * params.visibility_words + k / SPAN];
+    return ((word >> (k % SPAN)) & 1u) != 0u;
+}
+
+// Position k's entry `kept` (it passed the frustum) under the phase: the early phase
+// keeps it if drawn last frame; the late phase if not, unless hidden, and marks it
+// ENTRY_SEEN where not hidden.
+fn occlusion_entry(k: u32, s: vec4<f32>, kept: u32) -> u32 {
+    if (OCCLUSION == 0u) {
+        return kept;
+    }
+    let drawn = drawn_last_frame(k);
+    if (OCCLUSION == 1u) {
+        return select(0u, kept, drawn);
+    }
+    if (occluded(s)) {
+        return 0u;
+    }
+    return select(kept, 0u, drawn) | ENTRY_SEEN;
+}
+
+// Hidden from every eye of the display: the stereo rule.
+fn occluded(s: vec4<f32>) -> bool {
+    for (var e = 0u; e < min(display.instances_per_object, 2u); e++) {
+        if (!occluded_in_eye(s, e)) {
+            return false;
+        }
+    }
+    return true;
+}
+
+fn pyramid_texel(i: u32) -> f32 {
+    return bitcast<f32>(occlusion[params.pyramid_offset + i]);
+}
+
+fn view_center(s: vec4<f32>, m: mat4x4<f32>) -> vec3<f32> {
+    return vec3(
+        m[0].x * s.x + m[1].x * s.y + m[2].x * s.z + m[3].x,
+        m[0].y * s.x + m[1].y * s.y + m[2].y * s.z + m[3].y,
+        m[0].z * s.x + m[1].z * s.y + m[2].z * s.z + m[3].z,
+    );
+}
+
+fn nearest_distance(s: vec4<f32>, c: vec3<f32>) -> f32 {
+    let slack = (abs(c.x) + abs(c.y) + abs(c.z) + s.w) * DEPTH_SLACK;
+    return -c.z - s.w - slack;
+}
+
+// Depth-buffer value at view distance d > 0.
+fn depth_at(d: f32, clip: mat4x4<f32>) -> f32 {
+    return (clip[2].z * -d + clip[3].z) / d;
+}
+
+// Slopes (a / z) of the two tangents from the eye to the circle of radius r about
+// (a, z), least first.
+fn tangent_slopes(a: f32, z: f32, r: f32) -> vec2<f32> {
+    let t = sqrt(a * a + z * z - r * r);
+    let lo = (a * t - z * r) / (z * t + a * r);
+    let hi = (a * t + z * r) / (z * t - a * r);
+    return vec2(lo, hi);
+}
+
+// The finest level where pixels lo..=hi span at most two texels per axis.
+fn pyramid_level(lo: vec2<u32>, hi: vec2<u32>, levels: u32) -> u32 {
+    var l = 0u;
+    loop {
+        if (l + 1u >= levels) {
+            break;
+        }
+        let span = (hi >> vec2(l + 1u)) - (lo >> vec2(l + 1u));
+        if (span.x <= 1u && span.y <= 1u) {
+            break;
+        }
+        l++;
+    }
+    return l;
+}
+
+fn occluded_in_eye(s: vec4<f32>, e: u32) -> bool {
+    let view = display.eye[e].view_from_world;
+    let clip = display.eye[e].clip_from_view;
+    let c = view_center(s, view);
+    let near = nearest_distance(s, c);
+    if (!(near > 0.0)) {
+        return false;
+    }
+    let near_depth = depth_at(near, clip);
+    if (near_depth < 0.0) {
+        return false;
+    }
+    let xs = tangent_slopes(c.x, -c.z, s.w);
+    let ys = tangent_slopes(c.y, -c.z, s.w);
+    let x0 = clip[0].x * xs.x - clip[2].x;
+    let y0 = clip[1].y * ys.x - clip[2].y;
+    let x1 = clip[0].x * xs.y - clip[2].x;
+    let y1 = clip[1].y * ys.y - clip[2].y;
+    let size = eye_size();
+    let w = f32(size.x);
+    let h = f32(size.y);
+    let px0 = (x0 * 0.5 + 0.5) * w - BOUNDS_GROWTH_PX;
+    let px1 = (x1 * 0.5 + 0.5) * w + BOUNDS_GROWTH_PX;
+    let py0 = (0.5 - y1 * 0.5) * h - BOUNDS_GROWTH_PX;
+    let py1 = (0.5 - y0 * 0.5) * h + BOUNDS_GROWTH_PX;
+    if (px1 < 0.0 || py1 < 0.0 || px0 >= w || py0 >= h) {
+        return true;
+    }
+    // Clamped as floats: a conversion of a value out of range is not defined.
+    let last = vec2(w - 1.0, h - 1.0);
+    let lo = vec2<u32>(clamp(vec2(px0, py0), vec2(0.0), last));
+    let hi = vec2<u32>(clamp(vec2(px1, py1), vec2(0.0), last));
+    let levels = pyramid_levels();
+    let l = pyramid_level(lo, hi, levels);
+    let a = lo >> vec2(l + 1u);
+    let b = hi >> vec2(l + 1u);
+    let base = level_offset(e, l, levels);
+    let width = level_size(l).x;
+    let farthest = farthest4(
+        pyramid_texel(base + a.y * width + a.x),
+        pyramid_texel(base + a.y * width + b.x),
+        pyramid_texel(base + b.y * width + a.x),
+        pyramid_texel(base + b.y * width + b.x),
+    );
+    return near_depth > farthest + DEPTH_MARGIN;
+}
