@@ -13,7 +13,9 @@ use stereocull::live::LiveScene;
 use stereocull::occlusion::{self, PyramidShape};
 use stereocull::procedural;
 use stereocull::records::CullLayout;
-use stereocull::renderer::{CoarseMode, DisplayTarget, OcclusionMode, Renderer, RendererOptions};
+use stereocull::renderer::{
+    CoarseMode, DisplayTarget, FramePlan, OcclusionMode, Renderer, RendererOptions,
+};
 use stereocull::rig::{Mount, Rig};
 use stereocull::scene::{Animation, Instance, Scene};
 use stereocull::shapes;
@@ -457,4 +459,132 @@ fn read_depth(gpu: &Gpu, texture: &wgpu::Texture) -> Vec<f32> {
     (bytes.chunks(row as usize))
         .flat_map(|r| bytemuck::cast_slice::<u8, f32>(&r[..4 * w as usize]).to_vec())
         .collect()
+}
+
+/// The test never hides a sphere that some pixel shows: each sphere is ray-cast into a
+/// depth image at the pixel centers (its nearest hit, projected as the rasterizer would),
+/// every other pixel holds a random occluder nearer than the sphere, and a random part
+/// of the sphere's own pixels (at least one) show it. Eyes of every preset (the CAVE's
+/// walls are far off axis), spheres near and far, on the views' edges. And the test has
+/// teeth: with every pixel covered by a nearer occluder, most spheres well inside the
+/// view are found hidden.
+#[test]
+fn a_sphere_any_pixel_shows_is_never_hidden() {
+    let mut rng = Pcg64Mcg::seed_from_u64(23);
+    let (mut kept_hidden, mut hidden_cases) = (0, 0);
+    for preset in ["hmd", "cave", "hmd-peripheral"] {
+        let rig = sized(preset, 61, 47);
+        let plan = FramePlan::new(&rig, &RendererOptions::default(), false, 0.0).unwrap();
+        for (d, context) in plan.displays.iter().enumerate() {
+            let eyes = plan.resolved.displays[d].eyes.len();
+            for e in 0..eyes {
+                let eye = &context.eye[e];
+                let shape = PyramidShape {
+                    eye: glam::UVec2::new(61, 47),
+                    eyes: 1,
+                };
+                for _ in 0..150 {
+                    let Some((sphere, hits)) = random_sphere(&mut rng, eye, shape) else {
+                        continue;
+                    };
+                    let (shown, covered) = depth_images(&mut rng, &hits, shape);
+                    let pyramid = occlusion::reduce(&shown, 61, shape);
+                    assert!(
+                        !occlusion::occluded_in_eye(sphere, eye, (&pyramid, shape), 0),
+                        "{preset} display {d} eye {e}: {sphere} hidden though shown"
+                    );
+                    let inside = (hits.iter())
+                        .all(|&(x, y, _)| (3..58).contains(&x) && (3..44).contains(&y));
+                    if inside {
+                        hidden_cases += 1;
+                        let pyramid = occlusion::reduce(&covered, 61, shape);
+                        kept_hidden += usize::from(!occlusion::occluded_in_eye(
+                            sphere,
+                            eye,
+                            (&pyramid, shape),
+                            0,
+                        ));
+                    }
+                }
+            }
+        }
+    }
+    assert!(hidden_cases > 100, "{hidden_cases} hidden cases");
+    assert!(
+        kept_hidden * 5 < hidden_cases,
+        "kept {kept_hidden} of {hidden_cases} hidden"
+    );
+}
+
+/// A pixel a sphere covers and its depth there.
+type Hit = (u32, u32, f32);
+
+/// A random sphere in front of `eye` whose projection touches its view, and per pixel
+/// its nearest hit's depth where a ray through the pixel's center hits it.
+fn random_sphere(
+    rng: &mut Pcg64Mcg,
+    eye: &stereocull::contexts::EyeContext,
+    shape: PyramidShape,
+) -> Option<(Vec4, Vec<Hit>)> {
+    let (w, h) = (shape.eye.x, shape.eye.y);
+    // A point through a random pixel (some beyond the edges) at a random distance.
+    let ndc = glam::Vec2::new(rng.random_range(-1.2..1.2), rng.random_range(-1.2..1.2));
+    let depth = rng.random_range(0.2f32..0.999);
+    let center = eye.world_from_clip.project_point3(ndc.extend(depth));
+    let distance = (center - eye.position).length();
+    let radius = distance * rng.random_range(0.002..0.3);
+    let sphere = center.extend(radius);
+    if (center - eye.position).length() <= radius * 1.5 {
+        return None;
+    }
+    let mut hits = Vec::new();
+    for y in 0..h {
+        for x in 0..w {
+            let ndc = glam::Vec2::new(
+                (x as f32 + 0.5) / w as f32 * 2.0 - 1.0,
+                1.0 - (y as f32 + 0.5) / h as f32 * 2.0,
+            );
+            let near = eye.world_from_clip.project_point3(ndc.extend(0.0));
+            let far = eye.world_from_clip.project_point3(ndc.extend(1.0));
+            let dir = (far - near).normalize();
+            let oc = near - center;
+            let b = oc.dot(dir);
+            let disc = b * b - (oc.length_squared() - radius * radius);
+            if disc < 0.0 {
+                continue;
+            }
+            let t = -b - disc.sqrt();
+            if t < 0.0 {
+                continue;
+            }
+            let hit = eye.clip_from_world.project_point3(near + dir * t);
+            if (0.0..1.0).contains(&hit.z) {
+                hits.push((x, y, hit.z));
+            }
+        }
+    }
+    (!hits.is_empty()).then_some((sphere, hits))
+}
+
+/// Two depth images of one eye: occluders everywhere nearer than the sphere's nearest
+/// hit except at a random part (at least one) of its hits, which show it; and the same
+/// occluders over every pixel.
+fn depth_images(
+    rng: &mut Pcg64Mcg,
+    hits: &[(u32, u32, f32)],
+    shape: PyramidShape,
+) -> (Vec<f32>, Vec<f32>) {
+    let nearest = hits.iter().map(|h| h.2).fold(1.0f32, f32::min);
+    let len = (shape.eye.x * shape.eye.y) as usize;
+    let covered: Vec<f32> = (0..len)
+        .map(|_| nearest * rng.random_range(0.0..0.999))
+        .collect();
+    let mut shown = covered.clone();
+    let must = rng.random_range(0..hits.len());
+    for (i, &(x, y, z)) in hits.iter().enumerate() {
+        if i == must || rng.random_bool(0.3) {
+            shown[(y * shape.eye.x + x) as usize] = z;
+        }
+    }
+    (shown, covered)
 }

@@ -3,6 +3,7 @@
 mod chart;
 mod diff;
 mod edits;
+mod occlusion_report;
 mod profile;
 mod profile_measure;
 mod profile_report;
@@ -329,12 +330,13 @@ fn cull(args: &CullArgs) -> Result<()> {
         .zip(&culls.near)
         .map(|(d, out)| display_dump(&d.name, views(d), out, scene));
     // With the far layer, each stereo display's far cull follows as `<name>.far`; with
-    // the inset cull, each foveated display's inset cull as `<name>.inset`.
-    let extra = |list: &[Option<CullOutput>], tag: &str, v: u32| {
+    // the inset cull, each foveated display's inset cull as `<name>.inset`; with
+    // occlusion, `<name>` is the early phase and `<name>.late` the late one.
+    let extra = |list: &[Option<CullOutput>], tag: &str, v: Option<u32>| {
         let dumps = rig.displays.iter().zip(list).filter_map(|(d, out)| {
             Some(display_dump(
                 &format!("{}.{tag}", d.name),
-                v,
+                v.unwrap_or_else(|| views(d)),
                 out.as_ref()?,
                 scene,
             ))
@@ -342,8 +344,9 @@ fn cull(args: &CullArgs) -> Result<()> {
         dumps.collect::<Vec<_>>()
     };
     let displays: Vec<_> = near
-        .chain(extra(&culls.far, "far", 1))
-        .chain(extra(&culls.inset, "inset", 2))
+        .chain(extra(&culls.far, "far", Some(1)))
+        .chain(extra(&culls.inset, "inset", Some(2)))
+        .chain(extra(&culls.late, "late", None))
         .collect();
     write_json(
         &args.dump_visible,
@@ -356,6 +359,9 @@ struct Culls {
     near: Vec<CullOutput>,
     far: Vec<Option<CullOutput>>,
     inset: Vec<Option<CullOutput>>,
+    /// With occlusion (GPU culling), each display's late phase; `near` is then its
+    /// early phase.
+    late: Vec<Option<CullOutput>>,
 }
 
 /// Every display's cull and, with the far layer, each stereo display's far cull (with
@@ -381,7 +387,13 @@ fn cpu_cull(rig: &Rig, options: &RendererOptions, scene: &Scene) -> Result<Culls
         }
     }
     let near = near.into_iter().map(Option::unwrap_or_default).collect();
-    Ok(Culls { near, far, inset })
+    let late = vec![None; n];
+    Ok(Culls {
+        near,
+        far,
+        inset,
+        late,
+    })
 }
 
 /// `frames` GPU-culled frames, each after its edits are synced; the last frame's cull
@@ -413,7 +425,11 @@ fn gpu_cull(
             .map(|i| diagnostics.far_cull(i))
             .collect::<Result<_>>()?,
         inset: displays
+            .clone()
             .map(|i| diagnostics.inset_cull(i))
+            .collect::<Result<_>>()?,
+        late: displays
+            .map(|i| diagnostics.late_cull(i))
             .collect::<Result<_>>()?,
     })
 }

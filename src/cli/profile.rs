@@ -6,7 +6,9 @@ use indicatif::{ProgressBar, ProgressStyle};
 use super::edits::EditArgs;
 pub use super::profile_measure::ProfileArgs;
 use super::profile_measure::{Config, measure};
-use super::profile_report::{price_edits, print_table, write_csv};
+use super::profile_report::{
+    price_edits, price_occlusion, print_occlusion, print_table, write_csv,
+};
 use super::{chart, write_json};
 use crate::device::{Gpu, list_counts};
 use crate::error::{Error, Result};
@@ -50,8 +52,11 @@ pub fn profile(args: &ProfileArgs) -> Result<()> {
     if timer.is_none() {
         println!("GPU timings unavailable: the adapter has no TIMESTAMP_QUERY; CPU timings only");
     }
-    let variants =
-        args.moving.len() * args.coarse_cull.len() * args.far_layer.len() * args.inset_cull.len();
+    let variants = args.moving.len()
+        * args.coarse_cull.len()
+        * args.far_layer.len()
+        * args.inset_cull.len()
+        * args.occlusion.len();
     let total = (rigs.len() * args.instances.len() * configs.len() * variants) as u64
         * (args.frames + args.warmup) as u64;
     let bar = ProgressBar::new(total);
@@ -61,9 +66,10 @@ pub fn profile(args: &ProfileArgs) -> Result<()> {
     );
     let mut rows = Vec::new();
     for &n in &args.instances {
-        let mut scene = match args.city {
-            true => procedural::city(n, 1),
-            false => procedural::scene(n, args.meshes, 1),
+        let mut scene = match (args.city, args.rooms) {
+            (true, _) => procedural::city(n, 1),
+            (_, true) => procedural::rooms(n, 1),
+            _ => procedural::scene(n, args.meshes, 1),
         };
         if args.textured {
             procedural::texture(&mut scene);
@@ -76,8 +82,9 @@ pub fn profile(args: &ProfileArgs) -> Result<()> {
                 .flat_map(|(m, c)| args.far_layer.iter().map(move |f| (m, c, f.on())))
                 .flat_map(|v| args.inset_cull.iter().map(move |i| (v, i.on())))
                 .filter(|(_, inset)| !inset || rig.displays.iter().any(|d| d.views() == 4))
+                .flat_map(|v| args.occlusion.iter().map(move |o| (v, *o)))
                 .collect();
-            for (&(mode, cull), &((moving, coarse, far), inset)) in configs
+            for (&(mode, cull), &(((moving, coarse, far), inset), occlusion)) in configs
                 .iter()
                 .flat_map(|c| variants.iter().map(move |v| (c, v)))
             {
@@ -105,6 +112,7 @@ pub fn profile(args: &ProfileArgs) -> Result<()> {
                     coarse,
                     far,
                     inset,
+                    occlusion,
                     edits: EditArgs {
                         moving,
                         churn: args.churn,
@@ -116,7 +124,9 @@ pub fn profile(args: &ProfileArgs) -> Result<()> {
     }
     bar.finish_and_clear();
     price_edits(&mut rows);
+    price_occlusion(&mut rows);
     print_table(&rows);
+    print_occlusion(&rows);
     std::fs::create_dir_all(&args.out).map_err(|e| Error::io(&args.out, e))?;
     write_csv(&args.out.join("profile.csv"), &rows)?;
     write_json(&args.out.join("profile.json"), &rows)?;

@@ -10,6 +10,7 @@ use clap::Args;
 use indicatif::ProgressBar;
 
 use super::edits::{EditArgs, EditDriver};
+use super::occlusion_report::occlusion_report;
 use super::profile_report::{CullOverFloor, Row};
 use super::render::{PassReport, pass_reports};
 use super::{FRAME_SECONDS, Switch};
@@ -17,7 +18,9 @@ use crate::device::Gpu;
 use crate::error::Result;
 use crate::live::LiveScene;
 use crate::profiling::{GpuTimer, percentile};
-use crate::renderer::{CoarseMode, CullMode, Renderer, RendererOptions, StereoMode, SyncStats};
+use crate::renderer::{
+    CoarseMode, CullMode, OcclusionMode, Renderer, RendererOptions, StereoMode, SyncStats,
+};
 use crate::rig::Rig;
 use crate::scene::Scene;
 use wgpu_profiler::GpuTimerQueryResult;
@@ -68,6 +71,12 @@ pub struct ProfileArgs {
     /// Profile `city:N` scenes (a room and buildings 200 m to 2 km away) instead.
     #[arg(long)]
     pub city: bool,
+    /// Profile `rooms:N` scenes (rooms with doorways, props inside: occluders) instead.
+    #[arg(long, conflicts_with = "city")]
+    pub rooms: bool,
+    /// Occlusion culling, one configuration each (`on,off` compares them in one run).
+    #[arg(long, value_delimiter = ',', value_enum, default_value = "auto")]
+    pub occlusion: Vec<OcclusionMode>,
     /// Levels of detail chosen on the GPU from the viewer's position.
     #[arg(long, value_enum, default_value = "off")]
     pub lod: Switch,
@@ -109,6 +118,7 @@ pub(super) struct Config<'a> {
     pub(super) coarse: CoarseMode,
     pub(super) far: bool,
     pub(super) inset: bool,
+    pub(super) occlusion: OcclusionMode,
     pub(super) edits: EditArgs,
 }
 
@@ -123,6 +133,7 @@ pub(super) fn measure(
         coarse,
         far,
         inset,
+        occlusion,
         edits,
     }: &Config,
     args: &ProfileArgs,
@@ -140,6 +151,7 @@ pub(super) fn measure(
         far_threshold_px: args.far_threshold,
         inset_cull: inset,
         cull_floor: timer.is_some() && cull == CullMode::Gpu && !mode.per_instance(),
+        occlusion,
         ..Default::default()
     };
     let mut renderer = Renderer::new(&gpu.device, scene, rig, options)?;
@@ -210,6 +222,8 @@ pub(super) fn measure(
             };
             samples.gpu_cull.push(of("cull"));
             samples.gpu_draw.push(of("draw"));
+            samples.gpu_pyramid.push(of("pyramid"));
+            samples.gpu_late.push(of("late_cull") + of("late_draw"));
             // The floor kernel is the yardstick, not part of the frame.
             samples
                 .gpu
@@ -231,6 +245,10 @@ pub(super) fn measure(
         .diagnostics(&gpu.device, &gpu.queue)
         .sphere_tests()?;
     let far_near = renderer.diagnostics(&gpu.device, &gpu.queue).far_split()?;
+    let last_time = (args.warmup + args.frames).saturating_sub(1) as f32 * FRAME_SECONDS;
+    let scene_now = live.as_ref().map_or(scene, |(l, _)| l.scene());
+    let occlusion_displays = occlusion_report(gpu, &renderer, (rig, last_time), scene_now)?;
+    let occludes = occlusion_displays.iter().any(Option::is_some);
     let med = |v: &[f64]| percentile(v, 0.5);
     let wall = renderer
         .diagnostics(&gpu.device, &gpu.queue)
@@ -260,6 +278,11 @@ pub(super) fn measure(
         submit_ms_median: med(&samples.submit),
         gpu_cull_ms_median: gpu_med(&samples.gpu_cull),
         gpu_draw_ms_median: gpu_med(&samples.gpu_draw),
+        occlusion: occludes,
+        gpu_pyramid_ms_median: gpu_med(&samples.gpu_pyramid).filter(|_| occludes),
+        gpu_late_ms_median: gpu_med(&samples.gpu_late).filter(|_| occludes),
+        occlusion_displays,
+        occlusion_over_off: None,
         vertex_invocations: samples.statistics.map(|s| s.0),
         clipper_primitives: samples.statistics.map(|s| s.1),
         fragment_invocations: samples.fragments,
@@ -302,6 +325,8 @@ struct Samples {
     gpu: Vec<f64>,
     gpu_cull: Vec<f64>,
     gpu_draw: Vec<f64>,
+    gpu_pyramid: Vec<f64>,
+    gpu_late: Vec<f64>,
     /// Draw calls, dispatches and bytes uploaded of the last frame (the same every frame).
     last: (u32, u32, u64),
     /// Vertex-shader invocations and clipped primitives of the last frame.

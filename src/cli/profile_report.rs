@@ -4,6 +4,7 @@
 use serde::Serialize;
 use wgpu_profiler::GpuTimerQueryResult;
 
+use super::occlusion_report::OcclusionReport;
 use super::render::PassReport;
 use crate::error::{Error, Result};
 use crate::modes::StereoMode;
@@ -41,6 +42,16 @@ pub struct Row {
     pub submit_ms_median: f64,
     pub gpu_cull_ms_median: Option<f64>,
     pub gpu_draw_ms_median: Option<f64>,
+    /// Whether some display culled by occlusion.
+    pub occlusion: bool,
+    /// With occlusion: the depth pyramids' GPU time, and the late phase's (its cull and
+    /// its draw pass), per frame.
+    pub gpu_pyramid_ms_median: Option<f64>,
+    pub gpu_late_ms_median: Option<f64>,
+    /// Per display, what occlusion did in the last frame.
+    pub occlusion_displays: Vec<Option<OcclusionReport>>,
+    /// With occlusion and a row of the same configuration without it in the run.
+    pub occlusion_over_off: Option<OcclusionRatios>,
     /// Pipeline statistics of the draw passes (last frame); `None` where unavailable.
     pub vertex_invocations: Option<u64>,
     pub clipper_primitives: Option<u64>,
@@ -106,6 +117,62 @@ pub struct EditCost {
     pub submit_ms: f64,
 }
 
+/// A configuration with occlusion over the same without it, in the same run.
+#[derive(Clone, Debug, Serialize)]
+pub struct OcclusionRatios {
+    pub triangles_submitted: Option<f64>,
+    pub vertex_invocations: Option<f64>,
+    pub cpu_ms: f64,
+    pub gpu_ms: Option<f64>,
+}
+
+/// Fills [`Row::occlusion_over_off`] of every row with occlusion from the row of the
+/// same configuration without it, where the run has one (`--occlusion on,off`).
+pub fn price_occlusion(rows: &mut [Row]) {
+    let key = |r: &Row| {
+        let (a, b) = (r.moving_percent.to_bits(), r.churn_percent.to_bits());
+        let flags = (r.coarse_cull, r.far_layer, r.inset_cull);
+        (r.mode, r.cull, r.rig.clone(), r.instances, flags, a, b)
+    };
+    let ratio = |a: Option<u64>, b: Option<u64>| Some(a? as f64 / b?.max(1) as f64);
+    let priced: Vec<_> = (rows.iter())
+        .map(|r| {
+            let off = rows.iter().find(|b| !b.occlusion && key(b) == key(r))?;
+            r.occlusion.then(|| OcclusionRatios {
+                triangles_submitted: ratio(r.triangles_submitted, off.triangles_submitted),
+                vertex_invocations: ratio(r.vertex_invocations, off.vertex_invocations),
+                cpu_ms: r.cpu_ms_median / off.cpu_ms_median,
+                gpu_ms: r.gpu_ms_median.zip(off.gpu_ms_median).map(|(a, b)| a / b),
+            })
+        })
+        .collect();
+    for (r, p) in rows.iter_mut().zip(priced) {
+        r.occlusion_over_off = p;
+    }
+}
+
+/// The rows [`price_occlusion`] priced, one line each.
+pub fn print_occlusion(rows: &[Row]) {
+    let show = |v: Option<f64>| v.map_or("n/a".into(), |x| format!("{x:.3}"));
+    for r in rows {
+        let Some(o) = &r.occlusion_over_off else {
+            continue;
+        };
+        println!(
+            "occlusion on/off {} {} {}: triangles {}, vertex invocations {}, CPU {:.3}, GPU {} (pyramids {} ms, late phase {} ms)",
+            r.rig,
+            r.mode.name(),
+            r.instances,
+            show(o.triangles_submitted),
+            show(o.vertex_invocations),
+            o.cpu_ms,
+            show(o.gpu_ms),
+            show(r.gpu_pyramid_ms_median),
+            show(r.gpu_late_ms_median),
+        );
+    }
+}
+
 /// Fills [`Row::edits`] of every row with moves from the row of the same configuration
 /// without them, where the run has one (`--moving 0,1,10`).
 pub fn price_edits(rows: &mut [Row]) {
@@ -119,6 +186,7 @@ pub fn price_edits(rows: &mut [Row]) {
             a.far_layer,
             a.inset_cull,
             a.churn_percent,
+            a.occlusion,
         ) == (
             b.mode,
             b.cull,
@@ -128,6 +196,7 @@ pub fn price_edits(rows: &mut [Row]) {
             b.far_layer,
             b.inset_cull,
             b.churn_percent,
+            b.occlusion,
         )
     };
     let costs: Vec<Option<EditCost>> = rows

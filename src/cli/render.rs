@@ -7,6 +7,7 @@ use clap::Parser;
 use serde::Serialize;
 
 use super::edits::{EditArgs, EditDriver};
+use super::occlusion_report::occlusion_report;
 use super::{SceneArgs, write_json};
 use crate::composite::{CompositeParams, FoveatedComposite, composite_cpu};
 use crate::device::{Gpu, list_counts};
@@ -80,6 +81,14 @@ pub struct FrameFigures {
 }
 
 impl Session {
+    /// The scene as it stands: the live scene's after its edits, else the loaded one.
+    pub fn current_scene(&self) -> &Scene {
+        match &self.live {
+            Some((live, _)) => live.scene(),
+            None => &self.scene,
+        }
+    }
+
     /// Loads the rig and scene and opens the device, then the renderer with `cull`,
     /// `mode` and `msaa` samples per pixel (checked against the adapter's counts; `None`:
     /// [`default_msaa`]).
@@ -289,8 +298,9 @@ fn save(image: &image::RgbaImage, path: &std::path::Path) -> Result<()> {
 pub fn render(args: &RenderArgs) -> Result<()> {
     let edits = EditArgs::default();
     let mut session = Session::open(&args.scene, args.cull, args.mode, args.msaa, &edits)?;
-    // Room for every display's draw passes (one per eye at most) and the shadow pass.
-    let counted = 2 * session.rig.displays.len() as u32 + 1;
+    // Room for every display's draw passes (one per eye, or two with occlusion, at
+    // most) and the shadow pass.
+    let counted = 3 * session.rig.displays.len() as u32 + 1;
     session.timer = GpuTimer::new(&session.gpu.device, &session.gpu.queue, counted);
     let FrameFigures { stats, cpu_ms, .. } = session.frame(args.time)?;
     let start = Instant::now();
@@ -302,6 +312,12 @@ pub fn render(args: &RenderArgs) -> Result<()> {
     };
     let passes = pass_reports(&session.renderer, &session.rig, queries.as_ref());
     let far_near = far_near(&session)?;
+    let occlusion = occlusion_report(
+        &session.gpu,
+        &session.renderer,
+        (&session.rig, args.time),
+        session.current_scene(),
+    )?;
     std::fs::create_dir_all(&args.out).map_err(|e| Error::io(&args.out, e))?;
     let visible = session
         .renderer
@@ -363,6 +379,12 @@ pub fn render(args: &RenderArgs) -> Result<()> {
         stats.dispatches,
         stats.bytes_uploaded
     );
+    for r in occlusion.iter().flatten() {
+        println!(
+            "{:>18}: occlusion: {} in the frustum, {} drawn early, {} late, {} occluded",
+            r.display, r.frustum, r.early, r.late, r.occluded
+        );
+    }
     let out = args.out.join("stats.json");
     write_json(
         &out,
@@ -381,6 +403,8 @@ pub fn render(args: &RenderArgs) -> Result<()> {
             "shadows": session.renderer.options().shadows,
             "far_layer": session.renderer.options().far_layer,
             "far_near": far_near,
+            "occlusion": occlusion,
+            "occlusion_bytes": session.renderer.occlusion_bytes(),
             "passes_per_level": passes_per_level(&passes),
             "passes": passes,
             "cpu_encode_submit_ms": cpu_ms,

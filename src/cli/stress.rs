@@ -7,11 +7,12 @@ use indicatif::{ProgressBar, ProgressStyle};
 use serde::Serialize;
 
 use super::edits::EditArgs;
+use super::occlusion_report::{OcclusionReport, occlusion_report};
 use super::render::{PassReport, Session, far_near, pass_reports, passes_per_level};
 use super::{FRAME_SECONDS, SceneArgs};
 use crate::error::Result;
 use crate::profiling::{GpuTimer, percentile};
-use crate::renderer::{CullMode, StereoMode};
+use crate::renderer::{CullMode, OcclusionBytes, StereoMode};
 
 #[derive(Args)]
 pub struct StressArgs {
@@ -94,6 +95,10 @@ struct Summary {
     /// Median over the frames of the triangles submitted (pipeline statistics).
     triangles_submitted_median: Option<f64>,
     gpu_bytes_per_instance: u64,
+    /// GPU bytes occlusion adds per display and once (`None` without it).
+    occlusion_bytes: Option<OcclusionBytes>,
+    /// Per display, what occlusion did in the last frame.
+    occlusion: Vec<Option<OcclusionReport>>,
     /// Memory after the first frame, after every tenth of the run, and after the last:
     /// in a soak run, growth after warm-up means a leak.
     memory: Vec<MemorySample>,
@@ -130,8 +135,9 @@ impl MemorySample {
 pub fn stress(args: &StressArgs) -> Result<()> {
     let msaa = Some(args.msaa);
     let mut session = Session::open(&args.scene, args.cull, args.mode, msaa, &args.edits)?;
-    // Room for every display's draw passes (one per eye at most) and the shadow pass.
-    let counted = 2 * session.rig.displays.len() as u32 + 1;
+    // Room for every display's draw passes (one per eye, or two with occlusion, at
+    // most) and the shadow pass.
+    let counted = 3 * session.rig.displays.len() as u32 + 1;
     session.timer = GpuTimer::new(&session.gpu.device, &session.gpu.queue, counted);
     let bar = if args.json {
         ProgressBar::hidden()
@@ -210,7 +216,15 @@ pub fn stress(args: &StressArgs) -> Result<()> {
     bar.finish_and_clear();
     memory.dedup_by_key(|m| m.frame);
     let far_near = far_near(&session)?;
-    let summary = summarize(&session, args, &records, far_near, memory);
+    let last_time = args.frames.saturating_sub(1) as f32 * FRAME_SECONDS;
+    let occlusion = occlusion_report(
+        &session.gpu,
+        &session.renderer,
+        (&session.rig, last_time),
+        session.current_scene(),
+    )?;
+    let mut summary = summarize(&session, args, &records, far_near, memory);
+    summary.occlusion = occlusion;
     if args.json {
         let all = serde_json::json!({ "frames": records, "summary": summary });
         println!("{all}");
@@ -266,6 +280,8 @@ fn summarize(
         passes_per_level: passes_per_level(last.map_or(&[], |r| &r.passes[..])),
         far_near,
         gpu_bytes_per_instance: session.renderer.gpu_bytes_per_instance(),
+        occlusion_bytes: session.renderer.occlusion_bytes(),
+        occlusion: Vec::new(),
         memory,
     }
 }
@@ -337,4 +353,16 @@ fn print_summary(s: &Summary) {
         show(s.sphere_tests_median),
         s.gpu_bytes_per_instance
     );
+    if let Some(bytes) = &s.occlusion_bytes {
+        println!(
+            "occlusion: {} GPU bytes per display, {} for the shared pyramids",
+            bytes.per_display, bytes.pyramids
+        );
+    }
+    for r in s.occlusion.iter().flatten() {
+        println!(
+            "{}: last frame {} in the frustum, {} drawn early, {} late, {} occluded",
+            r.display, r.frustum, r.early, r.late, r.occluded
+        );
+    }
 }

@@ -10,7 +10,7 @@
 //! count. The buffers they read and write are [`super::gpu_buffers`]'s.
 
 use crate::cull::gpu_buffers::{CullScene, CullTargets};
-use crate::occlusion::Phase;
+use crate::shaders::Phase;
 use crate::shaders::{
     COARSE_BINDINGS, CULL_BINDINGS, CullPass, Windows, bind_group, bind_group_layout,
     compute_pipeline, pipeline_layout, subgroup_tier,

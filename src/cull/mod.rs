@@ -13,7 +13,6 @@ pub mod coarse;
 pub mod cpu;
 pub mod gpu;
 pub mod gpu_buffers;
-pub mod pyramid;
 
 pub use coarse::CoarseCull;
 

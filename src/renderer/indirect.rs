@@ -18,10 +18,10 @@ use super::targets::TargetViews;
 use super::view_pass::ViewPass;
 use crate::contexts::context_buffer;
 use crate::cull::gpu_buffers::{CullTargets, OcclusionRoom};
-use crate::cull::pyramid::PyramidPass;
 use crate::draw::{DrawFeatures, DrawScene, Drawer, Drawing};
 use crate::error::Result;
 use crate::modes::StereoMode;
+use crate::occlusion::pyramid::PyramidPass;
 use crate::occlusion::{Phase, PyramidShape};
 use crate::shaders::DrawKey;
 
@@ -354,6 +354,36 @@ impl IndirectPath {
             drawer: &self.drawer,
             scene: &self.draw_scene,
         }
+    }
+}
+
+/// GPU memory occlusion culling adds.
+#[derive(Clone, Copy, Debug, PartialEq, Eq, serde::Serialize)]
+pub struct OcclusionBytes {
+    /// Per display with occlusion: visibility bits (a word per span of places) and the
+    /// late phase's cull outputs (a visible list with room for every instance, the
+    /// draws, the counts).
+    pub per_display: u64,
+    /// Once: the depth pyramids of the largest display's eyes, which displays share.
+    pub pyramids: u64,
+}
+
+impl IndirectPath {
+    /// See [`super::Renderer::occlusion_bytes`].
+    pub(super) fn occlusion_bytes(&self) -> Option<OcclusionBytes> {
+        let shapes = self
+            .displays
+            .iter()
+            .filter_map(|d| d.late.as_ref().map(|l| l.1));
+        let pyramids = 4 * shapes.map(|s| s.len() as u64).max()?;
+        let (_, words, _) = self.culler.occlusion()?;
+        let late = self.displays.iter().find_map(|d| d.late.as_ref())?;
+        let targets = late.0.cull();
+        let outputs = targets.visible.size() + targets.draws.size() + targets.counts.size();
+        Some(OcclusionBytes {
+            per_display: 4 * words as u64 + outputs,
+            pyramids,
+        })
     }
 }
 

@@ -106,11 +106,12 @@ pub use checks::check_rig;
 use classic::ClassicPath;
 pub use frame::{CullView, FramePlan, FrameStats, PlannedCull, instances_per_object};
 use indirect::IndirectPath;
+pub use indirect::OcclusionBytes;
 use inputs::PathInputs;
 pub use options::{CoarseMode, CullMode, LOD_PIXELS, OcclusionMode, RendererOptions, frame_lod};
 pub use passes::{Level, PassRecord};
 use passes::{Recording, close, open_display};
-pub use readback::{Diagnostics, FarSplit};
+pub use readback::{Diagnostics, FarSplit, OcclusionCounts};
 pub use sync::SyncStats;
 pub use targets::{DisplayTarget, TargetShape, TargetViews};
 
@@ -260,6 +261,16 @@ impl Renderer {
     pub fn gpu_bytes_per_instance(&self) -> u64 {
         let culling = culler::Culler::bytes_per_instance(self.options.cull);
         DrawScene::BYTES_PER_INSTANCE + culling + 4 * self.shapes.len() as u64
+    }
+
+    /// GPU bytes occlusion culling adds, per display that runs it (its visibility bits,
+    /// the late phase's visible list and draws) and once for the renderer (the depth
+    /// pyramids, which the displays share); `None` without occlusion.
+    pub fn occlusion_bytes(&self) -> Option<OcclusionBytes> {
+        let Path::Indirect(p) = &self.path else {
+            return None;
+        };
+        p.occlusion_bytes()
     }
 
     /// What the frame at `time` for `rig`'s pose will do ([`FramePlan`]): what

@@ -46,6 +46,15 @@ impl Renderer {
     }
 }
 
+/// What one display's occlusion phases drew in a frame.
+#[derive(Clone, Copy, Debug, PartialEq, Eq, serde::Serialize)]
+pub struct OcclusionCounts {
+    /// Instances drawn early: drawn last frame, kept by the frustum.
+    pub early: u32,
+    /// Instances drawn late: not drawn last frame, not hidden by the early depth.
+    pub late: u32,
+}
+
 impl Diagnostics<'_> {
     /// The coarse cull's candidates in the last frame per display, read back after it
     /// was submitted (GPU culling with the coarse cull; `None` otherwise): the cull
@@ -114,6 +123,24 @@ impl Diagnostics<'_> {
             }
             _ => Ok(None),
         }
+    }
+
+    /// Per display, what its two occlusion phases drew in the last frame (read back
+    /// from their counts buffers); `None` for a display without occlusion.
+    pub fn occlusion_counts(&self) -> Result<Vec<Option<OcclusionCounts>>> {
+        let Path::Indirect(p) = &self.renderer.path else {
+            return Ok(vec![None; self.renderer.shapes.len()]);
+        };
+        (p.displays.iter())
+            .map(|d| {
+                let Some((late, _)) = &d.late else {
+                    return Ok(None);
+                };
+                let early = read_counts(self.device, self.queue, d.view.cull())?[1];
+                let late = read_counts(self.device, self.queue, late.cull())?[1];
+                Ok(Some(OcclusionCounts { early, late }))
+            })
+            .collect()
     }
 
     /// Display `index`'s occlusion state after the last frame: its pyramids' shape and

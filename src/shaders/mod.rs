@@ -59,7 +59,29 @@ pub use bindings::{
 pub(crate) use bindings::{compute_pipeline, dispatch_size, pipeline_layout};
 pub use windows::{Window, Windowed, Windows};
 
-use crate::occlusion::Phase;
+/// Which part of a display's two-phase cull a cull pass runs (`OCCLUSION` in
+/// `wgsl/shared/occlusion.wgsl`; see [`crate::occlusion`]).
+#[derive(Clone, Copy, Debug, PartialEq, Eq, Hash)]
+pub enum Phase {
+    /// The frustum alone: occlusion off, or a view without it.
+    Frustum = 0,
+    /// What the display drew last frame (and the frustum keeps), drawn first.
+    Early = 1,
+    /// What it did not, unless the early depth's pyramids hide it; records for the next
+    /// frame what the pyramids do not hide.
+    Late = 2,
+}
+
+impl Phase {
+    /// A pipeline's label in this phase.
+    pub fn label(self, base: &str) -> String {
+        match self {
+            Phase::Frustum => base.to_string(),
+            Phase::Early => format!("{base}.early"),
+            Phase::Late => format!("{base}.late"),
+        }
+    }
+}
 
 /// What a scatter's edits carry; each edit's first word is its key (a place, or a
 /// slot), at most one edit per key.

@@ -25,29 +25,9 @@ use crate::frustum::sphere_in_planes;
 use crate::records::CullLayout;
 use crate::shaders::SPAN;
 
-/// Which part of a display's two-phase cull a cull pass runs (`OCCLUSION` in
-/// `wgsl/shared/occlusion.wgsl`).
-#[derive(Clone, Copy, Debug, PartialEq, Eq, Hash)]
-pub enum Phase {
-    /// The frustum alone: occlusion off, or a view without it.
-    Frustum = 0,
-    /// What the display drew last frame (and the frustum keeps), drawn first.
-    Early = 1,
-    /// What it did not, unless the early depth's pyramids hide it; records for the next
-    /// frame what the pyramids do not hide.
-    Late = 2,
-}
+pub mod pyramid;
 
-impl Phase {
-    /// A pipeline's label in this phase.
-    pub fn label(self, base: &str) -> String {
-        match self {
-            Phase::Frustum => base.to_string(),
-            Phase::Early => format!("{base}.early"),
-            Phase::Late => format!("{base}.late"),
-        }
-    }
-}
+pub use crate::shaders::Phase;
 
 /// How a display's pyramids lie in one buffer of `f32`: per eye, its levels finest first.
 #[derive(Clone, Copy, Debug, PartialEq, Eq)]

@@ -3,11 +3,9 @@
 //! level, each eye in its own z slice so that no reduction crosses the seam. The CPU
 //! twin is [`crate::occlusion::reduce`].
 
+use super::PyramidShape;
 use crate::buffers::init_buffer;
-use crate::contexts::DisplayContext;
-use crate::occlusion::PyramidShape;
 use crate::shaders::{compute_pipeline, pyramid_source};
-use encase::ShaderType;
 
 /// The pyramid passes for depth targets of one sample count.
 pub struct PyramidPass {
@@ -116,22 +114,23 @@ fn entry(binding: u32, resource: wgpu::BindingResource<'_>) -> wgpu::BindGroupEn
 }
 
 fn bind_group_layout(device: &wgpu::Device, samples: u32) -> wgpu::BindGroupLayout {
-    let uniform = |binding, dynamic, min| wgpu::BindGroupLayoutEntry {
+    // No minimum sizes: wgpu checks the bound sizes against the shader at pipeline
+    // creation (and the context's size is the contexts module's, above this one).
+    let uniform = |binding, dynamic| wgpu::BindGroupLayoutEntry {
         binding,
         visibility: wgpu::ShaderStages::COMPUTE,
         ty: wgpu::BindingType::Buffer {
             ty: wgpu::BufferBindingType::Uniform,
             has_dynamic_offset: dynamic,
-            min_binding_size: std::num::NonZeroU64::new(min),
+            min_binding_size: None,
         },
         count: None,
     };
-    let context = DisplayContext::min_size().get();
     device.create_bind_group_layout(&wgpu::BindGroupLayoutDescriptor {
         label: Some("stereocull.occlusion_pyramid"),
         entries: &[
-            uniform(0, false, context),
-            uniform(1, true, 4),
+            uniform(0, false),
+            uniform(1, true),
             wgpu::BindGroupLayoutEntry {
                 binding: 2,
                 visibility: wgpu::ShaderStages::COMPUTE,
