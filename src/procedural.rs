@@ -148,7 +148,8 @@ const DOOR: [f32; 2] = [1.0, 2.2];
 
 /// An occluder-heavy interior: `n` props (the procedural scene's shapes, 0.15 to 0.6 m,
 /// on the floor or up to 2 m high) spread over a square grid of rooms 6 m a side and
-/// 3 m high, about 24 to a room, the viewer's standing point in the middle room. Every
+/// 3 m high (each with a floor and a ceiling), about 24 to a room, the viewer's
+/// standing point in the middle room. Every
 /// wall between two rooms has a doorway at a random place along it; the outer walls are
 /// whole. From inside a room most props of the others are behind a wall, and the
 /// doorways let some be seen, some by one eye only. Ids follow a Hilbert curve, as in
@@ -193,11 +194,31 @@ pub fn rooms(n: u32, seed: u64) -> Scene {
         add(at, size, turned, wall_mesh, plaster);
     }
     let cells = side * side;
+    let (floor, ceiling) = (
+        Vec4::new(0.45, 0.36, 0.28, 1.0),
+        Vec4::new(0.93, 0.93, 0.9, 1.0),
+    );
     for cell in 0..cells {
         let corner = Vec3::new(
             (cell % side) as f32 * ROOM - half,
             0.0,
             (cell / side) as f32 * ROOM - half,
+        );
+        let slab = Vec3::new(ROOM, WALL, ROOM);
+        let middle = corner + Vec3::new(ROOM * 0.5, 0.0, ROOM * 0.5);
+        add(
+            middle - Vec3::Y * (WALL * 0.5),
+            slab,
+            false,
+            wall_mesh,
+            floor,
+        );
+        add(
+            middle + Vec3::Y * (ROOM_HEIGHT + WALL * 0.5),
+            slab,
+            false,
+            wall_mesh,
+            ceiling,
         );
         let props = n * (cell + 1) / cells - n * cell / cells;
         for _ in 0..props {

@@ -150,6 +150,14 @@ pub struct Scene {
 }
 
 impl Scene {
+    /// Triangles of every instance at its finest level: what a frame could draw.
+    pub fn triangles(&self) -> u64 {
+        (self.instances.iter())
+            .filter_map(|i| self.meshes.get(i.mesh as usize))
+            .map(|m| (m.index_count / 3) as u64)
+            .sum()
+    }
+
     /// Removes instances whose transform, animation or world bounding sphere is not
     /// finite (NaN or infinite entries): culling cannot place them, and a NaN sphere would
     /// be culled differently by different hardware. Every other instance keeps its order; ids are

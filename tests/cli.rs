@@ -320,6 +320,8 @@ fn render_writes_one_image_per_display_and_stats() {
             "48",
             "--height",
             "40",
+            "--occlusion",
+            "off",
             "--out",
             dir.path().to_str().unwrap(),
         ]);
@@ -415,8 +417,20 @@ fn render_draws_the_shared_gltf_samples_in_both_eyes() {
 /// `stress --json` at 16x16 pixels per eye, its report parsed.
 fn stress_json(scene: &str, rig: &str, frames: &str) -> Value {
     let out = stereocull(&[
-        "stress", "--scene", scene, "--rig", rig, "--frames", frames, "--width", "16", "--height",
-        "16", "--json",
+        "stress",
+        "--scene",
+        scene,
+        "--rig",
+        rig,
+        "--frames",
+        frames,
+        "--width",
+        "16",
+        "--height",
+        "16",
+        "--occlusion",
+        "off",
+        "--json",
     ]);
     assert!(
         out.status.success(),
@@ -498,6 +512,8 @@ fn profile_writes_table_csv_json_and_chart() {
     let dir = tempfile::tempdir().unwrap();
     let out = stereocull(&[
         "profile",
+        "--occlusion",
+        "off",
         "--instances",
         "300,900",
         "--rig",
@@ -690,6 +706,8 @@ fn cull_after_edits_dumps_the_same_buffers_from_gpu_and_cpu() {
             moving,
             "--churn",
             "2",
+            "--occlusion",
+            "off",
             "--dump-visible",
             path.to_str().unwrap(),
         ];
@@ -725,6 +743,8 @@ fn stress_with_moving_instances_reports_what_they_cost() {
         "16",
         "--moving",
         "10",
+        "--occlusion",
+        "off",
         "--json",
     ];
     let out = stereocull(&args);
@@ -756,10 +776,11 @@ fn stress_with_moving_instances_reports_what_they_cost() {
     assert_eq!(summary["moving_percent"], 10.0);
 }
 
-/// `stats.json` lists the frame's passes by level: on `cave` with shadows and the
-/// coarse cull forced on, the frame level runs `coarse_cull`, `shadow_cull` and `shadow`
-/// once each, every wall its `cull` and `draw`; the shadow and draw passes carry their
-/// vertex-shader invocations (lavapipe has pipeline statistics).
+/// `stats.json` lists the frame's passes by level: on `cave` with shadows, the coarse
+/// cull and occlusion forced on, the frame level runs `coarse_cull`, `shadow_cull` and
+/// `shadow` once each, every wall its `cull` and `draw` and occlusion's `pyramid`,
+/// `late_cull` and `late_draw`; the shadow and draw passes carry their vertex-shader
+/// invocations (lavapipe has pipeline statistics). Each wall's occlusion report adds up.
 #[test]
 fn render_reports_the_passes_of_each_level() {
     let dir = tempfile::tempdir().unwrap();
@@ -776,6 +797,8 @@ fn render_reports_the_passes_of_each_level() {
         "--shadows",
         "on",
         "--coarse-cull",
+        "on",
+        "--occlusion",
         "on",
         "--out",
         dir.path().to_str().unwrap(),
@@ -801,7 +824,16 @@ fn render_reports_the_passes_of_each_level() {
         ["coarse_cull", "shadow_cull", "shadow"],
         "{stats}"
     );
-    assert_eq!(at("display"), ["cull", "draw"].repeat(5), "{stats}");
+    let occluded = ["cull", "draw", "pyramid", "late_cull", "late_draw"];
+    assert_eq!(at("display"), occluded.repeat(5), "{stats}");
+    let reports = stats["occlusion"].as_array().unwrap();
+    assert_eq!(reports.len(), 5, "{stats}");
+    for r in reports {
+        let n = |k: &str| r[k].as_u64().unwrap();
+        assert_eq!(n("frustum"), n("early") + n("late") + n("occluded"), "{r}");
+        assert!(n("early") > 0, "primed by two frames: {r}");
+    }
+    assert!(stats["occlusion_bytes"]["per_display"].as_u64().unwrap() > 0);
     assert!(at("eye").is_empty());
     assert_eq!(stats["passes_per_level"]["frame"], 3);
     assert_eq!(stats["coarse_cull"], true);

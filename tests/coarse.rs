@@ -17,6 +17,7 @@ use stereocull::frustum::{View, sphere_in_planes};
 use stereocull::renderer::{CoarseMode, CullMode, RendererOptions, StereoMode};
 use stereocull::rig::Rig;
 use stereocull::scene::Scene;
+use support::frustum_only;
 
 /// Every view whose planes the culls test: each display's combined view, or with
 /// `per_eye` each eye's (multi-camera).
@@ -179,7 +180,7 @@ fn auto_runs_the_coarse_cull_where_it_pays() {
     let gpu = support::gpu();
     let auto = |cull| RendererOptions {
         cull,
-        ..RendererOptions::default()
+        ..frustum_only()
     };
     let on = |preset: &str, cull, device| {
         let resolved = Rig::preset(preset).unwrap().resolve().unwrap();
@@ -256,7 +257,7 @@ fn draw_buffers_are_the_same_with_and_without_the_coarse_cull() {
                 cull,
                 lod,
                 coarse_cull,
-                ..RendererOptions::default()
+                ..frustum_only()
             };
             let (with, candidates) = culls(&scene, rig, options(CoarseMode::On));
             let (without, none) = culls(&scene, rig, options(CoarseMode::Off));
@@ -285,7 +286,7 @@ fn listed(scene: &Scene) -> (Vec<u32>, u64) {
     let rig = Rig::preset("hmd-peripheral").unwrap();
     let options = RendererOptions {
         coarse_cull: CoarseMode::On,
-        ..RendererOptions::default()
+        ..frustum_only()
     };
     let gpu = support::gpu();
     let renderer = support::one_frame(&gpu, scene, &rig, options);
@@ -346,7 +347,7 @@ fn coarse_lists_match_at_their_edges() {
         let options = |coarse_cull| RendererOptions {
             lod,
             coarse_cull,
-            ..RendererOptions::default()
+            ..frustum_only()
         };
         let (got, candidates) = culls_on(&gpu, &scene, &rig, options(CoarseMode::On));
         let (want, _) = culls_on(&gpu, &scene, &rig, options(CoarseMode::Off));

@@ -14,11 +14,11 @@ use stereocull::rig::Rig;
 use stereocull::scene::MAX_LODS;
 use stereocull::scene::Scene;
 use stereocull::shaders::{SPAN, WORKGROUP_SIZE, subgroup_tier};
-use support::{cubes, gpu, reference_culls};
+use support::{cubes, frustum_only, gpu, reference_culls};
 
 /// Runs one GPU-culled frame and compares every display's buffers with the CPU's.
 fn compare(gpu: &Gpu, scene: &Scene, rig: &Rig, what: &str) -> Vec<usize> {
-    let renderer = support::one_frame(gpu, scene, rig, RendererOptions::default());
+    let renderer = support::one_frame(gpu, scene, rig, frustum_only());
     reference_culls(scene, rig)
         .into_iter()
         .enumerate()
@@ -157,7 +157,7 @@ fn scans_edges(gpu: &Gpu) {
         for on in [false, true] {
             let options = RendererOptions {
                 lod: on,
-                ..Default::default()
+                ..frustum_only()
             };
             let renderer = support::one_frame(gpu, &scene, &rig, options);
             let got = support::read_culls(gpu, &renderer, &rig);

@@ -16,7 +16,7 @@ use stereocull::renderer::{CullMode, Renderer, RendererOptions, StereoMode};
 use stereocull::rig::Rig;
 use stereocull::scene::{Animation, Instance, Scene};
 use stereocull::{scene_spec, shapes};
-use support::{Tolerance, assert_images_match};
+use support::{Tolerance, assert_images_match, frustum_only};
 
 /// Unlit: each object one flat color, so that it can be found in the image.
 const FLAT: &str = "fn material(s: Surface) -> vec4<f32> { return vec4(s.color.rgb, 1.0); }";
@@ -32,7 +32,7 @@ fn culls(
     let options = RendererOptions {
         cull,
         far_layer,
-        ..RendererOptions::default()
+        ..frustum_only()
     };
     let renderer = support::one_frame(&gpu, scene, rig, options);
     let far = |d| {
@@ -115,7 +115,7 @@ fn render(scene: &Scene, rig: &Rig, far_layer: bool, threshold: f32) -> Vec<Rgba
         far_layer,
         far_threshold_px: threshold,
         material: Some(FLAT.into()),
-        ..RendererOptions::default()
+        ..frustum_only()
     };
     support::render(&support::gpu(), scene, rig, options).unwrap()
 }
@@ -285,7 +285,7 @@ fn with_nothing_far_the_far_layer_changes_no_pixel() {
             cull,
             far_layer,
             far_threshold_px: 1e-4,
-            ..RendererOptions::default()
+            ..frustum_only()
         };
         let gpu = support::gpu();
         let with = support::render(&gpu, &scene, &rig, options(true)).unwrap();
@@ -312,7 +312,7 @@ fn the_far_layer_is_an_error_outside_instanced() {
             mode,
             cull: support::cull_for(mode),
             far_layer: true,
-            ..RendererOptions::default()
+            ..frustum_only()
         };
         let result = Renderer::new(&gpu.device, &scene, &rig, options);
         assert!(matches!(result, Err(Error::Unsupported(_))), "{mode:?}");

@@ -25,7 +25,7 @@ use stereocull::renderer::{
 use stereocull::rig::Rig;
 use stereocull::scene::{Animation, Instance, MAX_LODS, Scene};
 use stereocull::shapes;
-use support::{Tolerance, assert_images_match, gpu, reference_culls};
+use support::{Tolerance, assert_images_match, frustum_only, gpu, reference_culls};
 
 const MESHES: u32 = 5;
 
@@ -255,7 +255,7 @@ fn edit_sequences_keep_gpu_and_cpu_culls_identical_to_the_model() {
             let options = RendererOptions {
                 cull,
                 lod,
-                ..Default::default()
+                ..frustum_only()
             };
             Renderer::new(&gpu.device, &meshes, &rig, options).unwrap()
         });
@@ -386,7 +386,7 @@ fn a_moved_instance_renders_like_a_fresh_scene_with_it_there() {
         let options = RendererOptions {
             mode,
             cull: support::cull_for(mode),
-            ..Default::default()
+            ..frustum_only()
         };
         let mut live = LiveScene::new(scene.clone());
         let handles = live.handles();
@@ -440,7 +440,7 @@ fn live_on_cave(gpu: &Gpu, seed: u64) -> (Rig, Pcg64Mcg, LiveScene, Renderer) {
     let rig = support::sized("cave", 32, 32);
     let mut rng = Pcg64Mcg::seed_from_u64(seed);
     let scene = random_scene(&mut rng, 3000);
-    let renderer = Renderer::new(&gpu.device, &scene, &rig, RendererOptions::default()).unwrap();
+    let renderer = Renderer::new(&gpu.device, &scene, &rig, frustum_only()).unwrap();
     (rig, rng, LiveScene::new(scene), renderer)
 }
 
@@ -525,7 +525,7 @@ fn a_move_staged_then_removed_before_the_frame_is_void() {
 fn options_for(cull: CullMode) -> RendererOptions {
     RendererOptions {
         cull,
-        ..RendererOptions::default()
+        ..frustum_only()
     }
 }
 
@@ -543,7 +543,7 @@ fn respawns_are_sparse_edits() {
         let mut live = LiveScene::new(scene.clone());
         let options = RendererOptions {
             cull,
-            ..RendererOptions::default()
+            ..frustum_only()
         };
         let mut renderer =
             Renderer::new(&gpu.device, &scene, &Rig::preset("hmd").unwrap(), options).unwrap();

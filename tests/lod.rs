@@ -15,7 +15,7 @@ use stereocull::renderer::{RendererOptions, StereoMode, frame_lod};
 use stereocull::rig::Rig;
 use stereocull::scene::{Animation, Instance, MAX_LODS, Scene};
 use stereocull::{procedural, shapes};
-use support::gpu;
+use support::{frustum_only, gpu};
 
 /// One frame culled by a renderer with LOD on; every display's cull read back.
 fn culls(gpu: &Gpu, scene: &Scene, rig: &Rig, mode: StereoMode) -> Vec<Vec<CullOutput>> {
@@ -23,7 +23,7 @@ fn culls(gpu: &Gpu, scene: &Scene, rig: &Rig, mode: StereoMode) -> Vec<Vec<CullO
         lod: true,
         mode,
         cull: support::cull_for(mode),
-        ..Default::default()
+        ..frustum_only()
     };
     let renderer = support::one_frame(gpu, scene, rig, options);
     support::read_culls(gpu, &renderer, rig)

@@ -12,7 +12,7 @@ use stereocull::readback::read_rgba8;
 use stereocull::renderer::{CullMode, Renderer, RendererOptions, StereoMode};
 use stereocull::rig::Rig;
 use stereocull::{procedural, scene_spec};
-use support::{Tolerance, assert_images_match};
+use support::{Tolerance, assert_images_match, frustum_only};
 
 fn gpu_without(missing: wgpu::Features) -> Gpu {
     let gpu = support::gpu_with(wgpu::Features::all() - missing);
@@ -29,7 +29,7 @@ fn render(gpu: &Gpu, mode: StereoMode, cull: CullMode) -> Result<RgbaImage, Erro
     let options = RendererOptions {
         mode,
         cull,
-        ..Default::default()
+        ..frustum_only()
     };
     Ok(support::render(gpu, &scene, &rig(), options.clone())?.remove(0))
 }
@@ -102,16 +102,13 @@ fn unsupported_msaa_is_a_clear_error() {
         let options = RendererOptions {
             mode,
             sample_count,
-            ..Default::default()
+            ..frustum_only()
         };
         let scene = scene_spec::load("default").unwrap();
         Renderer::new(&gpu.device, &scene, &rig(), options).err()
     };
     let webgpu = gpu_without(wgpu::Features::TEXTURE_ADAPTER_SPECIFIC_FORMAT_FEATURES);
-    assert_eq!(
-        webgpu.sample_counts(RendererOptions::default().color_format),
-        [1, 4]
-    );
+    assert_eq!(webgpu.sample_counts(frustum_only().color_format), [1, 4]);
     let msg = msaa(&webgpu, StereoMode::Instanced, 8)
         .expect("8x accepted")
         .to_string();
@@ -123,11 +120,9 @@ fn unsupported_msaa_is_a_clear_error() {
         .to_string();
     assert!(msg.contains("MULTISAMPLE_ARRAY"), "{msg}");
     let full = gpu_without(wgpu::Features::empty());
-    let lacking = [2, 8, 16].into_iter().find(|n| {
-        !full
-            .sample_counts(RendererOptions::default().color_format)
-            .contains(n)
-    });
+    let lacking = [2, 8, 16]
+        .into_iter()
+        .find(|n| !full.sample_counts(frustum_only().color_format).contains(n));
     if let Some(n) = lacking {
         let err = msaa(&full, StereoMode::Instanced, n).expect("a count the adapter lacks");
         assert!(matches!(err, Error::Wgpu(_)), "{n}x: {err}");
@@ -209,7 +204,7 @@ fn more_instances_than_one_binding_holds_stop_up_front_with_the_numbers() {
     scene.instances = vec![scene.instances[0]; too_many];
     let options = RendererOptions {
         binding_limit: Some(max),
-        ..RendererOptions::default()
+        ..frustum_only()
     };
     let err = Renderer::new(&gpu.device, &scene, &rig(), options)
         .err()
@@ -295,7 +290,7 @@ fn vertices_past_the_binding_size_are_accepted_up_to_the_buffer_size() {
     let mut scene = procedural::scene(1, 1, 1);
     let vertices = (limits.max_storage_buffer_binding_size / 24 + 1) as usize;
     scene.vertices.resize(vertices, scene.vertices[0]);
-    Renderer::new(&gpu.device, &scene, &rig(), RendererOptions::default())
+    Renderer::new(&gpu.device, &scene, &rig(), frustum_only())
         .expect("a vertex buffer past the binding size fits one buffer");
 }
 
@@ -312,7 +307,7 @@ fn materials_naming_what_the_scene_lacks_are_errors() {
             let options = RendererOptions {
                 mode,
                 cull: support::cull_for(mode),
-                ..Default::default()
+                ..frustum_only()
             };
             Renderer::new(&gpu.device, scene, &rig(), options).err()
         })

@@ -15,14 +15,14 @@ use stereocull::rig::Rig;
 use stereocull::scene::Scene;
 use stereocull::shaders::{Window, Windows};
 use stereocull::{cull, scene_spec};
-use support::{Tolerance, assert_images_match};
+use support::{Tolerance, assert_images_match, frustum_only};
 
 const LIMIT: u64 = 64 << 10;
 
 fn options(windowed: bool) -> RendererOptions {
     RendererOptions {
         binding_limit: windowed.then_some(LIMIT),
-        ..RendererOptions::default()
+        ..frustum_only()
     }
 }
 
@@ -59,7 +59,7 @@ fn windowed_culls_keep_the_contract() {
             let options = RendererOptions {
                 lod,
                 binding_limit: Some(limit),
-                ..RendererOptions::default()
+                ..frustum_only()
             };
             let renderer = support::one_frame(&gpu, &scene, &rig, options);
             let resolved = rig.resolve().unwrap();
@@ -111,7 +111,7 @@ fn windowed_bindings_draw_what_whole_ones_draw() {
         far_layer: true,
         far_threshold_px: 4.0,
         binding_limit: windowed.then_some(1024),
-        ..RendererOptions::default()
+        ..frustum_only()
     };
     let [whole, windowed] = [false, true].map(|w| {
         let mut renderer = Renderer::new(&gpu.device, &room, &rig, features(w)).unwrap();

@@ -260,6 +260,25 @@ fn info() -> Result<()> {
             if on { "on " } else { "off" }
         );
     }
+    println!(
+        "occlusion with --occlusion auto (GPU culling, instanced, displays of one or two \
+         views, no far layer): on for a display from a triangle per pixel of it, the \
+         scene's instances at their finest level:"
+    );
+    for preset in crate::rig::PRESETS {
+        let rig = Rig::preset(preset)?;
+        let pixels = |d: &crate::rig::Display| {
+            let [w, h] = d.resolution;
+            w as u64 * h as u64 * d.views().min(2) as u64
+        };
+        let from: Vec<String> = (rig.displays.iter())
+            .map(|d| match d.views() {
+                1 | 2 => format!("{} from {:.1}M", d.name, pixels(d) as f64 / 1e6),
+                _ => format!("{} never (foveated)", d.name),
+            })
+            .collect();
+        println!("  {preset:40} {}", from.join(", "));
+    }
     Ok(())
 }
 

@@ -301,6 +301,15 @@ pub fn render(args: &RenderArgs) -> Result<()> {
     // Room for every display's draw passes (one per eye, or two with occlusion, at
     // most) and the shadow pass.
     let counted = 3 * session.rig.displays.len() as u32 + 1;
+    // Occlusion's early phase draws what the display drew last frame: a first frame
+    // draws everything late (no depth yet to hide behind), the second draws that early
+    // and finds what it hides. Two frames before this one prime it, as in a running
+    // application.
+    let primed = session.renderer.occlusion_bytes().is_some();
+    for _ in 0..2 * u32::from(primed) {
+        session.frame(args.time)?;
+        session.gpu.wait()?;
+    }
     session.timer = GpuTimer::new(&session.gpu.device, &session.gpu.queue, counted);
     let FrameFigures { stats, cpu_ms, .. } = session.frame(args.time)?;
     let start = Instant::now();
@@ -404,6 +413,7 @@ pub fn render(args: &RenderArgs) -> Result<()> {
             "far_layer": session.renderer.options().far_layer,
             "far_near": far_near,
             "occlusion": occlusion,
+            "occlusion_primed_by_two_frames": primed,
             "occlusion_bytes": session.renderer.occlusion_bytes(),
             "passes_per_level": passes_per_level(&passes),
             "passes": passes,

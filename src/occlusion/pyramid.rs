@@ -1,6 +1,6 @@
 //! The depth pyramids of a display on the GPU (`wgsl/occlusion_pyramid.wgsl`): one
-//! dispatch from the display's depth target into each eye's level 0, then one per
-//! level, each eye in its own z slice so that no reduction crosses the seam. The CPU
+//! dispatch from the display's depth target into each eye's levels 0 and 1, then one
+//! per two levels, each eye in its own z slice so that no reduction crosses the seam. The CPU
 //! twin is [`crate::occlusion::reduce`].
 
 use super::PyramidShape;
@@ -88,7 +88,8 @@ impl PyramidPass {
         })
     }
 
-    /// Records the pyramids of `shape` with `group`; returns the dispatches.
+    /// Records the pyramids of `shape` with `group`, two levels per dispatch; returns
+    /// the dispatches.
     pub fn encode(
         &self,
         pass: &mut wgpu::ComputePass,
@@ -96,7 +97,7 @@ impl PyramidPass {
         shape: PyramidShape,
     ) -> u32 {
         let levels = shape.levels().min(MAX_LEVELS);
-        for l in 0..levels {
+        for l in (0..levels).step_by(2) {
             let size = shape.level_size(l);
             pass.set_pipeline(match l {
                 0 => &self.reduce_depth,
@@ -105,7 +106,7 @@ impl PyramidPass {
             pass.set_bind_group(0, group, &[l * self.stride]);
             pass.dispatch_workgroups(size.x.div_ceil(TILE), size.y.div_ceil(TILE), shape.eyes);
         }
-        levels
+        levels.div_ceil(2)
     }
 }
 

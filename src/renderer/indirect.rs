@@ -5,6 +5,7 @@
 //! Per frame on the GPU-culled path the CPU writes one display context per display and
 //! records a fixed number of commands: its cost does not depend on the instance count.
 
+use std::sync::Mutex;
 use std::time::Instant;
 
 use super::culler::{CullShape, Culler};
@@ -32,9 +33,17 @@ pub(super) struct IndirectDisplay {
     pub(super) view: ViewPass,
     key: DrawKey,
     pub(super) inset: Option<ViewPass>,
-    /// With occlusion: the late phase (`view` is then the early one) and the shape of
-    /// the display's pyramids.
-    pub(super) late: Option<(ViewPass, PyramidShape)>,
+    /// With occlusion: the late phase (`view` is then the early one).
+    pub(super) late: Option<LatePhase>,
+}
+
+/// A display's late occlusion phase: its cull and draw, the shape of its pyramids and
+/// their bind group for the depth target it was last made for (a caller usually
+/// renders into the same targets every frame: no bind group per frame then).
+pub(super) struct LatePhase {
+    pub(super) view: ViewPass,
+    pub(super) shape: PyramidShape,
+    bound: Mutex<Option<(wgpu::TextureView, wgpu::BindGroup)>>,
 }
 
 pub(super) struct IndirectPath {
@@ -68,7 +77,7 @@ impl IndirectPath {
             Some(_) => plan.displays.len() as u32,
             None => 0,
         };
-        let shapes = pyramid_shapes(plan, options);
+        let shapes = pyramid_shapes(plan, options, scene.triangles());
         let occlusion = OcclusionRoom {
             displays: plan.displays.len() as u32 * u32::from(shapes.iter().any(Option::is_some)),
             pyramid_texels: shapes.iter().flatten().map(|s| s.len()).max().unwrap_or(0),
@@ -211,24 +220,27 @@ impl IndirectPath {
         log: &mut Vec<PassRecord>,
     ) -> FrameStats {
         let state = &self.displays[index];
-        let (Some((late, shape)), Some((pyramid, device)), Some((buffer, _, offset))) = (
+        let (Some(late), Some((pyramid, device)), Some((buffer, _, offset))) = (
             &state.late,
             self.pyramid.as_deref(),
             self.culler.occlusion(),
         ) else {
             return FrameStats::default();
         };
-        let texels = wgpu::BufferBinding {
-            buffer,
-            offset,
-            size: std::num::NonZeroU64::new(4 * shape.len() as u64),
-        };
-        let group = pyramid.bind_group(device, state.view.context(), texels, target.depth);
+        let group = late.bind_group(target.depth, |depth| {
+            let texels = wgpu::BufferBinding {
+                buffer,
+                offset,
+                size: std::num::NonZeroU64::new(4 * late.shape.len() as u64),
+            };
+            pyramid.bind_group(device, state.view.context(), texels, depth)
+        });
         let mut dispatches = 0;
         let what = (&mut *log, PassRecord::display("pyramid", index));
         compute_pass(encoder, (&mut *timer, display), what, |pass| {
-            dispatches += pyramid.encode(pass, &group, *shape);
+            dispatches += pyramid.encode(pass, &group, late.shape);
         });
+        let late = &late.view;
         let what = (&mut *log, PassRecord::display("late_cull", index));
         dispatches += late.encode_cull(encoder, &self.culler, (&mut *timer, display), what);
         let what = (log, PassRecord::display("late_draw", index));
@@ -357,6 +369,29 @@ impl IndirectPath {
     }
 }
 
+impl LatePhase {
+    /// The pyramids' bind group for `depth`: the last one if made for it, else one
+    /// `make` makes (and kept).
+    fn bind_group(
+        &self,
+        depth: &wgpu::TextureView,
+        make: impl FnOnce(&wgpu::TextureView) -> wgpu::BindGroup,
+    ) -> wgpu::BindGroup {
+        let mut bound = self
+            .bound
+            .lock()
+            .unwrap_or_else(|poisoned| poisoned.into_inner());
+        match &*bound {
+            Some((view, group)) if view == depth => group.clone(),
+            _ => {
+                let group = make(depth);
+                *bound = Some((depth.clone(), group.clone()));
+                group
+            }
+        }
+    }
+}
+
 /// GPU memory occlusion culling adds.
 #[derive(Clone, Copy, Debug, PartialEq, Eq, serde::Serialize)]
 pub struct OcclusionBytes {
@@ -374,11 +409,11 @@ impl IndirectPath {
         let shapes = self
             .displays
             .iter()
-            .filter_map(|d| d.late.as_ref().map(|l| l.1));
+            .filter_map(|d| d.late.as_ref().map(|l| l.shape));
         let pyramids = 4 * shapes.map(|s| s.len() as u64).max()?;
         let (_, words, _) = self.culler.occlusion()?;
         let late = self.displays.iter().find_map(|d| d.late.as_ref())?;
-        let targets = late.0.cull();
+        let targets = late.view.cull();
         let outputs = targets.visible.size() + targets.draws.size() + targets.counts.size();
         Some(OcclusionBytes {
             per_display: 4 * words as u64 + outputs,
@@ -406,7 +441,12 @@ fn indirect_displays(
                         phased((CullView::Display(i), Phase::Early), context_buffer(device));
                     let context = early.context().clone();
                     let late = phased((CullView::Late(i), Phase::Late), context);
-                    (early, Some((late, *shape)))
+                    let late = LatePhase {
+                        view: late,
+                        shape: *shape,
+                        bound: Mutex::new(None),
+                    };
+                    (early, Some(late))
                 }
                 None => (view(CullView::Display(i)), None),
             };
@@ -420,14 +460,23 @@ fn indirect_displays(
         .collect()
 }
 
-/// Each display's pyramid shape where it culls by occlusion ([`RendererOptions::occludes`]).
-fn pyramid_shapes(plan: &FramePlan, options: &RendererOptions) -> Vec<Option<PyramidShape>> {
+/// Each display's pyramid shape where it culls by occlusion ([`RendererOptions::occludes`])
+/// in a scene of `triangles` triangles.
+fn pyramid_shapes(
+    plan: &FramePlan,
+    options: &RendererOptions,
+    triangles: u64,
+) -> Vec<Option<PyramidShape>> {
     (plan.resolved.displays.iter().zip(&plan.displays))
         .map(|(d, context)| {
-            options.occludes(d.eyes.len()).then(|| PyramidShape {
+            let shape = PyramidShape {
                 eye: context.resolution.as_uvec2(),
                 eyes: d.eyes.len() as u32,
-            })
+            };
+            let pixels = shape.eye.element_product() as u64 * shape.eyes as u64;
+            options
+                .occludes(d.eyes.len(), (pixels, triangles))
+                .then_some(shape)
         })
         .collect()
 }

@@ -52,8 +52,12 @@ pub enum CoarseMode {
 #[cfg_attr(feature = "cli", derive(clap::ValueEnum))]
 #[serde(rename_all = "lowercase")]
 pub enum OcclusionMode {
-    /// Off: occlusion pays only where a scene hides much of what the frustum keeps,
-    /// which the renderer cannot know; an engine with interiors turns it on.
+    /// On where it applies ([`OcclusionMode::On`]) for a display when the scene, at its
+    /// finest levels, has at least as many triangles as the display has pixels (both
+    /// eyes): decided when the renderer is made. Below that a frame draws so little that
+    /// the pyramids cost more than they save (on lavapipe, `hmd` at 1440 x 1600:
+    /// `procedural:1000`, 0.15 triangles a pixel, GPU frame 1.22 with occlusion; 10,000,
+    /// 1.5 a pixel, 0.82; `rooms:20000`, 0.23; docs/performance.md).
     #[default]
     Auto,
     /// On wherever it applies: GPU culling in `instanced` mode, displays of one or two
@@ -160,11 +164,18 @@ impl RendererOptions {
         self.shadows.then_some(self.light.shadow_map_size)
     }
 
-    /// Whether display `views` (views of one display) culls by occlusion: asked for, on
-    /// the GPU, in `instanced` mode, one or two views (a foveated display's insets see
-    /// through gaps its outer views' pixels miss), no far layer (not composed yet).
-    pub fn occludes(&self, views: usize) -> bool {
-        self.occlusion == OcclusionMode::On
+    /// Whether a display of `views` views and `pixels` pixels (all views) culls by
+    /// occlusion in a scene of `triangles` triangles (instances at their finest level):
+    /// on, or auto and at least a triangle a pixel; on the GPU, in `instanced` mode,
+    /// one or two views (a foveated display's insets see through gaps its outer views'
+    /// pixels miss), no far layer (not composed yet).
+    pub fn occludes(&self, views: usize, (pixels, triangles): (u64, u64)) -> bool {
+        let asked = match self.occlusion {
+            OcclusionMode::On => true,
+            OcclusionMode::Auto => triangles >= pixels,
+            OcclusionMode::Off => false,
+        };
+        asked
             && self.cull == CullMode::Gpu
             && self.mode == StereoMode::Instanced
             && views <= 2

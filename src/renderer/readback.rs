@@ -115,8 +115,8 @@ impl Diagnostics<'_> {
         match &self.renderer.path {
             Path::Indirect(p) if index < self.renderer.shapes.len() => {
                 match &p.displays[index].late {
-                    Some((late, _)) => p
-                        .read_targets(self.device, self.queue, late.cull())
+                    Some(late) => p
+                        .read_targets(self.device, self.queue, late.view.cull())
                         .map(Some),
                     None => Ok(None),
                 }
@@ -133,11 +133,11 @@ impl Diagnostics<'_> {
         };
         (p.displays.iter())
             .map(|d| {
-                let Some((late, _)) = &d.late else {
+                let Some(late) = &d.late else {
                     return Ok(None);
                 };
                 let early = read_counts(self.device, self.queue, d.view.cull())?[1];
-                let late = read_counts(self.device, self.queue, late.cull())?[1];
+                let late = read_counts(self.device, self.queue, late.view.cull())?[1];
                 Ok(Some(OcclusionCounts { early, late }))
             })
             .collect()
@@ -151,7 +151,11 @@ impl Diagnostics<'_> {
         let Path::Indirect(p) = &self.renderer.path else {
             return Ok(None);
         };
-        let Some((_, shape)) = p.displays.get(index).and_then(|d| d.late.as_ref()) else {
+        let Some(shape) = p
+            .displays
+            .get(index)
+            .and_then(|d| Some(d.late.as_ref()?.shape))
+        else {
             return Ok(None);
         };
         let Some((buffer, words, _)) = p.culler.occlusion() else {
@@ -159,7 +163,7 @@ impl Diagnostics<'_> {
         };
         let bytes = 4 * words as u64;
         let all: Vec<u32> = read_pod(self.device, self.queue, buffer, bytes * (index as u64 + 1))?;
-        Ok(Some((*shape, all[index * words as usize..].to_vec())))
+        Ok(Some((shape, all[index * words as usize..].to_vec())))
     }
 
     /// The depth pyramids the last display with occlusion built in the last frame (the
@@ -168,8 +172,11 @@ impl Diagnostics<'_> {
         let Path::Indirect(p) = &self.renderer.path else {
             return Ok(None);
         };
-        let (Some((_, shape)), Some((buffer, _, offset))) = (
-            p.displays.iter().rev().find_map(|d| d.late.as_ref()),
+        let (Some(shape), Some((buffer, _, offset))) = (
+            p.displays
+                .iter()
+                .rev()
+                .find_map(|d| Some(d.late.as_ref()?.shape)),
             p.culler.occlusion(),
         ) else {
             return Ok(None);
@@ -215,7 +222,8 @@ impl Diagnostics<'_> {
     }
 
     /// Visible totals of every display: read back from the counts buffers on the
-    /// indirect path, taken from this frame's CPU culls in the classic modes.
+    /// indirect path (with occlusion both phases': what the display drew), taken from
+    /// this frame's CPU culls in the classic modes.
     pub fn visible_counts(&self) -> Result<Vec<u32>> {
         match &self.renderer.path {
             Path::Indirect(p) => p.visible_counts(self.device, self.queue),
@@ -302,15 +310,21 @@ impl IndirectPath {
         })
     }
 
-    /// Every display's visible total, from its counts buffer.
+    /// Every display's visible total, from its counts buffer (with occlusion, both
+    /// phases': what it drew).
     pub(super) fn visible_counts(
         &self,
         device: &wgpu::Device,
         queue: &wgpu::Queue,
     ) -> Result<Vec<u32>> {
-        self.displays
-            .iter()
-            .map(|d| Ok(read_counts(device, queue, d.view.cull())?[1]))
+        let count = |view: &super::view_pass::ViewPass| -> Result<u32> {
+            Ok(read_counts(device, queue, view.cull())?[1])
+        };
+        (self.displays.iter())
+            .map(|d| {
+                let late = d.late.as_ref().map_or(Ok(0), |late| count(&late.view))?;
+                Ok(count(&d.view)? + late)
+            })
             .collect()
     }
 }

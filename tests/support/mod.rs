@@ -18,7 +18,7 @@ use stereocull::device::Gpu;
 use stereocull::procedural;
 use stereocull::readback::read_rgba8;
 use stereocull::records::CullLayout;
-use stereocull::renderer::{CullMode, Renderer, RendererOptions, StereoMode};
+use stereocull::renderer::{CullMode, OcclusionMode, Renderer, RendererOptions, StereoMode};
 use stereocull::rig::{Mount, Rig};
 use stereocull::scene::{Animation, Instance, Scene};
 use stereocull::shapes;
@@ -70,6 +70,16 @@ pub fn cubes(instances: &[(Vec3, u32)], meshes: u32) -> Scene {
         })
         .collect();
     s
+}
+
+/// Options that cull by the frustum alone: for the tests that hold the GPU's buffers
+/// to the CPU reference of the frustum cull (with occlusion, `auto` by default, a
+/// display's cull is two phases: `tests/occlusion.rs` holds those to their CPU twin).
+pub fn frustum_only() -> RendererOptions {
+    RendererOptions {
+        occlusion: OcclusionMode::Off,
+        ..Default::default()
+    }
 }
 
 /// The CPU reference cull of every display of `rig`, as the `instanced` mode culls.
