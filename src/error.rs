@@ -98,6 +98,15 @@ pub enum Error {
         displays: usize,
     },
 
+    /// With occlusion, a display's depth target cannot be read into its pyramids.
+    #[error(
+        "display {display}: occlusion reads the depth target, whose texture lacks TEXTURE_BINDING (make it with that usage, or turn occlusion off)"
+    )]
+    DepthNotBindable {
+        /// The display's index.
+        display: usize,
+    },
+
     /// Reading results back from the GPU failed (device lost, map failure).
     #[error("GPU readback failed: {0}")]
     Readback(String),

@@ -588,3 +588,47 @@ fn depth_images(
     }
     (shown, covered)
 }
+
+/// A caller's depth target that cannot be bound for reading is one clear error with
+/// occlusion on, before anything is recorded; without occlusion it renders.
+#[test]
+fn a_depth_target_occlusion_cannot_read_is_an_error() {
+    let gpu = gpu();
+    let scene = procedural::rooms(100, 2);
+    let rig = sized("hmd", 32, 32);
+    let made = |occlusion| Renderer::new(&gpu.device, &scene, &rig, options(occlusion)).unwrap();
+    let ours = made(OcclusionMode::On).create_targets(&gpu.device);
+    let depth = gpu.device.create_texture(&wgpu::TextureDescriptor {
+        label: Some("attachment only"),
+        size: ours[0].depth.size(),
+        mip_level_count: 1,
+        sample_count: 1,
+        dimension: wgpu::TextureDimension::D2,
+        format: ours[0].depth.format(),
+        usage: wgpu::TextureUsages::RENDER_ATTACHMENT,
+        view_formats: &[],
+    });
+    let depth = depth.create_view(&Default::default());
+    let color = ours[0].color.create_view(&Default::default());
+    let views = [stereocull::renderer::TargetViews {
+        color: &color,
+        depth: &depth,
+        resolve: None,
+    }];
+    for (occlusion, fails) in [(OcclusionMode::On, true), (OcclusionMode::Off, false)] {
+        let mut renderer = made(occlusion);
+        renderer.prepare(&gpu.queue, &rig, 0.0).unwrap();
+        let mut encoder = gpu.device.create_command_encoder(&Default::default());
+        let result = renderer.encode(&mut encoder, &views, None);
+        match fails {
+            true => assert!(matches!(
+                result,
+                Err(stereocull::Error::DepthNotBindable { display: 0 })
+            )),
+            false => {
+                result.unwrap();
+                gpu.queue.submit([encoder.finish()]);
+            }
+        }
+    }
+}

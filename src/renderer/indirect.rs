@@ -189,7 +189,7 @@ impl IndirectPath {
         (timer, display): Timing,
         log: &mut Vec<PassRecord>,
     ) -> FrameStats {
-        let culled = self.encode_cull(encoder, index, (timer, display), log);
+        let culled = self.encode_cull(encoder, (index, false), (timer, display), log);
         let multiview = self.displays[index].key.multiview_mask();
         let what = (&mut *log, PassRecord::display("draw", index));
         let draw_calls = draw_pass(
@@ -260,32 +260,22 @@ impl IndirectPath {
         }
     }
 
+    /// Whether each display with occlusion can read its depth target into its pyramids.
+    pub(super) fn check_depth(&self, targets: &[TargetViews]) -> Result<()> {
+        let bindable = wgpu::TextureUsages::TEXTURE_BINDING;
+        for (display, (state, target)) in self.displays.iter().zip(targets).enumerate() {
+            if state.late.is_some() && !target.depth.texture().usage().contains(bindable) {
+                return Err(crate::error::Error::DepthNotBindable { display });
+            }
+        }
+        Ok(())
+    }
+
     /// Display `index`'s cull (on the GPU; the culler's upload wrote a CPU cull) and,
-    /// with a far layer, its far cull and far layer pass, timed inside `display`.
+    /// with a far layer, its far cull and far layer pass, timed inside `display`. For a
+    /// display drawn in `one_pass` (the caller's), with occlusion its cull is the
+    /// frustum's alone, which draws everything in that pass.
     pub(super) fn encode_cull(
-        &self,
-        encoder: &mut wgpu::CommandEncoder,
-        index: usize,
-        timing: Timing,
-        log: &mut Vec<PassRecord>,
-    ) -> FrameStats {
-        self.encode_cull_as(encoder, (index, false), timing, log)
-    }
-
-    /// [`IndirectPath::encode_cull`] for a display drawn in one pass (the caller's):
-    /// with occlusion, its cull is then the frustum's alone, which draws everything in
-    /// that pass.
-    pub(super) fn encode_cull_in_one_pass(
-        &self,
-        encoder: &mut wgpu::CommandEncoder,
-        index: usize,
-        timing: Timing,
-        log: &mut Vec<PassRecord>,
-    ) -> FrameStats {
-        self.encode_cull_as(encoder, (index, true), timing, log)
-    }
-
-    fn encode_cull_as(
         &self,
         encoder: &mut wgpu::CommandEncoder,
         (index, one_pass): (usize, bool),
@@ -296,9 +286,10 @@ impl IndirectPath {
         let what = (&mut *log, PassRecord::display("cull", index));
         let timing = (&mut *timer, display);
         let dispatches = match one_pass {
-            true => state
-                .view
-                .encode_frustum_cull(encoder, &self.culler, timing, what),
+            true => {
+                let frustum = (state.view.view_cull(), Phase::Frustum);
+                self.culler.encode(encoder, frustum, timing, what)
+            }
             false => state.view.encode_cull(encoder, &self.culler, timing, what),
         };
         let mut stats = FrameStats {

@@ -323,6 +323,9 @@ impl Renderer {
                 displays: self.shapes.len(),
             });
         }
+        if let Path::Indirect(p) = &self.path {
+            p.check_depth(targets)?;
+        }
         let mut stats = self.encode_frame(encoder, &mut timer);
         for (i, target) in targets.iter().enumerate() {
             let display = open_display(&timer, &self.names[i], encoder);

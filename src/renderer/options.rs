@@ -118,7 +118,9 @@ pub struct RendererOptions {
     /// `cull_floor`: for `profile`'s `cull_over_floor`. GPU culling, `instanced` and
     /// `multiview` only; it draws nothing.
     pub cull_floor: bool,
-    /// Occlusion culling ([`OcclusionMode`]).
+    /// Occlusion culling ([`OcclusionMode`], [`crate::occlusion`]): in the renderer's
+    /// own passes (`encode`, `submit_frame`); the depth targets then need
+    /// `TEXTURE_BINDING` (those of `create_targets` have it).
     pub occlusion: OcclusionMode,
 }
 

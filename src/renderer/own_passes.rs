@@ -13,7 +13,9 @@ impl Renderer {
     /// For drawing into the caller's own render passes: records this frame's culls
     /// (GPU culling: each display's dispatches, timed as `cull` inside a scope per
     /// display; CPU culling: nothing, `prepare` uploaded them). Then, in passes the
-    /// caller begins, [`Renderer::draw_display`] for each display.
+    /// caller begins, [`Renderer::draw_display`] for each display. Occlusion's two
+    /// phases need the renderer's own passes (a draw, the depth's pyramids, another
+    /// draw): here each display is culled by its frustum alone.
     pub fn encode_culls(
         &mut self,
         encoder: &mut wgpu::CommandEncoder,
@@ -24,7 +26,7 @@ impl Renderer {
             for i in 0..self.shapes.len() {
                 let display = open_display(&timer, &self.names[i], encoder);
                 let timing = (&mut timer, &display);
-                let culled = p.encode_cull_in_one_pass(encoder, i, timing, &mut self.passes);
+                let culled = p.encode_cull(encoder, (i, true), timing, &mut self.passes);
                 stats.dispatches += culled.dispatches;
                 stats.draw_calls += culled.draw_calls;
                 close(&timer, encoder, display);

@@ -106,18 +106,6 @@ impl ViewPass {
         culler.encode(encoder, (&self.cull, self.cull.phase()), timing, logged)
     }
 
-    /// [`ViewPass::encode_cull`] by the frustum alone, whatever the view's phase: for
-    /// a display drawn in one pass (the caller's).
-    pub(super) fn encode_frustum_cull(
-        &self,
-        encoder: &mut wgpu::CommandEncoder,
-        culler: &Culler,
-        timing: Timing,
-        logged: Logged,
-    ) -> u32 {
-        culler.encode(encoder, (&self.cull, Phase::Frustum), timing, logged)
-    }
-
     /// The view's one multi-draw into `pass`: with `drawer`'s pipeline for `key`, or
     /// (`None`) with the pipeline `pass` already has. Returns the draw calls.
     pub(super) fn draw(
