@@ -466,8 +466,8 @@ fn read_depth(gpu: &Gpu, texture: &wgpu::Texture) -> Vec<f32> {
 /// every other pixel holds a random occluder nearer than the sphere, and a random part
 /// of the sphere's own pixels (at least one) show it. Eyes of every preset (the CAVE's
 /// walls are far off axis), spheres near and far, on the views' edges. And the test has
-/// teeth: with every pixel covered by a nearer occluder, most spheres well inside the
-/// view are found hidden.
+/// teeth: with every pixel covered by a nearer occluder, two thirds of the spheres well
+/// inside the view at least are found hidden.
 #[test]
 fn a_sphere_any_pixel_shows_is_never_hidden() {
     let mut rng = Pcg64Mcg::seed_from_u64(23);
@@ -510,8 +510,11 @@ fn a_sphere_any_pixel_shows_is_never_hidden() {
         }
     }
     assert!(hidden_cases > 100, "{hidden_cases} hidden cases");
+    // Kept are spheres whose nearest point lies nearer than every pixel center's hit
+    // (large spheres, seen between pixel centers) with an occluder between the two, and
+    // those the margins keep: 165 of 712 here.
     assert!(
-        kept_hidden * 5 < hidden_cases,
+        kept_hidden * 3 < hidden_cases,
         "kept {kept_hidden} of {hidden_cases} hidden"
     );
 }
@@ -631,4 +634,38 @@ fn a_depth_target_occlusion_cannot_read_is_an_error() {
             }
         }
     }
+}
+
+/// Random rigs (presets moved anywhere within a million meters, looking anywhere,
+/// random eye distances; the rooms moved with the viewer), with the shadow map on:
+/// three frames each, the images with occlusion equal those without. Far from the
+/// origin the view transform rounds to centimeters: the grown radius must cover it.
+#[test]
+fn random_rigs_with_shadows_draw_the_same_image() {
+    let gpu = gpu();
+    let mut culled = 0;
+    for mut rig in support::presets_and_random_rigs(6).split_off(3) {
+        for d in &mut rig.displays {
+            d.resolution = [48, 40];
+        }
+        let mut scene = procedural::rooms(300, 9);
+        let [x, y, z] = rig.viewer.position;
+        let moved = Affine3A::from_translation(Vec3::new(x, y - 1.6, z - 2.0));
+        for i in &mut scene.instances {
+            i.world_from_local = moved * i.world_from_local;
+        }
+        let made = |occlusion| RendererOptions {
+            shadows: true,
+            ..options(occlusion)
+        };
+        let mut on = Session::new(&gpu, &scene, &rig, made(OcclusionMode::On));
+        let mut off = Session::new(&gpu, &scene, &rig, made(OcclusionMode::Off));
+        let mut counted = Counted::default();
+        for frame in 0..3 {
+            let what = format!("occlusion-random-rig-frame{frame}");
+            compare_frames(&gpu, (&mut on, &mut off), &rig, &what, &mut counted);
+        }
+        culled += counted.culled;
+    }
+    assert!(culled > 0, "no random rig occluded anything");
 }

@@ -132,9 +132,12 @@ fn farthest4(d: [f32; 4]) -> f32 {
 /// Pixels the projected bounds grow by on each side, for the rounding of the
 /// projection (errors of about 1e-6 of the pixel coordinates).
 pub const BOUNDS_GROWTH_PX: f32 = 1.0;
-/// How much nearer the sphere's nearest point is taken, per unit of its view-space
-/// center's magnitude plus radius: covers the view transform's f32 rounding.
-pub const DEPTH_SLACK: f32 = 1.0 / 65536.0;
+/// How much a sphere's radius grows per unit of the magnitudes its view-space center is
+/// summed from (see `grown_radius`): each coordinate of the center is three products
+/// and three sums of a rotation's rows, rounded at most six times by 2^-24 of those
+/// magnitudes (2^-21.4 in all), plus the rotation's own rounding; the distance error
+/// stays under 2^-20 of them, and this is four times that.
+pub const DEPTH_SLACK: f32 = 1.0 / 262144.0;
 /// How far (in depth-buffer units) the sphere's nearest depth must lie beyond the
 /// farthest occluder depth: covers the rasterizer's depth interpolation.
 pub const DEPTH_MARGIN: f32 = 1.0 / 1048576.0;
@@ -202,22 +205,34 @@ fn view_center(s: Vec4, m: &Mat4) -> [f32; 3] {
     [row(0), row(1), row(2)]
 }
 
-/// The sphere's nearest depth in view space, pulled nearer by [`DEPTH_SLACK`].
-fn nearest_distance(s: Vec4, c: [f32; 3]) -> f32 {
-    let slack = (c[0].abs() + c[1].abs() + c[2].abs() + s.w) * DEPTH_SLACK;
-    -c[2] - s.w - slack
+/// The radius of `s`, grown by [`DEPTH_SLACK`] of every magnitude its view-space
+/// center `c` was summed from (the world center, the view's translation, the result, the
+/// radius): the f32 rounding of `c`, centimeters at a million meters from the origin.
+/// Summed left to right, as the WGSL does.
+fn grown_radius(s: Vec4, m: &Mat4, c: [f32; 3]) -> f32 {
+    let t = m.w_axis;
+    let magnitude = c[0].abs()
+        + c[1].abs()
+        + c[2].abs()
+        + s.x.abs()
+        + s.y.abs()
+        + s.z.abs()
+        + t.x.abs()
+        + t.y.abs()
+        + t.z.abs()
+        + s.w;
+    s.w + magnitude * DEPTH_SLACK
 }
 
 /// The sphere's projected bounds in normalized device coordinates (min x, min y, max x,
 /// max y), or `None` where it reaches the near plane (then it is never occluded).
 fn project(s: Vec4, view: &Mat4, clip: &Mat4) -> Option<Vec4> {
     let c = view_center(s, view);
-    let near = nearest_distance(s, c);
-    if near_depth(near, clip).is_none_or(|d| d < 0.0) {
+    let r = grown_radius(s, view, c);
+    if near_depth(-c[2] - r, clip).is_none_or(|d| d < 0.0) {
         return None;
     }
     let z = -c[2];
-    let r = s.w;
     let (x0, x1) = tangent_slopes(c[0], z, r);
     let (y0, y1) = tangent_slopes(c[1], z, r);
     let (p00, p11) = (clip.x_axis.x, clip.y_axis.y);
@@ -246,8 +261,8 @@ fn near_depth(d: f32, clip: &Mat4) -> Option<f32> {
 
 /// The depth-buffer value of the sphere's nearest point (pulled nearer for rounding).
 fn bounds_depth(s: Vec4, view: &Mat4, clip: &Mat4) -> f32 {
-    let near = nearest_distance(s, view_center(s, view));
-    near_depth(near, clip).unwrap_or(0.0)
+    let c = view_center(s, view);
+    near_depth(-c[2] - grown_radius(s, view, c), clip).unwrap_or(0.0)
 }
 
 /// One display's two-phase cull on the CPU (the twin of the GPU's early and late cull

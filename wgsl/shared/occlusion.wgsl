@@ -7,7 +7,7 @@
 
 const ENTRY_SEEN: u32 = 0x40000000u;
 const BOUNDS_GROWTH_PX: f32 = 1.0;
-const DEPTH_SLACK: f32 = 1.0 / 65536.0;
+const DEPTH_SLACK: f32 = 1.0 / 262144.0;
 const DEPTH_MARGIN: f32 = 1.0 / 1048576.0;
 
 // Whether the display drew cull position k last frame.
@@ -55,9 +55,12 @@ fn view_center(s: vec4<f32>, m: mat4x4<f32>) -> vec3<f32> {
     );
 }
 
-fn nearest_distance(s: vec4<f32>, c: vec3<f32>) -> f32 {
-    let slack = (abs(c.x) + abs(c.y) + abs(c.z) + s.w) * DEPTH_SLACK;
-    return -c.z - s.w - slack;
+// The radius grown for the rounding of c (grown_radius in src/occlusion/mod.rs: the
+// same sum, left to right).
+fn grown_radius(s: vec4<f32>, m: mat4x4<f32>, c: vec3<f32>) -> f32 {
+    let t = m[3];
+    let magnitude = abs(c.x) + abs(c.y) + abs(c.z) + abs(s.x) + abs(s.y) + abs(s.z) + abs(t.x) + abs(t.y) + abs(t.z) + s.w;
+    return s.w + magnitude * DEPTH_SLACK;
 }
 
 // Depth-buffer value at view distance d > 0.
@@ -94,7 +97,8 @@ fn occluded_in_eye(s: vec4<f32>, e: u32) -> bool {
     let view = display.eye[e].view_from_world;
     let clip = display.eye[e].clip_from_view;
     let c = view_center(s, view);
-    let near = nearest_distance(s, c);
+    let r = grown_radius(s, view, c);
+    let near = -c.z - r;
     if (!(near > 0.0)) {
         return false;
     }
@@ -102,8 +106,8 @@ fn occluded_in_eye(s: vec4<f32>, e: u32) -> bool {
     if (near_depth < 0.0) {
         return false;
     }
-    let xs = tangent_slopes(c.x, -c.z, s.w);
-    let ys = tangent_slopes(c.y, -c.z, s.w);
+    let xs = tangent_slopes(c.x, -c.z, r);
+    let ys = tangent_slopes(c.y, -c.z, r);
     let x0 = clip[0].x * xs.x - clip[2].x;
     let y0 = clip[1].y * ys.x - clip[2].y;
     let x1 = clip[0].x * xs.y - clip[2].x;
