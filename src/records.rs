@@ -24,7 +24,7 @@ pub struct InstanceRecord {
     pub bob: f32,
 }
 
-/// The 16 bytes before a scatter's edits (`EditHeader` in `wgsl/shared/scatter.wgsl`).
+/// The 32 bytes before a scatter's edits (`EditHeader` in `wgsl/shared/scatter.wgsl`).
 #[repr(C)]
 #[derive(Clone, Copy, Debug, PartialEq, Eq, Pod, Zeroable)]
 pub struct EditHeader {
@@ -34,8 +34,14 @@ pub struct EditHeader {
     pub spheres_too: u32,
     /// Workgroups along x of the dispatch (its y spreads past the device's limit).
     pub groups_x: u32,
-    /// Zero (the header is 16 bytes).
-    pub unused: u32,
+    /// With occlusion, the visibility words per display slot: a filled or vacated
+    /// place's bit is cleared in each slot's (a newcomer starts as not drawn). Zero
+    /// without occlusion.
+    pub visibility_words: u32,
+    /// With occlusion, the display slots that have visibility words; else zero.
+    pub visibility_slots: u32,
+    /// Zeros (the header is 32 bytes).
+    pub unused: [u32; 3],
 }
 
 /// A moved instance as the moves scatter takes it (56 bytes): the slot

@@ -158,6 +158,7 @@ pub struct Scatter<E: Edit> {
     index: Vec<u32>,
     indexed: bool,
     spheres_too: bool,
+    visibility: (u32, u32),
     max_groups: u32,
 }
 
@@ -166,7 +167,10 @@ pub struct Scatter<E: Edit> {
 /// culler's, or `None` when culling on the CPU).
 pub struct ScatterTargets<'a> {
     pub instances: &'a wgpu::Buffer,
-    pub spheres: Option<[&'a wgpu::Buffer; 4]>,
+    /// The spheres, positions, order, mesh bounds and occlusion words.
+    pub spheres: Option<[&'a wgpu::Buffer; 5]>,
+    /// With occlusion: the visibility words per display slot and the slots.
+    pub visibility: (u32, u32),
 }
 
 impl<E: Edit> Scatter<E> {
@@ -190,6 +194,7 @@ impl<E: Edit> Scatter<E> {
             index: Vec::new(),
             indexed: false,
             spheres_too: false,
+            visibility: (0, 0),
             max_groups: device.limits().max_compute_workgroups_per_dimension,
         }
     }
@@ -210,6 +215,7 @@ impl<E: Edit> Scatter<E> {
         targets: ScatterTargets,
     ) -> (u64, Vec<E>) {
         self.spheres_too = targets.spheres.is_some();
+        self.visibility = targets.visibility;
         let before = self.staged.len();
         if before == 0 {
             std::mem::swap(&mut self.staged, &mut edits);
@@ -334,7 +340,9 @@ impl<E: Edit> Scatter<E> {
             count: self.pending() as u32,
             spheres_too: u32::from(self.spheres_too),
             groups_x: self.groups().0,
-            unused: 0,
+            visibility_words: self.visibility.0,
+            visibility_slots: self.visibility.1,
+            unused: [0; 3],
         }
     }
 
@@ -344,8 +352,8 @@ impl<E: Edit> Scatter<E> {
             let usage = wgpu::BufferUsages::STORAGE;
             storage_buffer(device, "stereocull.scatter_stand_in", 0, usage)
         };
-        let stand_ins: [wgpu::Buffer; 4];
-        let [s, p, o, b] = match targets.spheres {
+        let stand_ins: [wgpu::Buffer; 5];
+        let [s, p, o, b, v] = match targets.spheres {
             Some(four) => four,
             None => {
                 stand_ins = std::array::from_fn(|_| stand_in());
@@ -353,7 +361,7 @@ impl<E: Edit> Scatter<E> {
             }
         };
         // In SCATTER_BINDINGS order.
-        let buffers = [&self.edits, p, o, b, targets.instances, s];
+        let buffers = [&self.edits, p, o, v, b, targets.instances, s];
         let (label, layout) = ("stereocull.scatter", &self.layout);
         bind_group(
             device,

@@ -760,9 +760,11 @@ fn stress_with_moving_instances_reports_what_they_cost() {
         frame["dispatches"], 4,
         "the scatter, then three cull passes"
     );
-    // 16 bytes of header, 56 per moved instance, then the frame and display contexts.
+    // The edits' header, 56 bytes per moved instance, then the frame and display
+    // contexts.
     let contexts = FrameContext::min_size().get() + DisplayContext::min_size().get();
-    assert_eq!(frame["bytes_uploaded"], 16 + 56 * 500 + contexts);
+    let header = size_of::<stereocull::records::EditHeader>() as u64;
+    assert_eq!(frame["bytes_uploaded"], header + 56 * 500 + contexts);
     assert!(frame["staging_ms"].as_f64().unwrap() > 0.0, "{frame}");
     let summary = &v["summary"];
     assert!(

@@ -397,7 +397,8 @@ fn a_moved_instance_renders_like_a_fresh_scene_with_it_there() {
             .unwrap();
         live.set_transform(handles[7], ahead).unwrap();
         let synced = renderer.sync(&gpu.device, &gpu.queue, &mut live).unwrap();
-        assert_eq!((synced.moved, synced.bytes_uploaded), (1, 16 + 56));
+        let header = size_of::<stereocull::records::EditHeader>() as u64;
+        assert_eq!((synced.moved, synced.bytes_uploaded), (1, header + 56));
         let frame = renderer
             .submit_frame(&gpu.device, &gpu.queue, &rig, 0.0, &targets)
             .unwrap();

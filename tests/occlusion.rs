@@ -669,3 +669,39 @@ fn random_rigs_with_shadows_draw_the_same_image() {
     }
     assert!(culled > 0, "no random rig occluded anything");
 }
+
+/// An instance inserted where a drawn one was removed (its place, and here its slot,
+/// reused) starts as not drawn: the next frame draws it late, not early, while an
+/// untouched neighbour stays early.
+#[test]
+fn a_newcomer_starts_as_not_drawn() {
+    let gpu = gpu();
+    let scene = procedural::rooms(200, 5);
+    let rig = sized("hmd", 64, 48);
+    let mut live = LiveScene::new(scene.clone());
+    let mut session = Session::new(&gpu, &scene, &rig, options(OcclusionMode::On));
+    for _ in 0..2 {
+        session.frame(&gpu, &rig);
+    }
+    let (early, _) = session.phases(&gpu, 0);
+    let (gone, kept) = (early.visible[0], early.visible[1]);
+    let handle = live.handles()[gone as usize];
+    let instance = live.remove(handle).unwrap();
+    let newcomer = live.insert(instance).unwrap();
+    assert_eq!(newcomer.slot(), gone, "the insert reuses the slot");
+    session
+        .renderer
+        .sync(&gpu.device, &gpu.queue, &mut live)
+        .unwrap();
+    session.frame(&gpu, &rig);
+    let (early, late) = session.phases(&gpu, 0);
+    assert!(
+        !early.visible.contains(&gone),
+        "the newcomer was drawn early"
+    );
+    assert!(
+        late.visible.contains(&gone),
+        "the newcomer was not drawn late"
+    );
+    assert!(early.visible.contains(&kept));
+}

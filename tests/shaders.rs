@@ -161,6 +161,8 @@ fn edit_records_match_wgsl() {
             ("count", offset_of!(EditHeader, count)),
             ("spheres_too", offset_of!(EditHeader, spheres_too)),
             ("groups_x", offset_of!(EditHeader, groups_x)),
+            ("visibility_words", offset_of!(EditHeader, visibility_words)),
+            ("visibility_slots", offset_of!(EditHeader, visibility_slots)),
             ("unused", offset_of!(EditHeader, unused)),
         ],
     );
@@ -211,7 +213,7 @@ fn edit_records_match_wgsl() {
     ] {
         let module = parse("edits", &scatter_source(&Windows::WHOLE, kind));
         let (members, _) = wgsl_struct(&module, "Edits");
-        assert_eq!(members[1], ("list".to_string(), 16), "{kind:?}");
+        assert_eq!(members[1], ("list".to_string(), 32), "{kind:?}");
         let list = module
             .types
             .iter()
@@ -574,6 +576,7 @@ fn windowed_arrays_take_one_binding_per_window() {
             "edits",
             "positions",
             "order",
+            "visibility",
             "mesh_bounds",
             "instances_0",
             "instances_1",

@@ -71,6 +71,8 @@ pub struct CullScene {
     /// ([`crate::occlusion::PyramidShape`]), which every display rebuilds in turn.
     pub(super) occlusion: wgpu::Buffer,
     occlusion_layout: (u32, u32),
+    /// Display slots with visibility words (0 without occlusion).
+    visibility_slots: u32,
 }
 
 /// What occlusion culling needs room for: how many displays keep visibility bits and
@@ -205,6 +207,7 @@ impl CullScene {
                 scratch | wgpu::BufferUsages::COPY_SRC,
             ),
             occlusion_layout,
+            visibility_slots: occlusion.displays,
         }
     }
 
@@ -235,8 +238,12 @@ impl CullScene {
             (&self.mesh_of, bytemuck::cast_slice(&layout.mesh_of)),
             (&self.meshes, bytemuck::cast_slice(&layout.meshes)),
         ];
-        writes
-            .iter()
+        // Laid out afresh, no place holds what it held: every instance starts as not
+        // drawn last frame.
+        let cleared = vec![0u8; 4 * (self.visibility_slots * self.occlusion_layout.0) as usize];
+        let clear = (&self.occlusion, cleared.as_slice());
+        (writes.iter().chain([&clear]))
+            .filter(|(_, bytes)| !bytes.is_empty())
             .map(|(buffer, bytes)| {
                 queue.write_buffer(buffer, 0, bytes);
                 bytes.len() as u64
@@ -245,14 +252,24 @@ impl CullScene {
     }
 
     /// Where the scatter passes write (the spheres in cull order, each slot's
-    /// position, each position's slot) and what they read (each mesh's local bounds).
-    pub fn scatter_targets(&self) -> [&wgpu::Buffer; 4] {
+    /// position, each position's slot, the places' visibility bits) and what they read
+    /// (each mesh's local bounds).
+    pub fn scatter_targets(&self) -> [&wgpu::Buffer; 5] {
         [
             &self.spheres,
             &self.positions,
             &self.order,
             &self.mesh_bounds,
+            &self.occlusion,
         ]
+    }
+
+    /// The visibility words per display slot and the slots (zeros without occlusion).
+    pub fn visibility_shape(&self) -> (u32, u32) {
+        match self.visibility_slots {
+            0 => (0, 0),
+            slots => (self.occlusion_layout.0, slots),
+        }
     }
 
     /// Bytes on the GPU per instance for culling (spheres, order, positions, mesh, the

@@ -284,13 +284,14 @@ impl Culler {
         }
     }
 
-    /// The GPU culler's spheres, cull positions, order and mesh bounds, which the
-    /// scatter passes write edits into; `None` for the CPU culler, which takes edits
+    /// The GPU culler's spheres, cull positions, order, mesh bounds and occlusion
+    /// words, which the scatter passes write edits into, and the visibility words' shape
+    /// (words per display slot, slots); `None` for the CPU culler, which takes edits
     /// into its layout ([`Culler::place`], [`Culler::moved`]).
-    pub(super) fn scatter_targets(&self) -> Option<[&wgpu::Buffer; 4]> {
+    pub(super) fn scatter_targets(&self) -> (Option<[&wgpu::Buffer; 5]>, (u32, u32)) {
         match &self.kind {
-            Kind::Gpu { scene, .. } => Some(scene.scatter_targets()),
-            Kind::Cpu { .. } => None,
+            Kind::Gpu { scene, .. } => (Some(scene.scatter_targets()), scene.visibility_shape()),
+            Kind::Cpu { .. } => (None, (0, 0)),
         }
     }
 

@@ -128,9 +128,11 @@ impl Renderer {
         let count = placed.len() as u32;
         let (instances, culler) = self.path.edit_targets();
         culler.place(&placed);
+        let (spheres, visibility) = culler.scatter_targets();
         let targets = ScatterTargets {
             instances,
-            spheres: culler.scatter_targets(),
+            spheres,
+            visibility,
         };
         let (bytes, spare) = self.scatter.stage_places(device, placed, targets);
         let stats = SyncStats {
@@ -155,9 +157,11 @@ impl Renderer {
         let count = moved.len() as u32;
         let (instances, culler) = self.path.edit_targets();
         culler.moved(scene, &moved);
+        let (spheres, visibility) = culler.scatter_targets();
         let targets = ScatterTargets {
             instances,
-            spheres: culler.scatter_targets(),
+            spheres,
+            visibility,
         };
         let (bytes, spare) = self.scatter.moves.stage(device, moved, targets);
         let stats = SyncStats {
@@ -179,9 +183,11 @@ impl Renderer {
             .map(|&slot| record_edit(scene, slot))
             .collect();
         let (instances, culler) = self.path.edit_targets();
+        let (spheres, visibility) = culler.scatter_targets();
         let targets = ScatterTargets {
             instances,
-            spheres: culler.scatter_targets(),
+            spheres,
+            visibility,
         };
         self.scatter.records.stage(device, records, targets).0
     }

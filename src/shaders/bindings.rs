@@ -187,13 +187,21 @@ pub const DRAW_BINDINGS: [Binding; 4] = [
 
 /// The scatter pass's bindings (`wgsl/scatter_*.wgsl`): the frame's edits, and where
 /// they go.
-pub const SCATTER_BINDINGS: [Binding; 6] = [
+pub const SCATTER_BINDINGS: [Binding; 7] = [
     // The header and one kind's edits (`Edits` in each wgsl/scatter_*.wgsl).
     binding("edits", Access::StorageRead, "Edits", COMPUTE),
     // Cull position of each slot (the places scatter writes, the moves read).
     binding("positions", Access::StorageReadWrite, "array<u32>", COMPUTE),
     // Slot at each cull position.
     binding("order", Access::StorageReadWrite, "array<u32>", COMPUTE),
+    // The GPU culler's occlusion words (CULL_BINDINGS' `occlusion`): places filled or
+    // vacated lose their visibility bits.
+    binding(
+        "visibility",
+        Access::StorageReadWrite,
+        "array<atomic<u32>>",
+        COMPUTE,
+    ),
     // Each mesh's local bounding sphere (center, radius): where a moved sphere's
     // center comes from.
     binding(

@@ -105,7 +105,8 @@ pub fn scatter_source(windows: &Windows, kind: EditKind) -> String {
         EditKind::Records => include_str!("../../wgsl/scatter_records.wgsl"),
     };
     let shared = include_str!("../../wgsl/shared/scatter.wgsl");
-    [RECORDS, &bindings, shared, body].concat()
+    let span = format!("const VISIBILITY_SPAN: u32 = {SPAN}u;\n");
+    [&span, RECORDS, &bindings, shared, body].concat()
 }
 
 /// The cull passes: two at the frame level (the coarse cull, when on) and four per

@@ -17,7 +17,10 @@ struct EditHeader {
     spheres_too: u32,
     // Workgroups along x; y spreads past the device's limit per dimension.
     groups_x: u32,
-    unused: u32,
+    // Occlusion: visibility words per display slot and the slots (zeros without).
+    visibility_words: u32,
+    visibility_slots: u32,
+    unused: array<u32, 3>,
 }
 
 struct PlaceEdit {
