@@ -174,6 +174,9 @@ pub struct DisplayContext {
     /// Which of the frame coarse cull's block lists this cull runs over: its display's
     /// index (the far layer's cull shares its display's). Read only over candidates.
     pub cull_slot: u32,
+    /// The display's views: 1 mono, 2 stereo, 4 foveated stereo (occlusion tests each
+    /// eye's pyramid, whatever the instances per object).
+    pub views: u32,
 }
 
 /// Views a display context holds: four for foveated stereo.
@@ -209,6 +212,7 @@ impl DisplayContext {
             split_keep: 0,
             split_distance: 0.0,
             cull_slot: 0,
+            views: eyes.len() as u32,
         }
     }
 
@@ -270,6 +274,7 @@ impl DisplayContext {
             split_keep: 0,
             split_distance: 0.0,
             cull_slot: 0,
+            views: 1,
         }
     }
 }

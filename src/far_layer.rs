@@ -103,6 +103,7 @@ impl FarPlan {
             split_keep: 2,
             split_distance: self.distance,
             cull_slot,
+            views: 1,
         }
     }
 

@@ -14,7 +14,7 @@ use stereocull::occlusion::{self, PyramidShape};
 use stereocull::procedural;
 use stereocull::records::CullLayout;
 use stereocull::renderer::{
-    CoarseMode, DisplayTarget, FramePlan, OcclusionMode, Renderer, RendererOptions,
+    CoarseMode, DisplayTarget, FramePlan, OcclusionMode, Renderer, RendererOptions, StereoMode,
 };
 use stereocull::rig::{Mount, Rig};
 use stereocull::scene::{Animation, Instance, Scene};
@@ -93,36 +93,65 @@ fn walk(rig: &Rig) -> Vec<Rig> {
     .to_vec()
 }
 
-/// What the walk and edit tests vary: the rig, levels of detail, MSAA, the coarse cull.
-const CASES: [(&str, bool, u32, CoarseMode); 5] = [
-    ("hmd", false, 1, CoarseMode::Off),
-    ("hmd", true, 4, CoarseMode::Off),
-    ("cave", true, 1, CoarseMode::On),
-    ("hmd-peripheral", false, 1, CoarseMode::On),
-    ("hmd-foveated", false, 1, CoarseMode::Off),
+/// What the walk test varies: the rig, levels of detail, MSAA, the coarse cull, the
+/// mode.
+const CASES: [(&str, bool, u32, CoarseMode, StereoMode); 7] = [
+    ("hmd", false, 1, CoarseMode::Off, StereoMode::Instanced),
+    ("hmd", true, 4, CoarseMode::Off, StereoMode::Instanced),
+    ("cave", true, 1, CoarseMode::On, StereoMode::Instanced),
+    (
+        "hmd-peripheral",
+        false,
+        1,
+        CoarseMode::On,
+        StereoMode::Instanced,
+    ),
+    (
+        "hmd-foveated",
+        false,
+        1,
+        CoarseMode::Off,
+        StereoMode::Instanced,
+    ),
+    ("hmd", false, 1, CoarseMode::Off, StereoMode::Multiview),
+    (
+        "hmd-peripheral",
+        true,
+        1,
+        CoarseMode::Off,
+        StereoMode::Multiview,
+    ),
 ];
 
 /// Frame after frame over a walk through the rooms, every preset (the foveated one
-/// runs without occlusion: see `RendererOptions::occludes`): each image with occlusion
+/// runs without occlusion: see `RendererOptions::occludes`), `instanced` and
+/// `multiview` (a pyramid per layer): each image with occlusion
 /// equals the image without it, and somewhere along the walk occlusion culls something
 /// and the late phase draws something (what came out from behind a wall in that frame).
 #[test]
 fn occlusion_changes_no_pixel_over_a_walk() {
     let gpu = gpu();
     let scene = procedural::rooms(600, 3);
-    for (preset, lod, samples, coarse) in CASES {
+    for (preset, lod, samples, coarse, mode) in CASES {
         let rig = sized(preset, 96, 80);
         let made = |occlusion| RendererOptions {
             lod,
             sample_count: samples,
             coarse_cull: coarse,
+            mode,
             ..options(occlusion)
         };
         let mut on = Session::new(&gpu, &scene, &rig, made(OcclusionMode::On));
         let mut off = Session::new(&gpu, &scene, &rig, made(OcclusionMode::Off));
-        let mut counted = Counted::default();
+        let mut counted = Counted {
+            tolerance: match mode {
+                StereoMode::Multiview => MULTIVIEW_TIES,
+                _ => Tolerance::EXACT,
+            },
+            ..Counted::default()
+        };
         for (step, pose) in walk(&rig).iter().enumerate() {
-            let what = format!("occlusion-{preset}-step{step}");
+            let what = format!("occlusion-{preset}-{}-step{step}", mode.name());
             compare_frames(&gpu, (&mut on, &mut off), pose, &what, &mut counted);
         }
         let occludes = preset != "hmd-foveated";
@@ -213,13 +242,35 @@ fn edit(live: &mut LiveScene, rng: &mut Pcg64Mcg) {
     }
 }
 
+/// Multiview draws back faces too (lavapipe drops the second view's front faces with
+/// face culling: `DrawKey::face_culling`), so on a silhouette a front and a back face
+/// of one object can meet a pixel center at the same depth, and which wins depends on
+/// the order they are drawn in: occlusion draws in two phases, so some edge pixels
+/// differ (24 of 15,360 seen). Nothing else may.
+const MULTIVIEW_TIES: Tolerance = Tolerance {
+    levels: 0,
+    share: 0.005,
+};
+
 /// Occlusion's work summed over frames: instances culled by it, and drawn late after
-/// the first frame.
-#[derive(Debug, Default)]
+/// the first frame; and how far the images may differ (exact but for multiview's ties).
+#[derive(Debug)]
 struct Counted {
     culled: usize,
     late: usize,
     frames: usize,
+    tolerance: Tolerance,
+}
+
+impl Default for Counted {
+    fn default() -> Counted {
+        Counted {
+            culled: 0,
+            late: 0,
+            frames: 0,
+            tolerance: Tolerance::EXACT,
+        }
+    }
 }
 
 /// One frame of `pose` with occlusion (`on`) and without (`off`): the images equal
@@ -236,7 +287,7 @@ fn compare_frames(
     let without = off.frame(gpu, pose);
     for (d, (a, b)) in with.iter().zip(&without).enumerate() {
         let what = format!("{what}-display{d}");
-        assert_images_match(&what, a, b, Tolerance::EXACT);
+        assert_images_match(&what, a, b, counted.tolerance);
         let diagnostics = on.renderer.diagnostics(&gpu.device, &gpu.queue);
         let Some(late) = diagnostics.late_cull(d).unwrap() else {
             continue;
@@ -262,7 +313,13 @@ fn compare_frames(
 #[test]
 fn gpu_phases_match_the_cpu_twin() {
     let gpu = gpu();
-    for (seed, lod) in [(1, false), (2, true), (5, false)] {
+    let multiview = StereoMode::Multiview;
+    for (seed, lod, mode) in [
+        (1, false, StereoMode::Instanced),
+        (2, true, StereoMode::Instanced),
+        (5, false, StereoMode::Instanced),
+        (6, false, multiview),
+    ] {
         let mut scene = procedural::rooms(300, seed);
         scene
             .instances
@@ -278,6 +335,7 @@ fn gpu_phases_match_the_cpu_twin() {
         let rig = sized("hmd", 80 + seed as u32, 61);
         let options = RendererOptions {
             lod,
+            mode,
             ..options(OcclusionMode::On)
         };
         let mut session = Session::new(&gpu, &scene, &rig, options);
@@ -305,16 +363,27 @@ fn gpu_phases_match_the_cpu_twin() {
 }
 
 /// The GPU's pyramids equal the CPU reduction of the depth they were built from, on
-/// depth images of odd sizes (random scenes rendered at odd eye sizes). The pose holds
+/// depth images of odd sizes (random scenes rendered at odd eye sizes), side by side
+/// and in multiview's layers. The pose holds
 /// still for three frames, so the third frame's late phase draws nothing and the depth
 /// read after it is the depth its pyramids were built from (asserted).
 #[test]
 fn pyramids_match_the_cpu_reduction() {
     let gpu = gpu();
-    for (seed, [w, h]) in [(7, [37, 23]), (8, [64, 9]), (9, [1, 5])] {
+    let multiview = StereoMode::Multiview;
+    for (seed, [w, h], mode) in [
+        (7, [37, 23], StereoMode::Instanced),
+        (8, [64, 9], StereoMode::Instanced),
+        (9, [1, 5], StereoMode::Instanced),
+        (10, [37, 23], multiview),
+    ] {
         let scene = procedural::scene(400, 6, seed);
         let rig = sized("hmd", w, h);
-        let mut session = Session::new(&gpu, &scene, &rig, options(OcclusionMode::On));
+        let options = RendererOptions {
+            mode,
+            ..options(OcclusionMode::On)
+        };
+        let mut session = Session::new(&gpu, &scene, &rig, options);
         for _ in 0..3 {
             session.frame(&gpu, &rig);
         }
@@ -324,7 +393,14 @@ fn pyramids_match_the_cpu_reduction() {
             "the third frame drew late: {:?}",
             late.visible
         );
-        let depth = read_depth(&gpu, &session.targets[0].depth);
+        let mut depth = read_depth(&gpu, &session.targets[0].depth);
+        if mode == multiview {
+            // Two layers, one after the other: side by side, row by row, as the CPU
+            // reduction reads them.
+            let (left, right) = depth.split_at((w * h) as usize);
+            let rows = left.chunks(w as usize).zip(right.chunks(w as usize));
+            depth = rows.flat_map(|(l, r)| [l, r].concat()).collect();
+        }
         let shape = PyramidShape {
             eye: glam::UVec2::new(w, h),
             eyes: 2,
@@ -425,9 +501,9 @@ fn what_one_eye_sees_around_an_edge_is_drawn() {
     );
 }
 
-/// The display's depth target, read back row by row (`Depth32Float`).
+/// The display's depth target, read back row by row (`Depth32Float`), layer after layer.
 fn read_depth(gpu: &Gpu, texture: &wgpu::Texture) -> Vec<f32> {
-    let (w, h) = (texture.width(), texture.height());
+    let (w, h) = (texture.width(), texture.height() * texture.depth_or_array_layers());
     let row = (4 * w).next_multiple_of(wgpu::COPY_BYTES_PER_ROW_ALIGNMENT);
     let buffer = gpu.device.create_buffer(&wgpu::BufferDescriptor {
         label: Some("depth readback"),
@@ -448,7 +524,7 @@ fn read_depth(gpu: &Gpu, texture: &wgpu::Texture) -> Vec<f32> {
             layout: wgpu::TexelCopyBufferLayout {
                 offset: 0,
                 bytes_per_row: Some(row),
-                rows_per_image: Some(h),
+                rows_per_image: Some(texture.height()),
             },
         },
         texture.size(),
@@ -704,4 +780,29 @@ fn a_newcomer_starts_as_not_drawn() {
         "the newcomer was not drawn late"
     );
     assert!(early.visible.contains(&kept));
+}
+
+#[test]
+fn scratch_multiview_procedural() {
+    let gpu = gpu();
+    let scene = procedural::rooms(600, 3);
+    let rig = sized("hmd-peripheral", 96, 80);
+    let made = |occlusion| RendererOptions { lod: true, mode: StereoMode::Multiview, ..options(occlusion) };
+    let mut on = Session::new(&gpu, &scene, &rig, made(OcclusionMode::On));
+    let mut off = Session::new(&gpu, &scene, &rig, made(OcclusionMode::Off));
+    for (step, pose) in walk(&rig).iter().enumerate().take(2) {
+        on.frame(&gpu, pose);
+        off.frame(&gpu, pose);
+        let (early, late) = on.phases(&gpu, 0);
+        let frustum = off.renderer.diagnostics(&gpu.device, &gpu.queue).cull(0).unwrap();
+        let drawn: std::collections::HashSet<u32> = early.visible.iter().chain(&late.visible).copied().collect();
+        let missing: Vec<u32> = frustum.visible.iter().copied().filter(|i| !drawn.contains(i)).collect();
+        eprintln!("SCRATCH step {step}: early {} late {} frustum {} missing {}", early.visible.len(), late.visible.len(), frustum.visible.len(), missing.len());
+        // Render the off renderer with only... list where missing ones are
+        let layout = CullLayout::new(&scene);
+        let plan = on.renderer.plan(pose, 0.0).unwrap();
+        let diagnostics = on.renderer.diagnostics(&gpu.device, &gpu.queue);
+        let (shape, _) = diagnostics.visibility(0).unwrap().unwrap();
+        eprintln!("SCRATCH shape {shape:?} views {}", plan.displays[0].views);
+    }
 }

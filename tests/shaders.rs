@@ -300,6 +300,7 @@ fn contexts_match_wgsl() {
         split_keep: 2,
         split_distance: 13.0,
         cull_slot: 3,
+        views: 4,
     };
     let bytes = uniform_bytes(&d);
     check_uniform(
@@ -319,6 +320,7 @@ fn contexts_match_wgsl() {
             ("split_keep", f32::from_bits(2)),
             ("split_distance", 13.0),
             ("cull_slot", f32::from_bits(3)),
+            ("views", f32::from_bits(4)),
         ],
     );
     // Each eye sits one EyeContext span after the one before (the fourth, a foveated

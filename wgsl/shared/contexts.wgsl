@@ -54,6 +54,9 @@ struct DisplayContext {
     // Which of the frame coarse cull's block lists this cull runs over (its display's
     // index; the far layer's cull shares its display's): read only over candidates.
     cull_slot: u32,
+    // The display's views: 1 mono, 2 stereo, 4 foveated stereo (occlusion tests each
+    // eye's pyramid, whatever the instances per object).
+    views: u32,
 }
 
 // Once per frame: the viewer (not any eye) and the time in seconds.

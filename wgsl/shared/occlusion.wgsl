@@ -35,7 +35,7 @@ fn occlusion_entry(k: u32, s: vec4<f32>, kept: u32) -> u32 {
 
 // Hidden from every eye of the display: the stereo rule.
 fn occluded(s: vec4<f32>) -> bool {
-    for (var e = 0u; e < min(display.instances_per_object, 2u); e++) {
+    for (var e = 0u; e < min(display.views, 2u); e++) {
         if (!occluded_in_eye(s, e)) {
             return false;
         }
