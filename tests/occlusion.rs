@@ -32,13 +32,20 @@ fn options(occlusion: OcclusionMode) -> RendererOptions {
 struct Session {
     renderer: Renderer,
     targets: Vec<DisplayTarget>,
+    /// The scene as the renderer last took it.
+    scene: Scene,
 }
 
 impl Session {
     fn new(gpu: &Gpu, scene: &Scene, rig: &Rig, options: RendererOptions) -> Session {
         let renderer = Renderer::new(&gpu.device, scene, rig, options).unwrap();
         let targets = renderer.create_targets(&gpu.device);
-        Session { renderer, targets }
+        let scene = scene.clone();
+        Session {
+            renderer,
+            targets,
+            scene,
+        }
     }
 
     fn frame(&mut self, gpu: &Gpu, rig: &Rig) -> Vec<image::RgbaImage> {
@@ -193,6 +200,7 @@ fn occlusion_changes_no_pixel_through_edits() {
         off.renderer
             .sync(&gpu.device, &gpu.queue, &mut twin)
             .unwrap();
+        off.scene = twin.scene().clone();
         let what = format!("occlusion-edits-step{step}");
         compare_frames(&gpu, (&mut on, &mut off), &rig, &what, &mut counted);
     }
@@ -243,13 +251,14 @@ fn edit(live: &mut LiveScene, rng: &mut Pcg64Mcg) {
 }
 
 /// Multiview draws back faces too (lavapipe drops the second view's front faces with
-/// face culling: `DrawKey::face_culling`), so on a silhouette a front and a back face
-/// of one object can meet a pixel center at the same depth, and which wins depends on
-/// the order they are drawn in: occlusion draws in two phases, so some edge pixels
-/// differ (24 of 15,360 seen). Nothing else may.
+/// face culling: `DrawKey::face_culling`), and in the rooms back faces lie on other
+/// pieces' front faces (a wall's bottom on the floor, a lintel's ends on the wall beside
+/// it): at such pixels the first drawn wins, and occlusion draws in two phases, in
+/// another order. Up to 1.4 % of the pixels were seen to differ so; that no visible
+/// instance is dropped is checked apart (`assert_dropped_are_hidden`).
 const MULTIVIEW_TIES: Tolerance = Tolerance {
-    levels: 0,
-    share: 0.005,
+    levels: 255,
+    share: 0.02,
 };
 
 /// Occlusion's work summed over frames: instances culled by it, and drawn late after
@@ -301,10 +310,53 @@ fn compare_frames(
             drawn <= frustum.visible.len(),
             "{what}: drew more than the frustum keeps"
         );
+        let dropped: Vec<u32> = (frustum.visible.iter().copied())
+            .filter(|i| !early.visible.contains(i) && !late.visible.contains(i))
+            .collect();
+        assert_dropped_are_hidden(gpu, (off, pose, d), &dropped, &what);
         counted.culled += frustum.visible.len() - drawn;
         counted.late += usize::from(counted.frames > 0) * late.visible.len();
     }
     counted.frames += 1;
+}
+
+/// Every instance in `dropped` is hidden in every eye of display `d` by the depth of the
+/// frame drawn without occlusion (`off`'s, which holds every instance the frustum keeps,
+/// the dropped ones too): had any pixel shown one, its own depth there would keep it.
+/// So occlusion dropped nothing visible, whatever the order of draws does at ties.
+/// Single-sampled targets only (a multisampled depth cannot be copied out).
+fn assert_dropped_are_hidden(
+    gpu: &Gpu,
+    (off, pose, d): (&Session, &Rig, usize),
+    dropped: &[u32],
+    what: &str,
+) {
+    let depth = &off.targets[d].depth;
+    if depth.sample_count() > 1 || dropped.is_empty() {
+        return;
+    }
+    let plan = off.renderer.plan(pose, 0.0).unwrap();
+    let context = &plan.displays[d];
+    let eye = context.resolution.as_uvec2();
+    let eyes = context.views.min(2);
+    let mut full = read_depth(gpu, depth);
+    if depth.depth_or_array_layers() > 1 {
+        let (left, right) = full.split_at((eye.x * eye.y) as usize);
+        let rows = left
+            .chunks(eye.x as usize)
+            .zip(right.chunks(eye.x as usize));
+        full = rows.flat_map(|(l, r)| [l, r].concat()).collect();
+    }
+    let shape = PyramidShape { eye, eyes };
+    let pyramid = occlusion::reduce(&full, eyes * eye.x, shape);
+    let layout = CullLayout::new(&off.scene);
+    for &id in dropped {
+        let s = layout.spheres[layout.positions[id as usize] as usize];
+        assert!(
+            occlusion::occluded(s, &context.eye, (&pyramid, shape)),
+            "{what}: instance {id} dropped though the frame without occlusion shows it"
+        );
+    }
 }
 
 /// Given the same depth pyramids and the same bits from last frame, the CPU twin
@@ -503,7 +555,10 @@ fn what_one_eye_sees_around_an_edge_is_drawn() {
 
 /// The display's depth target, read back row by row (`Depth32Float`), layer after layer.
 fn read_depth(gpu: &Gpu, texture: &wgpu::Texture) -> Vec<f32> {
-    let (w, h) = (texture.width(), texture.height() * texture.depth_or_array_layers());
+    let (w, h) = (
+        texture.width(),
+        texture.height() * texture.depth_or_array_layers(),
+    );
     let row = (4 * w).next_multiple_of(wgpu::COPY_BYTES_PER_ROW_ALIGNMENT);
     let buffer = gpu.device.create_buffer(&wgpu::BufferDescriptor {
         label: Some("depth readback"),
@@ -780,29 +835,4 @@ fn a_newcomer_starts_as_not_drawn() {
         "the newcomer was not drawn late"
     );
     assert!(early.visible.contains(&kept));
-}
-
-#[test]
-fn scratch_multiview_procedural() {
-    let gpu = gpu();
-    let scene = procedural::rooms(600, 3);
-    let rig = sized("hmd-peripheral", 96, 80);
-    let made = |occlusion| RendererOptions { lod: true, mode: StereoMode::Multiview, ..options(occlusion) };
-    let mut on = Session::new(&gpu, &scene, &rig, made(OcclusionMode::On));
-    let mut off = Session::new(&gpu, &scene, &rig, made(OcclusionMode::Off));
-    for (step, pose) in walk(&rig).iter().enumerate().take(2) {
-        on.frame(&gpu, pose);
-        off.frame(&gpu, pose);
-        let (early, late) = on.phases(&gpu, 0);
-        let frustum = off.renderer.diagnostics(&gpu.device, &gpu.queue).cull(0).unwrap();
-        let drawn: std::collections::HashSet<u32> = early.visible.iter().chain(&late.visible).copied().collect();
-        let missing: Vec<u32> = frustum.visible.iter().copied().filter(|i| !drawn.contains(i)).collect();
-        eprintln!("SCRATCH step {step}: early {} late {} frustum {} missing {}", early.visible.len(), late.visible.len(), frustum.visible.len(), missing.len());
-        // Render the off renderer with only... list where missing ones are
-        let layout = CullLayout::new(&scene);
-        let plan = on.renderer.plan(pose, 0.0).unwrap();
-        let diagnostics = on.renderer.diagnostics(&gpu.device, &gpu.queue);
-        let (shape, _) = diagnostics.visibility(0).unwrap().unwrap();
-        eprintln!("SCRATCH shape {shape:?} views {}", plan.displays[0].views);
-    }
 }
