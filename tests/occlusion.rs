@@ -14,7 +14,7 @@ use stereocull::occlusion::{self, PyramidShape};
 use stereocull::procedural;
 use stereocull::records::CullLayout;
 use stereocull::renderer::{
-    CoarseMode, DisplayTarget, FramePlan, OcclusionMode, Renderer, RendererOptions,
+    CoarseMode, DisplayTarget, FramePlan, OcclusionMode, Renderer, RendererOptions, StereoMode,
 };
 use stereocull::rig::{Mount, Rig};
 use stereocull::scene::{Animation, Instance, Scene};
@@ -32,13 +32,20 @@ fn options(occlusion: OcclusionMode) -> RendererOptions {
 struct Session {
     renderer: Renderer,
     targets: Vec<DisplayTarget>,
+    /// The scene as the renderer last took it.
+    scene: Scene,
 }
 
 impl Session {
     fn new(gpu: &Gpu, scene: &Scene, rig: &Rig, options: RendererOptions) -> Session {
         let renderer = Renderer::new(&gpu.device, scene, rig, options).unwrap();
         let targets = renderer.create_targets(&gpu.device);
-        Session { renderer, targets }
+        let scene = scene.clone();
+        Session {
+            renderer,
+            targets,
+            scene,
+        }
     }
 
     fn frame(&mut self, gpu: &Gpu, rig: &Rig) -> Vec<image::RgbaImage> {
@@ -93,36 +100,65 @@ fn walk(rig: &Rig) -> Vec<Rig> {
     .to_vec()
 }
 
-/// What the walk and edit tests vary: the rig, levels of detail, MSAA, the coarse cull.
-const CASES: [(&str, bool, u32, CoarseMode); 5] = [
-    ("hmd", false, 1, CoarseMode::Off),
-    ("hmd", true, 4, CoarseMode::Off),
-    ("cave", true, 1, CoarseMode::On),
-    ("hmd-peripheral", false, 1, CoarseMode::On),
-    ("hmd-foveated", false, 1, CoarseMode::Off),
+/// What the walk test varies: the rig, levels of detail, MSAA, the coarse cull, the
+/// mode.
+const CASES: [(&str, bool, u32, CoarseMode, StereoMode); 7] = [
+    ("hmd", false, 1, CoarseMode::Off, StereoMode::Instanced),
+    ("hmd", true, 4, CoarseMode::Off, StereoMode::Instanced),
+    ("cave", true, 1, CoarseMode::On, StereoMode::Instanced),
+    (
+        "hmd-peripheral",
+        false,
+        1,
+        CoarseMode::On,
+        StereoMode::Instanced,
+    ),
+    (
+        "hmd-foveated",
+        false,
+        1,
+        CoarseMode::Off,
+        StereoMode::Instanced,
+    ),
+    ("hmd", false, 1, CoarseMode::Off, StereoMode::Multiview),
+    (
+        "hmd-peripheral",
+        true,
+        1,
+        CoarseMode::Off,
+        StereoMode::Multiview,
+    ),
 ];
 
 /// Frame after frame over a walk through the rooms, every preset (the foveated one
-/// runs without occlusion: see `RendererOptions::occludes`): each image with occlusion
+/// runs without occlusion: see `RendererOptions::occludes`), `instanced` and
+/// `multiview` (a pyramid per layer): each image with occlusion
 /// equals the image without it, and somewhere along the walk occlusion culls something
 /// and the late phase draws something (what came out from behind a wall in that frame).
 #[test]
 fn occlusion_changes_no_pixel_over_a_walk() {
     let gpu = gpu();
     let scene = procedural::rooms(600, 3);
-    for (preset, lod, samples, coarse) in CASES {
+    for (preset, lod, samples, coarse, mode) in CASES {
         let rig = sized(preset, 96, 80);
         let made = |occlusion| RendererOptions {
             lod,
             sample_count: samples,
             coarse_cull: coarse,
+            mode,
             ..options(occlusion)
         };
         let mut on = Session::new(&gpu, &scene, &rig, made(OcclusionMode::On));
         let mut off = Session::new(&gpu, &scene, &rig, made(OcclusionMode::Off));
-        let mut counted = Counted::default();
+        let mut counted = Counted {
+            tolerance: match mode {
+                StereoMode::Multiview => MULTIVIEW_TIES,
+                _ => Tolerance::EXACT,
+            },
+            ..Counted::default()
+        };
         for (step, pose) in walk(&rig).iter().enumerate() {
-            let what = format!("occlusion-{preset}-step{step}");
+            let what = format!("occlusion-{preset}-{}-step{step}", mode.name());
             compare_frames(&gpu, (&mut on, &mut off), pose, &what, &mut counted);
         }
         let occludes = preset != "hmd-foveated";
@@ -164,6 +200,7 @@ fn occlusion_changes_no_pixel_through_edits() {
         off.renderer
             .sync(&gpu.device, &gpu.queue, &mut twin)
             .unwrap();
+        off.scene = twin.scene().clone();
         let what = format!("occlusion-edits-step{step}");
         compare_frames(&gpu, (&mut on, &mut off), &rig, &what, &mut counted);
     }
@@ -213,13 +250,36 @@ fn edit(live: &mut LiveScene, rng: &mut Pcg64Mcg) {
     }
 }
 
+/// Multiview draws back faces too (lavapipe drops the second view's front faces with
+/// face culling: `DrawKey::face_culling`), and in the rooms back faces lie on other
+/// pieces' front faces (a wall's bottom on the floor, a lintel's ends on the wall beside
+/// it): at such pixels the first drawn wins, and occlusion draws in two phases, in
+/// another order. Up to 1.4 % of the pixels were seen to differ so; that no visible
+/// instance is dropped is checked apart (`assert_dropped_are_hidden`).
+const MULTIVIEW_TIES: Tolerance = Tolerance {
+    levels: 255,
+    share: 0.02,
+};
+
 /// Occlusion's work summed over frames: instances culled by it, and drawn late after
-/// the first frame.
-#[derive(Debug, Default)]
+/// the first frame; and how far the images may differ (exact but for multiview's ties).
+#[derive(Debug)]
 struct Counted {
     culled: usize,
     late: usize,
     frames: usize,
+    tolerance: Tolerance,
+}
+
+impl Default for Counted {
+    fn default() -> Counted {
+        Counted {
+            culled: 0,
+            late: 0,
+            frames: 0,
+            tolerance: Tolerance::EXACT,
+        }
+    }
 }
 
 /// One frame of `pose` with occlusion (`on`) and without (`off`): the images equal
@@ -236,7 +296,7 @@ fn compare_frames(
     let without = off.frame(gpu, pose);
     for (d, (a, b)) in with.iter().zip(&without).enumerate() {
         let what = format!("{what}-display{d}");
-        assert_images_match(&what, a, b, Tolerance::EXACT);
+        assert_images_match(&what, a, b, counted.tolerance);
         let diagnostics = on.renderer.diagnostics(&gpu.device, &gpu.queue);
         let Some(late) = diagnostics.late_cull(d).unwrap() else {
             continue;
@@ -250,10 +310,53 @@ fn compare_frames(
             drawn <= frustum.visible.len(),
             "{what}: drew more than the frustum keeps"
         );
+        let dropped: Vec<u32> = (frustum.visible.iter().copied())
+            .filter(|i| !early.visible.contains(i) && !late.visible.contains(i))
+            .collect();
+        assert_dropped_are_hidden(gpu, (off, pose, d), &dropped, &what);
         counted.culled += frustum.visible.len() - drawn;
         counted.late += usize::from(counted.frames > 0) * late.visible.len();
     }
     counted.frames += 1;
+}
+
+/// Every instance in `dropped` is hidden in every eye of display `d` by the depth of the
+/// frame drawn without occlusion (`off`'s, which holds every instance the frustum keeps,
+/// the dropped ones too): had any pixel shown one, its own depth there would keep it.
+/// So occlusion dropped nothing visible, whatever the order of draws does at ties.
+/// Single-sampled targets only (a multisampled depth cannot be copied out).
+fn assert_dropped_are_hidden(
+    gpu: &Gpu,
+    (off, pose, d): (&Session, &Rig, usize),
+    dropped: &[u32],
+    what: &str,
+) {
+    let depth = &off.targets[d].depth;
+    if depth.sample_count() > 1 || dropped.is_empty() {
+        return;
+    }
+    let plan = off.renderer.plan(pose, 0.0).unwrap();
+    let context = &plan.displays[d];
+    let eye = context.resolution.as_uvec2();
+    let eyes = context.views.min(2);
+    let mut full = read_depth(gpu, depth);
+    if depth.depth_or_array_layers() > 1 {
+        let (left, right) = full.split_at((eye.x * eye.y) as usize);
+        let rows = left
+            .chunks(eye.x as usize)
+            .zip(right.chunks(eye.x as usize));
+        full = rows.flat_map(|(l, r)| [l, r].concat()).collect();
+    }
+    let shape = PyramidShape { eye, eyes };
+    let pyramid = occlusion::reduce(&full, eyes * eye.x, shape);
+    let layout = CullLayout::new(&off.scene);
+    for &id in dropped {
+        let s = layout.spheres[layout.positions[id as usize] as usize];
+        assert!(
+            occlusion::occluded(s, &context.eye, (&pyramid, shape)),
+            "{what}: instance {id} dropped though the frame without occlusion shows it"
+        );
+    }
 }
 
 /// Given the same depth pyramids and the same bits from last frame, the CPU twin
@@ -262,7 +365,13 @@ fn compare_frames(
 #[test]
 fn gpu_phases_match_the_cpu_twin() {
     let gpu = gpu();
-    for (seed, lod) in [(1, false), (2, true), (5, false)] {
+    let multiview = StereoMode::Multiview;
+    for (seed, lod, mode) in [
+        (1, false, StereoMode::Instanced),
+        (2, true, StereoMode::Instanced),
+        (5, false, StereoMode::Instanced),
+        (6, false, multiview),
+    ] {
         let mut scene = procedural::rooms(300, seed);
         scene
             .instances
@@ -278,6 +387,7 @@ fn gpu_phases_match_the_cpu_twin() {
         let rig = sized("hmd", 80 + seed as u32, 61);
         let options = RendererOptions {
             lod,
+            mode,
             ..options(OcclusionMode::On)
         };
         let mut session = Session::new(&gpu, &scene, &rig, options);
@@ -305,16 +415,27 @@ fn gpu_phases_match_the_cpu_twin() {
 }
 
 /// The GPU's pyramids equal the CPU reduction of the depth they were built from, on
-/// depth images of odd sizes (random scenes rendered at odd eye sizes). The pose holds
+/// depth images of odd sizes (random scenes rendered at odd eye sizes), side by side
+/// and in multiview's layers. The pose holds
 /// still for three frames, so the third frame's late phase draws nothing and the depth
 /// read after it is the depth its pyramids were built from (asserted).
 #[test]
 fn pyramids_match_the_cpu_reduction() {
     let gpu = gpu();
-    for (seed, [w, h]) in [(7, [37, 23]), (8, [64, 9]), (9, [1, 5])] {
+    let multiview = StereoMode::Multiview;
+    for (seed, [w, h], mode) in [
+        (7, [37, 23], StereoMode::Instanced),
+        (8, [64, 9], StereoMode::Instanced),
+        (9, [1, 5], StereoMode::Instanced),
+        (10, [37, 23], multiview),
+    ] {
         let scene = procedural::scene(400, 6, seed);
         let rig = sized("hmd", w, h);
-        let mut session = Session::new(&gpu, &scene, &rig, options(OcclusionMode::On));
+        let options = RendererOptions {
+            mode,
+            ..options(OcclusionMode::On)
+        };
+        let mut session = Session::new(&gpu, &scene, &rig, options);
         for _ in 0..3 {
             session.frame(&gpu, &rig);
         }
@@ -324,7 +445,14 @@ fn pyramids_match_the_cpu_reduction() {
             "the third frame drew late: {:?}",
             late.visible
         );
-        let depth = read_depth(&gpu, &session.targets[0].depth);
+        let mut depth = read_depth(&gpu, &session.targets[0].depth);
+        if mode == multiview {
+            // Two layers, one after the other: side by side, row by row, as the CPU
+            // reduction reads them.
+            let (left, right) = depth.split_at((w * h) as usize);
+            let rows = left.chunks(w as usize).zip(right.chunks(w as usize));
+            depth = rows.flat_map(|(l, r)| [l, r].concat()).collect();
+        }
         let shape = PyramidShape {
             eye: glam::UVec2::new(w, h),
             eyes: 2,
@@ -425,9 +553,12 @@ fn what_one_eye_sees_around_an_edge_is_drawn() {
     );
 }
 
-/// The display's depth target, read back row by row (`Depth32Float`).
+/// The display's depth target, read back row by row (`Depth32Float`), layer after layer.
 fn read_depth(gpu: &Gpu, texture: &wgpu::Texture) -> Vec<f32> {
-    let (w, h) = (texture.width(), texture.height());
+    let (w, h) = (
+        texture.width(),
+        texture.height() * texture.depth_or_array_layers(),
+    );
     let row = (4 * w).next_multiple_of(wgpu::COPY_BYTES_PER_ROW_ALIGNMENT);
     let buffer = gpu.device.create_buffer(&wgpu::BufferDescriptor {
         label: Some("depth readback"),
@@ -448,7 +579,7 @@ fn read_depth(gpu: &Gpu, texture: &wgpu::Texture) -> Vec<f32> {
             layout: wgpu::TexelCopyBufferLayout {
                 offset: 0,
                 bytes_per_row: Some(row),
-                rows_per_image: Some(h),
+                rows_per_image: Some(texture.height()),
             },
         },
         texture.size(),

@@ -5,23 +5,14 @@
 // one after. The z of the dispatch is the eye: no reduction crosses the seam.
 // Composed after occlusion.wgsl's layout helpers, the contexts and these bindings:
 //   display: DisplayContext (uniform), level: PyramidLevel (uniform, dynamic offset),
-//   pyramid: array<f32> (read_write), depth: the depth target (DEPTH_TYPE; MSAA: every
-//   sample, the farthest kept).
+//   pyramid: array<f32> (read_write), depth: the depth target, read by
+//   depth_texel(pixel, eye) (src/shaders/mod.rs: a layer per eye in multiview; under
+//   MSAA every sample, the farthest kept).
 
 struct PyramidLevel {
     index: u32,
 }
 
-fn depth_texel(p: vec2<u32>) -> f32 {
-    if (DEPTH_SAMPLES == 1u) {
-        return textureLoad(depth, p, 0);
-    }
-    var d = 0.0;
-    for (var i = 0; i < i32(DEPTH_SAMPLES); i++) {
-        d = max(d, textureLoad(depth, p, i));
-    }
-    return d;
-}
 
 // Each workgroup's texels of the level it writes, for the next level.
 var<workgroup> tile: array<f32, 64>;
@@ -36,14 +27,14 @@ fn reduce_depth(
     let e = id.z;
     var d = 0.0;
     if (all(id.xy < size)) {
-        let origin = vec2<u32>(display.eye[e].viewport.xy);
+        let origin = eye_origin(e);
         let last = eye_size() - 1u;
         let at = 2u * id.xy;
         d = farthest4(
-            depth_texel(origin + min(at, last)),
-            depth_texel(origin + min(at + vec2(1u, 0u), last)),
-            depth_texel(origin + min(at + vec2(0u, 1u), last)),
-            depth_texel(origin + min(at + vec2(1u, 1u), last)),
+            depth_texel(origin + min(at, last), e),
+            depth_texel(origin + min(at + vec2(1u, 0u), last), e),
+            depth_texel(origin + min(at + vec2(0u, 1u), last), e),
+            depth_texel(origin + min(at + vec2(1u, 1u), last), e),
         );
         pyramid[level_offset(e, 0u, pyramid_levels()) + id.y * size.x + id.x] = d;
     }

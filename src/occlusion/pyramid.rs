@@ -7,7 +7,7 @@ use super::PyramidShape;
 use crate::buffers::init_buffer;
 use crate::shaders::{compute_pipeline, pyramid_source};
 
-/// The pyramid passes for depth targets of one sample count.
+/// The pyramid passes for depth targets of one sample count and layering.
 pub struct PyramidPass {
     layout: wgpu::BindGroupLayout,
     reduce_depth: wgpu::ComputePipeline,
@@ -23,9 +23,10 @@ const MAX_LEVELS: u32 = 24;
 const TILE: u32 = 8;
 
 impl PyramidPass {
-    /// The passes over a depth target of `samples` samples per pixel.
-    pub fn new(device: &wgpu::Device, samples: u32) -> PyramidPass {
-        let layout = bind_group_layout(device, samples);
+    /// The passes over a depth target of `samples` samples per pixel, `layered` (a
+    /// layer per eye: multiview) or not.
+    pub fn new(device: &wgpu::Device, samples: u32, layered: bool) -> PyramidPass {
+        let layout = bind_group_layout(device, samples, layered);
         let pipeline_layout = device.create_pipeline_layout(&wgpu::PipelineLayoutDescriptor {
             label: Some("stereocull.occlusion_pyramid"),
             bind_group_layouts: &[Some(&layout)],
@@ -37,7 +38,7 @@ impl PyramidPass {
                 device,
                 &label,
                 &pipeline_layout,
-                pyramid_source(samples),
+                pyramid_source(samples, layered),
                 entry,
             )
         };
@@ -114,7 +115,7 @@ fn entry(binding: u32, resource: wgpu::BindingResource<'_>) -> wgpu::BindGroupEn
     wgpu::BindGroupEntry { binding, resource }
 }
 
-fn bind_group_layout(device: &wgpu::Device, samples: u32) -> wgpu::BindGroupLayout {
+fn bind_group_layout(device: &wgpu::Device, samples: u32, layered: bool) -> wgpu::BindGroupLayout {
     // No minimum sizes: wgpu checks the bound sizes against the shader at pipeline
     // creation (and the context's size is the contexts module's, above this one).
     let uniform = |binding, dynamic| wgpu::BindGroupLayoutEntry {
@@ -147,7 +148,10 @@ fn bind_group_layout(device: &wgpu::Device, samples: u32) -> wgpu::BindGroupLayo
                 visibility: wgpu::ShaderStages::COMPUTE,
                 ty: wgpu::BindingType::Texture {
                     sample_type: wgpu::TextureSampleType::Depth,
-                    view_dimension: wgpu::TextureViewDimension::D2,
+                    view_dimension: match layered {
+                        true => wgpu::TextureViewDimension::D2Array,
+                        false => wgpu::TextureViewDimension::D2,
+                    },
                     multisampled: samples > 1,
                 },
                 count: None,

@@ -55,9 +55,16 @@ pub(super) struct IndirectPath {
     shadow: Option<ShadowPass>,
     /// With the far layer: the stereo displays' far layers.
     pub(super) far: Option<Far>,
-    /// With occlusion: the depth pyramids' passes, and the device that binds each
-    /// frame's depth target to them (the caller may hand a different target each frame).
-    pyramid: Option<Box<(PyramidPass, wgpu::Device)>>,
+    /// With occlusion: the depth pyramids' passes (over side-by-side eyes, and over a
+    /// layer per eye for multiview), and the device that binds each frame's depth
+    /// target to them (the caller may hand a different target each frame).
+    pyramid: Option<Box<Pyramids>>,
+}
+
+struct Pyramids {
+    side_by_side: PyramidPass,
+    layered: Option<PyramidPass>,
+    device: wgpu::Device,
 }
 
 impl IndirectPath {
@@ -108,8 +115,14 @@ impl IndirectPath {
         };
         let displays = indirect_displays(device, (&keys, plan, &shapes), drawing, frame, &culler);
         let pyramid = (occlusion.displays > 0).then(|| {
-            let pass = PyramidPass::new(device, options.sample_count);
-            Box::new((pass, device.clone()))
+            let samples = options.sample_count;
+            let layered = (options.mode == StereoMode::Multiview && samples == 1)
+                .then(|| PyramidPass::new(device, 1, true));
+            Box::new(Pyramids {
+                side_by_side: PyramidPass::new(device, samples, false),
+                layered,
+                device: device.clone(),
+            })
         });
         let shadow = options
             .shadows
@@ -220,13 +233,18 @@ impl IndirectPath {
         log: &mut Vec<PassRecord>,
     ) -> FrameStats {
         let state = &self.displays[index];
-        let (Some(late), Some((pyramid, device)), Some((buffer, _, offset))) = (
+        let (Some(late), Some(pyramids), Some((buffer, _, offset))) = (
             &state.late,
             self.pyramid.as_deref(),
             self.culler.occlusion(),
         ) else {
             return FrameStats::default();
         };
+        let pyramid = match (state.key.multiview, &pyramids.layered) {
+            (true, Some(layered)) => layered,
+            _ => &pyramids.side_by_side,
+        };
+        let device = &pyramids.device;
         let group = late.bind_group(target.depth, |depth| {
             let texels = wgpu::BufferBinding {
                 buffer,
@@ -248,7 +266,7 @@ impl IndirectPath {
             encoder,
             target,
             false,
-            None,
+            state.key.multiview_mask(),
             (timer, display),
             what,
             |pass| late.draw(pass, self.drawing(), Some(state.key)),

@@ -60,8 +60,9 @@ pub enum OcclusionMode {
     /// 1.5 a pixel, 0.82; `rooms:20000`, 0.23; docs/performance.md).
     #[default]
     Auto,
-    /// On wherever it applies: GPU culling in `instanced` mode, displays of one or two
-    /// views, without the far layer (not composed with it yet).
+    /// On wherever it applies: GPU culling in `instanced` mode (or `multiview` without
+    /// MSAA), displays of one or two views, without the far layer (not composed with it
+    /// yet).
     On,
     /// Never.
     Off,
@@ -170,18 +171,22 @@ impl RendererOptions {
     /// occlusion in a scene of `triangles` triangles (instances at their finest level):
     /// on, or auto and at least a triangle a pixel; on the GPU, in `instanced` mode,
     /// one or two views (a foveated display's insets see through gaps its outer views'
-    /// pixels miss), no far layer (not composed yet).
+    /// pixels miss), no far layer (not composed yet), in `instanced` mode or in
+    /// `multiview` without MSAA (a pyramid per layer; WebGPU has no multisampled array
+    /// textures to read).
     pub fn occludes(&self, views: usize, (pixels, triangles): (u64, u64)) -> bool {
         let asked = match self.occlusion {
             OcclusionMode::On => true,
             OcclusionMode::Auto => triangles >= pixels,
             OcclusionMode::Off => false,
         };
-        asked
-            && self.cull == CullMode::Gpu
-            && self.mode == StereoMode::Instanced
-            && views <= 2
-            && !self.far_layer
+        // Multiview's layered depth has one sample (no multisampled array textures).
+        let mode = match self.mode {
+            StereoMode::Instanced => true,
+            StereoMode::Multiview => self.sample_count == 1,
+            _ => false,
+        };
+        asked && self.cull == CullMode::Gpu && mode && views <= 2 && !self.far_layer
     }
 
     /// The attachments the draw pipelines are built for.

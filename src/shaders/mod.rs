@@ -429,18 +429,35 @@ fn constants() -> String {
 }
 
 /// The depth pyramid's passes (`wgsl/occlusion_pyramid.wgsl`) over a depth target of
-/// `samples` samples per pixel; the layout is [`crate::cull::pyramid`]'s.
-pub fn pyramid_source(samples: u32) -> String {
-    let depth = match samples {
-        1 => "texture_depth_2d",
-        _ => "texture_depth_multisampled_2d",
+/// `samples` samples per pixel, `layered` (multiview: a layer per eye) or not (the eyes
+/// side by side); the layout is [`crate::occlusion::pyramid`]'s. WebGPU has no
+/// multisampled array textures, so a layered target has one sample.
+pub fn pyramid_source(samples: u32, layered: bool) -> String {
+    // A layer per eye starts at its layer's corner (the viewports say where the views
+    // are read back side by side); side by side, an eye starts at its viewport's.
+    let origin = match layered {
+        true => "vec2(0u)",
+        false => "vec2<u32>(display.eye[e].viewport.xy)",
+    };
+    let (depth, read) = match (samples, layered) {
+        (_, true) => (
+            "texture_depth_2d_array",
+            "return textureLoad(depth, p, e, 0);",
+        ),
+        (1, false) => ("texture_depth_2d", "return textureLoad(depth, p, 0);"),
+        _ => (
+            "texture_depth_multisampled_2d",
+            "var d = 0.0;\n    for (var i = 0; i < SAMPLES; i++) {\n        d = max(d, textureLoad(depth, p, i));\n    }\n    return d;",
+        ),
     };
     let bindings = format!(
-        "const DEPTH_SAMPLES: u32 = {samples}u;\n\
+        "const SAMPLES: i32 = {samples};\n\
          @group(0) @binding(0) var<uniform> display: DisplayContext;\n\
          @group(0) @binding(1) var<uniform> level: PyramidLevel;\n\
          @group(0) @binding(2) var<storage, read_write> pyramid: array<f32>;\n\
-         @group(0) @binding(3) var depth: {depth};\n"
+         @group(0) @binding(3) var depth: {depth};\n\
+         fn depth_texel(p: vec2<u32>, e: u32) -> f32 {{\n    {read}\n}}\n\
+         fn eye_origin(e: u32) -> vec2<u32> {{\n    return {origin};\n}}\n"
     );
     let body = include_str!("../../wgsl/occlusion_pyramid.wgsl");
     [CONTEXTS, &bindings, PYRAMID, body].concat()
@@ -530,9 +547,9 @@ pub fn all_sources() -> Vec<(String, String)> {
                     foveated_composite_source(),
                 ),
             ];
-            let pyramids = [1, 4].map(|samples| {
-                let label = format!("stereocull.occlusion_pyramid.x{samples}");
-                (label, pyramid_source(samples))
+            let pyramids = [(1, false), (4, false), (1, true)].map(|(samples, layered)| {
+                let label = format!("stereocull.occlusion_pyramid.x{samples}.{layered}");
+                (label, pyramid_source(samples, layered))
             });
             cull.chain(occlusion)
                 .chain(draw)
