@@ -261,9 +261,9 @@ fn info() -> Result<()> {
         );
     }
     println!(
-        "occlusion with --occlusion auto (GPU culling, instanced, displays of one or two \
-         views, no far layer): on for a display from a triangle per pixel of it, the \
-         scene's instances at their finest level:"
+        "occlusion with --occlusion auto (GPU culling, instanced or single-sampled \
+         multiview, displays of one or two views, no far layer): on for a display from a \
+         triangle per pixel of it, the scene's instances at their finest level:"
     );
     for preset in crate::rig::PRESETS {
         let rig = Rig::preset(preset)?;
