@@ -262,7 +262,14 @@ const MULTIVIEW_TIES: Tolerance = Tolerance {
 };
 
 /// Occlusion's work summed over frames: instances culled by it, and drawn late after
-/// the first frame; and how far the images may differ (exact but for multiview's ties).
+/// the first frame; and how far the images may differ. Exact outside multiview, on any
+/// CPU: both renderers run the same compiled pipelines on the same instances (whatever
+/// a CPU rounds, it rounds alike on both sides); occlusion changes only which draws run
+/// and in what order, and order decides a pixel only where two front faces meet its
+/// center at bit-equal depth. Back faces are culled, and in these scenes the only
+/// coincident faces face apart (a lintel's end against the wall beside it, a wall's
+/// bottom on the floor, a double-sided tube's two windings), so one of each pair is
+/// always culled. Multiview draws back faces: see MULTIVIEW_TIES.
 #[derive(Debug)]
 struct Counted {
     culled: usize,

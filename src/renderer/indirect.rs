@@ -5,15 +5,16 @@
 //! Per frame on the GPU-culled path the CPU writes one display context per display and
 //! records a fixed number of commands: its cost does not depend on the instance count.
 
-use std::sync::Mutex;
 use std::time::Instant;
 
 use super::culler::{CullShape, Culler};
 use super::far_pass::{Far, FarLayers};
 use super::frame::{CullView, FramePlan, FrameStats};
 use super::inputs::PathInputs;
-use super::options::RendererOptions;
-use super::passes::{PassRecord, Recording, Timing, compute_pass, draw_pass};
+use super::occlusion_pass::{
+    LateInputs, LatePhase, OcclusionBytes, Pyramids, check_depth, occlusion_bytes, pyramid_shapes,
+};
+use super::passes::{PassRecord, Recording, Timing, draw_pass};
 use super::shadow_pass::ShadowPass;
 use super::targets::TargetViews;
 use super::view_pass::ViewPass;
@@ -22,7 +23,6 @@ use crate::cull::gpu_buffers::{CullTargets, OcclusionRoom};
 use crate::draw::{DrawFeatures, DrawScene, Drawer, Drawing};
 use crate::error::Result;
 use crate::modes::StereoMode;
-use crate::occlusion::pyramid::PyramidPass;
 use crate::occlusion::{Phase, PyramidShape};
 use crate::shaders::DrawKey;
 
@@ -35,15 +35,6 @@ pub(super) struct IndirectDisplay {
     pub(super) inset: Option<ViewPass>,
     /// With occlusion: the late phase (`view` is then the early one).
     pub(super) late: Option<LatePhase>,
-}
-
-/// A display's late occlusion phase: its cull and draw, the shape of its pyramids and
-/// their bind group for the depth target it was last made for (a caller usually
-/// renders into the same targets every frame: no bind group per frame then).
-pub(super) struct LatePhase {
-    pub(super) view: ViewPass,
-    pub(super) shape: PyramidShape,
-    bound: Mutex<Option<(wgpu::TextureView, wgpu::BindGroup)>>,
 }
 
 pub(super) struct IndirectPath {
@@ -59,12 +50,6 @@ pub(super) struct IndirectPath {
     /// layer per eye for multiview), and the device that binds each frame's depth
     /// target to them (the caller may hand a different target each frame).
     pyramid: Option<Box<Pyramids>>,
-}
-
-struct Pyramids {
-    side_by_side: PyramidPass,
-    layered: Option<PyramidPass>,
-    device: wgpu::Device,
 }
 
 impl IndirectPath {
@@ -114,16 +99,7 @@ impl IndirectPath {
             scene: &draw_scene,
         };
         let displays = indirect_displays(device, (&keys, plan, &shapes), drawing, frame, &culler);
-        let pyramid = (occlusion.displays > 0).then(|| {
-            let samples = options.sample_count;
-            let layered = (options.mode == StereoMode::Multiview && samples == 1)
-                .then(|| PyramidPass::new(device, 1, true));
-            Box::new(Pyramids {
-                side_by_side: PyramidPass::new(device, samples, false),
-                layered,
-                device: device.clone(),
-            })
-        });
+        let pyramid = (occlusion.displays > 0).then(|| Box::new(Pyramids::new(device, options)));
         let shadow = options
             .shadows
             .then(|| ShadowPass::new(device, drawing, frame, &culler));
@@ -222,71 +198,39 @@ impl IndirectPath {
         }
     }
 
-    /// With occlusion, display `index`'s second phase after its early draw into
-    /// `target`: the pyramids of the early depth, the late cull, and a draw pass that
-    /// keeps what the early one drew.
+    /// With occlusion, display `index`'s late phase after its early draw into `target`.
     fn encode_late(
         &self,
         encoder: &mut wgpu::CommandEncoder,
         (index, target): (usize, &TargetViews),
-        (timer, display): Timing,
+        timing: Timing,
         log: &mut Vec<PassRecord>,
     ) -> FrameStats {
         let state = &self.displays[index];
-        let (Some(late), Some(pyramids), Some((buffer, _, offset))) = (
-            &state.late,
-            self.pyramid.as_deref(),
-            self.culler.occlusion(),
-        ) else {
+        let (Some(late), Some(pyramids)) = (&state.late, self.pyramid.as_deref()) else {
             return FrameStats::default();
         };
-        let pyramid = match (state.key.multiview, &pyramids.layered) {
-            (true, Some(layered)) => layered,
-            _ => &pyramids.side_by_side,
-        };
-        let device = &pyramids.device;
-        let group = late.bind_group(target.depth, |depth| {
-            let texels = wgpu::BufferBinding {
-                buffer,
-                offset,
-                size: std::num::NonZeroU64::new(4 * late.shape.len() as u64),
-            };
-            pyramid.bind_group(device, state.view.context(), texels, depth)
-        });
-        let mut dispatches = 0;
-        let what = (&mut *log, PassRecord::display("pyramid", index));
-        compute_pass(encoder, (&mut *timer, display), what, |pass| {
-            dispatches += pyramid.encode(pass, &group, late.shape);
-        });
-        let late = &late.view;
-        let what = (&mut *log, PassRecord::display("late_cull", index));
-        dispatches += late.encode_cull(encoder, &self.culler, (&mut *timer, display), what);
-        let what = (log, PassRecord::display("late_draw", index));
-        let draw_calls = draw_pass(
-            encoder,
+        let inputs = LateInputs {
+            culler: &self.culler,
+            drawing: self.drawing(),
+            pyramids,
+            index,
+            key: state.key,
+            context: state.view.context(),
             target,
-            false,
-            state.key.multiview_mask(),
-            (timer, display),
-            what,
-            |pass| late.draw(pass, self.drawing(), Some(state.key)),
-        );
-        FrameStats {
-            draw_calls,
-            dispatches,
-            ..FrameStats::default()
-        }
+        };
+        late.encode(encoder, inputs, timing, log)
     }
 
     /// Whether each display with occlusion can read its depth target into its pyramids.
     pub(super) fn check_depth(&self, targets: &[TargetViews]) -> Result<()> {
-        let bindable = wgpu::TextureUsages::TEXTURE_BINDING;
-        for (display, (state, target)) in self.displays.iter().zip(targets).enumerate() {
-            if state.late.is_some() && !target.depth.texture().usage().contains(bindable) {
-                return Err(crate::error::Error::DepthNotBindable { display });
-            }
-        }
-        Ok(())
+        check_depth(self.displays.iter().map(|d| d.late.as_ref()), targets)
+    }
+
+    /// See [`super::Renderer::occlusion_bytes`].
+    pub(super) fn occlusion_bytes(&self) -> Option<OcclusionBytes> {
+        let late = self.displays.iter().filter_map(|d| d.late.as_ref());
+        occlusion_bytes(late, &self.culler)
     }
 
     /// Display `index`'s cull (on the GPU; the culler's upload wrote a CPU cull) and,
@@ -378,59 +322,6 @@ impl IndirectPath {
     }
 }
 
-impl LatePhase {
-    /// The pyramids' bind group for `depth`: the last one if made for it, else one
-    /// `make` makes (and kept).
-    fn bind_group(
-        &self,
-        depth: &wgpu::TextureView,
-        make: impl FnOnce(&wgpu::TextureView) -> wgpu::BindGroup,
-    ) -> wgpu::BindGroup {
-        let mut bound = self
-            .bound
-            .lock()
-            .unwrap_or_else(|poisoned| poisoned.into_inner());
-        match &*bound {
-            Some((view, group)) if view == depth => group.clone(),
-            _ => {
-                let group = make(depth);
-                *bound = Some((depth.clone(), group.clone()));
-                group
-            }
-        }
-    }
-}
-
-/// GPU memory occlusion culling adds.
-#[derive(Clone, Copy, Debug, PartialEq, Eq, serde::Serialize)]
-pub struct OcclusionBytes {
-    /// Per display with occlusion: visibility bits (a word per span of places) and the
-    /// late phase's cull outputs (a visible list with room for every instance, the
-    /// draws, the counts).
-    pub per_display: u64,
-    /// Once: the depth pyramids of the largest display's eyes, which displays share.
-    pub pyramids: u64,
-}
-
-impl IndirectPath {
-    /// See [`super::Renderer::occlusion_bytes`].
-    pub(super) fn occlusion_bytes(&self) -> Option<OcclusionBytes> {
-        let shapes = self
-            .displays
-            .iter()
-            .filter_map(|d| d.late.as_ref().map(|l| l.shape));
-        let pyramids = 4 * shapes.map(|s| s.len() as u64).max()?;
-        let (_, words, _) = self.culler.occlusion()?;
-        let late = self.displays.iter().find_map(|d| d.late.as_ref())?;
-        let targets = late.view.cull();
-        let outputs = targets.visible.size() + targets.draws.size() + targets.counts.size();
-        Some(OcclusionBytes {
-            per_display: 4 * words as u64 + outputs,
-            pyramids,
-        })
-    }
-}
-
 /// Each display's view, for its pipeline variant `keys[i]`, and its inset view where
 /// `plan` culls the display's insets.
 fn indirect_displays(
@@ -450,12 +341,7 @@ fn indirect_displays(
                         phased((CullView::Display(i), Phase::Early), context_buffer(device));
                     let context = early.context().clone();
                     let late = phased((CullView::Late(i), Phase::Late), context);
-                    let late = LatePhase {
-                        view: late,
-                        shape: *shape,
-                        bound: Mutex::new(None),
-                    };
-                    (early, Some(late))
+                    (early, Some(LatePhase::new(late, *shape)))
                 }
                 None => (view(CullView::Display(i)), None),
             };
@@ -465,27 +351,6 @@ fn indirect_displays(
                 inset: plan.insets[i].map(|_| view(CullView::Inset(i))),
                 late,
             }
-        })
-        .collect()
-}
-
-/// Each display's pyramid shape where it culls by occlusion ([`RendererOptions::occludes`])
-/// in a scene of `triangles` triangles.
-fn pyramid_shapes(
-    plan: &FramePlan,
-    options: &RendererOptions,
-    triangles: u64,
-) -> Vec<Option<PyramidShape>> {
-    (plan.resolved.displays.iter().zip(&plan.displays))
-        .map(|(d, context)| {
-            let shape = PyramidShape {
-                eye: context.resolution.as_uvec2(),
-                eyes: d.eyes.len() as u32,
-            };
-            let pixels = shape.eye.element_product() as u64 * shape.eyes as u64;
-            options
-                .occludes(d.eyes.len(), (pixels, triangles))
-                .then_some(shape)
         })
         .collect()
 }

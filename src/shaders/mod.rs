@@ -49,6 +49,7 @@ const DRAW: &str = include_str!("../../wgsl/draw.wgsl");
 const DRAW_MULTIVIEW: &str = include_str!("../../wgsl/draw_multiview.wgsl");
 
 mod bindings;
+mod cull_passes;
 mod windows;
 
 use bindings::declarations;
@@ -57,31 +58,8 @@ pub use bindings::{
     bind_group_layout,
 };
 pub(crate) use bindings::{compute_pipeline, dispatch_size, pipeline_layout};
+pub use cull_passes::{CullPass, Phase, pyramid_source, subgroup_tier};
 pub use windows::{Window, Windowed, Windows};
-
-/// Which part of a display's two-phase cull a cull pass runs (`OCCLUSION` in
-/// `wgsl/shared/occlusion.wgsl`; see [`crate::occlusion`]).
-#[derive(Clone, Copy, Debug, PartialEq, Eq, Hash)]
-pub enum Phase {
-    /// The frustum alone: occlusion off, or a view without it.
-    Frustum = 0,
-    /// What the display drew last frame (and the frustum keeps), drawn first.
-    Early = 1,
-    /// What it did not, unless the early depth's pyramids hide it; records for the next
-    /// frame what the pyramids do not hide.
-    Late = 2,
-}
-
-impl Phase {
-    /// A pipeline's label in this phase.
-    pub fn label(self, base: &str) -> String {
-        match self {
-            Phase::Frustum => base.to_string(),
-            Phase::Early => format!("{base}.early"),
-            Phase::Late => format!("{base}.late"),
-        }
-    }
-}
 
 /// What a scatter's edits carry; each edit's first word is its key (a place, or a
 /// slot), at most one edit per key.
@@ -107,165 +85,6 @@ pub fn scatter_source(windows: &Windows, kind: EditKind) -> String {
     let shared = include_str!("../../wgsl/shared/scatter.wgsl");
     let span = format!("const VISIBILITY_SPAN: u32 = {SPAN}u;\n");
     [&span, RECORDS, &bindings, shared, body].concat()
-}
-
-/// The cull passes: two at the frame level (the coarse cull, when on) and four per
-/// display, each list in dispatch order; and the floor kernel `profile` times beside them.
-#[derive(Clone, Copy, Debug, PartialEq, Eq)]
-pub enum CullPass {
-    /// Every block's sphere (a block per invocation), tested against the frame frustum
-    /// and each slot's: marks, and per slot each workgroup's kept blocks.
-    CoarseBlocks,
-    /// Per slot (one workgroup each): prefixes of the workgroups' totals, each mesh's
-    /// range among the listed positions, the count and the display passes' indirect
-    /// dispatches.
-    CoarseLists,
-    /// Per slot, each kept block into the slot's list (a block per invocation).
-    CoarsePlace,
-    /// Sphere tests and levels, once per sphere, a span per invocation: entries, span
-    /// prefixes within their workgroup and each workgroup's totals.
-    Cull,
-    /// [`CullPass::Cull`] with its workgroup scan done by subgroup operations: the
-    /// same buffers, on adapters with one subgroup size ([`subgroup_tier`]).
-    CullSubgroups,
-    /// Group prefixes, then the packed draws and the draw count (one workgroup).
-    Draws,
-    /// Visible ids into their slots.
-    Compact,
-    /// One read and one flag per instance: the least a cull could do (`profile`).
-    Floor,
-}
-
-impl CullPass {
-    /// The frame passes (the coarse cull), in dispatch order.
-    pub const FRAME: [CullPass; 3] = [
-        CullPass::CoarseBlocks,
-        CullPass::CoarseLists,
-        CullPass::CoarsePlace,
-    ];
-    /// The display passes, in dispatch order.
-    pub const DISPLAY: [CullPass; 3] = [CullPass::Cull, CullPass::Draws, CullPass::Compact];
-
-    /// The pipeline's label; display passes over the coarse cull's candidates say so.
-    pub fn label(self, over_candidates: bool) -> String {
-        let name = match self {
-            CullPass::CoarseBlocks => "coarse_blocks",
-            CullPass::CoarseLists => "coarse_lists",
-            CullPass::CoarsePlace => "coarse_place",
-            CullPass::Cull => "cull",
-            CullPass::CullSubgroups => "cull_subgroups",
-            CullPass::Draws => "cull_draws",
-            CullPass::Compact => "cull_compact",
-            CullPass::Floor => "cull_floor",
-        };
-        let tail = if over_candidates && !self.is_frame() {
-            ".candidates"
-        } else {
-            ""
-        };
-        format!("stereocull.{name}{tail}")
-    }
-
-    /// Whether the pass runs once per frame.
-    pub fn is_frame(self) -> bool {
-        Self::FRAME.contains(&self)
-    }
-
-    /// The pass's WGSL entry point.
-    pub fn entry_point(self) -> &'static str {
-        match self {
-            CullPass::CoarseBlocks => "coarse_blocks",
-            CullPass::CoarseLists => "coarse_lists",
-            CullPass::CoarsePlace => "coarse_place",
-            CullPass::Cull => "cull",
-            CullPass::CullSubgroups => "cull_subgroups",
-            CullPass::Draws => "draws_main",
-            CullPass::Compact => "compact",
-            CullPass::Floor => "floor",
-        }
-    }
-
-    /// The pass's source: a display pass runs over every instance, or with
-    /// `over_candidates` over the frame's coarse cull candidates.
-    pub fn source(self, over_candidates: bool, windows: &Windows) -> String {
-        self.phased_source(over_candidates, Phase::Frustum, windows)
-    }
-
-    /// [`CullPass::source`] in occlusion `phase` (which only the cull pass reads).
-    pub fn phased_source(self, over_candidates: bool, phase: Phase, windows: &Windows) -> String {
-        let body = match self {
-            CullPass::CoarseBlocks | CullPass::CoarseLists | CullPass::CoarsePlace => {
-                include_str!("../../wgsl/cull_coarse.wgsl")
-            }
-            CullPass::Cull => include_str!("../../wgsl/cull.wgsl"),
-            CullPass::CullSubgroups => CULL_SUBGROUPS,
-            CullPass::Draws => include_str!("../../wgsl/cull_draws.wgsl"),
-            CullPass::Compact => include_str!("../../wgsl/cull_compact.wgsl"),
-            CullPass::Floor => include_str!("../../wgsl/cull_floor.wgsl"),
-        };
-        let coarse = format!(
-            "const COARSE: bool = {};\nconst OCCLUSION: u32 = {}u;\n",
-            over_candidates && !self.is_frame(),
-            phase as u32
-        );
-        let mut bindings = declarations(&CULL_BINDINGS, 0, windows);
-        if self.is_frame() {
-            bindings += &declarations(&COARSE_BINDINGS, 1, &Windows::WHOLE);
-        }
-        [
-            &constants(),
-            &coarse,
-            CONTEXTS,
-            RECORDS,
-            &bindings,
-            CULL_MATH,
-            PYRAMID,
-            OCCLUSION,
-            body,
-        ]
-        .concat()
-    }
-
-    /// The cull passes' occlusion variants: both tiers, over everything and over
-    /// candidates, early and late.
-    pub fn occlusion_variants() -> Vec<(CullPass, bool, Phase)> {
-        let passes = [CullPass::Cull, CullPass::CullSubgroups];
-        let phases = [Phase::Early, Phase::Late];
-        (passes.into_iter())
-            .flat_map(|p| [false, true].map(|c| (p, c)))
-            .flat_map(|(p, c)| phases.map(|phase| (p, c, phase)))
-            .collect()
-    }
-
-    /// Every cull pipeline variant: the frame passes, the display passes (both tiers
-    /// of the cull pass) over everything and over candidates, and the floor kernel.
-    pub fn variants() -> Vec<(CullPass, bool)> {
-        let display = [false, true].into_iter().flat_map(|c| {
-            Self::DISPLAY
-                .into_iter()
-                .chain([CullPass::CullSubgroups])
-                .map(move |p| (p, c))
-        });
-        Self::FRAME
-            .map(|p| (p, false))
-            .into_iter()
-            .chain(display)
-            .chain([(CullPass::Floor, false)])
-            .collect()
-    }
-}
-
-/// Whether the cull pass runs its subgroup tier on `device`: subgroup operations, and
-/// one subgroup size that divides [`WORKGROUP_SIZE`], so that every workgroup is made
-/// of full subgroups of that size (what `wgsl/cull_subgroups.wgsl` needs). Adapters
-/// whose size varies (AMD: 32 or 64) take the workgroup-memory scan.
-pub fn subgroup_tier(device: &wgpu::Device) -> bool {
-    let info = device.adapter_info();
-    let size = info.subgroup_min_size;
-    device.features().contains(wgpu::Features::SUBGROUP)
-        && size == info.subgroup_max_size
-        && size > 0
-        && WORKGROUP_SIZE.is_multiple_of(size)
 }
 
 /// Names a draw-pipeline variant; produces its source and a readable label.
@@ -426,41 +245,6 @@ fn constants() -> String {
          const BLOCK: u32 = {BLOCK}u;\nconst SPAN: u32 = {SPAN}u;\nconst BLOCK_GROWTH: f32 = {BLOCK_GROWTH:?};\n\
          const BLOCK_SLACK: f32 = {BLOCK_SLACK:?};\n"
     )
-}
-
-/// The depth pyramid's passes (`wgsl/occlusion_pyramid.wgsl`) over a depth target of
-/// `samples` samples per pixel, `layered` (multiview: a layer per eye) or not (the eyes
-/// side by side); the layout is [`crate::occlusion::pyramid`]'s. WebGPU has no
-/// multisampled array textures, so a layered target has one sample.
-pub fn pyramid_source(samples: u32, layered: bool) -> String {
-    // A layer per eye starts at its layer's corner (the viewports say where the views
-    // are read back side by side); side by side, an eye starts at its viewport's.
-    let origin = match layered {
-        true => "vec2(0u)",
-        false => "vec2<u32>(display.eye[e].viewport.xy)",
-    };
-    let (depth, read) = match (samples, layered) {
-        (_, true) => (
-            "texture_depth_2d_array",
-            "return textureLoad(depth, p, e, 0);",
-        ),
-        (1, false) => ("texture_depth_2d", "return textureLoad(depth, p, 0);"),
-        _ => (
-            "texture_depth_multisampled_2d",
-            "var d = 0.0;\n    for (var i = 0; i < SAMPLES; i++) {\n        d = max(d, textureLoad(depth, p, i));\n    }\n    return d;",
-        ),
-    };
-    let bindings = format!(
-        "const SAMPLES: i32 = {samples};\n\
-         @group(0) @binding(0) var<uniform> display: DisplayContext;\n\
-         @group(0) @binding(1) var<uniform> level: PyramidLevel;\n\
-         @group(0) @binding(2) var<storage, read_write> pyramid: array<f32>;\n\
-         @group(0) @binding(3) var depth: {depth};\n\
-         fn depth_texel(p: vec2<u32>, e: u32) -> f32 {{\n    {read}\n}}\n\
-         fn eye_origin(e: u32) -> vec2<u32> {{\n    return {origin};\n}}\n"
-    );
-    let body = include_str!("../../wgsl/occlusion_pyramid.wgsl");
-    [CONTEXTS, &bindings, PYRAMID, body].concat()
 }
 
 /// Group 2 of the built-in draw pipelines: the frame's shadow map and its comparison

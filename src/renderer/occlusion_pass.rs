@@ -1,0 +1,216 @@
+//! Occlusion's passes on the GPU-driven path (`indirect.rs`): after a display's early
+//! draw, its depth pyramids, its late cull and its late draw; which displays cull by
+//! occlusion, and what it costs in GPU memory. The technique is [`crate::occlusion`]'s.
+
+use std::sync::Mutex;
+
+use super::culler::Culler;
+use super::frame::{FramePlan, FrameStats};
+use super::options::RendererOptions;
+use super::passes::{PassRecord, Timing, compute_pass, draw_pass};
+use super::targets::TargetViews;
+use super::view_pass::ViewPass;
+use crate::draw::Drawing;
+use crate::error::Result;
+use crate::modes::StereoMode;
+use crate::occlusion::PyramidShape;
+use crate::occlusion::pyramid::PyramidPass;
+use crate::shaders::DrawKey;
+
+/// A display's late occlusion phase: its cull and draw, the shape of its pyramids and
+/// their bind group for the depth target it was last made for (a caller usually
+/// renders into the same targets every frame: no bind group per frame then).
+pub(super) struct LatePhase {
+    pub(super) view: ViewPass,
+    pub(super) shape: PyramidShape,
+    bound: Mutex<Option<(wgpu::TextureView, wgpu::BindGroup)>>,
+}
+
+impl LatePhase {
+    /// The late phase of a display whose pyramids are `shape`, culled and drawn by `view`.
+    pub(super) fn new(view: ViewPass, shape: PyramidShape) -> LatePhase {
+        LatePhase {
+            view,
+            shape,
+            bound: Mutex::new(None),
+        }
+    }
+
+    /// The pyramids' bind group for `depth`: the last one if made for it, else one
+    /// `make` makes (and kept).
+    fn bind_group(
+        &self,
+        depth: &wgpu::TextureView,
+        make: impl FnOnce(&wgpu::TextureView) -> wgpu::BindGroup,
+    ) -> wgpu::BindGroup {
+        let mut bound = self
+            .bound
+            .lock()
+            .unwrap_or_else(|poisoned| poisoned.into_inner());
+        match &*bound {
+            Some((view, group)) if view == depth => group.clone(),
+            _ => {
+                let group = make(depth);
+                *bound = Some((depth.clone(), group.clone()));
+                group
+            }
+        }
+    }
+}
+
+/// The depth pyramids' passes (over side-by-side eyes, and over a layer per eye for
+/// multiview), and the device that binds each frame's depth target to them.
+pub(super) struct Pyramids {
+    side_by_side: PyramidPass,
+    layered: Option<PyramidPass>,
+    device: wgpu::Device,
+}
+
+impl Pyramids {
+    /// The passes `options` need: a layered variant in single-sampled multiview.
+    pub(super) fn new(device: &wgpu::Device, options: &RendererOptions) -> Pyramids {
+        let samples = options.sample_count;
+        let layered = (options.mode == StereoMode::Multiview && samples == 1)
+            .then(|| PyramidPass::new(device, 1, true));
+        Pyramids {
+            side_by_side: PyramidPass::new(device, samples, false),
+            layered,
+            device: device.clone(),
+        }
+    }
+}
+
+/// GPU memory occlusion culling adds.
+#[derive(Clone, Copy, Debug, PartialEq, Eq, serde::Serialize)]
+pub struct OcclusionBytes {
+    /// Per display with occlusion: visibility bits (a word per span of places) and the
+    /// late phase's cull outputs (a visible list with room for every instance, the
+    /// draws, the counts).
+    pub per_display: u64,
+    /// Once: the depth pyramids of the largest display's eyes, which displays share.
+    pub pyramids: u64,
+}
+
+/// What a display's late phase is recorded with besides its own state: the path's
+/// culler, drawing and pyramid passes, and the display's index, pipeline variant,
+/// context and target.
+pub(super) struct LateInputs<'a> {
+    pub(super) culler: &'a Culler,
+    pub(super) drawing: Drawing<'a>,
+    pub(super) pyramids: &'a Pyramids,
+    pub(super) index: usize,
+    pub(super) key: DrawKey,
+    pub(super) context: &'a wgpu::Buffer,
+    pub(super) target: &'a TargetViews<'a>,
+}
+
+impl LatePhase {
+    /// The display's second phase after its early draw: the pyramids of the early
+    /// depth, the late cull, and a draw pass that keeps what the early one drew.
+    pub(super) fn encode(
+        &self,
+        encoder: &mut wgpu::CommandEncoder,
+        inputs: LateInputs,
+        (timer, display): Timing,
+        log: &mut Vec<PassRecord>,
+    ) -> FrameStats {
+        let LateInputs {
+            culler,
+            drawing,
+            pyramids,
+            index,
+            key,
+            context,
+            target,
+        } = inputs;
+        let Some((buffer, _, offset)) = culler.occlusion() else {
+            return FrameStats::default();
+        };
+        let pyramid = match (key.multiview, &pyramids.layered) {
+            (true, Some(layered)) => layered,
+            _ => &pyramids.side_by_side,
+        };
+        let group = self.bind_group(target.depth, |depth| {
+            let texels = wgpu::BufferBinding {
+                buffer,
+                offset,
+                size: std::num::NonZeroU64::new(4 * self.shape.len() as u64),
+            };
+            pyramid.bind_group(&pyramids.device, context, texels, depth)
+        });
+        let mut dispatches = 0;
+        let what = (&mut *log, PassRecord::display("pyramid", index));
+        compute_pass(encoder, (&mut *timer, display), what, |pass| {
+            dispatches += pyramid.encode(pass, &group, self.shape);
+        });
+        let what = (&mut *log, PassRecord::display("late_cull", index));
+        dispatches += (self.view).encode_cull(encoder, culler, (&mut *timer, display), what);
+        let what = (log, PassRecord::display("late_draw", index));
+        let mask = key.multiview_mask();
+        let draw_calls = draw_pass(
+            encoder,
+            target,
+            false,
+            mask,
+            (timer, display),
+            what,
+            |pass| self.view.draw(pass, drawing, Some(key)),
+        );
+        FrameStats {
+            draw_calls,
+            dispatches,
+            ..FrameStats::default()
+        }
+    }
+}
+
+/// Whether each display with occlusion (`late`, per display) can read its depth target
+/// into its pyramids.
+pub(super) fn check_depth<'a>(
+    late: impl Iterator<Item = Option<&'a LatePhase>>,
+    targets: &[TargetViews],
+) -> Result<()> {
+    let bindable = wgpu::TextureUsages::TEXTURE_BINDING;
+    for (display, (late, target)) in late.zip(targets).enumerate() {
+        if late.is_some() && !target.depth.texture().usage().contains(bindable) {
+            return Err(crate::error::Error::DepthNotBindable { display });
+        }
+    }
+    Ok(())
+}
+
+/// What occlusion adds in GPU memory for displays' `late` phases (`None` without any).
+pub(super) fn occlusion_bytes<'a>(
+    late: impl Iterator<Item = &'a LatePhase> + Clone,
+    culler: &Culler,
+) -> Option<OcclusionBytes> {
+    let pyramids = 4 * late.clone().map(|l| l.shape.len() as u64).max()?;
+    let (_, words, _) = culler.occlusion()?;
+    let targets = late.clone().next()?.view.cull();
+    let outputs = targets.visible.size() + targets.draws.size() + targets.counts.size();
+    Some(OcclusionBytes {
+        per_display: 4 * words as u64 + outputs,
+        pyramids,
+    })
+}
+
+/// Each display's pyramid shape where it culls by occlusion ([`RendererOptions::occludes`])
+/// in a scene of `triangles` triangles.
+pub(super) fn pyramid_shapes(
+    plan: &FramePlan,
+    options: &RendererOptions,
+    triangles: u64,
+) -> Vec<Option<PyramidShape>> {
+    (plan.resolved.displays.iter().zip(&plan.displays))
+        .map(|(d, context)| {
+            let shape = PyramidShape {
+                eye: context.resolution.as_uvec2(),
+                eyes: d.eyes.len() as u32,
+            };
+            let pixels = shape.eye.element_product() as u64 * shape.eyes as u64;
+            options
+                .occludes(d.eyes.len(), (pixels, triangles))
+                .then_some(shape)
+        })
+        .collect()
+}
