@@ -82,19 +82,7 @@ pub fn cull_frame(layout: &CullLayout, displays: &[CullJob], frame: &FrameCull) 
         return Vec::new();
     }
     let (lod, coarse) = (&frame.lod, frame.coarse.as_ref());
-    let levels: Option<(Vec<u8>, u32)> = (lod.levels > 1).then(|| {
-        let level_of = |(s, &m): (&Vec4, &u32)| {
-            let lods = &layout.lods[m as usize * MAX_LODS..][..MAX_LODS];
-            lod_level(*s, lod.viewer, lods, lod.lod_scale) as u8
-        };
-        let levels = layout
-            .spheres
-            .par_iter()
-            .zip(&layout.mesh_of)
-            .map(level_of)
-            .collect();
-        (levels, lod.levels)
-    });
+    let levels = (lod.levels > 1).then(|| (position_levels(layout, lod), lod.levels));
     let n = layout.spheres.len();
     let words = n.div_ceil(64);
     let planes: Vec<[[f32; 4]; 6]> = displays
@@ -155,18 +143,25 @@ pub fn cull_masked(
     instances_per_object: u32,
 ) -> CullOutput {
     if lod.levels > 1 {
-        let levels: Vec<u8> = (layout.spheres.iter().zip(&layout.mesh_of))
-            .map(|(s, &m)| {
-                let lods = &layout.lods[m as usize * MAX_LODS..][..MAX_LODS];
-                lod_level(*s, lod.viewer, lods, lod.lod_scale) as u8
-            })
-            .collect();
+        let levels = position_levels(layout, lod);
         return build_output_lod(layout, mask, &levels, lod.levels, instances_per_object);
     }
     let counts: Vec<u32> = (mask.chunks(WORDS_PER_CHUNK))
         .map(|c| c.iter().map(|w| w.count_ones()).sum())
         .collect();
     build_output(layout, mask, &counts, instances_per_object)
+}
+
+/// Each cull position's level of detail under `lod`, in parallel.
+fn position_levels(layout: &CullLayout, lod: &FrameLod) -> Vec<u8> {
+    let level_of = |(s, &m): (&Vec4, &u32)| {
+        let lods = &layout.lods[m as usize * MAX_LODS..][..MAX_LODS];
+        lod_level(*s, lod.viewer, lods, lod.lod_scale) as u8
+    };
+    (layout.spheres.par_iter())
+        .zip(&layout.mesh_of)
+        .map(level_of)
+        .collect()
 }
 
 /// What each sphere is tested against: every display's planes and far split, after
