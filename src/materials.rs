@@ -12,7 +12,7 @@ use image::imageops::FilterType;
 
 use crate::buffers::init_buffer;
 use crate::error::{Error, Result};
-use crate::scene::Scene;
+use crate::scene::{AlphaMode, Material, Scene};
 
 /// The largest layer side: bigger textures are scaled down to it.
 pub const MAX_LAYER_SIZE: u32 = 1024;
@@ -20,10 +20,13 @@ pub const MAX_LAYER_SIZE: u32 = 1024;
 /// A material as the fragment stage reads it (`MaterialRecord` in
 /// `wgsl/shared/records.wgsl`).
 #[repr(C)]
-#[derive(Clone, Copy, Debug, PartialEq, Eq, Pod, Zeroable)]
+#[derive(Clone, Copy, Debug, PartialEq, Pod, Zeroable)]
 pub struct MaterialRecord {
     /// Layer of the base color array, or [`MaterialRecord::UNTEXTURED`].
     pub base_color_layer: u32,
+    /// Fragments whose base color alpha is below this are discarded: a
+    /// [`AlphaMode::Mask`]'s cutoff, 0 (nothing) otherwise.
+    pub alpha_cutoff: f32,
 }
 
 impl MaterialRecord {
@@ -84,27 +87,41 @@ pub fn records(scene: &Scene) -> Result<Vec<MaterialRecord>> {
             v.material
         )));
     }
-    let untextured = MaterialRecord {
-        base_color_layer: MaterialRecord::UNTEXTURED,
-    };
     if scene.materials.is_empty() {
-        return Ok(vec![untextured]);
+        return Ok(vec![MaterialRecord {
+            base_color_layer: MaterialRecord::UNTEXTURED,
+            alpha_cutoff: 0.0,
+        }]);
     }
-    scene
-        .materials
-        .iter()
-        .map(|m| match m.base_color_texture {
-            None => Ok(untextured),
-            Some(t) if (t as usize) < scene.textures.len() => Ok(MaterialRecord {
-                base_color_layer: t,
-            }),
-            Some(t) => Err(Error::InvalidScene(format!(
+    scene.materials.iter().map(|m| record(scene, m)).collect()
+}
+
+fn record(scene: &Scene, m: &Material) -> Result<MaterialRecord> {
+    let base_color_layer = match m.base_color_texture {
+        None => MaterialRecord::UNTEXTURED,
+        Some(t) if (t as usize) < scene.textures.len() => t,
+        Some(t) => {
+            return Err(Error::InvalidScene(format!(
                 "material {:?} names texture {t} of {}",
                 m.name,
                 scene.textures.len()
-            ))),
-        })
-        .collect()
+            )));
+        }
+    };
+    let alpha_cutoff = match m.alpha {
+        AlphaMode::Mask { cutoff } if !cutoff.is_finite() => {
+            return Err(Error::InvalidScene(format!(
+                "material {:?} has alpha cutoff {cutoff}, not a finite number",
+                m.name
+            )));
+        }
+        AlphaMode::Mask { cutoff } => cutoff,
+        AlphaMode::Opaque | AlphaMode::Blend => 0.0,
+    };
+    Ok(MaterialRecord {
+        base_color_layer,
+        alpha_cutoff,
+    })
 }
 
 /// The side of every layer: the largest texture's, within [`MAX_LAYER_SIZE`] and the

@@ -279,6 +279,7 @@ pub fn texture(scene: &mut Scene) {
     scene.materials = vec![Material {
         name: "tiled".into(),
         base_color_texture: Some(0),
+        ..Default::default()
     }];
     for v in &mut scene.vertices {
         v.material = 0;

@@ -42,6 +42,25 @@ pub struct Material {
     pub name: String,
     /// Index into [`Scene::textures`], sampled at the vertices' `uv`.
     pub base_color_texture: Option<u32>,
+    /// How the base color's alpha covers what lies behind (glTF's `alphaMode`).
+    pub alpha: AlphaMode,
+}
+
+/// How a material's alpha (the base color's, texture included) is read: glTF's
+/// `alphaMode` and `alphaCutoff`.
+#[derive(Clone, Copy, Debug, Default, PartialEq)]
+pub enum AlphaMode {
+    /// Alpha is ignored: the surface hides what lies behind.
+    #[default]
+    Opaque,
+    /// A cutout: fragments whose alpha is below `cutoff` are not drawn, the rest are
+    /// opaque (glTF's `MASK`; its default cutoff is 0.5).
+    Mask {
+        /// Alpha below this is a hole.
+        cutoff: f32,
+    },
+    /// Glass: blended over what lies behind, by alpha (glTF's `BLEND`).
+    Blend,
 }
 
 /// A base color image: sRGB-encoded RGBA, straight alpha.

@@ -296,7 +296,7 @@ fn vertices_past_the_binding_size_are_accepted_up_to_the_buffer_size() {
 
 /// Materials that do not fit the scene are typed errors when the renderer is made, in
 /// every mode: a vertex naming a material the scene lacks, a material naming a texture
-/// it lacks.
+/// it lacks, a cutout whose cutoff is not a number.
 #[test]
 fn materials_naming_what_the_scene_lacks_are_errors() {
     let gpu = support::gpu();
@@ -320,9 +320,16 @@ fn materials_naming_what_the_scene_lacks_are_errors() {
     scene.materials = vec![stereocull::scene::Material {
         name: "stone".into(),
         base_color_texture: Some(0),
+        ..Default::default()
     }];
     for err in make(&scene) {
         let msg = err.expect("a material naming texture 0 of 0").to_string();
         assert!(msg.contains("\"stone\" names texture 0 of 0"), "{msg}");
+    }
+    scene.materials[0].base_color_texture = None;
+    scene.materials[0].alpha = stereocull::scene::AlphaMode::Mask { cutoff: f32::NAN };
+    for err in make(&scene) {
+        let msg = err.expect("a cutoff that is not a number").to_string();
+        assert!(msg.contains("\"stone\" has alpha cutoff NaN"), "{msg}");
     }
 }

@@ -114,10 +114,13 @@ fn records_match_wgsl() {
     check(
         "MaterialRecord",
         size_of::<MaterialRecord>(),
-        &[(
-            "base_color_layer",
-            offset_of!(MaterialRecord, base_color_layer),
-        )],
+        &[
+            (
+                "base_color_layer",
+                offset_of!(MaterialRecord, base_color_layer),
+            ),
+            ("alpha_cutoff", offset_of!(MaterialRecord, alpha_cutoff)),
+        ],
     );
     check(
         "DrawArgs",

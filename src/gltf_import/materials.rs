@@ -9,7 +9,7 @@ use gltf::{Document, Semantic};
 use image::RgbaImage;
 
 use super::{Importer, Step, check_accessor};
-use crate::scene::{Material, Texture};
+use crate::scene::{AlphaMode, Material, Texture};
 
 impl Importer<'_> {
     /// The texture coordinates the base color texture reads (its `texCoord` set), or
@@ -66,9 +66,11 @@ impl Importer<'_> {
                 .map_or_else(|| format!("material {i}"), str::to_string),
             None => "default".into(),
         };
+        let alpha = alpha_mode(material).map_err(|e| format!("material {name:?}: {e}"))?;
         self.scene.materials.push(Material {
             name,
             base_color_texture,
+            alpha,
         });
         let id = self.scene.materials.len() as u32 - 1;
         self.materials.insert(material.index(), id);
@@ -128,6 +130,22 @@ impl Importer<'_> {
         let decoded = image::load_from_memory(bytes).map_err(|e| e.to_string())?;
         Ok(decoded.to_rgba8())
     }
+}
+
+/// The material's alpha mode; a cutoff must be a finite number (JSON can spell an
+/// infinite one, `1e999`).
+fn alpha_mode(material: &gltf::Material) -> Step<AlphaMode> {
+    Ok(match material.alpha_mode() {
+        gltf::material::AlphaMode::Opaque => AlphaMode::Opaque,
+        gltf::material::AlphaMode::Blend => AlphaMode::Blend,
+        gltf::material::AlphaMode::Mask => {
+            let cutoff = material.alpha_cutoff().unwrap_or(0.5);
+            if !cutoff.is_finite() {
+                return Err(format!("alphaCutoff {cutoff} is not a finite number"));
+            }
+            AlphaMode::Mask { cutoff }
+        }
+    })
 }
 
 /// Every external image must exist, base color texture or not: a file whose images are

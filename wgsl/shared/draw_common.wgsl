@@ -91,6 +91,10 @@ fn fragment(in: FragmentInput, eye: u32, viewport: vec4<f32>) -> vec4<f32> {
     let color = unpack4x8unorm(instances_at(in.ids.y).color);
     let world = world_position(in.position, eye, viewport);
     let s = Surface(world, in.normal, color, eye, in.ids.y, in.uv, in.ids.z);
+    // A cutout's holes (alphaMode MASK), before any shading is spent on them.
+    if (base_color(s).a < materials[s.material].alpha_cutoff) {
+        discard;
+    }
     return surface_color(s);
 }
 

@@ -36,6 +36,8 @@ struct LodRecord {
 struct MaterialRecord {
     // Layer of base_color_textures, or 0xffffffff: untextured.
     base_color_layer: u32,
+    // Base color alpha below this is a hole (alphaMode MASK); 0 for every other mode.
+    alpha_cutoff: f32,
 }
 
 // Written whole by the draws pass every frame: see DrawArgs in src/records.rs.

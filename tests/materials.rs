@@ -1,0 +1,168 @@
+//! Materials: glTF alpha modes on the shared `AlphaBlendModeTest` (written by nobody
+//! here), and the errors a material's data can raise.
+
+use glam::{DVec3, Vec2, Vec3};
+use image::RgbaImage;
+use stereocull::renderer::RendererOptions;
+use stereocull::rig::Rig;
+use stereocull::scene::{AlphaMode, Scene};
+use stereocull::scene_spec;
+
+mod support;
+
+fn alpha_test() -> Scene {
+    let path = support::gltf_sample("AlphaBlendModeTest", "glb");
+    scene_spec::load(path.to_str().unwrap()).unwrap()
+}
+
+/// The hmd at 640 x 400 per eye, 4 m in front of the three cutout quads (at x = 0,
+/// 1.5 and 3, in the plane z = 0): each spans about 70 pixels, some 8 texels a pixel.
+fn facing_the_cutouts() -> Rig {
+    let mut rig = support::sized("hmd", 640, 400);
+    rig.viewer.position = [1.5, 1.0, 4.0];
+    rig
+}
+
+/// Where eye `e` of display 0 sees `p`, in the double-wide image.
+fn pixel(rig: &Rig, e: usize, p: Vec3) -> Option<(u32, u32)> {
+    let view = rig.resolve().ok()?.displays[0].eyes[e];
+    let clip = view.clip_from_world().as_dmat4() * p.as_dvec3().extend(1.0);
+    let ndc = DVec3::new(clip.x, clip.y, clip.z) / clip.w;
+    let [w, h] = rig.displays[0].resolution;
+    let (x, y) = (
+        (ndc.x * 0.5 + 0.5) * w as f64,
+        (0.5 - ndc.y * 0.5) * h as f64,
+    );
+    let inside = (0.0..w as f64).contains(&x) && (0.0..h as f64).contains(&y);
+    inside.then(|| (x as u32 + e as u32 * w, y as u32))
+}
+
+/// The world point of instance `i` at texture coordinates `uv`: the cutout meshes are
+/// flat quads whose coordinates map affinely onto their plane.
+fn world_at(scene: &Scene, i: usize, uv: Vec2) -> Vec3 {
+    let inst = &scene.instances[i];
+    let mesh = &scene.meshes[inst.mesh as usize];
+    let corner = |k: u32| {
+        let index = scene.indices[(mesh.first_index + k) as usize] as i32 + mesh.base_vertex;
+        scene.vertices[index as usize]
+    };
+    let [a, b, c] = [0, 1, 2].map(corner);
+    let (pa, pb, pc) = (
+        Vec3::from(a.position),
+        Vec3::from(b.position),
+        Vec3::from(c.position),
+    );
+    let (ta, tb, tc) = (Vec2::from(a.uv), Vec2::from(b.uv), Vec2::from(c.uv));
+    let m = glam::Mat2::from_cols(tb - ta, tc - ta);
+    let w = m.inverse() * (uv - ta);
+    let local = pa + w.x * (pb - pa) + w.y * (pc - pa);
+    inst.world_from_local.transform_point3(local)
+}
+
+/// The base color alpha around `uv` (`reach` texels each way, at the finest level):
+/// its lowest and highest value. The GPU reads a filtered, mipmapped texture, so only
+/// where the whole neighbourhood lies on one side of a cutoff is the outcome certain.
+fn alpha_range(image: &RgbaImage, uv: Vec2, reach: i32) -> (f32, f32) {
+    let (w, h) = (image.width() as i32, image.height() as i32);
+    let (cx, cy) = ((uv.x * w as f32) as i32, (uv.y * h as f32) as i32);
+    let mut range = (1.0f32, 0.0f32);
+    for y in cy - reach..=cy + reach {
+        for x in cx - reach..=cx + reach {
+            let a = image.get_pixel(x.rem_euclid(w) as u32, y.rem_euclid(h) as u32)[3];
+            let a = a as f32 / 255.0;
+            range = (range.0.min(a), range.1.max(a));
+        }
+    }
+    range
+}
+
+fn render(scene: &Scene, rig: &Rig) -> RgbaImage {
+    let gpu = support::gpu();
+    let options = RendererOptions {
+        shadows: false,
+        ..support::frustum_only()
+    };
+    support::render(&gpu, scene, rig, options)
+        .unwrap()
+        .remove(0)
+}
+
+/// Every `MASK` quad of `AlphaBlendModeTest` shows, at each sampled point, what lies
+/// behind it (the image without the cutouts) where the texture's alpha is under that
+/// material's cutoff, and the quad (the image with the cutouts made opaque) where it is
+/// over. The three cutoffs (0.25, 0.5 by default, 0.75) read the same texture, so the
+/// same texel is a hole in one quad and solid in another: a cutoff read from the wrong
+/// material, or ignored, fails. Both outcomes are exact: the same pipeline draws the
+/// same fragments, only the discard differs.
+#[test]
+fn alpha_blend_mode_test_cuts_each_mask_at_its_own_cutoff() {
+    let scene = alpha_test();
+    let rig = facing_the_cutouts();
+    let masks: Vec<(usize, f32)> = (scene.instances.iter().enumerate())
+        .filter_map(|(i, inst)| {
+            let vertex = scene.meshes[inst.mesh as usize].base_vertex as usize;
+            match scene.materials[scene.vertices[vertex].material as usize].alpha {
+                AlphaMode::Mask { cutoff } => Some((i, cutoff)),
+                _ => None,
+            }
+        })
+        .collect();
+    let mut cutoffs: Vec<f32> = masks.iter().map(|m| m.1).collect();
+    cutoffs.sort_by(f32::total_cmp);
+    assert_eq!(cutoffs, [0.25, 0.5, 0.75], "the file's three cutoffs");
+
+    let cut = render(&scene, &rig);
+    let mut opaque = scene.clone();
+    for m in &mut opaque.materials {
+        m.alpha = AlphaMode::Opaque;
+    }
+    let solid = render(&opaque, &rig);
+    let mut without = scene.clone();
+    let mask_ids: Vec<usize> = masks.iter().map(|m| m.0).collect();
+    without.instances = (scene.instances.iter().enumerate())
+        .filter(|(i, _)| !mask_ids.contains(i))
+        .map(|(_, inst)| *inst)
+        .collect();
+    let behind = render(&without, &rig);
+
+    for &(i, cutoff) in &masks {
+        let inst = &scene.instances[i];
+        let vertex = scene.meshes[inst.mesh as usize].base_vertex as usize;
+        let material = &scene.materials[scene.vertices[vertex].material as usize];
+        let texture = &scene.textures[material.base_color_texture.unwrap() as usize].image;
+        let (mut holes, mut solids) = (0, 0);
+        for step in 0..40 * 40 {
+            // The quads read u in [0.125, 0.675] and v in [0.05, 0.985].
+            let f = Vec2::new((step % 40) as f32 + 0.5, (step / 40) as f32 + 0.5) / 40.0;
+            let uv = Vec2::new(0.14 + 0.52 * f.x, 0.07 + 0.9 * f.y);
+            let (low, high) = alpha_range(texture, uv, 24);
+            let hole = high < cutoff - 0.02;
+            if !hole && low < cutoff + 0.02 {
+                continue;
+            }
+            for e in 0..2 {
+                let Some((x, y)) = pixel(&rig, e, world_at(&scene, i, uv)) else {
+                    continue;
+                };
+                let (want, other) = match hole {
+                    true => (behind.get_pixel(x, y), solid.get_pixel(x, y)),
+                    false => (solid.get_pixel(x, y), behind.get_pixel(x, y)),
+                };
+                if want == other {
+                    continue; // The quad is hidden here, or matches what it hides.
+                }
+                let got = cut.get_pixel(x, y);
+                assert_eq!(
+                    got, want,
+                    "instance {i} (cutoff {cutoff}) at uv {uv}, eye {e}, pixel ({x}, {y}): \
+                     alpha in [{low}, {high}]"
+                );
+                *if hole { &mut holes } else { &mut solids } += 1;
+            }
+        }
+        assert!(
+            holes > 50 && solids > 50,
+            "instance {i} (cutoff {cutoff}): {holes} holes and {solids} solid points checked"
+        );
+    }
+}
