@@ -5,13 +5,17 @@
 use std::collections::HashMap;
 use std::num::NonZeroU32;
 
+use crate::bins::{BinKind, BinRange};
 use crate::buffers::{init_buffer, init_buffer_with_room};
-use crate::cull::gpu_buffers::CullTargets;
+use crate::cull::gpu_buffers::{COUNTS_BIN_OFFSET, CullTargets};
 use crate::error::Result;
 use crate::materials::{self, GpuMaterials};
-use crate::records::{InstanceRecord, instance_records};
+use crate::records::{DrawArgs, InstanceRecord, instance_records};
 use crate::scene::{Scene, Vertex};
-use crate::shaders::{DRAW_BINDINGS, DrawKey, Windows, bind_group, bind_group_layout};
+use crate::shaders::{
+    DRAW_BINDINGS, DrawKey, Windows, bind_group, bind_group_layout, shadow_cutout_source,
+    shadow_source,
+};
 use crate::shadow::{self, ShadowMap};
 
 /// The depth format of the renderer's own targets, unless the options name another.
@@ -143,12 +147,16 @@ pub struct Drawer {
     pub windows: Windows,
     /// How draws are issued on this device.
     pub features: DrawFeatures,
+    /// Samples per pixel of the target (cutouts use alpha to coverage above 1).
+    samples: u32,
 }
 
-/// The frame's shadow pass pipeline (`wgsl/shadow.wgsl`).
+/// The frame's shadow pass pipelines (`wgsl/shadow.wgsl`, `wgsl/shadow_cutout.wgsl`).
 pub struct ShadowPipeline {
-    /// The depth-only pipeline.
+    /// The depth-only pipeline, for opaque bins.
     pub pipeline: wgpu::RenderPipeline,
+    /// For cutout bins (when the scene has any): discards under the cutoff.
+    pub cutout: Option<wgpu::RenderPipeline>,
     /// The shadow map's texels a side.
     pub size: u32,
 }
@@ -159,13 +167,14 @@ impl Drawer {
         &self.layout
     }
 
-    /// Builds the pipelines for the given variants, rendering into `target`, shaded by
+    /// Builds the pipelines for the given variants, one per bin kind of `kinds` (the
+    /// scene's), rendering into `target`, shaded by
     /// `material` (see [`DrawKey::source_with`]) or the built-in shading, and with
     /// `shadow_size` the shadow pass's, into a map of that many texels a side.
     pub fn new(
         device: &wgpu::Device,
         target: TargetFormat,
-        keys: &[DrawKey],
+        (keys, kinds): (&[DrawKey], &[BinKind]),
         material: Option<&str>,
         shadow_size: Option<u32>,
         windows: Windows,
@@ -178,9 +187,13 @@ impl Drawer {
             bind_group_layouts: &[Some(&layout), Some(&materials_layout), Some(&shadow_layout)],
             immediate_size: 0,
         });
-        let pipelines = keys
-            .iter()
-            .map(|&key| {
+        let pipelines = (keys.iter())
+            .flat_map(|&key| {
+                kinds
+                    .iter()
+                    .map(move |&k| key.with_alpha(k, target.samples))
+            })
+            .map(|key| {
                 let source = key.source_with(material, &windows);
                 (
                     key,
@@ -189,7 +202,18 @@ impl Drawer {
             })
             .collect();
         let shadow = shadow_size.map(|size| ShadowPipeline {
-            pipeline: shadow_pipeline(device, &layout, &windows),
+            pipeline: shadow_pipeline(
+                device,
+                &[Some(&layout)],
+                ("stereocull.shadow", shadow_source(&windows)),
+            ),
+            cutout: kinds.contains(&BinKind::Mask).then(|| {
+                shadow_pipeline(
+                    device,
+                    &[Some(&layout), Some(&materials_layout)],
+                    ("stereocull.shadow.cutout", shadow_cutout_source(&windows)),
+                )
+            }),
             size,
         });
         Drawer {
@@ -200,6 +224,7 @@ impl Drawer {
             shadow,
             windows,
             features: DrawFeatures::of(device),
+            samples: target.samples,
         }
     }
 
@@ -229,39 +254,94 @@ impl Drawer {
         )
     }
 
-    /// Sets the pipeline, geometry and bindings on `pass`.
-    pub fn bind(
-        &self,
-        pass: &mut wgpu::RenderPass,
-        key: DrawKey,
-        scene: &DrawScene,
-        bind_group: &wgpu::BindGroup,
-    ) {
-        pass.set_pipeline(&self.pipelines[&key]);
+    /// Sets the geometry and the bindings of the built-in pipelines on `pass` (group 2
+    /// too: the shadow map).
+    pub fn bind(pass: &mut wgpu::RenderPass, scene: &DrawScene, bind_group: &wgpu::BindGroup) {
         Drawer::bind_resources(pass, scene, bind_group);
-        pass.set_bind_group(1, &scene.materials.bind_group, &[]);
         pass.set_bind_group(2, &scene.shadow_map.bind_group, &[]);
     }
 
-    /// The geometry and group 0 on `pass`, for whatever pipeline it has.
+    /// The geometry, group 0 and the materials (group 1) on `pass`, for whatever
+    /// pipeline it has.
     pub fn bind_resources(
         pass: &mut wgpu::RenderPass,
         scene: &DrawScene,
         bind_group: &wgpu::BindGroup,
     ) {
         pass.set_bind_group(0, bind_group, &[]);
+        pass.set_bind_group(1, &scene.materials.bind_group, &[]);
         pass.set_vertex_buffer(0, scene.vertices.slice(..));
         pass.set_index_buffer(scene.indices.slice(..), wgpu::IndexFormat::Uint32);
     }
 
-    /// The one multi-draw call of the GPU-driven path.
-    pub fn draw_indirect(&self, pass: &mut wgpu::RenderPass, mesh_count: u32, cull: &CullTargets) {
-        if self.features.indirect_count {
-            pass.multi_draw_indexed_indirect_count(&cull.draws, 0, &cull.counts, 0, mesh_count);
-        } else {
-            pass.multi_draw_indexed_indirect(&cull.draws, 0, mesh_count);
+    /// The pipeline of `with` for bins of `kind`: `None` skips the bin (blended bins
+    /// cast no shadow), `Some(None)` keeps the pass's own.
+    pub fn bin_pipeline(
+        &self,
+        with: BinPipelines,
+        kind: BinKind,
+    ) -> Option<Option<&wgpu::RenderPipeline>> {
+        match with {
+            BinPipelines::Draw(key) => {
+                Some(Some(&self.pipelines[&key.with_alpha(kind, self.samples)]))
+            }
+            BinPipelines::Own => Some(None),
+            BinPipelines::Shadow => {
+                let shadow = self.shadow.as_ref()?;
+                match kind {
+                    BinKind::Opaque => Some(Some(&shadow.pipeline)),
+                    BinKind::Mask => shadow.cutout.as_ref().map(Some),
+                    BinKind::Blend => None,
+                }
+            }
         }
     }
+
+    /// The GPU-driven path's draws: per material bin, its pipeline (of `with`) and one
+    /// multi-draw over the bin's range. Returns the draw calls.
+    pub fn draw_bins(
+        &self,
+        pass: &mut wgpu::RenderPass,
+        bins: &[BinRange],
+        with: BinPipelines,
+        cull: &CullTargets,
+    ) -> u32 {
+        let mut calls = 0;
+        for (b, range) in bins.iter().enumerate() {
+            let Some(pipeline) = self.bin_pipeline(with, range.kind) else {
+                continue;
+            };
+            if let Some(pipeline) = pipeline {
+                pass.set_pipeline(pipeline);
+            }
+            let offset = range.first as u64 * size_of::<DrawArgs>() as u64;
+            if self.features.indirect_count {
+                let count_offset = COUNTS_BIN_OFFSET + 4 * b as u64;
+                pass.multi_draw_indexed_indirect_count(
+                    &cull.draws,
+                    offset,
+                    &cull.counts,
+                    count_offset,
+                    range.capacity,
+                );
+            } else {
+                pass.multi_draw_indexed_indirect(&cull.draws, offset, range.capacity);
+            }
+            calls += 1;
+        }
+        calls
+    }
+}
+
+/// Which pipelines a view's material bins are drawn with.
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+pub enum BinPipelines {
+    /// The built-in draw pipelines of this variant, each bin its own.
+    Draw(DrawKey),
+    /// The frame's shadow pass: depth only, cutouts discarding, blended bins skipped.
+    Shadow,
+    /// The pipeline the pass already has (an engine's own), for every bin.
+    Own,
 }
 
 /// What a draw pass renders into.
@@ -335,18 +415,23 @@ pub fn set_viewport(pass: &mut wgpu::RenderPass, [x, y, w, h]: [u32; 4]) {
 }
 
 /// Depth only, both faces (open meshes cast shadows too), biased by slope so that lit
-/// surfaces do not shadow themselves.
+/// surfaces do not shadow themselves; `layouts` are group 0's and, for the cutout
+/// variant, group 1's (the materials).
 fn shadow_pipeline(
     device: &wgpu::Device,
-    group_0: &wgpu::BindGroupLayout,
-    windows: &Windows,
+    layouts: &[Option<&wgpu::BindGroupLayout>],
+    (label, source): (&str, String),
 ) -> wgpu::RenderPipeline {
-    let label = "stereocull.shadow";
-    let layout = crate::shaders::pipeline_layout(device, label, group_0);
+    let layout = device.create_pipeline_layout(&wgpu::PipelineLayoutDescriptor {
+        label: Some(label),
+        bind_group_layouts: layouts,
+        immediate_size: 0,
+    });
     let module = device.create_shader_module(wgpu::ShaderModuleDescriptor {
         label: Some(label),
-        source: wgpu::ShaderSource::Wgsl(crate::shaders::shadow_source(windows).into()),
+        source: wgpu::ShaderSource::Wgsl(source.into()),
     });
+    let cutout = layouts.len() > 1;
     device.create_render_pipeline(&wgpu::RenderPipelineDescriptor {
         label: Some(label),
         layout: Some(&layout),
@@ -369,7 +454,12 @@ fn shadow_pipeline(
             },
         }),
         multisample: Default::default(),
-        fragment: None,
+        fragment: cutout.then(|| wgpu::FragmentState {
+            module: &module,
+            entry_point: Some("fs_main"),
+            compilation_options: Default::default(),
+            targets: &[],
+        }),
         multiview_mask: None,
         cache: None,
     })
@@ -402,20 +492,26 @@ fn pipeline(
         },
         depth_stencil: Some(wgpu::DepthStencilState {
             format: target.depth,
-            depth_write_enabled: Some(true),
+            // Blended surfaces are seen through, so they hide nothing.
+            depth_write_enabled: Some(key.alpha != BinKind::Blend),
             depth_compare: Some(wgpu::CompareFunction::Less),
             stencil: Default::default(),
             bias: Default::default(),
         }),
         multisample: wgpu::MultisampleState {
             count: target.samples,
+            alpha_to_coverage_enabled: key.coverage,
             ..Default::default()
         },
         fragment: Some(wgpu::FragmentState {
             module: &module,
             entry_point: Some("fs_main"),
             compilation_options: Default::default(),
-            targets: &[Some(target.color.into())],
+            targets: &[Some(wgpu::ColorTargetState {
+                format: target.color,
+                blend: (key.alpha == BinKind::Blend).then_some(wgpu::BlendState::ALPHA_BLENDING),
+                write_mask: wgpu::ColorWrites::ALL,
+            })],
         }),
         multiview_mask: key.multiview_mask(),
         cache: None,

@@ -25,6 +25,7 @@
 
 #![warn(missing_docs)]
 
+pub mod bins;
 mod buffers;
 /// The `stereocull` binary's commands (feature `cli`): not part of the library's API.
 #[cfg(feature = "cli")]

@@ -10,6 +10,7 @@ use bytemuck::{Pod, Zeroable};
 use image::RgbaImage;
 use image::imageops::FilterType;
 
+use crate::bins::mesh_material;
 use crate::buffers::init_buffer;
 use crate::error::{Error, Result};
 use crate::scene::{AlphaMode, Material, Scene};
@@ -78,7 +79,8 @@ pub fn bind_group_layout(device: &wgpu::Device) -> wgpu::BindGroupLayout {
 }
 
 /// The records of `scene`'s materials (one untextured record when it has none), after
-/// checking that every vertex names a material and every material a texture.
+/// checking that every vertex names a material, every mesh one material (its bin's,
+/// [`crate::bins`]) and every material a texture.
 pub fn records(scene: &Scene) -> Result<Vec<MaterialRecord>> {
     let count = scene.materials.len().max(1);
     if let Some(v) = scene.vertices.iter().find(|v| v.material as usize >= count) {
@@ -87,6 +89,9 @@ pub fn records(scene: &Scene) -> Result<Vec<MaterialRecord>> {
             v.material
         )));
     }
+    for m in 0..scene.meshes.len() {
+        check_one_material(scene, m)?;
+    }
     if scene.materials.is_empty() {
         return Ok(vec![MaterialRecord {
             base_color_layer: MaterialRecord::UNTEXTURED,
@@ -94,6 +99,28 @@ pub fn records(scene: &Scene) -> Result<Vec<MaterialRecord>> {
         }]);
     }
     scene.materials.iter().map(|m| record(scene, m)).collect()
+}
+
+fn check_one_material(scene: &Scene, m: usize) -> Result<()> {
+    let mesh = &scene.meshes[m];
+    let first = mesh.first_index as usize;
+    let indices = scene.indices.get(first..first + mesh.index_count as usize);
+    let material = |i: &u32| {
+        let v = usize::try_from(*i as i64 + mesh.base_vertex as i64).ok();
+        v.and_then(|v| scene.vertices.get(v)).map(|v| v.material)
+    };
+    let own = mesh_material(scene, m);
+    match indices
+        .into_iter()
+        .flatten()
+        .find_map(|i| material(i).filter(|&x| x != own))
+    {
+        Some(other) => Err(Error::InvalidScene(format!(
+            "mesh {m} ({:?}) mixes materials {own} and {other}: a mesh is drawn by one material's pipeline",
+            mesh.name
+        ))),
+        None => Ok(()),
+    }
 }
 
 fn record(scene: &Scene, m: &Material) -> Result<MaterialRecord> {

@@ -5,6 +5,7 @@
 use bytemuck::{Pod, Zeroable};
 use glam::Vec4;
 
+use crate::bins::Bins;
 use crate::places::Places;
 use crate::scene::{Instance, MAX_LODS, Mesh, Scene};
 
@@ -117,6 +118,9 @@ pub struct MeshRecord {
     pub cull_start: u32,
     /// How many places of the cull order this mesh has.
     pub cull_count: u32,
+    /// Its material's bin ([`crate::bins::Bins::of_mesh`]): the range of the draws
+    /// its draws go to.
+    pub bin: u32,
 }
 
 /// One level of detail of a mesh as culling reads it: [`MAX_LODS`] per mesh, level 0
@@ -174,8 +178,10 @@ pub struct CullLayout {
     pub positions: Vec<u32>,
     /// Mesh of each cull position: which levels of detail it has.
     pub mesh_of: Vec<u32>,
-    /// Per mesh: its index range and its range of the cull order.
+    /// Per mesh: its index range, its range of the cull order and its bin.
     pub meshes: Vec<MeshRecord>,
+    /// The material bins the meshes' draws are grouped by.
+    pub bins: Bins,
     /// [`MAX_LODS`] per mesh.
     pub lods: Vec<LodRecord>,
     /// Each mesh's local bounding sphere (center, radius): the moves scatter makes a
@@ -209,6 +215,7 @@ impl CullLayout {
         let mut positions = places.of_slots().to_vec();
         positions.resize(scene.instances.len(), CullLayout::VACANT);
         let mut mesh_of = Vec::with_capacity(order.len());
+        let bins = Bins::of(scene);
         let meshes = scene
             .meshes
             .iter()
@@ -222,6 +229,7 @@ impl CullLayout {
                     base_vertex: mesh.base_vertex,
                     cull_start,
                     cull_count,
+                    bin: bins.of_mesh[m],
                 }
             })
             .collect();
@@ -238,6 +246,7 @@ impl CullLayout {
             positions,
             mesh_of,
             meshes,
+            bins,
             lods: scene.meshes.iter().flat_map(lod_records).collect(),
             mesh_bounds: scene.meshes.iter().map(|m| m.bounds).collect(),
         }

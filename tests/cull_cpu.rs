@@ -4,12 +4,13 @@
 mod support;
 
 use glam::{Vec3, Vec4Swizzles};
-use stereocull::cull::{CullJob, CullOutput, cpu};
+use stereocull::bins::{BinKind, mesh_material};
+use stereocull::cull::{BinDraws, CullJob, CullOutput, cpu};
 use stereocull::frustum::sphere_in_planes;
 use stereocull::procedural;
 use stereocull::records::{CullLayout, DrawArgs};
 use stereocull::rig::Rig;
-use stereocull::scene::Scene;
+use stereocull::scene::{AlphaMode, Scene};
 use support::cubes;
 
 /// Three cube meshes of half-size 0.5 (bounding radius sqrt(3)/2).
@@ -114,7 +115,9 @@ fn mono_displays_do_not_double() {
     assert!(right.visible.is_empty(), "the right panel looks away");
 }
 
-/// What the contract says, written as plainly as possible.
+/// What the contract says, written as plainly as possible: visible ids by mesh, then
+/// one draw per mesh with visible instances, in its material bin's range (bins in
+/// alpha-mode order, each as long as its meshes).
 fn naive(scene: &Scene, job: &CullJob) -> CullOutput {
     let (planes, views) = (&job.planes, job.instances_per_object);
     let mut per_mesh = vec![Vec::new(); scene.meshes.len()];
@@ -124,33 +127,59 @@ fn naive(scene: &Scene, job: &CullJob) -> CullOutput {
             per_mesh[inst.mesh as usize].push(id as u32);
         }
     }
+    let kind = |m: usize| {
+        let material = scene.materials.get(mesh_material(scene, m) as usize);
+        BinKind::of(material.map_or(AlphaMode::Opaque, |m| m.alpha))
+    };
     let mut visible = Vec::new();
-    let mut draws = vec![DrawArgs::default(); scene.meshes.len()];
-    let mut draw_count = 0;
-    for (mesh, ids) in scene.meshes.iter().zip(per_mesh) {
+    let mut mesh_draws = Vec::new();
+    for (m, (mesh, ids)) in scene.meshes.iter().zip(per_mesh).enumerate() {
         if !ids.is_empty() {
-            draws[draw_count] = DrawArgs {
+            let draw = DrawArgs {
                 index_count: mesh.index_count,
                 instance_count: views * ids.len() as u32,
                 first_index: mesh.first_index,
                 base_vertex: mesh.base_vertex,
                 first_instance: views * visible.len() as u32,
             };
-            draw_count += 1;
+            mesh_draws.push((kind(m), draw));
             visible.extend(ids);
         }
+    }
+    let mut draws = Vec::new();
+    let mut bins = Vec::new();
+    for k in BinKind::ALL {
+        let meshes = (0..scene.meshes.len()).filter(|&m| kind(m) == k).count();
+        if meshes == 0 && !(k == BinKind::Opaque && scene.meshes.is_empty()) {
+            continue;
+        }
+        let first = draws.len();
+        draws.extend(mesh_draws.iter().filter(|d| d.0 == k).map(|d| d.1));
+        let count = draws.len() - first;
+        draws.resize(first + meshes, DrawArgs::default());
+        bins.push(BinDraws {
+            first: first as u32,
+            count: count as u32,
+        });
     }
     CullOutput {
         visible,
         draws,
-        draw_count: draw_count as u32,
+        draw_count: mesh_draws.len() as u32,
+        bins,
     }
 }
 
 #[test]
 fn matches_the_naive_contract_on_random_scenes() {
-    for (n, meshes, seed) in [(1, 1, 1), (63, 5, 2), (50_001, 40, 3), (70_000, 300, 4)] {
+    let cases = [(1, 1, 1), (63, 5, 2), (50_001, 40, 3), (70_000, 300, 4)];
+    for (k, (n, meshes, seed)) in cases.into_iter().enumerate() {
         let scene = procedural::scene(n, meshes, seed);
+        // Half the cases spread their meshes over every material bin.
+        let scene = match k % 2 {
+            0 => scene,
+            _ => support::with_random_bins(scene, seed),
+        };
         for preset in ["hmd", "cave", "hmd-peripheral"] {
             let rig = Rig::preset(preset).unwrap();
             for (d, job) in rig.cull_jobs().unwrap().iter().enumerate() {

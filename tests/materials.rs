@@ -3,10 +3,13 @@
 
 use glam::{DVec3, Vec2, Vec3};
 use image::RgbaImage;
-use stereocull::renderer::RendererOptions;
+use stereocull::bins::Bins;
+use stereocull::procedural;
+use stereocull::renderer::{CullMode, Renderer, RendererOptions, StereoMode};
 use stereocull::rig::Rig;
-use stereocull::scene::{AlphaMode, Scene};
+use stereocull::scene::{AlphaMode, Material, Scene};
 use stereocull::scene_spec;
+use support::Tolerance;
 
 mod support;
 
@@ -165,4 +168,91 @@ fn alpha_blend_mode_test_cuts_each_mask_at_its_own_cutoff() {
             "instance {i} (cutoff {cutoff}): {holes} holes and {solids} solid points checked"
         );
     }
+}
+
+/// The image of `scene` without shadows, every display.
+fn render_all(scene: &Scene, rig: &Rig, options: RendererOptions) -> Vec<RgbaImage> {
+    let gpu = support::gpu();
+    support::render(&gpu, scene, rig, options).unwrap()
+}
+
+/// One frame's draw calls of `scene` seen by `rig`, without shadows.
+fn draw_calls(scene: &Scene, rig: &Rig, options: RendererOptions) -> u32 {
+    let gpu = support::gpu();
+    let mut renderer = Renderer::new(&gpu.device, scene, rig, options).unwrap();
+    let targets = renderer.create_targets(&gpu.device);
+    let stats = (renderer.submit_frame(&gpu.device, &gpu.queue, rig, 0.0, &targets)).unwrap();
+    stats.draw_calls
+}
+
+/// A random scene whose meshes use materials of every alpha mode draws one multi-draw
+/// per material bin per display, on the GPU and CPU cull paths and in every indirect
+/// mode, whatever the instance count; a scene of one mode, one per display.
+#[test]
+fn each_material_bin_is_one_draw_call_per_display() {
+    let plain = procedural::scene(3000, 12, 21);
+    let binned = support::with_random_bins(plain.clone(), 21);
+    let bins = Bins::of(&binned).kinds.len() as u32;
+    assert_eq!(bins, 3, "the random materials use every mode");
+    for preset in ["hmd", "cave"] {
+        let rig = support::sized(preset, 64, 64);
+        let displays = rig.displays.len() as u32;
+        for (mode, cull) in [
+            (StereoMode::Instanced, CullMode::Gpu),
+            (StereoMode::Instanced, CullMode::Cpu),
+            (StereoMode::Multiview, CullMode::Gpu),
+        ] {
+            let options = RendererOptions {
+                mode,
+                cull,
+                shadows: false,
+                ..support::frustum_only()
+            };
+            let what = format!("{preset} {mode:?} {cull:?}");
+            assert_eq!(
+                draw_calls(&binned, &rig, options.clone()),
+                bins * displays,
+                "{what}"
+            );
+            assert_eq!(draw_calls(&plain, &rig, options), displays, "{what}");
+        }
+    }
+}
+
+/// Cutouts whose alpha is never under the cutoff draw exactly what opaque materials
+/// draw, from their own bin and pipeline: the bins change which call draws an
+/// instance, never what it looks like. The cutout pipeline is compiled apart (it can
+/// discard), so its colors may round a level apart ([`Tolerance::RECOMPILED`]).
+#[test]
+fn cutouts_that_cut_nothing_draw_what_opaque_materials_draw() {
+    let mut scene = procedural::scene(400, 6, 22);
+    scene.materials = vec![
+        Material::default(),
+        Material {
+            alpha: AlphaMode::Mask { cutoff: 0.5 },
+            ..Default::default()
+        },
+    ];
+    // Every other mesh's vertices (each mesh's are contiguous) name the cutout.
+    let starts: Vec<usize> = scene
+        .meshes
+        .iter()
+        .map(|m| m.base_vertex as usize)
+        .collect();
+    for m in (1..starts.len()).step_by(2) {
+        let end = starts.get(m + 1).copied().unwrap_or(scene.vertices.len());
+        for v in &mut scene.vertices[starts[m]..end] {
+            v.material = 1;
+        }
+    }
+    let mut opaque = scene.clone();
+    opaque.materials[1].alpha = AlphaMode::Opaque;
+    let rig = support::sized("hmd", 160, 120);
+    let options = RendererOptions {
+        shadows: false,
+        ..support::frustum_only()
+    };
+    let got = render_all(&scene, &rig, options.clone());
+    let want = render_all(&opaque, &rig, options);
+    support::assert_images_match("cutouts", &got[0], &want[0], Tolerance::RECOMPILED);
 }

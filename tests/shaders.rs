@@ -100,6 +100,7 @@ fn records_match_wgsl() {
             ("base_vertex", offset_of!(MeshRecord, base_vertex)),
             ("cull_start", offset_of!(MeshRecord, cull_start)),
             ("cull_count", offset_of!(MeshRecord, cull_count)),
+            ("bin", offset_of!(MeshRecord, bin)),
         ],
     );
     check(
@@ -394,6 +395,8 @@ fn contexts_match_wgsl() {
         lod_levels: 4,
         visibility_words: 9,
         pyramid_offset: 128,
+        bin_count: 11,
+        blend_bin: 13,
     };
     check_uniform(
         "CullParams",
@@ -405,6 +408,8 @@ fn contexts_match_wgsl() {
             ("lod_levels", f32::from_bits(4)),
             ("visibility_words", f32::from_bits(9)),
             ("pyramid_offset", f32::from_bits(128)),
+            ("bin_count", f32::from_bits(11)),
+            ("blend_bin", f32::from_bits(13)),
         ],
     );
 }

@@ -308,8 +308,8 @@ pub fn display_dump(name: &str, views: u32, out: &CullOutput, scene: &Scene) -> 
         name: name.into(),
         views,
         visible: out.visible.clone(),
-        draws: out.draws[..out.draw_count as usize]
-            .iter()
+        draws: out
+            .packed_draws()
             .zip(meshes)
             .map(|(d, mesh)| DrawDump {
                 mesh,

@@ -10,7 +10,7 @@ use rayon::prelude::*;
 use glam::{Vec3, Vec4};
 
 use super::coarse::{BLOCK, block_of};
-use super::{CoarseCull, CullJob, CullOutput, Split};
+use super::{BinDraws, CoarseCull, CullJob, CullOutput, Split};
 use crate::frustum::plane_distance;
 use crate::records::{CullLayout, DrawArgs, lod_level};
 use crate::scene::MAX_LODS;
@@ -307,27 +307,50 @@ fn build_output(
             + words.iter().map(|w| w.count_ones()).sum::<u32>()
             + partial.count_ones()
     };
-    let mut draws = vec![DrawArgs::default(); layout.meshes.len()];
-    let mut draw_count = 0;
-    for m in &layout.meshes {
+    let ordered = layout.meshes.iter().filter_map(|m| {
         let offset = visible_before(m.cull_start as usize);
         let count = visible_before((m.cull_start + m.cull_count) as usize) - offset;
-        if count > 0 {
-            draws[draw_count] = DrawArgs {
+        (count > 0).then(|| {
+            let draw = DrawArgs {
                 index_count: m.index_count,
                 instance_count: instances_per_object * count,
                 first_index: m.first_index,
                 base_vertex: m.base_vertex,
                 first_instance: instances_per_object * offset,
             };
-            draw_count += 1;
-        }
-    }
+            (m.bin, draw)
+        })
+    });
+    let (draws, bins) = into_bins(layout, 1, ordered);
     CullOutput {
         visible,
+        draw_count: bins.iter().map(|b| b.count).sum(),
         draws,
-        draw_count: draw_count as u32,
+        bins,
     }
+}
+
+/// Draws given in (level, mesh) order, each with its mesh's bin, placed in their bins'
+/// ranges ([`crate::bins::Bins::ranges`] for `levels`): the contract's `draws` and
+/// each bin's count.
+fn into_bins(
+    layout: &CullLayout,
+    levels: u32,
+    ordered: impl Iterator<Item = (u32, DrawArgs)>,
+) -> (Vec<DrawArgs>, Vec<BinDraws>) {
+    let mut bins: Vec<BinDraws> = (layout.bins.ranges(levels).iter())
+        .map(|r| BinDraws {
+            first: r.first,
+            count: 0,
+        })
+        .collect();
+    let mut draws = vec![DrawArgs::default(); layout.meshes.len() * levels as usize];
+    for (bin, draw) in ordered {
+        let b = &mut bins[bin as usize];
+        draws[(b.first + b.count) as usize] = draw;
+        b.count += 1;
+    }
+    (draws, bins)
 }
 
 /// The contract's buffers with levels of detail: visible ids grouped by level (finest
@@ -351,8 +374,8 @@ fn build_output_lod(
             counts[m][level] += 1;
         }
     }
-    let mut draws = vec![DrawArgs::default(); layout.meshes.len() * l_count];
-    let (mut draw_count, mut offset) = (0, 0);
+    let mut ordered = Vec::new();
+    let mut offset = 0;
     for level in 0..l_count {
         for ((m, mesh), per_level) in layout.meshes.iter().enumerate().zip(&counts) {
             let count = per_level[level];
@@ -360,21 +383,23 @@ fn build_output_lod(
                 continue;
             }
             let lod = layout.lods[m * MAX_LODS + level];
-            draws[draw_count] = DrawArgs {
+            let draw = DrawArgs {
                 index_count: lod.index_count,
                 instance_count: instances_per_object * count,
                 first_index: lod.first_index,
                 base_vertex: mesh.base_vertex,
                 first_instance: instances_per_object * offset,
             };
-            draw_count += 1;
+            ordered.push((mesh.bin, draw));
             offset += count;
         }
     }
+    let (draws, bins) = into_bins(layout, level_count, ordered.into_iter());
     CullOutput {
         visible: buckets.concat(),
+        draw_count: bins.iter().map(|b| b.count).sum(),
         draws,
-        draw_count: draw_count as u32,
+        bins,
     }
 }
 

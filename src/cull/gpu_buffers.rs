@@ -2,6 +2,7 @@
 //! again by a reload or a scatter) with the scratch all displays share, and each
 //! display's outputs, which its draw pass consumes.
 
+use crate::bins::MAX_BINS;
 use crate::buffers::{init_buffer, init_buffer_with_room, storage_buffer};
 use crate::cull::CullOutput;
 use crate::cull::coarse::{BLOCK, CoarseCull};
@@ -28,10 +29,18 @@ pub struct CullParams {
     pub visibility_words: u32,
     /// Where the depth pyramids start in the occlusion buffer, in words.
     pub pyramid_offset: u32,
+    /// Material bins ([`crate::bins::Bins`]): each has its own range of the draws.
+    pub bin_count: u32,
+    /// The blended bin ([`crate::bins::Bins::blend_bin`]): never marked drawn.
+    pub blend_bin: u32,
 }
 
-/// Bytes of the counts buffer: the draw count, then the visible total.
-pub const COUNTS_BYTES: u64 = 8;
+/// Bytes of the counts buffer: the draw count, the visible total, then each material
+/// bin's draw count ([`COUNTS_BIN_OFFSET`] on).
+pub const COUNTS_BYTES: u64 = COUNTS_BIN_OFFSET + 4 * MAX_BINS as u64;
+
+/// Where the counts buffer's per-bin draw counts start, in bytes.
+pub const COUNTS_BIN_OFFSET: u64 = 8;
 
 /// Scene data the cull passes read, uploaded once, plus scratch shared by all displays
 /// (displays cull one after another, so one scratch suffices).
@@ -316,7 +325,12 @@ impl CullTargets {
 
     /// Writes a CPU cull's `out` into these buffers; returns the bytes written.
     pub fn upload(&self, queue: &wgpu::Queue, out: &CullOutput) -> u64 {
-        let counts = [out.draw_count, out.visible.len() as u32];
+        let mut counts = [0; COUNTS_BYTES as usize / 4];
+        counts[0] = out.draw_count;
+        counts[1] = out.visible.len() as u32;
+        for (word, bin) in counts[2..].iter_mut().zip(&out.bins) {
+            *word = bin.count;
+        }
         let writes: [(&wgpu::Buffer, &[u8]); 3] = [
             (&self.visible, bytemuck::cast_slice(&out.visible)),
             (&self.draws, bytemuck::cast_slice(&out.draws)),
@@ -369,6 +383,8 @@ fn cull_params(
         lod_levels: levels,
         visibility_words,
         pyramid_offset,
+        bin_count: layout.bins.kinds.len() as u32,
+        blend_bin: layout.bins.blend_bin(),
     };
     (params, groups)
 }

@@ -1,9 +1,11 @@
 //! Per-display frustum culling into draw lists, on the CPU ([`cpu`]) or the GPU
 //! ([`gpu`]). Both honour one contract, byte for byte (the README's cull contract):
 //!
-//! - one draw per (level of detail, mesh) with at least one visible instance, levels
-//!   finest first, then ascending mesh id, packed at the front of `draws`; the rest of
-//!   `draws` (meshes times levels entries) is zero; `draw_count` is their number;
+//! - one draw per (level of detail, mesh) with at least one visible instance, grouped
+//!   by the mesh's material bin ([`crate::bins`]): each bin owns a fixed range of
+//!   `draws` (its meshes times the levels, bins in order), its draws packed at the
+//!   front of that range, levels finest first, then ascending mesh id, the rest of the
+//!   range zero; `draw_count` is their number, [`CullOutput::bins`] each bin's;
 //! - within a draw, visible instances in place order (ids ascending for a scene laid
 //!   out afresh);
 //! - `instance_count = V * visible_in_group`, `first_instance = V * offset`, where V is
@@ -69,19 +71,35 @@ pub struct CullOutput {
     /// One entry per (level, mesh), meshes times levels in all: the packed draws, then
     /// zeros.
     pub draws: Vec<DrawArgs>,
-    /// How many of `draws` are packed draws.
+    /// How many of `draws` are packed draws, in all bins.
     pub draw_count: u32,
+    /// Per material bin, in order: where its range of `draws` starts and how many
+    /// packed draws it holds.
+    pub bins: Vec<BinDraws>,
+}
+
+/// One material bin's draws in a [`CullOutput`].
+#[derive(Clone, Copy, Debug, Default, PartialEq, Eq)]
+pub struct BinDraws {
+    /// Its first entry of `draws`.
+    pub first: u32,
+    /// Its packed draws, from `first` on.
+    pub count: u32,
 }
 
 impl CullOutput {
+    /// The packed draws, bin by bin.
+    pub fn packed_draws(&self) -> impl Iterator<Item = &DrawArgs> {
+        (self.bins.iter()).flat_map(|b| &self.draws[b.first as usize..(b.first + b.count) as usize])
+    }
+
     /// The mesh each packed draw draws, recovered from its first visible instance.
     pub fn draw_meshes(
         &self,
         instances_per_object: u32,
         instance_mesh: impl Fn(u32) -> u32,
     ) -> Vec<u32> {
-        self.draws[..self.draw_count as usize]
-            .iter()
+        self.packed_draws()
             .map(|d| {
                 let slot = d.first_instance / instances_per_object;
                 instance_mesh(self.visible[slot as usize])

@@ -14,7 +14,7 @@ use super::targets::TargetViews;
 use crate::buffers::{storage_buffer, write};
 use crate::contexts::context_buffer;
 use crate::cull::CullOutput;
-use crate::draw::{DrawFeatures, DrawScene, Drawer, Drawing, set_viewport};
+use crate::draw::{BinPipelines, DrawFeatures, DrawScene, Drawer, Drawing, set_viewport};
 use crate::error::Result;
 use crate::modes::StereoMode;
 use crate::records::uniform_bytes;
@@ -57,6 +57,7 @@ static NOTHING: CullOutput = CullOutput {
     visible: Vec::new(),
     draws: Vec::new(),
     draw_count: 0,
+    bins: Vec::new(),
 };
 
 impl ClassicPath {
@@ -78,7 +79,7 @@ impl ClassicPath {
         let drawer = Drawer::new(
             device,
             target,
-            &keys,
+            (&keys, &layout.bins.kinds),
             material,
             options.shadow_size(),
             windows,
@@ -232,11 +233,12 @@ impl ClassicPath {
         match (self.mode, state.eyes.as_slice()) {
             (_, []) => {
                 self.bind(pass, &state.bind_group);
-                instance_draws(cull).map(|d| draw(pass, d)).count() as u32
+                let mut drawer = self.bin_drawer();
+                instance_draws(cull).map(|d| drawer.draw(pass, d)).count() as u32
             }
             (StereoMode::SinglePass, eyes) => {
                 self.bind(pass, &eyes[0].bind_group);
-                single_pass_cadence(pass, cull, eyes)
+                single_pass_cadence(pass, (cull, self.bin_drawer()), eyes)
             }
             (_, eyes) => (0..eyes.len()).map(|e| self.draw_eye(pass, index, e)).sum(),
         }
@@ -249,12 +251,24 @@ impl ClassicPath {
         self.bind(pass, &state.eyes[e].bind_group);
         set_viewport(pass, state.eyes[e].viewport);
         let out = self.cull_of(index, Some(e));
-        instance_draws(out).map(|d| draw(pass, d)).count() as u32
+        let mut drawer = self.bin_drawer();
+        instance_draws(out).map(|d| drawer.draw(pass, d)).count() as u32
     }
 
     fn bind(&self, pass: &mut wgpu::RenderPass, bind_group: &wgpu::BindGroup) {
-        let key = self.drawer.key(1);
-        self.drawer.bind(pass, key, &self.draw_scene, bind_group);
+        Drawer::bind(pass, &self.draw_scene, bind_group);
+    }
+
+    /// The one-view pipelines of the scene's material bins.
+    fn bin_drawer(&self) -> BinDrawer<'_> {
+        let with = BinPipelines::Draw(self.drawer.key(1));
+        let pipeline = |kind| self.drawer.bin_pipeline(with, kind).flatten();
+        BinDrawer {
+            pipelines: (self.culler.bins().iter())
+                .filter_map(|b| pipeline(b.kind))
+                .collect(),
+            current: None,
+        }
     }
 
     /// This frame's cull of display `index` (multi-camera: its left eye's).
@@ -318,7 +332,11 @@ fn classic_displays(
 /// left cadence (foveated: 0 1 2 3, then 3 2 1 0) so that the view (viewport and
 /// binding) switches once per view per instance, not once more. Multi-pass and
 /// multi-camera instead draw one pass per view into its viewport.
-fn single_pass_cadence(pass: &mut wgpu::RenderPass, out: &CullOutput, eyes: &[EyeState]) -> u32 {
+fn single_pass_cadence(
+    pass: &mut wgpu::RenderPass,
+    (out, mut drawer): (&CullOutput, BinDrawer),
+    eyes: &[EyeState],
+) -> u32 {
     let mut current = usize::MAX;
     let mut calls = 0;
     for (k, d) in instance_draws(out).enumerate() {
@@ -334,25 +352,45 @@ fn single_pass_cadence(pass: &mut wgpu::RenderPass, out: &CullOutput, eyes: &[Ey
                 set_viewport(pass, eyes[e].viewport);
                 current = e;
             }
-            draw(pass, d.clone());
+            drawer.draw(pass, d.clone());
             calls += 1;
         }
     }
     calls
 }
 
-/// One per-instance draw: index range, base vertex, and the slot in the visible list.
-type InstanceDraw = (std::ops::Range<u32>, i32, u32);
+/// One per-instance draw: its material bin, index range, base vertex, and the slot in
+/// the visible list.
+type InstanceDraw = (usize, std::ops::Range<u32>, i32, u32);
 
 /// The per-instance draws of a one-view cull result, in visible-list order.
 fn instance_draws(out: &CullOutput) -> impl Iterator<Item = InstanceDraw> + '_ {
-    out.draws[..out.draw_count as usize].iter().flat_map(|d| {
-        let indices = d.first_index..d.first_index + d.index_count;
-        (d.first_instance..d.first_instance + d.instance_count)
-            .map(move |slot| (indices.clone(), d.base_vertex, slot))
+    (out.bins.iter().enumerate()).flat_map(move |(bin, b)| {
+        let draws = &out.draws[b.first as usize..(b.first + b.count) as usize];
+        draws.iter().flat_map(move |d| {
+            let indices = d.first_index..d.first_index + d.index_count;
+            (d.first_instance..d.first_instance + d.instance_count)
+                .map(move |slot| (bin, indices.clone(), d.base_vertex, slot))
+        })
     })
 }
 
-fn draw(pass: &mut wgpu::RenderPass, (indices, base_vertex, slot): InstanceDraw) {
-    pass.draw_indexed(indices, base_vertex, slot..slot + 1);
+/// Draws per instance, setting each material bin's pipeline where the bin changes.
+struct BinDrawer<'a> {
+    pipelines: Vec<&'a wgpu::RenderPipeline>,
+    current: Option<usize>,
+}
+
+impl BinDrawer<'_> {
+    fn draw(
+        &mut self,
+        pass: &mut wgpu::RenderPass,
+        (bin, indices, base_vertex, slot): InstanceDraw,
+    ) {
+        if self.current != Some(bin) {
+            pass.set_pipeline(self.pipelines[bin]);
+            self.current = Some(bin);
+        }
+        pass.draw_indexed(indices, base_vertex, slot..slot + 1);
+    }
 }

@@ -8,6 +8,7 @@
 use super::frame::{CullView, FramePlan};
 use super::options::CullMode;
 use super::passes::{Logged, PassRecord, Recording, Timing, close, compute_pass, open_display};
+use crate::bins::BinRange;
 use crate::cull::CullOutput;
 use crate::cull::coarse::BLOCK;
 use crate::cull::cpu;
@@ -27,6 +28,8 @@ pub(super) struct Culler {
     /// every view's outputs hold.
     slots: u32,
     draws: u32,
+    /// The material bins' ranges of the draws (fixed: meshes do not change).
+    bins: Vec<BinRange>,
 }
 
 enum Kind {
@@ -75,6 +78,7 @@ impl Culler {
         windows: Windows,
     ) -> Culler {
         let draws = layout.meshes.len() as u32 * shape.levels;
+        let bins = layout.bins.ranges(shape.levels);
         let kind = match mode {
             CullMode::Cpu => Kind::Cpu {
                 layout,
@@ -103,12 +107,18 @@ impl Culler {
             kind,
             slots: shape.slots,
             draws,
+            bins,
         }
     }
 
     /// Draw entries of every view's outputs: meshes times levels of detail.
     pub(super) fn draws(&self) -> u32 {
         self.draws
+    }
+
+    /// The material bins' ranges of every view's draws.
+    pub(super) fn bins(&self) -> &[BinRange] {
+        &self.bins
     }
 
     /// `view`'s cull outputs (room for every slot and draw) and its bindings to the

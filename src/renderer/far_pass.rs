@@ -6,8 +6,10 @@ use super::culler::Culler;
 use super::frame::{CullView, FramePlan};
 use super::passes::{PassRecord, Recording, opener, render_pass};
 use super::view_pass::ViewPass;
+use crate::bins::BinKind;
 use crate::draw::{
-    CLEAR_COLOR, DEPTH_FORMAT, DrawScene, Drawer, Drawing, TargetFormat, cleared_depth,
+    BinPipelines, CLEAR_COLOR, DEPTH_FORMAT, DrawScene, Drawer, Drawing, TargetFormat,
+    cleared_depth,
 };
 use crate::far_layer::FarPlan;
 use crate::shaders::{DrawKey, far_composite_source};
@@ -38,7 +40,7 @@ pub(super) struct FarDisplay {
 impl FarLayers {
     pub(super) fn new(
         device: &wgpu::Device,
-        format: TargetFormat,
+        (format, kinds): (TargetFormat, &[BinKind]),
         material: Option<&str>,
         windows: crate::shaders::Windows,
     ) -> FarLayers {
@@ -48,7 +50,7 @@ impl FarLayers {
             ..format
         };
         let key = DrawKey::new(1, false);
-        let drawer = Drawer::new(device, single, &[key], material, None, windows);
+        let drawer = Drawer::new(device, single, (&[key], kinds), material, None, windows);
         let composite_layout = composite_layout(device);
         FarLayers {
             composite: composite_pipeline(device, &composite_layout, format),
@@ -158,7 +160,8 @@ impl FarLayers {
         let logged = (log, PassRecord::display("far_layer", index));
         let drawing = self.drawing(scene);
         let draw_calls = render_pass(encoder, begin, ((timer, display), logged), |pass| {
-            far.view.draw(pass, drawing, Some(DrawKey::new(1, false)))
+            far.view
+                .draw(pass, drawing, BinPipelines::Draw(DrawKey::new(1, false)))
         });
         (dispatches, draw_calls)
     }

@@ -20,7 +20,7 @@ use super::targets::TargetViews;
 use super::view_pass::ViewPass;
 use crate::contexts::context_buffer;
 use crate::cull::gpu_buffers::{CullTargets, OcclusionRoom};
-use crate::draw::{DrawFeatures, DrawScene, Drawer, Drawing};
+use crate::draw::{BinPipelines, DrawFeatures, DrawScene, Drawer, Drawing};
 use crate::error::Result;
 use crate::modes::StereoMode;
 use crate::occlusion::{Phase, PyramidShape};
@@ -81,6 +81,7 @@ impl IndirectPath {
             floor: options.cull_floor,
             occlusion,
         };
+        let kinds = layout.bins.kinds.clone();
         let culler = Culler::new(device, options.cull, layout, shape, windows);
         let keys = draw_keys(device, plan, options.mode);
         let material = options.material.as_deref();
@@ -88,7 +89,7 @@ impl IndirectPath {
         let drawer = Drawer::new(
             device,
             target,
-            &keys,
+            (&keys, &kinds),
             material,
             options.shadow_size(),
             windows,
@@ -104,7 +105,7 @@ impl IndirectPath {
             .shadows
             .then(|| ShadowPass::new(device, drawing, frame, &culler));
         let far = options.far_layer.then(|| {
-            let layers = FarLayers::new(device, target, material, windows);
+            let layers = FarLayers::new(device, (target, &kinds), material, windows);
             let contexts: Vec<&wgpu::Buffer> = displays.iter().map(|d| d.view.context()).collect();
             Far::new(device, layers, plan, &draw_scene, frame, &contexts, &culler)
         });
@@ -281,7 +282,9 @@ impl IndirectPath {
     /// Display `index`'s one multi-draw-indirect call into `pass`, whose pipeline the
     /// caller set (built on [`Drawer::layout`] and the decode).
     pub(super) fn draw_with_own_pipeline(&self, pass: &mut wgpu::RenderPass, index: usize) {
-        self.displays[index].view.draw(pass, self.drawing(), None);
+        self.displays[index]
+            .view
+            .draw(pass, self.drawing(), BinPipelines::Own);
     }
 
     /// How the instance records are bound.
@@ -306,9 +309,10 @@ impl IndirectPath {
             Some((far, Some(layer))) => far.layers.composite(pass, layer),
             _ => 0,
         };
-        let outer = state.view.draw(pass, self.drawing(), Some(state.key));
+        let with = BinPipelines::Draw(state.key);
+        let outer = state.view.draw(pass, self.drawing(), with);
         let insets = match &state.inset {
-            Some(inset) => inset.draw(pass, self.drawing(), Some(state.key)),
+            Some(inset) => inset.draw(pass, self.drawing(), with),
             None => 0,
         };
         composite + outer + insets

@@ -116,10 +116,11 @@ pub use readback::{Diagnostics, FarSplit, OcclusionCounts};
 pub use sync::SyncStats;
 pub use targets::{DisplayTarget, TargetShape, TargetViews};
 
-/// The path chosen in [`Renderer::new`].
+/// The path chosen in [`Renderer::new`] (boxed: each holds its pipelines, and they
+/// differ in size by what the indirect path adds).
 enum Path {
-    Indirect(IndirectPath),
-    Classic(ClassicPath),
+    Indirect(Box<IndirectPath>),
+    Classic(Box<ClassicPath>),
 }
 
 impl Path {
@@ -128,8 +129,8 @@ impl Path {
     fn new(device: &wgpu::Device, inputs: PathInputs) -> Result<Path> {
         let scope = device.push_error_scope(wgpu::ErrorFilter::Validation);
         let path = match inputs.options.mode.per_instance() {
-            false => IndirectPath::new(device, inputs).map(Path::Indirect),
-            true => ClassicPath::new(device, inputs).map(Path::Classic),
+            false => IndirectPath::new(device, inputs).map(|p| Path::Indirect(Box::new(p))),
+            true => ClassicPath::new(device, inputs).map(|p| Path::Classic(Box::new(p))),
         };
         // Popped before returning any error, so the caller's device keeps its scopes.
         if let Some(e) = pollster::block_on(scope.pop()) {

@@ -10,7 +10,7 @@ use super::options::RendererOptions;
 use super::passes::{PassRecord, Timing, compute_pass, draw_pass};
 use super::targets::TargetViews;
 use super::view_pass::ViewPass;
-use crate::draw::Drawing;
+use crate::draw::{BinPipelines, Drawing};
 use crate::error::Result;
 use crate::modes::StereoMode;
 use crate::occlusion::PyramidShape;
@@ -154,7 +154,7 @@ impl LatePhase {
             mask,
             (timer, display),
             what,
-            |pass| self.view.draw(pass, drawing, Some(key)),
+            |pass| self.view.draw(pass, drawing, BinPipelines::Draw(key)),
         );
         FrameStats {
             draw_calls,

@@ -4,8 +4,8 @@
 
 use super::indirect::IndirectPath;
 use super::{Path, Renderer};
-use crate::cull::CullOutput;
 use crate::cull::gpu_buffers::{COUNTS_BYTES, CullTargets};
+use crate::cull::{BinDraws, CullOutput};
 use crate::error::Result;
 use crate::occlusion::PyramidShape;
 use crate::readback::read_pod;
@@ -297,7 +297,8 @@ impl IndirectPath {
         queue: &wgpu::Queue,
         cull: &CullTargets,
     ) -> Result<CullOutput> {
-        let [draw_count, visible_total] = read_counts(device, queue, cull)?;
+        let counts = read_counts(device, queue, cull)?;
+        let [draw_count, visible_total] = [counts[0], counts[1]];
         let visible = match visible_total {
             0 => Vec::new(),
             n => read_pod(device, queue, &cull.visible, 4 * n as u64)?,
@@ -307,6 +308,12 @@ impl IndirectPath {
             visible,
             draws: read_pod(device, queue, &cull.draws, draws_bytes)?,
             draw_count,
+            bins: (self.culler.bins().iter().zip(&counts[2..]))
+                .map(|(r, &count)| BinDraws {
+                    first: r.first,
+                    count,
+                })
+                .collect(),
         })
     }
 
@@ -329,8 +336,7 @@ impl IndirectPath {
     }
 }
 
-/// The counts buffer: the draw count and the visible total.
-fn read_counts(device: &wgpu::Device, queue: &wgpu::Queue, cull: &CullTargets) -> Result<[u32; 2]> {
-    let counts: Vec<u32> = read_pod(device, queue, &cull.counts, COUNTS_BYTES)?;
-    Ok([counts[0], counts[1]])
+/// The counts buffer: the draw count, the visible total, each bin's draw count.
+fn read_counts(device: &wgpu::Device, queue: &wgpu::Queue, cull: &CullTargets) -> Result<Vec<u32>> {
+    read_pod(device, queue, &cull.counts, COUNTS_BYTES)
 }

@@ -7,7 +7,7 @@ use super::frame::CullView;
 use super::passes::{PassRecord, Recording, close, open_display, opener, render_pass};
 use super::view_pass::ViewPass;
 use crate::contexts::DisplayContext;
-use crate::draw::{Drawing, cleared_depth};
+use crate::draw::{BinPipelines, Drawing, cleared_depth};
 use crate::shadow::LightView;
 
 /// The light as one more view.
@@ -50,9 +50,9 @@ impl ShadowPass {
         culler: &Culler,
         Recording { timer, log }: Recording,
     ) -> (u32, u32) {
-        let Some(shadow) = &drawing.drawer.shadow else {
+        if drawing.drawer.shadow.is_none() {
             return (0, 0);
-        };
+        }
         let frame = open_display(timer, "shadow", encoder);
         let what = (&mut *log, PassRecord::frame("shadow_cull"));
         let dispatches = self
@@ -72,8 +72,7 @@ impl ShadowPass {
         });
         let logged = (log, PassRecord::frame("shadow"));
         let draw_calls = render_pass(encoder, begin, ((timer, &frame), logged), |pass| {
-            pass.set_pipeline(&shadow.pipeline);
-            self.view.draw(pass, drawing, None)
+            self.view.draw(pass, drawing, BinPipelines::Shadow)
         });
         close(timer, encoder, frame);
         (dispatches, draw_calls)

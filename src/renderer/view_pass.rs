@@ -5,22 +5,22 @@
 use super::culler::{Culler, ViewCull};
 use super::frame::CullView;
 use super::passes::{Logged, Timing};
+use crate::bins::BinRange;
 use crate::buffers::write;
 use crate::contexts::DisplayContext;
 use crate::contexts::context_buffer;
 use crate::cull::gpu_buffers::CullTargets;
-use crate::draw::{Drawer, Drawing};
+use crate::draw::{BinPipelines, Drawer, Drawing};
 use crate::occlusion::Phase;
 use crate::records::uniform_bytes;
-use crate::shaders::DrawKey;
 
 /// The view's context, its cull and bindings.
 pub(super) struct ViewPass {
     context: wgpu::Buffer,
     cull: ViewCull,
     draw_bind_group: wgpu::BindGroup,
-    /// Draw entries: meshes times levels of detail.
-    max_draws: u32,
+    /// The material bins' ranges of the draws.
+    bins: Vec<BinRange>,
 }
 
 impl ViewPass {
@@ -64,7 +64,7 @@ impl ViewPass {
             ),
             context,
             cull,
-            max_draws: culler.draws(),
+            bins: culler.bins().to_vec(),
         }
     }
 
@@ -106,19 +106,18 @@ impl ViewPass {
         culler.encode(encoder, (&self.cull, self.cull.phase()), timing, logged)
     }
 
-    /// The view's one multi-draw into `pass`: with `drawer`'s pipeline for `key`, or
-    /// (`None`) with the pipeline `pass` already has. Returns the draw calls.
+    /// The view's draws into `pass`: per material bin, its pipeline of `with` and one
+    /// multi-draw. Returns the draw calls.
     pub(super) fn draw(
         &self,
         pass: &mut wgpu::RenderPass,
         Drawing { drawer, scene }: Drawing,
-        key: Option<DrawKey>,
+        with: BinPipelines,
     ) -> u32 {
-        match key {
-            Some(key) => drawer.bind(pass, key, scene, &self.draw_bind_group),
-            None => Drawer::bind_resources(pass, scene, &self.draw_bind_group),
+        match with {
+            BinPipelines::Draw(_) => Drawer::bind(pass, scene, &self.draw_bind_group),
+            _ => Drawer::bind_resources(pass, scene, &self.draw_bind_group),
         }
-        drawer.draw_indirect(pass, self.max_draws, &self.cull.targets);
-        1
+        drawer.draw_bins(pass, &self.bins, with, &self.cull.targets)
     }
 }

@@ -45,6 +45,7 @@ const DRAW_NO_CLIP_DISTANCES: &str = include_str!("../../wgsl/shared/draw_no_cli
 const DRAW_CLIP_RECT: &str = include_str!("../../wgsl/shared/draw_clip_rect.wgsl");
 const DECODE: &str = include_str!("../../wgsl/shared/decode.wgsl");
 const DRAW_COMMON: &str = include_str!("../../wgsl/shared/draw_common.wgsl");
+const BASE_COLOR: &str = include_str!("../../wgsl/shared/base_color.wgsl");
 const DRAW: &str = include_str!("../../wgsl/draw.wgsl");
 const DRAW_MULTIVIEW: &str = include_str!("../../wgsl/draw_multiview.wgsl");
 
@@ -52,6 +53,7 @@ mod bindings;
 mod cull_passes;
 mod windows;
 
+use crate::bins::BinKind;
 use bindings::declarations;
 pub use bindings::{
     Access, Binding, COARSE_BINDINGS, CULL_BINDINGS, DRAW_BINDINGS, SCATTER_BINDINGS, bind_group,
@@ -102,6 +104,10 @@ pub struct DrawKey {
     /// Multiview: the target's layers, one per view (2 for stereo, 4 foveated); 1
     /// otherwise.
     pub layers: u32,
+    /// The material bin's state: opaque, cutout or blended ([`BinKind`]).
+    pub alpha: BinKind,
+    /// A cutout under MSAA: alpha to coverage instead of a discard.
+    pub coverage: bool,
 }
 
 impl DrawKey {
@@ -125,6 +131,8 @@ impl DrawKey {
         multiview: true,
         viewports: false,
         layers: 2,
+        alpha: BinKind::Opaque,
+        coverage: false,
     };
 
     /// Multiview of a foveated display: four layers of one size, each view filling its
@@ -159,7 +167,28 @@ impl DrawKey {
             multiview: false,
             viewports: views == 4,
             layers: 1,
+            alpha: BinKind::Opaque,
+            coverage: false,
         }
+    }
+
+    /// This variant for a bin of `alpha`, into a target of `samples` per pixel.
+    pub fn with_alpha(self, alpha: BinKind, samples: u32) -> DrawKey {
+        DrawKey {
+            alpha,
+            coverage: alpha == BinKind::Mask && samples > 1,
+            ..self
+        }
+    }
+
+    /// The variants of every bin state (cutouts with and without MSAA).
+    pub fn alpha_variants(self) -> [DrawKey; 4] {
+        [
+            self,
+            self.with_alpha(BinKind::Mask, 1),
+            self.with_alpha(BinKind::Mask, 4),
+            self.with_alpha(BinKind::Blend, 1),
+        ]
     }
 
     /// `views` per visible object, each into its own viewport of a foveated target (two:
@@ -173,6 +202,16 @@ impl DrawKey {
 
     /// The pipeline's label.
     pub fn label(self) -> String {
+        let alpha = match (self.alpha, self.coverage) {
+            (BinKind::Opaque, _) => "",
+            (BinKind::Mask, false) => ".mask",
+            (BinKind::Mask, true) => ".mask.coverage",
+            (BinKind::Blend, _) => ".blend",
+        };
+        format!("{}{alpha}", self.base_label())
+    }
+
+    fn base_label(self) -> String {
         let seam = if self.clip_distances {
             "clip"
         } else {
@@ -202,6 +241,11 @@ impl DrawKey {
             (false, _) => DRAW_NO_CLIP_DISTANCES,
         };
         let entry = if self.multiview { DRAW_MULTIVIEW } else { DRAW };
+        let alpha = format!(
+            "const ALPHA_MODE: u32 = {}u;\nconst ALPHA_TO_COVERAGE: bool = {};\n",
+            self.alpha.wgsl(),
+            self.coverage
+        );
         let shading = match material {
             Some(m) => format!(
                 "{m}\nfn surface_color(s: Surface) -> vec4<f32> {{ return material(s); }}\n"
@@ -211,7 +255,9 @@ impl DrawKey {
         [
             prelude,
             &decode_source_with(self.views, windows),
+            &alpha,
             crate::materials::DECLARATIONS,
+            BASE_COLOR,
             SHADOW_DECLARATIONS,
             DRAW_COMMON,
             &shading,
@@ -290,6 +336,19 @@ pub fn shadow_source(windows: &Windows) -> String {
     .concat()
 }
 
+/// The frame's shadow pass for cutout bins: [`shadow_source`]'s decode, the materials
+/// (group 1) and a fragment stage that discards under the cutoff
+/// (`wgsl/shadow_cutout.wgsl`).
+pub fn shadow_cutout_source(windows: &Windows) -> String {
+    [
+        &decode_source_with(1, windows),
+        crate::materials::DECLARATIONS,
+        BASE_COLOR,
+        include_str!("../../wgsl/shadow_cutout.wgsl"),
+    ]
+    .concat()
+}
+
 /// Every shader variant the crate can build, with its label.
 pub fn all_sources() -> Vec<(String, String)> {
     // Whole bindings, and every windowed array split in three (scenes past one binding).
@@ -307,7 +366,8 @@ pub fn all_sources() -> Vec<(String, String)> {
                 .map(move |(p, c)| (p.label(c), p.source(c, w)));
             let occlusion = (CullPass::occlusion_variants().into_iter())
                 .map(move |(p, c, phase)| (phase.label(&p.label(c)), p.phased_source(c, phase, w)));
-            let draw = DrawKey::ALL.map(|k| (k.label(), k.source_with(None, w)));
+            let draw = (DrawKey::ALL.iter().flat_map(|k| k.alpha_variants()))
+                .map(move |k| (k.label(), k.source_with(None, w)));
             let others = [
                 (
                     "stereocull.scatter_places".into(),
@@ -322,6 +382,10 @@ pub fn all_sources() -> Vec<(String, String)> {
                     scatter_source(w, EditKind::Records),
                 ),
                 ("stereocull.shadow".to_string(), shadow_source(w)),
+                (
+                    "stereocull.shadow.cutout".to_string(),
+                    shadow_cutout_source(w),
+                ),
                 (
                     "stereocull.far_composite".to_string(),
                     far_composite_source(),

@@ -330,3 +330,38 @@ pub fn presets_and_random_rigs(random: usize) -> Vec<Rig> {
         .chain(random)
         .collect()
 }
+
+/// `scene` with its meshes spread over materials of every alpha mode (opaque, cutouts
+/// at random cutoffs, blended) at random (fixed `seed`), so that its draws fall into
+/// every material bin. Each mesh's vertices name its one material.
+pub fn with_random_bins(mut scene: Scene, seed: u64) -> Scene {
+    use stereocull::scene::{AlphaMode, Material};
+    let mut rng = rand_pcg::Pcg64Mcg::seed_from_u64(seed);
+    scene.materials = (0..5)
+        .map(|k| Material {
+            name: format!("material {k}"),
+            alpha: match k % 3 {
+                0 => AlphaMode::Opaque,
+                1 => AlphaMode::Mask {
+                    cutoff: rng.random_range(0.1..0.9),
+                },
+                _ => AlphaMode::Blend,
+            },
+            ..Default::default()
+        })
+        .collect();
+    // Meshes that share vertices (a mirrored twin) share their material.
+    let mut chosen = std::collections::HashMap::new();
+    for m in 0..scene.meshes.len() {
+        let mesh = scene.meshes[m].clone();
+        let first = mesh.first_index as usize;
+        let indices = &scene.indices[first..first + mesh.index_count as usize];
+        let material = *chosen
+            .entry(mesh.base_vertex)
+            .or_insert_with(|| rng.random_range(0..5));
+        for &i in indices {
+            scene.vertices[(i as i32 + mesh.base_vertex) as usize].material = material;
+        }
+    }
+    scene
+}

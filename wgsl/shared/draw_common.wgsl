@@ -27,7 +27,8 @@ struct FragmentInput {
 }
 
 // What a material sees of one fragment: a caller's `fn material(s: Surface) ->
-// vec4<f32>` (RendererOptions::material) replaces `shade` below; `display.eye[s.eye]`
+// vec4<f32>` (RendererOptions::material) replaces `shade` below (its alpha is read by
+// blended materials only); `display.eye[s.eye]`
 // is the eye's context, `frame` the frame's (its light: `frame.light_direction`, and
 // `light_reaching(s.world_position, normal)` for the shadow map).
 struct Surface {
@@ -44,14 +45,9 @@ struct Surface {
     material: u32,
 }
 
-// The surface's color times its material's base color texture, if any. Sampled
-// unconditionally (layer 0 stands in for untextured materials) to keep control flow
-// uniform, as implicit-derivative sampling requires.
+// The surface's color times its material's base color texture, if any.
 fn base_color(s: Surface) -> vec4<f32> {
-    let layer = materials[s.material].base_color_layer;
-    let textured = layer != 0xffffffffu;
-    let texel = textureSample(base_color_textures, base_color_sampler, s.uv, select(0u, layer, textured));
-    return s.color * select(vec4(1.0), texel, textured);
+    return base_color_at(s.color, s.uv, s.material);
 }
 
 // How much of the frame's light reaches world position `p` (facing `n`, unit): 1 lit,
@@ -91,11 +87,25 @@ fn fragment(in: FragmentInput, eye: u32, viewport: vec4<f32>) -> vec4<f32> {
     let color = unpack4x8unorm(instances_at(in.ids.y).color);
     let world = world_position(in.position, eye, viewport);
     let s = Surface(world, in.normal, color, eye, in.ids.y, in.uv, in.ids.z);
-    // A cutout's holes (alphaMode MASK), before any shading is spent on them.
-    if (base_color(s).a < materials[s.material].alpha_cutoff) {
+    // The bin's alpha mode (ALPHA_MODE, src/bins.rs): only cutout pipelines discard,
+    // so the opaque ones keep early depth testing.
+    if (ALPHA_MODE == 1u && !ALPHA_TO_COVERAGE && base_color(s).a < materials[s.material].alpha_cutoff) {
         discard;
     }
-    return surface_color(s);
+    let shaded = surface_color(s);
+    if (ALPHA_MODE == 2u) {
+        return shaded;
+    }
+    if (ALPHA_MODE == 1u && ALPHA_TO_COVERAGE) {
+        return vec4(shaded.rgb, coverage(base_color(s).a, materials[s.material].alpha_cutoff));
+    }
+    return vec4(shaded.rgb, 1.0);
+}
+
+// A cutout's alpha under MSAA, for alpha to coverage: the cutoff's edge sharpened to
+// about a pixel wide (0 below, 1 above), so the samples split where the cutoff falls.
+fn coverage(alpha: f32, cutoff: f32) -> f32 {
+    return clamp((alpha - cutoff) / max(fwidth(alpha), 1e-4) + 0.5, 0.0, 1.0);
 }
 
 // The world position under a fragment of view `eye` drawn into `viewport`: its pixel
@@ -122,5 +132,6 @@ fn shade(s: Surface) -> vec4<f32> {
     let diffuse = max(dot(n, light), 0.0) * reaching;
     let half_vector = normalize(light + to_eye);
     let specular = 0.3 * pow(max(dot(n, half_vector), 0.0), 48.0) * reaching;
-    return vec4(base_color(s).rgb * (0.25 + 0.75 * diffuse) + vec3(specular), 1.0);
+    let base = base_color(s);
+    return vec4(base.rgb * (0.25 + 0.75 * diffuse) + vec3(specular), base.a);
 }

@@ -1,7 +1,8 @@
 // Occlusion culling's late test (src/occlusion.rs is its CPU twin: same operations, same
 // order, no fused multiply-add). OCCLUSION is 0 (frustum only), 1 (the early phase:
 // keep what the display drew last frame) or 2 (the late phase: keep what it did not
-// draw and the depth pyramids do not hide; record what they do not hide).
+// draw and the depth pyramids do not hide; record what they do not hide, blended
+// instances aside).
 // Composed after pyramid.wgsl, whose layout the pyramids have in `occlusion` from
 // params.pyramid_offset on (depths as bits: non-negative floats order as their bits).
 
@@ -18,7 +19,7 @@ fn drawn_last_frame(k: u32) -> bool {
 
 // Position k's entry `kept` (it passed the frustum) under the phase: the early phase
 // keeps it if drawn last frame; the late phase if not, unless hidden, and marks it
-// ENTRY_SEEN where not hidden.
+// ENTRY_SEEN where not hidden (and not blended).
 fn occlusion_entry(k: u32, s: vec4<f32>, kept: u32) -> u32 {
     if (OCCLUSION == 0u) {
         return kept;
@@ -30,7 +31,10 @@ fn occlusion_entry(k: u32, s: vec4<f32>, kept: u32) -> u32 {
     if (occluded(s)) {
         return 0u;
     }
-    return select(kept, 0u, drawn) | ENTRY_SEEN;
+    // Blended instances are never marked: always drawn late, after every opaque
+    // surface the display draws, so that they blend over all of it.
+    let blended = meshes[mesh_of[k]].bin == params.blend_bin;
+    return select(kept, 0u, drawn) | select(ENTRY_SEEN, 0u, blended);
 }
 
 // Hidden from every eye of the display: the stereo rule.

@@ -22,6 +22,8 @@ struct MeshRecord {
     // This mesh's range in the cull order (instances grouped by mesh, ids ascending).
     cull_start: u32,
     cull_count: u32,
+    // Its material's bin: which range of the draws its draws go to.
+    bin: u32,
 }
 
 // MAX_LODS per mesh, level 0 the mesh itself; mirrored by LodRecord in src/records.rs.
@@ -64,6 +66,10 @@ struct CullParams {
     // start in `occlusion`.
     visibility_words: u32,
     pyramid_offset: u32,
+    // Material bins: each has its own range of the draws and word of the counts;
+    // the blended bin's index (0xffffffff: none), which occlusion never marks drawn.
+    bin_count: u32,
+    blend_bin: u32,
 }
 
 // One slot's block test of the coarse cull (src/cull/coarse.rs): a display's planes

@@ -1,0 +1,124 @@
+//! Material bins: the draws that can share one multi-draw call, because they share a
+//! pipeline. The cull writes each bin's draws into its own fixed range of the indirect
+//! buffer (bin, then level, then mesh) and its count into its own word, so a display's
+//! draw pass sets each bin's pipeline once and issues one multi-draw for it: draw calls
+//! per display are the scene's bins, whatever the instance count.
+//!
+//! A mesh's bin is its material's alpha mode. Bins are drawn in [`BinKind`] order:
+//! blended surfaces last, over everything that writes depth.
+
+use crate::scene::{AlphaMode, Scene};
+
+/// The pipeline state a bin's draws need, in drawing order.
+#[derive(Clone, Copy, Debug, PartialEq, Eq, Hash, PartialOrd, Ord)]
+pub enum BinKind {
+    /// Writes depth, never discards: the pipeline keeps early depth testing.
+    Opaque,
+    /// Discards below the material's cutoff (alpha to coverage under MSAA).
+    Mask,
+    /// Blended by alpha over what is drawn, without writing depth.
+    Blend,
+}
+
+impl BinKind {
+    /// Every kind, in drawing order.
+    pub const ALL: [BinKind; 3] = [BinKind::Opaque, BinKind::Mask, BinKind::Blend];
+
+    /// The kind a material of `alpha` is drawn with.
+    pub fn of(alpha: AlphaMode) -> BinKind {
+        match alpha {
+            AlphaMode::Opaque => BinKind::Opaque,
+            AlphaMode::Mask { .. } => BinKind::Mask,
+            AlphaMode::Blend => BinKind::Blend,
+        }
+    }
+
+    /// Its value in WGSL (`ALPHA_MODE`).
+    pub fn wgsl(self) -> u32 {
+        self as u32
+    }
+}
+
+/// The most bins a scene has (and words its counts buffer keeps for them).
+pub const MAX_BINS: usize = BinKind::ALL.len();
+
+/// A scene's bins: the kinds its meshes need, in drawing order, and each mesh's bin.
+#[derive(Clone, Debug, PartialEq, Eq)]
+pub struct Bins {
+    /// Ascending; at least one (an empty scene has one opaque bin).
+    pub kinds: Vec<BinKind>,
+    /// Per mesh, its index into `kinds`.
+    pub of_mesh: Vec<u32>,
+}
+
+/// One bin's entries of a draws buffer.
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+pub struct BinRange {
+    /// The pipeline state its draws need.
+    pub kind: BinKind,
+    /// Its first entry.
+    pub first: u32,
+    /// Its entries: its meshes times the levels of detail.
+    pub capacity: u32,
+}
+
+impl Bins {
+    /// The bins of `scene`'s meshes, each by its material ([`mesh_material`]).
+    pub fn of(scene: &Scene) -> Bins {
+        let kind_of = |m: usize| {
+            let material = scene.materials.get(mesh_material(scene, m) as usize);
+            BinKind::of(material.map_or(AlphaMode::Opaque, |m| m.alpha))
+        };
+        let mesh_kinds: Vec<BinKind> = (0..scene.meshes.len()).map(kind_of).collect();
+        let mut kinds = mesh_kinds.clone();
+        kinds.sort();
+        kinds.dedup();
+        if kinds.is_empty() {
+            kinds.push(BinKind::Opaque);
+        }
+        let of_mesh = (mesh_kinds.iter())
+            .map(|k| kinds.iter().position(|x| x == k).unwrap_or(0) as u32)
+            .collect();
+        Bins { kinds, of_mesh }
+    }
+
+    /// The index of the blended bin, or `u32::MAX` without one. Occlusion culling
+    /// never marks its instances drawn: they are always drawn in the late phase, after
+    /// every opaque surface, and are never occluders.
+    pub fn blend_bin(&self) -> u32 {
+        let blend = self.kinds.iter().position(|&k| k == BinKind::Blend);
+        blend.map_or(u32::MAX, |b| b as u32)
+    }
+
+    /// Each bin's range of a draws buffer with `levels` levels of detail per mesh, in
+    /// bin order, packed from entry 0.
+    pub fn ranges(&self, levels: u32) -> Vec<BinRange> {
+        let mut first = 0;
+        (self.kinds.iter().enumerate())
+            .map(|(b, &kind)| {
+                let meshes = self.of_mesh.iter().filter(|&&m| m == b as u32).count() as u32;
+                let range = BinRange {
+                    kind,
+                    first,
+                    capacity: meshes * levels,
+                };
+                first += range.capacity;
+                range
+            })
+            .collect()
+    }
+}
+
+/// Mesh `m`'s material: its first triangle's first vertex's (material 0 for a mesh
+/// without triangles or whose indices lie outside the vertices; the renderer rejects
+/// those and meshes that mix materials, `materials::records`).
+pub fn mesh_material(scene: &Scene, m: usize) -> u32 {
+    let mesh = &scene.meshes[m];
+    if mesh.index_count == 0 {
+        return 0;
+    }
+    let vertex = (scene.indices.get(mesh.first_index as usize))
+        .and_then(|&i| usize::try_from(i as i64 + mesh.base_vertex as i64).ok())
+        .and_then(|v| scene.vertices.get(v));
+    vertex.map_or(0, |v| v.material)
+}
