@@ -80,16 +80,27 @@ fn check_display(d: &Value, scene_meshes: Option<usize>) -> usize {
         .collect();
     let draws = d["draws"].as_array().unwrap();
     assert_eq!(d["draw_count"].as_u64().unwrap() as usize, draws.len());
-    let mut next_instance = 0;
-    let mut last_mesh = None;
+    let field = |draw: &Value, name: &str| draw[name].as_u64().unwrap();
+    // Bin by bin, meshes ascending within a bin.
+    let mut last = None;
     for draw in draws {
-        let mesh = draw["mesh"].as_u64().unwrap();
-        assert!(last_mesh.is_none_or(|m| m < mesh), "draws ascend by mesh");
-        last_mesh = Some(mesh);
-        let (first, count) = (
-            draw["first_instance"].as_u64().unwrap(),
-            draw["instance_count"].as_u64().unwrap(),
+        let at = (field(draw, "bin"), field(draw, "mesh"));
+        assert!(
+            last.is_none_or(|l| l < at),
+            "draws ascend by bin, then mesh"
         );
+        last = Some(at);
+        if let Some(m) = scene_meshes {
+            assert!((at.1 as usize) < m);
+        }
+    }
+    // Their instance ranges tile the visible list, ids ascending within each.
+    let mut ranges: Vec<(u64, u64)> = (draws.iter())
+        .map(|d| (field(d, "first_instance"), field(d, "instance_count")))
+        .collect();
+    ranges.sort();
+    let mut next_instance = 0;
+    for (first, count) in ranges {
         assert_eq!(first, next_instance, "draws are packed");
         assert!(count > 0 && count % views == 0);
         let ids = &visible[(first / views) as usize..((first + count) / views) as usize];
@@ -98,9 +109,6 @@ fn check_display(d: &Value, scene_meshes: Option<usize>) -> usize {
             "ids ascend within a draw"
         );
         next_instance = first + count;
-        if let Some(m) = scene_meshes {
-            assert!((mesh as usize) < m);
-        }
     }
     assert_eq!(next_instance, views * visible.len() as u64);
     visible.len()

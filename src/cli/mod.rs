@@ -15,6 +15,7 @@ use std::path::{Path, PathBuf};
 use clap::{Args, Parser, Subcommand};
 use serde::Serialize;
 
+use crate::bins::Bins;
 use crate::cull::{CullOutput, cpu};
 use crate::device::{Gpu, OPTIONAL_FEATURES, Tier};
 use crate::error::{Error, Result};
@@ -294,6 +295,8 @@ pub struct DisplayDump {
 
 #[derive(Serialize)]
 pub struct DrawDump {
+    /// The material bin (`bins::Bins::kinds` index) whose range holds the draw.
+    pub bin: u32,
     pub mesh: u32,
     pub index_count: u32,
     pub instance_count: u32,
@@ -304,6 +307,7 @@ pub struct DrawDump {
 
 pub fn display_dump(name: &str, views: u32, out: &CullOutput, scene: &Scene) -> DisplayDump {
     let meshes = out.draw_meshes(views, |id| scene.instances[id as usize].mesh);
+    let bins = Bins::of(scene);
     DisplayDump {
         name: name.into(),
         views,
@@ -312,6 +316,7 @@ pub fn display_dump(name: &str, views: u32, out: &CullOutput, scene: &Scene) -> 
             .packed_draws()
             .zip(meshes)
             .map(|(d, mesh)| DrawDump {
+                bin: bins.of_mesh[mesh as usize],
                 mesh,
                 index_count: d.index_count,
                 instance_count: d.instance_count,

@@ -104,8 +104,14 @@ fn fragment(in: FragmentInput, eye: u32, viewport: vec4<f32>) -> vec4<f32> {
 
 // A cutout's alpha under MSAA, for alpha to coverage: the cutoff's edge sharpened to
 // about a pixel wide (0 below, 1 above), so the samples split where the cutoff falls.
+// The width is capped at COVERAGE_WIDTH: a texture sample's derivative is unreliable
+// where a 2 x 2 quad crosses a triangle edge (lavapipe's helper lanes read alpha 0
+// there: fwidth reached 0.75 on a smooth texture), and an uncapped width would let
+// such a pixel half cover a hole.
+const COVERAGE_WIDTH: f32 = 0.25;
+
 fn coverage(alpha: f32, cutoff: f32) -> f32 {
-    return clamp((alpha - cutoff) / max(fwidth(alpha), 1e-4) + 0.5, 0.0, 1.0);
+    return clamp((alpha - cutoff) / clamp(fwidth(alpha), 1e-4, COVERAGE_WIDTH) + 0.5, 0.0, 1.0);
 }
 
 // The world position under a fragment of view `eye` drawn into `viewport`: its pixel
