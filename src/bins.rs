@@ -4,15 +4,17 @@
 //! draw pass sets each bin's pipeline once and issues one multi-draw for it: draw calls
 //! per display are the scene's bins, whatever the instance count.
 //!
-//! A mesh's bin is its material's alpha mode. Bins are drawn in [`BinKind`] order:
-//! blended surfaces last, over everything that writes depth.
+//! A mesh's bin is its material's [`Bin`]: the alpha mode's pipeline state and the
+//! shading function. Bins are drawn in [`Bin`] order: by [`BinKind`] first, so blended
+//! surfaces come last, over everything that writes depth.
 
-use crate::scene::{AlphaMode, Scene};
+use crate::scene::{AlphaMode, Scene, Shading};
 
 /// The pipeline state a bin's draws need, in drawing order.
-#[derive(Clone, Copy, Debug, PartialEq, Eq, Hash, PartialOrd, Ord)]
+#[derive(Clone, Copy, Debug, Default, PartialEq, Eq, Hash, PartialOrd, Ord)]
 pub enum BinKind {
     /// Writes depth, never discards: the pipeline keeps early depth testing.
+    #[default]
     Opaque,
     /// Discards below the material's cutoff (alpha to coverage under MSAA).
     Mask,
@@ -39,14 +41,23 @@ impl BinKind {
     }
 }
 
-/// The most bins a scene has (and words its counts buffer keeps for them).
-pub const MAX_BINS: usize = BinKind::ALL.len();
+/// What a bin's draws share: one pipeline.
+#[derive(Clone, Copy, Debug, Default, PartialEq, Eq, Hash, PartialOrd, Ord)]
+pub struct Bin {
+    /// The alpha mode's pipeline state (first: it orders the bins).
+    pub alpha: BinKind,
+    /// The shading function.
+    pub shading: Shading,
+}
 
-/// A scene's bins: the kinds its meshes need, in drawing order, and each mesh's bin.
+/// The most bins a scene may have (and words its counts buffer keeps for them).
+pub const MAX_BINS: usize = 64;
+
+/// A scene's bins: the ones its meshes need, in drawing order, and each mesh's bin.
 #[derive(Clone, Debug, PartialEq, Eq)]
 pub struct Bins {
-    /// Ascending; at least one (an empty scene has one opaque bin).
-    pub kinds: Vec<BinKind>,
+    /// Ascending; at least one (an empty scene has one opaque, lit bin).
+    pub kinds: Vec<Bin>,
     /// Per mesh, its index into `kinds`.
     pub of_mesh: Vec<u32>,
 }
@@ -54,8 +65,8 @@ pub struct Bins {
 /// One bin's entries of a draws buffer.
 #[derive(Clone, Copy, Debug, PartialEq, Eq)]
 pub struct BinRange {
-    /// The pipeline state its draws need.
-    pub kind: BinKind,
+    /// The pipeline its draws need.
+    pub kind: Bin,
     /// Its first entry.
     pub first: u32,
     /// Its entries: its meshes times the levels of detail.
@@ -67,14 +78,17 @@ impl Bins {
     pub fn of(scene: &Scene) -> Bins {
         let kind_of = |m: usize| {
             let material = scene.materials.get(mesh_material(scene, m) as usize);
-            BinKind::of(material.map_or(AlphaMode::Opaque, |m| m.alpha))
+            material.map_or(Bin::default(), |m| Bin {
+                alpha: BinKind::of(m.alpha),
+                shading: m.shading,
+            })
         };
-        let mesh_kinds: Vec<BinKind> = (0..scene.meshes.len()).map(kind_of).collect();
+        let mesh_kinds: Vec<Bin> = (0..scene.meshes.len()).map(kind_of).collect();
         let mut kinds = mesh_kinds.clone();
         kinds.sort();
         kinds.dedup();
         if kinds.is_empty() {
-            kinds.push(BinKind::Opaque);
+            kinds.push(Bin::default());
         }
         let of_mesh = (mesh_kinds.iter())
             .map(|k| kinds.iter().position(|x| x == k).unwrap_or(0) as u32)
@@ -82,11 +96,12 @@ impl Bins {
         Bins { kinds, of_mesh }
     }
 
-    /// The index of the blended bin, or `u32::MAX` without one. Occlusion culling
-    /// never marks its instances drawn: they are always drawn in the late phase, after
-    /// every opaque surface, and are never occluders.
-    pub fn blend_bin(&self) -> u32 {
-        let blend = self.kinds.iter().position(|&k| k == BinKind::Blend);
+    /// The index of the first blended bin (all later ones are blended too), or
+    /// `u32::MAX` without one. Occlusion culling never marks their instances drawn:
+    /// they are always drawn in the late phase, after every opaque surface, and are
+    /// never occluders.
+    pub fn first_blend_bin(&self) -> u32 {
+        let blend = self.kinds.iter().position(|k| k.alpha == BinKind::Blend);
         blend.map_or(u32::MAX, |b| b as u32)
     }
 

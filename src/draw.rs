@@ -5,7 +5,7 @@
 use std::collections::HashMap;
 use std::num::NonZeroU32;
 
-use crate::bins::{BinKind, BinRange};
+use crate::bins::{Bin, BinKind, BinRange};
 use crate::buffers::{init_buffer, init_buffer_with_room};
 use crate::cull::gpu_buffers::{COUNTS_BIN_OFFSET, CullTargets};
 use crate::error::Result;
@@ -13,7 +13,7 @@ use crate::materials::{self, GpuMaterials};
 use crate::records::{DrawArgs, InstanceRecord, instance_records};
 use crate::scene::{Scene, Vertex};
 use crate::shaders::{
-    DRAW_BINDINGS, DrawKey, Windows, bind_group, bind_group_layout, shadow_cutout_source,
+    DRAW_BINDINGS, DrawKey, Shaders, Windows, bind_group, bind_group_layout, shadow_cutout_source,
     shadow_source,
 };
 use crate::shadow::{self, ShadowMap};
@@ -167,15 +167,15 @@ impl Drawer {
         &self.layout
     }
 
-    /// Builds the pipelines for the given variants, one per bin kind of `kinds` (the
-    /// scene's), rendering into `target`, shaded by
-    /// `material` (see [`DrawKey::source_with`]) or the built-in shading, and with
+    /// Builds the pipelines for the given variants, one per bin of `kinds` (the
+    /// scene's), rendering into `target`, shaded by each bin's function of `shaders`
+    /// (see [`DrawKey::source_with`]), and with
     /// `shadow_size` the shadow pass's, into a map of that many texels a side.
     pub fn new(
         device: &wgpu::Device,
         target: TargetFormat,
-        (keys, kinds): (&[DrawKey], &[BinKind]),
-        material: Option<&str>,
+        (keys, kinds): (&[DrawKey], &[Bin]),
+        shaders: Shaders,
         shadow_size: Option<u32>,
         windows: Windows,
     ) -> Drawer {
@@ -188,13 +188,9 @@ impl Drawer {
             immediate_size: 0,
         });
         let pipelines = (keys.iter())
-            .flat_map(|&key| {
-                kinds
-                    .iter()
-                    .map(move |&k| key.with_alpha(k, target.samples))
-            })
+            .flat_map(|&key| kinds.iter().map(move |&k| key.with_bin(k, target.samples)))
             .map(|key| {
-                let source = key.source_with(material, &windows);
+                let source = key.source_with(shaders.function(key.shading), &windows);
                 (
                     key,
                     pipeline(device, &pipeline_layout, key, &source, target),
@@ -207,7 +203,7 @@ impl Drawer {
                 &[Some(&layout)],
                 ("stereocull.shadow", shadow_source(&windows)),
             ),
-            cutout: kinds.contains(&BinKind::Mask).then(|| {
+            cutout: kinds.iter().any(|k| k.alpha == BinKind::Mask).then(|| {
                 shadow_pipeline(
                     device,
                     &[Some(&layout), Some(&materials_layout)],
@@ -279,16 +275,16 @@ impl Drawer {
     pub fn bin_pipeline(
         &self,
         with: BinPipelines,
-        kind: BinKind,
+        kind: Bin,
     ) -> Option<Option<&wgpu::RenderPipeline>> {
         match with {
             BinPipelines::Draw(key) => {
-                Some(Some(&self.pipelines[&key.with_alpha(kind, self.samples)]))
+                Some(Some(&self.pipelines[&key.with_bin(kind, self.samples)]))
             }
             BinPipelines::Own => Some(None),
             BinPipelines::Shadow => {
                 let shadow = self.shadow.as_ref()?;
-                match kind {
+                match kind.alpha {
                     BinKind::Opaque => Some(Some(&shadow.pipeline)),
                     BinKind::Mask => shadow.cutout.as_ref().map(Some),
                     BinKind::Blend => None,

@@ -55,6 +55,18 @@ pub enum Error {
     #[error("scene: {0}")]
     InvalidScene(String),
 
+    /// A material's shading function (WGSL, `RendererOptions::material` or `hooks`)
+    /// does not compile.
+    #[error("material {material:?}: its shading function does not compile{}: {message}", at_line(.line))]
+    Shading {
+        /// The first material that uses the function.
+        material: String,
+        /// The line of the function at fault, when the fault lies in it.
+        line: Option<usize>,
+        /// The compiler's message.
+        message: String,
+    },
+
     /// A handle to an instance that was removed, or that this scene never issued.
     #[error("bad handle: {0}")]
     BadHandle(String),
@@ -170,3 +182,7 @@ impl Error {
 
 /// The library's results.
 pub type Result<T, E = Error> = std::result::Result<T, E>;
+
+fn at_line(line: &Option<usize>) -> String {
+    line.map_or(String::new(), |l| format!(" (its line {l})"))
+}

@@ -44,6 +44,22 @@ pub struct Material {
     pub base_color_texture: Option<u32>,
     /// How the base color's alpha covers what lies behind (glTF's `alphaMode`).
     pub alpha: AlphaMode,
+    /// The shading function: its pipeline.
+    pub shading: Shading,
+}
+
+/// Which function shades a material's fragments: each is its own pipeline, so each
+/// (shading, alpha mode) pair of a scene is a material bin ([`crate::bins`]).
+#[derive(Clone, Copy, Debug, Default, PartialEq, Eq, Hash, PartialOrd, Ord)]
+pub enum Shading {
+    /// The built-in lighting (or `RendererOptions::material`, which replaces it).
+    #[default]
+    Lit,
+    /// The base color alone (glTF's `KHR_materials_unlit`).
+    Unlit,
+    /// The caller's WGSL `RendererOptions::hooks[i]`, a `fn material(s: Surface) ->
+    /// vec4<f32>`.
+    Hook(u32),
 }
 
 /// How a material's alpha (the base color's, texture included) is read: glTF's

@@ -1,13 +1,15 @@
 //! Materials: glTF alpha modes on the shared `AlphaBlendModeTest` (written by nobody
 //! here), and the errors a material's data can raise.
 
+use std::sync::Arc;
+
 use glam::{DVec3, Vec2, Vec3};
 use image::RgbaImage;
 use stereocull::bins::Bins;
 use stereocull::procedural;
 use stereocull::renderer::{CullMode, Renderer, RendererOptions, StereoMode};
 use stereocull::rig::Rig;
-use stereocull::scene::{AlphaMode, Material, Scene};
+use stereocull::scene::{AlphaMode, Material, Scene, Shading};
 use stereocull::scene_spec;
 use support::Tolerance;
 
@@ -397,4 +399,128 @@ fn cutouts_that_cut_nothing_draw_what_opaque_materials_draw() {
     let got = render_all(&scene, &rig, options.clone());
     let want = render_all(&opaque, &rig, options);
     support::assert_images_match("cutouts", &got[0], &want[0], Tolerance::RECOMPILED);
+}
+
+/// Tints for the hooks of [`shaded_scene`]: each its own function, so its own pipeline.
+fn tint_hook(tint: [f32; 3]) -> Arc<str> {
+    let [r, g, b] = tint;
+    format!(
+        "fn material(s: Surface) -> vec4<f32> {{\n    return vec4(base_color(s).rgb * vec3({r:?}, {g:?}, {b:?}), 1.0);\n}}\n"
+    )
+    .into()
+}
+
+/// A random scene whose meshes (each its own material, at random) are shaded by the
+/// built-in lighting, unlit, and three hooks; and the options that carry the hooks.
+fn shaded_scene() -> (Scene, RendererOptions) {
+    let shadings = [
+        Shading::Lit,
+        Shading::Unlit,
+        Shading::Hook(0),
+        Shading::Hook(1),
+        Shading::Hook(2),
+    ];
+    let mut scene = support::with_random_bins(procedural::scene(600, 10, 23), 23);
+    for (k, m) in scene.materials.iter_mut().enumerate() {
+        m.alpha = AlphaMode::Opaque;
+        m.shading = shadings[k];
+    }
+    let options = RendererOptions {
+        hooks: vec![
+            tint_hook([1.0, 0.3, 0.3]),
+            tint_hook([0.3, 1.0, 0.3]),
+            tint_hook([0.3, 0.3, 1.0]),
+        ],
+        shadows: false,
+        ..support::frustum_only()
+    };
+    (scene, options)
+}
+
+/// Every shading function is its own bin: a scene of five draws five multi-draws per
+/// display, and each pixel is what the instances of its material draw alone (the
+/// scene with only that material's instances, and only that material, so its one
+/// bin draws with the one pipeline it must). Exact: the same pipelines draw the same
+/// fragments; only which call draws them differs.
+#[test]
+fn each_shading_function_is_its_own_bin_and_draws_what_it_draws_alone() {
+    let (scene, options) = shaded_scene();
+    let rig = support::sized("hmd", 120, 90);
+    let bins = Bins::of(&scene).kinds.len() as u32;
+    assert_eq!(bins, 5, "five shading functions");
+    assert_eq!(draw_calls(&scene, &rig, options.clone()), bins);
+    let all = render_all(&scene, &rig, options.clone()).remove(0);
+    let alone: Vec<RgbaImage> = (0..scene.materials.len() as u32)
+        .map(|k| {
+            let mut only = scene.clone();
+            only.instances.retain(|i| {
+                let vertex = scene.meshes[i.mesh as usize].base_vertex as usize;
+                scene.vertices[vertex].material == k
+            });
+            for v in &mut only.vertices {
+                v.material = k;
+            }
+            render_all(&only, &rig, options.clone()).remove(0)
+        })
+        .collect();
+    let mut shown = vec![0; alone.len()];
+    for (x, y, p) in all.enumerate_pixels() {
+        let k = alone.iter().position(|a| a.get_pixel(x, y) == p);
+        let k = k.unwrap_or_else(|| panic!("pixel ({x}, {y}) {p:?} is no material's alone"));
+        shown[k] += 1;
+    }
+    let lit = render_all(&all_lit(&scene), &rig, options).remove(0);
+    assert_ne!(all, lit, "the functions change the image");
+    eprintln!("pixels first matched per material: {shown:?}");
+}
+
+/// `scene` with every material shaded by the built-in lighting.
+fn all_lit(scene: &Scene) -> Scene {
+    let mut lit = scene.clone();
+    for m in &mut lit.materials {
+        m.shading = Shading::Lit;
+    }
+    lit
+}
+
+/// A material's shading function that does not compile is an error naming the
+/// material and the function's own line, before anything is drawn; a hook index the
+/// options lack, an error naming the material.
+#[test]
+fn shading_functions_that_do_not_compile_are_errors_naming_material_and_line() {
+    let gpu = support::gpu();
+    let (mut scene, mut options) = shaded_scene();
+    let rig = support::sized("hmd", 32, 32);
+    options.hooks[1] =
+        "fn material(s: Surface) -> vec4<f32> {\n    return vec4(base_color(s).rgb, 1.0)\n}\n"
+            .into();
+    let err = Renderer::new(&gpu.device, &scene, &rig, options.clone())
+        .err()
+        .unwrap();
+    let msg = err.to_string();
+    assert!(msg.contains("material \"material 3\""), "{msg}");
+    assert!(
+        msg.contains("(its line 2)") || msg.contains("(its line 3)"),
+        "{msg}"
+    );
+    options.hooks[1] =
+        "fn material(s: Surface) -> vec4<f32> {\n    return s.color.rgb;\n}\n".into();
+    let msg = (Renderer::new(&gpu.device, &scene, &rig, options.clone())
+        .err()
+        .unwrap())
+    .to_string();
+    assert!(
+        msg.contains("material \"material 3\"") && msg.contains("(its line"),
+        "{msg}"
+    );
+    options.hooks.truncate(1);
+    scene.materials[3].shading = Shading::Lit;
+    let msg = (Renderer::new(&gpu.device, &scene, &rig, options)
+        .err()
+        .unwrap())
+    .to_string();
+    assert!(
+        msg.contains("material \"material 4\" names shading hook 2 of 1"),
+        "{msg}"
+    );
 }

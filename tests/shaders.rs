@@ -396,7 +396,7 @@ fn contexts_match_wgsl() {
         visibility_words: 9,
         pyramid_offset: 128,
         bin_count: 11,
-        blend_bin: 13,
+        first_blend_bin: 13,
     };
     check_uniform(
         "CullParams",
@@ -409,7 +409,7 @@ fn contexts_match_wgsl() {
             ("visibility_words", f32::from_bits(9)),
             ("pyramid_offset", f32::from_bits(128)),
             ("bin_count", f32::from_bits(11)),
-            ("blend_bin", f32::from_bits(13)),
+            ("first_blend_bin", f32::from_bits(13)),
         ],
     );
 }

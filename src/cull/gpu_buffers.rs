@@ -31,8 +31,9 @@ pub struct CullParams {
     pub pyramid_offset: u32,
     /// Material bins ([`crate::bins::Bins`]): each has its own range of the draws.
     pub bin_count: u32,
-    /// The blended bin ([`crate::bins::Bins::blend_bin`]): never marked drawn.
-    pub blend_bin: u32,
+    /// The first blended bin ([`crate::bins::Bins::first_blend_bin`]): blended
+    /// instances are never marked drawn.
+    pub first_blend_bin: u32,
 }
 
 /// Bytes of the counts buffer: the draw count, the visible total, then each material
@@ -384,7 +385,7 @@ fn cull_params(
         visibility_words,
         pyramid_offset,
         bin_count: layout.bins.kinds.len() as u32,
-        blend_bin: layout.bins.blend_bin(),
+        first_blend_bin: layout.bins.first_blend_bin(),
     };
     (params, groups)
 }

@@ -9,7 +9,7 @@ use gltf::{Document, Semantic};
 use image::RgbaImage;
 
 use super::{Importer, Step, check_accessor};
-use crate::scene::{AlphaMode, Material, Texture};
+use crate::scene::{AlphaMode, Material, Shading, Texture};
 
 impl Importer<'_> {
     /// The texture coordinates the base color texture reads (its `texCoord` set), or
@@ -71,6 +71,10 @@ impl Importer<'_> {
             name,
             base_color_texture,
             alpha,
+            shading: match material.unlit() {
+                true => Shading::Unlit,
+                false => Shading::Lit,
+            },
         });
         let id = self.scene.materials.len() as u32 - 1;
         self.materials.insert(material.index(), id);

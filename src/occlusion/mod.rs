@@ -276,7 +276,7 @@ pub struct Phases {
     pub late: CullOutput,
     /// `drawn`'s words, each span of places the late phase ran over rewritten with
     /// which of its places the pyramids do not hide (within the frustum; never blended
-    /// ones, [`crate::bins::Bins::blend_bin`]).
+    /// ones, [`crate::bins::Bins::first_blend_bin`]).
     pub seen: Vec<u32>,
 }
 
@@ -294,7 +294,7 @@ pub fn cull_phases(
     let (mut early, mut late) = (vec![0u64; words], vec![0u64; words]);
     let mut seen = drawn.to_vec();
     let span = SPAN as usize;
-    let blend_bin = layout.bins.blend_bin();
+    let first_blend = layout.bins.first_blend_bin();
     for (first, spheres) in layout
         .spheres
         .chunks(span)
@@ -315,7 +315,7 @@ pub fn cull_phases(
                 (false, false) => mark(&mut late),
                 (false, true) => {}
             }
-            let blended = layout.meshes[layout.mesh_of[k] as usize].bin == blend_bin;
+            let blended = layout.meshes[layout.mesh_of[k] as usize].bin >= first_blend;
             bits |= u32::from(!hidden && !blended) << i;
         }
         seen[first / span] = bits;

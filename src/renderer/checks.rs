@@ -8,7 +8,7 @@ use crate::modes::StereoMode;
 use crate::records::MeshRecord;
 use crate::rig::Rig;
 use crate::scene::{Scene, Vertex};
-use crate::shaders::Windowed;
+use crate::shaders::{Windowed, check_shading};
 
 /// MSAA the device can do for the options' color format and the depth format. Without
 /// `TEXTURE_ADAPTER_SPECIFIC_FORMAT_FEATURES` that is WebGPU's guarantee (1 and 4);
@@ -72,6 +72,7 @@ pub(super) fn check_device(
     let features = device.features();
     let mode = options.mode.name();
     check_sample_count(features, options)?;
+    check_shading(scene, options.shaders())?;
     if options.mode.per_instance() && options.cull == CullMode::Gpu {
         return Err(Error::Unsupported(format!(
             "{mode} records a draw call per visible instance, so it culls on the CPU: use --cull cpu"

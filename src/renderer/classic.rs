@@ -74,13 +74,13 @@ impl ClassicPath {
         let clip = DrawFeatures::of(device).clip_distances;
         let windows = options.windows(device, slots);
         let keys = [DrawKey::new(1, clip)];
-        let material = options.material.as_deref();
+        let shaders = options.shaders();
         let target = options.target_format();
         let drawer = Drawer::new(
             device,
             target,
             (&keys, &layout.bins.kinds),
-            material,
+            shaders,
             options.shadow_size(),
             windows,
         );

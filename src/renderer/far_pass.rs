@@ -6,13 +6,13 @@ use super::culler::Culler;
 use super::frame::{CullView, FramePlan};
 use super::passes::{PassRecord, Recording, opener, render_pass};
 use super::view_pass::ViewPass;
-use crate::bins::BinKind;
+use crate::bins::Bin;
 use crate::draw::{
     BinPipelines, CLEAR_COLOR, DEPTH_FORMAT, DrawScene, Drawer, Drawing, TargetFormat,
     cleared_depth,
 };
 use crate::far_layer::FarPlan;
-use crate::shaders::{DrawKey, far_composite_source};
+use crate::shaders::{DrawKey, Shaders, far_composite_source};
 use wgpu_profiler::GpuProfilerQuery;
 
 /// What every far layer shares: the mono pipeline drawing into them (single-sampled),
@@ -40,8 +40,8 @@ pub(super) struct FarDisplay {
 impl FarLayers {
     pub(super) fn new(
         device: &wgpu::Device,
-        (format, kinds): (TargetFormat, &[BinKind]),
-        material: Option<&str>,
+        (format, kinds): (TargetFormat, &[Bin]),
+        shaders: Shaders,
         windows: crate::shaders::Windows,
     ) -> FarLayers {
         let single = TargetFormat {
@@ -50,7 +50,7 @@ impl FarLayers {
             ..format
         };
         let key = DrawKey::new(1, false);
-        let drawer = Drawer::new(device, single, (&[key], kinds), material, None, windows);
+        let drawer = Drawer::new(device, single, (&[key], kinds), shaders, None, windows);
         let composite_layout = composite_layout(device);
         FarLayers {
             composite: composite_pipeline(device, &composite_layout, format),

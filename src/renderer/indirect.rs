@@ -84,13 +84,13 @@ impl IndirectPath {
         let kinds = layout.bins.kinds.clone();
         let culler = Culler::new(device, options.cull, layout, shape, windows);
         let keys = draw_keys(device, plan, options.mode);
-        let material = options.material.as_deref();
+        let shaders = options.shaders();
         let target = options.target_format();
         let drawer = Drawer::new(
             device,
             target,
             (&keys, &kinds),
-            material,
+            shaders,
             options.shadow_size(),
             windows,
         );
@@ -105,7 +105,7 @@ impl IndirectPath {
             .shadows
             .then(|| ShadowPass::new(device, drawing, frame, &culler));
         let far = options.far_layer.then(|| {
-            let layers = FarLayers::new(device, (target, &kinds), material, windows);
+            let layers = FarLayers::new(device, (target, &kinds), shaders, windows);
             let contexts: Vec<&wgpu::Buffer> = displays.iter().map(|d| d.view.context()).collect();
             Far::new(device, layers, plan, &draw_scene, frame, &contexts, &culler)
         });

@@ -9,7 +9,7 @@ use crate::far_layer::FAR_THRESHOLD_PX;
 use crate::modes::StereoMode;
 use crate::rig::{ResolvedRig, Rig};
 use crate::scene::MAX_LODS;
-use crate::shaders::Windows;
+use crate::shaders::{Shaders, Windows};
 use crate::shadow::Light;
 
 /// Where the per-display cull runs.
@@ -85,8 +85,12 @@ pub struct RendererOptions {
     /// vec4<f32>`, with `Surface` (world position, normal, color, eye, instance) and the
     /// bindings `frame` and `display` (`display.eye[s.eye]` is the eye's context) in
     /// scope; `base_color(s)` samples the material's texture. `None`: the built-in
-    /// shading.
+    /// shading. Materials of [`crate::scene::Shading::Lit`] use it.
     pub material: Option<Arc<str>>,
+    /// Shading functions that materials name ([`crate::scene::Shading::Hook`]`(i)` is
+    /// `hooks[i]`), each WGSL defining `fn material(s: Surface) -> vec4<f32>` as
+    /// `material` does. Each is its own pipeline, so its materials form their own bins.
+    pub hooks: Vec<Arc<str>>,
     /// Where the per-display cull runs (the classic modes cull on the CPU).
     pub cull: CullMode,
     /// The stereo technique.
@@ -129,6 +133,14 @@ pub struct RendererOptions {
 pub const LOD_PIXELS: f32 = 1.0;
 
 impl RendererOptions {
+    /// The shading functions the draw pipelines compile.
+    pub fn shaders(&self) -> Shaders<'_> {
+        Shaders {
+            lit: self.material.as_deref(),
+            hooks: &self.hooks,
+        }
+    }
+
     /// Levels of detail culled into: [`MAX_LODS`], or 1 with LOD off.
     pub fn lod_levels(&self) -> u32 {
         if self.lod { MAX_LODS as u32 } else { 1 }
@@ -206,6 +218,7 @@ impl Default for RendererOptions {
             sample_count: 1,
             depth_format: DEPTH_FORMAT,
             material: None,
+            hooks: Vec::new(),
             cull: CullMode::Gpu,
             mode: StereoMode::Instanced,
             lod: false,

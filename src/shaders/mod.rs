@@ -51,9 +51,11 @@ const DRAW_MULTIVIEW: &str = include_str!("../../wgsl/draw_multiview.wgsl");
 
 mod bindings;
 mod cull_passes;
+mod hooks;
 mod windows;
 
-use crate::bins::BinKind;
+use crate::bins::{Bin, BinKind};
+use crate::scene::Shading;
 use bindings::declarations;
 pub use bindings::{
     Access, Binding, COARSE_BINDINGS, CULL_BINDINGS, DRAW_BINDINGS, SCATTER_BINDINGS, bind_group,
@@ -61,6 +63,7 @@ pub use bindings::{
 };
 pub(crate) use bindings::{compute_pipeline, dispatch_size, pipeline_layout};
 pub use cull_passes::{CullPass, Phase, pyramid_source, subgroup_tier};
+pub use hooks::{Shaders, check_shading};
 pub use windows::{Window, Windowed, Windows};
 
 /// What a scatter's edits carry; each edit's first word is its key (a place, or a
@@ -106,6 +109,9 @@ pub struct DrawKey {
     pub layers: u32,
     /// The material bin's state: opaque, cutout or blended ([`BinKind`]).
     pub alpha: BinKind,
+    /// The material bin's shading function (its source comes with
+    /// [`DrawKey::source_with`]).
+    pub shading: Shading,
     /// A cutout under MSAA: alpha to coverage instead of a discard.
     pub coverage: bool,
 }
@@ -132,6 +138,7 @@ impl DrawKey {
         viewports: false,
         layers: 2,
         alpha: BinKind::Opaque,
+        shading: Shading::Lit,
         coverage: false,
     };
 
@@ -168,26 +175,32 @@ impl DrawKey {
             viewports: views == 4,
             layers: 1,
             alpha: BinKind::Opaque,
+            shading: Shading::Lit,
             coverage: false,
         }
     }
 
-    /// This variant for a bin of `alpha`, into a target of `samples` per pixel.
-    pub fn with_alpha(self, alpha: BinKind, samples: u32) -> DrawKey {
+    /// This variant for material bin `bin`, into a target of `samples` per pixel.
+    pub fn with_bin(self, bin: Bin, samples: u32) -> DrawKey {
         DrawKey {
-            alpha,
-            coverage: alpha == BinKind::Mask && samples > 1,
+            alpha: bin.alpha,
+            shading: bin.shading,
+            coverage: bin.alpha == BinKind::Mask && samples > 1,
             ..self
         }
     }
 
-    /// The variants of every bin state (cutouts with and without MSAA).
+    /// The variants of every alpha state (cutouts with and without MSAA).
     pub fn alpha_variants(self) -> [DrawKey; 4] {
+        let bin = |alpha| Bin {
+            alpha,
+            shading: Shading::Lit,
+        };
         [
             self,
-            self.with_alpha(BinKind::Mask, 1),
-            self.with_alpha(BinKind::Mask, 4),
-            self.with_alpha(BinKind::Blend, 1),
+            self.with_bin(bin(BinKind::Mask), 1),
+            self.with_bin(bin(BinKind::Mask), 4),
+            self.with_bin(bin(BinKind::Blend), 1),
         ]
     }
 
@@ -208,7 +221,12 @@ impl DrawKey {
             (BinKind::Mask, true) => ".mask.coverage",
             (BinKind::Blend, _) => ".blend",
         };
-        format!("{}{alpha}", self.base_label())
+        let shading = match self.shading {
+            Shading::Lit => String::new(),
+            Shading::Unlit => ".unlit".into(),
+            Shading::Hook(i) => format!(".hook{i}"),
+        };
+        format!("{}{alpha}{shading}", self.base_label())
     }
 
     fn base_label(self) -> String {
@@ -233,7 +251,8 @@ impl DrawKey {
     }
 
     /// The variant's source; `material` (WGSL defining `fn material(s: Surface) ->
-    /// vec4<f32>`, see `wgsl/shared/draw_common.wgsl`) replaces the built-in shading.
+    /// vec4<f32>`, see `wgsl/shared/draw_common.wgsl`: the key's shading function,
+    /// [`UNLIT`] for [`Shading::Unlit`]) replaces the built-in shading.
     pub fn source_with(self, material: Option<&str>, windows: &Windows) -> String {
         let prelude = match (self.clip_distances, self.viewports) {
             (true, true) => DRAW_CLIP_RECT,
@@ -266,6 +285,9 @@ impl DrawKey {
         .concat()
     }
 }
+
+/// The shading function of [`Shading::Unlit`] materials: the base color alone.
+pub const UNLIT: &str = "fn material(s: Surface) -> vec4<f32> { return base_color(s); }\n";
 
 /// The stereo decode for a pipeline of the caller's own that draws the cull outputs
 /// (`Renderer::draw_display_with_own_pipeline`): the contexts and records, group 0's

@@ -33,7 +33,7 @@ fn occlusion_entry(k: u32, s: vec4<f32>, kept: u32) -> u32 {
     }
     // Blended instances are never marked: always drawn late, after every opaque
     // surface the display draws, so that they blend over all of it.
-    let blended = meshes[mesh_of[k]].bin == params.blend_bin;
+    let blended = meshes[mesh_of[k]].bin >= params.first_blend_bin;
     return select(kept, 0u, drawn) | select(ENTRY_SEEN, 0u, blended);
 }
 

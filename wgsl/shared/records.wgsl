@@ -67,9 +67,10 @@ struct CullParams {
     visibility_words: u32,
     pyramid_offset: u32,
     // Material bins: each has its own range of the draws and word of the counts;
-    // the blended bin's index (0xffffffff: none), which occlusion never marks drawn.
+    // the first blended bin (0xffffffff: none; the later ones are blended too), whose
+    // instances occlusion never marks drawn.
     bin_count: u32,
-    blend_bin: u32,
+    first_blend_bin: u32,
 }
 
 // One slot's block test of the coarse cull (src/cull/coarse.rs): a display's planes
