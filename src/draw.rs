@@ -250,22 +250,22 @@ impl Drawer {
         )
     }
 
-    /// Sets the geometry and the bindings of the built-in pipelines on `pass` (group 2
-    /// too: the shadow map).
+    /// Sets the geometry and the bindings of the built-in pipelines on `pass`: group
+    /// 0, the materials (group 1) and the shadow map (group 2).
     pub fn bind(pass: &mut wgpu::RenderPass, scene: &DrawScene, bind_group: &wgpu::BindGroup) {
         Drawer::bind_resources(pass, scene, bind_group);
+        pass.set_bind_group(1, &scene.materials.bind_group, &[]);
         pass.set_bind_group(2, &scene.shadow_map.bind_group, &[]);
     }
 
-    /// The geometry, group 0 and the materials (group 1) on `pass`, for whatever
-    /// pipeline it has.
+    /// The geometry and group 0 on `pass`, for whatever pipeline it has (an engine's
+    /// own keeps its groups from 1 on).
     pub fn bind_resources(
         pass: &mut wgpu::RenderPass,
         scene: &DrawScene,
         bind_group: &wgpu::BindGroup,
     ) {
         pass.set_bind_group(0, bind_group, &[]);
-        pass.set_bind_group(1, &scene.materials.bind_group, &[]);
         pass.set_vertex_buffer(0, scene.vertices.slice(..));
         pass.set_index_buffer(scene.indices.slice(..), wgpu::IndexFormat::Uint32);
     }

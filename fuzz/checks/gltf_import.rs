@@ -7,20 +7,28 @@ use stereocull::cull::cpu;
 use stereocull::records::CullLayout;
 use stereocull::rig::Rig;
 
-/// Any bytes as a glTF or GLB file: an error, or a scene that the culler handles within
-/// the cull contract (non-finite instances dropped first, as `scene_spec::load` does).
+/// Any bytes as a glTF or GLB file: an error, or a scene whose materials a renderer
+/// accepts and that the culler handles within the cull contract, material bins included
+/// (non-finite instances dropped first, as `scene_spec::load` does).
 pub fn gltf_import(data: &[u8]) {
     let Ok(mut scene) = stereocull::gltf_import::import_bytes(data, None, Path::new("fuzz.glb"))
     else {
         return;
     };
     scene.drop_non_finite_instances();
+    // The importer checks everything the material records need (textures, finite
+    // cutoffs, one material per primitive), so a renderer never refuses an import.
+    if let Err(e) = stereocull::materials::records(&scene) {
+        panic!("an imported scene's materials: {e}");
+    }
     let layout = CullLayout::new(&scene);
     let rig = Rig::preset("hmd").expect("the hmd preset");
     let job = rig.cull_jobs().expect("the hmd display")[0];
     let out = cpu::cull(&layout, &job);
     let n = scene.instances.len();
     assert!(out.visible.len() <= n && out.visible.iter().all(|&i| (i as usize) < n));
+    assert_eq!(out.bins.len(), layout.bins.kinds.len());
+    assert_eq!(out.packed_draws().count(), out.draw_count as usize);
     let drawn: u32 = out.draws.iter().map(|d| d.instance_count).sum();
     assert_eq!(
         drawn as usize,

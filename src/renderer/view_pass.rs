@@ -116,7 +116,12 @@ impl ViewPass {
     ) -> u32 {
         match with {
             BinPipelines::Draw(_) => Drawer::bind(pass, scene, &self.draw_bind_group),
-            _ => Drawer::bind_resources(pass, scene, &self.draw_bind_group),
+            BinPipelines::Shadow => {
+                // The cutout pipeline reads the materials.
+                Drawer::bind_resources(pass, scene, &self.draw_bind_group);
+                pass.set_bind_group(1, &scene.materials.bind_group, &[]);
+            }
+            BinPipelines::Own => Drawer::bind_resources(pass, scene, &self.draw_bind_group),
         }
         drawer.draw_bins(pass, &self.bins, with, &self.cull.targets)
     }
