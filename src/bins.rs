@@ -69,7 +69,9 @@ pub struct BinRange {
     pub kind: Bin,
     /// Its first entry.
     pub first: u32,
-    /// Its entries: its meshes times the levels of detail.
+    /// Its entries: its meshes times the levels of detail; for a blended bin, one per
+    /// place of its meshes (each visible blended instance is its own draw, in sorted
+    /// order).
     pub capacity: u32,
 }
 
@@ -103,24 +105,6 @@ impl Bins {
     pub fn first_blend_bin(&self) -> u32 {
         let blend = self.kinds.iter().position(|k| k.alpha == BinKind::Blend);
         blend.map_or(u32::MAX, |b| b as u32)
-    }
-
-    /// Each bin's range of a draws buffer with `levels` levels of detail per mesh, in
-    /// bin order, packed from entry 0.
-    pub fn ranges(&self, levels: u32) -> Vec<BinRange> {
-        let mut first = 0;
-        (self.kinds.iter().enumerate())
-            .map(|(b, &kind)| {
-                let meshes = self.of_mesh.iter().filter(|&&m| m == b as u32).count() as u32;
-                let range = BinRange {
-                    kind,
-                    first,
-                    capacity: meshes * levels,
-                };
-                first += range.capacity;
-                range
-            })
-            .collect()
     }
 }
 

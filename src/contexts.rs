@@ -183,6 +183,16 @@ pub struct DisplayContext {
 pub const MAX_VIEWS: usize = 4;
 
 impl DisplayContext {
+    /// Where the display's blended instances are sorted from: the midpoint of its two
+    /// eyes (one order for both, each eye's view of it nearly the same), or its one
+    /// view's position. The GPU's blend pass computes it alike (`wgsl/cull_blend.wgsl`).
+    pub fn sort_origin(&self) -> Vec3 {
+        match self.views >= 2 {
+            true => (self.eye[0].position + self.eye[1].position) * 0.5,
+            false => self.eye[0].position,
+        }
+    }
+
     /// The context of a resolved display whose views lie in its target as `layout` says.
     pub fn new(
         display: &ResolvedDisplay,

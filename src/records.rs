@@ -5,7 +5,7 @@
 use bytemuck::{Pod, Zeroable};
 use glam::Vec4;
 
-use crate::bins::Bins;
+use crate::bins::{BinKind, BinRange, Bins};
 use crate::places::Places;
 use crate::scene::{Instance, MAX_LODS, Mesh, Scene};
 
@@ -192,6 +192,34 @@ pub struct CullLayout {
 impl CullLayout {
     /// A vacant place's slot and a vacant slot's position.
     pub const VACANT: u32 = Places::VACANT;
+
+    /// Each material bin's range of a draws buffer with `levels` levels of detail per
+    /// mesh, bins in order, packed from entry 0: a bin's meshes times the levels, or
+    /// for a blended bin the places of its meshes (a draw per visible instance).
+    pub fn bin_ranges(&self, levels: u32) -> Vec<BinRange> {
+        let mut first = 0;
+        (self.bins.kinds.iter().enumerate())
+            .map(|(b, &kind)| {
+                let members = self.meshes.iter().filter(|m| m.bin == b as u32);
+                let capacity = match kind.alpha {
+                    BinKind::Blend => members.map(|m| m.cull_count).sum(),
+                    _ => members.count() as u32 * levels,
+                };
+                let range = BinRange {
+                    kind,
+                    first,
+                    capacity,
+                };
+                first += capacity;
+                range
+            })
+            .collect()
+    }
+
+    /// Draw entries of every view's outputs: the bins' ranges together.
+    pub fn draw_entries(&self, levels: u32) -> u32 {
+        self.bin_ranges(levels).iter().map(|r| r.capacity).sum()
+    }
 
     /// A vacant place's sphere: its radius of minus infinity fails every plane test
     /// (GPU and CPU alike) and adds nothing to a coarse block's bounds.

@@ -4,13 +4,13 @@
 mod support;
 
 use glam::{Vec3, Vec4Swizzles};
-use stereocull::bins::{BinKind, mesh_material};
+use stereocull::bins::{Bin, BinKind, mesh_material};
 use stereocull::cull::{BinDraws, CullJob, CullOutput, cpu};
 use stereocull::frustum::sphere_in_planes;
 use stereocull::procedural;
 use stereocull::records::{CullLayout, DrawArgs};
 use stereocull::rig::Rig;
-use stereocull::scene::{AlphaMode, Scene};
+use stereocull::scene::Scene;
 use support::cubes;
 
 /// Three cube meshes of half-size 0.5 (bounding radius sqrt(3)/2).
@@ -117,7 +117,8 @@ fn mono_displays_do_not_double() {
 
 /// What the contract says, written as plainly as possible: visible ids by mesh, then
 /// one draw per mesh with visible instances, in its material bin's range (bins in
-/// alpha-mode order, each as long as its meshes).
+/// alpha-mode order, each as long as its meshes); in a blended bin's range (as long as
+/// its meshes' instances) one draw per visible instance, farthest first, ties by id.
 fn naive(scene: &Scene, job: &CullJob) -> CullOutput {
     let (planes, views) = (&job.planes, job.instances_per_object);
     let mut per_mesh = vec![Vec::new(); scene.meshes.len()];
@@ -129,11 +130,33 @@ fn naive(scene: &Scene, job: &CullJob) -> CullOutput {
     }
     let kind = |m: usize| {
         let material = scene.materials.get(mesh_material(scene, m) as usize);
-        BinKind::of(material.map_or(AlphaMode::Opaque, |m| m.alpha))
+        material.map_or(Bin::default(), |m| Bin {
+            alpha: BinKind::of(m.alpha),
+            shading: m.shading,
+        })
     };
     let mut visible = Vec::new();
     let mut mesh_draws = Vec::new();
+    let mut blended = Vec::new();
     for (m, (mesh, ids)) in scene.meshes.iter().zip(per_mesh).enumerate() {
+        if kind(m).alpha == BinKind::Blend {
+            for id in ids {
+                let key = cpu::sort_key(
+                    scene.world_sphere(&scene.instances[id as usize]),
+                    job.sort_origin,
+                );
+                let draw = DrawArgs {
+                    index_count: mesh.index_count,
+                    instance_count: views,
+                    first_index: mesh.first_index,
+                    base_vertex: mesh.base_vertex,
+                    first_instance: views * visible.len() as u32,
+                };
+                blended.push((kind(m), key, id, draw));
+                visible.push(id);
+            }
+            continue;
+        }
         if !ids.is_empty() {
             let draw = DrawArgs {
                 index_count: mesh.index_count,
@@ -146,17 +169,33 @@ fn naive(scene: &Scene, job: &CullJob) -> CullOutput {
             visible.extend(ids);
         }
     }
+    blended.sort_by_key(|&(_, key, id, _)| (key, id));
+    let mut kinds: Vec<Bin> = (0..scene.meshes.len()).map(kind).collect();
+    kinds.sort();
+    kinds.dedup();
+    if kinds.is_empty() {
+        kinds.push(Bin::default());
+    }
     let mut draws = Vec::new();
     let mut bins = Vec::new();
-    for k in BinKind::ALL {
-        let meshes = (0..scene.meshes.len()).filter(|&m| kind(m) == k).count();
-        if meshes == 0 && !(k == BinKind::Opaque && scene.meshes.is_empty()) {
-            continue;
-        }
+    for k in kinds {
+        let members = (0..scene.meshes.len()).filter(|&m| kind(m) == k);
+        let capacity = match k.alpha {
+            BinKind::Blend => (members.map(|m| {
+                scene
+                    .instances
+                    .iter()
+                    .filter(|i| i.mesh == m as u32)
+                    .count()
+            }))
+            .sum(),
+            _ => members.count(),
+        };
         let first = draws.len();
         draws.extend(mesh_draws.iter().filter(|d| d.0 == k).map(|d| d.1));
+        draws.extend(blended.iter().filter(|d| d.0 == k).map(|d| d.3));
         let count = draws.len() - first;
-        draws.resize(first + meshes, DrawArgs::default());
+        draws.resize(first + capacity, DrawArgs::default());
         bins.push(BinDraws {
             first: first as u32,
             count: count as u32,
@@ -165,7 +204,7 @@ fn naive(scene: &Scene, job: &CullJob) -> CullOutput {
     CullOutput {
         visible,
         draws,
-        draw_count: mesh_draws.len() as u32,
+        draw_count: bins.iter().map(|b| b.count).sum(),
         bins,
     }
 }

@@ -166,6 +166,7 @@ fn both_eyes_and_every_display_draw_an_instance_at_one_level() {
             planes: e.frustum().planes,
             instances_per_object: 1,
             split: None,
+            sort_origin: e.position(),
         })
         .collect();
     let per_eye = cpu::cull_many_lod(&layout, &eyes, &lod);

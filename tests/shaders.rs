@@ -397,6 +397,7 @@ fn contexts_match_wgsl() {
         pyramid_offset: 128,
         bin_count: 11,
         first_blend_bin: 13,
+        blend_first: 17,
     };
     check_uniform(
         "CullParams",
@@ -410,6 +411,7 @@ fn contexts_match_wgsl() {
             ("pyramid_offset", f32::from_bits(128)),
             ("bin_count", f32::from_bits(11)),
             ("first_blend_bin", f32::from_bits(13)),
+            ("blend_first", f32::from_bits(17)),
         ],
     );
 }

@@ -22,7 +22,8 @@ fn draws_main(@builtin(local_invocation_index) local: u32) {
     }
     var first = 0u;
     var all = 0u;
-    for (var bin = 0u; bin < params.bin_count; bin++) {
+    // Blended bins are the blend pass's (wgsl/cull_blend.wgsl).
+    for (var bin = 0u; bin < min(params.bin_count, params.first_blend_bin); bin++) {
         var packed = 0u;
         var members = 0u;
         for (var level = 0u; level < params.lod_levels; level++) {

@@ -123,10 +123,12 @@ pub fn cull_frame(layout: &CullLayout, displays: &[CullJob], frame: &FrameCull) 
             match &levels {
                 None => {
                     let chunk_counts: Vec<u32> = counts.iter().map(|c| c[d]).collect();
-                    build_output(layout, &mask, &chunk_counts, job.instances_per_object)
+                    let view = (job.instances_per_object, job.sort_origin);
+                    build_output(layout, &mask, &chunk_counts, view)
                 }
                 Some((levels, n)) => {
-                    build_output_lod(layout, &mask, levels, *n, job.instances_per_object)
+                    let view = (job.instances_per_object, job.sort_origin);
+                    build_output_lod(layout, &mask, levels, *n, view)
                 }
             }
         })
@@ -134,22 +136,23 @@ pub fn cull_frame(layout: &CullLayout, displays: &[CullJob], frame: &FrameCull) 
 }
 
 /// The contract's buffers for the cull positions set in `mask` (bit `p % 64` of word
-/// `p / 64`), with `lod`'s levels: what a cull that keeps those positions writes. For
-/// tests that a filter of positions (occlusion's phases) keeps the contract.
+/// `p / 64`), with `lod`'s levels, for a view of `instances_per_object` whose blended
+/// instances sort from `sort_origin`: what a cull that keeps those positions writes.
+/// For tests that a filter of positions (occlusion's phases) keeps the contract.
 pub fn cull_masked(
     layout: &CullLayout,
     mask: &[u64],
     lod: &FrameLod,
-    instances_per_object: u32,
+    view: (u32, Vec3),
 ) -> CullOutput {
     if lod.levels > 1 {
         let levels = position_levels(layout, lod);
-        return build_output_lod(layout, mask, &levels, lod.levels, instances_per_object);
+        return build_output_lod(layout, mask, &levels, lod.levels, view);
     }
     let counts: Vec<u32> = (mask.chunks(WORDS_PER_CHUNK))
         .map(|c| c.iter().map(|w| w.count_ones()).sum())
         .collect();
-    build_output(layout, mask, &counts, instances_per_object)
+    build_output(layout, mask, &counts, view)
 }
 
 /// Each cull position's level of detail under `lod`, in parallel.
@@ -277,7 +280,7 @@ fn build_output(
     layout: &CullLayout,
     mask: &[u64],
     counts: &[u32],
-    instances_per_object: u32,
+    (instances_per_object, sort_origin): (u32, Vec3),
 ) -> CullOutput {
     let chunk_start = exclusive_prefix(counts);
     let total = chunk_start.last().copied().unwrap_or(0) as usize;
@@ -322,30 +325,33 @@ fn build_output(
         })
     });
     let (draws, bins) = into_bins(layout, 1, ordered);
-    CullOutput {
+    let mut out = CullOutput {
         visible,
-        draw_count: bins.iter().map(|b| b.count).sum(),
+        draw_count: 0,
         draws,
         bins,
-    }
+    };
+    sort_blended(layout, &mut out, |_| 0, (instances_per_object, sort_origin));
+    out
 }
 
 /// Draws given in (level, mesh) order, each with its mesh's bin, placed in their bins'
-/// ranges ([`crate::bins::Bins::ranges`] for `levels`): the contract's `draws` and
-/// each bin's count.
+/// ranges ([`CullLayout::bin_ranges`] for `levels`): the contract's `draws` and each
+/// bin's count. Blended bins are left empty for [`sort_blended`].
 fn into_bins(
     layout: &CullLayout,
     levels: u32,
     ordered: impl Iterator<Item = (u32, DrawArgs)>,
 ) -> (Vec<DrawArgs>, Vec<BinDraws>) {
-    let mut bins: Vec<BinDraws> = (layout.bins.ranges(levels).iter())
+    let mut bins: Vec<BinDraws> = (layout.bin_ranges(levels).iter())
         .map(|r| BinDraws {
             first: r.first,
             count: 0,
         })
         .collect();
-    let mut draws = vec![DrawArgs::default(); layout.meshes.len() * levels as usize];
-    for (bin, draw) in ordered {
+    let mut draws = vec![DrawArgs::default(); layout.draw_entries(levels) as usize];
+    let first_blend = layout.bins.first_blend_bin();
+    for (bin, draw) in ordered.filter(|&(bin, _)| bin < first_blend) {
         let b = &mut bins[bin as usize];
         draws[(b.first + b.count) as usize] = draw;
         b.count += 1;
@@ -361,7 +367,7 @@ fn build_output_lod(
     mask: &[u64],
     levels: &[u8],
     level_count: u32,
-    instances_per_object: u32,
+    (instances_per_object, sort_origin): (u32, Vec3),
 ) -> CullOutput {
     let l_count = level_count as usize;
     let mut buckets = vec![Vec::new(); l_count];
@@ -395,12 +401,73 @@ fn build_output_lod(
         }
     }
     let (draws, bins) = into_bins(layout, level_count, ordered.into_iter());
-    CullOutput {
+    let starts = exclusive_prefix(&buckets.iter().map(|b| b.len() as u32).collect::<Vec<_>>());
+    let mut out = CullOutput {
         visible: buckets.concat(),
-        draw_count: bins.iter().map(|b| b.count).sum(),
+        draw_count: 0,
         draws,
         bins,
+    };
+    let level_of = |slot: usize| starts.partition_point(|&s| s as usize <= slot) - 1;
+    sort_blended(
+        layout,
+        &mut out,
+        level_of,
+        (instances_per_object, sort_origin),
+    );
+    out
+}
+
+/// Fills the blended bins of `out` (whose visible list is written): every visible
+/// instance of a blended bin is its own draw (`level_of` its slot's level), back to
+/// front from `origin` (the squared distance of its sphere's center, farthest first),
+/// ties by ascending id. Then counts every bin's draws. The twin of
+/// `wgsl/cull_blend.wgsl`.
+fn sort_blended(
+    layout: &CullLayout,
+    out: &mut CullOutput,
+    level_of: impl Fn(usize) -> usize,
+    (instances_per_object, origin): (u32, Vec3),
+) {
+    let first_blend = layout.bins.first_blend_bin() as usize;
+    for b in first_blend..out.bins.len() {
+        let mut records: Vec<(u32, u32, usize)> = (out.visible.iter().enumerate())
+            .filter_map(|(slot, &id)| {
+                let place = layout.positions[id as usize] as usize;
+                let mesh = layout.mesh_of[place] as usize;
+                let key = sort_key(layout.spheres[place], origin);
+                (layout.meshes[mesh].bin == b as u32).then_some((key, id, slot))
+            })
+            .collect();
+        records.sort_unstable();
+        let first = out.bins[b].first as usize;
+        for (i, &(_, id, slot)) in records.iter().enumerate() {
+            let place = layout.positions[id as usize] as usize;
+            let mesh = layout.mesh_of[place] as usize;
+            let lod = layout.lods[mesh * MAX_LODS + level_of(slot)];
+            out.draws[first + i] = DrawArgs {
+                index_count: lod.index_count,
+                instance_count: instances_per_object,
+                first_index: lod.first_index,
+                base_vertex: layout.meshes[mesh].base_vertex,
+                first_instance: instances_per_object * slot as u32,
+            };
+        }
+        out.bins[b].count = records.len() as u32;
     }
+    out.draw_count = out.bins.iter().map(|b| b.count).sum();
+}
+
+/// A blended instance's sort key: its sphere center's squared distance from `origin`
+/// (`(dx dx + dy dy) + dz dz`), bits inverted so that ascending keys run back to front.
+/// Non-negative floats order as their bits.
+pub fn sort_key(sphere: Vec4, origin: Vec3) -> u32 {
+    let (dx, dy, dz) = (
+        sphere.x - origin.x,
+        sphere.y - origin.y,
+        sphere.z - origin.z,
+    );
+    !(dx * dx + dy * dy + dz * dz).to_bits()
 }
 
 fn compact_chunk(words: &[u64], order: &[u32], out: &mut [u32]) {

@@ -30,6 +30,9 @@ pub struct GpuCuller {
     /// With occlusion: the cull pass's early and late phases, over everything and (with
     /// the coarse cull) over candidates.
     phases: Vec<((bool, Phase), wgpu::ComputePipeline)>,
+    /// With blended bins: the blend pass over everything and (with the coarse cull)
+    /// over candidates.
+    blend: Vec<(bool, wgpu::ComputePipeline)>,
 }
 
 /// What a [`GpuCuller`] is built for besides the display passes.
@@ -41,6 +44,8 @@ pub struct CullerFeatures {
     pub floor: bool,
     /// Two-phase occlusion culling.
     pub occlusion: bool,
+    /// Blended material bins: the blend pass after the display passes.
+    pub blend: bool,
 }
 
 /// The coarse cull's pipelines.
@@ -61,6 +66,7 @@ impl GpuCuller {
             coarse,
             floor,
             occlusion,
+            blend,
         } = features;
         let layout = bind_group_layout(device, "stereocull.cull", &CULL_BINDINGS, &windows);
         let build = |passes: &[CullPass], candidates: bool, with: &wgpu::PipelineLayout| {
@@ -108,6 +114,18 @@ impl GpuCuller {
             .filter(|_| occlusion)
             .map(|(c, p)| phased(c, p))
             .collect();
+        let blend = (over.into_iter().flatten())
+            .filter(|_| blend)
+            .map(|c| {
+                let pass = CullPass::Blend;
+                let (label, source) = (pass.label(c), pass.source(c, &windows));
+                let entry = pass.entry_point();
+                (
+                    c,
+                    compute_pipeline(device, &label, &display_layout, source, entry),
+                )
+            })
+            .collect();
         GpuCuller {
             layout,
             windows,
@@ -115,6 +133,7 @@ impl GpuCuller {
             coarse,
             floor,
             phases,
+            blend,
         }
     }
 
@@ -247,6 +266,15 @@ impl GpuCuller {
                 None => pass.dispatch_workgroups(grid.0, grid.1, 1),
             }
         }
+        if let Some((_, blend)) = self.blend.iter().find(|(c, _)| *c == candidates) {
+            pass.set_pipeline(blend);
+            pass.dispatch_workgroups(1, 1, 1);
+        }
+    }
+
+    /// Dispatches per display: the three passes, and the blend pass with blended bins.
+    pub fn dispatches_per_display(&self) -> u32 {
+        Self::DISPATCHES_PER_DISPLAY + u32::from(!self.blend.is_empty())
     }
 
     /// Whether the floor kernel was built.

@@ -2,7 +2,7 @@
 //! again by a reload or a scatter) with the scratch all displays share, and each
 //! display's outputs, which its draw pass consumes.
 
-use crate::bins::MAX_BINS;
+use crate::bins::{BinKind, MAX_BINS};
 use crate::buffers::{init_buffer, init_buffer_with_room, storage_buffer};
 use crate::cull::CullOutput;
 use crate::cull::coarse::{BLOCK, CoarseCull};
@@ -34,6 +34,8 @@ pub struct CullParams {
     /// The first blended bin ([`crate::bins::Bins::first_blend_bin`]): blended
     /// instances are never marked drawn.
     pub first_blend_bin: u32,
+    /// Where the blended bins' ranges of the draws start.
+    pub blend_first: u32,
 }
 
 /// Bytes of the counts buffer: the draw count, the visible total, then each material
@@ -386,6 +388,9 @@ fn cull_params(
         pyramid_offset,
         bin_count: layout.bins.kinds.len() as u32,
         first_blend_bin: layout.bins.first_blend_bin(),
+        blend_first: (layout.bin_ranges(levels).iter())
+            .find(|r| r.kind.alpha == BinKind::Blend)
+            .map_or(0, |r| r.first),
     };
     (params, groups)
 }

@@ -32,6 +32,10 @@ pub struct CullJob {
     pub instances_per_object: u32,
     /// With a far layer: which side of the display's far distance this cull keeps.
     pub split: Option<Split>,
+    /// Where blended instances are sorted from, back to front: the midpoint of the
+    /// display's two eyes (its one view's position for mono, far and light views;
+    /// [`crate::contexts::DisplayContext::sort_origin`]).
+    pub sort_origin: Vec3,
 }
 
 /// A display's far split ([`crate::far_layer`]): instances entirely beyond `distance`

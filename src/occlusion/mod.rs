@@ -320,7 +320,7 @@ pub fn cull_phases(
         }
         seen[first / span] = bits;
     }
-    let v = job.instances_per_object;
+    let v = (job.instances_per_object, job.sort_origin);
     Phases {
         early: cpu::cull_masked(layout, &early, lod, v),
         late: cpu::cull_masked(layout, &late, lod, v),

@@ -77,8 +77,8 @@ impl Culler {
         shape: CullShape,
         windows: Windows,
     ) -> Culler {
-        let draws = layout.meshes.len() as u32 * shape.levels;
-        let bins = layout.bins.ranges(shape.levels);
+        let bins = layout.bin_ranges(shape.levels);
+        let draws = layout.draw_entries(shape.levels);
         let kind = match mode {
             CullMode::Cpu => Kind::Cpu {
                 layout,
@@ -89,6 +89,7 @@ impl Culler {
                     coarse: shape.coarse_slots > 0,
                     floor: shape.floor,
                     occlusion: shape.occlusion.displays > 0,
+                    blend: layout.bins.first_blend_bin() != u32::MAX,
                 };
                 let culler = GpuCuller::new(device, features, windows);
                 let (slots, levels) = (shape.slots, shape.levels);
@@ -255,7 +256,7 @@ impl Culler {
         compute_pass(encoder, timing, logged, |pass| {
             culler.encode(pass, scene, group, (slot, phase));
         });
-        GpuCuller::DISPATCHES_PER_DISPLAY
+        culler.dispatches_per_display()
     }
 
     /// The occlusion buffer, the words of visibility bits per display in it and where

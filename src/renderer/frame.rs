@@ -201,6 +201,7 @@ fn inset_job(i: usize, context: &DisplayContext) -> PlannedCull {
             planes: context.planes,
             instances_per_object: context.instances_per_object,
             split: None,
+            sort_origin: context.sort_origin(),
         },
     }
 }
@@ -263,6 +264,8 @@ fn culls(
                         planes: eye.frustum().planes,
                         instances_per_object: 1,
                         split,
+                        // One order for both eyes, as the display draws it.
+                        sort_origin: context.sort_origin(),
                     },
                 }))
             }
@@ -270,6 +273,7 @@ fn culls(
                 view: CullView::Display(i),
                 job: CullJob {
                     split,
+                    sort_origin: context.sort_origin(),
                     ..r.cull_job(context.instances_per_object)
                 },
             }),
@@ -283,6 +287,7 @@ fn culls(
                 planes: plan.view.frustum().planes,
                 instances_per_object: 1,
                 split: Some(plan.split(true)),
+                sort_origin: plan.view.position(),
             },
         })
     }));

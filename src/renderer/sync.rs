@@ -53,7 +53,13 @@ impl Renderer {
             return self.reallocate(device, scene, places, needed);
         }
         if changes.restructured {
-            return Ok(self.reload(queue, scene, places));
+            let layout = CullLayout::with_places(scene, places);
+            // A blended bin's range has an entry per place of its meshes.
+            let (_, culler) = self.path.edit_targets();
+            if culler.bins() != layout.bin_ranges(self.options.lod_levels()) {
+                return self.reallocate(device, scene, places, needed);
+            }
+            return Ok(self.reload(queue, scene, layout));
         }
         for &slot in &changes.removed {
             self.scatter.moves.void(slot);
@@ -101,12 +107,12 @@ impl Renderer {
     }
 
     /// Writes the whole scene into the existing buffers: records, cull order, spheres.
-    fn reload(&mut self, queue: &wgpu::Queue, scene: &Scene, places: &Places) -> SyncStats {
+    fn reload(&mut self, queue: &wgpu::Queue, scene: &Scene, layout: CullLayout) -> SyncStats {
         self.scatter.reset();
         let records = instance_records(scene);
         let (instances, culler) = self.path.edit_targets();
         queue.write_buffer(instances, 0, bytemuck::cast_slice(&records));
-        let layout_bytes = culler.reload(queue, CullLayout::with_places(scene, places));
+        let layout_bytes = culler.reload(queue, layout);
         SyncStats {
             bytes_uploaded: std::mem::size_of_val(&records[..]) as u64 + layout_bytes,
             reloaded: true,

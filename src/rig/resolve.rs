@@ -216,10 +216,16 @@ impl ResolvedDisplay {
     /// Culling against the display frustum, each visible object drawn
     /// `instances_per_object` times.
     pub fn cull_job(&self, instances_per_object: u32) -> CullJob {
+        let eye = |e: usize| self.eyes[e].position();
         CullJob {
             planes: self.planes,
             instances_per_object,
             split: None,
+            // As DisplayContext::sort_origin, from the same f32 positions.
+            sort_origin: match self.eyes.len() >= 2 {
+                true => (eye(0) + eye(1)) * 0.5,
+                false => eye(0),
+            },
         }
     }
 }

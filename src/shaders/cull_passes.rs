@@ -33,8 +33,8 @@ impl Phase {
     }
 }
 
-/// The cull passes: two at the frame level (the coarse cull, when on) and four per
-/// display, each list in dispatch order; and the floor kernel `profile` times beside them.
+/// The cull passes: three at the frame level (the coarse cull, when on) and three per
+/// display (a fourth with blended bins), each list in dispatch order; and the floor kernel `profile` times beside them.
 #[derive(Clone, Copy, Debug, PartialEq, Eq)]
 pub enum CullPass {
     /// Every block's sphere (a block per invocation), tested against the frame frustum
@@ -56,6 +56,9 @@ pub enum CullPass {
     Draws,
     /// Visible ids into their slots.
     Compact,
+    /// With blended material bins: each visible blended instance its own draw, sorted
+    /// back to front (one workgroup).
+    Blend,
     /// One read and one flag per instance: the least a cull could do (`profile`).
     Floor,
 }
@@ -80,6 +83,7 @@ impl CullPass {
             CullPass::CullSubgroups => "cull_subgroups",
             CullPass::Draws => "cull_draws",
             CullPass::Compact => "cull_compact",
+            CullPass::Blend => "cull_blend",
             CullPass::Floor => "cull_floor",
         };
         let tail = if over_candidates && !self.is_frame() {
@@ -105,6 +109,7 @@ impl CullPass {
             CullPass::CullSubgroups => "cull_subgroups",
             CullPass::Draws => "draws_main",
             CullPass::Compact => "compact",
+            CullPass::Blend => "blend_main",
             CullPass::Floor => "floor",
         }
     }
@@ -125,6 +130,7 @@ impl CullPass {
             CullPass::CullSubgroups => CULL_SUBGROUPS,
             CullPass::Draws => include_str!("../../wgsl/cull_draws.wgsl"),
             CullPass::Compact => include_str!("../../wgsl/cull_compact.wgsl"),
+            CullPass::Blend => include_str!("../../wgsl/cull_blend.wgsl"),
             CullPass::Floor => include_str!("../../wgsl/cull_floor.wgsl"),
         };
         let coarse = format!(
@@ -167,7 +173,7 @@ impl CullPass {
         let display = [false, true].into_iter().flat_map(|c| {
             Self::DISPLAY
                 .into_iter()
-                .chain([CullPass::CullSubgroups])
+                .chain([CullPass::CullSubgroups, CullPass::Blend])
                 .map(move |p| (p, c))
         });
         Self::FRAME

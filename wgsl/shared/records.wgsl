@@ -71,6 +71,8 @@ struct CullParams {
     // instances occlusion never marks drawn.
     bin_count: u32,
     first_blend_bin: u32,
+    // Where the blended bins' ranges of the draws start (the blend pass's).
+    blend_first: u32,
 }
 
 // One slot's block test of the coarse cull (src/cull/coarse.rs): a display's planes
