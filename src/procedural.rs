@@ -5,7 +5,7 @@ use glam::{Affine3A, Quat, Vec3, Vec4};
 use rand::{Rng, SeedableRng};
 use rand_pcg::Pcg64Mcg;
 
-use crate::scene::{Animation, Instance, Material, Scene, Texture};
+use crate::scene::{AlphaMode, Animation, Instance, Material, Scene, Texture};
 use crate::shapes::{self, Shape};
 
 /// `n` instances of `mesh_count` built-in meshes scattered in a ball around the
@@ -283,6 +283,42 @@ pub fn texture(scene: &mut Scene) {
     }];
     for v in &mut scene.vertices {
         v.material = 0;
+    }
+}
+
+/// Makes `percent` % of `scene`'s meshes (the first ones, at least one for any
+/// positive share) glass: a blended material like the scene's first (or plain), and
+/// their instances half transparent. For profiling the blended bins' sort.
+pub fn glaze(scene: &mut Scene, percent: f64) {
+    let meshes = scene.meshes.len();
+    let glazed = ((meshes as f64 * percent / 100.0).round() as usize)
+        .clamp(usize::from(percent > 0.0), meshes);
+    if glazed == 0 {
+        return;
+    }
+    let base = scene.materials.first().cloned().unwrap_or_default();
+    if scene.materials.is_empty() {
+        scene.materials.push(base.clone());
+    }
+    scene.materials.push(Material {
+        name: "glass".into(),
+        alpha: AlphaMode::Blend,
+        ..base
+    });
+    let glass = scene.materials.len() as u32 - 1;
+    for m in 0..glazed {
+        let mesh = scene.meshes[m].clone();
+        let first = mesh.first_index as usize;
+        for &i in &scene.indices[first..first + mesh.index_count as usize] {
+            scene.vertices[(i as i32 + mesh.base_vertex) as usize].material = glass;
+        }
+    }
+    for inst in scene
+        .instances
+        .iter_mut()
+        .filter(|i| (i.mesh as usize) < glazed)
+    {
+        inst.color.w = 0.5;
     }
 }
 

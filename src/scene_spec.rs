@@ -1,5 +1,5 @@
 //! Scenes by name, above the importers: `default` (the built-in room),
-//! `procedural:N[:MESHES[:SEED[:textured]]]`, `city:N[:SEED]`, `rooms:N[:SEED]`, or a
+//! `procedural:N[:MESHES[:SEED[:textured][:glassP]]]`, `city:N[:SEED]`, `rooms:N[:SEED]`, or a
 //! `.gltf` / `.glb` file.
 
 use std::path::Path;
@@ -20,9 +20,10 @@ pub const DEFAULT_PROCEDURAL_SEED: u64 = 1;
 /// file is what it writes.
 pub const ROOM_GLB: &[u8] = include_bytes!("../assets/room.glb");
 
-/// `default` (the built-in room), `procedural:N[:MESHES[:SEED[:textured]]]` (`textured`:
-/// every mesh samples one generated base color texture), or a path to a `.gltf` /
-/// `.glb` file.
+/// `default` (the built-in room), `procedural:N[:MESHES[:SEED[:textured][:glassP]]]`
+/// (`textured`: every mesh samples one generated base color texture; `glassP`: P % of
+/// the meshes are blended glass, [`procedural::glaze`]), or a path to a `.gltf` / `.glb`
+/// file.
 /// An empty scene is an error: there would be nothing to cull or draw, and GPU
 /// buffers cannot be empty.
 pub fn load(spec: &str) -> Result<Scene> {
@@ -34,11 +35,12 @@ pub fn load(spec: &str) -> Result<Scene> {
     }
     let scene = match spec.strip_prefix("procedural:") {
         Some(rest) => {
-            let (n, meshes, seed, textured) = parse_procedural(spec, rest)?;
+            let (n, meshes, seed, (textured, glass)) = parse_procedural(spec, rest)?;
             let mut scene = procedural::scene(n, meshes, seed);
             if textured {
                 procedural::texture(&mut scene);
             }
+            procedural::glaze(&mut scene, glass);
             scene
         }
         None if spec == DEFAULT_SCENE => {
@@ -82,8 +84,8 @@ fn parse_rooms(spec: &str, rest: &str) -> Result<Scene> {
     Ok(procedural::rooms(n, seed))
 }
 
-fn parse_procedural(spec: &str, rest: &str) -> Result<(u32, u32, u64, bool)> {
-    let mut fields = Fields::new(spec, rest, "procedural:N[:MESHES[:SEED[:textured]]]");
+fn parse_procedural(spec: &str, rest: &str) -> Result<(u32, u32, u64, (bool, f64))> {
+    let mut fields = Fields::new(spec, rest, PROCEDURAL_FORM);
     let n = fields.count()?;
     let meshes = match fields.parts.next() {
         Some(s) => s
@@ -94,14 +96,25 @@ fn parse_procedural(spec: &str, rest: &str) -> Result<(u32, u32, u64, bool)> {
         None => DEFAULT_PROCEDURAL_MESHES,
     };
     let seed = fields.seed()?;
-    let textured = match fields.parts.next() {
-        Some("textured") => true,
-        Some(_) => return Err(fields.fail("the fourth field can only be `textured`")),
-        None => false,
-    };
+    let mut textured = false;
+    let mut glass = 0.0;
+    for part in fields.parts.by_ref() {
+        let percent = part.strip_prefix("glass").map(str::parse::<f64>);
+        match (part, percent) {
+            ("textured", _) => textured = true,
+            (_, Some(Ok(p))) if (0.0..=100.0).contains(&p) => glass = p,
+            _ => {
+                return Err(fields.fail(
+                    "fields after SEED are `textured` or `glassP` (P % of the meshes, 0 to 100)",
+                ));
+            }
+        }
+    }
     fields.end()?;
-    Ok((n, meshes, seed, textured))
+    Ok((n, meshes, seed, (textured, glass)))
 }
+
+const PROCEDURAL_FORM: &str = "procedural:N[:MESHES[:SEED[:textured][:glassP]]]";
 
 /// The `:`-separated fields of a generated scene's spec, read in order; errors name
 /// the spec and the form it should have.

@@ -15,7 +15,7 @@ use std::path::{Path, PathBuf};
 use clap::{Args, Parser, Subcommand};
 use serde::Serialize;
 
-use crate::bins::Bins;
+use crate::bins::{BinKind, Bins};
 use crate::cull::{CullOutput, cpu};
 use crate::device::{Gpu, OPTIONAL_FEATURES, Tier};
 use crate::error::{Error, Result};
@@ -297,6 +297,8 @@ pub struct DisplayDump {
 pub struct DrawDump {
     /// The material bin (`bins::Bins::kinds` index) whose range holds the draw.
     pub bin: u32,
+    /// The bin is blended: a draw per instance, back to front.
+    pub blended: bool,
     pub mesh: u32,
     pub index_count: u32,
     pub instance_count: u32,
@@ -317,6 +319,7 @@ pub fn display_dump(name: &str, views: u32, out: &CullOutput, scene: &Scene) -> 
             .zip(meshes)
             .map(|(d, mesh)| DrawDump {
                 bin: bins.of_mesh[mesh as usize],
+                blended: bins.kinds[bins.of_mesh[mesh as usize] as usize].alpha == BinKind::Blend,
                 mesh,
                 index_count: d.index_count,
                 instance_count: d.instance_count,

@@ -7,7 +7,7 @@ use super::edits::EditArgs;
 pub use super::profile_measure::ProfileArgs;
 use super::profile_measure::{Config, measure};
 use super::profile_report::{
-    price_edits, price_occlusion, print_occlusion, print_table, write_csv,
+    price_edits, price_occlusion, print_glass, print_occlusion, print_table, write_csv,
 };
 use super::{chart, write_json};
 use crate::device::{Gpu, list_counts};
@@ -52,7 +52,8 @@ pub fn profile(args: &ProfileArgs) -> Result<()> {
     if timer.is_none() {
         println!("GPU timings unavailable: the adapter has no TIMESTAMP_QUERY; CPU timings only");
     }
-    let variants = args.moving.len()
+    let variants = args.glass.len()
+        * args.moving.len()
         * args.coarse_cull.len()
         * args.far_layer.len()
         * args.inset_cull.len()
@@ -65,7 +66,8 @@ pub fn profile(args: &ProfileArgs) -> Result<()> {
             .unwrap_or_else(|_| ProgressStyle::default_bar()),
     );
     let mut rows = Vec::new();
-    for &n in &args.instances {
+    for (&n, &glass) in (args.instances.iter()).flat_map(|n| args.glass.iter().map(move |g| (n, g)))
+    {
         let mut scene = match (args.city, args.rooms) {
             (true, _) => procedural::city(n, 1),
             (_, true) => procedural::rooms(n, 1),
@@ -74,6 +76,7 @@ pub fn profile(args: &ProfileArgs) -> Result<()> {
         if args.textured {
             procedural::texture(&mut scene);
         }
+        procedural::glaze(&mut scene, glass);
         for (spec, rig) in &rigs {
             let variants: Vec<_> = args
                 .moving
@@ -117,6 +120,7 @@ pub fn profile(args: &ProfileArgs) -> Result<()> {
                         moving,
                         churn: args.churn,
                     },
+                    glass,
                 };
                 rows.push(measure(&gpu, &scene, &config, args, timer.as_mut(), &bar)?);
             }
@@ -127,6 +131,7 @@ pub fn profile(args: &ProfileArgs) -> Result<()> {
     price_occlusion(&mut rows);
     print_table(&rows);
     print_occlusion(&rows);
+    print_glass(&rows);
     std::fs::create_dir_all(&args.out).map_err(|e| Error::io(&args.out, e))?;
     write_csv(&args.out.join("profile.csv"), &rows)?;
     write_json(&args.out.join("profile.json"), &rows)?;

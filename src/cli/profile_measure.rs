@@ -68,6 +68,10 @@ pub struct ProfileArgs {
     /// Give every mesh a base color texture (`procedural:N:M:1:textured`).
     #[arg(long)]
     pub textured: bool,
+    /// Percents of the meshes made blended glass (`procedural:N:M:1:glassP`), one
+    /// configuration each (`0,1,10` measures the blended sort against none in one run).
+    #[arg(long, value_delimiter = ',', default_value = "0")]
+    pub glass: Vec<f64>,
     /// Profile `city:N` scenes (a room and buildings 200 m to 2 km away) instead.
     #[arg(long)]
     pub city: bool,
@@ -120,6 +124,8 @@ pub(super) struct Config<'a> {
     pub(super) inset: bool,
     pub(super) occlusion: OcclusionMode,
     pub(super) edits: EditArgs,
+    /// Percent of the meshes glazed ([`crate::procedural::glaze`]): the scene's.
+    pub(super) glass: f64,
 }
 
 pub(super) fn measure(
@@ -135,6 +141,7 @@ pub(super) fn measure(
         inset,
         occlusion,
         edits,
+        glass,
     }: &Config,
     args: &ProfileArgs,
     mut timer: Option<&mut GpuTimer>,
@@ -289,6 +296,7 @@ pub(super) fn measure(
         target_pixels: rig.displays.iter().map(|d| d.layout().pixels()).sum(),
         indirect_validation: gpu.indirect_validation(),
         moving_percent: edits.moving,
+        glass_percent: glass,
         churn_percent: edits.churn,
         sync_ms_median: med(&samples.sync),
         triangles_submitted: samples.triangles,

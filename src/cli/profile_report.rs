@@ -62,6 +62,8 @@ pub struct Row {
     pub indirect_validation: bool,
     pub moving_percent: f64,
     pub churn_percent: f64,
+    /// Percent of the meshes made blended glass (`--glass`).
+    pub glass_percent: f64,
     /// Of `cpu_ms_median`'s frames, the median sync of the frame's edits.
     pub sync_ms_median: f64,
     /// Primitives reaching the clipper in the draw passes (last frame).
@@ -132,7 +134,17 @@ pub fn price_occlusion(rows: &mut [Row]) {
     let key = |r: &Row| {
         let (a, b) = (r.moving_percent.to_bits(), r.churn_percent.to_bits());
         let flags = (r.coarse_cull, r.far_layer, r.inset_cull);
-        (r.mode, r.cull, r.rig.clone(), r.instances, flags, a, b)
+        let glass = r.glass_percent.to_bits();
+        (
+            r.mode,
+            r.cull,
+            r.rig.clone(),
+            r.instances,
+            flags,
+            a,
+            b,
+            glass,
+        )
     };
     let ratio = |a: Option<u64>, b: Option<u64>| Some(a? as f64 / b?.max(1) as f64);
     let priced: Vec<_> = (rows.iter())
@@ -173,6 +185,32 @@ pub fn print_occlusion(rows: &[Row]) {
     }
 }
 
+/// Per row with glass (`--glass 0,1,10`) and a row of the same configuration without:
+/// the GPU cull's time (where the blended bins' sort runs, a pass of its own) against
+/// that row's.
+pub fn print_glass(rows: &[Row]) {
+    for r in rows.iter().filter(|r| r.glass_percent > 0.0) {
+        let plain = rows.iter().find(|b| {
+            b.glass_percent == 0.0
+                && (b.mode, b.cull, &b.rig, b.instances, b.occlusion)
+                    == (r.mode, r.cull, &r.rig, r.instances, r.occlusion)
+        });
+        let (Some(plain), Some(cull)) = (plain, r.gpu_cull_ms_median) else {
+            continue;
+        };
+        let ratio = plain.gpu_cull_ms_median.map(|p| cull / p.max(1e-9));
+        println!(
+            "glass {} % {} {} {}: GPU cull {cull:.3} ms (with the blended sort), {} x the cull without glass; CPU {:.3} x",
+            r.glass_percent,
+            r.rig,
+            r.mode.name(),
+            r.instances,
+            ratio.map_or("n/a".into(), |x| format!("{x:.2}")),
+            r.cpu_ms_median / plain.cpu_ms_median.max(1e-9),
+        );
+    }
+}
+
 /// Fills [`Row::edits`] of every row with moves from the row of the same configuration
 /// without them, where the run has one (`--moving 0,1,10`).
 pub fn price_edits(rows: &mut [Row]) {
@@ -187,6 +225,7 @@ pub fn price_edits(rows: &mut [Row]) {
             a.inset_cull,
             a.churn_percent,
             a.occlusion,
+            a.glass_percent,
         ) == (
             b.mode,
             b.cull,
@@ -197,6 +236,7 @@ pub fn price_edits(rows: &mut [Row]) {
             b.inset_cull,
             b.churn_percent,
             b.occlusion,
+            b.glass_percent,
         )
     };
     let costs: Vec<Option<EditCost>> = rows
