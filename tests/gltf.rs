@@ -281,6 +281,20 @@ fn a_glb_length_shorter_than_its_header_is_an_error() {
     assert!(msg.contains("GLB header: length"), "{msg}");
 }
 
+/// Found by the `gltf_import` fuzz target (2026-12-02): texture coordinates of unsigned
+/// ints, as wide as two floats, reached `unreachable!` in gltf's reader. The kept file is
+/// BoxTextured with its TEXCOORD_0 retyped so: the finding's own PNG fails its CRC
+/// outside fuzzing builds (the png crate skips the check under `cfg(fuzzing)`), which
+/// would stop the import before the coordinates are read.
+#[test]
+fn texture_coordinates_of_unsigned_ints_are_an_error_naming_the_accessor() {
+    let msg = regression_error("texcoord-of-unsigned-ints.glb");
+    assert!(
+        msg.contains("TEXCOORD_0: accessors[3] has component type U32"),
+        "{msg}"
+    );
+}
+
 /// Found by the `gltf_import` fuzz target: float indices reached `unreachable!` in gltf.
 #[test]
 fn float_indices_are_an_error_naming_the_accessor() {

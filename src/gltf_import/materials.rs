@@ -29,11 +29,17 @@ impl Importer<'_> {
         };
         let set = info.tex_coord();
         if let Some(accessor) = primitive.get(&Semantic::TexCoords(set)) {
-            check_accessor(
-                &accessor,
-                accessor.size(),
-                &format!("{where_} TEXCOORD_{set}"),
-            )?;
+            let what = format!("{where_} TEXCOORD_{set}");
+            check_accessor(&accessor, accessor.size(), &what)?;
+            // The gltf crate's reader is `unreachable!` on any other component type.
+            use gltf::accessor::DataType::{F32, U8, U16};
+            if !matches!(accessor.data_type(), F32 | U8 | U16) {
+                return Err(format!(
+                    "{what}: accessors[{}] has component type {:?}; texture coordinates are float, unsigned byte or unsigned short",
+                    accessor.index(),
+                    accessor.data_type()
+                ));
+            }
         }
         let buffers = self.buffers;
         let uvs: Vec<[f32; 2]> = primitive
