@@ -42,26 +42,26 @@ fn sort_origin() -> vec3<f32> {
 }
 
 // Writes a record per visible position of `bin` from draws[start] on, in position
-// order; returns how many, as a value the whole workgroup agrees on.
+// order; returns how many, as a value the whole workgroup agrees on. Each invocation
+// walks a span of SPAN positions, so the workgroup scans once per WORKGROUP_SIZE * SPAN
+// positions (on lavapipe a scan's barriers cost more than the positions' reads).
 fn gather(bin: u32, start: u32, n: u32, local: u32) -> u32 {
     let origin = sort_origin();
     var written = 0u;
-    for (var base = 0u; base < n; base += WORKGROUP_SIZE) {
-        let j = base + local;
-        var entry = 0u;
-        var k = 0u;
-        if (j < n) {
-            entry = entries[j];
-            k = cull_position(j);
+    for (var base = 0u; base < n; base += WORKGROUP_SIZE * SPAN) {
+        let first = base + local * SPAN;
+        let end = min(first + SPAN, n);
+        var members = 0u;
+        for (var j = first; j < end; j++) {
+            members += select(0u, 1u, gathers(j, bin));
         }
-        let member = (entry & ENTRY_VISIBLE) != 0u && meshes[mesh_of[k]].bin == bin;
-        let scan = workgroup_exclusive_scan(local, select(0u, 1u, member));
-        if (member) {
-            let level = (entry >> ENTRY_LEVEL_SHIFT) & 3u;
-            let d = spheres_at(k).xyz - origin;
-            let key = ~bitcast<u32>(d.x * d.x + d.y * d.y + d.z * d.z);
-            let slot = flagged_before(level, j, n, 0u);
-            draws[start + written + scan.x] = DrawArgs(key, order[k], slot, bitcast<i32>(mesh_of[k]), level);
+        let scan = workgroup_exclusive_scan(local, members);
+        var at = start + written + scan.x;
+        for (var j = first; j < end; j++) {
+            if (gathers(j, bin)) {
+                draws[at] = record(j, n, origin);
+                at++;
+            }
         }
         written += scan.y;
     }
@@ -69,6 +69,22 @@ fn gather(bin: u32, start: u32, n: u32, local: u32) -> u32 {
         blend_total = written;
     }
     return workgroupUniformLoad(&blend_total);
+}
+
+// Whether position j (of those run over) is visible and of `bin`.
+fn gathers(j: u32, bin: u32) -> bool {
+    return (entries[j] & ENTRY_VISIBLE) != 0u && meshes[mesh_of[cull_position(j)]].bin == bin;
+}
+
+// Visible position j's record: its sort key (the squared distance of its sphere's
+// center from `origin`, bits inverted: farthest first), id, slot, mesh and level, in
+// the five words of a DrawArgs.
+fn record(j: u32, n: u32, origin: vec3<f32>) -> DrawArgs {
+    let k = cull_position(j);
+    let level = (entries[j] >> ENTRY_LEVEL_SHIFT) & 3u;
+    let d = spheres_at(k).xyz - origin;
+    let key = ~bitcast<u32>(d.x * d.x + d.y * d.y + d.z * d.z);
+    return DrawArgs(key, order[k], flagged_before(level, j, n, 0u), bitcast<i32>(mesh_of[k]), level);
 }
 
 // Sorts the `total` records from draws[start] on by (key, id).
