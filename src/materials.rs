@@ -83,14 +83,21 @@ pub fn bind_group_layout(device: &wgpu::Device) -> wgpu::BindGroupLayout {
 /// [`crate::bins`]) and every material a texture.
 pub fn records(scene: &Scene) -> Result<Vec<MaterialRecord>> {
     let count = scene.materials.len().max(1);
+    for (m, mesh) in scene.meshes.iter().enumerate() {
+        let material = mesh_material(scene, m);
+        if material as usize >= count {
+            return Err(Error::InvalidScene(format!(
+                "mesh {m} ({:?}) names material {material} of {count}",
+                mesh.name
+            )));
+        }
+        check_one_material(scene, m)?;
+    }
     if let Some(v) = scene.vertices.iter().find(|v| v.material as usize >= count) {
         return Err(Error::InvalidScene(format!(
             "a vertex names material {} of {count}",
             v.material
         )));
-    }
-    for m in 0..scene.meshes.len() {
-        check_one_material(scene, m)?;
     }
     if scene.materials.is_empty() {
         return Ok(vec![MaterialRecord {

@@ -295,13 +295,16 @@ fn vertices_past_the_binding_size_are_accepted_up_to_the_buffer_size() {
 }
 
 /// Materials that do not fit the scene are typed errors when the renderer is made, in
-/// every mode: a vertex naming a material the scene lacks, a material naming a texture
-/// it lacks, a cutout whose cutoff is not a number.
+/// every mode: a mesh naming a material the scene lacks, a mesh of two materials, a
+/// material naming a texture it lacks, a cutout whose cutoff is not a number.
 #[test]
 fn materials_naming_what_the_scene_lacks_are_errors() {
     let gpu = support::gpu();
     let mut scene = procedural::scene(20, 2, 7);
-    scene.vertices[3].material = 1;
+    let mesh_1 = scene.meshes[1].base_vertex as usize;
+    for v in &mut scene.vertices[mesh_1..] {
+        v.material = 1;
+    }
     let make = |scene: &stereocull::scene::Scene| {
         StereoMode::ALL.map(|mode| {
             let options = RendererOptions {
@@ -313,10 +316,23 @@ fn materials_naming_what_the_scene_lacks_are_errors() {
         })
     };
     for err in make(&scene) {
-        let msg = err.expect("a vertex naming material 1 of 1").to_string();
-        assert!(msg.contains("material 1 of 1"), "{msg}");
+        let msg = err.expect("a mesh naming material 1 of 1").to_string();
+        assert!(msg.contains("mesh 1 ("), "{msg}");
+        assert!(msg.contains("names material 1 of 1"), "{msg}");
     }
-    scene.vertices[3].material = 0;
+    scene.materials = vec![Default::default(); 2];
+    scene.vertices[mesh_1 + 3].material = 0;
+    for err in make(&scene) {
+        let msg = err.expect("a mesh of two materials").to_string();
+        assert!(
+            msg.contains("mesh 1 (") && msg.contains("mixes materials 1 and 0"),
+            "{msg}"
+        );
+    }
+    scene.materials.clear();
+    for v in &mut scene.vertices {
+        v.material = 0;
+    }
     scene.materials = vec![stereocull::scene::Material {
         name: "stone".into(),
         base_color_texture: Some(0),
