@@ -1,9 +1,16 @@
-//! Drawing: render passes, the pipelines (`wgsl/draw*.wgsl`) and the one
-//! multi-draw-indirect call of the GPU-driven path. The renderer decides what to draw
+//! Drawing: the pipelines of each material bin (`wgsl/draw*.wgsl`; their state in
+//! `pipelines.rs`), the scene on the GPU, and the GPU-driven path's multi-draw per bin;
+//! render passes in `passes.rs`. The renderer decides what to draw
 //! (`renderer::indirect`, `renderer::classic`); this module knows how.
 
+mod passes;
+mod pipelines;
+
 use std::collections::HashMap;
-use std::num::NonZeroU32;
+
+pub use passes::{Attachments, CLEAR_COLOR, begin_pass, cleared_depth, set_viewport};
+pub use pipelines::{DEPTH_FORMAT, TargetFormat, VERTEX_ATTRIBUTES, VERTEX_BUFFER};
+use pipelines::{pipeline, shadow_pipeline};
 
 use crate::bins::{Bin, BinKind, BinRange};
 use crate::buffers::{init_buffer, init_buffer_with_room};
@@ -11,46 +18,12 @@ use crate::cull::gpu_buffers::{COUNTS_BIN_OFFSET, CullTargets};
 use crate::error::Result;
 use crate::materials::{self, GpuMaterials};
 use crate::records::{DrawArgs, InstanceRecord, instance_records};
-use crate::scene::{Scene, Vertex};
+use crate::scene::Scene;
 use crate::shaders::{
     DRAW_BINDINGS, DrawKey, Shaders, Windows, bind_group, bind_group_layout, shadow_cutout_source,
     shadow_source,
 };
 use crate::shadow::{self, ShadowMap};
-
-/// The depth format of the renderer's own targets, unless the options name another.
-pub const DEPTH_FORMAT: wgpu::TextureFormat = wgpu::TextureFormat::Depth32Float;
-
-/// The attachment formats and sample count the draw pipelines are built for.
-#[derive(Clone, Copy, Debug, PartialEq, Eq)]
-pub struct TargetFormat {
-    /// The color attachment's format.
-    pub color: wgpu::TextureFormat,
-    /// The depth attachment's format.
-    pub depth: wgpu::TextureFormat,
-    /// Samples per pixel (1: no MSAA).
-    pub samples: u32,
-}
-/// Dark enough that any lit object stands out in tests.
-pub const CLEAR_COLOR: wgpu::Color = wgpu::Color {
-    r: 0.02,
-    g: 0.02,
-    b: 0.03,
-    a: 1.0,
-};
-
-/// How the draw pipelines read a [`Vertex`]: `VertexInput` in
-/// `wgsl/shared/decode.wgsl` (`tests/shaders.rs` checks both sides).
-pub const VERTEX_ATTRIBUTES: [wgpu::VertexAttribute; 4] =
-    wgpu::vertex_attr_array![0 => Float32x3, 1 => Float32x3, 2 => Float32x2, 3 => Uint32];
-
-/// The scene's vertex buffer as every pipeline drawing it reads it (an engine's own
-/// pipeline too).
-pub const VERTEX_BUFFER: wgpu::VertexBufferLayout<'static> = wgpu::VertexBufferLayout {
-    array_stride: size_of::<Vertex>() as u64,
-    step_mode: wgpu::VertexStepMode::Vertex,
-    attributes: &VERTEX_ATTRIBUTES,
-};
 
 /// What a view's draw draws with: the pipelines and the scene on the GPU.
 #[derive(Clone, Copy)]
@@ -338,178 +311,4 @@ pub enum BinPipelines {
     Shadow,
     /// The pipeline the pass already has (an engine's own), for every bin.
     Own,
-}
-
-/// What a draw pass renders into.
-#[derive(Clone, Copy)]
-pub struct Attachments<'a> {
-    /// Where color is drawn (multisampled under MSAA).
-    pub color: &'a wgpu::TextureView,
-    /// The depth attachment.
-    pub depth: &'a wgpu::TextureView,
-    /// Where a multisampled `color` is resolved at the end of the pass.
-    pub resolve: Option<&'a wgpu::TextureView>,
-}
-
-/// Opens a render pass on `target`, clearing it or keeping what earlier passes drew
-/// (multisampled color is kept too, then resolved again); `multiview_mask` renders
-/// those layers of a layered target (multiview; `DrawKey::multiview_mask`).
-pub fn begin_pass<'e>(
-    encoder: &'e mut wgpu::CommandEncoder,
-    target: Attachments,
-    clear: bool,
-    multiview_mask: Option<NonZeroU32>,
-    timestamp_writes: Option<wgpu::RenderPassTimestampWrites>,
-) -> wgpu::RenderPass<'e> {
-    let (color_load, depth_load) = if clear {
-        (wgpu::LoadOp::Clear(CLEAR_COLOR), wgpu::LoadOp::Clear(1.0))
-    } else {
-        (wgpu::LoadOp::Load, wgpu::LoadOp::Load)
-    };
-    encoder.begin_render_pass(&wgpu::RenderPassDescriptor {
-        label: Some("stereocull.draw"),
-        color_attachments: &[Some(wgpu::RenderPassColorAttachment {
-            view: target.color,
-            depth_slice: None,
-            resolve_target: target.resolve,
-            ops: wgpu::Operations {
-                load: color_load,
-                store: wgpu::StoreOp::Store,
-            },
-        })],
-        depth_stencil_attachment: Some(wgpu::RenderPassDepthStencilAttachment {
-            view: target.depth,
-            depth_ops: Some(wgpu::Operations {
-                load: depth_load,
-                store: wgpu::StoreOp::Store,
-            }),
-            stencil_ops: None,
-        }),
-        timestamp_writes,
-        occlusion_query_set: None,
-        multiview_mask,
-    })
-}
-
-/// `view` as a depth attachment cleared to the far plane and kept.
-pub fn cleared_depth(view: &wgpu::TextureView) -> wgpu::RenderPassDepthStencilAttachment<'_> {
-    wgpu::RenderPassDepthStencilAttachment {
-        view,
-        depth_ops: Some(wgpu::Operations {
-            load: wgpu::LoadOp::Clear(1.0),
-            store: wgpu::StoreOp::Store,
-        }),
-        stencil_ops: None,
-    }
-}
-
-/// Restricts drawing to one view's `[x, y, width, height]` of its display's target (an
-/// eye's half of a double-wide target, a foveated display's viewport).
-pub fn set_viewport(pass: &mut wgpu::RenderPass, [x, y, w, h]: [u32; 4]) {
-    pass.set_viewport(x as f32, y as f32, w as f32, h as f32, 0.0, 1.0);
-    pass.set_scissor_rect(x, y, w, h);
-}
-
-/// Depth only, both faces (open meshes cast shadows too), biased by slope so that lit
-/// surfaces do not shadow themselves; `layouts` are group 0's and, for the cutout
-/// variant, group 1's (the materials).
-fn shadow_pipeline(
-    device: &wgpu::Device,
-    layouts: &[Option<&wgpu::BindGroupLayout>],
-    (label, source): (&str, String),
-) -> wgpu::RenderPipeline {
-    let layout = device.create_pipeline_layout(&wgpu::PipelineLayoutDescriptor {
-        label: Some(label),
-        bind_group_layouts: layouts,
-        immediate_size: 0,
-    });
-    let module = device.create_shader_module(wgpu::ShaderModuleDescriptor {
-        label: Some(label),
-        source: wgpu::ShaderSource::Wgsl(source.into()),
-    });
-    let cutout = layouts.len() > 1;
-    device.create_render_pipeline(&wgpu::RenderPipelineDescriptor {
-        label: Some(label),
-        layout: Some(&layout),
-        vertex: wgpu::VertexState {
-            module: &module,
-            entry_point: Some("vs_main"),
-            compilation_options: Default::default(),
-            buffers: &[Some(VERTEX_BUFFER)],
-        },
-        primitive: wgpu::PrimitiveState::default(),
-        depth_stencil: Some(wgpu::DepthStencilState {
-            format: shadow::SHADOW_FORMAT,
-            depth_write_enabled: Some(true),
-            depth_compare: Some(wgpu::CompareFunction::Less),
-            stencil: Default::default(),
-            bias: wgpu::DepthBiasState {
-                constant: 2,
-                slope_scale: 2.0,
-                clamp: 0.0,
-            },
-        }),
-        multisample: Default::default(),
-        fragment: cutout.then(|| wgpu::FragmentState {
-            module: &module,
-            entry_point: Some("fs_main"),
-            compilation_options: Default::default(),
-            targets: &[],
-        }),
-        multiview_mask: None,
-        cache: None,
-    })
-}
-
-fn pipeline(
-    device: &wgpu::Device,
-    layout: &wgpu::PipelineLayout,
-    key: DrawKey,
-    source: &str,
-    target: TargetFormat,
-) -> wgpu::RenderPipeline {
-    let label = key.label();
-    let module = device.create_shader_module(wgpu::ShaderModuleDescriptor {
-        label: Some(&label),
-        source: wgpu::ShaderSource::Wgsl(source.into()),
-    });
-    device.create_render_pipeline(&wgpu::RenderPipelineDescriptor {
-        label: Some(&label),
-        layout: Some(layout),
-        vertex: wgpu::VertexState {
-            module: &module,
-            entry_point: Some("vs_main"),
-            compilation_options: Default::default(),
-            buffers: &[Some(VERTEX_BUFFER)],
-        },
-        primitive: wgpu::PrimitiveState {
-            cull_mode: key.face_culling(),
-            ..Default::default()
-        },
-        depth_stencil: Some(wgpu::DepthStencilState {
-            format: target.depth,
-            // Blended surfaces are seen through, so they hide nothing.
-            depth_write_enabled: Some(key.alpha != BinKind::Blend),
-            depth_compare: Some(wgpu::CompareFunction::Less),
-            stencil: Default::default(),
-            bias: Default::default(),
-        }),
-        multisample: wgpu::MultisampleState {
-            count: target.samples,
-            alpha_to_coverage_enabled: key.coverage,
-            ..Default::default()
-        },
-        fragment: Some(wgpu::FragmentState {
-            module: &module,
-            entry_point: Some("fs_main"),
-            compilation_options: Default::default(),
-            targets: &[Some(wgpu::ColorTargetState {
-                format: target.color,
-                blend: (key.alpha == BinKind::Blend).then_some(wgpu::BlendState::ALPHA_BLENDING),
-                write_mask: wgpu::ColorWrites::ALL,
-            })],
-        }),
-        multiview_mask: key.multiview_mask(),
-        cache: None,
-    })
 }
