@@ -8,7 +8,7 @@ use std::path::{Path, PathBuf};
 
 use glam::{Affine3A, Mat4, Quat, Vec3, Vec4};
 use stereocull::Error;
-use stereocull::scene::Scene;
+use stereocull::scene::{AlphaMode, Scene, Shading};
 use stereocull::scene_spec;
 
 mod support;
@@ -421,4 +421,49 @@ fn broken_base_color_textures_are_errors_naming_what_is_wrong() {
     std::fs::write(&p, json.to_string()).unwrap();
     let msg = scene_error(&p);
     assert!(msg.contains("TEXCOORD_0"), "{msg}");
+}
+
+/// Materials as the importer reads them: `alphaMode` with its cutoff (0.5 by default),
+/// `KHR_materials_unlit` as unlit shading; each mesh of its own material, and one bin
+/// per (alpha mode, shading) pair.
+#[test]
+fn alpha_modes_and_unlit_materials_are_read() {
+    let dir = tempfile::tempdir().unwrap();
+    let floats: [f32; 18] = [
+        0., 0., 0., 1., 0., 0., 0., 1., 0., // triangle
+        0., 0., 0., 0., 0., 0., 0., 0., 0., // unused
+    ];
+    std::fs::write(dir.path().join("tri.bin"), bytemuck::cast_slice(&floats)).unwrap();
+    let mut json: serde_json::Value =
+        serde_json::from_str(&gltf_json(r#""uri": "tri.bin""#, "")).unwrap();
+    json["extensionsUsed"] = serde_json::json!(["KHR_materials_unlit"]);
+    json["materials"] = serde_json::json!([
+        {"name": "flat", "extensions": {"KHR_materials_unlit": {}}},
+        {"name": "leaf", "alphaMode": "MASK", "alphaCutoff": 0.3},
+        {"name": "fence", "alphaMode": "MASK"},
+        {"name": "glass", "alphaMode": "BLEND"}
+    ]);
+    let primitive = |m: u32| serde_json::json!({"primitives": [{"attributes": {"POSITION": 0}, "material": m}]});
+    json["meshes"] = serde_json::json!([primitive(0), primitive(1), primitive(2), primitive(3)]);
+    json["nodes"] = serde_json::json!([{"mesh": 0}, {"mesh": 1}, {"mesh": 2}, {"mesh": 3}]);
+    json["scenes"] = serde_json::json!([{"nodes": [0, 1, 2, 3]}]);
+    let p = dir.path().join("materials.gltf");
+    std::fs::write(&p, json.to_string()).unwrap();
+    let s = scene_spec::load(p.to_str().unwrap()).unwrap();
+    let read: Vec<(&str, AlphaMode, Shading)> = (s.materials.iter())
+        .map(|m| (m.name.as_str(), m.alpha, m.shading))
+        .collect();
+    assert_eq!(
+        read,
+        [
+            ("flat", AlphaMode::Opaque, Shading::Unlit),
+            ("leaf", AlphaMode::Mask { cutoff: 0.3 }, Shading::Lit),
+            ("fence", AlphaMode::Mask { cutoff: 0.5 }, Shading::Lit),
+            ("glass", AlphaMode::Blend, Shading::Lit),
+        ]
+    );
+    let bins = stereocull::bins::Bins::of(&s);
+    // The two cutoffs share a bin: the cutoff is the material's data, not its pipeline.
+    assert_eq!(bins.kinds.len(), 3, "{:?}", bins.kinds);
+    assert_eq!(bins.first_blend_bin(), 2);
 }
