@@ -333,7 +333,8 @@ pub fn presets_and_random_rigs(random: usize) -> Vec<Rig> {
 
 /// `scene` with its meshes spread over materials of every alpha mode (opaque, cutouts
 /// at random cutoffs, blended) at random (fixed `seed`), so that its draws fall into
-/// every material bin. Each mesh's vertices name its one material.
+/// every material bin (with three meshes or more, every alpha mode). Each mesh's
+/// vertices name its one material.
 pub fn with_random_bins(mut scene: Scene, seed: u64) -> Scene {
     use stereocull::scene::{AlphaMode, Material};
     let mut rng = rand_pcg::Pcg64Mcg::seed_from_u64(seed);
@@ -356,9 +357,15 @@ pub fn with_random_bins(mut scene: Scene, seed: u64) -> Scene {
         let mesh = scene.meshes[m].clone();
         let first = mesh.first_index as usize;
         let indices = &scene.indices[first..first + mesh.index_count as usize];
-        let material = *chosen
-            .entry(mesh.base_vertex)
-            .or_insert_with(|| rng.random_range(0..5));
+        // The first three meshes take one of each alpha mode, the rest at random.
+        let next = chosen.len() as u32;
+        let material = *chosen.entry(mesh.base_vertex).or_insert_with(|| {
+            if next < 3 {
+                next
+            } else {
+                rng.random_range(0..5)
+            }
+        });
         for &i in indices {
             scene.vertices[(i as i32 + mesh.base_vertex) as usize].material = material;
         }
