@@ -31,12 +31,15 @@ impl Importer<'_> {
         if let Some(accessor) = primitive.get(&Semantic::TexCoords(set)) {
             let what = format!("{where_} TEXCOORD_{set}");
             check_accessor(&accessor, accessor.size(), &what)?;
-            // The gltf crate's reader is `unreachable!` on any other component type.
+            // The gltf crate's reader is `unreachable!` on any other component type, and
+            // asserts two components.
             use gltf::accessor::DataType::{F32, U8, U16};
-            if !matches!(accessor.data_type(), F32 | U8 | U16) {
+            let vec2 = accessor.dimensions() == gltf::accessor::Dimensions::Vec2;
+            if !matches!(accessor.data_type(), F32 | U8 | U16) || !vec2 {
                 return Err(format!(
-                    "{what}: accessors[{}] has component type {:?}; texture coordinates are float, unsigned byte or unsigned short",
+                    "{what}: accessors[{}] holds {:?} {:?}; texture coordinates are VEC2 of float, unsigned byte or unsigned short",
                     accessor.index(),
+                    accessor.dimensions(),
                     accessor.data_type()
                 ));
             }
