@@ -8,7 +8,7 @@
 //! shading function. Bins are drawn in [`Bin`] order: by [`BinKind`] first, so blended
 //! surfaces come last, over everything that writes depth.
 
-use crate::scene::{AlphaMode, Scene, Shading};
+use crate::scene::{AlphaMode, Mesh, Scene, Shading};
 
 /// The pipeline state a bin's draws need, in drawing order.
 #[derive(Clone, Copy, Debug, Default, PartialEq, Eq, Hash, PartialOrd, Ord)]
@@ -116,8 +116,15 @@ pub fn mesh_material(scene: &Scene, m: usize) -> u32 {
     if mesh.index_count == 0 {
         return 0;
     }
-    let vertex = (scene.indices.get(mesh.first_index as usize))
-        .and_then(|&i| usize::try_from(i as i64 + mesh.base_vertex as i64).ok())
-        .and_then(|v| scene.vertices.get(v));
-    vertex.map_or(0, |v| v.material)
+    let first = scene.indices.get(mesh.first_index as usize);
+    first
+        .and_then(|&i| vertex_material(scene, mesh, i))
+        .unwrap_or(0)
+}
+
+/// The material of `mesh`'s vertex at `index` (an entry of its index list), if that
+/// vertex exists.
+pub fn vertex_material(scene: &Scene, mesh: &Mesh, index: u32) -> Option<u32> {
+    let v = usize::try_from(index as i64 + mesh.base_vertex as i64).ok()?;
+    scene.vertices.get(v).map(|v| v.material)
 }

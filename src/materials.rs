@@ -10,7 +10,7 @@ use bytemuck::{Pod, Zeroable};
 use image::RgbaImage;
 use image::imageops::FilterType;
 
-use crate::bins::mesh_material;
+use crate::bins::{mesh_material, vertex_material};
 use crate::buffers::init_buffer;
 use crate::error::{Error, Result};
 use crate::scene::{AlphaMode, Material, Scene};
@@ -112,16 +112,9 @@ fn check_one_material(scene: &Scene, m: usize) -> Result<()> {
     let mesh = &scene.meshes[m];
     let first = mesh.first_index as usize;
     let indices = scene.indices.get(first..first + mesh.index_count as usize);
-    let material = |i: &u32| {
-        let v = usize::try_from(*i as i64 + mesh.base_vertex as i64).ok();
-        v.and_then(|v| scene.vertices.get(v)).map(|v| v.material)
-    };
     let own = mesh_material(scene, m);
-    match indices
-        .into_iter()
-        .flatten()
-        .find_map(|i| material(i).filter(|&x| x != own))
-    {
+    let other = |&i: &u32| vertex_material(scene, mesh, i).filter(|&x| x != own);
+    match indices.into_iter().flatten().find_map(other) {
         Some(other) => Err(Error::InvalidScene(format!(
             "mesh {m} ({:?}) mixes materials {own} and {other}: a mesh is drawn by one material's pipeline",
             mesh.name

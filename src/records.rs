@@ -216,11 +216,6 @@ impl CullLayout {
             .collect()
     }
 
-    /// Draw entries of every view's outputs: the bins' ranges together.
-    pub fn draw_entries(&self, levels: u32) -> u32 {
-        self.bin_ranges(levels).iter().map(|r| r.capacity).sum()
-    }
-
     /// A vacant place's sphere: its radius of minus infinity fails every plane test
     /// (GPU and CPU alike) and adds nothing to a coarse block's bounds.
     pub const VACANT_SPHERE: Vec4 = Vec4::new(0.0, 0.0, 0.0, f32::NEG_INFINITY);

@@ -343,13 +343,15 @@ fn into_bins(
     levels: u32,
     ordered: impl Iterator<Item = (u32, DrawArgs)>,
 ) -> (Vec<DrawArgs>, Vec<BinDraws>) {
-    let mut bins: Vec<BinDraws> = (layout.bin_ranges(levels).iter())
+    let ranges = layout.bin_ranges(levels);
+    let entries = ranges.last().map_or(0, |r| r.first + r.capacity);
+    let mut draws = vec![DrawArgs::default(); entries as usize];
+    let mut bins: Vec<BinDraws> = (ranges.iter())
         .map(|r| BinDraws {
             first: r.first,
             count: 0,
         })
         .collect();
-    let mut draws = vec![DrawArgs::default(); layout.draw_entries(levels) as usize];
     let first_blend = layout.bins.first_blend_bin();
     for (bin, draw) in ordered.filter(|&(bin, _)| bin < first_blend) {
         let b = &mut bins[bin as usize];
@@ -431,19 +433,18 @@ fn sort_blended(
 ) {
     let first_blend = layout.bins.first_blend_bin() as usize;
     for b in first_blend..out.bins.len() {
-        let mut records: Vec<(u32, u32, usize)> = (out.visible.iter().enumerate())
+        // (key, id) orders them; the slot and mesh come along.
+        let mut records: Vec<(u32, u32, usize, usize)> = (out.visible.iter().enumerate())
             .filter_map(|(slot, &id)| {
                 let place = layout.positions[id as usize] as usize;
                 let mesh = layout.mesh_of[place] as usize;
                 let key = sort_key(layout.spheres[place], origin);
-                (layout.meshes[mesh].bin == b as u32).then_some((key, id, slot))
+                (layout.meshes[mesh].bin == b as u32).then_some((key, id, slot, mesh))
             })
             .collect();
         records.sort_unstable();
         let first = out.bins[b].first as usize;
-        for (i, &(_, id, slot)) in records.iter().enumerate() {
-            let place = layout.positions[id as usize] as usize;
-            let mesh = layout.mesh_of[place] as usize;
+        for (i, &(_, _, slot, mesh)) in records.iter().enumerate() {
             let lod = layout.lods[mesh * MAX_LODS + level_of(slot)];
             out.draws[first + i] = DrawArgs {
                 index_count: lod.index_count,

@@ -24,11 +24,10 @@ use crate::shaders::Windows;
 
 pub(super) struct Culler {
     kind: Kind,
-    /// Instance slots of room, and draw entries per view (meshes times levels): what
-    /// every view's outputs hold.
+    /// Instance slots of room: what every view's visible list holds.
     slots: u32,
-    draws: u32,
-    /// The material bins' ranges of the draws (fixed: meshes do not change).
+    /// The material bins' ranges of every view's draws (fixed: meshes do not change;
+    /// a re-layout that would change them reallocates).
     bins: Vec<BinRange>,
 }
 
@@ -78,7 +77,6 @@ impl Culler {
         windows: Windows,
     ) -> Culler {
         let bins = layout.bin_ranges(shape.levels);
-        let draws = layout.draw_entries(shape.levels);
         let kind = match mode {
             CullMode::Cpu => Kind::Cpu {
                 layout,
@@ -107,14 +105,13 @@ impl Culler {
         Culler {
             kind,
             slots: shape.slots,
-            draws,
             bins,
         }
     }
 
-    /// Draw entries of every view's outputs: meshes times levels of detail.
+    /// Draw entries of every view's outputs: the bins' ranges together.
     pub(super) fn draws(&self) -> u32 {
-        self.draws
+        self.bins.iter().map(|r| r.capacity).sum()
     }
 
     /// The material bins' ranges of every view's draws.
@@ -130,7 +127,7 @@ impl Culler {
         (view, phase): (CullView, Phase),
         contexts: [&wgpu::Buffer; 2],
     ) -> ViewCull {
-        let targets = CullTargets::new(device, self.slots, self.draws);
+        let targets = CullTargets::new(device, self.slots, self.draws());
         let bind_group = match &self.kind {
             Kind::Gpu { culler, scene, .. } => {
                 Some(culler.bind_group(device, scene, contexts, &targets))
