@@ -8,7 +8,8 @@
 //! shading function. Bins are drawn in [`Bin`] order: by [`BinKind`] first, so blended
 //! surfaces come last, over everything that writes depth.
 
-use crate::scene::{AlphaMode, Mesh, Scene, Shading};
+use crate::error::{Error, Result};
+use crate::scene::{AlphaMode, Instance, Material, Mesh, Scene, Shading};
 
 /// The pipeline state a bin's draws need, in drawing order.
 #[derive(Clone, Copy, Debug, Default, PartialEq, Eq, Hash, PartialOrd, Ord)]
@@ -75,16 +76,20 @@ pub struct BinRange {
     pub capacity: u32,
 }
 
+impl Bin {
+    /// The bin of a material (`None`: a scene without materials draws lit and opaque).
+    pub fn of(material: Option<&Material>) -> Bin {
+        material.map_or(Bin::default(), |m| Bin {
+            alpha: BinKind::of(m.alpha),
+            shading: m.shading,
+        })
+    }
+}
+
 impl Bins {
     /// The bins of `scene`'s meshes, each by its material ([`mesh_material`]).
     pub fn of(scene: &Scene) -> Bins {
-        let kind_of = |m: usize| {
-            let material = scene.materials.get(mesh_material(scene, m) as usize);
-            material.map_or(Bin::default(), |m| Bin {
-                alpha: BinKind::of(m.alpha),
-                shading: m.shading,
-            })
-        };
+        let kind_of = |m: usize| Bin::of(scene.materials.get(mesh_material(scene, m) as usize));
         let mesh_kinds: Vec<Bin> = (0..scene.meshes.len()).map(kind_of).collect();
         let mut kinds = mesh_kinds.clone();
         kinds.sort();
@@ -127,4 +132,32 @@ pub fn mesh_material(scene: &Scene, m: usize) -> u32 {
 pub fn vertex_material(scene: &Scene, mesh: &Mesh, index: u32) -> Option<u32> {
     let v = usize::try_from(index as i64 + mesh.base_vertex as i64).ok()?;
     scene.vertices.get(v).map(|v| v.material)
+}
+
+/// An instance's own material ([`Instance::material`]) must exist and keep its mesh's
+/// bin: the cull groups draws by mesh, so the instance is drawn by its mesh's pipeline.
+pub fn check_override(scene: &Scene, instance: &Instance) -> Result<()> {
+    let Some(own) = instance.material else {
+        return Ok(());
+    };
+    let Some(material) = scene.materials.get(own as usize) else {
+        return Err(Error::InvalidScene(format!(
+            "an instance names material {own} of {}",
+            scene.materials.len()
+        )));
+    };
+    let Some(mesh) = scene.meshes.get(instance.mesh as usize) else {
+        return Ok(());
+    };
+    let mesh_bin = Bin::of(scene.materials.get(mesh_material(scene, instance.mesh as usize) as usize));
+    match Bin::of(Some(material)) == mesh_bin {
+        true => Ok(()),
+        false => Err(Error::InvalidScene(format!(
+            "an instance of mesh {:?} names material {own} ({:?}), drawn as {:?}; its mesh is drawn as {:?}, and an instance keeps its mesh's pipeline",
+            mesh.name,
+            material.name,
+            Bin::of(Some(material)),
+            mesh_bin
+        ))),
+    }
 }

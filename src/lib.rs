@@ -44,6 +44,7 @@ pub mod live;
 pub mod materials;
 mod modes;
 pub mod occlusion;
+pub mod pbr;
 pub mod places;
 pub mod procedural;
 pub mod profiling;

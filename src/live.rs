@@ -1,4 +1,5 @@
-//! A scene that changes between frames: instances inserted, moved, recolored and removed
+//! A scene that changes between frames: instances inserted, moved, recolored, given
+//! materials of their own and removed
 //! through stable [`Handle`]s, and meshes added, with the changes since the last
 //! [`crate::renderer::Renderer::sync`] kept so that only they cross the bus.
 //!
@@ -38,6 +39,7 @@
 
 use glam::{Affine3A, Mat4, Vec4};
 
+use crate::bins::check_override;
 use crate::error::{Error, Result};
 use crate::places::Places;
 use crate::scene::{Instance, Scene, Vertex};
@@ -68,7 +70,7 @@ pub struct Changes {
     /// Edits of the instances whose transform changed or that were inserted (each slot
     /// once, its last move; none for slots removed since).
     pub moved: Vec<MoveEdit>,
-    /// Slots whose record changed otherwise (color, an insert), each once.
+    /// Slots whose record changed otherwise (color, material, an insert), each once.
     pub recolored: Vec<u32>,
     /// Slots removed: a move staged by an earlier sync is void.
     pub removed: Vec<u32>,
@@ -117,6 +119,7 @@ impl LiveScene {
         world_from_local: Affine3A::IDENTITY,
         mesh: LiveScene::VACANT,
         color: Vec4::ZERO,
+        material: None,
         animation: crate::scene::Animation::NONE,
     };
 
@@ -202,6 +205,7 @@ impl LiveScene {
         if !(instance.animation.spin.is_finite() && instance.animation.bob.is_finite()) {
             return Err(Error::NonFinite("the animation".into()));
         }
+        check_override(&self.scene, &instance)?;
         let slot = match self.vacant.pop_first() {
             Some(slot) => {
                 self.scene.instances[slot as usize] = instance;
@@ -285,6 +289,23 @@ impl LiveScene {
             return Err(Error::NonFinite("the color".into()));
         }
         self.scene.instances[handle.slot as usize].color = color;
+        self.stage_record(handle.slot);
+        Ok(())
+    }
+
+    /// Gives the instance behind `handle` a material of its own in place of its mesh's
+    /// (`None`: its mesh's again), a record edit at the next sync. The material must
+    /// draw with the mesh's pipeline (the same bin, [`check_override`]): an override
+    /// changes the data a fragment reads (textures, cutoff, factors), not the draw.
+    pub fn set_material(&mut self, handle: Handle, material: Option<u32>) -> Result<()> {
+        self.check(handle)?;
+        let slot = handle.slot as usize;
+        let instance = Instance {
+            material,
+            ..self.scene.instances[slot]
+        };
+        check_override(&self.scene, &instance)?;
+        self.scene.instances[slot] = instance;
         self.stage_record(handle.slot);
         Ok(())
     }

@@ -41,6 +41,7 @@ pub fn scene(n: u32, mesh_count: u32, seed: u64) -> Scene {
                 ),
                 mesh: rng.random_range(0..scene.meshes.len() as u32),
                 color: Vec4::new(rng.random(), rng.random(), rng.random(), 1.0),
+                material: None,
                 animation: Animation::NONE,
             }
         })
@@ -133,6 +134,7 @@ pub fn city(n: u32, seed: u64) -> Scene {
             world_from_local: Affine3A::from_scale_rotation_translation(size, Quat::IDENTITY, at),
             mesh,
             color: Vec4::new(grey, grey * 0.95, grey * 0.9, 1.0),
+            material: None,
             animation: Animation::NONE,
         }
     }));
@@ -186,6 +188,7 @@ pub fn rooms(n: u32, seed: u64) -> Scene {
             world_from_local: Affine3A::from_scale_rotation_translation(size, rotation, at),
             mesh,
             color,
+            material: None,
             animation: Animation::NONE,
         });
     };
@@ -275,6 +278,7 @@ pub fn texture(scene: &mut Scene) {
     scene.textures = vec![Texture {
         name: "procedural tiles".into(),
         image,
+        encoding: Default::default(),
     }];
     scene.materials = vec![Material {
         name: "tiled".into(),

@@ -9,7 +9,8 @@ use crate::bins::{BinKind, BinRange, Bins};
 use crate::places::Places;
 use crate::scene::{Instance, MAX_LODS, Mesh, Scene};
 
-/// What the vertex shader reads per instance, indexed by instance id (64 bytes).
+/// What the vertex shader reads per instance, indexed by instance id (80 bytes: WGSL
+/// rounds the record to its rows' 16-byte alignment).
 #[repr(C)]
 #[derive(Clone, Copy, Debug, PartialEq, Pod, Zeroable)]
 pub struct InstanceRecord {
@@ -23,6 +24,15 @@ pub struct InstanceRecord {
     pub spin: f32,
     /// [`crate::scene::Animation::bob`]: meters along world +Y.
     pub bob: f32,
+    /// [`Instance::material`], or [`InstanceRecord::MESH_MATERIAL`]: the mesh's own.
+    pub material: u32,
+    /// Zeros (the record is 80 bytes).
+    pub unused: [u32; 3],
+}
+
+impl InstanceRecord {
+    /// No override: the instance draws with its mesh's material.
+    pub const MESH_MATERIAL: u32 = u32::MAX;
 }
 
 /// The 32 bytes before a scatter's edits (`EditHeader` in `wgsl/shared/scatter.wgsl`).
@@ -60,7 +70,7 @@ pub struct MoveEdit {
     pub radius: f32,
 }
 
-/// A rewritten instance record as the records scatter takes it (68 bytes): the slot,
+/// A rewritten instance record as the records scatter takes it (72 bytes): the slot,
 /// then [`InstanceRecord`]'s members (flat: WGSL would align a nested record to 16).
 #[repr(C)]
 #[derive(Clone, Copy, Debug, PartialEq, Pod, Zeroable)]
@@ -77,6 +87,8 @@ pub struct RecordEdit {
     pub spin: f32,
     /// [`InstanceRecord::bob`].
     pub bob: f32,
+    /// [`InstanceRecord::material`].
+    pub material: u32,
 }
 
 /// A place of the cull order and the slot now there ([`Places::VACANT`]: none), as the
@@ -100,6 +112,7 @@ impl RecordEdit {
             mesh: record.mesh,
             spin: record.spin,
             bob: record.bob,
+            material: record.material,
         }
     }
 }
@@ -352,6 +365,8 @@ pub fn instance_record(inst: &Instance) -> InstanceRecord {
         mesh: inst.mesh,
         spin: inst.animation.spin,
         bob: inst.animation.bob,
+        material: inst.material.unwrap_or(InstanceRecord::MESH_MATERIAL),
+        unused: [0; 3],
     }
 }
 

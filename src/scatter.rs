@@ -5,7 +5,7 @@
 //! new world sphere's radius: 56 bytes each, made by
 //! [`crate::live::LiveScene::set_transform`] and inserts) written into the instance
 //! records and, under GPU culling, the spheres in cull order, and whole records (slot
-//! and the 64-byte record: recolors, inserts). A frame without edits uploads and
+//! and the 80-byte record: recolors, inserts). A frame without edits uploads and
 //! dispatches nothing.
 //!
 //! The radius is computed on the CPU ([`crate::scene::Scene::world_sphere`]): WGSL's
@@ -396,7 +396,7 @@ fn edits_buffer(device: &wgpu::Device, size: u64) -> wgpu::Buffer {
     storage_buffer(device, "stereocull.edits", size, usage)
 }
 
-/// The record edit of `slot`: the slot, then its whole 64-byte instance record, as the
+/// The record edit of `slot`: the slot, then its whole instance record, as the
 /// records scatter reads them.
 pub fn record_edit(scene: &Scene, slot: u32) -> RecordEdit {
     RecordEdit::new(slot, instance_record(&scene.instances[slot as usize]))

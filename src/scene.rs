@@ -21,22 +21,40 @@ pub struct Vertex {
     /// Index into [`Scene::materials`]. Per vertex because glTF gives each primitive (our
     /// mesh) one material: the vertex stage then needs no extra load to find it.
     pub material: u32,
+    /// Local tangent (xyz, along +u of `uv`) and handedness (w: the bitangent is
+    /// `w * cross(normal, tangent)`), as signed normalized bytes: what normal maps need,
+    /// in 4 bytes (8-bit normal maps resolve no finer than the byte's 1/127).
+    pub tangent: [i8; 4],
 }
 
 impl Vertex {
-    /// An untextured vertex of material 0.
+    /// An untextured vertex of material 0, its tangent any unit vector across `normal`.
     pub fn new(position: Vec3, normal: Vec3) -> Vertex {
+        let across = normal.normalize_or(Vec3::Y).any_orthonormal_vector();
         Vertex {
             position: position.into(),
             normal: normal.into(),
             uv: [0.0; 2],
             material: 0,
+            tangent: pack_snorm8(across.extend(1.0)),
         }
+    }
+
+    /// The tangent as the vertex stage reads it (`Snorm8x4`).
+    pub fn tangent(&self) -> Vec4 {
+        Vec4::from_array(self.tangent.map(|c| (c as f32 / 127.0).max(-1.0)))
     }
 }
 
-/// What a surface is made of, beyond the instance's color (which multiplies it).
-#[derive(Clone, Debug, Default, PartialEq)]
+/// `v` (each component in -1..=1) as signed normalized bytes, rounded to nearest.
+pub fn pack_snorm8(v: Vec4) -> [i8; 4] {
+    v.to_array().map(|c| (c.clamp(-1.0, 1.0) * 127.0).round() as i8)
+}
+
+/// What a surface is made of, beyond the instance's color (which multiplies it): glTF's
+/// metallic-roughness model. Textures are indices into [`Scene::textures`]; base color
+/// and emissive ones must be [`Encoding::Srgb`], the others [`Encoding::Linear`].
+#[derive(Clone, Debug, PartialEq)]
 pub struct Material {
     /// As the file names it (or empty).
     pub name: String,
@@ -46,6 +64,55 @@ pub struct Material {
     pub alpha: AlphaMode,
     /// The shading function: its pipeline.
     pub shading: Shading,
+    /// Metalness, 0 (dielectric) to 1 (metal); times the blue channel of
+    /// `metallic_roughness_texture`.
+    pub metallic: f32,
+    /// Perceptual roughness, 0 (mirror) to 1; times the green channel of
+    /// `metallic_roughness_texture`.
+    pub roughness: f32,
+    /// glTF's `metallicRoughnessTexture` (linear).
+    pub metallic_roughness_texture: Option<u32>,
+    /// A tangent-space normal map (linear), read through the vertices' tangents.
+    pub normal_texture: Option<u32>,
+    /// Scales the normal map's x and y.
+    pub normal_scale: f32,
+    /// Ambient occlusion in the red channel (linear).
+    pub occlusion_texture: Option<u32>,
+    /// How much of the occlusion applies: 0 none, 1 all.
+    pub occlusion_strength: f32,
+    /// Emitted linear RGB (glTF's `emissiveFactor` times `KHR_materials_emissive_strength`).
+    pub emissive: Vec3,
+    /// Times `emissive` (sRGB).
+    pub emissive_texture: Option<u32>,
+    /// Times `emissive`: glTF's `KHR_materials_emissive_strength`, for emission past 1.
+    pub emissive_strength: f32,
+    /// Maps the vertices' `uv` to every texture's coordinates (glTF's
+    /// `KHR_texture_transform`, one per material): `uv' = matrix2 * uv + translation`.
+    pub uv_transform: glam::Affine2,
+}
+
+impl Default for Material {
+    /// Opaque, lit, untextured: a rough dielectric (what scenes without glTF materials
+    /// draw with), not glTF's default of a metal, which needs an environment to show.
+    fn default() -> Material {
+        Material {
+            name: String::new(),
+            base_color_texture: None,
+            alpha: AlphaMode::Opaque,
+            shading: Shading::Lit,
+            metallic: 0.0,
+            roughness: 0.5,
+            metallic_roughness_texture: None,
+            normal_texture: None,
+            normal_scale: 1.0,
+            occlusion_texture: None,
+            occlusion_strength: 1.0,
+            emissive: Vec3::ZERO,
+            emissive_texture: None,
+            emissive_strength: 1.0,
+            uv_transform: glam::Affine2::IDENTITY,
+        }
+    }
 }
 
 /// Which function shades a material's fragments: each is its own pipeline, so each
@@ -79,13 +146,27 @@ pub enum AlphaMode {
     Blend,
 }
 
-/// A base color image: sRGB-encoded RGBA, straight alpha.
+/// An image a material samples: RGBA, straight alpha.
 #[derive(Clone, Debug, PartialEq)]
 pub struct Texture {
     /// As the file names it (or empty).
     pub name: String,
     /// The texels.
     pub image: image::RgbaImage,
+    /// What the texels hold: colors (sRGB) or data (linear).
+    pub encoding: Encoding,
+}
+
+/// How a texture's bytes map to values: the GPU decodes sRGB colors before filtering,
+/// and must not decode data (normals, roughness, occlusion), so each encoding is its
+/// own texture array.
+#[derive(Clone, Copy, Debug, Default, PartialEq, Eq, Hash)]
+pub enum Encoding {
+    /// Colors: base color, emissive.
+    #[default]
+    Srgb,
+    /// Data: metallic-roughness, normal and occlusion maps.
+    Linear,
 }
 
 /// A mesh's slice of the shared buffers and its local bounding sphere.
@@ -136,6 +217,11 @@ pub struct Instance {
     pub mesh: u32,
     /// Linear RGBA.
     pub color: Vec4,
+    /// The instance's own material in place of its mesh's (an index into
+    /// [`Scene::materials`]), or `None`. It must draw with the mesh's pipeline (the same
+    /// [`crate::bins::Bin`]: alpha mode and shading), since draws are grouped by mesh;
+    /// what may differ is the data (textures, cutoff, factors).
+    pub material: Option<u32>,
     /// Motion the GPU evaluates from the frame context's time, with no CPU work per frame.
     pub animation: Animation,
 }

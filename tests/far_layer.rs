@@ -98,6 +98,7 @@ fn turned_box(at: Vec3, half: Vec3, color: Vec4, (mesh, turn): (u32, glam::Quat)
         world_from_local: Affine3A::from_scale_rotation_translation(half * 2.0, turn, at),
         mesh,
         color,
+        material: None,
         animation: Animation::NONE,
     }
 }

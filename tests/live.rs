@@ -53,6 +53,7 @@ fn random_instance(rng: &mut Pcg64Mcg, mesh: u32) -> Instance {
         world_from_local: random_transform(rng),
         mesh,
         color: Vec4::new(rng.random(), rng.random(), rng.random(), 1.0),
+        material: None,
         animation: Animation::NONE,
     }
 }

@@ -71,6 +71,7 @@ fn near_middle_and_far_instances_take_the_expected_levels() {
         world_from_local: Affine3A::IDENTITY,
         mesh: 0,
         color: Vec4::ONE,
+        material: None,
         animation: Animation::NONE,
     });
     let begins: Vec<f32> = mesh
@@ -93,6 +94,7 @@ fn near_middle_and_far_instances_take_the_expected_levels() {
             world_from_local: Affine3A::from_translation(viewer - Vec3::Z * d),
             mesh: 0,
             color: Vec4::ONE,
+            material: None,
             animation: Animation::NONE,
         })
         .collect();

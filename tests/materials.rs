@@ -556,6 +556,7 @@ fn glass_panes(depths: [f32; 3]) -> Scene {
             world_from_local: Affine3A::from_translation(at),
             mesh,
             color,
+            material: None,
             animation: Animation::NONE,
         });
     }
@@ -623,4 +624,104 @@ fn overlapping_glass_blends_back_to_front_in_both_eyes() {
             }
         }
     }
+}
+
+/// `scene` with two more opaque, lit materials (one bin: both draw with the built-in
+/// pipeline) that differ in data only: material `a` untextured, `b` sampling a random
+/// 4 x 4 texture (fixed seed); every vertex names `a`. Returns the scene and `b`.
+fn with_two_opaque_materials(mut scene: Scene, seed: u64) -> (Scene, u32) {
+    let mut rng = rand_pcg::Pcg64Mcg::seed_from_u64(seed);
+    let texels: Vec<u8> = (0..64).map(|i| if i % 4 == 3 { 255 } else { rng.random() }).collect();
+    scene.textures.push(stereocull::scene::Texture {
+        name: "random".into(),
+        image: RgbaImage::from_raw(4, 4, texels).unwrap(),
+        encoding: stereocull::scene::Encoding::Srgb,
+    });
+    let a = scene.materials.len() as u32;
+    scene.materials.push(Material {
+        name: "plain".into(),
+        ..Default::default()
+    });
+    scene.materials.push(Material {
+        name: "textured".into(),
+        base_color_texture: Some(scene.textures.len() as u32 - 1),
+        ..Default::default()
+    });
+    for v in &mut scene.vertices {
+        v.material = a;
+    }
+    (scene, a + 1)
+}
+
+/// Per-instance material overrides through live edits: every instance of two meshes
+/// takes material `b` in place of its mesh's `a` (a record edit each), and the frame
+/// is, exactly, that of the scene whose two meshes name `b` themselves (the same
+/// pipeline draws the same fragments: only where the material index comes from
+/// differs); clearing the overrides gives the first image back. An override of another
+/// bin, or of a material the scene lacks, is an error naming it, and so is such an
+/// override in a scene a renderer is made for.
+#[test]
+fn instances_take_materials_of_their_own_in_a_live_scene() {
+    let gpu = support::gpu();
+    let (scene, b) = with_two_opaque_materials(procedural::scene(400, 6, 31), 31);
+    let rig = support::sized("hmd", 96, 72);
+    let options = RendererOptions {
+        shadows: false,
+        ..support::frustum_only()
+    };
+    let read = |renderer: &mut Renderer, targets: &[stereocull::renderer::DisplayTarget]| {
+        renderer
+            .submit_frame(&gpu.device, &gpu.queue, &rig, 0.0, targets)
+            .unwrap();
+        stereocull::readback::read_rgba8(&gpu.device, &gpu.queue, &targets[0].color).unwrap()
+    };
+    let mut live = stereocull::live::LiveScene::new(scene.clone());
+    let mut renderer = Renderer::new(&gpu.device, live.scene(), &rig, options.clone()).unwrap();
+    let targets = renderer.create_targets(&gpu.device);
+    let before = read(&mut renderer, &targets);
+
+    let overridden = [1u32, 4];
+    for h in live.handles() {
+        if overridden.contains(&live.get(h).unwrap().mesh) {
+            live.set_material(h, Some(b)).unwrap();
+        }
+    }
+    renderer.sync(&gpu.device, &gpu.queue, &mut live).unwrap();
+    let after = read(&mut renderer, &targets);
+
+    let mut reference = scene.clone();
+    for &m in &overridden {
+        let mesh = scene.meshes[m as usize].clone();
+        let first = mesh.first_index as usize;
+        for &i in &scene.indices[first..first + mesh.index_count as usize] {
+            reference.vertices[(i as i32 + mesh.base_vertex) as usize].material = b;
+        }
+    }
+    let want = render_all(&reference, &rig, options.clone()).remove(0);
+    assert_ne!(after, before, "the overrides change the image");
+    support::assert_images_match("overrides", &after, &want, Tolerance::EXACT);
+
+    for h in live.handles() {
+        live.set_material(h, None).unwrap();
+    }
+    renderer.sync(&gpu.device, &gpu.queue, &mut live).unwrap();
+    let cleared = read(&mut renderer, &targets);
+    support::assert_images_match("overrides cleared", &cleared, &before, Tolerance::EXACT);
+
+    let h = live.handles()[0];
+    let glass = live.scene().materials.len() as u32;
+    let mut with_glass = live.scene().clone();
+    with_glass.materials.push(Material {
+        name: "glass".into(),
+        alpha: AlphaMode::Blend,
+        ..Default::default()
+    });
+    let mut live_glass = stereocull::live::LiveScene::new(with_glass.clone());
+    let err = live_glass.set_material(h, Some(glass)).unwrap_err().to_string();
+    assert!(err.contains("\"glass\"") && err.contains("pipeline"), "{err}");
+    let err = live.set_material(h, Some(99)).unwrap_err().to_string();
+    assert!(err.contains("material 99 of"), "{err}");
+    with_glass.instances[0].material = Some(glass);
+    let err = Renderer::new(&gpu.device, &with_glass, &rig, options).err().map(|e| e.to_string());
+    assert!(err.is_some_and(|e| e.contains("\"glass\"")), "a renderer refuses it");
 }

@@ -242,6 +242,7 @@ fn edit(live: &mut LiveScene, rng: &mut Pcg64Mcg) {
                 * Affine3A::from_scale(Vec3::splat(0.4)),
             mesh: k % 4,
             color: Vec4::new(0.9, 0.3, 0.1, 1.0),
+            material: None,
             animation: Animation::NONE,
         })
         .unwrap();
@@ -495,6 +496,7 @@ fn what_one_eye_sees_around_an_edge_is_drawn() {
             ),
             mesh: 0,
             color,
+            material: None,
             animation: Animation::NONE,
         };
         s.instances = vec![

@@ -222,6 +222,7 @@ fn spheres_at(points: &[DVec3], radius: f32) -> Scene {
             ),
             mesh: 0,
             color: glam::Vec4::ONE,
+            material: None,
             animation: stereocull::scene::Animation::NONE,
         })
         .collect();

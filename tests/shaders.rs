@@ -89,6 +89,7 @@ fn records_match_wgsl() {
             ("mesh", offset_of!(InstanceRecord, mesh)),
             ("spin", offset_of!(InstanceRecord, spin)),
             ("bob", offset_of!(InstanceRecord, bob)),
+            ("material", offset_of!(InstanceRecord, material)),
         ],
     );
     check(
@@ -116,11 +117,31 @@ fn records_match_wgsl() {
         "MaterialRecord",
         size_of::<MaterialRecord>(),
         &[
+            ("emissive", offset_of!(MaterialRecord, emissive)),
             (
                 "base_color_layer",
                 offset_of!(MaterialRecord, base_color_layer),
             ),
+            ("uv_transform", offset_of!(MaterialRecord, uv_transform)),
             ("alpha_cutoff", offset_of!(MaterialRecord, alpha_cutoff)),
+            (
+                "metallic_roughness_layer",
+                offset_of!(MaterialRecord, metallic_roughness_layer),
+            ),
+            ("normal_layer", offset_of!(MaterialRecord, normal_layer)),
+            ("occlusion_layer", offset_of!(MaterialRecord, occlusion_layer)),
+            ("emissive_layer", offset_of!(MaterialRecord, emissive_layer)),
+            ("metallic", offset_of!(MaterialRecord, metallic)),
+            ("roughness", offset_of!(MaterialRecord, roughness)),
+            ("normal_scale", offset_of!(MaterialRecord, normal_scale)),
+            (
+                "occlusion_strength",
+                offset_of!(MaterialRecord, occlusion_strength),
+            ),
+            (
+                "emissive_strength",
+                offset_of!(MaterialRecord, emissive_strength),
+            ),
         ],
     );
     check(
@@ -140,11 +161,11 @@ fn records_match_wgsl() {
         size_of::<wgpu::util::DrawIndexedIndirectArgs>()
     );
     assert_eq!(size_of::<DrawArgs>(), 20);
-    assert_eq!(size_of::<InstanceRecord>(), 64);
+    assert_eq!(size_of::<InstanceRecord>(), 80);
 }
 
 /// The scatter passes' edit records, each in the module of its kind, packed as the CPU
-/// writes them: 16, 8, 56 and 68 bytes.
+/// writes them: 32, 8, 56 and 72 bytes.
 #[test]
 fn edit_records_match_wgsl() {
     let check = |kind: EditKind, name: &str, size: usize, rust: &[(&str, usize)]| {
@@ -200,6 +221,7 @@ fn edit_records_match_wgsl() {
             ("mesh", offset_of!(RecordEdit, mesh)),
             ("spin", offset_of!(RecordEdit, spin)),
             ("bob", offset_of!(RecordEdit, bob)),
+            ("material", offset_of!(RecordEdit, material)),
         ],
     );
     // The byte counts the README and SyncStats quote.
@@ -208,7 +230,7 @@ fn edit_records_match_wgsl() {
         size_of::<MoveEdit>(),
         size_of::<RecordEdit>(),
     ];
-    assert_eq!(sizes, [8, 56, 68]);
+    assert_eq!(sizes, [8, 56, 72]);
     // Each kind's module lists its own records after the header.
     for (kind, record) in [
         (EditKind::Places, "PlaceEdit"),
@@ -490,9 +512,10 @@ fn every_pass_binds_what_its_list_declares() {
         assert_eq!(group_2, shadow_map, "{label}: group 2");
         let want: Vec<(u32, String)> = if label.starts_with("stereocull.draw") {
             vec![
-                (0, "base_color_textures".into()),
-                (1, "base_color_sampler".into()),
+                (0, "color_textures".into()),
+                (1, "texture_sampler".into()),
                 (2, "materials".into()),
+                (3, "data_textures".into()),
             ]
         } else if label.starts_with("stereocull.coarse") {
             COARSE_BINDINGS
@@ -526,6 +549,7 @@ fn vertex_layout_matches_wgsl() {
         ("normal", offset_of!(Vertex, normal)),
         ("uv", offset_of!(Vertex, uv)),
         ("material", offset_of!(Vertex, material)),
+        ("tangent", offset_of!(Vertex, tangent)),
     ];
     assert_eq!(members.len(), rust.len());
     for ((member, (name, offset)), attribute) in members.iter().zip(rust).zip(VERTEX_ATTRIBUTES) {
@@ -546,19 +570,26 @@ fn vertex_layout_matches_wgsl() {
                 scalar: naga::Scalar::F32,
             } => wgpu::VertexFormat::Float32x2,
             TypeInner::Scalar(naga::Scalar::U32) => wgpu::VertexFormat::Uint32,
+            // Four bytes the vertex stage reads as -1..=1 ([i8; 4] in Rust).
+            TypeInner::Vector {
+                size: naga::VectorSize::Quad,
+                scalar: naga::Scalar::F32,
+            } if size_of_val(&Vertex::new(Default::default(), Default::default()).tangent) == 4 => {
+                wgpu::VertexFormat::Snorm8x4
+            }
             other => panic!("{name}: {other:?}"),
         };
         assert_eq!(attribute.format, wgsl_format, "{name}");
     }
-    assert_eq!(size_of::<Vertex>(), 36);
+    assert_eq!(size_of::<Vertex>(), 40);
 }
 
 /// Past one binding, a windowed array takes one binding per window, in order, after the
-/// list's other bindings: the scatter pass with 5M instances and 64 MiB bindings binds
+/// list's other bindings: the scatter pass with 5M instances and 80 MiB bindings binds
 /// its edits and positions, five windows of records and two of spheres.
 #[test]
 fn windowed_arrays_take_one_binding_per_window() {
-    let split = Windows::new(5 << 20, 64 << 20);
+    let split = Windows::new(5 << 20, 80 << 20);
     assert_eq!(
         split.instances,
         Window {

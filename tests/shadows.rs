@@ -46,6 +46,7 @@ fn scene() -> Scene {
         world_from_local: Affine3A::from_translation(at),
         mesh,
         color,
+        material: None,
         animation: Animation::NONE,
     };
     s.instances.push(instance(
@@ -249,6 +250,7 @@ fn the_shadow_map_agrees_with_rays_to_the_light() {
         ),
         mesh,
         color: Vec4::ONE,
+        material: None,
         animation: Animation::NONE,
     };
     s.instances

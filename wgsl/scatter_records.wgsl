@@ -1,5 +1,5 @@
 // Whole records (dispatched after the moves, so an inserted instance's record wins):
-// each edit is a slot and its 64-byte instance record, member by member.
+// each edit is a slot and its 80-byte instance record, member by member.
 
 struct Edits {
     header: EditHeader,
@@ -13,5 +13,5 @@ fn scatter(@builtin(workgroup_id) wid: vec3<u32>, @builtin(local_invocation_inde
         return;
     }
     let e = edits.list[i];
-    instances_set(e.slot, InstanceRecord(edit_rows(e.rows), e.color, e.mesh, e.spin, e.bob));
+    instances_set(e.slot, InstanceRecord(edit_rows(e.rows), e.color, e.mesh, e.spin, e.bob, e.material));
 }

@@ -1,5 +1,7 @@
-//! glTF materials: base color textures (decoded with `image` from buffer views, data
-//! URIs or files), the materials that use them, and the UVs they are read at.
+//! glTF materials: the metallic-roughness model's factors and textures (decoded with
+//! `image` from buffer views, data URIs or files; colors sRGB, data linear),
+//! `KHR_materials_unlit`, `KHR_materials_emissive_strength` and `KHR_texture_transform`
+//! (one per material), and the UVs the textures are read at.
 
 use std::path::Path;
 
@@ -9,25 +11,49 @@ use gltf::{Document, Semantic};
 use image::RgbaImage;
 
 use super::{Importer, Step, check_accessor};
-use crate::scene::{AlphaMode, Material, Shading, Texture};
+use crate::scene::{AlphaMode, Encoding, Material, Shading, Texture};
+
+/// A material's texture slots: what it reads, and the set of coordinates and the
+/// transform each reads them with.
+fn slots<'a>(material: &gltf::Material<'a>) -> Vec<(gltf::texture::Info<'a>, Encoding)> {
+    let pbr = material.pbr_metallic_roughness();
+    [
+        pbr.base_color_texture().map(|t| (t, Encoding::Srgb)),
+        pbr.metallic_roughness_texture().map(|t| (t, Encoding::Linear)),
+        material.emissive_texture().map(|t| (t, Encoding::Srgb)),
+    ]
+    .into_iter()
+    .flatten()
+    .collect()
+}
+
+/// The coordinate set of every texture the material reads: the normal and occlusion
+/// maps' and the others' (we keep one set of coordinates per vertex).
+fn tex_coords(material: &gltf::Material) -> Vec<u32> {
+    let mut sets: Vec<u32> = slots(material).iter().map(|(t, _)| t.tex_coord()).collect();
+    sets.extend(material.normal_texture().map(|t| t.tex_coord()));
+    sets.extend(material.occlusion_texture().map(|t| t.tex_coord()));
+    sets
+}
 
 impl Importer<'_> {
-    /// The texture coordinates the base color texture reads (its `texCoord` set), or
-    /// zeros for untextured materials.
+    /// The texture coordinates the material's textures read (their `texCoord` set), or
+    /// zeros for untextured materials. Textures of one material must read one set.
     pub(super) fn uvs(
         &self,
         primitive: &gltf::Primitive,
         where_: &str,
         count: usize,
     ) -> Step<Vec<[f32; 2]>> {
-        let Some(info) = primitive
-            .material()
-            .pbr_metallic_roughness()
-            .base_color_texture()
-        else {
+        let sets = tex_coords(&primitive.material());
+        let Some(&set) = sets.first() else {
             return Ok(vec![[0.0; 2]; count]);
         };
-        let set = info.tex_coord();
+        if let Some(other) = sets.iter().find(|&&s| s != set) {
+            return Err(format!(
+                "{where_}: its material's textures read TEXCOORD_{set} and TEXCOORD_{other}; one set per material is read"
+            ));
+        }
         if let Some(accessor) = primitive.get(&Semantic::TexCoords(set)) {
             let what = format!("{where_} TEXCOORD_{set}");
             check_accessor(&accessor, accessor.size(), &what)?;
@@ -48,7 +74,7 @@ impl Importer<'_> {
         let uvs: Vec<[f32; 2]> = primitive
             .reader(|b| buffers.get(b.index()).map(|d| &d.0[..]))
             .read_tex_coords(set)
-            .ok_or_else(|| format!("{where_}: its material's base color texture reads TEXCOORD_{set}, which it lacks"))?
+            .ok_or_else(|| format!("{where_}: its material's textures read TEXCOORD_{set}, which it lacks"))?
             .into_f32()
             .collect();
         if uvs.len() != count {
@@ -65,10 +91,6 @@ impl Importer<'_> {
         if let Some(&id) = self.materials.get(&material.index()) {
             return Ok(id);
         }
-        let base_color_texture = match material.pbr_metallic_roughness().base_color_texture() {
-            Some(info) => Some(self.texture_id(info.texture().source())?),
-            None => None,
-        };
         let name = match material.index() {
             Some(i) => material
                 .name()
@@ -76,22 +98,46 @@ impl Importer<'_> {
             None => "default".into(),
         };
         let alpha = alpha_mode(material).map_err(|e| format!("material {name:?}: {e}"))?;
-        self.scene.materials.push(Material {
-            name,
-            base_color_texture,
+        let pbr = material.pbr_metallic_roughness();
+        let mut texture = |info: Option<gltf::Texture>, encoding| match info {
+            Some(t) => self.texture_id(t.source(), encoding).map(Some),
+            None => Ok(None),
+        };
+        let normal = material.normal_texture();
+        let occlusion = material.occlusion_texture();
+        let built = Material {
+            base_color_texture: texture(pbr.base_color_texture().map(|t| t.texture()), Encoding::Srgb)?,
+            metallic_roughness_texture: texture(
+                pbr.metallic_roughness_texture().map(|t| t.texture()),
+                Encoding::Linear,
+            )?,
+            normal_texture: texture(normal.as_ref().map(|t| t.texture()), Encoding::Linear)?,
+            occlusion_texture: texture(occlusion.as_ref().map(|t| t.texture()), Encoding::Linear)?,
+            emissive_texture: texture(material.emissive_texture().map(|t| t.texture()), Encoding::Srgb)?,
             alpha,
             shading: match material.unlit() {
                 true => Shading::Unlit,
                 false => Shading::Lit,
             },
-        });
+            metallic: pbr.metallic_factor(),
+            roughness: pbr.roughness_factor(),
+            normal_scale: normal.map_or(1.0, |t| t.scale()),
+            occlusion_strength: occlusion.map_or(1.0, |t| t.strength()),
+            emissive: glam::Vec3::from(material.emissive_factor()),
+            emissive_strength: material.emissive_strength().unwrap_or(1.0),
+            uv_transform: uv_transform(material, &name),
+            name,
+        };
+        self.scene.materials.push(built);
         let id = self.scene.materials.len() as u32 - 1;
         self.materials.insert(material.index(), id);
         Ok(id)
     }
 
-    fn texture_id(&mut self, image: gltf::Image) -> Step<u32> {
-        if let Some(&id) = self.textures.get(&image.index()) {
+    /// Our texture for a glTF image read as `encoding` (an image read both ways is
+    /// two textures, one in each array).
+    fn texture_id(&mut self, image: gltf::Image, encoding: Encoding) -> Step<u32> {
+        if let Some(&id) = self.textures.get(&(image.index(), encoding)) {
             return Ok(id);
         }
         let name = image
@@ -103,9 +149,10 @@ impl Importer<'_> {
         self.scene.textures.push(Texture {
             name,
             image: decoded,
+            encoding,
         });
         let id = self.scene.textures.len() as u32 - 1;
-        self.textures.insert(image.index(), id);
+        self.textures.insert((image.index(), encoding), id);
         Ok(id)
     }
 
@@ -143,6 +190,28 @@ impl Importer<'_> {
         let decoded = image::load_from_memory(bytes).map_err(|e| e.to_string())?;
         Ok(decoded.to_rgba8())
     }
+}
+
+/// The material's `KHR_texture_transform`: its base color texture's, else the first
+/// of its textures that has one (we keep one transform per material; a material whose
+/// textures differ is drawn with the first and logged). Its `texCoord` override is not
+/// read: one set of coordinates per vertex.
+fn uv_transform(material: &gltf::Material, name: &str) -> glam::Affine2 {
+    let transforms: Vec<glam::Affine2> = slots(material)
+        .iter()
+        .filter_map(|(t, _)| t.texture_transform())
+        .map(|t| {
+            let (s, c) = t.rotation().sin_cos();
+            // glTF: T * R * S, R's rows (cos, sin) and (-sin, cos).
+            let rotation = glam::Mat2::from_cols(glam::Vec2::new(c, -s), glam::Vec2::new(s, c));
+            let scale = glam::Mat2::from_diagonal(t.scale().into());
+            glam::Affine2::from_mat2_translation(rotation * scale, t.offset().into())
+        })
+        .collect();
+    if transforms.windows(2).any(|w| w[0] != w[1]) {
+        log::warn!("material {name:?}: its textures' transforms differ; the first applies to all");
+    }
+    transforms.first().copied().unwrap_or(glam::Affine2::IDENTITY)
 }
 
 /// The material's alpha mode; a cutoff must be a finite number (JSON can spell an

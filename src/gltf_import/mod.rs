@@ -126,8 +126,8 @@ struct Importer<'a> {
     mirrored: HashMap<u32, u32>,
     /// glTF material (None: the default material) -> our material id.
     materials: HashMap<Option<usize>, u32>,
-    /// glTF image -> our texture id.
-    textures: HashMap<usize, u32>,
+    /// (glTF image, how it is read) -> our texture id.
+    textures: HashMap<(usize, crate::scene::Encoding), u32>,
     /// Where external images resolve.
     base: Option<&'a Path>,
     skipped: usize,
@@ -184,6 +184,7 @@ impl Importer<'_> {
                     world_from_local,
                     mesh,
                     color,
+                    material: None,
                     animation: Animation::NONE,
                 });
             }
@@ -342,7 +343,7 @@ impl Importer<'_> {
         }
         let material = self.material_id(&primitive.material())?;
         let uvs = self.uvs(primitive, &where_, positions.len())?;
-        let vertices = positions
+        let mut vertices: Vec<Vertex> = positions
             .iter()
             .zip(&normals)
             .zip(uvs)
@@ -352,11 +353,58 @@ impl Importer<'_> {
                 ..Vertex::new(p, n)
             })
             .collect();
+        self.tangents(primitive, &where_, &mut vertices, &indices)?;
         let indices = match primitive.material().double_sided() {
             true => both_windings(&indices),
             false => indices,
         };
         Ok((vertices, indices))
+    }
+}
+
+impl Importer<'_> {
+    /// The file's TANGENTs (VEC4 of float: xyz and handedness), or, for a material
+    /// with a normal map, tangents generated from the coordinates (glTF asks for
+    /// MikkTSpace; ours agree on meshes whose uv map does not shear); other vertices
+    /// keep theirs, which nothing reads.
+    fn tangents(
+        &self,
+        primitive: &gltf::Primitive,
+        where_: &str,
+        vertices: &mut [Vertex],
+        indices: &[u32],
+    ) -> Step<()> {
+        let Some(accessor) = primitive.get(&Semantic::Tangents) else {
+            if primitive.material().normal_texture().is_some() {
+                crate::pbr::generate_tangents(vertices, indices);
+            }
+            return Ok(());
+        };
+        let what = format!("{where_} TANGENT");
+        check_accessor(&accessor, size_of::<[f32; 4]>(), &what)?;
+        if accessor.data_type() != DataType::F32 || accessor.dimensions() != Dimensions::Vec4 {
+            return Err(format!(
+                "{what}: accessors[{}] holds {:?} {:?}; tangents are VEC4 of float",
+                accessor.index(),
+                accessor.dimensions(),
+                accessor.data_type()
+            ));
+        }
+        let buffers = self.buffers;
+        let reader = primitive.reader(|b| buffers.get(b.index()).map(|d| &d.0[..]));
+        let tangents: Vec<[f32; 4]> = reader.read_tangents().into_iter().flatten().collect();
+        if tangents.len() != vertices.len() {
+            return Err(format!("{what} and POSITION differ in count"));
+        }
+        if let Some(bad) = tangents.iter().find(|t| !t.iter().all(|c| c.is_finite())) {
+            return Err(format!("{what}: {bad:?} is not finite"));
+        }
+        for (v, t) in vertices.iter_mut().zip(tangents) {
+            let t = Vec4::from(t);
+            let handedness = if t.w < 0.0 { -1.0 } else { 1.0 };
+            v.tangent = crate::scene::pack_snorm8(t.truncate().normalize_or_zero().extend(handedness));
+        }
+        Ok(())
     }
 }
 

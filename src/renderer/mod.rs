@@ -258,7 +258,7 @@ impl Renderer {
         self.coarse
     }
 
-    /// GPU bytes per instance: the 64-byte instance record, the GPU culler's layout and
+    /// GPU bytes per instance: the 80-byte instance record, the GPU culler's layout and
     /// scratch (GPU culling only), and 4 bytes of visible list per display.
     pub fn gpu_bytes_per_instance(&self) -> u64 {
         let culling = culler::Culler::bytes_per_instance(self.options.cull);

@@ -35,7 +35,7 @@ impl Renderer {
     /// Brings the GPU copy of `live` up to date with its changes since the last sync,
     /// paying for what changed: inserts and removes fill and vacate places of the cull
     /// order (8 bytes each), moved and inserted instances go up as scatter edits (56
-    /// bytes each), recolored and inserted ones as records (68 bytes), all applied by
+    /// bytes each), recolored and inserted ones as records (72 bytes), all applied by
     /// one compute pass in the next `encode`; a mesh out of vacant places lays the cull
     /// order out again (O(instances), with room); a scene that outgrew its buffers, or
     /// gained meshes, is uploaded again with room to grow by half. Call it before

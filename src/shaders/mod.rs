@@ -46,6 +46,7 @@ const DRAW_CLIP_RECT: &str = include_str!("../../wgsl/shared/draw_clip_rect.wgsl
 const DECODE: &str = include_str!("../../wgsl/shared/decode.wgsl");
 const DRAW_COMMON: &str = include_str!("../../wgsl/shared/draw_common.wgsl");
 const BASE_COLOR: &str = include_str!("../../wgsl/shared/base_color.wgsl");
+const PBR: &str = include_str!("../../wgsl/shared/pbr.wgsl");
 const DRAW: &str = include_str!("../../wgsl/draw.wgsl");
 const DRAW_MULTIVIEW: &str = include_str!("../../wgsl/draw_multiview.wgsl");
 
@@ -279,6 +280,7 @@ impl DrawKey {
             BASE_COLOR,
             SHADOW_DECLARATIONS,
             DRAW_COMMON,
+            PBR,
             &shading,
             entry,
         ]
@@ -374,7 +376,7 @@ pub fn shadow_cutout_source(windows: &Windows) -> String {
 /// Every shader variant the crate can build, with its label.
 pub fn all_sources() -> Vec<(String, String)> {
     // Whole bindings, and every windowed array split in three (scenes past one binding).
-    let split = Windows::new(5 << 20, 64 << 20);
+    let split = Windows::new(5 << 20, 80 << 20);
     [Windows::WHOLE, split]
         .iter()
         .flat_map(|w| {

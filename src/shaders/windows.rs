@@ -4,7 +4,7 @@
 /// The per-instance arrays that may outgrow the device's largest storage binding.
 #[derive(Clone, Copy, Debug, PartialEq, Eq)]
 pub enum Windowed {
-    /// Instance records, 64 bytes each.
+    /// Instance records ([`crate::records::InstanceRecord`]).
     Instances,
     /// World bounding spheres, 16 bytes each.
     Spheres,
@@ -14,7 +14,7 @@ impl Windowed {
     /// Bytes per element.
     pub fn stride(self) -> u64 {
         match self {
-            Windowed::Instances => 64,
+            Windowed::Instances => size_of::<crate::records::InstanceRecord>() as u64,
             Windowed::Spheres => 16,
         }
     }

@@ -66,6 +66,7 @@ pub fn cubes(instances: &[(Vec3, u32)], meshes: u32) -> Scene {
             world_from_local: Affine3A::from_translation(p),
             mesh,
             color: Vec4::ONE,
+            material: None,
             animation: Animation::NONE,
         })
         .collect();

@@ -30,6 +30,7 @@ pub fn room() -> Scene {
             world_from_local: Affine3A::from_scale_rotation_translation(scale, rotation, at),
             mesh,
             color: Vec4::new(rgb[0], rgb[1], rgb[2], 1.0),
+            material: None,
             animation: Animation::NONE,
         });
     };

@@ -10,6 +10,8 @@ struct VertexInput {
     @location(2) uv: vec2<f32>,
     // The mesh's material (MaterialRecord index).
     @location(3) material: u32,
+    // Local tangent (xyz) and handedness (w): the bitangent is w * cross(normal, tangent).
+    @location(4) tangent: vec4<f32>,
 }
 
 // Normals transform by the cofactor matrix (inverse transpose times determinant),
@@ -18,6 +20,14 @@ fn world_normal(rows: array<vec4<f32>, 3>, n: vec3<f32>) -> vec3<f32> {
     let m = transpose(mat3x3(rows[0].xyz, rows[1].xyz, rows[2].xyz));
     let cofactor = mat3x3(cross(m[1], m[2]), cross(m[2], m[0]), cross(m[0], m[1]));
     return sign(dot(m[0], cross(m[1], m[2]))) * (cofactor * n);
+}
+
+// Tangents transform as directions; a mirroring transform flips the handedness, since
+// world_normal keeps normals outward.
+fn world_tangent(rows: array<vec4<f32>, 3>, t: vec4<f32>) -> vec4<f32> {
+    let m = transpose(mat3x3(rows[0].xyz, rows[1].xyz, rows[2].xyz));
+    let mirrored = sign(dot(m[0], cross(m[1], m[2])));
+    return vec4(m * t.xyz, t.w * mirrored);
 }
 
 const PI: f32 = 3.14159265358979;
@@ -62,6 +72,8 @@ struct Decoded {
     eye: u32,
     uv: vec2<f32>,
     material: u32,
+    // World tangent and handedness (world_tangent).
+    world_tangent: vec4<f32>,
 }
 
 // Visible slot `slot` for view `eye`, animated by the frame's time; `double_wide`
@@ -94,5 +106,7 @@ fn decode(v: VertexInput, slot: u32, eye: u32, double_wide: bool) -> Decoded {
     let normal = world_normal(rows, spun * v.normal);
     let true_eye = eye + display.first_eye;
     let color = unpack4x8unorm(inst.color);
-    return Decoded(clip, seam, edges, world, normal, color, id, true_eye, v.uv, v.material);
+    let material = select(inst.material, v.material, inst.material == 0xffffffffu);
+    let tangent = world_tangent(rows, vec4(spun * v.tangent.xyz, v.tangent.w));
+    return Decoded(clip, seam, edges, world, normal, color, id, true_eye, v.uv, material, tangent);
 }

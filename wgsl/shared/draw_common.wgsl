@@ -15,6 +15,7 @@ fn vertex(v: VertexInput, slot: u32, eye: u32, double_wide: bool) -> VertexOutpu
     out.normal = d.world_normal;
     out.ids = vec3(d.eye, d.instance, d.material);
     out.uv = d.uv;
+    out.tangent = d.world_tangent;
     return out;
 }
 
@@ -24,13 +25,15 @@ struct FragmentInput {
     @location(0) normal: vec3<f32>,
     @location(1) @interpolate(flat) ids: vec3<u32>,
     @location(2) uv: vec2<f32>,
+    @location(3) tangent: vec4<f32>,
 }
 
 // What a material sees of one fragment: a caller's `fn material(s: Surface) ->
-// vec4<f32>` (RendererOptions::material) replaces `shade` below (its alpha is read by
-// blended materials only); `display.eye[s.eye]`
-// is the eye's context, `frame` the frame's (its light: `frame.light_direction`, and
-// `light_reaching(s.world_position, normal)` for the shadow map).
+// vec4<f32>` (RendererOptions::material) replaces `shade` (its alpha is read by
+// blended materials only); `display.eye[s.eye]` is the eye's context, `frame` the
+// frame's (its light: `frame.light_direction`, and `light_reaching(s.world_position,
+// normal)` for the shadow map). `pbr_inputs(s)` reads the material's textures and
+// factors (wgsl/shared/pbr.wgsl) and `pbr_shade(s, p)` lights them as `shade` does.
 struct Surface {
     world_position: vec3<f32>,
     // Interpolated, not normalized.
@@ -43,6 +46,9 @@ struct Surface {
     // Texture coordinates, and the material (materials[s.material]).
     uv: vec2<f32>,
     material: u32,
+    // World tangent (interpolated, not normalized) and handedness in w: the bitangent
+    // is sign(w) * cross(normal, tangent).
+    tangent: vec4<f32>,
 }
 
 // The surface's color times its material's base color texture, if any.
@@ -86,7 +92,7 @@ fn fragment(in: FragmentInput, eye: u32, viewport: vec4<f32>) -> vec4<f32> {
     }
     let color = unpack4x8unorm(instances_at(in.ids.y).color);
     let world = world_position(in.position, eye, viewport);
-    let s = Surface(world, in.normal, color, eye, in.ids.y, in.uv, in.ids.z);
+    let s = Surface(world, in.normal, color, eye, in.ids.y, in.uv, in.ids.z, in.tangent);
     // The bin's alpha mode (ALPHA_MODE, src/bins.rs): only cutout pipelines discard,
     // so the opaque ones keep early depth testing.
     if (ALPHA_MODE == 1u && !ALPHA_TO_COVERAGE && base_color(s).a < materials[s.material].alpha_cutoff) {
@@ -123,21 +129,4 @@ fn world_position(frag: vec4<f32>, eye: u32, viewport: vec4<f32>) -> vec3<f32> {
     let ndc = vec2(at.x / size.x * 2.0 - 1.0, 1.0 - at.y / size.y * 2.0);
     let world = display.eye[eye].world_from_clip * vec4(ndc, frag.z, 1.0);
     return world.xyz / world.w;
-}
-
-// The built-in shading: diffuse from one light, specular from this eye's own position
-// (not the viewer's: the eye context).
-fn shade(s: Surface) -> vec4<f32> {
-    let to_eye = normalize(display.eye[s.eye].position - s.world_position);
-    var n = normalize(s.normal);
-    if (dot(n, to_eye) < 0.0) {
-        n = -n;
-    }
-    let light = frame.light_direction;
-    let reaching = light_reaching(s.world_position, n);
-    let diffuse = max(dot(n, light), 0.0) * reaching;
-    let half_vector = normalize(light + to_eye);
-    let specular = 0.3 * pow(max(dot(n, half_vector), 0.0), 48.0) * reaching;
-    let base = base_color(s);
-    return vec4(base.rgb * (0.25 + 0.75 * diffuse) + vec3(specular), base.a);
 }

@@ -9,6 +9,8 @@ struct VertexOutput {
     // clipped triangles as varyings grow.
     @location(1) @interpolate(flat) ids: vec3<u32>,
     @location(2) uv: vec2<f32>,
+    // World tangent and handedness, for normal maps.
+    @location(3) tangent: vec4<f32>,
 }
 
 fn set_view_clip(out: ptr<function, VertexOutput>, d: Decoded) {}

@@ -13,6 +13,9 @@ struct InstanceRecord {
     // of bob along world +Y (see vertex() in draw_common.wgsl).
     spin: f32,
     bob: f32,
+    // The instance's own material in place of its mesh's (same bin), or 0xffffffff:
+    // the mesh's (the vertices'). WGSL pads the record to 80 bytes.
+    material: u32,
 }
 
 struct MeshRecord {
@@ -34,12 +37,27 @@ struct LodRecord {
     error_sq: f32,
 }
 
-// Mirrored by MaterialRecord in src/materials.rs (bytemuck).
+// Mirrored by MaterialRecord in src/materials.rs (bytemuck): glTF's metallic-roughness
+// material. Layers are of color_textures (base color, emissive: sRGB) or data_textures
+// (the rest: linear), 0xffffffff (UNTEXTURED) where a slot has no texture.
 struct MaterialRecord {
-    // Layer of base_color_textures, or 0xffffffff: untextured.
+    emissive: vec3<f32>,
     base_color_layer: u32,
+    // KHR_texture_transform, for every texture: uv' = uv_transform * vec3(uv, 1).
+    uv_transform: mat3x2<f32>,
     // Base color alpha below this is a hole (alphaMode MASK); 0 for every other mode.
     alpha_cutoff: f32,
+    // Roughness in green, metalness in blue.
+    metallic_roughness_layer: u32,
+    normal_layer: u32,
+    // Occlusion in red.
+    occlusion_layer: u32,
+    emissive_layer: u32,
+    metallic: f32,
+    roughness: f32,
+    normal_scale: f32,
+    occlusion_strength: f32,
+    emissive_strength: f32,
 }
 
 // Written whole by the draws pass every frame: see DrawArgs in src/records.rs.

@@ -41,6 +41,7 @@ struct RecordEdit {
     mesh: u32,
     spin: f32,
     bob: f32,
+    material: u32,
 }
 
 // This invocation's edit; at or past the header's count when it has none.
