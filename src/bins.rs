@@ -149,7 +149,11 @@ pub fn check_override(scene: &Scene, instance: &Instance) -> Result<()> {
     let Some(mesh) = scene.meshes.get(instance.mesh as usize) else {
         return Ok(());
     };
-    let mesh_bin = Bin::of(scene.materials.get(mesh_material(scene, instance.mesh as usize) as usize));
+    let mesh_bin = Bin::of(
+        scene
+            .materials
+            .get(mesh_material(scene, instance.mesh as usize) as usize),
+    );
     match Bin::of(Some(material)) == mesh_bin {
         true => Ok(()),
         false => Err(Error::InvalidScene(format!(

@@ -2,10 +2,14 @@
 
 use wgpu::util::DeviceExt;
 
-/// The smallest buffer we create: wgpu refuses empty bindings and slices, and 64 bytes
-/// hold one element of any record we bind, so an empty scene draws nothing instead of
-/// failing.
-const MIN_BUFFER: usize = 64;
+/// The smallest buffer we create: wgpu refuses empty bindings and slices, and 80 bytes
+/// hold one element of any record we bind (the largest: the instance and material
+/// records), so an empty scene draws nothing instead of failing.
+const MIN_BUFFER: usize = 80;
+const _: () = assert!(
+    size_of::<crate::records::InstanceRecord>() <= MIN_BUFFER
+        && size_of::<crate::materials::MaterialRecord>() <= MIN_BUFFER
+);
 
 /// A buffer holding `contents`, padded with zeros to at least [`MIN_BUFFER`] bytes.
 pub(crate) fn init_buffer(

@@ -154,9 +154,8 @@ fn check_one_material(scene: &Scene, m: usize) -> Result<()> {
 fn record(scene: &Scene, m: &Material) -> Result<MaterialRecord> {
     let layer = |slot: Option<u32>, encoding: Encoding, what: &str| match slot {
         None => Ok(MaterialRecord::UNTEXTURED),
-        Some(t) => texture_layer(scene, t, encoding).map_err(|e| {
-            Error::InvalidScene(format!("material {:?} {e} ({what})", m.name))
-        }),
+        Some(t) => texture_layer(scene, t, encoding)
+            .map_err(|e| Error::InvalidScene(format!("material {:?} {e} ({what})", m.name))),
     };
     let alpha_cutoff = match m.alpha {
         AlphaMode::Mask { cutoff } if !cutoff.is_finite() => {
@@ -173,7 +172,11 @@ fn record(scene: &Scene, m: &Material) -> Result<MaterialRecord> {
     Ok(MaterialRecord {
         emissive: m.emissive.into(),
         base_color_layer: layer(m.base_color_texture, Encoding::Srgb, "base color")?,
-        uv_transform: [t.matrix2.x_axis.into(), t.matrix2.y_axis.into(), t.translation.into()],
+        uv_transform: [
+            t.matrix2.x_axis.into(),
+            t.matrix2.y_axis.into(),
+            t.translation.into(),
+        ],
         alpha_cutoff,
         metallic_roughness_layer: layer(
             m.metallic_roughness_texture,
@@ -192,7 +195,7 @@ fn record(scene: &Scene, m: &Material) -> Result<MaterialRecord> {
 }
 
 /// Every factor must be a finite number (JSON can spell an infinite one, `1e999`).
-fn check_factors(m: &Material) -> Result<()> {
+pub(crate) fn check_factors(m: &Material) -> Result<()> {
     let t = m.uv_transform;
     let factors = [
         ("metallicFactor", m.metallic),
@@ -236,7 +239,9 @@ fn texture_layer(scene: &Scene, t: u32, encoding: Encoding) -> std::result::Resu
 /// [`MAX_LAYER_SIZE`] and the device's limit; 1 with no textures.
 fn layer_size<'a>(textures: impl Iterator<Item = &'a RgbaImage>, device_max: u32) -> (u32, u32) {
     let fit = |side: u32| side.clamp(1, MAX_LAYER_SIZE.min(device_max));
-    textures.fold((1, 1), |(w, h), t| (w.max(fit(t.width())), h.max(fit(t.height()))))
+    textures.fold((1, 1), |(w, h), t| {
+        (w.max(fit(t.width())), h.max(fit(t.height())))
+    })
 }
 
 /// `image` at `size`, then each mip level below it (halving to 1 x 1).
@@ -292,7 +297,10 @@ impl TextureArray {
             false => images.iter().map(|image| mip_chain(image, size)).collect(),
         };
         let (label, format) = match encoding {
-            Encoding::Srgb => ("stereocull.color_textures", wgpu::TextureFormat::Rgba8UnormSrgb),
+            Encoding::Srgb => (
+                "stereocull.color_textures",
+                wgpu::TextureFormat::Rgba8UnormSrgb,
+            ),
             Encoding::Linear => ("stereocull.data_textures", wgpu::TextureFormat::Rgba8Unorm),
         };
         let texture = device.create_texture(&wgpu::TextureDescriptor {

@@ -88,7 +88,10 @@ pub fn generate_tangents(vertices: &mut [Vertex], indices: &[u32]) {
             Vec3::from(b.position) - Vec3::from(a.position),
             Vec3::from(c.position) - Vec3::from(a.position),
         );
-        let (d1, d2) = (Vec2::from(b.uv) - Vec2::from(a.uv), Vec2::from(c.uv) - Vec2::from(a.uv));
+        let (d1, d2) = (
+            Vec2::from(b.uv) - Vec2::from(a.uv),
+            Vec2::from(c.uv) - Vec2::from(a.uv),
+        );
         // Unnormalized by the uv area's determinant: larger triangles in uv weigh more.
         let sign = if d1.perp_dot(d2) < 0.0 { -1.0 } else { 1.0 };
         let along_u = (e1 * d2.y - e2 * d1.y) * sign;
@@ -102,7 +105,11 @@ pub fn generate_tangents(vertices: &mut [Vertex], indices: &[u32]) {
         let n = Vec3::from(v.normal).normalize_or_zero();
         let along = u_dir - n * n.dot(u_dir);
         if along.length_squared() > 1e-20 && n != Vec3::ZERO {
-            let handedness = if n.cross(along).dot(v_dir) > 0.0 { -1.0 } else { 1.0 };
+            let handedness = if n.cross(along).dot(v_dir) > 0.0 {
+                -1.0
+            } else {
+                1.0
+            };
             v.tangent = pack_snorm8(along.normalize().extend(handedness));
         }
     }

@@ -48,7 +48,8 @@ impl Vertex {
 
 /// `v` (each component in -1..=1) as signed normalized bytes, rounded to nearest.
 pub fn pack_snorm8(v: Vec4) -> [i8; 4] {
-    v.to_array().map(|c| (c.clamp(-1.0, 1.0) * 127.0).round() as i8)
+    v.to_array()
+        .map(|c| (c.clamp(-1.0, 1.0) * 127.0).round() as i8)
 }
 
 /// What a surface is made of, beyond the instance's color (which multiplies it): glTF's

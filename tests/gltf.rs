@@ -477,3 +477,106 @@ fn texture_coordinates_of_three_floats_are_an_error_naming_the_accessor() {
     let msg = regression_error("texcoord-of-three-floats.glb");
     assert!(msg.contains("accessors[3] holds Vec3 F32"), "{msg}");
 }
+
+/// The metallic-roughness model as the importer reads it from `AlphaBlendModeTest`
+/// (written by nobody here): its floor's normal, occlusion and metallic-roughness
+/// textures (the last two one image, read as data: one linear texture) beside its
+/// sRGB base color, its file tangents, and the quads' factors (metallic 0, roughness
+/// 0.8); glTF's defaults where a file is silent.
+#[test]
+fn metallic_roughness_materials_and_tangents_are_read() {
+    use stereocull::scene::Encoding;
+    let path = support::gltf_sample("AlphaBlendModeTest", "glb");
+    let s = scene_spec::load(path.to_str().unwrap()).unwrap();
+    let bed = s.materials.iter().find(|m| m.name == "MatBed").unwrap();
+    let encoding = |t: Option<u32>| s.textures[t.unwrap() as usize].encoding;
+    assert_eq!(encoding(bed.base_color_texture), Encoding::Srgb);
+    assert_eq!(encoding(bed.normal_texture), Encoding::Linear);
+    assert_eq!(bed.occlusion_texture, bed.metallic_roughness_texture);
+    assert_eq!(encoding(bed.occlusion_texture), Encoding::Linear);
+    assert_eq!(
+        (bed.metallic, bed.roughness, bed.normal_scale),
+        (1.0, 1.0, 1.0)
+    );
+    let quad = s.materials.iter().find(|m| m.name == "MatOpaque").unwrap();
+    assert_eq!((quad.metallic, quad.roughness), (0.0, 0.8));
+    assert_eq!(quad.emissive, glam::Vec3::ZERO);
+    // Tangents from the file: unit (to a byte's rounding) and across the normal.
+    for v in &s.vertices {
+        let (t, n) = (v.tangent(), glam::Vec3::from(v.normal).normalize());
+        assert!((t.truncate().length() - 1.0).abs() < 0.02, "{t}");
+        assert!(t.truncate().dot(n).abs() < 0.02, "{t} across {n}");
+        assert_eq!(t.w.abs(), 1.0);
+    }
+    // Every slot's texture must hold what the slot reads.
+    let mut wrong = s.clone();
+    wrong.materials[0].normal_texture = wrong.materials[0].base_color_texture;
+    let gpu = support::gpu();
+    let rig = stereocull::Rig::preset("hmd").unwrap();
+    let options = stereocull::renderer::RendererOptions::default();
+    let err = stereocull::renderer::Renderer::new(&gpu.device, &wrong, &rig, options)
+        .err()
+        .map(|e| e.to_string())
+        .unwrap_or_default();
+    assert!(
+        err.contains("(normal map)") && err.contains("Srgb"),
+        "{err}"
+    );
+}
+
+/// `emissiveFactor` with `KHR_materials_emissive_strength`, the normal map's scale and
+/// the occlusion's strength, and `KHR_texture_transform` as glTF composes it
+/// (translation, then rotation, then scale).
+#[test]
+fn emission_strengths_and_texture_transforms_are_read() {
+    let dir = tempfile::tempdir().unwrap();
+    let floats: [f32; 18] = [
+        0., 0., 0., 1., 0., 0., 0., 1., 0., // triangle
+        0., 0., 1., 0., 0., 1., 0., 0., 0., // its coordinates, then unused
+    ];
+    std::fs::write(dir.path().join("tri.bin"), bytemuck::cast_slice(&floats)).unwrap();
+    let mut json: serde_json::Value =
+        serde_json::from_str(&gltf_json(r#""uri": "tri.bin""#, "")).unwrap();
+    json["extensionsUsed"] =
+        serde_json::json!(["KHR_materials_emissive_strength", "KHR_texture_transform"]);
+    let png = dir.path().join("white.png");
+    image::RgbaImage::from_pixel(2, 2, image::Rgba([255; 4]))
+        .save(&png)
+        .unwrap();
+    json["images"] = serde_json::json!([{"uri": "white.png"}]);
+    json["textures"] = serde_json::json!([{"source": 0}]);
+    json["accessors"]
+        .as_array_mut()
+        .unwrap()
+        .push(serde_json::json!(
+            {"bufferView": 1, "componentType": 5126, "count": 3, "type": "VEC2"}
+        ));
+    let transform = serde_json::json!({"KHR_texture_transform":
+        {"offset": [0.5, 0.25], "rotation": 0.5, "scale": [2.0, 3.0]}});
+    json["materials"] = serde_json::json!([{
+        "name": "lamp",
+        "emissiveFactor": [1.0, 0.5, 0.25],
+        "extensions": {"KHR_materials_emissive_strength": {"emissiveStrength": 4.0}},
+        "normalTexture": {"index": 0, "scale": 0.5},
+        "occlusionTexture": {"index": 0, "strength": 0.25},
+        "pbrMetallicRoughness": {"baseColorTexture": {"index": 0, "extensions": transform}}
+    }]);
+    json["meshes"] = serde_json::json!([{"primitives": [{"attributes": {"POSITION": 0, "TEXCOORD_0": 2}, "material": 0}]}]);
+    let p = dir.path().join("lamp.gltf");
+    std::fs::write(&p, json.to_string()).unwrap();
+    let s = scene_spec::load(p.to_str().unwrap()).unwrap();
+    let m = &s.materials[0];
+    assert_eq!(m.emissive, glam::Vec3::new(1.0, 0.5, 0.25));
+    assert_eq!(
+        (m.emissive_strength, m.normal_scale, m.occlusion_strength),
+        (4.0, 0.5, 0.25)
+    );
+    // A point of the texture's space: scaled, rotated, then offset.
+    let uv = m.uv_transform.transform_point2(glam::Vec2::new(1.0, 0.0));
+    let (s_, c) = 0.5f32.sin_cos();
+    let want = glam::Vec2::new(0.5 + 2.0 * c, 0.25 - 2.0 * s_);
+    assert!((uv - want).length() < 1e-6, "{uv} against {want}");
+    // The normal map with no TANGENT in the file: generated, along +u.
+    let t = s.vertices[0].tangent();
+    assert!((t.truncate() - glam::Vec3::X).length() < 0.02, "{t}");
+}

@@ -631,7 +631,9 @@ fn overlapping_glass_blends_back_to_front_in_both_eyes() {
 /// 4 x 4 texture (fixed seed); every vertex names `a`. Returns the scene and `b`.
 fn with_two_opaque_materials(mut scene: Scene, seed: u64) -> (Scene, u32) {
     let mut rng = rand_pcg::Pcg64Mcg::seed_from_u64(seed);
-    let texels: Vec<u8> = (0..64).map(|i| if i % 4 == 3 { 255 } else { rng.random() }).collect();
+    let texels: Vec<u8> = (0..64)
+        .map(|i| if i % 4 == 3 { 255 } else { rng.random() })
+        .collect();
     scene.textures.push(stereocull::scene::Texture {
         name: "random".into(),
         image: RgbaImage::from_raw(4, 4, texels).unwrap(),
@@ -717,11 +719,22 @@ fn instances_take_materials_of_their_own_in_a_live_scene() {
         ..Default::default()
     });
     let mut live_glass = stereocull::live::LiveScene::new(with_glass.clone());
-    let err = live_glass.set_material(h, Some(glass)).unwrap_err().to_string();
-    assert!(err.contains("\"glass\"") && err.contains("pipeline"), "{err}");
+    let err = live_glass
+        .set_material(h, Some(glass))
+        .unwrap_err()
+        .to_string();
+    assert!(
+        err.contains("\"glass\"") && err.contains("pipeline"),
+        "{err}"
+    );
     let err = live.set_material(h, Some(99)).unwrap_err().to_string();
     assert!(err.contains("material 99 of"), "{err}");
     with_glass.instances[0].material = Some(glass);
-    let err = Renderer::new(&gpu.device, &with_glass, &rig, options).err().map(|e| e.to_string());
-    assert!(err.is_some_and(|e| e.contains("\"glass\"")), "a renderer refuses it");
+    let err = Renderer::new(&gpu.device, &with_glass, &rig, options)
+        .err()
+        .map(|e| e.to_string());
+    assert!(
+        err.is_some_and(|e| e.contains("\"glass\"")),
+        "a renderer refuses it"
+    );
 }

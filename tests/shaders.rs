@@ -129,7 +129,10 @@ fn records_match_wgsl() {
                 offset_of!(MaterialRecord, metallic_roughness_layer),
             ),
             ("normal_layer", offset_of!(MaterialRecord, normal_layer)),
-            ("occlusion_layer", offset_of!(MaterialRecord, occlusion_layer)),
+            (
+                "occlusion_layer",
+                offset_of!(MaterialRecord, occlusion_layer),
+            ),
             ("emissive_layer", offset_of!(MaterialRecord, emissive_layer)),
             ("metallic", offset_of!(MaterialRecord, metallic)),
             ("roughness", offset_of!(MaterialRecord, roughness)),

@@ -19,7 +19,8 @@ fn slots<'a>(material: &gltf::Material<'a>) -> Vec<(gltf::texture::Info<'a>, Enc
     let pbr = material.pbr_metallic_roughness();
     [
         pbr.base_color_texture().map(|t| (t, Encoding::Srgb)),
-        pbr.metallic_roughness_texture().map(|t| (t, Encoding::Linear)),
+        pbr.metallic_roughness_texture()
+            .map(|t| (t, Encoding::Linear)),
         material.emissive_texture().map(|t| (t, Encoding::Srgb)),
     ]
     .into_iter()
@@ -74,7 +75,9 @@ impl Importer<'_> {
         let uvs: Vec<[f32; 2]> = primitive
             .reader(|b| buffers.get(b.index()).map(|d| &d.0[..]))
             .read_tex_coords(set)
-            .ok_or_else(|| format!("{where_}: its material's textures read TEXCOORD_{set}, which it lacks"))?
+            .ok_or_else(|| {
+                format!("{where_}: its material's textures read TEXCOORD_{set}, which it lacks")
+            })?
             .into_f32()
             .collect();
         if uvs.len() != count {
@@ -106,14 +109,20 @@ impl Importer<'_> {
         let normal = material.normal_texture();
         let occlusion = material.occlusion_texture();
         let built = Material {
-            base_color_texture: texture(pbr.base_color_texture().map(|t| t.texture()), Encoding::Srgb)?,
+            base_color_texture: texture(
+                pbr.base_color_texture().map(|t| t.texture()),
+                Encoding::Srgb,
+            )?,
             metallic_roughness_texture: texture(
                 pbr.metallic_roughness_texture().map(|t| t.texture()),
                 Encoding::Linear,
             )?,
             normal_texture: texture(normal.as_ref().map(|t| t.texture()), Encoding::Linear)?,
             occlusion_texture: texture(occlusion.as_ref().map(|t| t.texture()), Encoding::Linear)?,
-            emissive_texture: texture(material.emissive_texture().map(|t| t.texture()), Encoding::Srgb)?,
+            emissive_texture: texture(
+                material.emissive_texture().map(|t| t.texture()),
+                Encoding::Srgb,
+            )?,
             alpha,
             shading: match material.unlit() {
                 true => Shading::Unlit,
@@ -128,6 +137,7 @@ impl Importer<'_> {
             uv_transform: uv_transform(material, &name),
             name,
         };
+        crate::materials::check_factors(&built).map_err(|e| e.to_string())?;
         self.scene.materials.push(built);
         let id = self.scene.materials.len() as u32 - 1;
         self.materials.insert(material.index(), id);
@@ -211,7 +221,10 @@ fn uv_transform(material: &gltf::Material, name: &str) -> glam::Affine2 {
     if transforms.windows(2).any(|w| w[0] != w[1]) {
         log::warn!("material {name:?}: its textures' transforms differ; the first applies to all");
     }
-    transforms.first().copied().unwrap_or(glam::Affine2::IDENTITY)
+    transforms
+        .first()
+        .copied()
+        .unwrap_or(glam::Affine2::IDENTITY)
 }
 
 /// The material's alpha mode; a cutoff must be a finite number (JSON can spell an

@@ -402,7 +402,8 @@ impl Importer<'_> {
         for (v, t) in vertices.iter_mut().zip(tangents) {
             let t = Vec4::from(t);
             let handedness = if t.w < 0.0 { -1.0 } else { 1.0 };
-            v.tangent = crate::scene::pack_snorm8(t.truncate().normalize_or_zero().extend(handedness));
+            v.tangent =
+                crate::scene::pack_snorm8(t.truncate().normalize_or_zero().extend(handedness));
         }
         Ok(())
     }
