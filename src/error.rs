@@ -92,6 +92,17 @@ pub enum Error {
     #[error("{0}")]
     Limits(String),
 
+    /// A display draws material bins of a pipeline of the caller's own that it was not
+    /// given (`Renderer::set_own_pipeline`).
+    #[error(
+        "display {index} draws materials of Shading::Own({shading}) and has no pipeline for them: give it one with Renderer::set_own_pipeline({index}, {shading}, ..)"
+    )]
+    MissingOwnPipeline {
+        /// The display.
+        index: usize,
+        /// The `Shading::Own` index.
+        shading: u32,
+    },
     /// A display index past the renderer's displays.
     #[error("display {index} does not exist: the renderer has {displays} displays")]
     NoSuchDisplay {

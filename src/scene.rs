@@ -128,6 +128,11 @@ pub enum Shading {
     /// The caller's WGSL `RendererOptions::hooks[i]`, a `fn material(s: Surface) ->
     /// vec4<f32>`.
     Hook(u32),
+    /// A render pipeline of the caller's own, set per display with
+    /// `Renderer::set_own_pipeline(display, i, ..)`: the bin's one multi-draw is issued
+    /// with it (the GPU-driven modes; the shadow pass draws the bin's depth with the
+    /// built-in pipelines).
+    Own(u32),
 }
 
 /// How a material's alpha (the base color's, texture included) is read: glTF's

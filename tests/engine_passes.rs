@@ -454,3 +454,215 @@ fn msaa_blends_edges_that_1x_leaves_hard() {
         "4x blends edges: {at_4x} pixels (199 on lavapipe)"
     );
 }
+
+/// Materials drawn by pipelines of the caller's own (`Shading::Own`): each is its own
+/// bin, one multi-draw per display, drawn by the caller's pipeline with its own bind
+/// group (a flat color from a uniform in group 1), in the renderer's own passes and,
+/// with occlusion, in both phases; the same image as hooks that return those colors.
+/// The scene's cutout bin follows the own bins, so the built-in groups must be bound
+/// again after them (wgpu refuses the draw otherwise).
+#[test]
+fn materials_of_the_callers_own_pipelines_draw_as_hooks_of_theirs_would() {
+    use stereocull::scene::{AlphaMode, Shading};
+    let gpu = support::gpu_with(wgpu::Features::all() - wgpu::Features::CLIP_DISTANCES);
+    let rig = sized("hmd", 120, 100);
+    // Pure channels: the same bytes in a linear and an sRGB target.
+    let colors = [[1.0, 0.0, 1.0], [0.0, 1.0, 0.0]];
+    let mut scene = support::with_random_bins(stereocull::procedural::scene(600, 10, 29), 29);
+    let kinds = [
+        (AlphaMode::Opaque, Shading::Lit),
+        (AlphaMode::Mask { cutoff: 0.3 }, Shading::Lit),
+        (AlphaMode::Opaque, Shading::Own(0)),
+        (AlphaMode::Opaque, Shading::Own(1)),
+        (AlphaMode::Blend, Shading::Lit),
+    ];
+    for (m, (alpha, shading)) in scene.materials.iter_mut().zip(kinds) {
+        (m.alpha, m.shading) = (alpha, shading);
+    }
+    let bins = stereocull::bins::Bins::of(&scene).kinds;
+    assert_eq!(bins.len(), 5);
+    assert_eq!(
+        bins[3].shading,
+        Shading::Lit,
+        "a built-in bin after the own ones"
+    );
+
+    let hooks: Vec<Arc<str>> = colors.iter().map(|&c| flat_color(c).into()).collect();
+    let mut hooked = scene.clone();
+    for m in &mut hooked.materials {
+        if let Shading::Own(i) = m.shading {
+            m.shading = Shading::Hook(i);
+        }
+    }
+    let options = RendererOptions {
+        hooks,
+        shadows: true,
+        ..support::frustum_only()
+    };
+    let want = support::render(&gpu, &hooked, &rig, options.clone())
+        .unwrap()
+        .remove(0);
+    for occlusion in [false, true] {
+        use stereocull::renderer::OcclusionMode;
+        let options = RendererOptions {
+            occlusion: [OcclusionMode::Off, OcclusionMode::On][usize::from(occlusion)],
+            ..options.clone()
+        };
+        let (got, draw_calls) = render_with_own(&gpu, (&scene, &rig), options, &colors);
+        let name = format!("own-bins-occlusion-{occlusion}");
+        assert_images_match(&name, &got, &want, Tolerance::RECOMPILED);
+        let painted = |c: [f32; 3]| {
+            got.pixels()
+                .any(|p| p.0[..3] == c.map(|x| (x * 255.0f32).round() as u8))
+        };
+        assert!(
+            colors.into_iter().all(painted),
+            "{name}: both own pipelines paint"
+        );
+        // Per bin and phase one multi-draw, and the shadow pass's of every bin but glass.
+        let phases = if occlusion { 2 } else { 1 };
+        assert_eq!(draw_calls, 5 * phases + 4, "{name}: one multi-draw per bin");
+    }
+
+    let mut renderer = Renderer::new(&gpu.device, &scene, &rig, options.clone()).unwrap();
+    let targets = renderer.create_targets(&gpu.device);
+    let err = renderer.submit_frame(&gpu.device, &gpu.queue, &rig, 0.0, &targets);
+    let err = err.err().map(|e| e.to_string()).unwrap_or_default();
+    assert!(err.contains("Shading::Own(0)"), "no pipeline set: {err}");
+    let classic = RendererOptions {
+        mode: StereoMode::MultiPass,
+        cull: stereocull::renderer::CullMode::Cpu,
+        ..options
+    };
+    let err = Renderer::new(&gpu.device, &scene, &rig, classic).err();
+    let err = err.map(|e| e.to_string()).unwrap_or_default();
+    assert!(
+        err.contains("material \"material 2\"") && err.contains("multi-pass"),
+        "{err}"
+    );
+}
+
+/// A material function painting one flat color.
+fn flat_color([r, g, b]: [f32; 3]) -> String {
+    format!("fn material(s: Surface) -> vec4<f32> {{ return vec4({r:?}, {g:?}, {b:?}, 1.0); }}")
+}
+
+/// One frame of `scene` with display 0's `Shading::Own(i)` drawn by a flat pipeline of
+/// `colors[i]`; its image and draw calls.
+fn render_with_own(
+    gpu: &Gpu,
+    (scene, rig): (&Scene, &Rig),
+    options: RendererOptions,
+    colors: &[[f32; 3]],
+) -> (RgbaImage, u32) {
+    let mut renderer = Renderer::new(&gpu.device, scene, rig, options.clone()).unwrap();
+    for (i, &color) in colors.iter().enumerate() {
+        let own = flat_pipeline(&gpu.device, &renderer, &options, color);
+        renderer.set_own_pipeline(0, i as u32, own).unwrap();
+    }
+    let targets = renderer.create_targets(&gpu.device);
+    let stats = renderer.submit_frame(&gpu.device, &gpu.queue, rig, 0.0, &targets);
+    let draw_calls = stats.unwrap().draw_calls;
+    let image = read_rgba8(&gpu.device, &gpu.queue, &targets[0].color).unwrap();
+    (image, draw_calls)
+}
+
+/// The caller's stereo pipeline for an own bin: stereocull's decode, back faces culled
+/// as the built-in pipelines cull them, the eyes kept apart by a discard, and the color
+/// read from a uniform of its own group 1.
+fn flat_pipeline(
+    device: &wgpu::Device,
+    renderer: &Renderer,
+    options: &RendererOptions,
+    color: [f32; 3],
+) -> stereocull::draw::OwnPipeline {
+    use wgpu::util::DeviceExt;
+    let source = renderer.decode_source(2).expect("the indirect modes")
+        + "
+        @group(1) @binding(0) var<uniform> flat: vec4<f32>;
+        struct Out {
+            @builtin(position) position: vec4<f32>,
+            @location(0) @interpolate(flat) eye: u32,
+        }
+        @vertex fn vs(v: VertexInput, @builtin(instance_index) i: u32) -> Out {
+            let at = decode_instance(i, VIEWS);
+            let d = decode(v, at.x, at.y, true);
+            return Out(d.clip, d.eye);
+        }
+        @fragment fn fs(in: Out) -> @location(0) vec4<f32> {
+            if ((in.position.x < display.resolution.x) != (in.eye == 0u)) {
+                discard;
+            }
+            return flat;
+        }";
+    let module = device.create_shader_module(wgpu::ShaderModuleDescriptor {
+        label: Some("flat"),
+        source: wgpu::ShaderSource::Wgsl(source.into()),
+    });
+    let group_layout = device.create_bind_group_layout(&wgpu::BindGroupLayoutDescriptor {
+        label: Some("flat"),
+        entries: &[wgpu::BindGroupLayoutEntry {
+            binding: 0,
+            visibility: wgpu::ShaderStages::FRAGMENT,
+            ty: wgpu::BindingType::Buffer {
+                ty: wgpu::BufferBindingType::Uniform,
+                has_dynamic_offset: false,
+                min_binding_size: None,
+            },
+            count: None,
+        }],
+    });
+    let [r, g, b] = color;
+    let buffer = device.create_buffer_init(&wgpu::util::BufferInitDescriptor {
+        label: Some("flat"),
+        contents: bytemuck::cast_slice(&[r, g, b, 1.0f32]),
+        usage: wgpu::BufferUsages::UNIFORM,
+    });
+    let group = device.create_bind_group(&wgpu::BindGroupDescriptor {
+        label: Some("flat"),
+        layout: &group_layout,
+        entries: &[wgpu::BindGroupEntry {
+            binding: 0,
+            resource: buffer.as_entire_binding(),
+        }],
+    });
+    let layout = device.create_pipeline_layout(&wgpu::PipelineLayoutDescriptor {
+        label: Some("flat"),
+        bind_group_layouts: &[renderer.bind_group_layout(), Some(&group_layout)],
+        immediate_size: 0,
+    });
+    let pipeline = device.create_render_pipeline(&wgpu::RenderPipelineDescriptor {
+        label: Some("flat"),
+        layout: Some(&layout),
+        vertex: wgpu::VertexState {
+            module: &module,
+            entry_point: Some("vs"),
+            compilation_options: Default::default(),
+            buffers: &[Some(stereocull::draw::VERTEX_BUFFER)],
+        },
+        primitive: wgpu::PrimitiveState {
+            cull_mode: Some(wgpu::Face::Back),
+            ..Default::default()
+        },
+        depth_stencil: Some(wgpu::DepthStencilState {
+            format: options.depth_format,
+            depth_write_enabled: Some(true),
+            depth_compare: Some(wgpu::CompareFunction::Less),
+            stencil: Default::default(),
+            bias: Default::default(),
+        }),
+        multisample: Default::default(),
+        fragment: Some(wgpu::FragmentState {
+            module: &module,
+            entry_point: Some("fs"),
+            compilation_options: Default::default(),
+            targets: &[Some(options.color_format.into())],
+        }),
+        multiview_mask: None,
+        cache: None,
+    });
+    stereocull::draw::OwnPipeline {
+        pipeline,
+        bind_groups: vec![group],
+    }
+}

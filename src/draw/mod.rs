@@ -6,7 +6,7 @@
 mod passes;
 mod pipelines;
 
-use std::collections::HashMap;
+use std::collections::{BTreeMap, HashMap};
 
 pub use passes::{Attachments, CLEAR_COLOR, begin_pass, cleared_depth, set_viewport};
 pub use pipelines::{DEPTH_FORMAT, TargetFormat, VERTEX_ATTRIBUTES, VERTEX_BUFFER};
@@ -18,7 +18,7 @@ use crate::cull::gpu_buffers::{COUNTS_BIN_OFFSET, CullTargets};
 use crate::error::Result;
 use crate::materials::{self, GpuMaterials};
 use crate::records::{DrawArgs, InstanceRecord, instance_records};
-use crate::scene::Scene;
+use crate::scene::{Scene, Shading};
 use crate::shaders::{
     DRAW_BINDINGS, DrawKey, Shaders, Windows, bind_group, bind_group_layout, shadow_cutout_source,
     shadow_source,
@@ -160,8 +160,15 @@ impl Drawer {
             bind_group_layouts: &[Some(&layout), Some(&materials_layout), Some(&shadow_layout)],
             immediate_size: 0,
         });
+        let built_in = kinds
+            .iter()
+            .filter(|k| !matches!(k.shading, Shading::Own(_)));
         let pipelines = (keys.iter())
-            .flat_map(|&key| kinds.iter().map(move |&k| key.with_bin(k, target.samples)))
+            .flat_map(|&key| {
+                built_in
+                    .clone()
+                    .map(move |&k| key.with_bin(k, target.samples))
+            })
             .map(|key| {
                 let source = key.source_with(shaders.function(key.shading), &windows);
                 (
@@ -243,23 +250,20 @@ impl Drawer {
         pass.set_index_buffer(scene.indices.slice(..), wgpu::IndexFormat::Uint32);
     }
 
-    /// The pipeline of `with` for bins of `kind`: `None` skips the bin (blended bins
-    /// cast no shadow), `Some(None)` keeps the pass's own.
-    pub fn bin_pipeline(
-        &self,
-        with: BinPipelines,
-        kind: Bin,
-    ) -> Option<Option<&wgpu::RenderPipeline>> {
-        match with {
-            BinPipelines::Draw(key) => {
-                Some(Some(&self.pipelines[&key.with_bin(kind, self.samples)]))
-            }
-            BinPipelines::Own => Some(None),
-            BinPipelines::Shadow => {
+    /// What `with` draws bins of `kind` with: `None` skips the bin (blended bins cast
+    /// no shadow; a pipeline of the caller's own that is not set).
+    pub fn bin_pipeline<'a>(&'a self, with: BinPipelines<'a>, kind: Bin) -> Option<BinDraw<'a>> {
+        match (with, kind.shading) {
+            (BinPipelines::Draw(_, own), Shading::Own(i)) => own.get(&i).map(BinDraw::Own),
+            (BinPipelines::Draw(key, _), _) => Some(BinDraw::BuiltIn(
+                &self.pipelines[&key.with_bin(kind, self.samples)],
+            )),
+            (BinPipelines::Own, _) => Some(BinDraw::Keep),
+            (BinPipelines::Shadow, _) => {
                 let shadow = self.shadow.as_ref()?;
                 match kind.alpha {
-                    BinKind::Opaque => Some(Some(&shadow.pipeline)),
-                    BinKind::Mask => shadow.cutout.as_ref().map(Some),
+                    BinKind::Opaque => Some(BinDraw::BuiltIn(&shadow.pipeline)),
+                    BinKind::Mask => shadow.cutout.as_ref().map(BinDraw::BuiltIn),
                     BinKind::Blend => None,
                 }
             }
@@ -267,21 +271,36 @@ impl Drawer {
     }
 
     /// The GPU-driven path's draws: per material bin, its pipeline (of `with`) and one
-    /// multi-draw over the bin's range. Returns the draw calls.
+    /// multi-draw over the bin's range. A pipeline of the caller's own binds its groups
+    /// from 1 on, so the built-in bins after it bind the materials and shadow map again.
+    /// Returns the draw calls.
     pub fn draw_bins(
         &self,
         pass: &mut wgpu::RenderPass,
-        bins: &[BinRange],
+        (bins, scene): (&[BinRange], &DrawScene),
         with: BinPipelines,
         cull: &CullTargets,
     ) -> u32 {
         let mut calls = 0;
+        let mut groups_taken = false;
         for (b, range) in bins.iter().enumerate() {
-            let Some(pipeline) = self.bin_pipeline(with, range.kind) else {
-                continue;
-            };
-            if let Some(pipeline) = pipeline {
-                pass.set_pipeline(pipeline);
+            match self.bin_pipeline(with, range.kind) {
+                None => continue,
+                Some(BinDraw::Keep) => {}
+                Some(BinDraw::BuiltIn(pipeline)) => {
+                    pass.set_pipeline(pipeline);
+                    if std::mem::take(&mut groups_taken) {
+                        pass.set_bind_group(1, &scene.materials.bind_group, &[]);
+                        pass.set_bind_group(2, &scene.shadow_map.bind_group, &[]);
+                    }
+                }
+                Some(BinDraw::Own(own)) => {
+                    pass.set_pipeline(&own.pipeline);
+                    for (g, group) in own.bind_groups.iter().enumerate() {
+                        pass.set_bind_group(g as u32 + 1, group, &[]);
+                    }
+                    groups_taken = true;
+                }
             }
             let offset = range.first as u64 * size_of::<DrawArgs>() as u64;
             if self.features.indirect_count {
@@ -302,11 +321,42 @@ impl Drawer {
     }
 }
 
+/// A render pipeline of the caller's own for the material bins of
+/// [`Shading::Own`]: its layout starts with group 0 (`Renderer::bind_group_layout`), its
+/// shader with `Renderer::decode_source(views)`; its own bind groups are set from group
+/// 1 on before its bin's multi-draw. It renders into the display's target as the
+/// built-in pipelines do (formats, samples, multiview mask) and keeps each eye in its
+/// own half (see `Renderer::draw_display_with_own_pipeline`).
+#[derive(Clone, Debug)]
+pub struct OwnPipeline {
+    /// The pipeline.
+    pub pipeline: wgpu::RenderPipeline,
+    /// Its groups from 1 on, in order.
+    pub bind_groups: Vec<wgpu::BindGroup>,
+}
+
+/// One display's pipelines of the caller's own, by [`Shading::Own`] index.
+pub type OwnPipelines = BTreeMap<u32, OwnPipeline>;
+
+/// No pipelines of the caller's own (the modes and layers that have none).
+pub const NO_OWN_PIPELINES: &OwnPipelines = &BTreeMap::new();
+
+/// How one bin is drawn.
+pub enum BinDraw<'a> {
+    /// With the pipeline the pass already has.
+    Keep,
+    /// With one of ours, on the built-in groups.
+    BuiltIn(&'a wgpu::RenderPipeline),
+    /// With the caller's, on its own groups.
+    Own(&'a OwnPipeline),
+}
+
 /// Which pipelines a view's material bins are drawn with.
-#[derive(Clone, Copy, Debug, PartialEq, Eq)]
-pub enum BinPipelines {
-    /// The built-in draw pipelines of this variant, each bin its own.
-    Draw(DrawKey),
+#[derive(Clone, Copy, Debug)]
+pub enum BinPipelines<'a> {
+    /// The built-in draw pipelines of this variant, each bin its own, and the display's
+    /// pipelines of the caller's own for [`Shading::Own`] bins.
+    Draw(DrawKey, &'a OwnPipelines),
     /// The frame's shadow pass: depth only, cutouts discarding, blended bins skipped.
     Shadow,
     /// The pipeline the pass already has (an engine's own), for every bin.

@@ -7,7 +7,7 @@ use crate::error::{Error, Result};
 use crate::modes::StereoMode;
 use crate::records::MeshRecord;
 use crate::rig::Rig;
-use crate::scene::{Scene, Vertex};
+use crate::scene::{Scene, Shading, Vertex};
 use crate::shaders::{Windowed, check_shading};
 
 /// MSAA the device can do for the options' color format and the depth format. Without
@@ -63,6 +63,33 @@ pub fn check_rig(rig: &Rig, options: &RendererOptions, max_multiview_views: u32)
     ))
 }
 
+/// Materials drawn by a pipeline of the caller's own need the GPU-driven modes, whose
+/// bins are one multi-draw each, and no far layer (its own pass draws far instances
+/// with the built-in pipelines into a layer of its own shape).
+fn check_own_shading(scene: &Scene, options: &RendererOptions) -> Result<()> {
+    let own = scene
+        .materials
+        .iter()
+        .find(|m| matches!(m.shading, Shading::Own(_)));
+    let Some(m) = own else {
+        return Ok(());
+    };
+    let why = match (options.mode.per_instance(), options.far_layer) {
+        (true, _) => format!("{} draws per instance", options.mode.name()),
+        (false, true) => "the far layer draws with the built-in pipelines alone".into(),
+        (false, false) => return Ok(()),
+    };
+    Err(Error::Unsupported(format!(
+        "material {:?} is drawn by a pipeline of the caller's own, and {why}: use --mode instanced or multiview{}",
+        m.name,
+        if options.far_layer {
+            " without the far layer"
+        } else {
+            ""
+        }
+    )))
+}
+
 /// What a mode cannot do without, said before anything is built.
 pub(super) fn check_device(
     device: &wgpu::Device,
@@ -88,6 +115,7 @@ pub(super) fn check_device(
             "multiview is unavailable: the device lacks MULTIVIEW".into(),
         ));
     }
+    check_own_shading(scene, options)?;
     let limits = device.limits();
     check_shadows(features, &limits, options)?;
     if options.far_layer && options.mode != StereoMode::Instanced {

@@ -14,7 +14,9 @@ use super::targets::TargetViews;
 use crate::buffers::{storage_buffer, write};
 use crate::contexts::context_buffer;
 use crate::cull::CullOutput;
-use crate::draw::{BinPipelines, DrawFeatures, DrawScene, Drawer, Drawing, set_viewport};
+use crate::draw::{
+    BinDraw, BinPipelines, DrawFeatures, DrawScene, Drawer, Drawing, NO_OWN_PIPELINES, set_viewport,
+};
 use crate::error::Result;
 use crate::modes::StereoMode;
 use crate::records::uniform_bytes;
@@ -261,8 +263,11 @@ impl ClassicPath {
 
     /// The one-view pipelines of the scene's material bins.
     fn bin_drawer(&self) -> BinDrawer<'_> {
-        let with = BinPipelines::Draw(self.drawer.key(1));
-        let pipeline = |kind| self.drawer.bin_pipeline(with, kind).flatten();
+        let with = BinPipelines::Draw(self.drawer.key(1), NO_OWN_PIPELINES);
+        let pipeline = |kind| match self.drawer.bin_pipeline(with, kind) {
+            Some(BinDraw::BuiltIn(pipeline)) => Some(pipeline),
+            _ => None,
+        };
         BinDrawer {
             pipelines: (self.culler.bins().iter())
                 .filter_map(|b| pipeline(b.kind))

@@ -8,8 +8,8 @@ use super::passes::{PassRecord, Recording, opener, render_pass};
 use super::view_pass::ViewPass;
 use crate::bins::Bin;
 use crate::draw::{
-    BinPipelines, CLEAR_COLOR, DEPTH_FORMAT, DrawScene, Drawer, Drawing, TargetFormat,
-    cleared_depth,
+    BinPipelines, CLEAR_COLOR, DEPTH_FORMAT, DrawScene, Drawer, Drawing, NO_OWN_PIPELINES,
+    TargetFormat, cleared_depth,
 };
 use crate::far_layer::FarPlan;
 use crate::shaders::{DrawKey, Shaders, far_composite_source};
@@ -160,8 +160,11 @@ impl FarLayers {
         let logged = (log, PassRecord::display("far_layer", index));
         let drawing = self.drawing(scene);
         let draw_calls = render_pass(encoder, begin, ((timer, display), logged), |pass| {
-            far.view
-                .draw(pass, drawing, BinPipelines::Draw(DrawKey::new(1, false)))
+            far.view.draw(
+                pass,
+                drawing,
+                BinPipelines::Draw(DrawKey::new(1, false), NO_OWN_PIPELINES),
+            )
         });
         (dispatches, draw_calls)
     }

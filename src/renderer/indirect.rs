@@ -20,10 +20,13 @@ use super::targets::TargetViews;
 use super::view_pass::ViewPass;
 use crate::contexts::context_buffer;
 use crate::cull::gpu_buffers::{CullTargets, OcclusionRoom};
-use crate::draw::{BinPipelines, DrawFeatures, DrawScene, Drawer, Drawing};
-use crate::error::Result;
+use crate::draw::{
+    BinPipelines, DrawFeatures, DrawScene, Drawer, Drawing, OwnPipeline, OwnPipelines,
+};
+use crate::error::{Error, Result};
 use crate::modes::StereoMode;
 use crate::occlusion::{Phase, PyramidShape};
+use crate::scene::Shading;
 use crate::shaders::DrawKey;
 
 /// One display: a view (its context, cull and draw bindings) and its pipeline variant,
@@ -32,6 +35,8 @@ use crate::shaders::DrawKey;
 pub(super) struct IndirectDisplay {
     pub(super) view: ViewPass,
     key: DrawKey,
+    /// Pipelines of the caller's own for its [`crate::scene::Shading::Own`] bins.
+    own: OwnPipelines,
     pub(super) inset: Option<ViewPass>,
     /// With occlusion: the late phase (`view` is then the early one).
     pub(super) late: Option<LatePhase>,
@@ -217,6 +222,7 @@ impl IndirectPath {
             pyramids,
             index,
             key: state.key,
+            own: &state.own,
             context: state.view.context(),
             target,
         };
@@ -287,6 +293,30 @@ impl IndirectPath {
             .draw(pass, self.drawing(), BinPipelines::Own);
     }
 
+    /// Sets display `index`'s pipeline of the caller's own for its
+    /// [`Shading::Own`]`(shading)` bins.
+    pub(super) fn set_own_pipeline(&mut self, index: usize, shading: u32, own: OwnPipeline) {
+        self.displays[index].own.insert(shading, own);
+    }
+
+    /// Every display must have a pipeline for each [`Shading::Own`] bin it draws.
+    pub(super) fn check_own_pipelines(&self) -> Result<()> {
+        for (index, state) in self.displays.iter().enumerate() {
+            let missing = self
+                .culler
+                .bins()
+                .iter()
+                .find_map(|b| match b.kind.shading {
+                    Shading::Own(i) if !state.own.contains_key(&i) => Some(i),
+                    _ => None,
+                });
+            if let Some(shading) = missing {
+                return Err(Error::MissingOwnPipeline { index, shading });
+            }
+        }
+        Ok(())
+    }
+
     /// How the instance records are bound.
     pub(super) fn windows(&self) -> crate::shaders::Windows {
         self.drawer.windows
@@ -309,7 +339,7 @@ impl IndirectPath {
             Some((far, Some(layer))) => far.layers.composite(pass, layer),
             _ => 0,
         };
-        let with = BinPipelines::Draw(state.key);
+        let with = BinPipelines::Draw(state.key, &state.own);
         let outer = state.view.draw(pass, self.drawing(), with);
         let insets = match &state.inset {
             Some(inset) => inset.draw(pass, self.drawing(), with),
@@ -352,6 +382,7 @@ fn indirect_displays(
             IndirectDisplay {
                 view: display,
                 key,
+                own: OwnPipelines::new(),
                 inset: plan.insets[i].map(|_| view(CullView::Inset(i))),
                 late,
             }

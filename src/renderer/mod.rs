@@ -327,6 +327,7 @@ impl Renderer {
         }
         if let Path::Indirect(p) = &self.path {
             p.check_depth(targets)?;
+            p.check_own_pipelines()?;
         }
         let mut stats = self.encode_frame(encoder, &mut timer);
         for (i, target) in targets.iter().enumerate() {

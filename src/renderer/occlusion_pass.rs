@@ -10,7 +10,7 @@ use super::options::RendererOptions;
 use super::passes::{PassRecord, Timing, compute_pass, draw_pass};
 use super::targets::TargetViews;
 use super::view_pass::ViewPass;
-use crate::draw::{BinPipelines, Drawing};
+use crate::draw::{BinPipelines, Drawing, OwnPipelines};
 use crate::error::Result;
 use crate::modes::StereoMode;
 use crate::occlusion::PyramidShape;
@@ -100,6 +100,8 @@ pub(super) struct LateInputs<'a> {
     pub(super) pyramids: &'a Pyramids,
     pub(super) index: usize,
     pub(super) key: DrawKey,
+    /// The display's pipelines of the caller's own.
+    pub(super) own: &'a OwnPipelines,
     pub(super) context: &'a wgpu::Buffer,
     pub(super) target: &'a TargetViews<'a>,
 }
@@ -120,6 +122,7 @@ impl LatePhase {
             pyramids,
             index,
             key,
+            own,
             context,
             target,
         } = inputs;
@@ -154,7 +157,7 @@ impl LatePhase {
             mask,
             (timer, display),
             what,
-            |pass| self.view.draw(pass, drawing, BinPipelines::Draw(key)),
+            |pass| self.view.draw(pass, drawing, BinPipelines::Draw(key, own)),
         );
         FrameStats {
             draw_calls,

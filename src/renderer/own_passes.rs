@@ -6,6 +6,7 @@ use super::frame::FrameStats;
 use super::passes::{close, open_display};
 use super::{Path, Renderer};
 use crate::cull::gpu_buffers::CullTargets;
+use crate::draw::OwnPipeline;
 use crate::error::{Error, Result};
 use crate::profiling::GpuTimer;
 
@@ -52,9 +53,33 @@ impl Renderer {
             });
         }
         Ok(match &self.path {
-            Path::Indirect(p) => p.draw(pass, index),
+            Path::Indirect(p) => {
+                p.check_own_pipelines()?;
+                p.draw(pass, index)
+            }
             Path::Classic(p) => p.draw(pass, index),
         })
+    }
+
+    /// Sets display `index`'s pipeline of the caller's own for the material bins of
+    /// [`crate::scene::Shading::Own`]`(shading)` (the GPU-driven modes): from now on
+    /// every draw of the display, in the renderer's passes and in
+    /// [`Renderer::draw_display`], issues those bins' multi-draw with it. One pipeline
+    /// may serve several displays of one target shape. A frame whose display draws an
+    /// own bin without its pipeline is [`Error::MissingOwnPipeline`].
+    pub fn set_own_pipeline(&mut self, index: usize, shading: u32, own: OwnPipeline) -> Result<()> {
+        let displays = self.shapes.len();
+        match &mut self.path {
+            Path::Indirect(_) if index >= displays => Err(Error::NoSuchDisplay { index, displays }),
+            Path::Indirect(p) => {
+                p.set_own_pipeline(index, shading, own);
+                Ok(())
+            }
+            Path::Classic(_) => Err(Error::Unsupported(format!(
+                "{} draws per instance; pipelines of the caller's own draw the indirect modes",
+                self.options.mode.name()
+            ))),
+        }
     }
 
     /// For an engine's own draw pipeline (the indirect modes): group 0's layout, to

@@ -115,7 +115,7 @@ impl ViewPass {
         with: BinPipelines,
     ) -> u32 {
         match with {
-            BinPipelines::Draw(_) => Drawer::bind(pass, scene, &self.draw_bind_group),
+            BinPipelines::Draw(..) => Drawer::bind(pass, scene, &self.draw_bind_group),
             BinPipelines::Shadow => {
                 // The cutout pipeline reads the materials.
                 Drawer::bind_resources(pass, scene, &self.draw_bind_group);
@@ -123,6 +123,6 @@ impl ViewPass {
             }
             BinPipelines::Own => Drawer::bind_resources(pass, scene, &self.draw_bind_group),
         }
-        drawer.draw_bins(pass, &self.bins, with, &self.cull.targets)
+        drawer.draw_bins(pass, (&self.bins, scene), with, &self.cull.targets)
     }
 }

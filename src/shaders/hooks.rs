@@ -20,12 +20,14 @@ pub struct Shaders<'a> {
 }
 
 impl<'a> Shaders<'a> {
-    /// The function of `shading` (`None`: the built-in lighting).
+    /// The function of `shading` (`None`: the built-in lighting; a pipeline of the
+    /// caller's own has no function of ours).
     pub fn function(&self, shading: Shading) -> Option<&'a str> {
         match shading {
             Shading::Lit => self.lit,
             Shading::Unlit => Some(UNLIT),
             Shading::Hook(i) => self.hooks.get(i as usize).map(|h| &**h),
+            Shading::Own(_) => None,
         }
     }
 }
@@ -51,7 +53,7 @@ pub fn check_shading(scene: &Scene, shaders: Shaders) -> Result<()> {
                 shaders.hooks.len()
             )));
         }
-        if checked.contains(&m.shading) {
+        if checked.contains(&m.shading) || matches!(m.shading, Shading::Own(_)) {
             continue;
         }
         checked.push(m.shading);

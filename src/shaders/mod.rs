@@ -226,6 +226,7 @@ impl DrawKey {
             Shading::Lit => String::new(),
             Shading::Unlit => ".unlit".into(),
             Shading::Hook(i) => format!(".hook{i}"),
+            Shading::Own(i) => format!(".own{i}"),
         };
         format!("{}{alpha}{shading}", self.base_label())
     }
