@@ -247,14 +247,19 @@ impl UiPanel {
 
 /// Bring your own pipeline: a pipeline written here, on stereocull's decode
 /// (`Renderer::decode_source`) and group 0 layout, drawing the cull outputs with the one
-/// indirect call, gives the built-in image. Both keep the eyes apart by a fragment
-/// discard here (clip distances off), so the comparison is exact.
+/// indirect call, gives the built-in pipelines' image with a hook of the same shading
+/// ([`LIT`]: the own pipeline has no materials to read). Both keep the eyes apart by a
+/// fragment discard here (clip distances off).
 #[test]
 fn a_pipeline_of_the_callers_own_draws_the_built_in_image() {
     let gpu = support::gpu_with(wgpu::Features::all() - wgpu::Features::CLIP_DISTANCES);
     let scene = scene_spec::load("default").unwrap();
     let rig = sized("hmd", 120, 100);
-    let options = RendererOptions::default();
+    let hook = "fn material(s: Surface) -> vec4<f32> { return lit(s.world_position, s.normal, s.color, s.eye); }";
+    let options = RendererOptions {
+        material: Some(format!("{LIT}\n{hook}").into()),
+        ..Default::default()
+    };
     let built_in = support::render(&gpu, &scene, &rig, options.clone())
         .unwrap()
         .remove(0);
@@ -286,7 +291,8 @@ const BY_EYE: &str = "
         return select(vec4(1.0, 0.0, 0.0, 1.0), vec4(0.0, 1.0, 0.0, 1.0), s.eye == 1u);
     }";
 
-/// The built-in shading, restated here: one light's diffuse plus specular from the eye.
+/// A shading of one light's diffuse plus specular from the eye (the built-in shading
+/// before it read glTF's materials).
 const LIT: &str = "
     fn lit(world: vec3<f32>, normal: vec3<f32>, color: vec4<f32>, eye: u32) -> vec4<f32> {
         let light = vec3(0.37139068, 0.74278135, 0.55708601);
@@ -366,16 +372,13 @@ fn own_pipeline(
 }
 
 /// The material hook: a caller's WGSL `material` compiled into every mode's pipeline.
-/// Re-implementing the built-in shading gives the built-in image; a material that
-/// paints by eye paints exactly the two halves (left red, right green).
+/// The built-in shading composed from the parts a hook may call (`pbr_inputs`,
+/// `pbr_shade`) gives the built-in image; a material that paints by eye paints exactly
+/// the two halves (left red, right green).
 #[test]
 fn a_material_hook_shades_every_mode() {
-    let same_as_built_in: Arc<str> = format!(
-        "{LIT}\nfn material(s: Surface) -> vec4<f32> {{
-            return lit(s.world_position, s.normal, s.color, s.eye);
-        }}"
-    )
-    .into();
+    let same_as_built_in: Arc<str> =
+        "fn material(s: Surface) -> vec4<f32> { return pbr_shade(s, pbr_inputs(s)); }".into();
     let gpu = gpu();
     let scene = scene_spec::load("default").unwrap();
     let rig = sized("hmd", 120, 100);
