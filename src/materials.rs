@@ -20,6 +20,9 @@ use crate::scene::{AlphaMode, Encoding, Material, Scene};
 /// The largest layer side: bigger textures are scaled down to it.
 pub const MAX_LAYER_SIZE: u32 = 1024;
 
+// One record must fit the smallest buffer bound: an empty scene's.
+const _: () = assert!(size_of::<MaterialRecord>() <= crate::buffers::MIN_BUFFER);
+
 /// A material as the fragment stage reads it (`MaterialRecord` in
 /// `wgsl/shared/records.wgsl`): layers of `color_textures` (base color, emissive) and
 /// of `data_textures` (the rest), each [`MaterialRecord::UNTEXTURED`] when absent.

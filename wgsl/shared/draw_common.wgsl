@@ -12,20 +12,18 @@ fn vertex(v: VertexInput, slot: u32, eye: u32, double_wide: bool) -> VertexOutpu
         set_view_clip(&out, d);
     }
     out.position = d.clip;
-    out.normal = d.world_normal;
-    out.ids = vec3(d.eye, d.instance, d.material);
-    out.uv = d.uv;
-    out.tangent = d.world_tangent;
+    out.normal_u = vec4(d.world_normal, d.uv.x);
+    out.ids = vec4(d.eye, d.instance, d.material, u32(d.world_tangent.w < 0.0));
+    out.tangent_v = vec4(d.world_tangent.xyz, d.uv.y);
     return out;
 }
 
 // The fragment stage gets its own input: naga rejects clip_distances in it.
 struct FragmentInput {
     @builtin(position) position: vec4<f32>,
-    @location(0) normal: vec3<f32>,
-    @location(1) @interpolate(flat) ids: vec3<u32>,
-    @location(2) uv: vec2<f32>,
-    @location(3) tangent: vec4<f32>,
+    @location(0) normal_u: vec4<f32>,
+    @location(1) @interpolate(flat) ids: vec4<u32>,
+    @location(2) tangent_v: vec4<f32>,
 }
 
 // What a material sees of one fragment: a caller's `fn material(s: Surface) ->
@@ -92,7 +90,11 @@ fn fragment(in: FragmentInput, eye: u32, viewport: vec4<f32>) -> vec4<f32> {
     }
     let color = unpack4x8unorm(instances_at(in.ids.y).color);
     let world = world_position(in.position, eye, viewport);
-    let s = Surface(world, in.normal, color, eye, in.ids.y, in.uv, in.ids.z, in.tangent);
+    let uv = vec2(in.normal_u.w, in.tangent_v.w);
+    // Handedness is the provoking vertex's: constant across a triangle in practice
+    // (a mirrored uv seam splits its vertices).
+    let tangent = vec4(in.tangent_v.xyz, select(1.0, -1.0, in.ids.w == 1u));
+    let s = Surface(world, in.normal_u.xyz, color, eye, in.ids.y, uv, in.ids.z, tangent);
     // The bin's alpha mode (ALPHA_MODE, src/bins.rs): only cutout pipelines discard,
     // so the opaque ones keep early depth testing.
     if (ALPHA_MODE == 1u && !ALPHA_TO_COVERAGE && base_color(s).a < materials[s.material].alpha_cutoff) {

@@ -4,13 +4,13 @@
 
 struct VertexOutput {
     @builtin(position) position: vec4<f32>,
-    @location(0) normal: vec3<f32>,
-    // (eye, instance, material) in one location: lavapipe's multiview misroutes
-    // clipped triangles as varyings grow.
-    @location(1) @interpolate(flat) ids: vec3<u32>,
-    @location(2) uv: vec2<f32>,
-    // World tangent and handedness, for normal maps.
-    @location(3) tangent: vec4<f32>,
+    // Three locations, packed (normal_u: world normal and u; tangent_v: world tangent
+    // and v; ids: eye, instance, material and the tangent's handedness as 0 or 1):
+    // lavapipe's multiview misroutes clipped triangles as varyings grow (a fourth
+    // location for the tangent dropped a wall's edge from the second view).
+    @location(0) normal_u: vec4<f32>,
+    @location(1) @interpolate(flat) ids: vec4<u32>,
+    @location(2) tangent_v: vec4<f32>,
 }
 
 fn set_view_clip(out: ptr<function, VertexOutput>, d: Decoded) {}
