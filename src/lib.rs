@@ -10,7 +10,8 @@
 //! Modules, in the order data flows: [`rig`] (viewer and displays, resolved once per
 //! frame) -> [`frustum`] (eye, display and frame frusta, in f64) -> [`contexts`] (what
 //! shaders read per display and eye) -> [`scene`] (what is drawn; filled by
-//! [`gltf_import`] or [`procedural`], chosen by name in [`scene_spec`]) -> [`records`]
+//! [`gltf_import`] or [`procedural`], chosen by name in [`scene_spec`]; [`posing`] moves
+//! its animated instances once per frame) -> [`records`]
 //! (GPU layouts; [`places`], each instance's place in the cull order) -> [`cull`]
 //! (visible lists and draw arguments, CPU or GPU) -> [`draw`]
 //! (pipelines, passes, the one indirect call). [`renderer::Renderer`] ties them together
@@ -46,6 +47,7 @@ mod modes;
 pub mod occlusion;
 pub mod pbr;
 pub mod places;
+pub mod posing;
 pub mod procedural;
 pub mod profiling;
 pub mod readback;

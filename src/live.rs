@@ -243,6 +243,29 @@ impl LiveScene {
         Ok(())
     }
 
+    /// Poses the scene's node animations at `time` seconds ([`crate::posing`], once per
+    /// frame): every instance they move that is still in the scene (in its slot since
+    /// [`LiveScene::new`]) moves as by [`LiveScene::set_transform`], so only the posed
+    /// instances' edits cross the bus. Returns how many moved.
+    pub fn pose(&mut self, time: f32) -> Result<u32> {
+        let posing = std::mem::take(&mut self.scene.posing);
+        let transforms = posing.instance_transforms(time);
+        let mut moved = 0;
+        let mut result = Ok(());
+        for (i, world) in posing.instances.iter().zip(transforms) {
+            let handle = Handle {
+                slot: i.instance,
+                generation: 0,
+            };
+            if self.check(handle).is_ok() {
+                result = result.and(self.set_transform(handle, world));
+                moved += 1;
+            }
+        }
+        self.scene.posing = posing;
+        result.map(|()| moved)
+    }
+
     /// Lists `slot`'s edit (transform and sphere) in this change set, once.
     fn stage_move(&mut self, slot: u32) {
         let edit = make_edit(&self.scene, slot);

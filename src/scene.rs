@@ -274,9 +274,23 @@ pub struct Scene {
     pub materials: Vec<Material>,
     /// Base color images, by index.
     pub textures: Vec<Texture>,
+    /// Node animations and the instances they move (by the ids instances have here):
+    /// posed once per frame ([`crate::posing`]); empty for a still scene.
+    pub posing: crate::posing::Posing,
 }
 
 impl Scene {
+    /// Poses the instances its node animations move at `time` seconds (what `render
+    /// --time` draws; a live scene poses with [`crate::live::LiveScene::pose`]).
+    pub fn pose(&mut self, time: f32) {
+        let transforms = self.posing.instance_transforms(time);
+        for (i, world) in self.posing.instances.iter().zip(transforms) {
+            if let Some(instance) = self.instances.get_mut(i.instance as usize) {
+                instance.world_from_local = world;
+            }
+        }
+    }
+
     /// Triangles of every instance at its finest level: what a frame could draw.
     pub fn triangles(&self) -> u64 {
         (self.instances.iter())
@@ -292,12 +306,18 @@ impl Scene {
     pub fn drop_non_finite_instances(&mut self) -> usize {
         let before = self.instances.len();
         let meshes = &self.meshes;
-        self.instances.retain(|inst| {
-            let finite = Mat4::from(inst.world_from_local).is_finite()
-                && inst.animation.spin.is_finite()
-                && inst.animation.bob.is_finite();
-            finite && world_sphere_of(meshes, inst).is_finite()
-        });
+        let kept: Vec<bool> = (self.instances.iter())
+            .map(|inst| {
+                let finite = Mat4::from(inst.world_from_local).is_finite()
+                    && inst.animation.spin.is_finite()
+                    && inst.animation.bob.is_finite();
+                finite && world_sphere_of(meshes, inst).is_finite()
+            })
+            .collect();
+        let mut kept_flags = kept.iter();
+        self.instances
+            .retain(|_| *kept_flags.next().unwrap_or(&false));
+        self.posing.keep_instances(&kept);
         before - self.instances.len()
     }
 

@@ -1086,3 +1086,77 @@ fn cull_dumps_inset_culls_alike_on_gpu_and_cpu() {
         "{visible:?}: the insets see less"
     );
 }
+
+/// `render --time T` poses a file's node animations at T (`--animation off`: its rest
+/// pose whatever the time), and `stress` plays them on its clock: only the animated
+/// instance is uploaded again each frame.
+#[test]
+fn render_poses_node_animations_at_its_time() {
+    let file = gltf_samples()
+        .into_iter()
+        .find(|(name, _)| *name == "BoxAnimated")
+        .unwrap()
+        .1;
+    let dir = tempfile::tempdir().unwrap();
+    let render = |time: &str, animation: &str| {
+        let out_dir = dir.path().join(format!("{time}-{animation}"));
+        let out = stereocull(&[
+            "render",
+            "--scene",
+            &file,
+            "--viewer",
+            "0,1,6",
+            "--width",
+            "48",
+            "--height",
+            "40",
+            "--time",
+            time,
+            "--animation",
+            animation,
+            "--out",
+            out_dir.to_str().unwrap(),
+        ]);
+        assert!(
+            out.status.success(),
+            "{}",
+            String::from_utf8_lossy(&out.stderr)
+        );
+        std::fs::read(out_dir.join("hmd.png")).unwrap()
+    };
+    let rest = render("0", "on");
+    assert_ne!(render("2", "on"), rest, "posed at 2 s");
+    assert_eq!(
+        render("2", "off"),
+        rest,
+        "--animation off keeps the rest pose"
+    );
+    let uploads = |animation: &str| {
+        let out = stereocull(&[
+            "stress",
+            "--scene",
+            &file,
+            "--frames",
+            "3",
+            "--width",
+            "16",
+            "--height",
+            "16",
+            "--animation",
+            animation,
+            "--json",
+        ]);
+        assert!(
+            out.status.success(),
+            "{}",
+            String::from_utf8_lossy(&out.stderr)
+        );
+        let report: Value = serde_json::from_slice(&out.stdout).unwrap();
+        (report["frames"].as_array().unwrap().iter())
+            .map(|f| f["bytes_uploaded"].as_u64().unwrap())
+            .collect::<Vec<u64>>()
+    };
+    let (on, off) = (uploads("on"), uploads("off"));
+    let posed = on.iter().zip(&off).all(|(a, b)| a > b);
+    assert!(posed, "each frame sends the pose: {on:?} against {off:?}");
+}

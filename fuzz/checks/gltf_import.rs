@@ -16,6 +16,21 @@ pub fn gltf_import(data: &[u8]) {
         return;
     };
     scene.drop_non_finite_instances();
+    // Posing samples every channel and walks every posed tree: any time, no panic, and
+    // only instances that exist move.
+    let n = scene.instances.len();
+    assert!(
+        scene
+            .posing
+            .instances
+            .iter()
+            .all(|i| (i.instance as usize) < n)
+    );
+    for time in [-1.0, 0.0, 0.37, 1e6] {
+        scene.pose(time);
+    }
+    scene.drop_non_finite_instances();
+    let n = scene.instances.len();
     // The importer checks everything the material records need (textures, finite
     // cutoffs, one material per primitive), so a renderer never refuses an import.
     if let Err(e) = stereocull::materials::records(&scene) {
@@ -25,7 +40,6 @@ pub fn gltf_import(data: &[u8]) {
     let rig = Rig::preset("hmd").expect("the hmd preset");
     let job = rig.cull_jobs().expect("the hmd display")[0];
     let out = cpu::cull(&layout, &job);
-    let n = scene.instances.len();
     assert!(out.visible.len() <= n && out.visible.iter().all(|&i| (i as usize) < n));
     assert_eq!(out.bins.len(), layout.bins.kinds.len());
     assert_eq!(out.packed_draws().count(), out.draw_count as usize);

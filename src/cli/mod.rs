@@ -115,6 +115,10 @@ pub struct SceneArgs {
     /// it can show (one more cull and multi-draw per display).
     #[arg(long, value_enum, default_value = "off")]
     pub inset_cull: Switch,
+    /// The scene's glTF node animations, posed once per frame at the frame's time (off:
+    /// the file's rest pose).
+    #[arg(long, value_enum, default_value = "on")]
+    pub animation: Switch,
 }
 
 #[derive(Clone, Copy, Debug, PartialEq, Eq, clap::ValueEnum, Serialize)]

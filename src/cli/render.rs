@@ -89,18 +89,23 @@ impl Session {
         }
     }
 
-    /// Loads the rig and scene and opens the device, then the renderer with `cull`,
+    /// Loads the rig and scene (posed at `time` seconds, or with `--animation off`
+    /// stripped of its animations) and opens the device, then the renderer with `cull`,
     /// `mode` and `msaa` samples per pixel (checked against the adapter's counts; `None`:
-    /// [`default_msaa`]).
+    /// [`default_msaa`]). A scene with edits or animations is live: each
+    /// [`Session::frame`] poses it at the frame's time.
     pub fn open(
         args: &SceneArgs,
-        cull: CullMode,
-        mode: StereoMode,
-        msaa: Option<u32>,
+        (cull, mode, msaa): (CullMode, StereoMode, Option<u32>),
         edits: &EditArgs,
+        time: f32,
     ) -> Result<Session> {
         let rig = args.load_rig()?;
-        let scene = scene_spec::load(&args.scene)?;
+        let mut scene = scene_spec::load(&args.scene)?;
+        match args.animation.on() {
+            true => scene.pose(time),
+            false => scene.posing = Default::default(),
+        }
         let gpu = Gpu::headless()?;
         let mut options = RendererOptions {
             cull,
@@ -119,7 +124,7 @@ impl Session {
         }
         let renderer = Renderer::new(&gpu.device, &scene, &rig, options)?;
         let targets = renderer.create_targets(&gpu.device);
-        let live = match edits.any() {
+        let live = match edits.any() || !scene.posing.is_empty() {
             true => {
                 let live = LiveScene::new(scene.clone());
                 let driver = EditDriver::new(&live, edits)?;
@@ -146,6 +151,7 @@ impl Session {
         let (mut edit_ms, mut sync_ms, mut sync) = (0.0, 0.0, SyncStats::default());
         let start = Instant::now();
         if let Some((live, driver)) = &mut self.live {
+            live.pose(time)?;
             driver.apply(live, self.frames)?;
             edit_ms = ms(start);
             let sync_start = Instant::now();
@@ -297,7 +303,8 @@ fn save(image: &image::RgbaImage, path: &std::path::Path) -> Result<()> {
 
 pub fn render(args: &RenderArgs) -> Result<()> {
     let edits = EditArgs::default();
-    let mut session = Session::open(&args.scene, args.cull, args.mode, args.msaa, &edits)?;
+    let how = (args.cull, args.mode, args.msaa);
+    let mut session = Session::open(&args.scene, how, &edits, args.time)?;
     // Room for every display's draw passes (one per eye, or two with occlusion, at
     // most) and the shadow pass.
     let counted = 3 * session.rig.displays.len() as u32 + 1;

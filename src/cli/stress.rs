@@ -134,7 +134,8 @@ impl MemorySample {
 
 pub fn stress(args: &StressArgs) -> Result<()> {
     let msaa = Some(args.msaa);
-    let mut session = Session::open(&args.scene, args.cull, args.mode, msaa, &args.edits)?;
+    let how = (args.cull, args.mode, msaa);
+    let mut session = Session::open(&args.scene, how, &args.edits, 0.0)?;
     // Room for every display's draw passes (one per eye, or two with occlusion, at
     // most) and the shadow pass.
     let counted = 3 * session.rig.displays.len() as u32 + 1;

@@ -14,8 +14,10 @@ use gltf::buffer::Data;
 use gltf::{Document, Semantic};
 
 use crate::error::{Error, Result};
+use crate::posing::NodeInstance;
 use crate::scene::{Animation, Instance, Scene, Vertex, both_windings};
 
+mod animations;
 mod materials;
 mod preconditions;
 
@@ -55,6 +57,8 @@ pub fn import_bytes(bytes: &[u8], base: Option<&Path>, origin: &Path) -> Result<
         textures: HashMap::new(),
         base,
         skipped: 0,
+        animated: animations::targets(&gltf.document),
+        pose_nodes: HashMap::new(),
     };
     let root = gltf
         .document
@@ -64,6 +68,7 @@ pub fn import_bytes(bytes: &[u8], base: Option<&Path>, origin: &Path) -> Result<
     for node in root.nodes() {
         importer.visit(node).map_err(&fail)?;
     }
+    importer.read_clips().map_err(&fail)?;
     if importer.skipped > 0 {
         log::warn!(
             "{}: skipped {} non-triangle primitive instance(s)",
@@ -131,6 +136,11 @@ struct Importer<'a> {
     /// Where external images resolve.
     base: Option<&'a Path>,
     skipped: usize,
+    /// The nodes an animation channel targets.
+    animated: HashSet<usize>,
+    /// glTF node -> its index in `scene.posing.nodes`, for the animated nodes and their
+    /// descendants.
+    pose_nodes: HashMap<usize, u32>,
 }
 
 type Step<T> = std::result::Result<T, String>;
@@ -140,8 +150,8 @@ impl Importer<'_> {
     /// instance-id order), with an explicit stack: a file may nest nodes deeper than the
     /// thread's stack would allow recursion.
     fn visit(&mut self, root: gltf::Node) -> Step<()> {
-        let mut stack = vec![(root, Affine3A::IDENTITY)];
-        while let Some((node, parent)) = stack.pop() {
+        let mut stack = vec![(root, Affine3A::IDENTITY, None)];
+        while let Some((node, parent, parent_pose)) = stack.pop() {
             if !self.visited.insert(node.index()) {
                 return Err(format!(
                     "nodes[{}] is reached twice (a cycle, or two parents); glTF nodes form trees",
@@ -150,14 +160,15 @@ impl Importer<'_> {
             }
             let local = Mat4::from_cols_array_2d(&node.transform().matrix());
             let world = parent * Affine3A::from_mat4(local);
-            self.place(&node, world)?;
+            let pose = self.pose_node(&node, parent, parent_pose);
+            self.place(&node, world, pose)?;
             let children: Vec<_> = node.children().collect();
-            stack.extend(children.into_iter().rev().map(|c| (c, world)));
+            stack.extend(children.into_iter().rev().map(|c| (c, world, pose)));
         }
         Ok(())
     }
 
-    fn place(&mut self, node: &gltf::Node, world: Affine3A) -> Step<()> {
+    fn place(&mut self, node: &gltf::Node, world: Affine3A, pose: Option<u32>) -> Step<()> {
         let Some(mesh) = node.mesh() else {
             return Ok(());
         };
@@ -180,6 +191,13 @@ impl Importer<'_> {
                     false => id,
                     true => self.mirrored_mesh_id(id, &primitive),
                 };
+                if let Some(node) = pose {
+                    self.scene.posing.instances.push(NodeInstance {
+                        instance: self.scene.instances.len() as u32,
+                        node,
+                        node_from_local: *copy,
+                    });
+                }
                 self.scene.instances.push(Instance {
                     world_from_local,
                     mesh,
