@@ -60,6 +60,7 @@ pub mod scene_spec;
 pub mod shaders;
 pub mod shadow;
 pub mod shapes;
+pub mod skinning;
 
 pub use error::{Error, Result};
 pub use live::LiveScene;

@@ -79,6 +79,8 @@ pub struct Changes {
     pub restructured: bool,
     /// Meshes were added: geometry grows.
     pub geometry: bool,
+    /// The skins' joint matrices changed ([`LiveScene::pose`]): they go up.
+    pub skinned: bool,
 }
 
 impl Changes {
@@ -248,22 +250,20 @@ impl LiveScene {
     /// [`LiveScene::new`]) moves as by [`LiveScene::set_transform`], so only the posed
     /// instances' edits cross the bus. Returns how many moved.
     pub fn pose(&mut self, time: f32) -> Result<u32> {
-        let posing = std::mem::take(&mut self.scene.posing);
-        let transforms = posing.instance_transforms(time);
+        let posed = self.scene.posed(time);
+        self.changes.skinned |= !self.scene.skins.is_empty();
         let mut moved = 0;
-        let mut result = Ok(());
-        for (i, world) in posing.instances.iter().zip(transforms) {
+        for (slot, world) in posed {
             let handle = Handle {
-                slot: i.instance,
+                slot,
                 generation: 0,
             };
             if self.check(handle).is_ok() {
-                result = result.and(self.set_transform(handle, world));
+                self.set_transform(handle, world)?;
                 moved += 1;
             }
         }
-        self.scene.posing = posing;
-        result.map(|()| moved)
+        Ok(moved)
     }
 
     /// Lists `slot`'s edit (transform and sphere) in this change set, once.

@@ -114,22 +114,12 @@ impl Posing {
     /// After the instances whose `kept` is false are dropped from the scene: the posed
     /// ones among them go, and the rest take their new ids.
     pub fn keep_instances(&mut self, kept: &[bool]) {
-        let mut new_id = Vec::with_capacity(kept.len());
-        let mut next = 0u32;
-        for &k in kept {
-            new_id.push(k.then_some(next));
-            next += u32::from(k);
-        }
+        let new_id = new_ids(kept);
         self.instances.retain_mut(|i| {
             let id = new_id.get(i.instance as usize).copied().flatten();
             i.instance = id.unwrap_or(u32::MAX);
             id.is_some()
         });
-    }
-
-    /// Whether nothing is animated.
-    pub fn is_empty(&self) -> bool {
-        self.clips.is_empty() || self.instances.is_empty()
     }
 
     /// Each node's world transform with every clip at `time` seconds, each clip looping
@@ -158,11 +148,27 @@ impl Posing {
     /// Every posed instance's world transform at `time`, in [`Posing::instances`] order
     /// (in parallel: a crowd has many).
     pub fn instance_transforms(&self, time: f32) -> Vec<Affine3A> {
-        let world = self.node_worlds(time);
+        self.instance_transforms_in(&self.node_worlds(time))
+    }
+
+    /// Every posed instance's world transform with the nodes at `world`.
+    pub fn instance_transforms_in(&self, world: &[Affine3A]) -> Vec<Affine3A> {
         (self.instances.par_iter())
             .map(|i| world[i.node as usize] * i.node_from_local)
             .collect()
     }
+}
+
+/// Each instance's id after those whose `kept` is false are dropped (`None`: dropped).
+pub fn new_ids(kept: &[bool]) -> Vec<Option<u32>> {
+    let mut next = 0u32;
+    (kept.iter())
+        .map(|&k| {
+            let id = k.then_some(next);
+            next += u32::from(k);
+            id
+        })
+        .collect()
 }
 
 impl Clip {

@@ -277,18 +277,37 @@ pub struct Scene {
     /// Node animations and the instances they move (by the ids instances have here):
     /// posed once per frame ([`crate::posing`]); empty for a still scene.
     pub posing: crate::posing::Posing,
+    /// Skinned instances, moved by posed nodes ([`crate::skinning`]); empty without.
+    pub skins: crate::skinning::Skins,
 }
 
 impl Scene {
     /// Poses the instances its node animations move at `time` seconds (what `render
     /// --time` draws; a live scene poses with [`crate::live::LiveScene::pose`]).
     pub fn pose(&mut self, time: f32) {
-        let transforms = self.posing.instance_transforms(time);
-        for (i, world) in self.posing.instances.iter().zip(transforms) {
-            if let Some(instance) = self.instances.get_mut(i.instance as usize) {
+        for (instance, world) in self.posed(time) {
+            if let Some(instance) = self.instances.get_mut(instance as usize) {
                 instance.world_from_local = world;
             }
         }
+    }
+
+    /// Whether it has animations that move something (otherwise every time poses alike).
+    pub fn is_animated(&self) -> bool {
+        let moved = !self.posing.instances.is_empty() || !self.skins.is_empty();
+        !self.posing.clips.is_empty() && moved
+    }
+
+    /// Poses the node animations and skins at `time`: writes the skins' joint matrices
+    /// and returns each posed instance (node and skinned) with its world transform.
+    pub fn posed(&mut self, time: f32) -> Vec<(u32, Affine3A)> {
+        let worlds = self.posing.node_worlds(time);
+        let nodes = self.posing.instance_transforms_in(&worlds);
+        let mut posed: Vec<(u32, Affine3A)> =
+            (self.posing.instances.iter().map(|i| i.instance).zip(nodes)).collect();
+        let skins = self.skins.poses(&worlds);
+        posed.extend(self.skins.set_poses(&skins));
+        posed
     }
 
     /// Triangles of every instance at its finest level: what a frame could draw.
@@ -318,6 +337,7 @@ impl Scene {
         self.instances
             .retain(|_| *kept_flags.next().unwrap_or(&false));
         self.posing.keep_instances(&kept);
+        self.skins.keep_instances(&kept);
         before - self.instances.len()
     }
 

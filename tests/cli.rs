@@ -1160,3 +1160,26 @@ fn render_poses_node_animations_at_its_time() {
     let posed = on.iter().zip(&off).all(|(a, b)| a > b);
     assert!(posed, "each frame sends the pose: {on:?} against {off:?}");
 }
+
+/// A skinned file plays in `stress`: one skinning pass per frame at the frame level,
+/// the same skinned vertices per frame on `hmd` and on `cave`'s five walls (per-eye
+/// skinning would be ten times as many there).
+#[test]
+fn stress_skins_once_per_frame_whatever_the_rig() {
+    let file = support::gltf_sample("SimpleSkin", "gltf")
+        .display()
+        .to_string();
+    let skinned = |rig: &str| {
+        let report = stress_json(&file, rig, "3");
+        let frame_passes = &report["frames"][2]["passes"];
+        let skins = (frame_passes.as_array().unwrap().iter())
+            .filter(|p| p["name"] == "skin" && p["level"] == "frame")
+            .count();
+        assert_eq!(skins, 1, "{rig}: one skinning pass");
+        report["summary"]["skinned_vertices_per_frame"]
+            .as_u64()
+            .unwrap()
+    };
+    let (hmd, cave) = (skinned("hmd"), skinned("cave"));
+    assert_eq!((hmd, cave), (10, 10), "cave / hmd = 1");
+}

@@ -635,3 +635,47 @@ fn windowed_arrays_take_one_binding_per_window() {
     );
     assert!(bound.iter().enumerate().all(|(i, (b, _))| *b == i as u32));
 }
+
+/// The skinning pass's rest vertex and joint matrices as WGSL declares them, and the
+/// words of `scene::Vertex` it writes (position, normal, tangent).
+#[test]
+fn skin_records_match_wgsl() {
+    use stereocull::scene::Vertex;
+    use stereocull::skinning::{JointMatrix, SkinVertex};
+    let source = stereocull::shaders::skin_source();
+    let module = parse("skin", &source);
+    let (members, span) = wgsl_struct(&module, "SkinVertex");
+    assert_eq!(span as usize, size_of::<SkinVertex>(), "SkinVertex size");
+    let found: Vec<(&str, usize)> = members
+        .iter()
+        .map(|(n, o)| (n.as_str(), *o as usize))
+        .collect();
+    let rust = [
+        ("position", offset_of!(SkinVertex, position)),
+        ("normal", offset_of!(SkinVertex, normal)),
+        ("tangent", offset_of!(SkinVertex, tangent)),
+        ("joints", offset_of!(SkinVertex, joints)),
+        ("weights", offset_of!(SkinVertex, weights)),
+        ("joint_base", offset_of!(SkinVertex, joint_base)),
+        ("destination", offset_of!(SkinVertex, destination)),
+    ];
+    assert_eq!(found, rust, "SkinVertex members and offsets");
+    assert_eq!(size_of::<JointMatrix>(), 48, "three vec4 rows");
+    let word = |name: &str| {
+        let declared = format!("const {name}: u32 = ");
+        let at = source.find(&declared).unwrap() + declared.len();
+        source[at..]
+            .split('u')
+            .next()
+            .unwrap()
+            .parse::<usize>()
+            .unwrap()
+            * 4
+    };
+    assert_eq!(word("VERTEX_WORDS"), size_of::<Vertex>());
+    assert_eq!(word("TANGENT_WORD"), offset_of!(Vertex, tangent));
+    assert_eq!(
+        (offset_of!(Vertex, position), offset_of!(Vertex, normal)),
+        (0, 12)
+    );
+}

@@ -26,6 +26,13 @@ pub fn gltf_import(data: &[u8]) {
             .iter()
             .all(|i| (i.instance as usize) < n)
     );
+    // The skinning pass writes only the scene's vertices and reads only its joints.
+    let skins = &scene.skins;
+    for v in &skins.vertices {
+        assert!((v.destination as usize) < scene.vertices.len());
+        let joints = v.joints.map(|j| v.joint_base as usize + j as usize);
+        assert!(joints.iter().all(|&j| j < skins.joint_matrices.len()));
+    }
     for time in [-1.0, 0.0, 0.37, 1e6] {
         scene.pose(time);
     }

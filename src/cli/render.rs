@@ -102,10 +102,10 @@ impl Session {
     ) -> Result<Session> {
         let rig = args.load_rig()?;
         let mut scene = scene_spec::load(&args.scene)?;
-        match args.animation.on() {
-            true => scene.pose(time),
-            false => scene.posing = Default::default(),
+        if !args.animation.on() {
+            scene.posing.clips.clear();
         }
+        scene.pose(time);
         let gpu = Gpu::headless()?;
         let mut options = RendererOptions {
             cull,
@@ -124,7 +124,7 @@ impl Session {
         }
         let renderer = Renderer::new(&gpu.device, &scene, &rig, options)?;
         let targets = renderer.create_targets(&gpu.device);
-        let live = match edits.any() || !scene.posing.is_empty() {
+        let live = match edits.any() || scene.is_animated() {
             true => {
                 let live = LiveScene::new(scene.clone());
                 let driver = EditDriver::new(&live, edits)?;

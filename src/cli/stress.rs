@@ -95,6 +95,11 @@ struct Summary {
     /// Median over the frames of the triangles submitted (pipeline statistics).
     triangles_submitted_median: Option<f64>,
     gpu_bytes_per_instance: u64,
+    /// Vertices the skinning pass poses per frame (once for every display and eye), and
+    /// the GPU bytes each takes in the pass's rest buffer (its posed copy is the scene's
+    /// vertex); the joint matrices take `bytes_per_joint` each.
+    skinned_vertices_per_frame: u32,
+    skinning_bytes: serde_json::Value,
     /// GPU bytes occlusion adds per display and once (`None` without it).
     occlusion_bytes: Option<OcclusionBytes>,
     /// Per display, what occlusion did in the last frame.
@@ -281,6 +286,11 @@ fn summarize(
         passes_per_level: passes_per_level(last.map_or(&[], |r| &r.passes[..])),
         far_near,
         gpu_bytes_per_instance: session.renderer.gpu_bytes_per_instance(),
+        skinned_vertices_per_frame: session.renderer.skinned_vertices(),
+        skinning_bytes: serde_json::json!({
+            "per_skinned_vertex": size_of::<crate::skinning::SkinVertex>(),
+            "per_joint": size_of::<crate::skinning::JointMatrix>(),
+        }),
         occlusion_bytes: session.renderer.occlusion_bytes(),
         occlusion: Vec::new(),
         memory,

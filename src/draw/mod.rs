@@ -67,7 +67,7 @@ impl DrawScene {
             vertices: init(
                 "stereocull.vertices",
                 bytemuck::cast_slice(&scene.vertices),
-                wgpu::BufferUsages::VERTEX,
+                DrawScene::vertex_usage(scene),
             ),
             indices: init(
                 "stereocull.indices",
@@ -82,6 +82,16 @@ impl DrawScene {
                 wgpu::BufferUsages::STORAGE | wgpu::BufferUsages::COPY_DST,
             ),
         })
+    }
+
+    /// The vertex buffer's uses: drawn, read back, and written by the skinning pass
+    /// when the scene has skins.
+    fn vertex_usage(scene: &Scene) -> wgpu::BufferUsages {
+        let skinned = match scene.skins.is_empty() {
+            true => wgpu::BufferUsages::empty(),
+            false => wgpu::BufferUsages::STORAGE,
+        };
+        wgpu::BufferUsages::VERTEX | wgpu::BufferUsages::COPY_SRC | skinned
     }
 
     /// GPU bytes per instance slot for drawing: its record.

@@ -20,6 +20,7 @@ use crate::scene::{Animation, Instance, Scene, Vertex, both_windings};
 mod animations;
 mod materials;
 mod preconditions;
+mod skins;
 
 use materials::check_images;
 
@@ -57,8 +58,11 @@ pub fn import_bytes(bytes: &[u8], base: Option<&Path>, origin: &Path) -> Result<
         textures: HashMap::new(),
         base,
         skipped: 0,
-        animated: animations::targets(&gltf.document),
+        animated: (animations::targets(&gltf.document).into_iter())
+            .chain(skins::joints(&gltf.document))
+            .collect(),
         pose_nodes: HashMap::new(),
+        pending_skins: Vec::new(),
     };
     let root = gltf
         .document
@@ -69,6 +73,7 @@ pub fn import_bytes(bytes: &[u8], base: Option<&Path>, origin: &Path) -> Result<
         importer.visit(node).map_err(&fail)?;
     }
     importer.read_clips().map_err(&fail)?;
+    importer.resolve_skins().map_err(&fail)?;
     if importer.skipped > 0 {
         log::warn!(
             "{}: skipped {} non-triangle primitive instance(s)",
@@ -136,11 +141,13 @@ struct Importer<'a> {
     /// Where external images resolve.
     base: Option<&'a Path>,
     skipped: usize,
-    /// The nodes an animation channel targets.
+    /// The nodes an animation channel targets, and the skins' joints: posed nodes.
     animated: HashSet<usize>,
-    /// glTF node -> its index in `scene.posing.nodes`, for the animated nodes and their
-    /// descendants.
+    /// glTF node -> its index in `scene.posing.nodes`, for the animated nodes (and
+    /// joints) and their descendants.
     pose_nodes: HashMap<usize, u32>,
+    /// Skinned instances whose joints are resolved once every node is placed.
+    pending_skins: Vec<skins::PendingSkin>,
 }
 
 type Step<T> = std::result::Result<T, String>;
@@ -169,6 +176,9 @@ impl Importer<'_> {
     }
 
     fn place(&mut self, node: &gltf::Node, world: Affine3A, pose: Option<u32>) -> Step<()> {
+        if let Some(skin) = node.skin() {
+            return self.place_skinned(node, skin);
+        }
         let Some(mesh) = node.mesh() else {
             return Ok(());
         };

@@ -165,7 +165,11 @@ pub(super) fn check_device(
             "vertices",
             size_of::<Vertex>() as u64,
             scene.vertices.len(),
-            limits.max_buffer_size,
+            // The skinning pass binds them whole to write its meshes.
+            match scene.skins.is_empty() {
+                true => limits.max_buffer_size,
+                false => storage,
+            },
         ),
         (
             "indices",

@@ -98,6 +98,7 @@ mod own_passes;
 mod passes;
 mod readback;
 mod shadow_pass;
+mod skin_pass;
 mod sync;
 mod targets;
 mod view_pass;
@@ -113,6 +114,7 @@ pub use options::{CoarseMode, CullMode, LOD_PIXELS, OcclusionMode, RendererOptio
 pub use passes::{Level, PassRecord};
 use passes::{Recording, close, open_display};
 pub use readback::{Diagnostics, FarSplit, OcclusionCounts};
+use skin_pass::SkinPass;
 pub use sync::SyncStats;
 pub use targets::{DisplayTarget, TargetShape, TargetViews};
 
@@ -146,6 +148,13 @@ impl Path {
         }
     }
 
+    fn draw_scene_ref(&self) -> &DrawScene {
+        match self {
+            Path::Indirect(p) => &p.draw_scene,
+            Path::Classic(p) => &p.draw_scene,
+        }
+    }
+
     /// The instance records and the culler: what edits change.
     fn edit_targets(&mut self) -> (&wgpu::Buffer, &mut culler::Culler) {
         match self {
@@ -168,6 +177,8 @@ pub struct Renderer {
     names: Vec<String>,
     /// Moved instances, staged by `sync`, dispatched by the next `encode`.
     scatter: Scatters,
+    /// With skins: the frame's skinning pass.
+    skin: Option<SkinPass>,
     /// Instance slots the buffers have room for.
     slots: u32,
     /// The rig as made: the displays (and far layer sizes) a reallocation rebuilds for.
@@ -209,6 +220,7 @@ impl Renderer {
             slots,
         };
         let path = Path::new(device, inputs)?;
+        let skin = SkinPass::new(device, &scene.skins, &path.draw_scene_ref().vertices);
         let shapes = rig
             .displays
             .iter()
@@ -227,11 +239,18 @@ impl Renderer {
             shapes,
             names: rig.displays.iter().map(|d| d.name.clone()).collect(),
             scatter,
+            skin,
             slots,
             rig: rig.clone(),
             coarse,
             passes: Vec::new(),
         })
+    }
+
+    /// Vertices the frame's skinning pass poses (0 without skins): the same for any
+    /// rig, since it runs once per frame.
+    pub fn skinned_vertices(&self) -> u32 {
+        self.skin.as_ref().map_or(0, SkinPass::vertices)
     }
 
     /// Where display `index`'s views lie in its target: side by side at their own sizes,
@@ -360,16 +379,20 @@ impl Renderer {
         if scattered > 0 {
             self.passes.push(PassRecord::frame("scatter"));
         }
-        let recording = Recording {
+        let mut recording = Recording {
             timer,
             log: &mut self.passes,
+        };
+        let skinned = match &self.skin {
+            Some(skin) => skin.encode(encoder, recording.again()),
+            None => 0,
         };
         let stats = match &self.path {
             Path::Indirect(p) => p.encode_frame(encoder, recording),
             Path::Classic(p) => p.encode_frame(encoder, recording),
         };
         FrameStats {
-            dispatches: stats.dispatches + scattered,
+            dispatches: stats.dispatches + scattered + skinned,
             cpu_staging,
             ..stats
         }

@@ -221,6 +221,13 @@ impl Diagnostics<'_> {
             .time_against_floor(self.device, self.queue, &views, rounds)
     }
 
+    /// The scene's vertices as the frame drew them: skinned meshes as the skinning
+    /// pass posed them (in their instances' local space), the rest as uploaded.
+    pub fn vertices(&self) -> Result<Vec<crate::scene::Vertex>> {
+        let buffer = &self.renderer.path.draw_scene_ref().vertices;
+        read_pod(self.device, self.queue, buffer, buffer.size())
+    }
+
     /// Visible totals of every display: read back from the counts buffers on the
     /// indirect path (with occlusion both phases': what the display drew), taken from
     /// this frame's CPU culls in the classic modes.

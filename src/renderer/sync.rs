@@ -4,6 +4,7 @@
 use super::checks::check_device;
 use super::frame::FramePlan;
 use super::inputs::PathInputs;
+use super::skin_pass::SkinPass;
 use super::{Path, Renderer};
 use crate::error::Result;
 use crate::live::{Changes, LiveScene, MoveEdit, PlaceEdit};
@@ -47,6 +48,22 @@ impl Renderer {
         live: &mut LiveScene,
     ) -> Result<SyncStats> {
         let changes = live.take_changes();
+        let skinned = changes.skinned;
+        let mut stats = self.sync_instances(device, queue, live, changes)?;
+        if let Some(skin) = self.skin.as_ref().filter(|_| skinned) {
+            stats.bytes_uploaded += skin.upload(queue, &live.scene().skins);
+        }
+        Ok(stats)
+    }
+
+    /// [`Renderer::sync`] of the instances (and, reallocating, of everything).
+    fn sync_instances(
+        &mut self,
+        device: &wgpu::Device,
+        queue: &wgpu::Queue,
+        live: &mut LiveScene,
+        changes: Changes,
+    ) -> Result<SyncStats> {
         let (scene, places) = (live.scene(), live.places());
         let needed = (scene.instances.len() as u32).max(places.len());
         if changes.geometry || needed > self.slots {
@@ -94,6 +111,7 @@ impl Renderer {
             slots: room,
         };
         self.path = Path::new(device, inputs)?;
+        self.skin = SkinPass::new(device, &scene.skins, &self.path.draw_scene_ref().vertices);
         self.slots = room;
         // The bindings may now need more windows.
         self.scatter = Scatters::new(device, self.options.windows(device, room));

@@ -374,6 +374,11 @@ pub fn shadow_cutout_source(windows: &Windows) -> String {
     .concat()
 }
 
+/// The frame's skinning pass (`wgsl/skin.wgsl`: its one bind group declared in the file).
+pub fn skin_source() -> String {
+    include_str!("../../wgsl/skin.wgsl").into()
+}
+
 /// Every shader variant the crate can build, with its label.
 pub fn all_sources() -> Vec<(String, String)> {
     // Whole bindings, and every windowed array split in three (scenes past one binding).
@@ -419,6 +424,7 @@ pub fn all_sources() -> Vec<(String, String)> {
                     "stereocull.foveated_composite".to_string(),
                     foveated_composite_source(),
                 ),
+                ("stereocull.skin".to_string(), skin_source()),
             ];
             let pyramids = [(1, false), (4, false), (1, true)].map(|(samples, layered)| {
                 let label = format!("stereocull.occlusion_pyramid.x{samples}.{layered}");

@@ -1,0 +1,142 @@
+//! The frame's skinning pass on the GPU ([`crate::skinning`], `wgsl/skin.wgsl`): one
+//! dispatch per frame over every skinned vertex, before the shadow pass and every
+//! display, writing into the vertex buffer they all draw from.
+
+use super::passes::{PassRecord, Recording, compute_pass};
+use crate::buffers::init_buffer;
+use crate::shaders::{compute_pipeline, dispatch_size, skin_source};
+use crate::skinning::Skins;
+
+/// What the pass reads and writes, and its pipeline.
+pub(super) struct SkinPass {
+    pipeline: wgpu::ComputePipeline,
+    bind_group: wgpu::BindGroup,
+    joints: wgpu::Buffer,
+    vertices: u32,
+    dispatch: (u32, u32),
+}
+
+const WORKGROUP: u32 = 64;
+
+impl SkinPass {
+    /// The pass for `skins` writing into `vertex_buffer` (`None` without skins).
+    pub(super) fn new(
+        device: &wgpu::Device,
+        skins: &Skins,
+        vertex_buffer: &wgpu::Buffer,
+    ) -> Option<SkinPass> {
+        if skins.is_empty() {
+            return None;
+        }
+        let storage = wgpu::BufferUsages::STORAGE;
+        let rest = init_buffer(
+            device,
+            "stereocull.skin_vertices",
+            bytemuck::cast_slice(&skins.vertices),
+            storage,
+        );
+        let joints = init_buffer(
+            device,
+            "stereocull.joint_matrices",
+            bytemuck::cast_slice(&skins.joint_matrices),
+            storage | wgpu::BufferUsages::COPY_DST,
+        );
+        let vertices = skins.vertices.len() as u32;
+        let dispatch = dispatch_size(
+            vertices.div_ceil(WORKGROUP),
+            device.limits().max_compute_workgroups_per_dimension,
+        );
+        let params = init_buffer(
+            device,
+            "stereocull.skin_params",
+            bytemuck::cast_slice(&[vertices, dispatch.0 * WORKGROUP]),
+            wgpu::BufferUsages::UNIFORM,
+        );
+        let layout = device.create_bind_group_layout(&wgpu::BindGroupLayoutDescriptor {
+            label: Some("stereocull.skin"),
+            entries: &[
+                storage_entry(0, true),
+                storage_entry(1, true),
+                storage_entry(2, false),
+                wgpu::BindGroupLayoutEntry {
+                    binding: 3,
+                    visibility: wgpu::ShaderStages::COMPUTE,
+                    ty: wgpu::BindingType::Buffer {
+                        ty: wgpu::BufferBindingType::Uniform,
+                        has_dynamic_offset: false,
+                        min_binding_size: None,
+                    },
+                    count: None,
+                },
+            ],
+        });
+        let entries = [&rest, &joints, vertex_buffer, &params]
+            .iter()
+            .enumerate()
+            .map(|(i, b)| wgpu::BindGroupEntry {
+                binding: i as u32,
+                resource: b.as_entire_binding(),
+            })
+            .collect::<Vec<_>>();
+        let bind_group = device.create_bind_group(&wgpu::BindGroupDescriptor {
+            label: Some("stereocull.skin"),
+            layout: &layout,
+            entries: &entries,
+        });
+        let pipeline_layout = device.create_pipeline_layout(&wgpu::PipelineLayoutDescriptor {
+            label: Some("stereocull.skin"),
+            bind_group_layouts: &[Some(&layout)],
+            immediate_size: 0,
+        });
+        let pipeline = compute_pipeline(
+            device,
+            "stereocull.skin",
+            &pipeline_layout,
+            skin_source(),
+            "skin",
+        );
+        Some(SkinPass {
+            pipeline,
+            bind_group,
+            joints,
+            vertices,
+            dispatch,
+        })
+    }
+
+    /// Writes `skins`' current joint matrices; returns the bytes.
+    pub(super) fn upload(&self, queue: &wgpu::Queue, skins: &Skins) -> u64 {
+        let bytes: &[u8] = bytemuck::cast_slice(&skins.joint_matrices);
+        queue.write_buffer(&self.joints, 0, bytes);
+        bytes.len() as u64
+    }
+
+    /// Records the frame's one skinning dispatch, logged as the frame pass `skin`.
+    pub(super) fn encode(&self, encoder: &mut wgpu::CommandEncoder, recording: Recording) -> u32 {
+        let what = (recording.log, PassRecord::frame("skin"));
+        compute_pass(encoder, (recording.timer, &None), what, |pass| {
+            pass.set_pipeline(&self.pipeline);
+            pass.set_bind_group(0, &self.bind_group, &[]);
+            pass.dispatch_workgroups(self.dispatch.0, self.dispatch.1, 1);
+        });
+        1
+    }
+
+    /// Skinned vertices per frame.
+    pub(super) fn vertices(&self) -> u32 {
+        self.vertices
+    }
+}
+
+fn storage_entry(binding: u32, read_only: bool) -> wgpu::BindGroupLayoutEntry {
+    wgpu::BindGroupLayoutEntry {
+        binding,
+        visibility: wgpu::ShaderStages::COMPUTE,
+        ty: wgpu::BindingType::Buffer {
+            ty: wgpu::BufferBindingType::Storage { read_only },
+            has_dynamic_offset: false,
+            min_binding_size: None,
+        },
+        count: None,
+    }
+}
