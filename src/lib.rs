@@ -34,6 +34,7 @@ mod buffers;
 pub mod cli;
 pub mod composite;
 pub mod contexts;
+pub mod crowd;
 pub mod cull;
 pub mod device;
 pub mod draw;

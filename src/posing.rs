@@ -47,13 +47,17 @@ pub struct Channel {
     pub values: Vec<Vec4>,
 }
 
-/// One animation: channels played together.
-#[derive(Clone, Debug, Default, PartialEq)]
+/// One animation: channels played together, at its own phase and pace.
+#[derive(Clone, Debug, PartialEq)]
 pub struct Clip {
     /// The file's name for it, or `animations[i]`.
     pub name: String,
     /// Its channels.
     pub channels: Vec<Channel>,
+    /// Seconds into the clip at frame time 0 (glTF's: 0).
+    pub offset: f32,
+    /// Clip seconds per frame second (glTF's: 1).
+    pub speed: f32,
 }
 
 /// A node's local transform as glTF splits it.
@@ -127,7 +131,7 @@ impl Posing {
     pub fn node_worlds(&self, time: f32) -> Vec<Affine3A> {
         let mut local: Vec<Trs> = self.nodes.iter().map(|n| n.rest).collect();
         for clip in &self.clips {
-            let t = clip.looped(time);
+            let t = clip.looped(time * clip.speed + clip.offset);
             for c in &clip.channels {
                 let trs = &mut local[c.node as usize];
                 match c.property {

@@ -1,5 +1,5 @@
 //! Scenes by name, above the importers: `default` (the built-in room),
-//! `procedural:N[:MESHES[:SEED[:textured][:glassP]]]`, `city:N[:SEED]`, `rooms:N[:SEED]`, or a
+//! `procedural:N[:MESHES[:SEED[:textured][:glassP]]]`, `city:N[:SEED]`, `rooms:N[:SEED]`, `crowd:N[:SEED]`, or a
 //! `.gltf` / `.glb` file.
 
 use std::path::Path;
@@ -32,6 +32,9 @@ pub fn load(spec: &str) -> Result<Scene> {
     }
     if let Some(rest) = spec.strip_prefix("rooms:") {
         return checked(spec, parse_rooms(spec, rest)?);
+    }
+    if let Some(rest) = spec.strip_prefix("crowd:") {
+        return checked(spec, parse_crowd(spec, rest)?);
     }
     let scene = match spec.strip_prefix("procedural:") {
         Some(rest) => {
@@ -82,6 +85,15 @@ fn parse_rooms(spec: &str, rest: &str) -> Result<Scene> {
     let seed = fields.seed()?;
     fields.end()?;
     Ok(procedural::rooms(n, seed))
+}
+
+/// `crowd:N[:SEED]`: [`crate::crowd::scene`].
+fn parse_crowd(spec: &str, rest: &str) -> Result<Scene> {
+    let mut fields = Fields::new(spec, rest, "crowd:N[:SEED]");
+    let n = fields.count()?;
+    let seed = fields.seed()?;
+    fields.end()?;
+    Ok(crate::crowd::scene(n, seed))
 }
 
 fn parse_procedural(spec: &str, rest: &str) -> Result<(u32, u32, u64, (bool, f64))> {

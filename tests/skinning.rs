@@ -313,3 +313,89 @@ fn malformed_skins_are_errors_naming_the_part() {
         "{err}"
     );
 }
+
+/// The crowd: every posed vertex of random figures at random times lies inside its
+/// instance's culling sphere (fails if the bounds ignore the pose: the swinging limbs
+/// leave the rest pose's sphere), the figures walk out of phase, and the GPU poses
+/// what the twin poses.
+#[test]
+fn crowd_figures_stay_inside_their_spheres_at_any_time() {
+    let mut scene = scene_spec::load("crowd:40:3").unwrap();
+    assert_eq!(scene.skins.skins.len(), 40);
+    assert!(scene.skins.skins[0].joints.len() >= 10, "tens of joints");
+    let rest: Vec<_> = (scene.instances.iter())
+        .map(|i| scene.world_sphere(i))
+        .collect();
+    let mut rng = rand_pcg::Pcg64Mcg::seed_from_u64(8);
+    let mut left_rest = 0;
+    for _ in 0..12 {
+        scene.pose(rng.random_range(0.0..30.0));
+        for (s, posed) in scene.skins.skins.iter().zip(posed_world(&scene)) {
+            let instance = &scene.instances[s.instance as usize];
+            let sphere = scene.world_sphere(instance);
+            for p in &posed {
+                assert!(
+                    p.distance(sphere.truncate()) <= sphere.w,
+                    "{p} outside {sphere}"
+                );
+            }
+            let was = rest[s.instance as usize];
+            left_rest += usize::from(posed.iter().any(|p| p.distance(was.truncate()) > was.w));
+        }
+    }
+    assert!(left_rest > 0, "limbs swing out of the rest sphere");
+    // Out of phase: two figures' knees do not bend alike.
+    let knees: Vec<f32> = (scene.skins.joint_matrices.chunks(stereocull::crowd::JOINTS))
+        .map(|m| m[12][1][2])
+        .collect();
+    assert!(knees.windows(2).any(|w| (w[0] - w[1]).abs() > 1e-3));
+}
+
+/// Every stereo mode draws the crowd posed alike, with tests/images.rs's tolerances for
+/// still scenes: the classic modes draw each eye into its own viewport, where a vertex
+/// can round a hair from the double-wide remap (2 levels, 0.05 % of the pixels beyond:
+/// seen here, 3 pixels one level off), and lavapipe's multiview clips triangles that
+/// cross the near plane a pixel differently (2 levels, 0.3 %).
+#[test]
+fn every_stereo_mode_draws_the_same_posed_crowd() {
+    use stereocull::renderer::StereoMode;
+    let gpu = support::gpu();
+    let mut scene = scene_spec::load("crowd:60:5").unwrap();
+    scene.pose(0.7);
+    let mut rig = support::sized("hmd", 96, 80);
+    rig.viewer.position = [0.0, 1.6, 0.0];
+    let draw = |mode: StereoMode| {
+        let options = RendererOptions {
+            mode,
+            cull: support::cull_for(mode),
+            ..support::frustum_only()
+        };
+        support::render(&gpu, &scene, &rig, options)
+            .unwrap()
+            .remove(0)
+    };
+    let reference = draw(StereoMode::Instanced);
+    let background = *reference.get_pixel(0, 0);
+    assert!(
+        reference.pixels().filter(|p| **p != background).count() > 300,
+        "figures drawn"
+    );
+    for mode in StereoMode::ALL {
+        let tolerance = match mode {
+            StereoMode::Multiview => support::Tolerance {
+                levels: 2,
+                share: 0.003,
+            },
+            _ => support::Tolerance {
+                levels: 2,
+                share: 0.0005,
+            },
+        };
+        support::assert_images_match(
+            &format!("crowd-{}", mode.name()),
+            &draw(mode),
+            &reference,
+            tolerance,
+        );
+    }
+}

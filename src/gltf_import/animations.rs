@@ -61,6 +61,8 @@ impl Importer<'_> {
             let mut clip = Clip {
                 name: animation.name().map_or_else(|| at.clone(), str::to_owned),
                 channels: Vec::new(),
+                offset: 0.0,
+                speed: 1.0,
             };
             for channel in animation.channels() {
                 let at = format!("{at}.channels[{}]", channel.index());
