@@ -238,6 +238,7 @@ fn add_figure(
         joint_bounds: bone_bounds(),
         inverse_binds,
         vertices: first..scene.skins.vertices.len() as u32,
+        joint_base,
     });
     scene.instances.push(Instance {
         world_from_local: Affine3A::IDENTITY,

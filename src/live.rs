@@ -79,8 +79,9 @@ pub struct Changes {
     pub restructured: bool,
     /// Meshes were added: geometry grows.
     pub geometry: bool,
-    /// The skins' joint matrices changed ([`LiveScene::pose`]): they go up.
-    pub skinned: bool,
+    /// Ranges of the skins' joint matrices that changed ([`LiveScene::pose`]: all of
+    /// them; [`LiveScene::set_joints`]: one skin's): they go up.
+    pub joints: Vec<std::ops::Range<u32>>,
 }
 
 impl Changes {
@@ -251,7 +252,10 @@ impl LiveScene {
     /// instances' edits cross the bus. Returns how many moved.
     pub fn pose(&mut self, time: f32) -> Result<u32> {
         let posed = self.scene.posed(time);
-        self.changes.skinned |= !self.scene.skins.is_empty();
+        let all = self.scene.skins.joint_matrices.len() as u32;
+        if all > 0 {
+            self.changes.joints = vec![0..all];
+        }
         let mut moved = 0;
         for (slot, world) in posed {
             let handle = Handle {
@@ -264,6 +268,35 @@ impl LiveScene {
             }
         }
         Ok(moved)
+    }
+
+    /// Poses the skinned instance behind `handle` with joint transforms the engine
+    /// supplies (`joint_worlds`: each joint's world transform, in the skin's joint
+    /// order): its culling sphere follows them, and only its joint matrices and its
+    /// transform go up at the next sync. An error for an instance without a skin, the
+    /// wrong joint count, or transforms that are not finite.
+    pub fn set_joints(&mut self, handle: Handle, joint_worlds: &[Affine3A]) -> Result<()> {
+        self.check(handle)?;
+        let skins = &self.scene.skins;
+        let Some(s) = skins.of_instance(handle.slot) else {
+            return Err(Error::InvalidScene(format!(
+                "set_joints: instance {} has no skin",
+                handle.slot
+            )));
+        };
+        let skin = &skins.skins[s];
+        if joint_worlds.len() != skin.joints.len() {
+            return Err(Error::InvalidScene(format!(
+                "set_joints: {} joint transforms for a skin of {}",
+                joint_worlds.len(),
+                skin.joints.len()
+            )));
+        }
+        joint_worlds.iter().try_for_each(check_finite)?;
+        let pose = skin.pose_joints(joint_worlds);
+        let range = self.scene.skins.set_pose(s, &pose);
+        self.changes.joints.push(range);
+        self.set_transform(handle, pose.world_from_local)
     }
 
     /// Lists `slot`'s edit (transform and sphere) in this change set, once.

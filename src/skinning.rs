@@ -55,6 +55,8 @@ pub struct Skin {
     pub joint_bounds: Vec<Vec4>,
     /// Its vertices: a range of [`Skins::vertices`].
     pub vertices: std::ops::Range<u32>,
+    /// Its first joint matrix in [`Skins::joint_matrices`].
+    pub joint_base: u32,
 }
 
 /// A scene's skinned instances, their vertices at rest, and the current joint matrices
@@ -95,6 +97,22 @@ impl Skins {
             .collect()
     }
 
+    /// The skin of instance `instance`, if it has one (skins are in instance order).
+    pub fn of_instance(&self, instance: u32) -> Option<usize> {
+        self.skins
+            .binary_search_by_key(&instance, |s| s.instance)
+            .ok()
+    }
+
+    /// Writes skin `s`'s `pose` into [`Skins::joint_matrices`]; returns the range written.
+    pub fn set_pose(&mut self, s: usize, pose: &SkinPose) -> std::ops::Range<u32> {
+        let start = self.skins[s].joint_base;
+        for (k, m) in pose.joint_matrices.iter().enumerate() {
+            self.joint_matrices[start as usize + k] = rows(m);
+        }
+        start..start + pose.joint_matrices.len() as u32
+    }
+
     /// Writes `poses` (one per skin) into [`Skins::joint_matrices`]; returns each skin's
     /// instance and transform.
     pub fn set_poses(&mut self, poses: &[SkinPose]) -> Vec<(u32, Affine3A)> {
@@ -126,9 +144,14 @@ impl Skin {
         let joint_worlds: Vec<Affine3A> = (self.joints.iter())
             .map(|&j| node_worlds[j as usize])
             .collect();
+        self.pose_joints(&joint_worlds)
+    }
+
+    /// Its pose for its joints' world transforms, in its joint order.
+    pub fn pose_joints(&self, joint_worlds: &[Affine3A]) -> SkinPose {
         // The joints' bounds are in their bind spaces: the joints' own transforms move
         // them; the vertices take the inverse bind matrices first.
-        let sphere = posed_sphere(&joint_worlds, &self.joint_bounds);
+        let sphere = posed_sphere(joint_worlds, &self.joint_bounds);
         let world_joints = (joint_worlds.iter().zip(&self.inverse_binds)).map(|(m, ib)| *m * *ib);
         let world_from_local = onto(self.rest_sphere, sphere);
         let local_from_world = world_from_local.inverse();

@@ -399,3 +399,65 @@ fn every_stereo_mode_draws_the_same_posed_crowd() {
         );
     }
 }
+
+/// An engine that animates itself hands one figure's joint transforms to the live
+/// scene: that figure's joint matrices and transform become what posing at the same
+/// time gives, the others stay, only its joints (and its move) go up at the sync, and
+/// the GPU skins it with them.
+#[test]
+fn engine_supplied_joints_pose_one_figure_sparsely() {
+    use stereocull::live::LiveScene;
+    let gpu = support::gpu();
+    let scene = scene_spec::load("crowd:6:2").unwrap();
+    let rig = support::sized("hmd", 32, 32);
+    let options = RendererOptions::default();
+    let mut renderer = Renderer::new(&gpu.device, &scene, &rig, options).unwrap();
+    let targets = renderer.create_targets(&gpu.device);
+    let mut live = LiveScene::new(scene.clone());
+    let skin = scene.skins.skins[2].clone();
+    let worlds = scene.posing.node_worlds(0.8);
+    let joint_worlds: Vec<_> = skin.joints.iter().map(|&j| worlds[j as usize]).collect();
+    let handle = live.handles()[skin.instance as usize];
+    live.set_joints(handle, &joint_worlds).unwrap();
+    let synced = renderer.sync(&gpu.device, &gpu.queue, &mut live).unwrap();
+
+    let mut posed = scene.clone();
+    posed.pose(0.8);
+    let (start, end) = (
+        skin.joint_base as usize,
+        skin.joint_base as usize + skin.joints.len(),
+    );
+    let matrices = &live.scene().skins.joint_matrices;
+    assert_eq!(matrices[start..end], posed.skins.joint_matrices[start..end]);
+    assert_eq!(
+        matrices[..start],
+        scene.skins.joint_matrices[..start],
+        "the others stay"
+    );
+    let instance = skin.instance as usize;
+    assert_eq!(live.scene().instances[instance], posed.instances[instance]);
+    let joint_bytes = (skin.joints.len() * 48) as u64;
+    assert_eq!(synced.moved, 1);
+    assert!(synced.bytes_uploaded >= joint_bytes && synced.bytes_uploaded < 2 * joint_bytes);
+
+    renderer
+        .submit_frame(&gpu.device, &gpu.queue, &rig, 0.0, &targets)
+        .unwrap();
+    let drawn = renderer
+        .diagnostics(&gpu.device, &gpu.queue)
+        .vertices()
+        .unwrap();
+    let range = skin.vertices.start as usize..skin.vertices.end as usize;
+    for v in &live.scene().skins.vertices[range] {
+        let (position, _, _) = skin_vertex(v, matrices);
+        let gpu_position = drawn[v.destination as usize].position;
+        for (g, c) in gpu_position.iter().zip(position) {
+            assert!((g - c).abs() <= 1e-6 * (1.0 + c.abs()), "{g} against {c}");
+        }
+    }
+    let err = live
+        .set_joints(handle, &joint_worlds[..3])
+        .unwrap_err()
+        .to_string();
+    assert!(err.contains("3 joint transforms for a skin of 17"), "{err}");
+}

@@ -53,6 +53,8 @@ struct FrameRecord {
     triangles_submitted: Option<u64>,
     /// Until the GPU finished the frame.
     frame_ms: f64,
+    /// The skinning pass's GPU milliseconds (timestamps; `None` without skins or them).
+    skin_gpu_ms: Option<f64>,
     visible: Vec<u32>,
     /// Sphere-against-frustum tests (GPU culling; see `Diagnostics::sphere_tests`).
     sphere_tests: Option<u64>,
@@ -100,6 +102,8 @@ struct Summary {
     /// vertex); the joint matrices take `bytes_per_joint` each.
     skinned_vertices_per_frame: u32,
     skinning_bytes: serde_json::Value,
+    /// Median over the frames of the skinning pass's GPU time.
+    skin_gpu_ms_median: Option<f64>,
     /// GPU bytes occlusion adds per display and once (`None` without it).
     occlusion_bytes: Option<OcclusionBytes>,
     /// Per display, what occlusion did in the last frame.
@@ -173,6 +177,9 @@ pub fn stress(args: &StressArgs) -> Result<()> {
             None => None,
         };
         let triangles_submitted = queries.as_ref().and_then(|q| q.triangles_submitted);
+        let skin_gpu_ms = (queries.as_ref())
+            .and_then(|q| q.passes.iter().find(|(label, _)| label == "skin"))
+            .map(|(_, ms)| *ms);
         let passes = pass_reports(&session.renderer, &session.rig, queries.as_ref());
         let visible = session
             .renderer
@@ -192,6 +199,7 @@ pub fn stress(args: &StressArgs) -> Result<()> {
             reloaded: figures.sync.reloaded,
             triangles_submitted,
             frame_ms,
+            skin_gpu_ms,
             visible,
             sphere_tests,
             passes,
@@ -287,6 +295,10 @@ fn summarize(
         far_near,
         gpu_bytes_per_instance: session.renderer.gpu_bytes_per_instance(),
         skinned_vertices_per_frame: session.renderer.skinned_vertices(),
+        skin_gpu_ms_median: {
+            let v: Vec<f64> = records.iter().filter_map(|r| r.skin_gpu_ms).collect();
+            (!v.is_empty()).then(|| percentile(&v, 0.5))
+        },
         skinning_bytes: serde_json::json!({
             "per_skinned_vertex": size_of::<crate::skinning::SkinVertex>(),
             "per_joint": size_of::<crate::skinning::JointMatrix>(),

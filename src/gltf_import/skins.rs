@@ -208,6 +208,7 @@ impl Importer<'_> {
                 inverse_binds,
                 joint_bounds,
                 vertices: pending.vertices,
+                joint_base: base,
             });
         }
         self.scene.pose(0.0);

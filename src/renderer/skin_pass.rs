@@ -5,7 +5,9 @@
 use super::passes::{PassRecord, Recording, compute_pass};
 use crate::buffers::init_buffer;
 use crate::shaders::{compute_pipeline, dispatch_size, skin_source};
-use crate::skinning::Skins;
+use std::ops::Range;
+
+use crate::skinning::{JointMatrix, Skins};
 
 /// What the pass reads and writes, and its pipeline.
 pub(super) struct SkinPass {
@@ -104,10 +106,12 @@ impl SkinPass {
         })
     }
 
-    /// Writes `skins`' current joint matrices; returns the bytes.
-    pub(super) fn upload(&self, queue: &wgpu::Queue, skins: &Skins) -> u64 {
-        let bytes: &[u8] = bytemuck::cast_slice(&skins.joint_matrices);
-        queue.write_buffer(&self.joints, 0, bytes);
+    /// Writes `skins`' current joint matrices in `range`; returns the bytes.
+    pub(super) fn upload(&self, queue: &wgpu::Queue, skins: &Skins, range: Range<u32>) -> u64 {
+        let matrices = &skins.joint_matrices[range.start as usize..range.end as usize];
+        let bytes: &[u8] = bytemuck::cast_slice(matrices);
+        let offset = range.start as u64 * size_of::<JointMatrix>() as u64;
+        queue.write_buffer(&self.joints, offset, bytes);
         bytes.len() as u64
     }
 

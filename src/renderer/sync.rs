@@ -47,11 +47,13 @@ impl Renderer {
         queue: &wgpu::Queue,
         live: &mut LiveScene,
     ) -> Result<SyncStats> {
-        let changes = live.take_changes();
-        let skinned = changes.skinned;
+        let mut changes = live.take_changes();
+        let joints = std::mem::take(&mut changes.joints);
         let mut stats = self.sync_instances(device, queue, live, changes)?;
-        if let Some(skin) = self.skin.as_ref().filter(|_| skinned) {
-            stats.bytes_uploaded += skin.upload(queue, &live.scene().skins);
+        if let Some(skin) = &self.skin {
+            for range in joints {
+                stats.bytes_uploaded += skin.upload(queue, &live.scene().skins, range);
+            }
         }
         Ok(stats)
     }
