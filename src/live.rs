@@ -254,7 +254,8 @@ impl LiveScene {
         let posed = self.scene.posed(time);
         let all = self.scene.skins.joint_matrices.len() as u32;
         if all > 0 {
-            self.changes.joints = vec![0..all];
+            self.changes.joints.clear();
+            self.changes.joints.push(0..all);
         }
         let mut moved = 0;
         for (slot, world) in posed {
