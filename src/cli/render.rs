@@ -71,7 +71,7 @@ pub struct Session {
 pub struct FrameFigures {
     /// Recorded and uploaded by prepare + encode + submit (sync's bytes included).
     pub stats: FrameStats,
-    /// sync + prepare + encode + submit on the CPU: stereocull's cost.
+    /// posing + sync + prepare + encode + submit on the CPU: stereocull's cost.
     pub cpu_ms: f64,
     /// Applying the frame's edits to the live scene: the caller's work.
     pub edit_ms: f64,
@@ -151,9 +151,11 @@ impl Session {
         let (mut edit_ms, mut sync_ms, mut sync) = (0.0, 0.0, SyncStats::default());
         let start = Instant::now();
         if let Some((live, driver)) = &mut self.live {
+            // Posing is stereocull's frame-context work: counted in cpu_ms.
             live.pose(time)?;
+            let edits = Instant::now();
             driver.apply(live, self.frames)?;
-            edit_ms = ms(start);
+            edit_ms = ms(edits);
             let sync_start = Instant::now();
             sync = self
                 .renderer
