@@ -1183,3 +1183,50 @@ fn stress_skins_once_per_frame_whatever_the_rig() {
     let (hmd, cave) = (skinned("hmd"), skinned("cave"));
     assert_eq!((hmd, cave), (10, 10), "cave / hmd = 1");
 }
+
+/// `profile --crowd` plays the walking crowd on its clock in every mode: each
+/// configuration's traced frame holds the frame-level `skin` pass.
+#[test]
+fn profile_plays_the_crowd_in_every_mode() {
+    let dir = tempfile::tempdir().unwrap();
+    let trace = dir.path().join("trace.json");
+    let out = stereocull(&[
+        "profile",
+        "--crowd",
+        "--instances",
+        "30",
+        "--rig",
+        "hmd",
+        "--frames",
+        "2",
+        "--warmup",
+        "1",
+        "--width",
+        "16",
+        "--height",
+        "16",
+        "--occlusion",
+        "off",
+        "--out",
+        dir.path().to_str().unwrap(),
+        "--trace",
+        trace.to_str().unwrap(),
+    ]);
+    assert!(
+        out.status.success(),
+        "{}",
+        String::from_utf8_lossy(&out.stderr)
+    );
+    let trace: Value = serde_json::from_slice(&std::fs::read(trace).unwrap()).unwrap();
+    let events = trace["traceEvents"].as_array().unwrap();
+    let configurations = events.iter().filter(|e| {
+        e["name"]
+            .as_str()
+            .is_some_and(|n| n.starts_with("hmd ") && n.ends_with(" 30"))
+    });
+    let skins = events.iter().filter(|e| e["name"] == "skin").count();
+    assert!(
+        skins > 0 && skins == configurations.count(),
+        "one skin pass per configuration's frame: {skins}"
+    );
+}

@@ -68,9 +68,10 @@ pub fn profile(args: &ProfileArgs) -> Result<()> {
     let mut rows = Vec::new();
     for (&n, &glass) in (args.instances.iter()).flat_map(|n| args.glass.iter().map(move |g| (n, g)))
     {
-        let mut scene = match (args.city, args.rooms) {
-            (true, _) => procedural::city(n, 1),
-            (_, true) => procedural::rooms(n, 1),
+        let mut scene = match (args.city, args.rooms, args.crowd) {
+            (true, _, _) => procedural::city(n, 1),
+            (_, true, _) => procedural::rooms(n, 1),
+            (_, _, true) => crate::crowd::scene(n, 1),
             _ => procedural::scene(n, args.meshes, 1),
         };
         if args.textured {

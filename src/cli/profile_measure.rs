@@ -78,6 +78,10 @@ pub struct ProfileArgs {
     /// Profile `rooms:N` scenes (rooms with doorways, props inside: occluders) instead.
     #[arg(long, conflicts_with = "city")]
     pub rooms: bool,
+    /// Profile `crowd:N` scenes (N skinned figures walking, posed and skinned every
+    /// frame on the 90 Hz clock, posing timed as the frame's CPU work) instead.
+    #[arg(long, conflicts_with_all = ["city", "rooms"])]
+    pub crowd: bool,
     /// Occlusion culling, one configuration each (`on,off` compares them in one run).
     #[arg(long, value_delimiter = ',', value_enum, default_value = "auto")]
     pub occlusion: Vec<OcclusionMode>,
@@ -166,7 +170,7 @@ pub(super) fn measure(
     let views: Vec<_> = targets.iter().map(|t| t.views()).collect();
     let mut samples = Samples::default();
     let mut copy = PlainCopy::default();
-    let mut live = match edits.any() {
+    let mut live = match edits.any() || scene.is_animated() {
         true => {
             let live = LiveScene::new(scene.clone());
             let driver = EditDriver::new(&live, &edits)?;
@@ -180,13 +184,17 @@ pub(super) fn measure(
             driver.apply(live, frame)?;
         }
         let start = Instant::now();
+        let time = frame as f32 * FRAME_SECONDS;
         let synced = match &mut live {
-            Some((live, _)) => renderer.sync(&gpu.device, &gpu.queue, live)?,
+            Some((live, _)) => {
+                live.pose(time)?;
+                renderer.sync(&gpu.device, &gpu.queue, live)?
+            }
             None => SyncStats::default(),
         };
         let sync_end = Instant::now();
         copy.bytes = synced.bytes_uploaded as usize;
-        let prepared = renderer.prepare(&gpu.queue, rig, frame as f32 * FRAME_SECONDS)?;
+        let prepared = renderer.prepare(&gpu.queue, rig, time)?;
         let encode_start = Instant::now();
         let mut encoder = gpu.device.create_command_encoder(&Default::default());
         let recorded = renderer.encode(&mut encoder, &views, timer.as_deref_mut())?;
