@@ -60,7 +60,7 @@ pub struct Skin {
 }
 
 /// A scene's skinned instances, their vertices at rest, and the current joint matrices
-/// (what the skinning pass applies: [`Skins::pose`] writes them).
+/// (what the skinning pass applies: [`Skins::set_poses`] and [`Skins::set_pose`] write them).
 #[derive(Clone, Debug, Default, PartialEq)]
 pub struct Skins {
     /// The skins.
