@@ -391,14 +391,16 @@ fn one_sided_lod_chain(vertices: &[Vertex], indices: &[u32], radius: f32) -> Vec
 }
 
 fn bounding_sphere(vertices: &[Vertex]) -> Vec4 {
-    let positions = || vertices.iter().map(|v| Vec3::from(v.position));
-    let min = positions().fold(Vec3::splat(f32::MAX), Vec3::min);
-    let max = positions().fold(Vec3::splat(f32::MIN), Vec3::max);
-    if vertices.is_empty() {
-        return Vec4::ZERO;
-    }
+    sphere_around(|| vertices.iter().map(|v| Vec3::from(v.position))).unwrap_or(Vec4::ZERO)
+}
+
+/// The sphere (xyz center, w radius) around the points `points()` yields, centered on
+/// their box, which is tight enough for culling and cheap; `None` for no points.
+pub fn sphere_around<I: Iterator<Item = Vec3>>(points: impl Fn() -> I) -> Option<Vec4> {
+    let first = points().next()?;
+    let (min, max) = points().fold((first, first), |(lo, hi), p| (lo.min(p), hi.max(p)));
     let center = 0.5 * (min + max);
-    let radius = positions().map(|p| p.distance(center)).fold(0.0, f32::max);
-    // Rounding in the distance can leave the farthest vertex a hair outside.
-    center.extend(radius * (1.0 + 1e-6))
+    let radius = points().map(|p| p.distance(center)).fold(0.0, f32::max);
+    // Rounding in the distance can leave the farthest point a hair outside.
+    Some(center.extend(radius * (1.0 + 1e-6)))
 }

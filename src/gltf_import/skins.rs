@@ -9,7 +9,7 @@ use gltf::accessor::{DataType, Dimensions};
 use gltf::mesh::util::{ReadJoints, ReadWeights};
 
 use super::{Importer, Step, check_accessor};
-use crate::scene::{Animation, Instance};
+use crate::scene::{Animation, Instance, sphere_around};
 use crate::skinning::{Skin, SkinVertex};
 
 /// A skinned instance read before its joints are placed: its skin, and its vertices'
@@ -259,13 +259,7 @@ fn joint_bounds(vertices: &[SkinVertex], inverse_binds: &[Affine3A]) -> Vec<Vec4
                     })
                     .map(move |v| ib.transform_point3(Vec3::from(v.position)))
             };
-            let Some(first) = moved().next() else {
-                return Vec4::new(0.0, 0.0, 0.0, -1.0);
-            };
-            let (min, max) = moved().fold((first, first), |(lo, hi), p| (lo.min(p), hi.max(p)));
-            let center = 0.5 * (min + max);
-            let radius = moved().map(|p| p.distance(center)).fold(0.0, f32::max);
-            center.extend(radius * (1.0 + 1e-6))
+            sphere_around(moved).unwrap_or(Vec4::new(0.0, 0.0, 0.0, -1.0))
         })
         .collect()
 }
