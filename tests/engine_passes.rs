@@ -333,13 +333,26 @@ fn own_pipeline(
             return lit(in.world, in.normal, in.color, in.eye);
         }"
         + LIT;
+    let layouts = [renderer.bind_group_layout()];
+    stereo_pipeline(device, (&source, &layouts), &options, None)
+}
+
+/// A pipeline of the test's own on `source` (entry points `vs` and `fs`) and
+/// `group_layouts` (stereocull's group 0 first), into the targets `options` describe,
+/// depth-tested, culling `cull_mode`.
+fn stereo_pipeline(
+    device: &wgpu::Device,
+    (source, group_layouts): (&str, &[Option<&wgpu::BindGroupLayout>]),
+    options: &RendererOptions,
+    cull_mode: Option<wgpu::Face>,
+) -> wgpu::RenderPipeline {
     let module = device.create_shader_module(wgpu::ShaderModuleDescriptor {
         label: Some("own"),
         source: wgpu::ShaderSource::Wgsl(source.into()),
     });
     let layout = device.create_pipeline_layout(&wgpu::PipelineLayoutDescriptor {
         label: Some("own"),
-        bind_group_layouts: &[renderer.bind_group_layout()],
+        bind_group_layouts: group_layouts,
         immediate_size: 0,
     });
     device.create_render_pipeline(&wgpu::RenderPipelineDescriptor {
@@ -351,7 +364,10 @@ fn own_pipeline(
             compilation_options: Default::default(),
             buffers: &[Some(stereocull::draw::VERTEX_BUFFER)],
         },
-        primitive: Default::default(),
+        primitive: wgpu::PrimitiveState {
+            cull_mode,
+            ..Default::default()
+        },
         depth_stencil: Some(wgpu::DepthStencilState {
             format: options.depth_format,
             depth_write_enabled: Some(true),
@@ -598,10 +614,6 @@ fn flat_pipeline(
             }
             return flat;
         }";
-    let module = device.create_shader_module(wgpu::ShaderModuleDescriptor {
-        label: Some("flat"),
-        source: wgpu::ShaderSource::Wgsl(source.into()),
-    });
     let group_layout = device.create_bind_group_layout(&wgpu::BindGroupLayoutDescriptor {
         label: Some("flat"),
         entries: &[wgpu::BindGroupLayoutEntry {
@@ -629,41 +641,8 @@ fn flat_pipeline(
             resource: buffer.as_entire_binding(),
         }],
     });
-    let layout = device.create_pipeline_layout(&wgpu::PipelineLayoutDescriptor {
-        label: Some("flat"),
-        bind_group_layouts: &[renderer.bind_group_layout(), Some(&group_layout)],
-        immediate_size: 0,
-    });
-    let pipeline = device.create_render_pipeline(&wgpu::RenderPipelineDescriptor {
-        label: Some("flat"),
-        layout: Some(&layout),
-        vertex: wgpu::VertexState {
-            module: &module,
-            entry_point: Some("vs"),
-            compilation_options: Default::default(),
-            buffers: &[Some(stereocull::draw::VERTEX_BUFFER)],
-        },
-        primitive: wgpu::PrimitiveState {
-            cull_mode: Some(wgpu::Face::Back),
-            ..Default::default()
-        },
-        depth_stencil: Some(wgpu::DepthStencilState {
-            format: options.depth_format,
-            depth_write_enabled: Some(true),
-            depth_compare: Some(wgpu::CompareFunction::Less),
-            stencil: Default::default(),
-            bias: Default::default(),
-        }),
-        multisample: Default::default(),
-        fragment: Some(wgpu::FragmentState {
-            module: &module,
-            entry_point: Some("fs"),
-            compilation_options: Default::default(),
-            targets: &[Some(options.color_format.into())],
-        }),
-        multiview_mask: None,
-        cache: None,
-    });
+    let layouts = [renderer.bind_group_layout(), Some(&group_layout)];
+    let pipeline = stereo_pipeline(device, (&source, &layouts), options, Some(wgpu::Face::Back));
     stereocull::draw::OwnPipeline {
         pipeline,
         bind_groups: vec![group],
