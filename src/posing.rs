@@ -141,8 +141,19 @@ impl Posing {
                 }
             }
         }
+        self.compose(&local)
+    }
+
+    /// Each node's world transform at rest: no clip applied (the file's placement).
+    pub fn rest_worlds(&self) -> Vec<Affine3A> {
+        let rest: Vec<Trs> = self.nodes.iter().map(|n| n.rest).collect();
+        self.compose(&rest)
+    }
+
+    /// World transforms from each node's `local` one, parents first.
+    fn compose(&self, local: &[Trs]) -> Vec<Affine3A> {
         let mut world: Vec<Affine3A> = Vec::with_capacity(self.nodes.len());
-        for (node, trs) in self.nodes.iter().zip(&local) {
+        for (node, trs) in self.nodes.iter().zip(local) {
             let above = node.parent.map_or(node.root_from, |p| world[p as usize]);
             world.push(above * trs.affine());
         }

@@ -166,7 +166,13 @@ impl Scene {
     /// Poses the instances its node animations move at `time` seconds (what `render
     /// --time` draws; a live scene poses with [`crate::live::LiveScene::pose`]).
     pub fn pose(&mut self, time: f32) {
-        for (instance, world) in self.posed(time) {
+        let posed = self.posed(time);
+        self.place(posed);
+    }
+
+    /// Moves each of `posed`'s instances to its transform.
+    fn place(&mut self, posed: Vec<(u32, Affine3A)>) {
+        for (instance, world) in posed {
             if let Some(instance) = self.instances.get_mut(instance as usize) {
                 instance.world_from_local = world;
             }
@@ -186,9 +192,17 @@ impl Scene {
         let nodes = self.posing.instance_transforms_in(&worlds);
         let mut posed: Vec<(u32, Affine3A)> =
             (self.posing.instances.iter().map(|i| i.instance).zip(nodes)).collect();
-        let skins = self.skins.poses(&worlds);
-        posed.extend(self.skins.set_poses(&skins));
+        posed.extend(self.skins.set_poses(&self.skins.poses(&worlds)));
         posed
+    }
+
+    /// Poses the skins alone by the nodes at rest (no clip applied), leaving every other
+    /// instance where it was placed: what an imported skinned scene is drawn in until a
+    /// frame poses it.
+    pub fn pose_skins_at_rest(&mut self) {
+        let poses = self.skins.poses(&self.posing.rest_worlds());
+        let posed = self.skins.set_poses(&poses);
+        self.place(posed);
     }
 
     /// Triangles of every instance at its finest level: what a frame could draw.

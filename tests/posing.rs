@@ -437,3 +437,17 @@ fn dropped_instances_leave_posing_and_the_rest_keep_their_poses() {
     without_moving.pose(2.0);
     assert_eq!(without_moving.instances[0], scene.instances[still]);
 }
+
+/// Importing keeps the file's placement: an animated node's instance stands where its
+/// node's own transform puts it until a frame poses it, not at the clip's first key.
+#[test]
+fn an_imported_animated_node_keeps_its_rest_placement() {
+    let keys = [[2.0, 0.0, 0.0], [4.0, 0.0, 0.0]];
+    let mut scene = import(&animated_triangle(&[0.0, 1.0], &keys, "LINEAR")).unwrap();
+    assert_eq!(
+        scene.instances[0].world_from_local,
+        glam::Affine3A::IDENTITY
+    );
+    scene.pose(0.0);
+    assert_eq!(scene.instances[0].world_from_local.translation.x, 2.0);
+}

@@ -170,7 +170,8 @@ impl Importer<'_> {
     }
 
     /// The skins read while placing nodes, now that every joint is a posed node: their
-    /// joints, inverse bind matrices and joints' bounds; then every skin posed at rest.
+    /// joints, inverse bind matrices and joints' bounds; then every skin posed at rest
+    /// (the node-animated instances keep the file's placement).
     pub(super) fn resolve_skins(&mut self) -> Step<()> {
         for pending in std::mem::take(&mut self.pending_skins) {
             let skin = self
@@ -211,7 +212,7 @@ impl Importer<'_> {
                 joint_base: base,
             });
         }
-        self.scene.pose(0.0);
+        self.scene.pose_skins_at_rest();
         Ok(())
     }
 
