@@ -299,22 +299,17 @@ impl IndirectPath {
         self.displays[index].own.insert(shading, own);
     }
 
-    /// Every display must have a pipeline for each [`Shading::Own`] bin it draws.
-    pub(super) fn check_own_pipelines(&self) -> Result<()> {
-        for (index, state) in self.displays.iter().enumerate() {
-            let missing = self
-                .culler
-                .bins()
-                .iter()
-                .find_map(|b| match b.kind.shading {
-                    Shading::Own(i) if !state.own.contains_key(&i) => Some(i),
-                    _ => None,
-                });
-            if let Some(shading) = missing {
-                return Err(Error::MissingOwnPipeline { index, shading });
-            }
+    /// Display `index` must have a pipeline for each [`Shading::Own`] bin it draws.
+    pub(super) fn check_own_pipelines(&self, index: usize) -> Result<()> {
+        let own = &self.displays[index].own;
+        let missing = (self.culler.bins().iter()).find_map(|b| match b.kind.shading {
+            Shading::Own(i) if !own.contains_key(&i) => Some(i),
+            _ => None,
+        });
+        match missing {
+            Some(shading) => Err(Error::MissingOwnPipeline { index, shading }),
+            None => Ok(()),
         }
-        Ok(())
     }
 
     /// How the instance records are bound.

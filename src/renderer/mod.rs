@@ -346,7 +346,7 @@ impl Renderer {
         }
         if let Path::Indirect(p) = &self.path {
             p.check_depth(targets)?;
-            p.check_own_pipelines()?;
+            (0..self.shapes.len()).try_for_each(|i| p.check_own_pipelines(i))?;
         }
         let mut stats = self.encode_frame(encoder, &mut timer);
         for (i, target) in targets.iter().enumerate() {

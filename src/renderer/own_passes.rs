@@ -54,7 +54,7 @@ impl Renderer {
         }
         Ok(match &self.path {
             Path::Indirect(p) => {
-                p.check_own_pipelines()?;
+                p.check_own_pipelines(index)?;
                 p.draw(pass, index)
             }
             Path::Classic(p) => p.draw(pass, index),
