@@ -48,6 +48,7 @@ mod modes;
 pub mod occlusion;
 pub mod pbr;
 pub mod places;
+pub mod pose_tables;
 pub mod posing;
 pub mod procedural;
 pub mod profiling;

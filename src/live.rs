@@ -82,6 +82,9 @@ pub struct Changes {
     /// Ranges of the skins' joint matrices that changed ([`LiveScene::pose`]: all of
     /// them; [`LiveScene::set_joints`]: one skin's): they go up.
     pub joints: Vec<std::ops::Range<u32>>,
+    /// Skinned slots the engine began to pose itself ([`LiveScene::set_joints`]): GPU
+    /// posing stops posing them.
+    pub driven: Vec<u32>,
 }
 
 impl Changes {
@@ -111,6 +114,8 @@ pub struct LiveScene {
     epoch: u32,
     changes: Changes,
     places: Places,
+    /// Skinned slots whose joints the engine supplies.
+    driven: std::collections::BTreeSet<u32>,
 }
 
 impl LiveScene {
@@ -141,6 +146,7 @@ impl LiveScene {
             changes: Changes::default(),
             places,
             scene,
+            driven: Default::default(),
         }
     }
 
@@ -163,6 +169,17 @@ impl LiveScene {
                 generation: self.generations[slot as usize],
             })
             .collect()
+    }
+
+    /// Whether the scene's animations still pose the instance in `slot`: it is the one
+    /// placed there by [`LiveScene::new`] (not removed) and, if skinned, the engine has
+    /// not supplied its joints.
+    pub fn animates(&self, slot: u32) -> bool {
+        let original = Handle {
+            slot,
+            generation: 0,
+        };
+        self.check(original).is_ok() && !self.driven.contains(&slot)
     }
 
     /// Slots issued so far, occupied or vacant.
@@ -297,6 +314,9 @@ impl LiveScene {
         let pose = skin.pose_joints(joint_worlds);
         let range = self.scene.skins.set_pose(s, &pose);
         self.changes.joints.push(range);
+        if self.driven.insert(handle.slot) {
+            self.changes.driven.push(handle.slot);
+        }
         self.set_transform(handle, pose.world_from_local)
     }
 

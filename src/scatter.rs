@@ -347,30 +347,93 @@ impl<E: Edit> Scatter<E> {
     }
 
     fn bind(&self, device: &wgpu::Device, targets: &ScatterTargets) -> wgpu::BindGroup {
-        // Under CPU culling the shader skips the spheres; these stand in for the binding.
-        let stand_in = || {
-            let usage = wgpu::BufferUsages::STORAGE;
-            storage_buffer(device, "stereocull.scatter_stand_in", 0, usage)
+        let (layout, windows) = (&self.layout, &self.windows);
+        bind_edits(device, (layout, windows), &self.edits, targets)
+    }
+}
+
+/// The bind group of a scatter over `edits` into `targets`.
+fn bind_edits(
+    device: &wgpu::Device,
+    (layout, windows): (&wgpu::BindGroupLayout, &Windows),
+    edits: &wgpu::Buffer,
+    targets: &ScatterTargets,
+) -> wgpu::BindGroup {
+    // Under CPU culling the shader skips the spheres; these stand in for the binding.
+    let stand_in = || {
+        let usage = wgpu::BufferUsages::STORAGE;
+        storage_buffer(device, "stereocull.scatter_stand_in", 0, usage)
+    };
+    let stand_ins: [wgpu::Buffer; 5];
+    let [s, p, o, b, v] = match targets.spheres {
+        Some(four) => four,
+        None => {
+            stand_ins = std::array::from_fn(|_| stand_in());
+            stand_ins.each_ref()
+        }
+    };
+    // In SCATTER_BINDINGS order.
+    let buffers = [edits, p, o, v, b, targets.instances, s];
+    let label = "stereocull.scatter";
+    bind_group(device, label, layout, &SCATTER_BINDINGS, windows, buffers)
+}
+
+/// The moves scatter over edits the GPU writes (the pose pass's, [`crate::pose_tables`]):
+/// a fixed count of edits, one per posed target, rewritten on the GPU every frame, so
+/// that nothing of a pose crosses the bus.
+pub struct GpuMoves {
+    pipeline: wgpu::ComputePipeline,
+    bind_group: wgpu::BindGroup,
+    edits: wgpu::Buffer,
+    groups: (u32, u32),
+}
+
+impl GpuMoves {
+    /// The scatter of `count` GPU-written moves into `targets`, bound in `windows`.
+    pub fn new(
+        device: &wgpu::Device,
+        windows: Windows,
+        count: u32,
+        targets: ScatterTargets,
+    ) -> GpuMoves {
+        let layout = bind_group_layout(device, "stereocull.scatter", &SCATTER_BINDINGS, &windows);
+        let pipeline_layout = pipeline_layout(device, "stereocull.scatter", &layout);
+        let source = scatter_source(&windows, EditKind::Moves);
+        let label = "stereocull.scatter";
+        let pipeline = compute_pipeline(device, label, &pipeline_layout, source, "scatter");
+        let max = device.limits().max_compute_workgroups_per_dimension;
+        let groups = dispatch_size(count.div_ceil(GROUP), max);
+        let header = EditHeader {
+            count,
+            spheres_too: u32::from(targets.spheres.is_some()),
+            groups_x: groups.0,
+            visibility_words: targets.visibility.0,
+            visibility_slots: targets.visibility.1,
+            unused: [0; 3],
         };
-        let stand_ins: [wgpu::Buffer; 5];
-        let [s, p, o, b, v] = match targets.spheres {
-            Some(four) => four,
-            None => {
-                stand_ins = std::array::from_fn(|_| stand_in());
-                stand_ins.each_ref()
-            }
-        };
-        // In SCATTER_BINDINGS order.
-        let buffers = [&self.edits, p, o, v, b, targets.instances, s];
-        let (label, layout) = ("stereocull.scatter", &self.layout);
-        bind_group(
-            device,
-            label,
-            layout,
-            &SCATTER_BINDINGS,
-            &self.windows,
-            buffers,
-        )
+        let mut contents = bytemuck::bytes_of(&header).to_vec();
+        contents.resize(contents.len() + count as usize * size_of::<MoveEdit>(), 0);
+        let usage = wgpu::BufferUsages::STORAGE;
+        let edits = crate::buffers::init_buffer(device, "stereocull.posed_moves", &contents, usage);
+        let bind_group = bind_edits(device, (&layout, &windows), &edits, &targets);
+        GpuMoves {
+            pipeline,
+            bind_group,
+            edits,
+            groups,
+        }
+    }
+
+    /// The edits buffer the GPU writes: the header, then one move per target.
+    pub fn edits(&self) -> &wgpu::Buffer {
+        &self.edits
+    }
+
+    /// Records the scatter of the moves the pose pass wrote, after it in `pass`.
+    pub fn encode(&self, pass: &mut wgpu::ComputePass) {
+        pass.set_pipeline(&self.pipeline);
+        pass.set_bind_group(0, &self.bind_group, &[]);
+        pass.dispatch_workgroups(self.groups.0, self.groups.1, 1);
     }
 }
 

@@ -679,3 +679,79 @@ fn skin_records_match_wgsl() {
         (0, 12)
     );
 }
+
+/// The pose pass's tables as `wgsl/pose.wgsl` declares them.
+#[test]
+fn pose_records_match_wgsl() {
+    use stereocull::pose_tables::{
+        PoseChannelRecord, PoseNodeRecord, PoseTargetRecord, SkinJointRecord,
+    };
+    let module = parse("pose", &stereocull::shaders::pose_source());
+    let check = |name: &str, size: usize, rust: &[(&str, usize)]| {
+        let (members, span) = wgsl_struct(&module, name);
+        assert_eq!(span as usize, size, "{name} size");
+        let found: Vec<(&str, usize)> = (members.iter())
+            .map(|(n, o)| (n.as_str(), *o as usize))
+            .collect();
+        assert_eq!(found, rust, "{name} members and offsets");
+    };
+    check(
+        "PoseNode",
+        size_of::<PoseNodeRecord>(),
+        &[
+            ("parent", offset_of!(PoseNodeRecord, parent)),
+            ("first_channel", offset_of!(PoseNodeRecord, first_channel)),
+            ("channels", offset_of!(PoseNodeRecord, channels)),
+            ("unused", offset_of!(PoseNodeRecord, unused)),
+            ("root_from", offset_of!(PoseNodeRecord, root_from)),
+            ("translation", offset_of!(PoseNodeRecord, translation)),
+            ("rotation", offset_of!(PoseNodeRecord, rotation)),
+            ("scale", offset_of!(PoseNodeRecord, scale)),
+        ],
+    );
+    check(
+        "PoseChannel",
+        size_of::<PoseChannelRecord>(),
+        &[
+            ("property", offset_of!(PoseChannelRecord, property)),
+            (
+                "interpolation",
+                offset_of!(PoseChannelRecord, interpolation),
+            ),
+            ("first_key", offset_of!(PoseChannelRecord, first_key)),
+            ("keys", offset_of!(PoseChannelRecord, keys)),
+            ("first_value", offset_of!(PoseChannelRecord, first_value)),
+            ("offset", offset_of!(PoseChannelRecord, offset)),
+            ("speed", offset_of!(PoseChannelRecord, speed)),
+            ("duration", offset_of!(PoseChannelRecord, duration)),
+        ],
+    );
+    check(
+        "PoseTarget",
+        size_of::<PoseTargetRecord>(),
+        &[
+            ("slot", offset_of!(PoseTargetRecord, slot)),
+            ("node", offset_of!(PoseTargetRecord, node)),
+            ("joints", offset_of!(PoseTargetRecord, joints)),
+            ("joint_base", offset_of!(PoseTargetRecord, joint_base)),
+            ("bounds", offset_of!(PoseTargetRecord, bounds)),
+            (
+                "node_from_local",
+                offset_of!(PoseTargetRecord, node_from_local),
+            ),
+            ("orbit", offset_of!(PoseTargetRecord, orbit)),
+            ("bob", offset_of!(PoseTargetRecord, bob)),
+            ("unused", offset_of!(PoseTargetRecord, unused)),
+        ],
+    );
+    check(
+        "SkinJoint",
+        size_of::<SkinJointRecord>(),
+        &[
+            ("node", offset_of!(SkinJointRecord, node)),
+            ("unused", offset_of!(SkinJointRecord, unused)),
+            ("inverse_bind", offset_of!(SkinJointRecord, inverse_bind)),
+            ("bounds", offset_of!(SkinJointRecord, bounds)),
+        ],
+    );
+}

@@ -131,7 +131,10 @@ impl CullScene {
         let occlusion_layout = (words, pyramid_offset);
         let (params, groups) = cull_params(layout, (max_groups, levels, occlusion_layout));
         let room = |label: &str, contents: &[u8], per_slot: u64| {
-            let usage = wgpu::BufferUsages::STORAGE | wgpu::BufferUsages::COPY_DST;
+            // COPY_SRC: the spheres are read back by diagnostics (`spheres`).
+            let usage = wgpu::BufferUsages::STORAGE
+                | wgpu::BufferUsages::COPY_DST
+                | wgpu::BufferUsages::COPY_SRC;
             init_buffer_with_room(device, label, contents, per_slot * slots as u64, usage)
         };
         let scratch = wgpu::BufferUsages::STORAGE;
@@ -261,6 +264,22 @@ impl CullScene {
                 bytes.len() as u64
             })
             .sum()
+    }
+
+    /// Each slot's world sphere as the GPU culler holds it (vacant slots: whatever
+    /// their place holds), read back.
+    pub fn read_spheres(
+        &self,
+        device: &wgpu::Device,
+        queue: &wgpu::Queue,
+        slots: u32,
+    ) -> crate::error::Result<Vec<[f32; 4]>> {
+        use crate::readback::read_pod;
+        let spheres: Vec<[f32; 4]> = read_pod(device, queue, &self.spheres, self.spheres.size())?;
+        let positions: Vec<u32> = read_pod(device, queue, &self.positions, self.positions.size())?;
+        Ok((positions.iter().take(slots as usize))
+            .map(|&p| spheres.get(p as usize).copied().unwrap_or([f32::NAN; 4]))
+            .collect())
     }
 
     /// Where the scatter passes write (the spheres in cull order, each slot's

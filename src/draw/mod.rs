@@ -79,7 +79,10 @@ impl DrawScene {
                 "stereocull.instances",
                 bytemuck::cast_slice(&instance_records(scene)),
                 DrawScene::BYTES_PER_INSTANCE * slots as u64,
-                wgpu::BufferUsages::STORAGE | wgpu::BufferUsages::COPY_DST,
+                // COPY_SRC: read back by diagnostics (`instance_records`).
+                wgpu::BufferUsages::STORAGE
+                    | wgpu::BufferUsages::COPY_DST
+                    | wgpu::BufferUsages::COPY_SRC,
             ),
         })
     }

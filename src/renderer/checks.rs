@@ -1,7 +1,7 @@
 //! What a device must have for the options and scene asked of it, said before anything
 //! is built.
 
-use super::options::{CullMode, RendererOptions};
+use super::options::{CullMode, PosingMode, RendererOptions};
 use crate::draw::DrawScene;
 use crate::error::{Error, Result};
 use crate::modes::StereoMode;
@@ -116,6 +116,11 @@ pub(super) fn check_device(
         ));
     }
     check_own_shading(scene, options)?;
+    if options.posing == PosingMode::Gpu && options.cull != CullMode::Gpu {
+        return Err(Error::Unsupported(
+            "posing on the GPU writes the culling spheres on the GPU, which a CPU cull cannot read: use --posing cpu or --cull gpu".into(),
+        ));
+    }
     let limits = device.limits();
     check_shadows(features, &limits, options)?;
     if options.far_layer && options.mode != StereoMode::Instanced {

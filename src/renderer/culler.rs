@@ -296,6 +296,19 @@ impl Culler {
     /// words, which the scatter passes write edits into, and the visibility words' shape
     /// (words per display slot, slots); `None` for the CPU culler, which takes edits
     /// into its layout ([`Culler::place`], [`Culler::moved`]).
+    /// Each slot's world sphere on the GPU (`None` culling on the CPU).
+    pub(super) fn read_spheres(
+        &self,
+        device: &wgpu::Device,
+        queue: &wgpu::Queue,
+        slots: u32,
+    ) -> Result<Option<Vec<[f32; 4]>>> {
+        match &self.kind {
+            Kind::Gpu { scene, .. } => scene.read_spheres(device, queue, slots).map(Some),
+            Kind::Cpu { .. } => Ok(None),
+        }
+    }
+
     pub(super) fn scatter_targets(&self) -> (Option<[&wgpu::Buffer; 5]>, (u32, u32)) {
         match &self.kind {
             Kind::Gpu { scene, .. } => (Some(scene.scatter_targets()), scene.visibility_shape()),

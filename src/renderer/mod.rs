@@ -96,6 +96,7 @@ mod occlusion_pass;
 mod options;
 mod own_passes;
 mod passes;
+mod pose_pass;
 mod readback;
 mod shadow_pass;
 mod skin_pass;
@@ -110,9 +111,12 @@ pub use frame::{CullView, FramePlan, FrameStats, PlannedCull, instances_per_obje
 use indirect::IndirectPath;
 use inputs::PathInputs;
 pub use occlusion_pass::OcclusionBytes;
-pub use options::{CoarseMode, CullMode, LOD_PIXELS, OcclusionMode, RendererOptions, frame_lod};
+pub use options::{
+    CoarseMode, CullMode, LOD_PIXELS, OcclusionMode, PosingMode, RendererOptions, frame_lod,
+};
 pub use passes::{Level, PassRecord};
 use passes::{Recording, close, open_display};
+use pose_pass::PosePass;
 pub use readback::{Diagnostics, FarSplit, OcclusionCounts};
 use skin_pass::SkinPass;
 pub use sync::SyncStats;
@@ -179,6 +183,8 @@ pub struct Renderer {
     scatter: Scatters,
     /// With skins: the frame's skinning pass.
     skin: Option<SkinPass>,
+    /// Posing on the GPU, with animations: the frame's pose pass.
+    pose: Option<PosePass>,
     /// Instance slots the buffers have room for.
     slots: u32,
     /// The rig as made: the displays (and far layer sizes) a reallocation rebuilds for.
@@ -219,8 +225,14 @@ impl Renderer {
             options: &options,
             slots,
         };
-        let path = Path::new(device, inputs)?;
+        let mut path = Path::new(device, inputs)?;
         let skin = SkinPass::new(device, &scene.skins, &path.draw_scene_ref().vertices);
+        let gpu = GpuParts {
+            frame: &frame,
+            skin: skin.as_ref(),
+            windows: options.windows(device, slots),
+        };
+        let pose = pose_pass(device, scene, &options, (&mut path, gpu), |_| true)?;
         let shapes = rig
             .displays
             .iter()
@@ -240,6 +252,7 @@ impl Renderer {
             names: rig.displays.iter().map(|d| d.name.clone()).collect(),
             scatter,
             skin,
+            pose,
             slots,
             rig: rig.clone(),
             coarse,
@@ -251,6 +264,11 @@ impl Renderer {
     /// rig, since it runs once per frame.
     pub fn skinned_vertices(&self) -> u32 {
         self.skin.as_ref().map_or(0, SkinPass::vertices)
+    }
+
+    /// GPU bytes the pose pass holds (its tables and per-node scratch); 0 without it.
+    pub fn posing_bytes(&self) -> u64 {
+        self.pose.as_ref().map_or(0, PosePass::gpu_bytes)
     }
 
     /// Where display `index`'s views lie in its target: side by side at their own sizes,
@@ -383,6 +401,10 @@ impl Renderer {
             timer,
             log: &mut self.passes,
         };
+        let posed = match &self.pose {
+            Some(pose) => pose.encode(encoder, recording.again()),
+            None => 0,
+        };
         let skinned = match &self.skin {
             Some(skin) => skin.encode(encoder, recording.again()),
             None => 0,
@@ -392,7 +414,7 @@ impl Renderer {
             Path::Classic(p) => p.encode_frame(encoder, recording),
         };
         FrameStats {
-            dispatches: stats.dispatches + scattered + skinned,
+            dispatches: stats.dispatches + scattered + posed + skinned,
             cpu_staging,
             ..stats
         }
@@ -450,4 +472,50 @@ impl Renderer {
             .map(|s| s.create(device, self.options.target_format()))
             .collect()
     }
+}
+
+/// What the pose pass binds besides the path's buffers.
+struct GpuParts<'a> {
+    frame: &'a wgpu::Buffer,
+    skin: Option<&'a SkinPass>,
+    windows: crate::shaders::Windows,
+}
+
+/// The pose pass, with [`PosingMode::Gpu`] and a scene that moves; `posed(slot)`: whether
+/// it still poses the instance in `slot`.
+fn pose_pass(
+    device: &wgpu::Device,
+    scene: &Scene,
+    options: &RendererOptions,
+    (path, gpu): (&mut Path, GpuParts),
+    posed: impl Fn(u32) -> bool,
+) -> Result<Option<PosePass>> {
+    if options.posing != PosingMode::Gpu {
+        return Ok(None);
+    }
+    let Some(tables) = crate::pose_tables::PoseTables::new(scene, posed)? else {
+        return Ok(None);
+    };
+    // Node animations alone have no joint matrices: the targets pass writes none.
+    let stand_in;
+    let joint_matrices = match gpu.skin {
+        Some(skin) => skin.joint_matrices(),
+        None => {
+            let usage = wgpu::BufferUsages::STORAGE;
+            stand_in = crate::buffers::storage_buffer(device, "stereocull.no_joints", 0, usage);
+            &stand_in
+        }
+    };
+    let (instances, culler) = path.edit_targets();
+    let (spheres, visibility) = culler.scatter_targets();
+    let outputs = pose_pass::PoseOutputs {
+        joint_matrices,
+        scatter: crate::scatter::ScatterTargets {
+            instances,
+            spheres,
+            visibility,
+        },
+        windows: gpu.windows,
+    };
+    Ok(Some(PosePass::new(device, &tables, gpu.frame, outputs)))
 }

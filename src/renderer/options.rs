@@ -68,6 +68,25 @@ pub enum OcclusionMode {
     Off,
 }
 
+/// Where a scene's animations ([`crate::posing`], [`crate::skinning`]) are posed.
+#[derive(Clone, Copy, Debug, Default, PartialEq, Eq, Hash, serde::Serialize)]
+#[cfg_attr(feature = "cli", derive(clap::ValueEnum))]
+#[serde(rename_all = "lowercase")]
+pub enum PosingMode {
+    /// By the caller on the CPU ([`crate::live::LiveScene::pose`], or
+    /// [`crate::scene::Scene::pose`] before the renderer is made); each frame's poses go
+    /// up with `sync` (an instance move per posed instance, 48 bytes per joint). The
+    /// default: the engine owns its animation clock, and nothing moves unless it poses.
+    #[default]
+    Cpu,
+    /// By the renderer on the GPU, every clip at the frame context's time, once per
+    /// frame before the skinning pass ([`crate::pose_tables`]): nothing of a pose
+    /// crosses the bus. Needs GPU culling (the culling spheres are written on the GPU).
+    /// A skin the engine poses itself ([`crate::live::LiveScene::set_joints`]) is no
+    /// longer posed by its clips.
+    Gpu,
+}
+
 /// What a [`super::Renderer`] is made with; `Default` is the GPU-driven `instanced` mode
 /// with GPU culling.
 #[derive(Clone, Debug)]
@@ -127,6 +146,8 @@ pub struct RendererOptions {
     /// own passes (`encode`, `submit_frame`); the depth targets then need
     /// `TEXTURE_BINDING` (those of `create_targets` have it).
     pub occlusion: OcclusionMode,
+    /// Where animations are posed ([`PosingMode`]).
+    pub posing: PosingMode,
 }
 
 /// Screen-space error, in pixels, a level of detail may show.
@@ -231,6 +252,7 @@ impl Default for RendererOptions {
             binding_limit: None,
             cull_floor: false,
             occlusion: OcclusionMode::Auto,
+            posing: PosingMode::Cpu,
         }
     }
 }

@@ -228,6 +228,32 @@ impl Diagnostics<'_> {
         read_pod(self.device, self.queue, buffer, buffer.size())
     }
 
+    /// Every slot's instance record as the frame drew it (a posed instance's
+    /// transform as the pose pass wrote it, with GPU posing).
+    pub fn instance_records(&self) -> Result<Vec<crate::records::InstanceRecord>> {
+        let buffer = &self.renderer.path.draw_scene_ref().instances;
+        let mut records: Vec<crate::records::InstanceRecord> =
+            read_pod(self.device, self.queue, buffer, buffer.size())?;
+        records.truncate(self.renderer.slots as usize);
+        Ok(records)
+    }
+
+    /// Every slot's world sphere as the GPU cull tested it (GPU culling; `None`
+    /// otherwise): with GPU posing, what the pose pass wrote.
+    pub fn spheres(&self) -> Result<Option<Vec<[f32; 4]>>> {
+        let (culler, _) = self.renderer.culler();
+        culler.read_spheres(self.device, self.queue, self.renderer.slots)
+    }
+
+    /// The joint matrices the frame's skinning pass applied (`None` without skins).
+    pub fn joint_matrices(&self) -> Result<Option<Vec<crate::skinning::JointMatrix>>> {
+        let Some(skin) = &self.renderer.skin else {
+            return Ok(None);
+        };
+        let buffer = skin.joint_matrices();
+        read_pod(self.device, self.queue, buffer, buffer.size()).map(Some)
+    }
+
     /// Visible totals of every display: read back from the counts buffers on the
     /// indirect path (with occlusion both phases': what the display drew), taken from
     /// this frame's CPU culls in the classic modes.

@@ -41,7 +41,8 @@ impl SkinPass {
             device,
             "stereocull.joint_matrices",
             bytemuck::cast_slice(&skins.joint_matrices),
-            storage | wgpu::BufferUsages::COPY_DST,
+            // COPY_SRC: read back by diagnostics (`joint_matrices`).
+            storage | wgpu::BufferUsages::COPY_DST | wgpu::BufferUsages::COPY_SRC,
         );
         let vertices = skins.vertices.len() as u32;
         let dispatch = dispatch_size(
@@ -132,6 +133,11 @@ impl SkinPass {
         );
         close(timer, encoder, frame);
         1
+    }
+
+    /// The joint matrices the pass applies (the pose pass writes them on the GPU).
+    pub(super) fn joint_matrices(&self) -> &wgpu::Buffer {
+        &self.joints
     }
 
     /// Skinned vertices per frame.

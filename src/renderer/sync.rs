@@ -5,10 +5,9 @@ use super::checks::check_device;
 use super::frame::FramePlan;
 use super::inputs::PathInputs;
 use super::skin_pass::SkinPass;
-use super::{Path, Renderer};
+use super::{GpuParts, Path, Renderer, pose_pass};
 use crate::error::Result;
 use crate::live::{Changes, LiveScene, MoveEdit, PlaceEdit};
-use crate::places::Places;
 use crate::records::{CullLayout, InstanceRecord, RecordEdit, instance_records};
 use crate::scatter::{ScatterTargets, Scatters, record_edit};
 use crate::scene::Scene;
@@ -49,7 +48,20 @@ impl Renderer {
     ) -> Result<SyncStats> {
         let mut changes = live.take_changes();
         let joints = std::mem::take(&mut changes.joints);
+        let driven = std::mem::take(&mut changes.driven);
+        let stopped = changes
+            .removed
+            .iter()
+            .chain(&driven)
+            .copied()
+            .collect::<Vec<_>>();
         let mut stats = self.sync_instances(device, queue, live, changes)?;
+        // After a reallocation the pass was built from the live scene as it is.
+        if let (Some(pose), false) = (&mut self.pose, stats.reallocated) {
+            for slot in stopped {
+                stats.bytes_uploaded += pose.stop(queue, slot);
+            }
+        }
         if let Some(skin) = &self.skin {
             for range in joints {
                 stats.bytes_uploaded += skin.upload(queue, &live.scene().skins, range);
@@ -69,14 +81,14 @@ impl Renderer {
         let (scene, places) = (live.scene(), live.places());
         let needed = (scene.instances.len() as u32).max(places.len());
         if changes.geometry || needed > self.slots {
-            return self.reallocate(device, scene, places, needed);
+            return self.reallocate(device, live, needed);
         }
         if changes.restructured {
             let layout = CullLayout::with_places(scene, places);
             // A blended bin's range has an entry per place of its meshes.
             let (_, culler) = self.path.edit_targets();
             if culler.bins() != layout.bin_ranges(self.options.lod_levels()) {
-                return self.reallocate(device, scene, places, needed);
+                return self.reallocate(device, live, needed);
             }
             return Ok(self.reload(queue, scene, layout));
         }
@@ -97,10 +109,10 @@ impl Renderer {
     fn reallocate(
         &mut self,
         device: &wgpu::Device,
-        scene: &Scene,
-        places: &Places,
+        live: &LiveScene,
         needed: u32,
     ) -> Result<SyncStats> {
+        let (scene, places) = (live.scene(), live.places());
         check_device(device, scene, &self.options)?;
         let room = needed + needed / 2;
         let plan = FramePlan::new(&self.rig, &self.options, self.coarse, 0.0)?;
@@ -116,7 +128,15 @@ impl Renderer {
         self.skin = SkinPass::new(device, &scene.skins, &self.path.draw_scene_ref().vertices);
         self.slots = room;
         // The bindings may now need more windows.
-        self.scatter = Scatters::new(device, self.options.windows(device, room));
+        let windows = self.options.windows(device, room);
+        self.scatter = Scatters::new(device, windows);
+        let gpu = GpuParts {
+            frame: &self.frame,
+            skin: self.skin.as_ref(),
+            windows,
+        };
+        let path = (&mut self.path, gpu);
+        self.pose = pose_pass(device, scene, &self.options, path, |s| live.animates(s))?;
         let bytes = (scene.instances.len() * size_of::<InstanceRecord>()) as u64;
         Ok(SyncStats {
             bytes_uploaded: bytes,

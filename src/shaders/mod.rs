@@ -379,6 +379,20 @@ pub fn skin_source() -> String {
     include_str!("../../wgsl/skin.wgsl").into()
 }
 
+/// The frame's posing pass (`wgsl/pose.wgsl`, three entry points): the frame context
+/// and the moves scatter's records come before it.
+pub fn pose_source() -> String {
+    let pose = format!(
+        "const POSE_GROUP: u32 = {}u;\nconst MAX_DEPTH: u32 = {}u;\nconst ROUNDING_SLACK: f32 = {:?};\n",
+        crate::pose_tables::POSE_GROUP,
+        crate::pose_tables::MAX_DEPTH,
+        crate::frustum::ROUNDING_SLACK,
+    );
+    let scatter = include_str!("../../wgsl/shared/scatter.wgsl");
+    let body = include_str!("../../wgsl/pose.wgsl");
+    [&constants(), &pose, CONTEXTS, scatter, body].concat()
+}
+
 /// Every shader variant the crate can build, with its label.
 pub fn all_sources() -> Vec<(String, String)> {
     // Whole bindings, and every windowed array split in three (scenes past one binding).
@@ -425,6 +439,7 @@ pub fn all_sources() -> Vec<(String, String)> {
                     foveated_composite_source(),
                 ),
                 ("stereocull.skin".to_string(), skin_source()),
+                ("stereocull.pose".to_string(), pose_source()),
             ];
             let pyramids = [(1, false), (4, false), (1, true)].map(|(samples, layered)| {
                 let label = format!("stereocull.occlusion_pyramid.x{samples}.{layered}");

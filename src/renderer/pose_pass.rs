@@ -1,0 +1,180 @@
+//! The frame's posing pass on the GPU ([`crate::pose_tables`], `wgsl/pose.wgsl`):
+//! three dispatches (node locals, node worlds, targets) and the moves scatter of what
+//! they wrote, in one compute pass before the skinning pass, from the frame context's
+//! time. Built only with [`crate::renderer::Posing::Gpu`] and a scene that moves.
+
+use super::passes::{PassRecord, Recording, close, compute_pass, open_display};
+use crate::buffers::init_buffer;
+use std::collections::HashMap;
+
+use crate::places::Places;
+use crate::pose_tables::{POSE_GROUP, PoseTables, PoseTargetRecord};
+use crate::scatter::{GpuMoves, ScatterTargets};
+use crate::shaders::{Windows, dispatch_size, pose_source};
+
+/// The pass's pipelines, tables and bindings.
+pub(super) struct PosePass {
+    pipelines: [wgpu::ComputePipeline; 3],
+    bind_groups: [wgpu::BindGroup; 3],
+    dispatches: [(u32, u32); 3],
+    moves: GpuMoves,
+    /// Each posed slot's target (to void a removed instance's).
+    targets_of: HashMap<u32, u32>,
+    targets: wgpu::Buffer,
+    gpu_bytes: u64,
+}
+
+/// Where the pass writes: the skins' joint matrices and the scatter's targets.
+pub(super) struct PoseOutputs<'a> {
+    pub joint_matrices: &'a wgpu::Buffer,
+    pub scatter: ScatterTargets<'a>,
+    pub windows: Windows,
+}
+
+impl PosePass {
+    /// The pass for `tables`, reading the frame context `frame`.
+    pub(super) fn new(
+        device: &wgpu::Device,
+        tables: &PoseTables,
+        frame: &wgpu::Buffer,
+        outputs: PoseOutputs,
+    ) -> PosePass {
+        let storage = |label: &str, bytes: &[u8], write: bool| {
+            let usage = wgpu::BufferUsages::STORAGE
+                | if write {
+                    wgpu::BufferUsages::COPY_DST
+                } else {
+                    wgpu::BufferUsages::empty()
+                };
+            init_buffer(device, label, bytes, usage)
+        };
+        use bytemuck::cast_slice as cast;
+        let nodes = storage("stereocull.pose_nodes", cast(&tables.nodes), false);
+        let channels = storage("stereocull.pose_channels", cast(&tables.channels), false);
+        let times = storage("stereocull.pose_times", cast(&tables.times), false);
+        let values = storage("stereocull.pose_values", cast(&tables.values), false);
+        let targets = storage("stereocull.pose_targets", cast(&tables.targets), true);
+        let joints = storage("stereocull.pose_joints", cast(&tables.joints), false);
+        let rows = vec![0u8; tables.nodes.len() * 48];
+        let locals = storage("stereocull.pose_locals", &rows, false);
+        let worlds = storage("stereocull.pose_worlds", &rows, false);
+        let max = device.limits().max_compute_workgroups_per_dimension;
+        let (node_count, target_count) = (tables.nodes.len() as u32, tables.targets.len() as u32);
+        let node_groups = dispatch_size(node_count.div_ceil(POSE_GROUP), max);
+        let target_groups = dispatch_size(target_count.div_ceil(POSE_GROUP), max);
+        let params = [
+            node_groups.0 * POSE_GROUP,
+            target_groups.0 * POSE_GROUP,
+            node_count,
+            target_count,
+        ];
+        let params = init_buffer(
+            device,
+            "stereocull.pose_params",
+            cast(&params),
+            wgpu::BufferUsages::UNIFORM,
+        );
+        let moves = GpuMoves::new(device, outputs.windows, target_count, outputs.scatter);
+        let module = device.create_shader_module(wgpu::ShaderModuleDescriptor {
+            label: Some("stereocull.pose"),
+            source: wgpu::ShaderSource::Wgsl(pose_source().into()),
+        });
+        let all: [(u32, &wgpu::Buffer); 12] = [
+            (0, frame),
+            (1, &nodes),
+            (2, &channels),
+            (3, &times),
+            (4, &values),
+            (5, &locals),
+            (6, &worlds),
+            (7, &targets),
+            (8, &joints),
+            (9, outputs.joint_matrices),
+            (10, moves.edits()),
+            (11, &params),
+        ];
+        // Each entry point binds what it uses (its layout derived from the shader).
+        let uses: [&[u32]; 3] = [
+            &[0, 1, 2, 3, 4, 5, 11],
+            &[1, 5, 6, 11],
+            &[6, 7, 8, 9, 10, 11],
+        ];
+        let entries = ["locals_main", "worlds_main", "targets_main"];
+        let pipelines = entries.map(|entry| {
+            device.create_compute_pipeline(&wgpu::ComputePipelineDescriptor {
+                label: Some("stereocull.pose"),
+                layout: None,
+                module: &module,
+                entry_point: Some(entry),
+                compilation_options: Default::default(),
+                cache: None,
+            })
+        });
+        let bind_groups = std::array::from_fn(|k| {
+            let entries: Vec<wgpu::BindGroupEntry> = (all.iter())
+                .filter(|(b, _)| uses[k].contains(b))
+                .map(|(b, buffer)| wgpu::BindGroupEntry {
+                    binding: *b,
+                    resource: buffer.as_entire_binding(),
+                })
+                .collect();
+            device.create_bind_group(&wgpu::BindGroupDescriptor {
+                label: Some("stereocull.pose"),
+                layout: &pipelines[k].get_bind_group_layout(0),
+                entries: &entries,
+            })
+        });
+        PosePass {
+            pipelines,
+            bind_groups,
+            dispatches: [node_groups, node_groups, target_groups],
+            moves,
+            targets_of: (tables.targets.iter().enumerate())
+                .filter(|(_, t)| t.slot != Places::VACANT)
+                .map(|(k, t)| (t.slot, k as u32))
+                .collect(),
+            targets,
+            gpu_bytes: tables.gpu_bytes(),
+        }
+    }
+
+    /// Stops posing the instance in `slot` (removed, or posed by the engine now): its
+    /// target's slot goes void (4 bytes); returns the bytes written.
+    pub(super) fn stop(&mut self, queue: &wgpu::Queue, slot: u32) -> u64 {
+        let Some(k) = self.targets_of.remove(&slot) else {
+            return 0;
+        };
+        let offset = k as u64 * size_of::<PoseTargetRecord>() as u64;
+        let void = Places::VACANT.to_le_bytes();
+        queue.write_buffer(&self.targets, offset, &void);
+        void.len() as u64
+    }
+
+    /// Records the frame's posing, logged as the frame pass `pose`; returns its
+    /// dispatches.
+    pub(super) fn encode(&self, encoder: &mut wgpu::CommandEncoder, recording: Recording) -> u32 {
+        let Recording { timer, log } = recording;
+        let frame = open_display(timer, "frame", encoder);
+        compute_pass(
+            encoder,
+            (timer, &frame),
+            (log, PassRecord::frame("pose")),
+            |pass| {
+                for k in 0..3 {
+                    pass.set_pipeline(&self.pipelines[k]);
+                    pass.set_bind_group(0, &self.bind_groups[k], &[]);
+                    let (x, y) = self.dispatches[k];
+                    pass.dispatch_workgroups(x, y, 1);
+                }
+                self.moves.encode(pass);
+            },
+        );
+        close(timer, encoder, frame);
+        4
+    }
+
+    /// GPU bytes of its tables and scratch.
+    pub(super) fn gpu_bytes(&self) -> u64 {
+        self.gpu_bytes
+    }
+}
