@@ -1088,8 +1088,9 @@ fn cull_dumps_inset_culls_alike_on_gpu_and_cpu() {
 }
 
 /// `render --time T` poses a file's node animations at T (`--animation off`: its rest
-/// pose whatever the time), and `stress` plays them on its clock: only the animated
-/// instance is uploaded again each frame.
+/// pose whatever the time), and `stress` plays them on its clock: posed on the CPU,
+/// only the animated instance is uploaded again each frame; on the GPU, nothing more
+/// than a still frame's.
 #[test]
 fn render_poses_node_animations_at_its_time() {
     let file = gltf_samples()
@@ -1131,7 +1132,7 @@ fn render_poses_node_animations_at_its_time() {
         rest,
         "--animation off keeps the rest pose"
     );
-    let uploads = |animation: &str| {
+    let uploads = |animation: &str, posing: &str| {
         let out = stereocull(&[
             "stress",
             "--scene",
@@ -1144,6 +1145,8 @@ fn render_poses_node_animations_at_its_time() {
             "16",
             "--animation",
             animation,
+            "--posing",
+            posing,
             "--json",
         ]);
         assert!(
@@ -1156,9 +1159,14 @@ fn render_poses_node_animations_at_its_time() {
             .map(|f| f["bytes_uploaded"].as_u64().unwrap())
             .collect::<Vec<u64>>()
     };
-    let (on, off) = (uploads("on"), uploads("off"));
+    let (on, off) = (uploads("on", "cpu"), uploads("off", "cpu"));
     let posed = on.iter().zip(&off).all(|(a, b)| a > b);
-    assert!(posed, "each frame sends the pose: {on:?} against {off:?}");
+    assert!(
+        posed,
+        "posed on the CPU, each frame sends the pose: {on:?} against {off:?}"
+    );
+    let on_gpu = uploads("on", "gpu");
+    assert_eq!(on_gpu, off, "posed on the GPU, only the time changes");
 }
 
 /// A skinned file plays in `stress`: one skinning pass per frame at the frame level,
@@ -1185,7 +1193,8 @@ fn stress_skins_once_per_frame_whatever_the_rig() {
 }
 
 /// `profile --crowd` plays the walking crowd on its clock in every mode: each
-/// configuration's traced frame holds the frame-level `skin` pass.
+/// configuration's traced frame holds the frame-level `skin` pass, and those culled on
+/// the GPU a `pose` pass (posed on the GPU by default there).
 #[test]
 fn profile_plays_the_crowd_in_every_mode() {
     let dir = tempfile::tempdir().unwrap();
@@ -1228,5 +1237,16 @@ fn profile_plays_the_crowd_in_every_mode() {
     assert!(
         skins > 0 && skins == configurations.count(),
         "one skin pass per configuration's frame: {skins}"
+    );
+    // `--posing auto`: on the GPU exactly where the cull runs there, one pose pass each.
+    let rows: Value =
+        serde_json::from_slice(&std::fs::read(dir.path().join("profile.json")).unwrap()).unwrap();
+    let rows = rows.as_array().unwrap();
+    assert!(rows.iter().all(|r| r["posing"] == r["cull"]), "{rows:?}");
+    let gpu_posed = rows.iter().filter(|r| r["posing"] == "gpu").count();
+    let poses = events.iter().filter(|e| e["name"] == "pose").count();
+    assert!(
+        gpu_posed > 0 && poses == gpu_posed,
+        "{poses} pose passes, {gpu_posed} rows"
     );
 }

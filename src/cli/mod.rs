@@ -22,7 +22,7 @@ use crate::error::{Error, Result};
 use crate::live::LiveScene;
 use crate::records::CullLayout;
 use crate::renderer::{
-    CoarseMode, CullMode, CullView, FramePlan, OcclusionMode, Renderer, RendererOptions,
+    CoarseMode, CullMode, CullView, FramePlan, OcclusionMode, PosingMode, Renderer, RendererOptions,
 };
 use crate::rig::{Gaze, Rig};
 use crate::scene::Scene;
@@ -119,6 +119,32 @@ pub struct SceneArgs {
     /// the file's rest pose).
     #[arg(long, value_enum, default_value = "on")]
     pub animation: Switch,
+    /// Where animations are posed each frame: on the GPU from the frame's time alone
+    /// (needs --cull gpu), or on the CPU with the poses uploaded (auto: the GPU where
+    /// the cull runs there). `render`, `stress`.
+    #[arg(long, value_enum, default_value = "auto")]
+    pub posing: PosingArg,
+}
+
+/// Where animations are posed, as the command line asks.
+#[derive(Clone, Copy, Debug, PartialEq, Eq, clap::ValueEnum, Serialize)]
+#[serde(rename_all = "lowercase")]
+pub enum PosingArg {
+    /// On the GPU where the cull runs there (the faster: docs/performance.md), else on
+    /// the CPU.
+    Auto,
+    Cpu,
+    Gpu,
+}
+
+impl PosingArg {
+    /// The renderer's posing for a cull on `cull`.
+    pub fn resolve(self, cull: CullMode) -> PosingMode {
+        match (self, cull) {
+            (PosingArg::Gpu, _) | (PosingArg::Auto, CullMode::Gpu) => PosingMode::Gpu,
+            _ => PosingMode::Cpu,
+        }
+    }
 }
 
 #[derive(Clone, Copy, Debug, PartialEq, Eq, clap::ValueEnum, Serialize)]

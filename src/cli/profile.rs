@@ -14,7 +14,7 @@ use crate::device::{Gpu, list_counts};
 use crate::error::{Error, Result};
 use crate::procedural;
 use crate::profiling::{GpuTimer, write_trace};
-use crate::renderer::{CullMode, RendererOptions, StereoMode};
+use crate::renderer::{CullMode, PosingMode, RendererOptions, StereoMode};
 use crate::rig::Rig;
 
 pub fn profile(args: &ProfileArgs) -> Result<()> {
@@ -57,7 +57,8 @@ pub fn profile(args: &ProfileArgs) -> Result<()> {
         * args.coarse_cull.len()
         * args.far_layer.len()
         * args.inset_cull.len()
-        * args.occlusion.len();
+        * args.occlusion.len()
+        * args.posing.len();
     let total = (rigs.len() * args.instances.len() * configs.len() * variants) as u64
         * (args.frames + args.warmup) as u64;
     let bar = ProgressBar::new(total);
@@ -87,8 +88,9 @@ pub fn profile(args: &ProfileArgs) -> Result<()> {
                 .flat_map(|v| args.inset_cull.iter().map(move |i| (v, i.on())))
                 .filter(|(_, inset)| !inset || rig.displays.iter().any(|d| d.views() == 4))
                 .flat_map(|v| args.occlusion.iter().map(move |o| (v, *o)))
+                .flat_map(|v| args.posing.iter().map(move |p| (v, *p)))
                 .collect();
-            for (&(mode, cull), &(((moving, coarse, far), inset), occlusion)) in configs
+            for (&(mode, cull), &((((moving, coarse, far), inset), occlusion), posing)) in configs
                 .iter()
                 .flat_map(|c| variants.iter().map(move |v| (c, v)))
             {
@@ -108,6 +110,14 @@ pub fn profile(args: &ProfileArgs) -> Result<()> {
                     println!("skipped {} on {spec}: {e}", mode.name());
                     continue;
                 }
+                let posing = posing.resolve(cull);
+                if posing == PosingMode::Gpu && cull == CullMode::Cpu {
+                    println!(
+                        "skipped {} with a CPU cull: posing on the GPU needs the GPU cull",
+                        mode.name()
+                    );
+                    continue;
+                }
                 let config = Config {
                     spec,
                     rig,
@@ -117,6 +127,7 @@ pub fn profile(args: &ProfileArgs) -> Result<()> {
                     far,
                     inset,
                     occlusion,
+                    posing,
                     edits: EditArgs {
                         moving,
                         churn: args.churn,

@@ -19,7 +19,8 @@ use crate::error::Result;
 use crate::live::LiveScene;
 use crate::profiling::{GpuTimer, percentile};
 use crate::renderer::{
-    CoarseMode, CullMode, OcclusionMode, Renderer, RendererOptions, StereoMode, SyncStats,
+    CoarseMode, CullMode, OcclusionMode, PosingMode, Renderer, RendererOptions, StereoMode,
+    SyncStats,
 };
 use crate::rig::Rig;
 use crate::scene::Scene;
@@ -85,6 +86,10 @@ pub struct ProfileArgs {
     /// Occlusion culling, one configuration each (`on,off` compares them in one run).
     #[arg(long, value_delimiter = ',', value_enum, default_value = "auto")]
     pub occlusion: Vec<OcclusionMode>,
+    /// Where animations are posed, one configuration each (`cpu,gpu` compares them;
+    /// `gpu` runs with GPU culling only; auto: the GPU where the cull runs there).
+    #[arg(long, value_delimiter = ',', value_enum, default_value = "auto")]
+    pub posing: Vec<super::PosingArg>,
     /// Levels of detail chosen on the GPU from the viewer's position.
     #[arg(long, value_enum, default_value = "off")]
     pub lod: Switch,
@@ -127,6 +132,7 @@ pub(super) struct Config<'a> {
     pub(super) far: bool,
     pub(super) inset: bool,
     pub(super) occlusion: OcclusionMode,
+    pub(super) posing: PosingMode,
     pub(super) edits: EditArgs,
     /// Percent of the meshes glazed ([`crate::procedural::glaze`]): the scene's.
     pub(super) glass: f64,
@@ -144,6 +150,7 @@ pub(super) fn measure(
         far,
         inset,
         occlusion,
+        posing,
         edits,
         glass,
     }: &Config,
@@ -163,6 +170,7 @@ pub(super) fn measure(
         inset_cull: inset,
         cull_floor: timer.is_some() && cull == CullMode::Gpu && !mode.per_instance(),
         occlusion,
+        posing,
         ..Default::default()
     };
     let mut renderer = Renderer::new(&gpu.device, scene, rig, options)?;
@@ -170,7 +178,9 @@ pub(super) fn measure(
     let views: Vec<_> = targets.iter().map(|t| t.views()).collect();
     let mut samples = Samples::default();
     let mut copy = PlainCopy::default();
-    let mut live = match edits.any() || scene.is_animated() {
+    // Posed on the GPU, an animated scene needs no live copy: only the time changes.
+    let cpu_posed = posing == PosingMode::Cpu && scene.is_animated();
+    let mut live = match edits.any() || cpu_posed {
         true => {
             let live = LiveScene::new(scene.clone());
             let driver = EditDriver::new(&live, &edits)?;
@@ -187,7 +197,9 @@ pub(super) fn measure(
         let time = frame as f32 * FRAME_SECONDS;
         let synced = match &mut live {
             Some((live, _)) => {
-                live.pose(time)?;
+                if posing == PosingMode::Cpu {
+                    live.pose(time)?;
+                }
                 renderer.sync(&gpu.device, &gpu.queue, live)?
             }
             None => SyncStats::default(),
@@ -293,6 +305,7 @@ pub(super) fn measure(
         submit_ms_median: med(&samples.submit),
         gpu_cull_ms_median: gpu_med(&samples.gpu_cull),
         gpu_draw_ms_median: gpu_med(&samples.gpu_draw),
+        posing,
         occlusion: occludes,
         gpu_pyramid_ms_median: gpu_med(&samples.gpu_pyramid).filter(|_| occludes),
         gpu_late_ms_median: gpu_med(&samples.gpu_late).filter(|_| occludes),

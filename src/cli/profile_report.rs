@@ -44,6 +44,8 @@ pub struct Row {
     pub gpu_draw_ms_median: Option<f64>,
     /// Whether some display culled by occlusion.
     pub occlusion: bool,
+    /// Where animations were posed (as configured; a still scene has nothing to pose).
+    pub posing: crate::renderer::PosingMode,
     /// With occlusion: the depth pyramids' GPU time, and the late phase's (its cull and
     /// its draw pass), per frame.
     pub gpu_pyramid_ms_median: Option<f64>,

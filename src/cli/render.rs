@@ -16,7 +16,8 @@ use crate::live::LiveScene;
 use crate::profiling::{FrameQueries, GpuTimer};
 use crate::readback::read_rgba8;
 use crate::renderer::{
-    CullMode, DisplayTarget, FrameStats, Level, Renderer, RendererOptions, StereoMode, SyncStats,
+    CullMode, DisplayTarget, FrameStats, Level, PosingMode, Renderer, RendererOptions, StereoMode,
+    SyncStats,
 };
 use crate::rig::Rig;
 use crate::scene::Scene;
@@ -110,6 +111,7 @@ impl Session {
         let mut options = RendererOptions {
             cull,
             mode,
+            posing: args.posing.resolve(cull),
             ..args.options()
         };
         let counts = gpu.sample_counts(options.color_format);
@@ -122,9 +124,11 @@ impl Session {
                 list_counts(&counts)
             )));
         }
+        // Posed on the GPU, an animated scene needs no live copy: only the time changes.
+        let cpu_posed = options.posing == PosingMode::Cpu && scene.is_animated();
         let renderer = Renderer::new(&gpu.device, &scene, &rig, options)?;
         let targets = renderer.create_targets(&gpu.device);
-        let live = match edits.any() || scene.is_animated() {
+        let live = match edits.any() || cpu_posed {
             true => {
                 let live = LiveScene::new(scene.clone());
                 let driver = EditDriver::new(&live, edits)?;
@@ -152,7 +156,9 @@ impl Session {
         let start = Instant::now();
         if let Some((live, driver)) = &mut self.live {
             // Posing is stereocull's frame-context work: counted in cpu_ms.
-            live.pose(time)?;
+            if self.renderer.options().posing == PosingMode::Cpu {
+                live.pose(time)?;
+            }
             let edits = Instant::now();
             driver.apply(live, self.frames)?;
             edit_ms = ms(edits);

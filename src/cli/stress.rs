@@ -55,6 +55,7 @@ struct FrameRecord {
     frame_ms: f64,
     /// The skinning pass's GPU milliseconds (timestamps; `None` without skins or them).
     skin_gpu_ms: Option<f64>,
+    pose_gpu_ms: Option<f64>,
     visible: Vec<u32>,
     /// Sphere-against-frustum tests (GPU culling; see `Diagnostics::sphere_tests`).
     sphere_tests: Option<u64>,
@@ -104,6 +105,11 @@ struct Summary {
     skinning_bytes: serde_json::Value,
     /// Median over the frames of the skinning pass's GPU time.
     skin_gpu_ms_median: Option<f64>,
+    /// Where animations were posed (`--posing`), the pose pass's GPU time (posing on
+    /// the GPU), and the GPU bytes of its tables and per-node scratch.
+    posing: crate::renderer::PosingMode,
+    pose_gpu_ms_median: Option<f64>,
+    posing_bytes: u64,
     /// GPU bytes occlusion adds per display and once (`None` without it).
     occlusion_bytes: Option<OcclusionBytes>,
     /// Per display, what occlusion did in the last frame.
@@ -177,9 +183,12 @@ pub fn stress(args: &StressArgs) -> Result<()> {
             None => None,
         };
         let triangles_submitted = queries.as_ref().and_then(|q| q.triangles_submitted);
-        let skin_gpu_ms = (queries.as_ref())
-            .and_then(|q| q.passes.iter().find(|(label, _)| label == "skin"))
-            .map(|(_, ms)| *ms);
+        let pass_ms = |name: &str| {
+            (queries.as_ref())
+                .and_then(|q| q.passes.iter().find(|(label, _)| label == name))
+                .map(|(_, ms)| *ms)
+        };
+        let (skin_gpu_ms, pose_gpu_ms) = (pass_ms("skin"), pass_ms("pose"));
         let passes = pass_reports(&session.renderer, &session.rig, queries.as_ref());
         let visible = session
             .renderer
@@ -200,6 +209,7 @@ pub fn stress(args: &StressArgs) -> Result<()> {
             triangles_submitted,
             frame_ms,
             skin_gpu_ms,
+            pose_gpu_ms,
             visible,
             sphere_tests,
             passes,
@@ -299,6 +309,12 @@ fn summarize(
             let v: Vec<f64> = records.iter().filter_map(|r| r.skin_gpu_ms).collect();
             (!v.is_empty()).then(|| percentile(&v, 0.5))
         },
+        posing: session.renderer.options().posing,
+        pose_gpu_ms_median: {
+            let v: Vec<f64> = records.iter().filter_map(|r| r.pose_gpu_ms).collect();
+            (!v.is_empty()).then(|| percentile(&v, 0.5))
+        },
+        posing_bytes: session.renderer.posing_bytes(),
         skinning_bytes: serde_json::json!({
             "per_skinned_vertex": size_of::<crate::skinning::SkinVertex>(),
             "per_joint": size_of::<crate::skinning::JointMatrix>(),
