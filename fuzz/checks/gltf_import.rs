@@ -4,6 +4,7 @@
 use std::path::Path;
 
 use stereocull::cull::cpu;
+use stereocull::pose_tables::{PoseNodeRecord, PoseTables};
 use stereocull::records::CullLayout;
 use stereocull::rig::Rig;
 
@@ -38,6 +39,10 @@ pub fn gltf_import(data: &[u8]) {
     }
     scene.drop_non_finite_instances();
     let n = scene.instances.len();
+    // Posing on the GPU reads only what its tables index (a tree too deep is an error).
+    if let Ok(Some(tables)) = PoseTables::new(&scene, |_| true) {
+        check_pose_tables(&tables, n, scene.skins.joint_matrices.len());
+    }
     // The importer checks everything the material records need (textures, finite
     // cutoffs, one material per primitive), so a renderer never refuses an import.
     if let Err(e) = stereocull::materials::records(&scene) {
@@ -55,4 +60,29 @@ pub fn gltf_import(data: &[u8]) {
         drawn as usize,
         out.visible.len() * job.instances_per_object as usize
     );
+}
+
+/// Every index of the pose pass's tables in range: nodes' parents (earlier) and
+/// channels, channels' keys and values, targets' slots, nodes, joints and matrices.
+fn check_pose_tables(t: &PoseTables, instances: usize, joint_matrices: usize) {
+    for (i, node) in t.nodes.iter().enumerate() {
+        assert!(node.parent == PoseNodeRecord::ROOT || (node.parent as usize) < i);
+        assert!((node.first_channel + node.channels) as usize <= t.channels.len());
+    }
+    for c in &t.channels {
+        let per_key = if c.interpolation == 2 { 3 } else { 1 };
+        assert!(c.keys >= 1 && (c.first_key + c.keys) as usize <= t.times.len());
+        assert!((c.first_value + per_key * c.keys) as usize <= t.values.len());
+    }
+    for target in &t.targets {
+        assert!((target.slot as usize) < instances);
+        match target.joints {
+            0 => assert!((target.node as usize) < t.nodes.len()),
+            joints => {
+                assert!((target.node + joints) as usize <= t.joints.len());
+                assert!((target.joint_base + joints) as usize <= joint_matrices);
+            }
+        }
+    }
+    assert!(t.joints.iter().all(|j| (j.node as usize) < t.nodes.len()));
 }
