@@ -182,13 +182,10 @@ impl PoseTables {
     fn add_nodes(&mut self, scene: &Scene) {
         let posing = &scene.posing;
         let mut by_node: Vec<Vec<PoseChannelRecord>> = vec![Vec::new(); posing.nodes.len()];
+        let mut keys = KeyStore::default();
         for clip in &posing.clips {
             for c in &clip.channels {
-                let per_key = if c.interpolation == Interpolation::CubicSpline {
-                    3
-                } else {
-                    1
-                };
+                let (first_key, first_value) = keys.add(self, c);
                 by_node[c.node as usize].push(PoseChannelRecord {
                     property: match c.property {
                         Property::Translation => 0,
@@ -200,16 +197,13 @@ impl PoseTables {
                         Interpolation::Linear => 1,
                         Interpolation::CubicSpline => 2,
                     },
-                    first_key: self.times.len() as u32,
+                    first_key,
                     keys: c.times.len() as u32,
-                    first_value: self.values.len() as u32,
+                    first_value,
                     offset: clip.offset,
                     speed: clip.speed,
                     duration: clip.duration(),
                 });
-                debug_assert_eq!(c.values.len(), per_key * c.times.len());
-                self.times.extend(&c.times);
-                self.values.extend(c.values.iter().map(|v| v.to_array()));
             }
         }
         for (node, channels) in posing.nodes.iter().zip(by_node) {
@@ -237,6 +231,36 @@ impl PoseTables {
             + size_of_val(&self.targets[..])
             + size_of_val(&self.joints[..])
             + scratch) as u64
+    }
+}
+
+/// Channels' keys stored once however many channels share them (a crowd's figures play
+/// one walk at their own phases: each clip is its own, its keys the same).
+#[derive(Default)]
+struct KeyStore {
+    /// Where each channel's keys were stored, by their bits.
+    stored: std::collections::HashMap<KeyBits, (u32, u32)>,
+}
+
+/// A channel's times and values, bit for bit.
+type KeyBits = (Vec<u32>, Vec<[u32; 4]>);
+
+impl KeyStore {
+    /// Where `c`'s times and values lie in `tables`, added unless stored already.
+    fn add(&mut self, tables: &mut PoseTables, c: &crate::posing::Channel) -> (u32, u32) {
+        let bits = (
+            c.times.iter().map(|t| t.to_bits()).collect(),
+            c.values
+                .iter()
+                .map(|v| v.to_array().map(f32::to_bits))
+                .collect(),
+        );
+        *self.stored.entry(bits).or_insert_with(|| {
+            let at = (tables.times.len() as u32, tables.values.len() as u32);
+            tables.times.extend(&c.times);
+            tables.values.extend(c.values.iter().map(|v| v.to_array()));
+            at
+        })
     }
 }
 

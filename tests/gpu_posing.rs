@@ -420,3 +420,21 @@ fn gpu_posing_with_a_cpu_cull_is_an_error() {
         .to_string();
     assert!(err.contains("--posing cpu or --cull gpu"), "{err}");
 }
+
+/// The pose pass's tables hold a walk's keys once however many figures play it (each
+/// at its own phase, in a clip of its own): `crowd:N`'s keys do not grow with N.
+#[test]
+fn figures_share_the_walk_keys_in_the_pose_tables() {
+    use stereocull::pose_tables::PoseTables;
+    let tables = |n: u32| {
+        let scene = scene_spec::load(&format!("crowd:{n}:3")).unwrap();
+        PoseTables::new(&scene, |_| true).unwrap().unwrap()
+    };
+    let (few, many) = (tables(2), tables(40));
+    assert_eq!(many.channels.len(), 20 * few.channels.len());
+    assert_eq!(
+        (many.times.len(), many.values.len()),
+        (few.times.len(), few.values.len())
+    );
+    assert!(!few.times.is_empty());
+}

@@ -4,8 +4,10 @@
 // `worlds` composes each node's world transform, `targets` writes each posed
 // instance's move (the moves scatter's edit, applied by that scatter right after) and
 // each skin's joint matrices. The CPU twin is posing::Posing::node_worlds,
-// skinning::Skin::pose_joints and scene::Scene::world_sphere, the same steps in the
-// same order; tests/posing.rs compares them. Transforms are the rows of 3x4 affines.
+// skinning::Skin::pose_joints and scene::Scene::world_sphere, the same steps (a node's
+// world product associated from the node up, not from the root down: no chain kept per
+// invocation); tests/gpu_posing.rs compares them. Transforms are the rows of 3x4
+// affines.
 
 struct PoseNode {
     parent: u32,
@@ -239,23 +241,20 @@ fn worlds_main(@builtin(global_invocation_id) id: vec3<u32>) {
     if (n >= params.nodes) {
         return;
     }
-    // The node and its ancestors, then composed from the root down.
-    var chain: array<u32, MAX_DEPTH>;
-    var depth = 0u;
+    // Composed from the node up: each ancestor's local transform applied on the left,
+    // then the root's placement (the CPU composes from the root down: the same
+    // product, associated the other way).
+    var world = locals[n];
     var at = n;
-    loop {
-        chain[depth] = at;
-        depth++;
+    for (var depth = 1u; depth < MAX_DEPTH; depth++) {
         let parent = nodes[at].parent;
-        if (parent == ROOT || depth == MAX_DEPTH) {
+        if (parent == ROOT) {
             break;
         }
         at = parent;
+        world = mul(locals[at], world);
     }
-    var world = mul(nodes[at].root_from, locals[at]);
-    for (var k = depth - 1u; k > 0u; k--) {
-        world = mul(world, locals[chain[k - 1u]]);
-    }
+    world = mul(nodes[at].root_from, world);
     worlds[n] = world;
 }
 
