@@ -438,3 +438,43 @@ fn figures_share_the_walk_keys_in_the_pose_tables() {
     );
     assert!(!few.times.is_empty());
 }
+
+/// Where posing runs does not change the image: the crowd posed on the GPU at random
+/// times draws what the CPU-posed crowd draws, on `hmd` and `cave`, and so does
+/// BoxAnimated's node animation. Both draw with the same pipelines; only the posed
+/// transforms and joint matrices differ, in their last bits (the posings' rounding, see
+/// POSE_TOLERANCE: measured here far below it), so a vertex can land a hair apart and
+/// flip an edge pixel or round its shading a level: 2 levels, 0.1 % of the pixels beyond.
+#[test]
+fn gpu_and_cpu_posing_draw_the_same_images() {
+    let gpu = support::gpu();
+    let mut rng = rand_pcg::Pcg64Mcg::seed_from_u64(12);
+    let tolerance = support::Tolerance {
+        levels: 2,
+        share: 0.001,
+    };
+    let crowd = scene_spec::load("crowd:60:5").unwrap();
+    let boxes =
+        scene_spec::load(support::gltf_sample("BoxAnimated", "glb").to_str().unwrap()).unwrap();
+    for (name, scene, preset, viewer) in [
+        ("crowd", &crowd, "hmd", [0.0, 1.6, 0.0]),
+        ("crowd", &crowd, "cave", [0.0, 1.6, 0.0]),
+        ("box", &boxes, "hmd", [0.0, 1.0, 6.0]),
+    ] {
+        let mut rig = support::sized(preset, 96, 80);
+        rig.viewer.position = viewer;
+        let time = rng.random_range(0.0..4.0);
+        let mut cpu_posed = scene.clone();
+        cpu_posed.pose(time);
+        let on_cpu =
+            support::render_at(&gpu, &cpu_posed, &rig, support::frustum_only(), time).unwrap();
+        let on_gpu = support::render_at(&gpu, scene, &rig, gpu_posing(), time).unwrap();
+        for (d, (g, c)) in on_gpu.iter().zip(&on_cpu).enumerate() {
+            let background = *c.get_pixel(0, 0);
+            let drawn = c.pixels().filter(|p| **p != background).count();
+            let label = format!("posing-{name}-{preset}-{d}");
+            support::assert_images_match(&label, g, c, tolerance);
+            assert!(d > 0 || drawn > 100, "{label}: drawn ({drawn} pixels)");
+        }
+    }
+}
