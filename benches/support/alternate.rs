@@ -1,0 +1,95 @@
+//! Two renderers timed in alternating rounds of frames (prepare, encode, submit; each
+//! frame waited for untimed), each round giving the ratio of the two medians. A small
+//! VM's speed drifts over the seconds one configuration takes by more than the effects
+//! these benches measure, and two blocks of samples (criterion's way, one configuration
+//! after the other) fold that drift into the ratio; alternating rounds do not.
+
+use std::time::Instant;
+
+use stereocull::device::Gpu;
+use stereocull::profiling::percentile;
+use stereocull::renderer::{DisplayTarget, Renderer};
+use stereocull::rig::Rig;
+
+/// Microseconds of a frame's prepare, encode (and finish) and submit.
+type Phases = [f64; 3];
+
+/// One configuration: its name, renderer and targets.
+pub struct Config {
+    pub name: String,
+    pub renderer: Renderer,
+    pub targets: Vec<DisplayTarget>,
+}
+
+/// Times `configs` (two: the second over the first) on `rig` in `rounds` alternating
+/// rounds of `frames` frames after a warm-up round; prints each round's ratio, each
+/// configuration's median phases, and the median ratio, which it returns.
+pub fn compare(
+    gpu: &Gpu,
+    rig: &Rig,
+    configs: &mut [Config; 2],
+    (rounds, frames): (u32, u32),
+) -> f64 {
+    let mut all: Vec<Vec<Phases>> = vec![Vec::new(); 2];
+    let mut ratios = Vec::new();
+    for round in 0..=rounds {
+        let mut medians = Vec::new();
+        for (k, c) in configs.iter_mut().enumerate() {
+            let timed: Vec<Phases> = (0..frames)
+                .map(|_| frame(gpu, &mut c.renderer, &c.targets, rig))
+                .collect();
+            let totals: Vec<f64> = timed.iter().map(|p| p.iter().sum()).collect();
+            medians.push(percentile(&totals, 0.5));
+            // Round 0 warms up: the first frames compile llvmpipe's shader variants.
+            if round > 0 {
+                all[k].extend(timed);
+            }
+        }
+        if round > 0 {
+            ratios.push(medians[1] / medians[0]);
+            println!(
+                "round {round}: CPU per frame {:.3}",
+                ratios[ratios.len() - 1]
+            );
+        }
+    }
+    for (c, timed) in configs.iter().zip(&all) {
+        let phase = |i: usize| percentile(&timed.iter().map(|p| p[i]).collect::<Vec<_>>(), 0.5);
+        println!(
+            "{}: median prepare {:.1} us, encode {:.1} us, submit {:.1} us",
+            c.name,
+            phase(0),
+            phase(1),
+            phase(2)
+        );
+    }
+    let ratio = percentile(&ratios, 0.5);
+    println!(
+        "{} / {}, median of the rounds: {ratio:.3}",
+        configs[1].name, configs[0].name
+    );
+    ratio
+}
+
+/// One frame's CPU phases, the frame then waited for.
+fn frame(gpu: &Gpu, renderer: &mut Renderer, targets: &[DisplayTarget], rig: &Rig) -> Phases {
+    let start = Instant::now();
+    renderer.prepare(&gpu.queue, rig, 0.0).expect("prepare");
+    let prepared = Instant::now();
+    let mut encoder = gpu.device.create_command_encoder(&Default::default());
+    let views: Vec<_> = targets.iter().map(DisplayTarget::views).collect();
+    renderer.encode(&mut encoder, &views, None).expect("encode");
+    let commands = encoder.finish();
+    let encoded = Instant::now();
+    gpu.queue.submit([commands]);
+    let submitted = Instant::now();
+    gpu.device
+        .poll(wgpu::PollType::wait_indefinitely())
+        .expect("poll");
+    let us = |a: Instant, b: Instant| (b - a).as_secs_f64() * 1e6;
+    [
+        us(start, prepared),
+        us(prepared, encoded),
+        us(encoded, submitted),
+    ]
+}
