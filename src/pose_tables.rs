@@ -268,7 +268,9 @@ impl KeyStore {
 /// them.
 fn target_of(scene: &Scene, instance: u32) -> PoseTargetRecord {
     let instance = &scene.instances[instance as usize];
-    let bounds: Vec4 = scene.meshes[instance.mesh as usize].bounds;
+    // A live scene's vacated slot has no mesh; its target is void anyway.
+    let mesh = scene.meshes.get(instance.mesh as usize);
+    let bounds: Vec4 = mesh.map_or(Vec4::ZERO, |m| m.bounds);
     let a = instance.animation;
     PoseTargetRecord {
         slot: Places::VACANT,

@@ -478,3 +478,55 @@ fn gpu_and_cpu_posing_draw_the_same_images() {
         }
     }
 }
+
+/// A live scene that outgrows its buffers after a figure was removed: the renderer
+/// builds the pose pass again from the live scene as it is (the removed figure's slot
+/// vacant, then refilled), and the figures left walk on.
+#[test]
+fn a_reallocation_rebuilds_the_pose_pass_from_the_live_scene() {
+    let gpu = support::gpu();
+    let scene = scene_spec::load("crowd:8:6").unwrap();
+    let rig = support::sized("hmd", 32, 32);
+    let mut renderer = Renderer::new(&gpu.device, &scene, &rig, gpu_posing()).unwrap();
+    let targets = renderer.create_targets(&gpu.device);
+    let mut live = LiveScene::new(scene.clone());
+    let handles = live.handles();
+    let removed = live.remove(handles[2]).unwrap();
+    renderer.sync(&gpu.device, &gpu.queue, &mut live).unwrap();
+    let placed = Affine3A::from_translation(Vec3::new(0.0, 1.0, -3.0));
+    let inserted: Vec<_> = (0..3)
+        .map(|_| {
+            let instance = stereocull::scene::Instance {
+                world_from_local: placed,
+                ..removed
+            };
+            live.insert(instance).unwrap()
+        })
+        .collect();
+    let synced = renderer.sync(&gpu.device, &gpu.queue, &mut live).unwrap();
+    assert!(
+        synced.reallocated,
+        "three inserts into one vacant slot outgrow the buffers"
+    );
+    let time = 1.3;
+    renderer
+        .submit_frame(&gpu.device, &gpu.queue, &rig, time, &targets)
+        .unwrap();
+    let records = (renderer
+        .diagnostics(&gpu.device, &gpu.queue)
+        .instance_records())
+    .unwrap();
+    for h in &inserted {
+        assert_eq!(records[h.slot() as usize].world_from_local, rows(&placed));
+    }
+    let mut cpu = scene.clone();
+    cpu.pose(time);
+    for h in handles.iter().filter(|h| h.slot() != 2) {
+        let slot = h.slot() as usize;
+        let want = rows(&cpu.instances[slot].world_from_local);
+        assert!(
+            close(&records[slot].world_from_local, &want, POSE_TOLERANCE),
+            "figure {slot}"
+        );
+    }
+}
