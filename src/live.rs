@@ -421,7 +421,11 @@ impl LiveScene {
         indices: &[u32],
     ) -> u32 {
         self.changes.geometry = true;
-        self.scene.add_mesh(name, vertices, indices)
+        let mesh = self.scene.add_mesh(name, vertices, indices);
+        // The cull order gets the new mesh's range (empty, with room), so that a sync
+        // before any instance of it lays the scene out whole.
+        self.lay_out();
+        mesh
     }
 
     /// The changes since the last call, which forgets them.

@@ -479,9 +479,10 @@ fn gpu_and_cpu_posing_draw_the_same_images() {
     }
 }
 
-/// A live scene that outgrows its buffers after a figure was removed: the renderer
-/// builds the pose pass again from the live scene as it is (the removed figure's slot
-/// vacant, then refilled), and the figures left walk on.
+/// A live scene reallocated (it gained a mesh) while a removed figure's slot stands
+/// vacant: the renderer builds the pose pass again from the live scene as it is, the
+/// vacant slot posed by nothing, an instance of the new mesh where it was put, and the
+/// figures left walk on.
 #[test]
 fn a_reallocation_rebuilds_the_pose_pass_from_the_live_scene() {
     let gpu = support::gpu();
@@ -491,23 +492,18 @@ fn a_reallocation_rebuilds_the_pose_pass_from_the_live_scene() {
     let targets = renderer.create_targets(&gpu.device);
     let mut live = LiveScene::new(scene.clone());
     let handles = live.handles();
-    let removed = live.remove(handles[2]).unwrap();
-    renderer.sync(&gpu.device, &gpu.queue, &mut live).unwrap();
+    live.remove(handles[2]).unwrap();
+    let cube = stereocull::shapes::cuboid(Vec3::splat(0.2));
+    let mesh = live.add_mesh("cube", &cube.vertices, &cube.indices);
     let placed = Affine3A::from_translation(Vec3::new(0.0, 1.0, -3.0));
-    let inserted: Vec<_> = (0..3)
-        .map(|_| {
-            let instance = stereocull::scene::Instance {
-                world_from_local: placed,
-                ..removed
-            };
-            live.insert(instance).unwrap()
-        })
-        .collect();
     let synced = renderer.sync(&gpu.device, &gpu.queue, &mut live).unwrap();
-    assert!(
-        synced.reallocated,
-        "three inserts into one vacant slot outgrow the buffers"
-    );
+    assert!(synced.reallocated, "a new mesh: everything uploaded again");
+    assert!(!live.occupied(2), "the removed figure's slot stays vacant");
+    let mut cube_instance = support::cubes(&[(Vec3::ZERO, 0)], 1).instances[0];
+    cube_instance.mesh = mesh;
+    cube_instance.world_from_local = placed;
+    let new = live.insert(cube_instance).unwrap();
+    renderer.sync(&gpu.device, &gpu.queue, &mut live).unwrap();
     let time = 1.3;
     renderer
         .submit_frame(&gpu.device, &gpu.queue, &rig, time, &targets)
@@ -516,9 +512,7 @@ fn a_reallocation_rebuilds_the_pose_pass_from_the_live_scene() {
         .diagnostics(&gpu.device, &gpu.queue)
         .instance_records())
     .unwrap();
-    for h in &inserted {
-        assert_eq!(records[h.slot() as usize].world_from_local, rows(&placed));
-    }
+    assert_eq!(records[new.slot() as usize].world_from_local, rows(&placed));
     let mut cpu = scene.clone();
     cpu.pose(time);
     for h in handles.iter().filter(|h| h.slot() != 2) {

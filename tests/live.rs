@@ -637,3 +637,32 @@ fn respawns_are_sparse_edits() {
         );
     }
 }
+
+/// A live scene gains a mesh and syncs before any instance of it (the renderer uploads
+/// everything again), then instances of it come in (some into vacated slots): every
+/// sync keeps the GPU culls equal to the reference's. The cull order got the new mesh's
+/// range when the mesh was added, not at its first instance.
+#[test]
+fn a_mesh_added_to_a_live_scene_syncs_before_and_after_its_instances() {
+    let gpu = gpu();
+    let (rig, mut rng, mut live, mut renderer) = live_on_cave(&gpu, 13);
+    for &h in live.handles().iter().step_by(9) {
+        live.remove(h).unwrap();
+    }
+    let shape = stereocull::shapes::cuboid(Vec3::splat(0.3));
+    let mesh = live.add_mesh("late box", &shape.vertices, &shape.indices);
+    let synced = renderer.sync(&gpu.device, &gpu.queue, &mut live).unwrap();
+    assert!(synced.reallocated, "{synced:?}");
+    frame_matches_reference(&gpu, &mut renderer, &live, &rig);
+    for _ in 0..500 {
+        live.insert(random_instance(&mut rng, mesh)).unwrap();
+    }
+    renderer.sync(&gpu.device, &gpu.queue, &mut live).unwrap();
+    frame_matches_reference(&gpu, &mut renderer, &live, &rig);
+    let scene = live.scene();
+    let seen = (reference_culls(scene, &rig).iter())
+        .flat_map(|c| c.visible.iter())
+        .filter(|&&slot| scene.instances[slot as usize].mesh == mesh)
+        .count();
+    assert!(seen > 0, "instances of the new mesh are drawn");
+}
