@@ -292,10 +292,6 @@ impl Culler {
         }
     }
 
-    /// The GPU culler's spheres, cull positions, order, mesh bounds and occlusion
-    /// words, which the scatter passes write edits into, and the visibility words' shape
-    /// (words per display slot, slots); `None` for the CPU culler, which takes edits
-    /// into its layout ([`Culler::place`], [`Culler::moved`]).
     /// Each slot's world sphere on the GPU (`None` culling on the CPU).
     pub(super) fn read_spheres(
         &self,
@@ -309,6 +305,10 @@ impl Culler {
         }
     }
 
+    /// The GPU culler's spheres, cull positions, order, mesh bounds and occlusion
+    /// words, which the scatter passes write edits into, and the visibility words' shape
+    /// (words per display slot, slots); `None` for the CPU culler, which takes edits
+    /// into its layout ([`Culler::place`], [`Culler::moved`]).
     pub(super) fn scatter_targets(&self) -> (Option<[&wgpu::Buffer; 5]>, (u32, u32)) {
         match &self.kind {
             Kind::Gpu { scene, .. } => (Some(scene.scatter_targets()), scene.visibility_shape()),
