@@ -227,12 +227,12 @@ impl Renderer {
         };
         let mut path = Path::new(device, inputs)?;
         let skin = SkinPass::new(device, &scene.skins, &path.draw_scene_ref().vertices);
-        let gpu = GpuParts {
+        let gpu = pose_pass::GpuParts {
             frame: &frame,
             skin: skin.as_ref(),
             windows: options.windows(device, slots),
         };
-        let pose = pose_pass(device, scene, &options, (&mut path, gpu), |_| true)?;
+        let pose = pose_pass::build(device, scene, &options, (&mut path, gpu), |_| true)?;
         let shapes = rig
             .displays
             .iter()
@@ -472,50 +472,4 @@ impl Renderer {
             .map(|s| s.create(device, self.options.target_format()))
             .collect()
     }
-}
-
-/// What the pose pass binds besides the path's buffers.
-struct GpuParts<'a> {
-    frame: &'a wgpu::Buffer,
-    skin: Option<&'a SkinPass>,
-    windows: crate::shaders::Windows,
-}
-
-/// The pose pass, with [`PosingMode::Gpu`] and a scene that moves; `posed(slot)`: whether
-/// it still poses the instance in `slot`.
-fn pose_pass(
-    device: &wgpu::Device,
-    scene: &Scene,
-    options: &RendererOptions,
-    (path, gpu): (&mut Path, GpuParts),
-    posed: impl Fn(u32) -> bool,
-) -> Result<Option<PosePass>> {
-    if options.posing != PosingMode::Gpu {
-        return Ok(None);
-    }
-    let Some(tables) = crate::pose_tables::PoseTables::new(scene, posed)? else {
-        return Ok(None);
-    };
-    // Node animations alone have no joint matrices: the targets pass writes none.
-    let stand_in;
-    let joint_matrices = match gpu.skin {
-        Some(skin) => skin.joint_matrices(),
-        None => {
-            let usage = wgpu::BufferUsages::STORAGE;
-            stand_in = crate::buffers::storage_buffer(device, "stereocull.no_joints", 0, usage);
-            &stand_in
-        }
-    };
-    let (instances, culler) = path.edit_targets();
-    let (spheres, visibility) = culler.scatter_targets();
-    let outputs = pose_pass::PoseOutputs {
-        joint_matrices,
-        scatter: crate::scatter::ScatterTargets {
-            instances,
-            spheres,
-            visibility,
-        },
-        windows: gpu.windows,
-    };
-    Ok(Some(PosePass::new(device, &tables, gpu.frame, outputs)))
 }

@@ -174,6 +174,24 @@ pub(super) fn compute_pass(
     log.push(what);
 }
 
+/// Records one frame-level compute pass logged and timed as `name`, inside a `frame`
+/// scope as the other frame-level passes are; `record` fills it.
+pub(super) fn frame_compute_pass(
+    encoder: &mut wgpu::CommandEncoder,
+    Recording { timer, log }: Recording,
+    name: &'static str,
+    record: impl FnOnce(&mut wgpu::ComputePass),
+) {
+    let frame = open_display(timer, "frame", encoder);
+    compute_pass(
+        encoder,
+        (timer, &frame),
+        (log, PassRecord::frame(name)),
+        record,
+    );
+    close(timer, encoder, frame);
+}
+
 /// Opens display `name`'s timer scope, when timing.
 pub(super) fn open_display(
     timer: &Option<&mut GpuTimer>,

@@ -3,8 +3,13 @@
 //! they wrote, in one compute pass before the skinning pass, from the frame context's
 //! time. Built only with [`crate::renderer::Posing::Gpu`] and a scene that moves.
 
-use super::passes::{PassRecord, Recording, close, compute_pass, open_display};
+use super::Path;
+use super::options::{PosingMode, RendererOptions};
+use super::passes::{Recording, frame_compute_pass};
+use super::skin_pass::SkinPass;
 use crate::buffers::init_buffer;
+use crate::error::Result;
+use crate::scene::Scene;
 use std::collections::HashMap;
 
 use crate::places::Places;
@@ -153,23 +158,15 @@ impl PosePass {
     /// Records the frame's posing, logged as the frame pass `pose`; returns its
     /// dispatches.
     pub(super) fn encode(&self, encoder: &mut wgpu::CommandEncoder, recording: Recording) -> u32 {
-        let Recording { timer, log } = recording;
-        let frame = open_display(timer, "frame", encoder);
-        compute_pass(
-            encoder,
-            (timer, &frame),
-            (log, PassRecord::frame("pose")),
-            |pass| {
-                for k in 0..3 {
-                    pass.set_pipeline(&self.pipelines[k]);
-                    pass.set_bind_group(0, &self.bind_groups[k], &[]);
-                    let (x, y) = self.dispatches[k];
-                    pass.dispatch_workgroups(x, y, 1);
-                }
-                self.moves.encode(pass);
-            },
-        );
-        close(timer, encoder, frame);
+        frame_compute_pass(encoder, recording, "pose", |pass| {
+            for k in 0..3 {
+                pass.set_pipeline(&self.pipelines[k]);
+                pass.set_bind_group(0, &self.bind_groups[k], &[]);
+                let (x, y) = self.dispatches[k];
+                pass.dispatch_workgroups(x, y, 1);
+            }
+            self.moves.encode(pass);
+        });
         4
     }
 
@@ -177,4 +174,50 @@ impl PosePass {
     pub(super) fn gpu_bytes(&self) -> u64 {
         self.gpu_bytes
     }
+}
+
+/// What the pose pass binds besides the path's buffers.
+pub(super) struct GpuParts<'a> {
+    pub(super) frame: &'a wgpu::Buffer,
+    pub(super) skin: Option<&'a SkinPass>,
+    pub(super) windows: Windows,
+}
+
+/// The pose pass, with [`PosingMode::Gpu`] and a scene that moves; `posed(slot)`: whether
+/// it still poses the instance in `slot`.
+pub(super) fn build(
+    device: &wgpu::Device,
+    scene: &Scene,
+    options: &RendererOptions,
+    (path, gpu): (&mut Path, GpuParts),
+    posed: impl Fn(u32) -> bool,
+) -> Result<Option<PosePass>> {
+    if options.posing != PosingMode::Gpu {
+        return Ok(None);
+    }
+    let Some(tables) = PoseTables::new(scene, posed)? else {
+        return Ok(None);
+    };
+    // Node animations alone have no joint matrices: the targets pass writes none.
+    let stand_in;
+    let joint_matrices = match gpu.skin {
+        Some(skin) => skin.joint_matrices(),
+        None => {
+            let usage = wgpu::BufferUsages::STORAGE;
+            stand_in = crate::buffers::storage_buffer(device, "stereocull.no_joints", 0, usage);
+            &stand_in
+        }
+    };
+    let (instances, culler) = path.edit_targets();
+    let (spheres, visibility) = culler.scatter_targets();
+    let outputs = PoseOutputs {
+        joint_matrices,
+        scatter: ScatterTargets {
+            instances,
+            spheres,
+            visibility,
+        },
+        windows: gpu.windows,
+    };
+    Ok(Some(PosePass::new(device, &tables, gpu.frame, outputs)))
 }

@@ -2,7 +2,7 @@
 //! dispatch per frame over every skinned vertex, before the shadow pass and every
 //! display, writing into the vertex buffer they all draw from.
 
-use super::passes::{PassRecord, Recording, close, compute_pass, open_display};
+use super::passes::{Recording, frame_compute_pass};
 use crate::buffers::init_buffer;
 use crate::shaders::{compute_pipeline, dispatch_size, skin_source};
 use std::ops::Range;
@@ -118,20 +118,11 @@ impl SkinPass {
 
     /// Records the frame's one skinning dispatch, logged as the frame pass `skin`.
     pub(super) fn encode(&self, encoder: &mut wgpu::CommandEncoder, recording: Recording) -> u32 {
-        let Recording { timer, log } = recording;
-        // Timed inside a frame scope, as the other frame-level passes are.
-        let frame = open_display(timer, "frame", encoder);
-        compute_pass(
-            encoder,
-            (timer, &frame),
-            (log, PassRecord::frame("skin")),
-            |pass| {
-                pass.set_pipeline(&self.pipeline);
-                pass.set_bind_group(0, &self.bind_group, &[]);
-                pass.dispatch_workgroups(self.dispatch.0, self.dispatch.1, 1);
-            },
-        );
-        close(timer, encoder, frame);
+        frame_compute_pass(encoder, recording, "skin", |pass| {
+            pass.set_pipeline(&self.pipeline);
+            pass.set_bind_group(0, &self.bind_group, &[]);
+            pass.dispatch_workgroups(self.dispatch.0, self.dispatch.1, 1);
+        });
         1
     }
 

@@ -4,8 +4,9 @@
 use super::checks::check_device;
 use super::frame::FramePlan;
 use super::inputs::PathInputs;
+use super::pose_pass::{self, GpuParts};
 use super::skin_pass::SkinPass;
-use super::{GpuParts, Path, Renderer, pose_pass};
+use super::{Path, Renderer};
 use crate::error::Result;
 use crate::live::{Changes, LiveScene, MoveEdit, PlaceEdit};
 use crate::records::{CullLayout, InstanceRecord, RecordEdit, instance_records};
@@ -136,7 +137,7 @@ impl Renderer {
             windows,
         };
         let path = (&mut self.path, gpu);
-        self.pose = pose_pass(device, scene, &self.options, path, |s| live.animates(s))?;
+        self.pose = pose_pass::build(device, scene, &self.options, path, |s| live.animates(s))?;
         let bytes = (scene.instances.len() * size_of::<InstanceRecord>()) as u64;
         Ok(SyncStats {
             bytes_uploaded: bytes,
