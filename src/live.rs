@@ -472,22 +472,10 @@ impl LiveScene {
 /// scatter pass reads them.
 pub fn make_edit(scene: &Scene, slot: u32) -> MoveEdit {
     let instance = &scene.instances[slot as usize];
-    let m = instance.world_from_local;
-    let (x, y, z, t) = (
-        m.matrix3.x_axis,
-        m.matrix3.y_axis,
-        m.matrix3.z_axis,
-        m.translation,
-    );
-    let s = scene.world_sphere(instance);
     MoveEdit {
         slot,
-        rows: [
-            [x.x, y.x, z.x, t.x],
-            [x.y, y.y, z.y, t.y],
-            [x.z, y.z, z.z, t.z],
-        ],
-        radius: s.w,
+        rows: crate::scene::affine_rows(&instance.world_from_local),
+        radius: scene.world_sphere(instance).w,
     }
 }
 

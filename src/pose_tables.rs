@@ -19,7 +19,7 @@ use glam::{Affine3A, Vec4};
 use crate::error::{Error, Result};
 use crate::places::Places;
 use crate::posing::{Interpolation, Property};
-use crate::scene::Scene;
+use crate::scene::{Scene, affine_rows};
 
 /// The deepest posed tree the pass walks (a node and its ancestors); deeper trees are
 /// posed on the CPU. Real skeletons are under 30 deep.
@@ -153,7 +153,7 @@ impl PoseTables {
             tables.targets.push(PoseTargetRecord {
                 slot: slot(i.instance),
                 node: i.node,
-                node_from_local: rows(&i.node_from_local),
+                node_from_local: affine_rows(&i.node_from_local),
                 ..target_of(scene, i.instance)
             });
         }
@@ -171,7 +171,7 @@ impl PoseTables {
                 .extend(joints.map(|((&node, ib), b)| SkinJointRecord {
                     node,
                     unused: [0; 3],
-                    inverse_bind: rows(ib),
+                    inverse_bind: affine_rows(ib),
                     bounds: b.to_array(),
                 }));
         }
@@ -212,7 +212,7 @@ impl PoseTables {
                 first_channel: self.channels.len() as u32,
                 channels: channels.len() as u32,
                 unused: 0,
-                root_from: rows(&node.root_from),
+                root_from: affine_rows(&node.root_from),
                 translation: node.rest.translation.extend(0.0).to_array(),
                 rotation: node.rest.rotation.to_array(),
                 scale: node.rest.scale.extend(0.0).to_array(),
@@ -278,7 +278,7 @@ fn target_of(scene: &Scene, instance: u32) -> PoseTargetRecord {
         joints: 0,
         joint_base: 0,
         bounds: bounds.to_array(),
-        node_from_local: rows(&Affine3A::IDENTITY),
+        node_from_local: affine_rows(&Affine3A::IDENTITY),
         orbit: if a.spin == 0.0 {
             0.0
         } else {
@@ -303,19 +303,4 @@ fn check_depth(scene: &Scene) -> Result<()> {
         }
     }
     Ok(())
-}
-
-/// The rows of `m` (`world = rows * vec4(local, 1)`).
-pub fn rows(m: &Affine3A) -> [[f32; 4]; 3] {
-    let (x, y, z, t) = (
-        m.matrix3.x_axis,
-        m.matrix3.y_axis,
-        m.matrix3.z_axis,
-        m.translation,
-    );
-    [
-        [x.x, y.x, z.x, t.x],
-        [x.y, y.y, z.y, t.y],
-        [x.z, y.z, z.z, t.z],
-    ]
 }

@@ -358,9 +358,8 @@ pub fn instance_records(scene: &Scene) -> Vec<InstanceRecord> {
 
 /// The record the GPU reads for `inst`.
 pub fn instance_record(inst: &Instance) -> InstanceRecord {
-    let m = glam::Mat4::from(inst.world_from_local);
     InstanceRecord {
-        world_from_local: [m.row(0).into(), m.row(1).into(), m.row(2).into()],
+        world_from_local: crate::scene::affine_rows(&inst.world_from_local),
         color: pack_unorm4x8(inst.color),
         mesh: inst.mesh,
         spin: inst.animation.spin,

@@ -326,6 +326,22 @@ fn world_sphere_of(meshes: &[Mesh], instance: &Instance) -> Vec4 {
     center.extend(radius + slack)
 }
 
+/// The rows of the 3x4 affine `m` (`world = rows * vec4(local, 1)`), as instance
+/// records, move edits and the pose pass's tables hold a transform.
+pub fn affine_rows(m: &Affine3A) -> [[f32; 4]; 3] {
+    let (x, y, z, t) = (
+        m.matrix3.x_axis,
+        m.matrix3.y_axis,
+        m.matrix3.z_axis,
+        m.translation,
+    );
+    [
+        [x.x, y.x, z.x, t.x],
+        [x.y, y.y, z.y, t.y],
+        [x.z, y.z, z.z, t.z],
+    ]
+}
+
 /// `m` applied to point `p`, row by row, each `x * p.x + y * p.y + z * p.z + t` summed
 /// left to right without fma: the CPU twin of the moves scatter's center
 /// (`wgsl/scatter_moves.wgsl`), so that both make the same world sphere.

@@ -140,7 +140,7 @@ fn random_animated_scene(seed: u64) -> Scene {
 
 /// The rows of `m` as an instance record holds them.
 fn rows(m: &Affine3A) -> [[f32; 4]; 3] {
-    stereocull::pose_tables::rows(m)
+    stereocull::scene::affine_rows(m)
 }
 
 /// Whether two transforms' rows agree within `tolerance` of the larger entry of the
