@@ -9,6 +9,26 @@ use rand_pcg::Pcg64Mcg;
 
 use crate::error::{Error, Result};
 use crate::live::{Handle, LiveScene};
+use crate::renderer::PosingMode;
+use crate::scene::Scene;
+
+/// The live copy of `scene` a run of frames changes on the CPU, with its edit driver:
+/// when `edits` asks for edits, or the scene's animations are posed on the CPU
+/// (`posing`); `None` when nothing changes on the CPU (posed on the GPU, only the time
+/// changes).
+pub fn live_copy(
+    scene: &Scene,
+    edits: &EditArgs,
+    posing: PosingMode,
+) -> Result<Option<(LiveScene, EditDriver)>> {
+    let cpu_posed = posing == PosingMode::Cpu && scene.is_animated();
+    if !(edits.any() || cpu_posed) {
+        return Ok(None);
+    }
+    let live = LiveScene::new(scene.clone());
+    let driver = EditDriver::new(&live, edits)?;
+    Ok(Some((live, driver)))
+}
 
 #[derive(Args, Clone, Copy, Debug, Default)]
 pub struct EditArgs {

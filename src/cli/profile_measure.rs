@@ -9,14 +9,13 @@ use std::time::Instant;
 use clap::Args;
 use indicatif::ProgressBar;
 
-use super::edits::{EditArgs, EditDriver};
+use super::edits::{EditArgs, live_copy};
 use super::occlusion_report::occlusion_report;
 use super::profile_report::{CullOverFloor, Row};
 use super::render::{PassReport, pass_reports};
 use super::{FRAME_SECONDS, Switch};
 use crate::device::Gpu;
 use crate::error::Result;
-use crate::live::LiveScene;
 use crate::profiling::{GpuTimer, percentile};
 use crate::renderer::{
     CoarseMode, CullMode, OcclusionMode, PosingMode, Renderer, RendererOptions, StereoMode,
@@ -178,16 +177,7 @@ pub(super) fn measure(
     let views: Vec<_> = targets.iter().map(|t| t.views()).collect();
     let mut samples = Samples::default();
     let mut copy = PlainCopy::default();
-    // Posed on the GPU, an animated scene needs no live copy: only the time changes.
-    let cpu_posed = posing == PosingMode::Cpu && scene.is_animated();
-    let mut live = match edits.any() || cpu_posed {
-        true => {
-            let live = LiveScene::new(scene.clone());
-            let driver = EditDriver::new(&live, &edits)?;
-            Some((live, driver))
-        }
-        false => None,
-    };
+    let mut live = live_copy(scene, &edits, posing)?;
     for frame in 0..args.warmup + args.frames {
         // The edits themselves are the caller's work: made before the clock starts.
         if let Some((live, driver)) = &mut live {

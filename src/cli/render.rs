@@ -6,7 +6,7 @@ use std::time::Instant;
 use clap::Parser;
 use serde::Serialize;
 
-use super::edits::{EditArgs, EditDriver};
+use super::edits::{EditArgs, EditDriver, live_copy};
 use super::occlusion_report::occlusion_report;
 use super::{SceneArgs, write_json};
 use crate::composite::{CompositeParams, FoveatedComposite, composite_cpu};
@@ -124,18 +124,9 @@ impl Session {
                 list_counts(&counts)
             )));
         }
-        // Posed on the GPU, an animated scene needs no live copy: only the time changes.
-        let cpu_posed = options.posing == PosingMode::Cpu && scene.is_animated();
+        let live = live_copy(&scene, edits, options.posing)?;
         let renderer = Renderer::new(&gpu.device, &scene, &rig, options)?;
         let targets = renderer.create_targets(&gpu.device);
-        let live = match edits.any() || cpu_posed {
-            true => {
-                let live = LiveScene::new(scene.clone());
-                let driver = EditDriver::new(&live, edits)?;
-                Some((live, driver))
-            }
-            false => None,
-        };
         Ok(Session {
             gpu,
             rig,
