@@ -177,7 +177,16 @@ pub struct DisplayContext {
     /// The display's views: 1 mono, 2 stereo, 4 foveated stereo (occlusion tests each
     /// eye's pyramid, whatever the instances per object).
     pub views: u32,
+    /// Pixels a sphere's projected bounds grow by on each side in the occlusion test:
+    /// [`BOUNDS_GROWTH_PX`] for the rounding of the projection, and in a far layer's
+    /// cull also how far its composite may carry a far point from where the eye sees it
+    /// ([`crate::far_layer::FarPlan::composite_reach_px`]).
+    pub occlusion_margin_px: f32,
 }
+
+/// Pixels the projected bounds grow by on each side in the occlusion test, for the
+/// rounding of the projection (errors of about 1e-6 of the pixel coordinates).
+pub const BOUNDS_GROWTH_PX: f32 = 1.0;
 
 /// Views a display context holds: four for foveated stereo.
 pub const MAX_VIEWS: usize = 4;
@@ -185,11 +194,14 @@ pub const MAX_VIEWS: usize = 4;
 impl DisplayContext {
     /// Where the display's blended instances are sorted from: the midpoint of its two
     /// eyes (one order for both, each eye's view of it nearly the same), or its one
-    /// view's position. The GPU's blend pass computes it alike (`wgsl/cull_blend.wgsl`).
+    /// view's position; a far layer's cull sorts from its apex, `position`, whichever
+    /// eyes it holds for the occlusion test. The GPU's blend pass computes it alike
+    /// (`wgsl/cull_blend.wgsl`).
     pub fn sort_origin(&self) -> Vec3 {
-        match self.views >= 2 {
-            true => (self.eye[0].position + self.eye[1].position) * 0.5,
-            false => self.eye[0].position,
+        match (self.split_keep, self.views >= 2) {
+            (2, _) => self.position,
+            (_, true) => (self.eye[0].position + self.eye[1].position) * 0.5,
+            (_, false) => self.eye[0].position,
         }
     }
 
@@ -223,6 +235,7 @@ impl DisplayContext {
             split_distance: 0.0,
             cull_slot: 0,
             views: eyes.len() as u32,
+            occlusion_margin_px: BOUNDS_GROWTH_PX,
         }
     }
 
@@ -285,6 +298,7 @@ impl DisplayContext {
             split_distance: 0.0,
             cull_slot: 0,
             views: 1,
+            occlusion_margin_px: BOUNDS_GROWTH_PX,
         }
     }
 }

@@ -37,6 +37,11 @@ pub struct FarPlan {
     pub view: View,
     /// Texels of the far layer: `SUPERSAMPLE` per pixel of the sharpest eye, across.
     pub size: (u32, u32),
+    /// Pixels the eyes' images of a far point may move when taken from the far layer:
+    /// the threshold the plan was made for.
+    pub threshold_px: f32,
+    /// The most eye pixels per radian of any eye (`f (1 + t^2)` in [`FarPlan::new`]).
+    pub eye_px_per_radian: f32,
 }
 
 impl FarPlan {
@@ -71,6 +76,36 @@ impl FarPlan {
             distance: distance as f32,
             view,
             size: (side(f_x, l + r), side(f_y, u + d)),
+            threshold_px: threshold,
+            eye_px_per_radian: spread as f32,
+        }
+    }
+
+    /// Eye pixels from where an eye sees a far point to the farthest pixel whose
+    /// composite reads it: the threshold, plus a far texel (the reach of the composite's
+    /// filtered read, and of its depth texel) in eye pixels. A far texel spans at most
+    /// `1 / f` radians, `f` its fewer texels per unit of tangent (at least that many
+    /// per radian), which an eye sees across at most `eye_px_per_radian / f` pixels.
+    pub fn composite_reach_px(&self) -> f32 {
+        let [l, r, u, d] = self.view.fov.tangents();
+        let texels = (self.size.0 as f64 / (l + r)).min(self.size.1 as f64 / (u + d));
+        self.threshold_px + (self.eye_px_per_radian as f64 / texels) as f32
+    }
+
+    /// The context of the far layer's cull with occlusion: its frustum, split and one
+    /// instance per object, with `display`'s eyes and pyramids to test against (see
+    /// [`crate::occlusion::Phase::Tested`]), the bounds grown by the composite's reach
+    /// so that a far instance whose removal could change a composited pixel is kept.
+    pub fn tested_context(&self, display: &DisplayContext) -> DisplayContext {
+        let far = self.context(display.cull_slot);
+        DisplayContext {
+            planes: far.planes,
+            position: far.position,
+            instances_per_object: 1,
+            split_keep: far.split_keep,
+            split_distance: far.split_distance,
+            occlusion_margin_px: display.occlusion_margin_px + self.composite_reach_px(),
+            ..*display
         }
     }
 
@@ -104,6 +139,7 @@ impl FarPlan {
             split_distance: self.distance,
             cull_slot,
             views: 1,
+            occlusion_margin_px: crate::contexts::BOUNDS_GROWTH_PX,
         }
     }
 

@@ -144,7 +144,7 @@ fn cull_dumps_follow_the_contract_for_every_preset() {
 /// `cull --displays A,B`: those displays' dumps equal their entries in the full rig's
 /// dump, byte for byte, culled on the GPU and on the CPU, with levels of detail (whose
 /// density the whole rig decides: a side panel alone would pick coarser levels) and the
-/// far layer.
+/// far layer (by the frustum alone: the CPU cull has no occlusion).
 #[test]
 fn a_subset_of_displays_culls_as_the_full_rig() {
     for (rig, subset) in [
@@ -164,6 +164,8 @@ fn a_subset_of_displays_culls_as_the_full_rig() {
                 "on",
                 "--far-layer",
                 "on",
+                "--occlusion",
+                "off",
             ];
             let full = dump(&args);
             let part = dump(&[&args[..], &["--displays", subset]].concat());
@@ -862,9 +864,64 @@ fn render_reports_the_passes_of_each_level() {
     assert_eq!(walls, ["front", "left", "right", "floor", "ceiling"]);
 }
 
+/// With the far layer and occlusion, a display's far layer waits for its pyramids: its
+/// cull and pass run between the late cull and the late draw (which opens with the
+/// composite), and the occlusion report counts the far instances the frustum keeps and
+/// those the pyramids hide.
+#[test]
+fn render_culls_the_far_layer_against_the_pyramids() {
+    let dir = tempfile::tempdir().unwrap();
+    let out = stereocull(&[
+        "render",
+        "--scene",
+        "city:4000",
+        "--rig",
+        "hmd",
+        "--width",
+        "64",
+        "--height",
+        "64",
+        "--far-layer",
+        "on",
+        "--occlusion",
+        "on",
+        "--out",
+        dir.path().to_str().unwrap(),
+    ]);
+    assert!(
+        out.status.success(),
+        "{}",
+        String::from_utf8_lossy(&out.stderr)
+    );
+    let stats: Value =
+        serde_json::from_str(&std::fs::read_to_string(dir.path().join("stats.json")).unwrap())
+            .unwrap();
+    let passes: Vec<&str> = (stats["passes"].as_array().unwrap().iter())
+        .filter(|p| p["level"] == "display")
+        .map(|p| p["name"].as_str().unwrap())
+        .collect();
+    let order = [
+        "cull",
+        "draw",
+        "pyramid",
+        "late_cull",
+        "far_cull",
+        "far_layer",
+        "late_draw",
+    ];
+    assert_eq!(passes, order, "{stats}");
+    let report = &stats["occlusion"][0];
+    let n = |k: &str| report[k].as_u64().unwrap();
+    assert!(
+        n("far_frustum") > 0 && n("far_occluded") <= n("far_frustum"),
+        "{report}"
+    );
+}
+
 /// With the far layer (and shadows and the coarse cull, which change no cull), `cull`
 /// dumps each stereo display's near cull and its far cull (`<name>.far`, one view),
-/// GPU and CPU alike; together they hold what the display sees without it.
+/// GPU and CPU alike (by the frustum alone: the CPU cull has no occlusion); together
+/// they hold what the display sees without it.
 #[test]
 fn cull_dumps_far_layers_alike_on_gpu_and_cpu() {
     let base = [
@@ -877,6 +934,8 @@ fn cull_dumps_far_layers_alike_on_gpu_and_cpu() {
         "64",
         "--height",
         "64",
+        "--occlusion",
+        "off",
     ];
     let with = [
         &base[..],

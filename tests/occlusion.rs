@@ -14,7 +14,8 @@ use stereocull::occlusion::{self, PyramidShape};
 use stereocull::procedural;
 use stereocull::records::CullLayout;
 use stereocull::renderer::{
-    CoarseMode, DisplayTarget, FramePlan, OcclusionMode, Renderer, RendererOptions, StereoMode,
+    CoarseMode, CullView, DisplayTarget, FramePlan, OcclusionMode, Renderer, RendererOptions,
+    StereoMode,
 };
 use stereocull::rig::{Mount, Rig};
 use stereocull::scene::{Animation, Instance, Scene};
@@ -365,7 +366,7 @@ fn assert_dropped_are_hidden(
     for &id in dropped {
         let s = layout.spheres[layout.positions[id as usize] as usize];
         assert!(
-            occlusion::occluded(s, &context.eye, (&pyramid, shape)),
+            occlusion::occluded(s, context, (&pyramid, shape)),
             "{what}: instance {id} dropped though the frame without occlusion shows it"
         );
     }
@@ -542,13 +543,13 @@ fn what_one_eye_sees_around_an_edge_is_drawn() {
         sphere,
         &eyes[0],
         (&pyramid, shape),
-        0
+        (0, occlusion::BOUNDS_GROWTH_PX)
     ));
     assert!(!occlusion::occluded_in_eye(
         sphere,
         &eyes[1],
         (&pyramid, shape),
-        1
+        (1, occlusion::BOUNDS_GROWTH_PX)
     ));
 
     let hidden = scene(-3.0);
@@ -638,7 +639,7 @@ fn a_sphere_any_pixel_shows_is_never_hidden() {
                     let (shown, covered) = depth_images(&mut rng, &hits, shape);
                     let pyramid = occlusion::reduce(&shown, 61, shape);
                     assert!(
-                        !occlusion::occluded_in_eye(sphere, eye, (&pyramid, shape), 0),
+                        !occlusion::occluded_in_eye(sphere, eye, (&pyramid, shape), GROWN),
                         "{preset} display {d} eye {e}: {sphere} hidden though shown"
                     );
                     let inside = (hits.iter())
@@ -650,7 +651,7 @@ fn a_sphere_any_pixel_shows_is_never_hidden() {
                             sphere,
                             eye,
                             (&pyramid, shape),
-                            0,
+                            GROWN,
                         ));
                     }
                 }
@@ -669,6 +670,9 @@ fn a_sphere_any_pixel_shows_is_never_hidden() {
 
 /// A pixel a sphere covers and its depth there.
 type Hit = (u32, u32, f32);
+
+/// Eye 0 with a display's own margin.
+const GROWN: (u32, f32) = (0, occlusion::BOUNDS_GROWTH_PX);
 
 /// A random sphere in front of `eye` whose projection touches its view, and per pixel
 /// its nearest hit's depth where a ray through the pixel's center hits it.
@@ -852,4 +856,139 @@ fn a_newcomer_starts_as_not_drawn() {
         "the newcomer was not drawn late"
     );
     assert!(early.visible.contains(&kept));
+}
+
+/// A yard walled in by eight wall pieces 5 m out, a gap between each two, props inside,
+/// and boxes beyond `far` (1.2 to 4 times it, from the horizon to 35 degrees up): in
+/// every direction the walls hide some far boxes, and the gaps and the sky above the
+/// walls (25 degrees up from the standing point) show others.
+fn walled_yard(center: Vec3, far: f32, seed: u64) -> Scene {
+    let mut rng = Pcg64Mcg::seed_from_u64(seed);
+    let piece = |at: Vec3, half: Vec3, turn: glam::Quat, color: Vec4| Instance {
+        world_from_local: Affine3A::from_scale_rotation_translation(half * 2.0, turn, at),
+        mesh: 0,
+        color,
+        material: None,
+        animation: Animation::NONE,
+    };
+    let grey = Vec4::new(0.6, 0.6, 0.55, 1.0);
+    let mut instances: Vec<Instance> = (0..8)
+        .map(|k| {
+            let a = k as f32 * std::f32::consts::TAU / 8.0;
+            let at =
+                Vec3::new(5.0 * a.sin(), 2.0, -5.0 * a.cos()) + center * Vec3::new(1.0, 0.0, 1.0);
+            piece(
+                at,
+                Vec3::new(1.5, 2.0, 0.1),
+                glam::Quat::from_rotation_y(-a),
+                grey,
+            )
+        })
+        .collect();
+    for _ in 0..300 {
+        let (azimuth, up) = (
+            rng.random_range(0.0..std::f32::consts::TAU),
+            rng.random_range(0.0..0.6f32),
+        );
+        let distance = far * rng.random_range(1.2..4.0);
+        let direction = Vec3::new(
+            azimuth.sin() * up.cos(),
+            up.sin(),
+            -azimuth.cos() * up.cos(),
+        );
+        let color = Vec4::new(rng.random(), rng.random(), rng.random(), 1.0);
+        let half = Vec3::splat(distance * rng.random_range(0.004..0.015));
+        instances.push(piece(
+            center + direction * distance,
+            half,
+            glam::Quat::IDENTITY,
+            color,
+        ));
+    }
+    for _ in 0..40 {
+        let at = Vec3::new(
+            rng.random_range(-3.5..3.5),
+            rng.random_range(0.2..2.0),
+            rng.random_range(-3.5..3.5),
+        );
+        let color = Vec4::new(0.8, rng.random(), 0.2, 1.0);
+        instances.push(piece(at, Vec3::splat(0.15), glam::Quat::IDENTITY, color));
+    }
+    let mut scene = Scene::default();
+    let cube = shapes::cuboid(Vec3::splat(0.5));
+    scene.add_mesh("box", &cube.vertices, &cube.indices);
+    scene.instances = instances;
+    scene
+}
+
+/// With the far layer, a display's far instances are culled against its pyramids too
+/// (after its early draw; the far layer is drawn and composited in the late phase): the
+/// image equals the image without occlusion, exactly (the bounds of a far instance grow
+/// by how far the composite carries a far point, so nothing it would have composited
+/// onto a pixel is dropped), every far instance dropped is hidden in both eyes by the
+/// depth of the frame drawn without occlusion, the GPU's far cull is the CPU twin's
+/// byte for byte given the same pyramids, and along the turns some far instances are
+/// dropped and some kept. Single-sampled and with 4x MSAA.
+#[test]
+fn occlusion_culls_far_instances_hidden_by_near_ones() {
+    let gpu = gpu();
+    let rig = sized("hmd", 96, 80);
+    let center = Vec3::from(rig.viewer.position);
+    let resolved = rig.resolve().unwrap();
+    let far = stereocull::far_layer::FarPlan::new(&resolved.displays[0], [96, 80], 0.5).distance;
+    let scene = walled_yard(center, far, 9);
+    let layout = CullLayout::new(&scene);
+    for samples in [1, 4] {
+        let made = |occlusion| RendererOptions {
+            far_layer: true,
+            sample_count: samples,
+            ..options(occlusion)
+        };
+        let mut on = Session::new(&gpu, &scene, &rig, made(OcclusionMode::On));
+        let mut off = Session::new(&gpu, &scene, &rig, made(OcclusionMode::Off));
+        let (mut dropped_far, mut kept_far) = (0, 0);
+        let mut counted = Counted::default();
+        for (step, yaw) in [0.0, 10.0, 100.0, 110.0, 200.0, 210.0]
+            .into_iter()
+            .enumerate()
+        {
+            let position = (center + Vec3::new(0.3 * step as f32, 0.0, -0.2 * step as f32)).into();
+            let pose = at(&rig, position, yaw);
+            let what = format!("occlusion-far-{samples}x-step{step}");
+            compare_frames(&gpu, (&mut on, &mut off), &pose, &what, &mut counted);
+            let diagnostics = on.renderer.diagnostics(&gpu.device, &gpu.queue);
+            let tested = diagnostics.far_cull(0).unwrap().expect("a far layer");
+            let (shape, _) = diagnostics.visibility(0).unwrap().unwrap();
+            let pyramid = diagnostics.pyramid().unwrap().unwrap();
+            let plan = on.renderer.plan(&pose, 0.0).unwrap();
+            let job = (plan.culls.iter())
+                .find(|c| c.view == CullView::Far(0))
+                .unwrap()
+                .job;
+            let context = plan.far[0].unwrap().tested_context(&plan.displays[0]);
+            let twin = occlusion::cull_tested(
+                &layout,
+                (&job, &context),
+                &plan.cull.lod,
+                (&pyramid, shape),
+            );
+            assert_eq!(tested, twin, "{what}: the far cull against the pyramids");
+            let whole = (off.renderer.diagnostics(&gpu.device, &gpu.queue))
+                .far_cull(0)
+                .unwrap()
+                .unwrap();
+            let dropped: Vec<u32> = (whole.visible.iter().copied())
+                .filter(|i| !tested.visible.contains(i))
+                .collect();
+            assert_eq!(whole.visible.len(), tested.visible.len() + dropped.len());
+            assert_dropped_are_hidden(&gpu, (&off, &pose, 0), &dropped, &what);
+            dropped_far += dropped.len();
+            kept_far += tested.visible.len();
+        }
+        eprintln!("dropped {dropped_far}, kept {kept_far}");
+        assert!(
+            dropped_far > 0 && kept_far > 0,
+            "dropped {dropped_far}, kept {kept_far}"
+        );
+    }
 }

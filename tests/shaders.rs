@@ -330,6 +330,7 @@ fn contexts_match_wgsl() {
         split_distance: 13.0,
         cull_slot: 3,
         views: 4,
+        occlusion_margin_px: 14.5,
     };
     let bytes = uniform_bytes(&d);
     check_uniform(
@@ -350,6 +351,7 @@ fn contexts_match_wgsl() {
             ("split_distance", 13.0),
             ("cull_slot", f32::from_bits(3)),
             ("views", f32::from_bits(4)),
+            ("occlusion_margin_px", 14.5),
         ],
     );
     // Each eye sits one EyeContext span after the one before (the fourth, a foveated

@@ -35,8 +35,12 @@ fn blend_main(@builtin(local_invocation_index) local: u32) {
     }
 }
 
-// Blended instances sort from the midpoint of the display's eyes.
+// Blended instances sort from the midpoint of the display's eyes, or a far layer's
+// from its apex (DisplayContext::sort_origin).
 fn sort_origin() -> vec3<f32> {
+    if (display.split_keep == 2u) {
+        return display.position;
+    }
     let both = (display.eye[0].position + display.eye[1].position) * 0.5;
     return select(display.eye[0].position, both, display.views >= 2u);
 }

@@ -28,6 +28,12 @@ pub struct OcclusionReport {
     /// alone, or of the right eye alone, would drop (what naive stereo occlusion would
     /// get wrong).
     pub one_eye_drops: Option<[u32; 2]>,
+    /// With the far layer: the far instances its frustum keeps, and of those how many
+    /// the display's pyramids hide (not drawn into the far layer).
+    #[serde(skip_serializing_if = "Option::is_none")]
+    pub far_frustum: Option<u32>,
+    #[serde(skip_serializing_if = "Option::is_none")]
+    pub far_occluded: Option<u32>,
 }
 
 /// Per display of `rig`, what occlusion did in `renderer`'s last frame (at `time`,
@@ -46,13 +52,11 @@ pub fn occlusion_report(
     let plan = renderer.plan(rig, time)?;
     let layout = CullLayout::new(scene);
     let culled = cpu::cull_frame(&layout, &plan.jobs(), &plan.cull);
-    let frustum = |i: usize| {
-        let at = plan
-            .culls
-            .iter()
-            .position(|c| c.view == CullView::Display(i));
+    let kept_by = |view: CullView| {
+        let at = plan.culls.iter().position(|c| c.view == view);
         at.map(|k| &culled[k])
     };
+    let frustum = |i: usize| kept_by(CullView::Display(i));
     let last = counts.iter().rposition(Option::is_some);
     let mut reports = Vec::new();
     for (i, count) in counts.iter().enumerate() {
@@ -66,10 +70,11 @@ pub fn occlusion_report(
             diagnostics.pyramid()?,
         ) {
             (true, Some((shape, _)), Some(pyramid)) => {
-                let eyes = &plan.displays[i].eye;
+                let display = &plan.displays[i];
                 let hidden = |id: u32, e: u32| {
                     let s = layout.spheres[layout.positions[id as usize] as usize];
-                    occluded_in_eye(s, &eyes[e as usize], (&pyramid, shape), e)
+                    let eye = &display.eye[e as usize];
+                    occluded_in_eye(s, eye, (&pyramid, shape), (e, display.occlusion_margin_px))
                 };
                 let drops = |e: u32| {
                     let other = 1 - e;
@@ -84,6 +89,8 @@ pub fn occlusion_report(
             _ => None,
         };
         let frustum = kept.visible.len() as u32;
+        let far_frustum = kept_by(CullView::Far(i)).map(|f| f.visible.len() as u32);
+        let far_drawn = diagnostics.far_cull(i)?.map(|f| f.visible.len() as u32);
         reports.push(Some(OcclusionReport {
             display: rig.displays[i].name.clone(),
             frustum,
@@ -91,6 +98,8 @@ pub fn occlusion_report(
             late: count.late,
             occluded: frustum.saturating_sub(count.early + count.late),
             one_eye_drops: drops,
+            far_frustum,
+            far_occluded: far_frustum.zip(far_drawn).map(|(f, d)| f.saturating_sub(d)),
         }));
     }
     Ok(reports)

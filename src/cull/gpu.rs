@@ -27,7 +27,7 @@ pub struct GpuCuller {
     coarse: Option<CoarsePipelines>,
     /// The floor kernel, when asked for (`profile`).
     floor: Option<wgpu::ComputePipeline>,
-    /// With occlusion: the cull pass's early and late phases, over everything and (with
+    /// With occlusion: the cull pass's early and late (and tested) phases, over everything and (with
     /// the coarse cull) over candidates.
     phases: Vec<((bool, Phase), wgpu::ComputePipeline)>,
     /// With blended bins: the blend pass over everything and (with the coarse cull)
@@ -44,6 +44,8 @@ pub struct CullerFeatures {
     pub floor: bool,
     /// Two-phase occlusion culling.
     pub occlusion: bool,
+    /// With occlusion, the far layers' cull tested against their displays' pyramids.
+    pub tested: bool,
     /// Blended material bins: the blend pass after the display passes.
     pub blend: bool,
 }
@@ -66,6 +68,7 @@ impl GpuCuller {
             coarse,
             floor,
             occlusion,
+            tested,
             blend,
         } = features;
         let layout = bind_group_layout(device, "stereocull.cull", &CULL_BINDINGS, &windows);
@@ -110,8 +113,8 @@ impl GpuCuller {
         };
         let over = [Some(false), features.coarse.then_some(true)];
         let phases = (over.into_iter().flatten())
-            .flat_map(|c| [Phase::Early, Phase::Late].map(|p| (c, p)))
-            .filter(|_| occlusion)
+            .flat_map(|c| [Phase::Early, Phase::Late, Phase::Tested].map(|p| (c, p)))
+            .filter(|(_, p)| occlusion && (tested || *p != Phase::Tested))
             .map(|(c, p)| phased(c, p))
             .collect();
         let blend = (over.into_iter().flatten())

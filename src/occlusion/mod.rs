@@ -129,9 +129,7 @@ fn farthest4(d: [f32; 4]) -> f32 {
     d[0].max(d[1]).max(d[2].max(d[3]))
 }
 
-/// Pixels the projected bounds grow by on each side, for the rounding of the
-/// projection (errors of about 1e-6 of the pixel coordinates).
-pub const BOUNDS_GROWTH_PX: f32 = 1.0;
+pub use crate::contexts::BOUNDS_GROWTH_PX;
 /// How much a sphere's radius grows per unit of the magnitudes its view-space center is
 /// summed from (see `grown_radius`): each coordinate of the center is three products
 /// and three sums of a rotation's rows, rounded at most six times by 2^-24 of those
@@ -143,22 +141,24 @@ pub const DEPTH_SLACK: f32 = 1.0 / 262144.0;
 pub const DEPTH_MARGIN: f32 = 1.0 / 1048576.0;
 
 /// Whether sphere `s` (world space) is hidden from eye `e` of a display whose context
-/// holds `eye`, by that eye's pyramid in `pyramid` laid out as `shape`.
+/// holds `eye`, by that eye's pyramid in `pyramid` laid out as `shape`, its projected
+/// bounds grown by `margin` pixels each way (the context's `occlusion_margin_px`,
+/// [`BOUNDS_GROWTH_PX`] for a display's own cull).
 pub fn occluded_in_eye(
     s: Vec4,
     eye: &EyeContext,
     (pyramid, shape): (&[f32], PyramidShape),
-    e: u32,
+    (e, margin): (u32, f32),
 ) -> bool {
     let Some(bounds) = project(s, &eye.view_from_world, &eye.clip_from_view) else {
         return false;
     };
     let (w, h) = (shape.eye.x as f32, shape.eye.y as f32);
     // Pixel rectangle, y down, grown for rounding.
-    let px0 = (bounds.x * 0.5 + 0.5) * w - BOUNDS_GROWTH_PX;
-    let px1 = (bounds.z * 0.5 + 0.5) * w + BOUNDS_GROWTH_PX;
-    let py0 = (0.5 - bounds.w * 0.5) * h - BOUNDS_GROWTH_PX;
-    let py1 = (0.5 - bounds.y * 0.5) * h + BOUNDS_GROWTH_PX;
+    let px0 = (bounds.x * 0.5 + 0.5) * w - margin;
+    let px1 = (bounds.z * 0.5 + 0.5) * w + margin;
+    let py0 = (0.5 - bounds.w * 0.5) * h - margin;
+    let py1 = (0.5 - bounds.y * 0.5) * h + margin;
     if px1 < 0.0 || py1 < 0.0 || px0 >= w || py0 >= h {
         // Outside this eye's view: it cannot see the sphere.
         return true;
@@ -181,10 +181,17 @@ pub fn occluded_in_eye(
     bounds_depth(s, &eye.view_from_world, &eye.clip_from_view) > farthest + DEPTH_MARGIN
 }
 
-/// Whether sphere `s` is hidden from every one of a display's first `eyes` views: the
-/// stereo rule (an instance one eye sees around an edge is kept).
-pub fn occluded(s: Vec4, eye: &[EyeContext], (pyramid, shape): (&[f32], PyramidShape)) -> bool {
-    (0..shape.eyes).all(|e| occluded_in_eye(s, &eye[e as usize], (pyramid, shape), e))
+/// Whether sphere `s` is hidden from every eye of the display whose context (or a far
+/// layer's tested context) is `display`: the stereo rule (an instance one eye sees
+/// around an edge is kept).
+pub fn occluded(
+    s: Vec4,
+    display: &DisplayContext,
+    (pyramid, shape): (&[f32], PyramidShape),
+) -> bool {
+    let margin = display.occlusion_margin_px;
+    (0..shape.eyes)
+        .all(|e| occluded_in_eye(s, &display.eye[e as usize], (pyramid, shape), (e, margin)))
 }
 
 /// The finest level where pixels `lo..=hi` span at most two texels per axis (the last
@@ -304,11 +311,11 @@ pub fn cull_phases(
         let mut bits = 0u32;
         for (i, &s) in spheres.iter().enumerate() {
             let k = first + i;
-            if !(sphere_in_planes(&job.planes, s) && job.split.is_none_or(|split| split.keeps(s))) {
+            if !in_view(job, s) {
                 continue;
             }
             let was = drawn[k / span] >> (k % span) & 1 == 1;
-            let hidden = occluded(s, &display.eye, pyramid);
+            let hidden = occluded(s, display, pyramid);
             let mark = |mask: &mut [u64]| mask[k / 64] |= 1 << (k % 64);
             match (was, hidden) {
                 (true, _) => mark(&mut early),
@@ -326,6 +333,31 @@ pub fn cull_phases(
         late: cpu::cull_masked(layout, &late, lod, v),
         seen,
     }
+}
+
+/// A far layer's cull with occlusion ([`Phase::Tested`]): what its frustum and split
+/// keep (`job`) and its display's pyramids do not hide, tested with `context`
+/// ([`crate::far_layer::FarPlan::tested_context`]: the display's eyes, the far layer's
+/// margin). The twin of the GPU's tested cull pass.
+pub fn cull_tested(
+    layout: &CullLayout,
+    (job, context): (&CullJob, &DisplayContext),
+    lod: &FrameLod,
+    pyramid: (&[f32], PyramidShape),
+) -> CullOutput {
+    let mut kept = vec![0u64; layout.spheres.len().div_ceil(64)];
+    for (k, &s) in layout.spheres.iter().enumerate() {
+        if in_view(job, s) && !occluded(s, context, pyramid) {
+            kept[k / 64] |= 1 << (k % 64);
+        }
+    }
+    let v = (job.instances_per_object, job.sort_origin);
+    cpu::cull_masked(layout, &kept, lod, v)
+}
+
+/// Whether `job`'s frustum and split keep sphere `s`.
+fn in_view(job: &CullJob, s: Vec4) -> bool {
+    sphere_in_planes(&job.planes, s) && job.split.is_none_or(|split| split.keeps(s))
 }
 
 #[cfg(test)]

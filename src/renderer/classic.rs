@@ -92,6 +92,7 @@ impl ClassicPath {
             coarse_slots: 0,
             floor: false,
             occlusion: Default::default(),
+            tested: false,
         };
         let culler = Culler::new(device, options.cull, layout, shape, windows);
         let draw_scene = DrawScene::new(device, &drawer, scene, slots)?;

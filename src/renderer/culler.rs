@@ -56,6 +56,8 @@ pub(super) struct CullShape {
     pub coarse_slots: u32,
     pub floor: bool,
     pub occlusion: OcclusionRoom,
+    /// With occlusion, whether far layers test against their displays' pyramids.
+    pub tested: bool,
 }
 
 /// One view's cull outputs (per the cull contract) and, on the GPU, its bindings.
@@ -87,6 +89,7 @@ impl Culler {
                     coarse: shape.coarse_slots > 0,
                     floor: shape.floor,
                     occlusion: shape.occlusion.displays > 0,
+                    tested: shape.tested,
                     blend: layout.bins.first_blend_bin() != u32::MAX,
                 };
                 let culler = GpuCuller::new(device, features, windows);

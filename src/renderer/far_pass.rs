@@ -7,11 +7,13 @@ use super::frame::{CullView, FramePlan};
 use super::passes::{PassRecord, Recording, opener, render_pass};
 use super::view_pass::ViewPass;
 use crate::bins::Bin;
+use crate::contexts::DisplayContext;
 use crate::draw::{
     BinPipelines, CLEAR_COLOR, DEPTH_FORMAT, DrawScene, Drawer, Drawing, NO_OWN_PIPELINES,
     TargetFormat, cleared_depth,
 };
 use crate::far_layer::FarPlan;
+use crate::occlusion::Phase;
 use crate::shaders::{DrawKey, Shaders, far_composite_source};
 use wgpu_profiler::GpuProfilerQuery;
 
@@ -121,22 +123,21 @@ impl FarLayers {
         }
     }
 
-    /// Records `far`'s cull (on the GPU: over its display's blocks with the coarse cull)
-    /// and its far layer pass, timed inside `display`. Returns (dispatches, draw calls).
+    /// Records `far`'s cull in `phase` (on the GPU: over its display's blocks with the
+    /// coarse cull; [`Phase::Tested`] after its display's pyramids) and its far layer
+    /// pass, timed inside `display`. Returns (dispatches, draw calls).
     pub(super) fn encode(
         &self,
         encoder: &mut wgpu::CommandEncoder,
-        far: &FarDisplay,
-        scene: &DrawScene,
-        culler: &Culler,
+        (far, phase): (&FarDisplay, Phase),
+        (scene, culler): (&DrawScene, &Culler),
         Recording { timer, log }: Recording,
         display: &Option<GpuProfilerQuery>,
     ) -> (u32, u32) {
         let index = far.index;
         let what = (&mut *log, PassRecord::display("far_cull", index));
-        let dispatches = far
-            .view
-            .encode_cull(encoder, culler, (timer, display), what);
+        let culling = (culler, phase);
+        let dispatches = (far.view).encode_cull_in(encoder, culling, (timer, display), what);
         let begin = opener(|encoder, writes| {
             encoder
                 .begin_render_pass(&wgpu::RenderPassDescriptor {
@@ -176,8 +177,8 @@ impl FarLayers {
         }
     }
 
-    /// The composite into the display's pass, before its near geometry: one draw, one
-    /// instance per eye.
+    /// The composite into the display's pass, before its near geometry (with occlusion,
+    /// before what its late phase draws): one draw, one instance per eye.
     pub(super) fn composite(&self, pass: &mut wgpu::RenderPass, far: &FarDisplay) -> u32 {
         pass.set_pipeline(&self.composite);
         pass.set_bind_group(0, &far.composite_bind_group, &[]);
@@ -188,15 +189,23 @@ impl FarLayers {
 
 impl FarDisplay {
     /// Writes this frame's far context for `plan` (at the layer's fixed size, over the
-    /// coarse cull's `slot`, its display's) and the culler's far cull. Returns the bytes
+    /// coarse cull's `slot`, its display's), with occlusion the context its cull tests
+    /// with (paired with `display`'s), and the culler's far cull. Returns the bytes
     /// written.
-    pub(super) fn prepare(&self, queue: &wgpu::Queue, plan: &FarPlan, culler: &Culler) -> u64 {
+    pub(super) fn prepare(
+        &self,
+        queue: &wgpu::Queue,
+        (plan, display): (&FarPlan, &DisplayContext),
+        culler: &Culler,
+    ) -> u64 {
         let sized = FarPlan {
             size: self.size,
             ..*plan
         };
         let slot = self.index as u32;
+        let tested = sized.tested_context(display);
         self.view.prepare(queue, &sized.context(slot), culler)
+            + self.view.prepare_cull_context(queue, &tested)
     }
 }
 
@@ -254,8 +263,10 @@ fn composite_layout(device: &wgpu::Device) -> wgpu::BindGroupLayout {
     })
 }
 
-/// Writes color and the far points' depth as each eye sees them (depth always passes:
-/// the composite opens the pass), at the display's sample count.
+/// Writes color and the far points' depth as each eye sees them where nothing drawn
+/// before is nearer, at the display's sample count. Opening the pass (on a cleared
+/// depth, which every depth passes) it wins where near geometry drawn next ties it;
+/// drawn after a display's early phase, it wins those ties too: the same image.
 fn composite_pipeline(
     device: &wgpu::Device,
     layout: &wgpu::BindGroupLayout,
@@ -280,7 +291,7 @@ fn composite_pipeline(
         depth_stencil: Some(wgpu::DepthStencilState {
             format: format.depth,
             depth_write_enabled: Some(true),
-            depth_compare: Some(wgpu::CompareFunction::Always),
+            depth_compare: Some(wgpu::CompareFunction::LessEqual),
             stencil: Default::default(),
             bias: Default::default(),
         }),
@@ -311,26 +322,25 @@ pub(super) struct Far {
 
 impl Far {
     /// Far layers for the stereo displays of `plan` (the rig as made, which sizes
-    /// them), each composited into the display whose context is `contexts[i]`, culled
-    /// by `culler` and drawn from `scene` with the frame context `frame`.
+    /// them), each composited into the display whose context is `contexts[i]` (and,
+    /// where `tested[i]`, culled against its pyramids), culled by `culler` and drawn
+    /// from `scene` with the frame context `frame`.
     pub(super) fn new(
         device: &wgpu::Device,
-        layers: FarLayers,
-        plan: &FramePlan,
-        scene: &DrawScene,
-        frame: &wgpu::Buffer,
-        contexts: &[&wgpu::Buffer],
+        (layers, plan): (FarLayers, &FramePlan),
+        (scene, frame): (&DrawScene, &wgpu::Buffer),
+        (contexts, tested): (&[&wgpu::Buffer], &[bool]),
         culler: &Culler,
     ) -> Far {
-        let displays = plan
-            .far
-            .iter()
-            .zip(contexts)
+        let displays = (plan.far.iter().zip(contexts).zip(tested))
             .enumerate()
-            .map(|(i, (far, context))| {
+            .map(|(i, ((far, context), &tested))| {
                 let far = far.as_ref()?;
                 let drawing = layers.drawing(scene);
-                let view = ViewPass::new(device, drawing, frame, culler, CullView::Far(i));
+                let view = match tested {
+                    true => ViewPass::tested(device, drawing, frame, culler, CullView::Far(i)),
+                    false => ViewPass::new(device, drawing, frame, culler, CullView::Far(i)),
+                };
                 Some(layers.display(device, i, view, context, far))
             })
             .collect();
@@ -350,11 +360,9 @@ impl Far {
         culler: &Culler,
     ) -> u64 {
         self.distances = plan.far.iter().map(|p| p.map(|p| p.distance)).collect();
-        self.displays
-            .iter()
-            .zip(&plan.far)
-            .filter_map(|(far, plan)| Some((far.as_ref()?, plan.as_ref()?)))
-            .map(|(far, plan)| far.prepare(queue, plan, culler))
+        (self.displays.iter().zip(&plan.far).zip(&plan.displays))
+            .filter_map(|((far, plan), display)| Some((far.as_ref()?, plan.as_ref()?, display)))
+            .map(|(far, plan, display)| far.prepare(queue, (plan, display), culler))
             .sum()
     }
 }

@@ -85,6 +85,7 @@ impl IndirectPath {
             coarse_slots,
             floor: options.cull_floor,
             occlusion,
+            tested: options.far_layer && occlusion.displays > 0,
         };
         let kinds = layout.bins.kinds.clone();
         let culler = Culler::new(device, options.cull, layout, shape, windows);
@@ -112,7 +113,9 @@ impl IndirectPath {
         let far = options.far_layer.then(|| {
             let layers = FarLayers::new(device, (target, &kinds), shaders, windows);
             let contexts: Vec<&wgpu::Buffer> = displays.iter().map(|d| d.view.context()).collect();
-            Far::new(device, layers, plan, &draw_scene, frame, &contexts, &culler)
+            let tested: Vec<bool> = displays.iter().map(|d| d.late.is_some()).collect();
+            let scene = (&draw_scene, frame);
+            Far::new(device, (layers, plan), scene, (&contexts, &tested), &culler)
         });
         Ok(IndirectPath {
             culler,
@@ -187,6 +190,8 @@ impl IndirectPath {
         let culled = self.encode_cull(encoder, (index, false), (timer, display), log);
         let multiview = self.displays[index].key.multiview_mask();
         let what = (&mut *log, PassRecord::display("draw", index));
+        // With occlusion the far layer is drawn and composited in the late phase.
+        let composite = self.displays[index].late.is_none();
         let draw_calls = draw_pass(
             encoder,
             target,
@@ -194,7 +199,7 @@ impl IndirectPath {
             multiview,
             (timer, display),
             what,
-            |pass| self.draw(pass, index),
+            |pass| self.draw_views(pass, index, composite),
         );
         let late = self.encode_late(encoder, (index, target), (timer, display), log);
         FrameStats {
@@ -204,12 +209,14 @@ impl IndirectPath {
         }
     }
 
-    /// With occlusion, display `index`'s late phase after its early draw into `target`.
+    /// With occlusion, display `index`'s late phase after its early draw into `target`:
+    /// the pyramids and the late cull, then with a far layer its cull against those
+    /// pyramids and its pass, then the late draw (opening with the far composite).
     fn encode_late(
         &self,
         encoder: &mut wgpu::CommandEncoder,
         (index, target): (usize, &TargetViews),
-        timing: Timing,
+        (timer, display): Timing,
         log: &mut Vec<PassRecord>,
     ) -> FrameStats {
         let state = &self.displays[index];
@@ -226,7 +233,28 @@ impl IndirectPath {
             context: state.view.context(),
             target,
         };
-        late.encode(encoder, inputs, timing, log)
+        let mut stats = late.encode_cull(encoder, &inputs, (&mut *timer, display), log);
+        let far = self
+            .far
+            .as_ref()
+            .and_then(|f| Some((f, f.displays[index].as_ref()?)));
+        if let Some((far, layer)) = far {
+            let recording = Recording {
+                timer: &mut *timer,
+                log: &mut *log,
+            };
+            let culling = (&self.draw_scene, &self.culler);
+            let (dispatches, draw_calls) =
+                (far.layers).encode(encoder, (layer, Phase::Tested), culling, recording, display);
+            stats.dispatches += dispatches;
+            stats.draw_calls += draw_calls;
+        }
+        let composite = |pass: &mut wgpu::RenderPass| match far {
+            Some((far, layer)) => far.layers.composite(pass, layer),
+            None => 0,
+        };
+        stats.draw_calls += late.encode_draw(encoder, &inputs, composite, (timer, display), log);
+        stats
     }
 
     /// Whether each display with occlusion can read its depth target into its pyramids.
@@ -269,13 +297,18 @@ impl IndirectPath {
             let what = (&mut *log, PassRecord::display("inset_cull", index));
             stats.dispatches += inset.encode_cull(encoder, &self.culler, (timer, display), what);
         }
-        if let Some((far, Some(layer))) = self.far.as_ref().map(|f| (f, &f.displays[index])) {
+        let far = self
+            .far
+            .as_ref()
+            .and_then(|f| Some((f, f.displays[index].as_ref()?)));
+        // With occlusion in the renderer's passes, the far layer waits for the pyramids.
+        if let Some((far, layer)) = far.filter(|_| one_pass || state.late.is_none()) {
             let recording = Recording { timer, log };
-            let (dispatches, draw_calls) = far.layers.encode(
+            let culling = (&self.draw_scene, &self.culler);
+            let (dispatches, draw_calls) = (far.layers).encode(
                 encoder,
-                layer,
-                &self.draw_scene,
-                &self.culler,
+                (layer, Phase::Frustum),
+                culling,
                 recording,
                 display,
             );
@@ -329,9 +362,14 @@ impl IndirectPath {
     /// With a far layer, its composite goes first (one more draw call); with an inset
     /// cull, the inset pair's multi-draw follows (one more).
     pub(super) fn draw(&self, pass: &mut wgpu::RenderPass, index: usize) -> u32 {
+        self.draw_views(pass, index, true)
+    }
+
+    /// [`IndirectPath::draw`], with the far composite only where `composite`.
+    fn draw_views(&self, pass: &mut wgpu::RenderPass, index: usize, composite: bool) -> u32 {
         let state = &self.displays[index];
         let composite = match self.far.as_ref().map(|f| (f, &f.displays[index])) {
-            Some((far, Some(layer))) => far.layers.composite(pass, layer),
+            Some((far, Some(layer))) if composite => far.layers.composite(pass, layer),
             _ => 0,
         };
         let with = BinPipelines::Draw(state.key, &state.own);

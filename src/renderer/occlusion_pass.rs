@@ -107,63 +107,60 @@ pub(super) struct LateInputs<'a> {
 }
 
 impl LatePhase {
-    /// The display's second phase after its early draw: the pyramids of the early
-    /// depth, the late cull, and a draw pass that keeps what the early one drew.
-    pub(super) fn encode(
+    /// The display's second phase after its early draw, up to its draw: the pyramids of
+    /// the early depth and the late cull.
+    pub(super) fn encode_cull(
         &self,
         encoder: &mut wgpu::CommandEncoder,
-        inputs: LateInputs,
+        inputs: &LateInputs,
         (timer, display): Timing,
         log: &mut Vec<PassRecord>,
     ) -> FrameStats {
-        let LateInputs {
-            culler,
-            drawing,
-            pyramids,
-            index,
-            key,
-            own,
-            context,
-            target,
-        } = inputs;
-        let Some((buffer, _, offset)) = culler.occlusion() else {
+        let Some((buffer, _, offset)) = inputs.culler.occlusion() else {
             return FrameStats::default();
         };
-        let pyramid = match (key.multiview, &pyramids.layered) {
+        let pyramids = inputs.pyramids;
+        let pyramid = match (inputs.key.multiview, &pyramids.layered) {
             (true, Some(layered)) => layered,
             _ => &pyramids.side_by_side,
         };
-        let group = self.bind_group(target.depth, |depth| {
+        let group = self.bind_group(inputs.target.depth, |depth| {
             let texels = wgpu::BufferBinding {
                 buffer,
                 offset,
                 size: std::num::NonZeroU64::new(4 * self.shape.len() as u64),
             };
-            pyramid.bind_group(&pyramids.device, context, texels, depth)
+            pyramid.bind_group(&pyramids.device, inputs.context, texels, depth)
         });
         let mut dispatches = 0;
-        let what = (&mut *log, PassRecord::display("pyramid", index));
+        let what = (&mut *log, PassRecord::display("pyramid", inputs.index));
         compute_pass(encoder, (&mut *timer, display), what, |pass| {
             dispatches += pyramid.encode(pass, &group, self.shape);
         });
-        let what = (&mut *log, PassRecord::display("late_cull", index));
-        dispatches += (self.view).encode_cull(encoder, culler, (&mut *timer, display), what);
-        let what = (log, PassRecord::display("late_draw", index));
-        let mask = key.multiview_mask();
-        let draw_calls = draw_pass(
-            encoder,
-            target,
-            false,
-            mask,
-            (timer, display),
-            what,
-            |pass| self.view.draw(pass, drawing, BinPipelines::Draw(key, own)),
-        );
+        let what = (log, PassRecord::display("late_cull", inputs.index));
+        dispatches += (self.view).encode_cull(encoder, inputs.culler, (timer, display), what);
         FrameStats {
-            draw_calls,
             dispatches,
             ..FrameStats::default()
         }
+    }
+
+    /// The late draw: a pass that keeps what the early one drew, opening with what
+    /// `first` draws (a far layer's composite). Returns the draw calls.
+    pub(super) fn encode_draw(
+        &self,
+        encoder: &mut wgpu::CommandEncoder,
+        inputs: &LateInputs,
+        first: impl FnOnce(&mut wgpu::RenderPass) -> u32,
+        timing: Timing,
+        log: &mut Vec<PassRecord>,
+    ) -> u32 {
+        let what = (log, PassRecord::display("late_draw", inputs.index));
+        let mask = inputs.key.multiview_mask();
+        let with = BinPipelines::Draw(inputs.key, inputs.own);
+        draw_pass(encoder, inputs.target, false, mask, timing, what, |pass| {
+            first(pass) + self.view.draw(pass, inputs.drawing, with)
+        })
     }
 }
 

@@ -202,11 +202,11 @@ impl RendererOptions {
 
     /// Whether a display of `views` views and `pixels` pixels (all views) culls by
     /// occlusion in a scene of `triangles` triangles (instances at their finest level):
-    /// on, or auto and at least a triangle a pixel; on the GPU, in `instanced` mode,
-    /// one or two views (a foveated display's insets see through gaps its outer views'
-    /// pixels miss), no far layer (not composed yet), in `instanced` mode or in
-    /// `multiview` without MSAA (a pyramid per layer; WebGPU has no multisampled array
-    /// textures to read).
+    /// on, or auto and at least a triangle a pixel; on the GPU, one or two views (a
+    /// foveated display's insets see through gaps its outer views' pixels miss), in
+    /// `instanced` mode or in `multiview` without MSAA (a pyramid per layer; WebGPU has
+    /// no multisampled array textures to read). With the far layer, the display's far
+    /// instances are tested against its pyramids too.
     pub fn occludes(&self, views: usize, (pixels, triangles): (u64, u64)) -> bool {
         let asked = match self.occlusion {
             OcclusionMode::On => true,
@@ -219,7 +219,7 @@ impl RendererOptions {
             StereoMode::Multiview => self.sample_count == 1,
             _ => false,
         };
-        asked && self.cull == CullMode::Gpu && mode && views <= 2 && !self.far_layer
+        asked && self.cull == CullMode::Gpu && mode && views <= 2
     }
 
     /// The attachments the draw pipelines are built for.

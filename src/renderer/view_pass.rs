@@ -17,6 +17,9 @@ use crate::records::uniform_bytes;
 /// The view's context, its cull and bindings.
 pub(super) struct ViewPass {
     context: wgpu::Buffer,
+    /// A context of its own for the cull, where the cull tests against another view's
+    /// pyramids (a far layer's, [`Phase::Tested`]); else the cull reads `context`.
+    cull_context: Option<wgpu::Buffer>,
     cull: ViewCull,
     draw_bind_group: wgpu::BindGroup,
     /// The material bins' ranges of the draws.
@@ -55,6 +58,38 @@ impl ViewPass {
         context: wgpu::Buffer,
     ) -> ViewPass {
         let cull = culler.view(device, view, [frame, &context]);
+        ViewPass::bound(device, drawing, frame, culler, (context, None, cull))
+    }
+
+    /// `view` culled in [`Phase::Tested`]: against its display's pyramids, with a cull
+    /// context of its own ([`crate::far_layer::FarPlan::tested_context`]) beside the
+    /// context it is drawn with.
+    pub(super) fn tested(
+        device: &wgpu::Device,
+        drawing: Drawing,
+        frame: &wgpu::Buffer,
+        culler: &Culler,
+        view: CullView,
+    ) -> ViewPass {
+        let cull_context = context_buffer(device);
+        let cull = culler.view(device, (view, Phase::Tested), [frame, &cull_context]);
+        let context = context_buffer(device);
+        ViewPass::bound(
+            device,
+            drawing,
+            frame,
+            culler,
+            (context, Some(cull_context), cull),
+        )
+    }
+
+    fn bound(
+        device: &wgpu::Device,
+        drawing: Drawing,
+        frame: &wgpu::Buffer,
+        culler: &Culler,
+        (context, cull_context, cull): (wgpu::Buffer, Option<wgpu::Buffer>, ViewCull),
+    ) -> ViewPass {
         ViewPass {
             draw_bind_group: drawing.drawer.bind_group(
                 device,
@@ -63,6 +98,7 @@ impl ViewPass {
                 &cull.targets.visible,
             ),
             context,
+            cull_context,
             cull,
             bins: culler.bins().to_vec(),
         }
@@ -94,6 +130,19 @@ impl ViewPass {
         write(queue, &self.context, &uniform_bytes(context)) + culler.upload(queue, &self.cull)
     }
 
+    /// Writes this frame's cull context, for a view that has one of its own
+    /// ([`ViewPass::tested`]); returns the bytes written.
+    pub(super) fn prepare_cull_context(
+        &self,
+        queue: &wgpu::Queue,
+        context: &DisplayContext,
+    ) -> u64 {
+        match &self.cull_context {
+            Some(buffer) => write(queue, buffer, &uniform_bytes(context)),
+            None => 0,
+        }
+    }
+
     /// Records the view's cull (on the GPU) in its phase, timed and logged as `logged`.
     /// Returns the dispatches.
     pub(super) fn encode_cull(
@@ -103,7 +152,19 @@ impl ViewPass {
         timing: Timing,
         logged: Logged,
     ) -> u32 {
-        culler.encode(encoder, (&self.cull, self.cull.phase()), timing, logged)
+        self.encode_cull_in(encoder, (culler, self.cull.phase()), timing, logged)
+    }
+
+    /// [`ViewPass::encode_cull`] in `phase` (a tested view culled by its frustum alone
+    /// where its display draws in one pass).
+    pub(super) fn encode_cull_in(
+        &self,
+        encoder: &mut wgpu::CommandEncoder,
+        (culler, phase): (&Culler, Phase),
+        timing: Timing,
+        logged: Logged,
+    ) -> u32 {
+        culler.encode(encoder, (&self.cull, phase), timing, logged)
     }
 
     /// The view's draws into `pass`: per material bin, its pipeline of `with` and one

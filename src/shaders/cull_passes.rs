@@ -20,6 +20,10 @@ pub enum Phase {
     /// What it did not, unless the early depth's pyramids hide it; records for the next
     /// frame what the pyramids do not hide.
     Late = 2,
+    /// What the display's pyramids do not hide, whatever it drew last frame, recording
+    /// nothing: a far layer's cull after its display's early phase (the far layer is
+    /// drawn once per frame from this frame's depth, so it has no phases of its own).
+    Tested = 3,
 }
 
 impl Phase {
@@ -29,6 +33,7 @@ impl Phase {
             Phase::Frustum => base.to_string(),
             Phase::Early => format!("{base}.early"),
             Phase::Late => format!("{base}.late"),
+            Phase::Tested => format!("{base}.tested"),
         }
     }
 }
@@ -157,10 +162,10 @@ impl CullPass {
     }
 
     /// The cull passes' occlusion variants: both tiers, over everything and over
-    /// candidates, early and late.
+    /// candidates, early, late and tested.
     pub fn occlusion_variants() -> Vec<(CullPass, bool, Phase)> {
         let passes = [CullPass::Cull, CullPass::CullSubgroups];
-        let phases = [Phase::Early, Phase::Late];
+        let phases = [Phase::Early, Phase::Late, Phase::Tested];
         (passes.into_iter())
             .flat_map(|p| [false, true].map(|c| (p, c)))
             .flat_map(|(p, c)| phases.map(|phase| (p, c, phase)))

@@ -57,6 +57,9 @@ struct DisplayContext {
     // The display's views: 1 mono, 2 stereo, 4 foveated stereo (occlusion tests each
     // eye's pyramid, whatever the instances per object).
     views: u32,
+    // Pixels a sphere's projected bounds grow by each way in the occlusion test: 1 for
+    // rounding, more in a far layer's cull (how far its composite carries a far point).
+    occlusion_margin_px: f32,
 }
 
 // Once per frame: the viewer (not any eye) and the time in seconds.

@@ -1,13 +1,13 @@
 // Occlusion culling's late test (src/occlusion.rs is its CPU twin: same operations, same
 // order, no fused multiply-add). OCCLUSION is 0 (frustum only), 1 (the early phase:
-// keep what the display drew last frame) or 2 (the late phase: keep what it did not
+// keep what the display drew last frame), 2 (the late phase: keep what it did not
 // draw and the depth pyramids do not hide; record what they do not hide, blended
-// instances aside).
+// instances aside) or 3 (tested: a far layer's cull keeps what the pyramids do not
+// hide, and records nothing).
 // Composed after pyramid.wgsl, whose layout the pyramids have in `occlusion` from
 // params.pyramid_offset on (depths as bits: non-negative floats order as their bits).
 
 const ENTRY_SEEN: u32 = 0x40000000u;
-const BOUNDS_GROWTH_PX: f32 = 1.0;
 const DEPTH_SLACK: f32 = 1.0 / 262144.0;
 const DEPTH_MARGIN: f32 = 1.0 / 1048576.0;
 
@@ -23,6 +23,9 @@ fn drawn_last_frame(k: u32) -> bool {
 fn occlusion_entry(k: u32, s: vec4<f32>, kept: u32) -> u32 {
     if (OCCLUSION == 0u) {
         return kept;
+    }
+    if (OCCLUSION == 3u) {
+        return select(kept, 0u, occluded(s));
     }
     let drawn = drawn_last_frame(k);
     if (OCCLUSION == 1u) {
@@ -119,10 +122,10 @@ fn occluded_in_eye(s: vec4<f32>, e: u32) -> bool {
     let size = eye_size();
     let w = f32(size.x);
     let h = f32(size.y);
-    let px0 = (x0 * 0.5 + 0.5) * w - BOUNDS_GROWTH_PX;
-    let px1 = (x1 * 0.5 + 0.5) * w + BOUNDS_GROWTH_PX;
-    let py0 = (0.5 - y1 * 0.5) * h - BOUNDS_GROWTH_PX;
-    let py1 = (0.5 - y0 * 0.5) * h + BOUNDS_GROWTH_PX;
+    let px0 = (x0 * 0.5 + 0.5) * w - display.occlusion_margin_px;
+    let px1 = (x1 * 0.5 + 0.5) * w + display.occlusion_margin_px;
+    let py0 = (0.5 - y1 * 0.5) * h - display.occlusion_margin_px;
+    let py1 = (0.5 - y0 * 0.5) * h + display.occlusion_margin_px;
     if (px1 < 0.0 || py1 < 0.0 || px0 >= w || py0 >= h) {
         return true;
     }
