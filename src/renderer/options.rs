@@ -61,8 +61,8 @@ pub enum OcclusionMode {
     #[default]
     Auto,
     /// On wherever it applies: GPU culling in `instanced` mode (or `multiview` without
-    /// MSAA), displays of one or two views, without the far layer (not composed with it
-    /// yet).
+    /// MSAA), displays of one or two views (with the far layer, its far instances are
+    /// tested against the pyramids too).
     On,
     /// Never.
     Off,
