@@ -47,7 +47,7 @@ pub fn run(frames: u32) -> Result<image::RgbaImage> {
     for frame in 0..frames {
         renderer.prepare(&gpu.queue, &rig, frame as f32 / 90.0)?;
         let mut encoder = gpu.device.create_command_encoder(&Default::default());
-        renderer.encode_culls(&mut encoder, None);
+        renderer.encode_culls(&mut encoder, None)?;
         let views = targets[0].views();
         let mut pass = encoder.begin_render_pass(&wgpu::RenderPassDescriptor {
             label: Some("engine opaque"),

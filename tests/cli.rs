@@ -987,6 +987,38 @@ fn cull_dumps_far_layers_alike_on_gpu_and_cpu() {
     assert_eq!(both, ids(&whole["displays"][0]));
 }
 
+/// `cull --occlusion on` culls rendered frames on the CPU too (their pyramids read back
+/// halfway): after three frames of a walk-in viewer, the early (`<name>`) and late
+/// (`<name>.late`) phases and the far layer's cull are the GPU's byte for byte.
+#[test]
+fn cull_with_occlusion_dumps_alike_on_gpu_and_cpu() {
+    let base = [
+        "cull",
+        "--scene",
+        "rooms:400:5",
+        "--rig",
+        "hmd",
+        "--width",
+        "64",
+        "--height",
+        "48",
+        "--occlusion",
+        "on",
+        "--frames",
+        "3",
+        "--far-layer",
+        "on",
+    ];
+    let cpu = dump(&[&base[..], &["--cull", "cpu"]].concat());
+    let gpu = dump(&[&base[..], &["--cull", "gpu"]].concat());
+    assert_eq!(cpu, gpu);
+    let names: Vec<&str> = (cpu["displays"].as_array().unwrap().iter())
+        .map(|d| d["name"].as_str().unwrap())
+        .collect();
+    assert_eq!(names, ["hmd", "hmd.far", "hmd.late"]);
+    assert!(!cpu["displays"][0]["visible"].as_array().unwrap().is_empty());
+}
+
 /// `diff` states what LOD costs in pixels: LOD on against off differs in some pixels but
 /// not most (at 160 x 160 about 16 %: objects a few pixels wide, their silhouettes moved
 /// by up to a pixel), an image against itself in none, and images of two sizes give one line and

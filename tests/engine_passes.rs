@@ -72,7 +72,7 @@ fn draw_in_engine_passes(
     let targets = renderer.create_targets(&gpu.device);
     renderer.prepare(&gpu.queue, rig, 0.0).unwrap();
     let mut encoder = gpu.device.create_command_encoder(&Default::default());
-    renderer.encode_culls(&mut encoder, None);
+    renderer.encode_culls(&mut encoder, None).unwrap();
     for (i, target) in targets.iter().enumerate() {
         let multiview = mode == StereoMode::Multiview && rig.displays[i].stereo;
         if sky {
@@ -304,7 +304,7 @@ fn a_pipeline_of_the_callers_own_draws_the_built_in_image() {
     let targets = renderer.create_targets(&gpu.device);
     renderer.prepare(&gpu.queue, &rig, 0.0).unwrap();
     let mut encoder = gpu.device.create_command_encoder(&Default::default());
-    renderer.encode_culls(&mut encoder, None);
+    renderer.encode_culls(&mut encoder, None).unwrap();
     let mut pass = begin(&mut encoder, &targets[0], Some(CLEAR_COLOR), false);
     pass.set_pipeline(&pipeline);
     renderer

@@ -367,14 +367,22 @@ fn cull(args: &CullArgs) -> Result<()> {
     let mut live = LiveScene::new(scene_spec::load(&args.scene.scene)?);
     let mut driver = edits::EditDriver::new(&live, &args.edits)?;
     let options = args.scene.options();
-    let culls = match args.cull {
-        CullMode::Cpu => {
+    let culls = match (args.cull, options.occlusion) {
+        // Occlusion culls what frames drew: on the CPU too, the renderer's frames (their
+        // pyramids read back halfway).
+        (CullMode::Gpu, _) | (CullMode::Cpu, OcclusionMode::On) => {
+            let options = RendererOptions {
+                cull: args.cull,
+                ..options.clone()
+            };
+            rendered_cull(&rig, options, &mut live, &mut driver, args.frames)?
+        }
+        (CullMode::Cpu, _) => {
             for frame in 0..args.frames {
                 driver.apply(&mut live, frame)?;
             }
             cpu_cull(&rig, &options, live.scene())?
         }
-        CullMode::Gpu => gpu_cull(&rig, options.clone(), &mut live, &mut driver, args.frames)?,
     };
     let scene = live.scene();
     let views = |d: &crate::rig::Display| match (options.inset_cull, d.views()) {
@@ -453,9 +461,9 @@ fn cpu_cull(rig: &Rig, options: &RendererOptions, scene: &Scene) -> Result<Culls
     })
 }
 
-/// `frames` GPU-culled frames, each after its edits are synced; the last frame's cull
-/// buffers (and far layers' and insets' culls) read back.
-fn gpu_cull(
+/// `frames` frames culled as `options` say, each after its edits are synced; the last
+/// frame's cull buffers (and far layers', insets' and late phases' culls) read back.
+fn rendered_cull(
     rig: &Rig,
     options: RendererOptions,
     live: &mut LiveScene,

@@ -296,9 +296,41 @@ pub fn cull_phases(
     drawn: &[u32],
     pyramid: (&[f32], PyramidShape),
 ) -> Phases {
-    let n = layout.spheres.len();
-    let words = n.div_ceil(64);
-    let (mut early, mut late) = (vec![0u64; words], vec![0u64; words]);
+    let (late, seen) = cull_late(layout, (job, display), lod, drawn, pyramid);
+    Phases {
+        early: cull_early(layout, job, lod, drawn),
+        late,
+        seen,
+    }
+}
+
+/// The early phase alone: what `job`'s frustum keeps among the places set in `drawn`.
+/// The CPU culler's first half of a frame, before any depth exists.
+pub fn cull_early(layout: &CullLayout, job: &CullJob, lod: &FrameLod, drawn: &[u32]) -> CullOutput {
+    let mut early = vec![0u64; layout.spheres.len().div_ceil(64)];
+    let span = SPAN as usize;
+    for (k, &s) in layout.spheres.iter().enumerate() {
+        if in_view(job, s) && drawn[k / span] >> (k % span) & 1 == 1 {
+            early[k / 64] |= 1 << (k % 64);
+        }
+    }
+    cpu::cull_masked(
+        layout,
+        &early,
+        lod,
+        (job.instances_per_object, job.sort_origin),
+    )
+}
+
+/// The late phase alone, and the visibility words after it (see [`Phases`]).
+pub fn cull_late(
+    layout: &CullLayout,
+    (job, display): (&CullJob, &DisplayContext),
+    lod: &FrameLod,
+    drawn: &[u32],
+    pyramid: (&[f32], PyramidShape),
+) -> (CullOutput, Vec<u32>) {
+    let mut late = vec![0u64; layout.spheres.len().div_ceil(64)];
     let mut seen = drawn.to_vec();
     let span = SPAN as usize;
     let first_blend = layout.bins.first_blend_bin();
@@ -311,28 +343,19 @@ pub fn cull_phases(
         let mut bits = 0u32;
         for (i, &s) in spheres.iter().enumerate() {
             let k = first + i;
-            if !in_view(job, s) {
+            if !in_view(job, s) || occluded(s, display, pyramid) {
                 continue;
             }
-            let was = drawn[k / span] >> (k % span) & 1 == 1;
-            let hidden = occluded(s, display, pyramid);
-            let mark = |mask: &mut [u64]| mask[k / 64] |= 1 << (k % 64);
-            match (was, hidden) {
-                (true, _) => mark(&mut early),
-                (false, false) => mark(&mut late),
-                (false, true) => {}
+            if drawn[k / span] >> (k % span) & 1 == 0 {
+                late[k / 64] |= 1 << (k % 64);
             }
             let blended = layout.meshes[layout.mesh_of[k] as usize].bin >= first_blend;
-            bits |= u32::from(!hidden && !blended) << i;
+            bits |= u32::from(!blended) << i;
         }
         seen[first / span] = bits;
     }
     let v = (job.instances_per_object, job.sort_origin);
-    Phases {
-        early: cpu::cull_masked(layout, &early, lod, v),
-        late: cpu::cull_masked(layout, &late, lod, v),
-        seen,
-    }
+    (cpu::cull_masked(layout, &late, lod, v), seen)
 }
 
 /// A far layer's cull with occlusion ([`Phase::Tested`]): what its frustum and split

@@ -9,18 +9,19 @@ use super::frame::{CullView, FramePlan};
 use super::options::CullMode;
 use super::passes::{Logged, PassRecord, Recording, Timing, close, compute_pass, open_display};
 use crate::bins::BinRange;
-use crate::cull::CullOutput;
+use crate::contexts::DisplayContext;
 use crate::cull::coarse::BLOCK;
 use crate::cull::cpu;
 use crate::cull::gpu::{CullerFeatures, GpuCuller};
 use crate::cull::gpu_buffers::{CullScene, CullTargets, OcclusionRoom};
+use crate::cull::{CullJob, CullOutput};
 use crate::error::Result;
-use crate::occlusion::Phase;
+use crate::occlusion::{self, Phase, PyramidShape};
 use crate::profiling::percentile;
 use crate::readback::{read_pod, wait_idle};
 use crate::records::{CullLayout, MoveEdit, PlaceEdit};
 use crate::scene::Scene;
-use crate::shaders::Windows;
+use crate::shaders::{SPAN, Windows};
 
 pub(super) struct Culler {
     kind: Kind,
@@ -39,10 +40,13 @@ enum Kind {
         scene: Box<CullScene>,
         coarse: Option<wgpu::BindGroup>,
     },
-    /// The CPU culler over its own copy of the cull layout, and this frame's results.
+    /// The CPU culler over its own copy of the cull layout, and this frame's results;
+    /// with occlusion, per display that culls by it its visibility words (the CPU's
+    /// copy of what the GPU keeps in its occlusion buffer).
     Cpu {
         layout: CullLayout,
         outputs: Vec<(CullView, CullOutput)>,
+        visibility: Vec<Option<Vec<u32>>>,
     },
 }
 
@@ -83,6 +87,7 @@ impl Culler {
             CullMode::Cpu => Kind::Cpu {
                 layout,
                 outputs: Vec::new(),
+                visibility: Vec::new(),
             },
             CullMode::Gpu => {
                 let features = CullerFeatures {
@@ -154,7 +159,11 @@ impl Culler {
                 let planes: Vec<_> = plan.resolved.displays.iter().map(|d| d.planes).collect();
                 scene.write_block_tests(queue, &planes)
             }
-            Kind::Cpu { layout, outputs } => {
+            Kind::Cpu {
+                layout,
+                outputs,
+                visibility,
+            } => {
                 let culled = cpu::cull_frame(layout, &plan.jobs(), &plan.cull);
                 *outputs = plan.culls.iter().map(|c| c.view).zip(culled).collect();
                 // Outside the coarse cull: one more pass for the light and the insets.
@@ -163,6 +172,15 @@ impl Culler {
                     let jobs: Vec<_> = apart.iter().map(|c| c.job).collect();
                     let out = cpu::cull_many_lod(layout, &jobs, &plan.cull.lod);
                     outputs.extend(apart.iter().map(|c| c.view).zip(out));
+                }
+                // With occlusion a display's first cull is its early phase.
+                for (i, words) in visibility.iter().enumerate() {
+                    let (Some(words), Some(job)) = (words, planned(plan, CullView::Display(i)))
+                    else {
+                        continue;
+                    };
+                    let early = occlusion::cull_early(layout, &job, &plan.cull.lod, words);
+                    set_output(outputs, CullView::Display(i), early);
                 }
                 0
             }
@@ -288,7 +306,16 @@ impl Culler {
     pub(super) fn reload(&mut self, queue: &wgpu::Queue, layout: CullLayout) -> u64 {
         match &mut self.kind {
             Kind::Gpu { scene, .. } => scene.reload(queue, &layout),
-            Kind::Cpu { layout: own, .. } => {
+            Kind::Cpu {
+                layout: own,
+                visibility,
+                ..
+            } => {
+                let words = layout.spheres.len().div_ceil(SPAN as usize);
+                visibility
+                    .iter_mut()
+                    .flatten()
+                    .for_each(|w| w.resize(words, 0));
                 *own = layout;
                 0
             }
@@ -339,6 +366,86 @@ impl Culler {
                 layout.set_sphere(layout.positions[slot], sphere);
             }
         }
+    }
+}
+
+/// Occlusion with CPU culling: the early phase from visibility words the CPU keeps, the
+/// late phase (and a far layer's tested cull) from pyramids read back mid-frame.
+impl Culler {
+    /// Keeps visibility words for each display where `occluding` says (CPU culling;
+    /// the GPU culler keeps its own). Every place starts as not drawn.
+    pub(super) fn track_visibility(&mut self, occluding: &[bool]) {
+        if let Kind::Cpu {
+            layout, visibility, ..
+        } = &mut self.kind
+        {
+            let words = layout.spheres.len().div_ceil(SPAN as usize);
+            *visibility = (occluding.iter())
+                .map(|&o| o.then(|| vec![0; words]))
+                .collect();
+        }
+    }
+
+    /// Whether a frame needs its pyramids on the CPU before its late phase: CPU culling
+    /// with occlusion.
+    pub(super) fn reads_back(&self) -> bool {
+        matches!(&self.kind, Kind::Cpu { visibility, .. } if visibility.iter().any(Option::is_some))
+    }
+
+    /// Display `i`'s visibility words on the CPU (`None` on the GPU or without
+    /// occlusion).
+    pub(super) fn cpu_visibility(&self, i: usize) -> Option<&[u32]> {
+        match &self.kind {
+            Kind::Cpu { visibility, .. } => visibility.get(i)?.as_deref(),
+            Kind::Gpu { .. } => None,
+        }
+    }
+
+    /// Display `i`'s late phase of `plan` on the CPU against its `pyramid` (read back),
+    /// and with `far` (its far layer's tested context) the far cull against it too; the
+    /// display's visibility words rewritten. [`Culler::upload`] then writes them.
+    pub(super) fn cull_late(
+        &mut self,
+        (plan, i): (&FramePlan, usize),
+        pyramid: (&[f32], PyramidShape),
+        far: Option<&DisplayContext>,
+    ) {
+        let Kind::Cpu {
+            layout,
+            outputs,
+            visibility,
+        } = &mut self.kind
+        else {
+            return;
+        };
+        let (Some(words), Some(job)) = (
+            visibility.get_mut(i).and_then(Option::as_mut),
+            planned(plan, CullView::Display(i)),
+        ) else {
+            return;
+        };
+        let lod = &plan.cull.lod;
+        let display = (&job, &plan.displays[i]);
+        let (late, seen) = occlusion::cull_late(layout, display, lod, words, pyramid);
+        *words = seen;
+        set_output(outputs, CullView::Late(i), late);
+        if let (Some(far), Some(far_job)) = (far, planned(plan, CullView::Far(i))) {
+            let tested = occlusion::cull_tested(layout, (&far_job, far), lod, pyramid);
+            set_output(outputs, CullView::Far(i), tested);
+        }
+    }
+}
+
+/// The job `plan` culls `view` with.
+fn planned(plan: &FramePlan, view: CullView) -> Option<CullJob> {
+    plan.culls.iter().find(|c| c.view == view).map(|c| c.job)
+}
+
+/// Sets (or adds) `view`'s output.
+fn set_output(outputs: &mut Vec<(CullView, CullOutput)>, view: CullView, out: CullOutput) {
+    match outputs.iter_mut().find(|(v, _)| *v == view) {
+        Some((_, o)) => *o = out,
+        None => outputs.push((view, out)),
     }
 }
 

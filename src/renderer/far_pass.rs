@@ -203,9 +203,23 @@ impl FarDisplay {
             ..*plan
         };
         let slot = self.index as u32;
-        let tested = sized.tested_context(display);
+        let tested = self.tested_context(plan, display);
         self.view.prepare(queue, &sized.context(slot), culler)
             + self.view.prepare_cull_context(queue, &tested)
+    }
+
+    /// The context its cull tests with for `plan` (at the layer's fixed size) in the
+    /// display whose context is `display` ([`FarPlan::tested_context`]).
+    pub(super) fn tested_context(
+        &self,
+        plan: &FarPlan,
+        display: &DisplayContext,
+    ) -> DisplayContext {
+        let sized = FarPlan {
+            size: self.size,
+            ..*plan
+        };
+        sized.tested_context(display)
     }
 }
 

@@ -38,6 +38,22 @@ pub struct FrameStats {
     pub cpu_staging: Duration,
 }
 
+/// The two halves of a frame culled on the CPU with occlusion, together.
+impl std::ops::Add for FrameStats {
+    type Output = FrameStats;
+
+    fn add(self, other: FrameStats) -> FrameStats {
+        FrameStats {
+            draw_calls: self.draw_calls + other.draw_calls,
+            dispatches: self.dispatches + other.dispatches,
+            bytes_uploaded: self.bytes_uploaded + other.bytes_uploaded,
+            cpu_cull: self.cpu_cull + other.cpu_cull,
+            cpu_upload: self.cpu_upload + other.cpu_upload,
+            cpu_staging: self.cpu_staging + other.cpu_staging,
+        }
+    }
+}
+
 /// The view a cull is for.
 #[derive(Clone, Copy, Debug, PartialEq, Eq, Hash)]
 pub enum CullView {

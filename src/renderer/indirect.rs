@@ -15,6 +15,7 @@ use super::occlusion_pass::{
     LateInputs, LatePhase, OcclusionBytes, Pyramids, check_depth, occlusion_bytes, pyramid_shapes,
 };
 use super::passes::{PassRecord, Recording, Timing, draw_pass};
+use super::pyramid_readback::{PyramidReadback, ReadPyramids};
 use super::shadow_pass::ShadowPass;
 use super::targets::TargetViews;
 use super::view_pass::ViewPass;
@@ -55,6 +56,15 @@ pub(super) struct IndirectPath {
     /// layer per eye for multiview), and the device that binds each frame's depth
     /// target to them (the caller may hand a different target each frame).
     pyramid: Option<Box<Pyramids>>,
+    /// Culling on the CPU with occlusion: the pyramids read back mid-frame and the plan
+    /// of the frame prepared, which the late culls take.
+    readback: Option<CpuLate>,
+}
+
+/// What the CPU culler's late phases need between a frame's two halves.
+struct CpuLate {
+    pyramids: PyramidReadback,
+    plan: Option<FramePlan>,
 }
 
 impl IndirectPath {
@@ -88,7 +98,12 @@ impl IndirectPath {
             tested: options.far_layer && occlusion.displays > 0,
         };
         let kinds = layout.bins.kinds.clone();
-        let culler = Culler::new(device, options.cull, layout, shape, windows);
+        let mut culler = Culler::new(device, options.cull, layout, shape, windows);
+        culler.track_visibility(&shapes.iter().map(Option::is_some).collect::<Vec<_>>());
+        let readback = culler.reads_back().then(|| CpuLate {
+            pyramids: PyramidReadback::new(device, &shapes),
+            plan: None,
+        });
         let keys = draw_keys(device, plan, options.mode);
         let shaders = options.shaders();
         let target = options.target_format();
@@ -125,6 +140,7 @@ impl IndirectPath {
             shadow,
             far,
             pyramid,
+            readback,
         })
     }
 
@@ -132,6 +148,9 @@ impl IndirectPath {
     /// display's, each far layer's, the light's.
     pub(super) fn prepare(&mut self, queue: &wgpu::Queue, plan: &FramePlan) -> FrameStats {
         let mut stats = FrameStats::default();
+        if let Some(readback) = &mut self.readback {
+            readback.plan = Some(plan.clone());
+        }
         let start = Instant::now();
         stats.bytes_uploaded += self.culler.prepare(queue, plan);
         stats.cpu_cull = start.elapsed();
@@ -178,12 +197,32 @@ impl IndirectPath {
     }
 
     /// Display `index`: its cull dispatches (GPU culling), then one pass with one draw
-    /// call, timed inside `display`.
+    /// call, timed inside `display`; with occlusion both halves of its two phases.
     pub(super) fn encode_display(
         &self,
         encoder: &mut wgpu::CommandEncoder,
         index: usize,
         target: &TargetViews,
+        (timer, display): Timing,
+        log: &mut Vec<PassRecord>,
+    ) -> FrameStats {
+        let early = self.encode_early(encoder, (index, target), (&mut *timer, display), log);
+        let rest = self.encode_rest(encoder, (index, target), (timer, display), log);
+        FrameStats {
+            draw_calls: early.draw_calls + rest.draw_calls,
+            dispatches: early.dispatches + rest.dispatches,
+            ..early
+        }
+    }
+
+    /// Display `index` up to what its late phase needs: its cull, its draw (with
+    /// occlusion the early one) and its pyramids (and, culling on the GPU, its late
+    /// cull). Culling on the CPU with occlusion the frame stops here until
+    /// [`IndirectPath::cull_late`] has the pyramids.
+    pub(super) fn encode_early(
+        &self,
+        encoder: &mut wgpu::CommandEncoder,
+        (index, target): (usize, &TargetViews),
         (timer, display): Timing,
         log: &mut Vec<PassRecord>,
     ) -> FrameStats {
@@ -201,39 +240,31 @@ impl IndirectPath {
             what,
             |pass| self.draw_views(pass, index, composite),
         );
-        let late = self.encode_late(encoder, (index, target), (timer, display), log);
+        let pyramids = match self.late_inputs(index, target) {
+            Some((late, inputs)) => late.encode_cull(encoder, &inputs, (timer, display), log),
+            None => FrameStats::default(),
+        };
         FrameStats {
-            draw_calls: culled.draw_calls + draw_calls + late.draw_calls,
-            dispatches: culled.dispatches + late.dispatches,
+            draw_calls: culled.draw_calls + draw_calls,
+            dispatches: culled.dispatches + pyramids.dispatches,
             ..culled
         }
     }
 
-    /// With occlusion, display `index`'s late phase after its early draw into `target`:
-    /// the pyramids and the late cull, then with a far layer its cull against those
-    /// pyramids and its pass, then the late draw (opening with the far composite).
-    fn encode_late(
+    /// With occlusion, the rest of display `index`'s late phase after
+    /// [`IndirectPath::encode_early`]: with a far layer its cull against the pyramids
+    /// and its pass, then the late draw (opening with the far composite).
+    pub(super) fn encode_rest(
         &self,
         encoder: &mut wgpu::CommandEncoder,
         (index, target): (usize, &TargetViews),
         (timer, display): Timing,
         log: &mut Vec<PassRecord>,
     ) -> FrameStats {
-        let state = &self.displays[index];
-        let (Some(late), Some(pyramids)) = (&state.late, self.pyramid.as_deref()) else {
+        let Some((late, inputs)) = self.late_inputs(index, target) else {
             return FrameStats::default();
         };
-        let inputs = LateInputs {
-            culler: &self.culler,
-            drawing: self.drawing(),
-            pyramids,
-            index,
-            key: state.key,
-            own: &state.own,
-            context: state.view.context(),
-            target,
-        };
-        let mut stats = late.encode_cull(encoder, &inputs, (&mut *timer, display), log);
+        let mut stats = FrameStats::default();
         let far = self
             .far
             .as_ref()
@@ -257,6 +288,72 @@ impl IndirectPath {
         stats
     }
 
+    /// Display `index`'s late phase and what it is recorded with, where it has one.
+    fn late_inputs<'a>(
+        &'a self,
+        index: usize,
+        target: &'a TargetViews,
+    ) -> Option<(&'a LatePhase, LateInputs<'a>)> {
+        let state = &self.displays[index];
+        let (late, pyramids) = (state.late.as_ref()?, self.pyramid.as_deref()?);
+        let texels = match &self.readback {
+            Some(readback) => readback.pyramids.texels(index)?,
+            None => self
+                .culler
+                .occlusion()
+                .map(|(buffer, _, at)| (buffer, at))?,
+        };
+        let inputs = LateInputs {
+            culler: &self.culler,
+            drawing: self.drawing(),
+            pyramids,
+            texels,
+            index,
+            key: state.key,
+            own: &state.own,
+            context: state.view.context(),
+            target,
+        };
+        Some((late, inputs))
+    }
+
+    /// Culling on the CPU with occlusion, after the frame's early half was submitted:
+    /// reads every display's pyramids back (waiting for the GPU), culls each display's
+    /// late phase and its far layer against them and uploads both. Returns the bytes
+    /// uploaded and the CPU time the culls took.
+    pub(super) fn cull_late(
+        &mut self,
+        device: &wgpu::Device,
+        queue: &wgpu::Queue,
+    ) -> Result<FrameStats> {
+        let Some(CpuLate {
+            pyramids,
+            plan: Some(plan),
+        }) = &self.readback
+        else {
+            return Ok(FrameStats::default());
+        };
+        let read = pyramids.read(device, queue)?;
+        let start = Instant::now();
+        let mut stats = FrameStats::default();
+        for (i, pyramid) in read.iter().enumerate() {
+            let Some((texels, shape)) = pyramid else {
+                continue;
+            };
+            let far =
+                (self.far.as_ref()).and_then(|f| Some((f.displays[i].as_ref()?, plan.far[i]?)));
+            let tested = far.map(|(layer, p)| layer.tested_context(&p, &plan.displays[i]));
+            (self.culler).cull_late((plan, i), (texels, *shape), tested.as_ref());
+            let late = self.displays[i].late.as_ref().map(|l| l.view.view_cull());
+            let views = late
+                .into_iter()
+                .chain(far.map(|(layer, _)| layer.view.view_cull()));
+            stats.bytes_uploaded += views.map(|v| self.culler.upload(queue, v)).sum::<u64>();
+        }
+        stats.cpu_cull = start.elapsed();
+        Ok(stats)
+    }
+
     /// Whether each display with occlusion can read its depth target into its pyramids.
     pub(super) fn check_depth(&self, targets: &[TargetViews]) -> Result<()> {
         check_depth(self.displays.iter().map(|d| d.late.as_ref()), targets)
@@ -265,7 +362,21 @@ impl IndirectPath {
     /// See [`super::Renderer::occlusion_bytes`].
     pub(super) fn occlusion_bytes(&self) -> Option<OcclusionBytes> {
         let late = self.displays.iter().filter_map(|d| d.late.as_ref());
-        occlusion_bytes(late, &self.culler)
+        let read_back = self.readback.as_ref().map(|r| r.pyramids.bytes());
+        occlusion_bytes(late, &self.culler, read_back)
+    }
+
+    /// Culling on the CPU with occlusion, every display's pyramids of the last frame
+    /// (`None` otherwise).
+    pub(super) fn read_back_pyramids(
+        &self,
+        device: &wgpu::Device,
+        queue: &wgpu::Queue,
+    ) -> Result<Option<ReadPyramids>> {
+        match &self.readback {
+            Some(r) => r.pyramids.read(device, queue).map(Some),
+            None => Ok(None),
+        }
     }
 
     /// Display `index`'s cull (on the GPU; the culler's upload wrote a CPU cull) and,

@@ -35,7 +35,7 @@
 //! #         -> stereocull::Result<()> {
 //! renderer.prepare(queue, rig, 0.0)?;
 //! let mut encoder = device.create_command_encoder(&Default::default());
-//! renderer.encode_culls(&mut encoder, None);
+//! renderer.encode_culls(&mut encoder, None)?;
 //! // ... the engine's sky pass on `color` ...
 //! let mut pass = encoder.begin_render_pass(&wgpu::RenderPassDescriptor {
 //!     label: Some("engine opaque"),
@@ -97,6 +97,7 @@ mod options;
 mod own_passes;
 mod passes;
 mod pose_pass;
+mod pyramid_readback;
 mod readback;
 mod shadow_pass;
 mod skin_pass;
@@ -350,11 +351,67 @@ impl Renderer {
     /// each pass a scope within it, `cull` or `draw`. The edits of the last
     /// [`Renderer::sync`] are copied into place from staging memory that comes back for
     /// reuse when `encoder` is submitted: submit every encoder this records into.
+    /// Culling on the CPU with occlusion a frame needs its pyramids on the CPU halfway:
+    /// that is [`Error::Unsupported`] here; record it with [`Renderer::encode_early`] and
+    /// [`Renderer::encode_late`].
     pub fn encode(
         &mut self,
         encoder: &mut wgpu::CommandEncoder,
         targets: &[TargetViews],
+        timer: Option<&mut GpuTimer>,
+    ) -> Result<FrameStats> {
+        if self.reads_back() {
+            return Err(Error::Unsupported(
+                "occlusion with CPU culling needs each display's pyramids on the CPU between the frame's two halves: record them with encode_early and encode_late, submitting in between (or use submit_frame)".into(),
+            ));
+        }
+        self.encode_part(encoder, targets, timer, Part::Whole)
+    }
+
+    /// The first half of a frame: the frame's passes and each display's cull, draw and,
+    /// with occlusion, its pyramids (culling on the GPU, its late cull too). Submit
+    /// `encoder`, then record the rest with [`Renderer::encode_late`]. Any renderer can
+    /// record its frames so; culling on the CPU with occlusion it must.
+    pub fn encode_early(
+        &mut self,
+        encoder: &mut wgpu::CommandEncoder,
+        targets: &[TargetViews],
+        timer: Option<&mut GpuTimer>,
+    ) -> Result<FrameStats> {
+        self.encode_part(encoder, targets, timer, Part::Early)
+    }
+
+    /// The second half of a frame, after the encoder of [`Renderer::encode_early`] was
+    /// submitted: culling on the CPU with occlusion, waits for the GPU, reads every
+    /// display's pyramids back and culls each display's late phase (and far layer)
+    /// against them, then uploads those culls; then records each display's late phase.
+    pub fn encode_late(
+        &mut self,
+        (device, queue): (&wgpu::Device, &wgpu::Queue),
+        encoder: &mut wgpu::CommandEncoder,
+        targets: &[TargetViews],
+        timer: Option<&mut GpuTimer>,
+    ) -> Result<FrameStats> {
+        let culled = match &mut self.path {
+            Path::Indirect(p) => p.cull_late(device, queue)?,
+            Path::Classic(_) => FrameStats::default(),
+        };
+        Ok(culled + self.encode_part(encoder, targets, timer, Part::Rest)?)
+    }
+
+    /// Whether a frame needs its pyramids on the CPU halfway (CPU culling with
+    /// occlusion).
+    fn reads_back(&self) -> bool {
+        matches!(&self.path, Path::Indirect(p) if p.culler.reads_back())
+    }
+
+    /// Records `part` of the frame into `encoder`.
+    fn encode_part(
+        &mut self,
+        encoder: &mut wgpu::CommandEncoder,
+        targets: &[TargetViews],
         mut timer: Option<&mut GpuTimer>,
+        part: Part,
     ) -> Result<FrameStats> {
         if targets.len() != self.shapes.len() {
             return Err(Error::TargetCount {
@@ -366,20 +423,29 @@ impl Renderer {
             p.check_depth(targets)?;
             (0..self.shapes.len()).try_for_each(|i| p.check_own_pipelines(i))?;
         }
-        let mut stats = self.encode_frame(encoder, &mut timer);
+        let mut stats = match part {
+            Part::Rest => FrameStats::default(),
+            _ => self.encode_frame(encoder, &mut timer),
+        };
         for (i, target) in targets.iter().enumerate() {
             let display = open_display(&timer, &self.names[i], encoder);
             let timing = (&mut timer, &display);
             let log = &mut self.passes;
-            let recorded = match &self.path {
-                Path::Indirect(p) => p.encode_display(encoder, i, target, timing, log),
-                Path::Classic(p) => p.encode_display(encoder, i, target, timing, log),
+            let at = (i, target);
+            let recorded = match (&self.path, part) {
+                (Path::Indirect(p), Part::Whole) => {
+                    p.encode_display(encoder, i, target, timing, log)
+                }
+                (Path::Indirect(p), Part::Early) => p.encode_early(encoder, at, timing, log),
+                (Path::Indirect(p), Part::Rest) => p.encode_rest(encoder, at, timing, log),
+                (Path::Classic(_), Part::Rest) => FrameStats::default(),
+                (Path::Classic(p), _) => p.encode_display(encoder, i, target, timing, log),
             };
             stats.draw_calls += recorded.draw_calls;
             stats.dispatches += recorded.dispatches;
             close(&timer, encoder, display);
         }
-        if let Some(t) = timer {
+        if let Some(t) = timer.filter(|_| part != Part::Early) {
             t.resolve(encoder);
         }
         Ok(stats)
@@ -454,14 +520,18 @@ impl Renderer {
         let prepared = self.prepare(queue, rig, time)?;
         let mut encoder = device.create_command_encoder(&Default::default());
         let views: Vec<_> = targets.iter().map(DisplayTarget::views).collect();
-        let recorded = self.encode(&mut encoder, &views, timer)?;
+        let recorded = match self.reads_back() {
+            true => {
+                let mut timer = timer;
+                let early = self.encode_early(&mut encoder, &views, timer.as_deref_mut())?;
+                queue.submit([encoder.finish()]);
+                encoder = device.create_command_encoder(&Default::default());
+                early + self.encode_late((device, queue), &mut encoder, &views, timer)?
+            }
+            false => self.encode(&mut encoder, &views, timer)?,
+        };
         queue.submit([encoder.finish()]);
-        Ok(FrameStats {
-            bytes_uploaded: prepared.bytes_uploaded,
-            cpu_cull: prepared.cpu_cull,
-            cpu_upload: prepared.cpu_upload,
-            ..recorded
-        })
+        Ok(prepared + recorded)
     }
 
     /// Color (`RENDER_ATTACHMENT | COPY_SRC`) and depth textures for every display, shaped
@@ -472,4 +542,14 @@ impl Renderer {
             .map(|s| s.create(device, self.options.target_format()))
             .collect()
     }
+}
+
+/// Which part of a frame an `encode` records.
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+enum Part {
+    Whole,
+    /// Up to each display's pyramids.
+    Early,
+    /// The rest.
+    Rest,
 }

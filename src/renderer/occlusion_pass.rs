@@ -87,7 +87,8 @@ pub struct OcclusionBytes {
     /// late phase's cull outputs (a visible list with room for every instance, the
     /// draws, the counts).
     pub per_display: u64,
-    /// Once: the depth pyramids of the largest display's eyes, which displays share.
+    /// Once: the depth pyramids of the largest display's eyes, which displays share
+    /// (culling on the CPU, every display's, read back together).
     pub pyramids: u64,
 }
 
@@ -98,6 +99,8 @@ pub(super) struct LateInputs<'a> {
     pub(super) culler: &'a Culler,
     pub(super) drawing: Drawing<'a>,
     pub(super) pyramids: &'a Pyramids,
+    /// The buffer the display's pyramids go into, and where they start (bytes).
+    pub(super) texels: (&'a wgpu::Buffer, u64),
     pub(super) index: usize,
     pub(super) key: DrawKey,
     /// The display's pipelines of the caller's own.
@@ -116,9 +119,7 @@ impl LatePhase {
         (timer, display): Timing,
         log: &mut Vec<PassRecord>,
     ) -> FrameStats {
-        let Some((buffer, _, offset)) = inputs.culler.occlusion() else {
-            return FrameStats::default();
-        };
+        let (buffer, offset) = inputs.texels;
         let pyramids = inputs.pyramids;
         let pyramid = match (inputs.key.multiview, &pyramids.layered) {
             (true, Some(layered)) => layered,
@@ -179,15 +180,24 @@ pub(super) fn check_depth<'a>(
     Ok(())
 }
 
-/// What occlusion adds in GPU memory for displays' `late` phases (`None` without any).
+/// What occlusion adds in GPU memory for displays' `late` phases (`None` without any):
+/// culling on the GPU, the bits and the shared pyramids; culling on the CPU, the
+/// `read_back` pyramids (one region per display; the bits stay on the CPU).
 pub(super) fn occlusion_bytes<'a>(
     late: impl Iterator<Item = &'a LatePhase> + Clone,
     culler: &Culler,
+    read_back: Option<u64>,
 ) -> Option<OcclusionBytes> {
     let pyramids = 4 * late.clone().map(|l| l.shape.len() as u64).max()?;
-    let (_, words, _) = culler.occlusion()?;
     let targets = late.clone().next()?.view.cull();
     let outputs = targets.visible.size() + targets.draws.size() + targets.counts.size();
+    if let Some(read_back) = read_back {
+        return Some(OcclusionBytes {
+            per_display: outputs,
+            pyramids: read_back,
+        });
+    }
+    let (_, words, _) = culler.occlusion()?;
     Some(OcclusionBytes {
         per_display: 4 * words as u64 + outputs,
         pyramids,

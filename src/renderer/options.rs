@@ -52,17 +52,19 @@ pub enum CoarseMode {
 #[cfg_attr(feature = "cli", derive(clap::ValueEnum))]
 #[serde(rename_all = "lowercase")]
 pub enum OcclusionMode {
-    /// On where it applies ([`OcclusionMode::On`]) for a display when the scene, at its
-    /// finest levels, has at least as many triangles as the display has pixels (both
-    /// eyes): decided when the renderer is made. Below that a frame draws so little that
+    /// On where it applies ([`OcclusionMode::On`]), culling on the GPU, for a display
+    /// when the scene, at its finest levels, has at least as many triangles as the
+    /// display has pixels (both eyes): decided when the renderer is made. Culling on the
+    /// CPU it stays off: each frame would wait for its pyramids halfway. Below that a frame draws so little that
     /// the pyramids cost more than they save (on lavapipe, `hmd` at 1440 x 1600:
     /// `procedural:1000`, 0.15 triangles a pixel, GPU frame 1.22 with occlusion; 10,000,
     /// 1.5 a pixel, 0.82; `rooms:20000`, 0.23; docs/performance.md).
     #[default]
     Auto,
-    /// On wherever it applies: GPU culling in `instanced` mode (or `multiview` without
-    /// MSAA), displays of one or two views (with the far layer, its far instances are
-    /// tested against the pyramids too).
+    /// On wherever it applies: `instanced` mode (or `multiview` without MSAA), displays
+    /// of one or two views (with the far layer, its far instances are tested against the
+    /// pyramids too); culling on the CPU too, each frame then reading the pyramids back
+    /// halfway ([`super::Renderer::encode_late`]).
     On,
     /// Never.
     Off,
@@ -202,15 +204,16 @@ impl RendererOptions {
 
     /// Whether a display of `views` views and `pixels` pixels (all views) culls by
     /// occlusion in a scene of `triangles` triangles (instances at their finest level):
-    /// on, or auto and at least a triangle a pixel; on the GPU, one or two views (a
-    /// foveated display's insets see through gaps its outer views' pixels miss), in
+    /// on, or auto, culling on the GPU and at least a triangle a pixel (culling on the
+    /// CPU a frame waits for its pyramids halfway: on only when asked); one or two views
+    /// (a foveated display's insets see through gaps its outer views' pixels miss), in
     /// `instanced` mode or in `multiview` without MSAA (a pyramid per layer; WebGPU has
     /// no multisampled array textures to read). With the far layer, the display's far
     /// instances are tested against its pyramids too.
     pub fn occludes(&self, views: usize, (pixels, triangles): (u64, u64)) -> bool {
         let asked = match self.occlusion {
             OcclusionMode::On => true,
-            OcclusionMode::Auto => triangles >= pixels,
+            OcclusionMode::Auto => self.cull == CullMode::Gpu && triangles >= pixels,
             OcclusionMode::Off => false,
         };
         // Multiview's layered depth has one sample (no multisampled array textures).
@@ -219,7 +222,7 @@ impl RendererOptions {
             StereoMode::Multiview => self.sample_count == 1,
             _ => false,
         };
-        asked && self.cull == CullMode::Gpu && mode && views <= 2
+        asked && mode && views <= 2
     }
 
     /// The attachments the draw pipelines are built for.

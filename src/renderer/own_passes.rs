@@ -16,12 +16,19 @@ impl Renderer {
     /// display; CPU culling: nothing, `prepare` uploaded them). Then, in passes the
     /// caller begins, [`Renderer::draw_display`] for each display. Occlusion's two
     /// phases need the renderer's own passes (a draw, the depth's pyramids, another
-    /// draw): here each display is culled by its frustum alone.
+    /// draw): here each display is culled by its frustum alone. Culling on the CPU with
+    /// occlusion, `prepare` uploaded the early phases, so that is
+    /// [`Error::Unsupported`].
     pub fn encode_culls(
         &mut self,
         encoder: &mut wgpu::CommandEncoder,
         mut timer: Option<&mut GpuTimer>,
-    ) -> FrameStats {
+    ) -> Result<FrameStats> {
+        if self.reads_back() {
+            return Err(Error::Unsupported(
+                "occlusion with CPU culling draws in the renderer's own passes (encode_early, encode_late): make the renderer with occlusion off to draw in passes of your own".into(),
+            ));
+        }
         let mut stats = self.encode_frame(encoder, &mut timer);
         if let Path::Indirect(p) = &self.path {
             for i in 0..self.shapes.len() {
@@ -36,7 +43,7 @@ impl Renderer {
         if let Some(t) = timer {
             t.resolve(encoder);
         }
-        stats
+        Ok(stats)
     }
 
     /// Draws display `index` into a render pass the caller began, after

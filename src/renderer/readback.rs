@@ -158,6 +158,9 @@ impl Diagnostics<'_> {
         else {
             return Ok(None);
         };
+        if let Some(words) = p.culler.cpu_visibility(index) {
+            return Ok(Some((shape, words.to_vec())));
+        }
         let Some((buffer, words, _)) = p.culler.occlusion() else {
             return Ok(None);
         };
@@ -172,6 +175,9 @@ impl Diagnostics<'_> {
         let Path::Indirect(p) = &self.renderer.path else {
             return Ok(None);
         };
+        if let Some(read) = p.read_back_pyramids(self.device, self.queue)? {
+            return Ok(read.into_iter().flatten().last().map(|(texels, _)| texels));
+        }
         let (Some(shape), Some((buffer, _, offset))) = (
             p.displays
                 .iter()
