@@ -617,6 +617,62 @@ fn profile_writes_table_csv_json_and_chart() {
     );
 }
 
+/// `profile --cull gpu,cpu --occlusion on`: the CPU-culled row records each frame in two
+/// halves (its pyramids read back between them) and draws what the GPU-culled row
+/// draws: the same triangles and the same counts per phase.
+#[test]
+fn profile_culls_by_occlusion_on_the_cpu_too() {
+    let dir = tempfile::tempdir().unwrap();
+    let out = stereocull(&[
+        "profile",
+        "--rooms",
+        "--instances",
+        "400",
+        "--rig",
+        "hmd",
+        "--modes",
+        "instanced",
+        "--cull",
+        "gpu,cpu",
+        "--occlusion",
+        "on",
+        "--frames",
+        "2",
+        "--warmup",
+        "2",
+        "--width",
+        "32",
+        "--height",
+        "32",
+        "--out",
+        dir.path().to_str().unwrap(),
+    ]);
+    assert!(
+        out.status.success(),
+        "{}",
+        String::from_utf8_lossy(&out.stderr)
+    );
+    let rows: Value =
+        serde_json::from_slice(&std::fs::read(dir.path().join("profile.json")).unwrap()).unwrap();
+    let rows = rows.as_array().unwrap();
+    assert_eq!(rows.len(), 2);
+    let (gpu, cpu) = (&rows[0], &rows[1]);
+    assert_eq!(
+        (gpu["cull"].as_str(), cpu["cull"].as_str()),
+        (Some("gpu"), Some("cpu"))
+    );
+    assert_eq!(gpu["triangles_submitted"], cpu["triangles_submitted"]);
+    assert_eq!(gpu["occlusion_displays"], cpu["occlusion_displays"]);
+    assert!(
+        cpu["occlusion_displays"][0]["early"].as_u64().unwrap() > 0,
+        "{cpu}"
+    );
+    let passes: Vec<&str> = (cpu["passes"].as_array().unwrap().iter())
+        .map(|p| p["name"].as_str().unwrap())
+        .collect();
+    assert_eq!(passes, ["draw", "pyramid", "late_draw"], "{cpu}");
+}
+
 /// `profile --moving 0,5`: the moving row is priced against the static one of the same
 /// run, per move and beside a plain copy of the same bytes, phase by phase; the static
 /// row stages nothing.

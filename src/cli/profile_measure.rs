@@ -199,7 +199,17 @@ pub(super) fn measure(
         let prepared = renderer.prepare(&gpu.queue, rig, time)?;
         let encode_start = Instant::now();
         let mut encoder = gpu.device.create_command_encoder(&Default::default());
-        let recorded = renderer.encode(&mut encoder, &views, timer.as_deref_mut())?;
+        // CPU culling with occlusion: the stall for the pyramids counts as encoding.
+        let recorded = match renderer.reads_back() {
+            true => {
+                let early = renderer.encode_early(&mut encoder, &views, timer.as_deref_mut())?;
+                gpu.queue.submit([encoder.finish()]);
+                encoder = gpu.device.create_command_encoder(&Default::default());
+                let device = (&gpu.device, &gpu.queue);
+                early + renderer.encode_late(device, &mut encoder, &views, timer.as_deref_mut())?
+            }
+            false => renderer.encode(&mut encoder, &views, timer.as_deref_mut())?,
+        };
         let submit_start = Instant::now();
         gpu.queue.submit([encoder.finish()]);
         let end = Instant::now();
@@ -219,7 +229,9 @@ pub(super) fn measure(
         let ms = |a: Instant, b: Instant| (b - a).as_secs_f64() * 1e3;
         samples.cpu.push(ms(start, end));
         samples.sync.push(ms(start, sync_end));
-        samples.cull.push(prepared.cpu_cull.as_secs_f64() * 1e3);
+        // Culling on the CPU with occlusion, the late culls run in the encode.
+        let culled = prepared.cpu_cull + recorded.cpu_cull;
+        samples.cull.push(culled.as_secs_f64() * 1e3);
         samples.upload.push(prepared.cpu_upload.as_secs_f64() * 1e3);
         samples.encode.push(ms(encode_start, submit_start));
         samples

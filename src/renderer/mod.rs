@@ -399,9 +399,10 @@ impl Renderer {
         Ok(culled + self.encode_part(encoder, targets, timer, Part::Rest)?)
     }
 
-    /// Whether a frame needs its pyramids on the CPU halfway (CPU culling with
-    /// occlusion).
-    fn reads_back(&self) -> bool {
+    /// Whether each frame reads its pyramids back halfway (CPU culling with occlusion):
+    /// then record it with [`Renderer::encode_early`], submit, and
+    /// [`Renderer::encode_late`].
+    pub fn reads_back(&self) -> bool {
         matches!(&self.path, Path::Indirect(p) if p.culler.reads_back())
     }
 
