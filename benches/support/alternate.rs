@@ -1,4 +1,4 @@
-//! Two renderers timed in alternating rounds of frames (prepare, encode, submit; each
+//! Two renderers timed in alternating rounds of frames (prepare, encode, finish, submit; each
 //! frame waited for untimed), each round giving the ratio of the two medians. A small
 //! VM's speed drifts over the seconds one configuration takes by more than the effects
 //! these benches measure, and two blocks of samples (criterion's way, one configuration
@@ -11,8 +11,9 @@ use stereocull::profiling::percentile;
 use stereocull::renderer::{DisplayTarget, Renderer};
 use stereocull::rig::Rig;
 
-/// Microseconds of a frame's prepare, encode (and finish) and submit.
-type Phases = [f64; 3];
+/// Microseconds of a frame's prepare, encode, finish (wgpu records a pass's commands
+/// into the device's when the encoder finishes) and submit.
+type Phases = [f64; 4];
 
 /// One configuration: its name, renderer and targets.
 pub struct Config {
@@ -56,11 +57,12 @@ pub fn compare(
     for (c, timed) in configs.iter().zip(&all) {
         let phase = |i: usize| percentile(&timed.iter().map(|p| p[i]).collect::<Vec<_>>(), 0.5);
         println!(
-            "{}: median prepare {:.1} us, encode {:.1} us, submit {:.1} us",
+            "{}: median prepare {:.1} us, encode {:.1} us, finish {:.1} us, submit {:.1} us",
             c.name,
             phase(0),
             phase(1),
-            phase(2)
+            phase(2),
+            phase(3)
         );
     }
     let ratio = percentile(&ratios, 0.5);
@@ -79,6 +81,7 @@ fn frame(gpu: &Gpu, renderer: &mut Renderer, targets: &[DisplayTarget], rig: &Ri
     let mut encoder = gpu.device.create_command_encoder(&Default::default());
     let views: Vec<_> = targets.iter().map(DisplayTarget::views).collect();
     renderer.encode(&mut encoder, &views, None).expect("encode");
+    let recorded = Instant::now();
     let commands = encoder.finish();
     let encoded = Instant::now();
     gpu.queue.submit([commands]);
@@ -89,7 +92,8 @@ fn frame(gpu: &Gpu, renderer: &mut Renderer, targets: &[DisplayTarget], rig: &Ri
     let us = |a: Instant, b: Instant| (b - a).as_secs_f64() * 1e6;
     [
         us(start, prepared),
-        us(prepared, encoded),
+        us(prepared, recorded),
+        us(recorded, encoded),
         us(encoded, submitted),
     ]
 }
