@@ -996,8 +996,8 @@ fn occlusion_culls_far_instances_hidden_by_near_ones() {
 /// Culling on the CPU with occlusion (each frame's pyramids read back halfway): the
 /// early and late culls, the far layer's, the visibility words and the images are the
 /// GPU cull's byte for byte, frame after frame over a walk, on random scenes of rooms
-/// and props, on `hmd`, `cave` (4x MSAA) and `hmd-peripheral` in multiview, and with
-/// the far layer.
+/// and props, on `hmd`, `cave` (4x MSAA) and `hmd-peripheral` in multiview, with the
+/// far layer, and on random rigs.
 #[test]
 fn cpu_culling_with_occlusion_matches_the_gpu_cull() {
     let gpu = gpu();
@@ -1018,38 +1018,66 @@ fn cpu_culling_with_occlusion_matches_the_gpu_cull() {
             }
             false => rooms_and_props(seed),
         };
-        let made = |cull| RendererOptions {
-            cull,
+        let options = RendererOptions {
             mode,
             sample_count: samples,
             far_layer,
             ..options(OcclusionMode::On)
         };
-        let mut on_gpu = Session::new(&gpu, &scene, &rig, made(CullMode::Gpu));
-        let mut on_cpu = Session::new(&gpu, &scene, &rig, made(CullMode::Cpu));
-        let (mut late, mut occluded) = (0, 0);
-        for (step, pose) in walk(&rig).iter().take(4).enumerate() {
-            let (a, b) = (on_gpu.frame(&gpu, pose), on_cpu.frame(&gpu, pose));
-            let (g, c) = (
-                on_gpu.renderer.diagnostics(&gpu.device, &gpu.queue),
-                on_cpu.renderer.diagnostics(&gpu.device, &gpu.queue),
+        let (late, occluded) = cpu_against_gpu(&gpu, (&scene, &rig), options, preset);
+        assert!(
+            late > 0 && occluded > 0,
+            "{preset}: late {late}, occluded {occluded}"
+        );
+    }
+    let random = support::presets_and_random_rigs(3);
+    for (k, rig) in random[random.len() - 3..].iter().enumerate() {
+        let scene = rooms_and_props(10 + k as u64);
+        let what = format!("random rig {k}");
+        let (_, occluded) = cpu_against_gpu(&gpu, (&scene, rig), options(OcclusionMode::On), &what);
+        assert!(occluded > 0, "{what}");
+    }
+}
+
+/// Four frames of `walk(rig)` culled on the GPU and on the CPU under `options` (with
+/// occlusion): every display's images, culls and words equal. Returns the instances
+/// drawn late after the first frame, and those occluded.
+fn cpu_against_gpu(
+    gpu: &Gpu,
+    (scene, rig): (&Scene, &Rig),
+    options: RendererOptions,
+    name: &str,
+) -> (usize, usize) {
+    let made = |cull| RendererOptions {
+        cull,
+        ..options.clone()
+    };
+    let mut on_gpu = Session::new(gpu, scene, rig, made(CullMode::Gpu));
+    let mut on_cpu = Session::new(gpu, scene, rig, made(CullMode::Cpu));
+    let (mut late, mut occluded) = (0, 0);
+    for (step, pose) in walk(rig).iter().take(4).enumerate() {
+        let (a, b) = (on_gpu.frame(gpu, pose), on_cpu.frame(gpu, pose));
+        let (g, c) = (
+            on_gpu.renderer.diagnostics(&gpu.device, &gpu.queue),
+            on_cpu.renderer.diagnostics(&gpu.device, &gpu.queue),
+        );
+        for d in 0..rig.displays.len() {
+            let what = format!("cpu-occlusion-{name}-step{step}-display{d}");
+            // Exact on any CPU: the same pipelines draw the same draws in the same
+            // order; only where the culls ran differs.
+            assert_images_match(&what, &b[d], &a[d], Tolerance::EXACT);
+            assert_eq!(c.cull(d).unwrap(), g.cull(d).unwrap(), "{what}: early");
+            let (late_c, late_g) = (c.late_cull(d).unwrap(), g.late_cull(d).unwrap());
+            assert_eq!(late_c, late_g, "{what}: late");
+            assert_eq!(
+                c.far_cull(d).unwrap(),
+                g.far_cull(d).unwrap(),
+                "{what}: far"
             );
-            for d in 0..rig.displays.len() {
-                let what = format!("cpu-occlusion-{preset}-step{step}-display{d}");
-                // Exact on any CPU: the same pipelines draw the same draws in the same
-                // order; only where the culls ran differs.
-                assert_images_match(&what, &b[d], &a[d], Tolerance::EXACT);
-                assert_eq!(c.cull(d).unwrap(), g.cull(d).unwrap(), "{what}: early");
-                let (late_c, late_g) = (c.late_cull(d).unwrap(), g.late_cull(d).unwrap());
-                assert_eq!(late_c, late_g, "{what}: late");
-                assert_eq!(
-                    c.far_cull(d).unwrap(),
-                    g.far_cull(d).unwrap(),
-                    "{what}: far"
-                );
-                // The GPU's words run on over its room's places, unused.
-                let (bits_c, bits_g) = (c.visibility(d).unwrap(), g.visibility(d).unwrap());
-                let ((shape_c, cpu), (shape_g, gpu_words)) = (bits_c.unwrap(), bits_g.unwrap());
+            // The GPU's words run on over its room's places, unused.
+            let (bits_c, bits_g) = (c.visibility(d).unwrap(), g.visibility(d).unwrap());
+            assert_eq!(bits_c.is_some(), bits_g.is_some(), "{what}");
+            if let (Some((shape_c, cpu)), Some((shape_g, gpu_words))) = (bits_c, bits_g) {
                 let (used, room) = gpu_words.split_at(cpu.len());
                 assert_eq!(
                     (shape_c, &cpu[..]),
@@ -1057,19 +1085,16 @@ fn cpu_culling_with_occlusion_matches_the_gpu_cull() {
                     "{what}: visibility words"
                 );
                 assert!(room.iter().all(|&w| w == 0), "{what}");
-                late += usize::from(step > 0) * late_c.expect("a late phase").visible.len();
             }
-            let frustum = support::reference_culls(&scene, pose);
-            let drawn = c.occlusion_counts().unwrap();
-            occluded += (frustum.iter().zip(&drawn))
-                .map(|(f, n)| n.map_or(0, |n| f.visible.len() - (n.early + n.late) as usize))
-                .sum::<usize>();
+            late += usize::from(step > 0) * late_c.map_or(0, |l| l.visible.len());
         }
-        assert!(
-            late > 0 && occluded > 0,
-            "{preset}: late {late}, occluded {occluded}"
-        );
+        let frustum = support::reference_culls(scene, pose);
+        let drawn = c.occlusion_counts().unwrap();
+        occluded += (frustum.iter().zip(&drawn))
+            .map(|(f, n)| n.map_or(0, |n| f.visible.len() - (n.early + n.late) as usize))
+            .sum::<usize>();
     }
+    (late, occluded)
 }
 
 /// Rooms and props of the procedural scene's first four meshes.
