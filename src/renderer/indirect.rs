@@ -7,6 +7,7 @@
 
 use std::time::Instant;
 
+use super::cpu_occlusion::{CpuLate, PyramidReadback, ReadPyramids};
 use super::culler::{CullShape, Culler};
 use super::far_pass::{Far, FarLayers};
 use super::frame::{CullView, FramePlan, FrameStats};
@@ -15,7 +16,6 @@ use super::occlusion_pass::{
     LateInputs, LatePhase, OcclusionBytes, Pyramids, check_depth, occlusion_bytes, pyramid_shapes,
 };
 use super::passes::{PassRecord, Recording, Timing, draw_pass};
-use super::pyramid_readback::{PyramidReadback, ReadPyramids};
 use super::shadow_pass::ShadowPass;
 use super::targets::TargetViews;
 use super::view_pass::ViewPass;
@@ -59,12 +59,6 @@ pub(super) struct IndirectPath {
     /// Culling on the CPU with occlusion: the pyramids read back mid-frame and the plan
     /// of the frame prepared, which the late culls take.
     readback: Option<CpuLate>,
-}
-
-/// What the CPU culler's late phases need between a frame's two halves.
-struct CpuLate {
-    pyramids: PyramidReadback,
-    plan: Option<FramePlan>,
 }
 
 impl IndirectPath {
@@ -318,52 +312,21 @@ impl IndirectPath {
     }
 
     /// Culling on the CPU with occlusion, after the frame's early half was submitted:
-    /// reads every display's pyramids back (waiting for the GPU), culls each display's
-    /// late phase and its far layer against them and uploads both. Returns the bytes
-    /// uploaded and the CPU time the culls took.
+    /// each display's late phase and far layer culled against its pyramids, read back
+    /// ([`CpuLate::cull_late`]).
     pub(super) fn cull_late(
         &mut self,
         device: &wgpu::Device,
         queue: &wgpu::Queue,
     ) -> Result<FrameStats> {
-        let Some(CpuLate {
-            pyramids,
-            plan: Some(plan),
-        }) = &self.readback
-        else {
+        let Some(readback) = &self.readback else {
             return Ok(FrameStats::default());
         };
-        let read = pyramids.read(device, queue)?;
-        let start = Instant::now();
-        let mut stats = FrameStats::default();
-        for (i, pyramid) in read.iter().enumerate() {
-            let Some((texels, shape)) = pyramid else {
-                continue;
-            };
-            let far =
-                (self.far.as_ref()).and_then(|f| Some((f.displays[i].as_ref()?, plan.far[i]?)));
-            let tested = far.map(|(layer, p)| layer.tested_context(&p, &plan.displays[i]));
-            (self.culler).cull_late((plan, i), (texels, *shape), tested.as_ref());
-            let late = self.displays[i].late.as_ref().map(|l| l.view.view_cull());
-            let views = late
-                .into_iter()
-                .chain(far.map(|(layer, _)| layer.view.view_cull()));
-            stats.bytes_uploaded += views.map(|v| self.culler.upload(queue, v)).sum::<u64>();
-        }
-        stats.cpu_cull = start.elapsed();
-        Ok(stats)
-    }
-
-    /// Whether each display with occlusion can read its depth target into its pyramids.
-    pub(super) fn check_depth(&self, targets: &[TargetViews]) -> Result<()> {
-        check_depth(self.displays.iter().map(|d| d.late.as_ref()), targets)
-    }
-
-    /// See [`super::Renderer::occlusion_bytes`].
-    pub(super) fn occlusion_bytes(&self) -> Option<OcclusionBytes> {
-        let late = self.displays.iter().filter_map(|d| d.late.as_ref());
-        let read_back = self.readback.as_ref().map(|r| r.pyramids.bytes());
-        occlusion_bytes(late, &self.culler, read_back)
+        let late: Vec<_> = (self.displays.iter())
+            .map(|d| d.late.as_ref().map(|l| l.view.view_cull()))
+            .collect();
+        let views = (&late[..], self.far.as_ref());
+        readback.cull_late((device, queue), &mut self.culler, views)
     }
 
     /// Culling on the CPU with occlusion, every display's pyramids of the last frame
@@ -377,6 +340,18 @@ impl IndirectPath {
             Some(r) => r.pyramids.read(device, queue).map(Some),
             None => Ok(None),
         }
+    }
+
+    /// Whether each display with occlusion can read its depth target into its pyramids.
+    pub(super) fn check_depth(&self, targets: &[TargetViews]) -> Result<()> {
+        check_depth(self.displays.iter().map(|d| d.late.as_ref()), targets)
+    }
+
+    /// See [`super::Renderer::occlusion_bytes`].
+    pub(super) fn occlusion_bytes(&self) -> Option<OcclusionBytes> {
+        let late = self.displays.iter().filter_map(|d| d.late.as_ref());
+        let read_back = self.readback.as_ref().map(|r| r.pyramids.bytes());
+        occlusion_bytes(late, &self.culler, read_back)
     }
 
     /// Display `index`'s cull (on the GPU; the culler's upload wrote a CPU cull) and,

@@ -87,6 +87,7 @@ use crate::scene::Scene;
 
 mod checks;
 mod classic;
+mod cpu_occlusion;
 mod culler;
 mod far_pass;
 mod frame;
@@ -97,7 +98,6 @@ mod options;
 mod own_passes;
 mod passes;
 mod pose_pass;
-mod pyramid_readback;
 mod readback;
 mod shadow_pass;
 mod skin_pass;

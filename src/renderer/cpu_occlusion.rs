@@ -1,13 +1,24 @@
-//! Occlusion with CPU culling: each display's depth pyramids, built on the GPU from its
-//! early depth by the same passes as on the GPU-culled path, then read back mid-frame so
-//! that the CPU culler's late phase tests against them. The pyramids, not the depth,
-//! come back: a third of the bytes, and the reduction reads multisampled and layered
-//! depth, which a copy cannot (`tests/occlusion.rs` holds the GPU's reduction to the
-//! CPU twin's).
+//! Occlusion with CPU culling: between a frame's two halves, each display's depth
+//! pyramids, built on the GPU from its early depth by the same passes as on the
+//! GPU-culled path, are read back so that the CPU culler's late phase (and a far
+//! layer's tested cull) runs against them. The pyramids, not the depth, come back: a
+//! third of the bytes, and the reduction reads multisampled and layered depth, which a
+//! copy cannot (`tests/occlusion.rs` holds the GPU's reduction to the CPU twin's).
 
+use std::time::Instant;
+
+use super::culler::{Culler, ViewCull};
+use super::far_pass::Far;
+use super::frame::{FramePlan, FrameStats};
 use crate::error::Result;
 use crate::occlusion::PyramidShape;
 use crate::readback::read_pod;
+
+/// What the CPU culler's late phases need between a frame's two halves.
+pub(super) struct CpuLate {
+    pub(super) pyramids: PyramidReadback,
+    pub(super) plan: Option<FramePlan>,
+}
 
 /// Per display, its pyramids read back and their shape (`None` without occlusion).
 pub(super) type ReadPyramids = Vec<Option<(Vec<f32>, PyramidShape)>>;
@@ -64,5 +75,39 @@ impl PyramidReadback {
     /// The buffer's bytes.
     pub(super) fn bytes(&self) -> u64 {
         self.buffer.size()
+    }
+}
+
+impl CpuLate {
+    /// After the frame's early half was submitted: reads every display's pyramids back
+    /// (waiting for the GPU), culls each display's late phase (`late[i]`, its view) and
+    /// its far layer (in `far`) against them on `culler`, and uploads both. Returns the
+    /// bytes uploaded and the CPU time the culls took.
+    pub(super) fn cull_late(
+        &self,
+        (device, queue): (&wgpu::Device, &wgpu::Queue),
+        culler: &mut Culler,
+        (late, far): (&[Option<&ViewCull>], Option<&Far>),
+    ) -> Result<FrameStats> {
+        let Some(plan) = &self.plan else {
+            return Ok(FrameStats::default());
+        };
+        let read = self.pyramids.read(device, queue)?;
+        let start = Instant::now();
+        let mut stats = FrameStats::default();
+        for (i, pyramid) in read.iter().enumerate() {
+            let Some((texels, shape)) = pyramid else {
+                continue;
+            };
+            let far = far.and_then(|f| Some((f.displays[i].as_ref()?, plan.far[i]?)));
+            let tested = far.map(|(layer, p)| layer.tested_context(&p, &plan.displays[i]));
+            culler.cull_late((plan, i), (texels, *shape), tested.as_ref());
+            let views = late[i]
+                .into_iter()
+                .chain(far.map(|(layer, _)| layer.view.view_cull()));
+            stats.bytes_uploaded += views.map(|v| culler.upload(queue, v)).sum::<u64>();
+        }
+        stats.cpu_cull = start.elapsed();
+        Ok(stats)
     }
 }
