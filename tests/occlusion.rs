@@ -947,6 +947,11 @@ fn occlusion_culls_far_instances_hidden_by_near_ones() {
         let mut on = Session::new(&gpu, &scene, &rig, made(OcclusionMode::On));
         let mut off = Session::new(&gpu, &scene, &rig, made(OcclusionMode::Off));
         let (mut dropped_far, mut kept_far) = (0, 0);
+        // Exact on any CPU, as `Counted` says, and for the far layer too: both
+        // renderers run the same compiled pipelines, and the far texels occlusion drops
+        // reach only pixels where the early near depth is nearer than the dropped
+        // instance (its bounds grown by the composite's reach), so the composite loses
+        // there with or without them, bit for bit.
         let mut counted = Counted::default();
         for (step, yaw) in [0.0, 10.0, 100.0, 110.0, 200.0, 210.0]
             .into_iter()
@@ -961,10 +966,7 @@ fn occlusion_culls_far_instances_hidden_by_near_ones() {
             let (shape, _) = diagnostics.visibility(0).unwrap().unwrap();
             let pyramid = diagnostics.pyramid().unwrap().unwrap();
             let plan = on.renderer.plan(&pose, 0.0).unwrap();
-            let job = (plan.culls.iter())
-                .find(|c| c.view == CullView::Far(0))
-                .unwrap()
-                .job;
+            let job = plan.job(CullView::Far(0)).unwrap();
             let context = plan.far[0].unwrap().tested_context(&plan.displays[0]);
             let twin = occlusion::cull_tested(
                 &layout,

@@ -307,13 +307,10 @@ pub fn cull_phases(
 /// The early phase alone: what `job`'s frustum keeps among the places set in `drawn`.
 /// The CPU culler's first half of a frame, before any depth exists.
 pub fn cull_early(layout: &CullLayout, job: &CullJob, lod: &FrameLod, drawn: &[u32]) -> CullOutput {
-    let mut early = vec![0u64; layout.spheres.len().div_ceil(64)];
     let span = SPAN as usize;
-    for (k, &s) in layout.spheres.iter().enumerate() {
-        if in_view(job, s) && drawn[k / span] >> (k % span) & 1 == 1 {
-            early[k / 64] |= 1 << (k % 64);
-        }
-    }
+    let early = mask(layout, |k, s| {
+        in_view(job, s) && drawn[k / span] >> (k % span) & 1 == 1
+    });
     cpu::cull_masked(
         layout,
         &early,
@@ -368,14 +365,22 @@ pub fn cull_tested(
     lod: &FrameLod,
     pyramid: (&[f32], PyramidShape),
 ) -> CullOutput {
+    let kept = mask(layout, |_, s| {
+        in_view(job, s) && !occluded(s, context, pyramid)
+    });
+    let v = (job.instances_per_object, job.sort_origin);
+    cpu::cull_masked(layout, &kept, lod, v)
+}
+
+/// The cull positions (64 a word) whose sphere `keep` keeps.
+fn mask(layout: &CullLayout, keep: impl Fn(usize, Vec4) -> bool) -> Vec<u64> {
     let mut kept = vec![0u64; layout.spheres.len().div_ceil(64)];
     for (k, &s) in layout.spheres.iter().enumerate() {
-        if in_view(job, s) && !occluded(s, context, pyramid) {
+        if keep(k, s) {
             kept[k / 64] |= 1 << (k % 64);
         }
     }
-    let v = (job.instances_per_object, job.sort_origin);
-    cpu::cull_masked(layout, &kept, lod, v)
+    kept
 }
 
 /// Whether `job`'s frustum and split keep sphere `s`.

@@ -10,11 +10,11 @@ use super::options::CullMode;
 use super::passes::{Logged, PassRecord, Recording, Timing, close, compute_pass, open_display};
 use crate::bins::BinRange;
 use crate::contexts::DisplayContext;
+use crate::cull::CullOutput;
 use crate::cull::coarse::BLOCK;
 use crate::cull::cpu;
 use crate::cull::gpu::{CullerFeatures, GpuCuller};
 use crate::cull::gpu_buffers::{CullScene, CullTargets, OcclusionRoom};
-use crate::cull::{CullJob, CullOutput};
 use crate::error::Result;
 use crate::occlusion::{self, Phase, PyramidShape};
 use crate::profiling::percentile;
@@ -175,8 +175,7 @@ impl Culler {
                 }
                 // With occlusion a display's first cull is its early phase.
                 for (i, words) in visibility.iter().enumerate() {
-                    let (Some(words), Some(job)) = (words, planned(plan, CullView::Display(i)))
-                    else {
+                    let (Some(words), Some(job)) = (words, plan.job(CullView::Display(i))) else {
                         continue;
                     };
                     let early = occlusion::cull_early(layout, &job, &plan.cull.lod, words);
@@ -420,7 +419,7 @@ impl Culler {
         };
         let (Some(words), Some(job)) = (
             visibility.get_mut(i).and_then(Option::as_mut),
-            planned(plan, CullView::Display(i)),
+            plan.job(CullView::Display(i)),
         ) else {
             return;
         };
@@ -429,16 +428,11 @@ impl Culler {
         let (late, seen) = occlusion::cull_late(layout, display, lod, words, pyramid);
         *words = seen;
         set_output(outputs, CullView::Late(i), late);
-        if let (Some(far), Some(far_job)) = (far, planned(plan, CullView::Far(i))) {
+        if let (Some(far), Some(far_job)) = (far, plan.job(CullView::Far(i))) {
             let tested = occlusion::cull_tested(layout, (&far_job, far), lod, pyramid);
             set_output(outputs, CullView::Far(i), tested);
         }
     }
-}
-
-/// The job `plan` culls `view` with.
-fn planned(plan: &FramePlan, view: CullView) -> Option<CullJob> {
-    plan.culls.iter().find(|c| c.view == view).map(|c| c.job)
 }
 
 /// Sets (or adds) `view`'s output.

@@ -198,14 +198,10 @@ impl FarDisplay {
         (plan, display): (&FarPlan, &DisplayContext),
         culler: &Culler,
     ) -> u64 {
-        let sized = FarPlan {
-            size: self.size,
-            ..*plan
-        };
+        let sized = self.sized(plan);
         let slot = self.index as u32;
-        let tested = self.tested_context(plan, display);
         self.view.prepare(queue, &sized.context(slot), culler)
-            + self.view.prepare_cull_context(queue, &tested)
+            + (self.view).prepare_cull_context(queue, &sized.tested_context(display))
     }
 
     /// The context its cull tests with for `plan` (at the layer's fixed size) in the
@@ -215,11 +211,15 @@ impl FarDisplay {
         plan: &FarPlan,
         display: &DisplayContext,
     ) -> DisplayContext {
-        let sized = FarPlan {
+        self.sized(plan).tested_context(display)
+    }
+
+    /// `plan` at the layer's fixed size (the rig as made).
+    fn sized(&self, plan: &FarPlan) -> FarPlan {
+        FarPlan {
             size: self.size,
             ..*plan
-        };
-        sized.tested_context(display)
+        }
     }
 }
 

@@ -197,6 +197,12 @@ impl FramePlan {
     pub fn jobs(&self) -> Vec<CullJob> {
         self.culls.iter().map(|c| c.job).collect()
     }
+
+    /// The job of [`FramePlan::culls`] for `view` (`None` if the frame frustum's culls
+    /// have none).
+    pub fn job(&self, view: CullView) -> Option<CullJob> {
+        self.culls.iter().find(|c| c.view == view).map(|c| c.job)
+    }
 }
 
 /// How many instances each visible object becomes in `mode`'s draws of a display with

@@ -9,7 +9,7 @@ use std::time::Instant;
 
 use super::cpu_occlusion::{CpuLate, PyramidReadback, ReadPyramids};
 use super::culler::{CullShape, Culler};
-use super::far_pass::{Far, FarLayers};
+use super::far_pass::{Far, FarDisplay, FarLayers};
 use super::frame::{CullView, FramePlan, FrameStats};
 use super::inputs::PathInputs;
 use super::occlusion_pass::{
@@ -201,12 +201,7 @@ impl IndirectPath {
         log: &mut Vec<PassRecord>,
     ) -> FrameStats {
         let early = self.encode_early(encoder, (index, target), (&mut *timer, display), log);
-        let rest = self.encode_rest(encoder, (index, target), (timer, display), log);
-        FrameStats {
-            draw_calls: early.draw_calls + rest.draw_calls,
-            dispatches: early.dispatches + rest.dispatches,
-            ..early
-        }
+        early + self.encode_rest(encoder, (index, target), (timer, display), log)
     }
 
     /// Display `index` up to what its late phase needs: its cull, its draw (with
@@ -258,28 +253,41 @@ impl IndirectPath {
         let Some((late, inputs)) = self.late_inputs(index, target) else {
             return FrameStats::default();
         };
-        let mut stats = FrameStats::default();
-        let far = self
-            .far
-            .as_ref()
-            .and_then(|f| Some((f, f.displays[index].as_ref()?)));
-        if let Some((far, layer)) = far {
-            let recording = Recording {
-                timer: &mut *timer,
-                log: &mut *log,
-            };
-            let culling = (&self.draw_scene, &self.culler);
-            let (dispatches, draw_calls) =
-                (far.layers).encode(encoder, (layer, Phase::Tested), culling, recording, display);
-            stats.dispatches += dispatches;
-            stats.draw_calls += draw_calls;
-        }
-        let composite = |pass: &mut wgpu::RenderPass| match far {
+        let mut stats = self.encode_far(encoder, (index, Phase::Tested), (timer, display), log);
+        let composite = |pass: &mut wgpu::RenderPass| match self.far_layer(index) {
             Some((far, layer)) => far.layers.composite(pass, layer),
             None => 0,
         };
         stats.draw_calls += late.encode_draw(encoder, &inputs, composite, (timer, display), log);
         stats
+    }
+
+    /// Display `index`'s far layer, with what every far layer shares (`None` without).
+    fn far_layer(&self, index: usize) -> Option<(&Far, &FarDisplay)> {
+        let far = self.far.as_ref()?;
+        Some((far, far.displays[index].as_ref()?))
+    }
+
+    /// With a far layer, display `index`'s far cull in `phase` and far layer pass.
+    fn encode_far(
+        &self,
+        encoder: &mut wgpu::CommandEncoder,
+        (index, phase): (usize, Phase),
+        (timer, display): Timing,
+        log: &mut Vec<PassRecord>,
+    ) -> FrameStats {
+        let Some((far, layer)) = self.far_layer(index) else {
+            return FrameStats::default();
+        };
+        let recording = Recording { timer, log };
+        let culling = (&self.draw_scene, &self.culler);
+        let (dispatches, draw_calls) =
+            (far.layers).encode(encoder, (layer, phase), culling, recording, display);
+        FrameStats {
+            dispatches,
+            draw_calls,
+            ..FrameStats::default()
+        }
     }
 
     /// Display `index`'s late phase and what it is recorded with, where it has one.
@@ -383,23 +391,10 @@ impl IndirectPath {
             let what = (&mut *log, PassRecord::display("inset_cull", index));
             stats.dispatches += inset.encode_cull(encoder, &self.culler, (timer, display), what);
         }
-        let far = self
-            .far
-            .as_ref()
-            .and_then(|f| Some((f, f.displays[index].as_ref()?)));
         // With occlusion in the renderer's passes, the far layer waits for the pyramids.
-        if let Some((far, layer)) = far.filter(|_| one_pass || state.late.is_none()) {
-            let recording = Recording { timer, log };
-            let culling = (&self.draw_scene, &self.culler);
-            let (dispatches, draw_calls) = (far.layers).encode(
-                encoder,
-                (layer, Phase::Frustum),
-                culling,
-                recording,
-                display,
-            );
-            stats.dispatches += dispatches;
-            stats.draw_calls += draw_calls;
+        if one_pass || state.late.is_none() {
+            stats =
+                stats + self.encode_far(encoder, (index, Phase::Frustum), (timer, display), log);
         }
         stats
     }
@@ -454,8 +449,8 @@ impl IndirectPath {
     /// [`IndirectPath::draw`], with the far composite only where `composite`.
     fn draw_views(&self, pass: &mut wgpu::RenderPass, index: usize, composite: bool) -> u32 {
         let state = &self.displays[index];
-        let composite = match self.far.as_ref().map(|f| (f, &f.displays[index])) {
-            Some((far, Some(layer))) if composite => far.layers.composite(pass, layer),
+        let composite = match self.far_layer(index) {
+            Some((far, layer)) if composite => far.layers.composite(pass, layer),
             _ => 0,
         };
         let with = BinPipelines::Draw(state.key, &state.own);
