@@ -69,7 +69,7 @@
 //! the coarse cull, the far/near split, the light) and hands it to the path chosen once
 //! in [`Renderer::new`]: the GPU-driven one (`indirect.rs`: `instanced`, `multiview`) or
 //! the classic per-instance modes (`classic.rs`). Both cull every view through the one
-//! culler (`culler.rs`: GPU passes or the CPU culler); [`Renderer::encode`] records the
+//! culler (`culler/`: GPU passes or the CPU culler); [`Renderer::encode`] records the
 //! frame-level passes (scatter, coarse cull, shadow) and then each display's cull and
 //! draw pass (`far_pass.rs`, `shadow_pass.rs` and `view_pass.rs` for the extra views).
 
