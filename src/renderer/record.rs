@@ -1,0 +1,211 @@
+//! Recording a frame into the caller's encoder: the frame level's passes, then every
+//! display's (whole, or in two halves around a submission where the CPU culler needs the
+//! pyramids), and the headless conveniences that prepare, record and submit.
+
+use super::frame::FrameStats;
+use super::passes::{Recording, close, open_display};
+use super::{DisplayTarget, PassRecord, Path, Renderer, TargetViews};
+use crate::error::{Error, Result};
+use crate::profiling::GpuTimer;
+use crate::rig::Rig;
+
+impl Renderer {
+    /// Records every display into `targets[i]` for display `i`: its cull dispatches (GPU
+    /// culling) and its passes. With a timer, each display is a scope named after it and
+    /// each pass a scope within it, `cull` or `draw`. The edits of the last
+    /// [`Renderer::sync`] are copied into place from staging memory that comes back for
+    /// reuse when `encoder` is submitted: submit every encoder this records into.
+    /// Culling on the CPU with occlusion a frame needs its pyramids on the CPU halfway:
+    /// that is [`Error::Unsupported`] here; record it with [`Renderer::encode_early`] and
+    /// [`Renderer::encode_late`].
+    pub fn encode(
+        &mut self,
+        encoder: &mut wgpu::CommandEncoder,
+        targets: &[TargetViews],
+        timer: Option<&mut GpuTimer>,
+    ) -> Result<FrameStats> {
+        if self.reads_back() {
+            return Err(Error::Unsupported(
+                "occlusion with CPU culling needs each display's pyramids on the CPU between the frame's two halves: record them with encode_early and encode_late, submitting in between (or use submit_frame)".into(),
+            ));
+        }
+        self.encode_part(encoder, targets, timer, Part::Whole)
+    }
+
+    /// The first half of a frame: the frame's passes and each display's cull, draw and,
+    /// with occlusion, its pyramids (culling on the GPU, its late cull too). Submit
+    /// `encoder`, then record the rest with [`Renderer::encode_late`]. Any renderer can
+    /// record its frames so; culling on the CPU with occlusion it must.
+    pub fn encode_early(
+        &mut self,
+        encoder: &mut wgpu::CommandEncoder,
+        targets: &[TargetViews],
+        timer: Option<&mut GpuTimer>,
+    ) -> Result<FrameStats> {
+        self.encode_part(encoder, targets, timer, Part::Early)
+    }
+
+    /// The second half of a frame, after the encoder of [`Renderer::encode_early`] was
+    /// submitted: culling on the CPU with occlusion, waits for the GPU, reads every
+    /// display's pyramids back and culls each display's late phase (and far layer)
+    /// against them, then uploads those culls; then records each display's late phase.
+    pub fn encode_late(
+        &mut self,
+        (device, queue): (&wgpu::Device, &wgpu::Queue),
+        encoder: &mut wgpu::CommandEncoder,
+        targets: &[TargetViews],
+        timer: Option<&mut GpuTimer>,
+    ) -> Result<FrameStats> {
+        let culled = match &mut self.path {
+            Path::Indirect(p) => p.cull_late(device, queue)?,
+            Path::Classic(_) => FrameStats::default(),
+        };
+        Ok(culled + self.encode_part(encoder, targets, timer, Part::Rest)?)
+    }
+
+    /// Whether each frame reads its pyramids back halfway (CPU culling with occlusion):
+    /// then record it with [`Renderer::encode_early`], submit, and
+    /// [`Renderer::encode_late`].
+    pub fn reads_back(&self) -> bool {
+        matches!(&self.path, Path::Indirect(p) if p.culler.reads_back())
+    }
+
+    /// Records `part` of the frame into `encoder`.
+    fn encode_part(
+        &mut self,
+        encoder: &mut wgpu::CommandEncoder,
+        targets: &[TargetViews],
+        mut timer: Option<&mut GpuTimer>,
+        part: Part,
+    ) -> Result<FrameStats> {
+        if targets.len() != self.shapes.len() {
+            return Err(Error::TargetCount {
+                targets: targets.len(),
+                displays: self.shapes.len(),
+            });
+        }
+        if let Path::Indirect(p) = &self.path {
+            p.check_depth(targets)?;
+            (0..self.shapes.len()).try_for_each(|i| p.check_own_pipelines(i))?;
+        }
+        let mut stats = match part {
+            Part::Rest => FrameStats::default(),
+            _ => self.encode_frame(encoder, &mut timer),
+        };
+        for (i, target) in targets.iter().enumerate() {
+            let display = open_display(&timer, &self.names[i], encoder);
+            let timing = (&mut timer, &display);
+            let log = &mut self.passes;
+            let at = (i, target);
+            let recorded = match (&self.path, part) {
+                (Path::Indirect(p), Part::Whole) => {
+                    p.encode_display(encoder, i, target, timing, log)
+                }
+                (Path::Indirect(p), Part::Early) => p.encode_early(encoder, at, timing, log),
+                (Path::Indirect(p), Part::Rest) => p.encode_rest(encoder, at, timing, log),
+                (Path::Classic(_), Part::Rest) => FrameStats::default(),
+                (Path::Classic(p), _) => p.encode_display(encoder, i, target, timing, log),
+            };
+            stats.draw_calls += recorded.draw_calls;
+            stats.dispatches += recorded.dispatches;
+            close(&timer, encoder, display);
+        }
+        if let Some(t) = timer.filter(|_| part != Part::Early) {
+            t.resolve(encoder);
+        }
+        Ok(stats)
+    }
+
+    /// The frame level's passes, before any display's (and a new pass log): the
+    /// scatter of moved instances, the coarse cull, the shadow pass.
+    pub(super) fn encode_frame(
+        &mut self,
+        encoder: &mut wgpu::CommandEncoder,
+        timer: &mut Option<&mut GpuTimer>,
+    ) -> FrameStats {
+        self.passes.clear();
+        let (scattered, cpu_staging) = self.scatter.encode(encoder);
+        if scattered > 0 {
+            self.passes.push(PassRecord::frame("scatter"));
+        }
+        let mut recording = Recording {
+            timer,
+            log: &mut self.passes,
+        };
+        let posed = match &self.pose {
+            Some(pose) => pose.encode(encoder, recording.again()),
+            None => 0,
+        };
+        let skinned = match &self.skin {
+            Some(skin) => skin.encode(encoder, recording.again()),
+            None => 0,
+        };
+        let stats = match &self.path {
+            Path::Indirect(p) => p.encode_frame(encoder, recording),
+            Path::Classic(p) => p.encode_frame(encoder, recording),
+        };
+        FrameStats {
+            dispatches: stats.dispatches + scattered + posed + skinned,
+            cpu_staging,
+            ..stats
+        }
+    }
+
+    /// The passes the last `encode` (or `encode_culls`) recorded, in order, each with its
+    /// level (frame, display, eye): the shadow pass appears once per frame, whatever
+    /// the displays.
+    pub fn passes(&self) -> &[PassRecord] {
+        &self.passes
+    }
+
+    /// Headless convenience: [`Renderer::prepare`], [`Renderer::encode`] into a new encoder
+    /// and submit, rendering into `targets` (from [`Renderer::create_targets`]).
+    pub fn submit_frame(
+        &mut self,
+        device: &wgpu::Device,
+        queue: &wgpu::Queue,
+        rig: &Rig,
+        time: f32,
+        targets: &[DisplayTarget],
+    ) -> Result<FrameStats> {
+        self.submit_frame_timed(device, queue, rig, time, targets, None)
+    }
+
+    /// [`Renderer::submit_frame`] with GPU timing and pipeline statistics recorded into
+    /// `timer` (read it after the frame completes).
+    pub fn submit_frame_timed(
+        &mut self,
+        device: &wgpu::Device,
+        queue: &wgpu::Queue,
+        rig: &Rig,
+        time: f32,
+        targets: &[DisplayTarget],
+        timer: Option<&mut GpuTimer>,
+    ) -> Result<FrameStats> {
+        let prepared = self.prepare(queue, rig, time)?;
+        let mut encoder = device.create_command_encoder(&Default::default());
+        let views: Vec<_> = targets.iter().map(DisplayTarget::views).collect();
+        let recorded = match self.reads_back() {
+            true => {
+                let mut timer = timer;
+                let early = self.encode_early(&mut encoder, &views, timer.as_deref_mut())?;
+                queue.submit([encoder.finish()]);
+                encoder = device.create_command_encoder(&Default::default());
+                early + self.encode_late((device, queue), &mut encoder, &views, timer)?
+            }
+            false => self.encode(&mut encoder, &views, timer)?,
+        };
+        queue.submit([encoder.finish()]);
+        Ok(prepared + recorded)
+    }
+}
+
+/// Which part of a frame an `encode` records.
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+enum Part {
+    Whole,
+    /// Up to each display's pyramids.
+    Early,
+    /// The rest.
+    Rest,
+}
