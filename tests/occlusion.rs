@@ -433,20 +433,30 @@ fn gpu_phases_match_the_cpu_twin() {
 
 /// The GPU's pyramids equal the CPU reduction of the depth they were built from, on
 /// depth images of odd sizes (random scenes rendered at odd eye sizes), side by side
-/// and in multiview's layers. The pose holds
+/// and in multiview's layers, over one workgroup's tile and several. The pose holds
 /// still for three frames, so the third frame's late phase draws nothing and the depth
 /// read after it is the depth its pyramids were built from (asserted).
 #[test]
 fn pyramids_match_the_cpu_reduction() {
     let gpu = gpu();
     let multiview = StereoMode::Multiview;
-    for (seed, [w, h], mode) in [
-        (7, [37, 23], StereoMode::Instanced),
-        (8, [64, 9], StereoMode::Instanced),
-        (9, [1, 5], StereoMode::Instanced),
-        (10, [37, 23], multiview),
+    // (seed, eye size, mode, whether the scene is rooms)
+    for (seed, [w, h], mode, rooms) in [
+        (7, [37, 23], StereoMode::Instanced, false),
+        (8, [64, 9], StereoMode::Instanced, false),
+        (9, [1, 5], StereoMode::Instanced, false),
+        (10, [37, 23], multiview, false),
+        // Past one workgroup's tile (32 x 32 texels of level 0) and past the six levels
+        // of one dispatch, so that the second dispatch reads the first's last level;
+        // inside a room, so that no pixel is the cleared far depth and the coarse
+        // levels are not all 1.
+        (11, [150, 77], StereoMode::Instanced, true),
+        (12, [133, 140], multiview, true),
     ] {
-        let scene = procedural::scene(400, 6, seed);
+        let scene = match rooms {
+            true => procedural::rooms(300, seed),
+            false => procedural::scene(400, 6, seed),
+        };
         let rig = sized("hmd", w, h);
         let options = RendererOptions {
             mode,
@@ -477,6 +487,10 @@ fn pyramids_match_the_cpu_reduction() {
         let diagnostics = session.renderer.diagnostics(&gpu.device, &gpu.queue);
         let pyramid = diagnostics.pyramid().unwrap().unwrap();
         assert!(depth.iter().any(|&d| d < 1.0), "{w}x{h}: nothing drawn");
+        if rooms {
+            let top = |eye: u32| pyramid[((eye + 1) * shape.eye_len() - 1) as usize];
+            assert!(top(0) < 1.0 && top(1) < 1.0, "{w}x{h}: the far depth shows");
+        }
         assert_eq!(pyramid, occlusion::reduce(&depth, 2 * w, shape), "{w}x{h}");
     }
 }

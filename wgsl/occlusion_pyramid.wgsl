@@ -1,9 +1,15 @@
 // Each eye's depth pyramid of a display (src/occlusion/mod.rs is the CPU twin; its
-// module documentation says what a texel holds), two levels per dispatch:
-// `reduce_depth` reads the eye's viewport of the display's depth target into level 0
-// and level 1; `reduce_level` level `level.index` - 1 into level `level.index` and the
-// one after. The z of the dispatch is the eye: no reduction crosses the seam.
-// Composed after occlusion.wgsl's layout helpers, the contexts and these bindings:
+// module documentation says what a texel holds), six levels per dispatch:
+// `reduce_depth` reads the eye's viewport of the display's depth target into levels
+// 0 to 5; `reduce_level` level `level.index` - 1 into level `level.index` and the five
+// after it. The z of the dispatch is the eye: no reduction crosses the seam.
+// Each dispatch costs the CPU a flush of its bindings and a barrier in wgpu, more
+// than its GPU work at these sizes, so a dispatch does as many levels as one
+// workgroup's tile allows: a 16 x 16 workgroup owns a 32 x 32 tile of its first level
+// (each invocation a 2 x 2 block of it) and reduces it to one texel.
+// Composed after occlusion.wgsl's layout helpers, the contexts, the constants
+// LEVELS_PER_DISPATCH (6: 32 x 32 texels of the first level down to 1 x 1) and SIDE
+// (16, invocations per workgroup side), and these bindings:
 //   display: DisplayContext (uniform), level: PyramidLevel (uniform, dynamic offset),
 //   pyramid: array<f32> (read_write), depth: the depth target, read by
 //   depth_texel(pixel, eye) (src/shaders/mod.rs: a layer per eye in multiview; under
@@ -13,84 +19,94 @@ struct PyramidLevel {
     index: u32,
 }
 
+// Texels of the level being reduced within the workgroup, one per invocation.
+var<workgroup> tile: array<f32, SIDE * SIDE>;
 
-// Each workgroup's texels of the level it writes, for the next level.
-var<workgroup> tile: array<f32, 64>;
-
-@compute @workgroup_size(8, 8, 1)
+@compute @workgroup_size(SIDE, SIDE, 1)
 fn reduce_depth(
-    @builtin(global_invocation_id) id: vec3<u32>,
     @builtin(local_invocation_id) local: vec3<u32>,
     @builtin(workgroup_id) group: vec3<u32>,
 ) {
-    let size = level_size(0u);
-    let e = id.z;
-    var d = 0.0;
-    if (all(id.xy < size)) {
+    reduce(0u, group.z, local.xy, group.xy);
+}
+
+// Levels `level.index` (a multiple of LEVELS_PER_DISPATCH) on, from the one before.
+@compute @workgroup_size(SIDE, SIDE, 1)
+fn reduce_level(
+    @builtin(local_invocation_id) local: vec3<u32>,
+    @builtin(workgroup_id) group: vec3<u32>,
+) {
+    reduce(level.index, group.z, local.xy, group.xy);
+}
+
+// Texel `p` of level `l` of eye `e` from what it covers one level finer (the depth
+// target's pixels for level 0): the farthest of 2 x 2, clamped at that level's edge.
+fn texel(l: u32, p: vec2<u32>, e: u32, levels: u32) -> f32 {
+    let at = 2u * p;
+    if (l == 0u) {
         let origin = eye_origin(e);
         let last = eye_size() - 1u;
-        let at = 2u * id.xy;
-        d = farthest4(
+        return farthest4(
             depth_texel(origin + min(at, last), e),
             depth_texel(origin + min(at + vec2(1u, 0u), last), e),
             depth_texel(origin + min(at + vec2(0u, 1u), last), e),
             depth_texel(origin + min(at + vec2(1u, 1u), last), e),
         );
-        pyramid[level_offset(e, 0u, pyramid_levels()) + id.y * size.x + id.x] = d;
     }
-    next_level(0u, e, local.xy, group.xy, d);
-}
-
-// Level `level.index` (an even level from 2 on) from the one before it.
-@compute @workgroup_size(8, 8, 1)
-fn reduce_level(
-    @builtin(global_invocation_id) id: vec3<u32>,
-    @builtin(local_invocation_id) local: vec3<u32>,
-    @builtin(workgroup_id) group: vec3<u32>,
-) {
-    let l = level.index;
-    let size = level_size(l);
-    let e = id.z;
-    var d = 0.0;
-    if (all(id.xy < size)) {
-        let levels = pyramid_levels();
-        let src = level_size(l - 1u);
-        let base = level_offset(e, l - 1u, levels);
-        let last = src - 1u;
-        let at = 2u * id.xy;
-        let a = min(at, last);
-        let b = min(at + vec2(1u), last);
-        d = farthest4(
-            pyramid[base + a.y * src.x + a.x],
-            pyramid[base + a.y * src.x + b.x],
-            pyramid[base + b.y * src.x + a.x],
-            pyramid[base + b.y * src.x + b.x],
-        );
-        pyramid[level_offset(e, l, levels) + id.y * size.x + id.x] = d;
-    }
-    next_level(l, e, local.xy, group.xy, d);
-}
-
-// Level l + 1 of the workgroup's 4 x 4 texels from its 8 x 8 of level l (`d`, each
-// invocation's): two levels per dispatch. A texel of l + 1 that exists reads only
-// texels of l inside this workgroup's tile, clamped at the level's edge as above.
-fn next_level(l: u32, e: u32, local: vec2<u32>, group: vec2<u32>, d: f32) {
-    tile[local.y * 8u + local.x] = d;
-    workgroupBarrier();
-    let levels = pyramid_levels();
-    let size = level_size(l + 1u);
-    let at = group * 4u + local;
-    if (l + 1u >= levels || any(local >= vec2(4u)) || any(at >= size)) {
-        return;
-    }
-    let last = level_size(l) - 1u - group * 8u;
-    let a = min(2u * local, last);
-    let b = min(2u * local + 1u, last);
-    let farthest = farthest4(
-        tile[a.y * 8u + a.x],
-        tile[a.y * 8u + b.x],
-        tile[b.y * 8u + a.x],
-        tile[b.y * 8u + b.x],
+    let src = level_size(l - 1u);
+    let base = level_offset(e, l - 1u, levels);
+    let a = min(at, src - 1u);
+    let b = min(at + 1u, src - 1u);
+    return farthest4(
+        pyramid[base + a.y * src.x + a.x],
+        pyramid[base + a.y * src.x + b.x],
+        pyramid[base + b.y * src.x + a.x],
+        pyramid[base + b.y * src.x + b.x],
     );
-    pyramid[level_offset(e, l + 1u, levels) + at.y * size.x + at.x] = farthest;
+}
+
+// The workgroup's tile of level `first` and the five levels after it. Texels past a
+// level's edge are reduced too, and never written: reduced from clamped reads of
+// texels that exist, each is the farthest of a part of what the edge texel beside it
+// covers, so reading it beside that texel (where the reference reads the edge twice)
+// changes nothing.
+fn reduce(first: u32, e: u32, local: vec2<u32>, group: vec2<u32>) {
+    let levels = pyramid_levels();
+    let size = level_size(first);
+    let base = level_offset(e, first, levels);
+    // This invocation's 2 x 2 block of level `first`.
+    let p = group * (2u * SIDE) + 2u * local;
+    var d = 0.0;
+    for (var k = 0u; k < 4u; k++) {
+        let q = p + vec2(k & 1u, k >> 1u);
+        let t = texel(first, q, e, levels);
+        if (all(q < size)) {
+            pyramid[base + q.y * size.x + q.x] = t;
+        }
+        d = max(d, t);
+    }
+    var span = SIDE;
+    for (var n = 1u; n < LEVELS_PER_DISPATCH && first + n < levels; n++) {
+        let l = first + n;
+        let here = level_size(l);
+        let at = group * span + local;
+        if (all(local < vec2(span)) && all(at < here)) {
+            pyramid[level_offset(e, l, levels) + at.y * here.x + at.x] = d;
+        }
+        workgroupBarrier();
+        tile[local.y * SIDE + local.x] = d;
+        workgroupBarrier();
+        let half = span / 2u;
+        if (all(local < vec2(half))) {
+            let i = 2u * local;
+            let j = i + 1u;
+            d = farthest4(
+                tile[i.y * SIDE + i.x],
+                tile[i.y * SIDE + j.x],
+                tile[j.y * SIDE + i.x],
+                tile[j.y * SIDE + j.x],
+            );
+        }
+        span = half;
+    }
 }

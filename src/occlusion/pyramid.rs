@@ -1,11 +1,11 @@
 //! The depth pyramids of a display on the GPU (`wgsl/occlusion_pyramid.wgsl`): one
-//! dispatch from the display's depth target into each eye's levels 0 and 1, then one
-//! per two levels, each eye in its own z slice so that no reduction crosses the seam. The CPU
+//! dispatch from the display's depth target into each eye's levels 0 to 5, then one
+//! per six levels, each eye in its own z slice so that no reduction crosses the seam. The CPU
 //! twin is [`crate::occlusion::reduce`].
 
 use super::PyramidShape;
 use crate::buffers::init_buffer;
-use crate::shaders::{compute_pipeline, pyramid_source};
+use crate::shaders::{PYRAMID_LEVELS_PER_DISPATCH, PYRAMID_SIDE, compute_pipeline, pyramid_source};
 
 /// The pyramid passes for depth targets of one sample count and layering.
 pub struct PyramidPass {
@@ -19,8 +19,8 @@ pub struct PyramidPass {
 
 /// Levels the uniform holds: eyes up to 2^MAX_LEVELS pixels wide.
 const MAX_LEVELS: u32 = 24;
-/// Invocations per workgroup side.
-const TILE: u32 = 8;
+/// Texels of its first level a workgroup covers per side (each invocation a 2 x 2 block).
+const TILE: u32 = 2 * PYRAMID_SIDE;
 
 impl PyramidPass {
     /// The passes over a depth target of `samples` samples per pixel, `layered` (a
@@ -89,7 +89,7 @@ impl PyramidPass {
         })
     }
 
-    /// Records the pyramids of `shape` with `group`, two levels per dispatch; returns
+    /// Records the pyramids of `shape` with `group`, six levels per dispatch; returns
     /// the dispatches.
     pub fn encode(
         &self,
@@ -98,7 +98,7 @@ impl PyramidPass {
         shape: PyramidShape,
     ) -> u32 {
         let levels = shape.levels().min(MAX_LEVELS);
-        for l in (0..levels).step_by(2) {
+        for l in (0..levels).step_by(PYRAMID_LEVELS_PER_DISPATCH as usize) {
             let size = shape.level_size(l);
             pass.set_pipeline(match l {
                 0 => &self.reduce_depth,
@@ -107,7 +107,7 @@ impl PyramidPass {
             pass.set_bind_group(0, group, &[l * self.stride]);
             pass.dispatch_workgroups(size.x.div_ceil(TILE), size.y.div_ceil(TILE), shape.eyes);
         }
-        levels.div_ceil(2)
+        levels.div_ceil(PYRAMID_LEVELS_PER_DISPATCH)
     }
 }
 

@@ -203,6 +203,14 @@ pub fn subgroup_tier(device: &wgpu::Device) -> bool {
         && WORKGROUP_SIZE.is_multiple_of(size)
 }
 
+/// Levels one dispatch of `wgsl/occlusion_pyramid.wgsl` writes: a workgroup of
+/// [`PYRAMID_SIDE`]² invocations reduces a tile of its first level, twice as wide, to
+/// one texel. One dispatch more costs the CPU a flush of bindings and a barrier in
+/// wgpu, more than the GPU work of these small levels.
+pub const PYRAMID_LEVELS_PER_DISPATCH: u32 = 6;
+/// Invocations per side of a pyramid workgroup: 2^(levels per dispatch - 2).
+pub const PYRAMID_SIDE: u32 = 1 << (PYRAMID_LEVELS_PER_DISPATCH - 2);
+
 /// The depth pyramid's passes (`wgsl/occlusion_pyramid.wgsl`) over a depth target of
 /// `samples` samples per pixel, `layered` (multiview: a layer per eye) or not (the eyes
 /// side by side); the layout is [`crate::occlusion::pyramid`]'s. WebGPU has no
@@ -227,6 +235,8 @@ pub fn pyramid_source(samples: u32, layered: bool) -> String {
     };
     let bindings = format!(
         "const SAMPLES: i32 = {samples};\n\
+         const LEVELS_PER_DISPATCH: u32 = {PYRAMID_LEVELS_PER_DISPATCH}u;\n\
+         const SIDE: u32 = {PYRAMID_SIDE}u;\n\
          @group(0) @binding(0) var<uniform> display: DisplayContext;\n\
          @group(0) @binding(1) var<uniform> level: PyramidLevel;\n\
          @group(0) @binding(2) var<storage, read_write> pyramid: array<f32>;\n\

@@ -63,7 +63,9 @@ pub use bindings::{
     bind_group_layout,
 };
 pub(crate) use bindings::{compute_pipeline, dispatch_size, pipeline_layout};
-pub use cull_passes::{CullPass, Phase, pyramid_source, subgroup_tier};
+pub use cull_passes::{
+    CullPass, PYRAMID_LEVELS_PER_DISPATCH, PYRAMID_SIDE, Phase, pyramid_source, subgroup_tier,
+};
 pub use hooks::{Shaders, check_shading};
 pub use windows::{Window, Windowed, Windows};
 
