@@ -140,13 +140,11 @@ impl IndirectPath {
 
     /// Writes `plan`'s display contexts and the culler's results for every view: each
     /// display's, each far layer's, the light's.
-    pub(super) fn prepare(&mut self, queue: &wgpu::Queue, plan: &FramePlan) -> FrameStats {
+    /// Culling on the CPU with occlusion, the plan stays for the frame's late culls.
+    pub(super) fn prepare(&mut self, queue: &wgpu::Queue, plan: FramePlan) -> FrameStats {
         let mut stats = FrameStats::default();
-        if let Some(readback) = &mut self.readback {
-            readback.plan = Some(plan.clone());
-        }
         let start = Instant::now();
-        stats.bytes_uploaded += self.culler.prepare(queue, plan);
+        stats.bytes_uploaded += self.culler.prepare(queue, &plan);
         stats.cpu_cull = start.elapsed();
         let start = Instant::now();
         for ((state, ctx), inset) in self.displays.iter().zip(&plan.displays).zip(&plan.insets) {
@@ -156,13 +154,16 @@ impl IndirectPath {
             }
         }
         if let Some(far) = &mut self.far {
-            stats.bytes_uploaded += far.prepare(queue, plan, &self.culler);
+            stats.bytes_uploaded += far.prepare(queue, &plan, &self.culler);
         }
         if let (Some(shadow), Some(_)) = (&self.shadow, &plan.light_cull) {
             let size = self.draw_scene.shadow_map.size;
             stats.bytes_uploaded += shadow.prepare(queue, &plan.light, size, &self.culler);
         }
         stats.cpu_upload = start.elapsed();
+        if let Some(readback) = &mut self.readback {
+            readback.plan = Some(plan);
+        }
         stats
     }
 

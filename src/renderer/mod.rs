@@ -337,7 +337,7 @@ impl Renderer {
         let plan = self.plan(rig, time)?;
         let frame_bytes = write(queue, &self.frame, &uniform_bytes(&plan.frame));
         let mut stats = match &mut self.path {
-            Path::Indirect(p) => p.prepare(queue, &plan),
+            Path::Indirect(p) => p.prepare(queue, plan),
             Path::Classic(p) => p.prepare(queue, &plan),
         };
         // Texels go up with the first frame: `new` has no queue.

@@ -164,8 +164,15 @@ impl Culler {
                 outputs,
                 visibility,
             } => {
-                let culled = cpu::cull_frame(layout, &plan.jobs(), &plan.cull);
-                *outputs = plan.culls.iter().map(|c| c.view).zip(culled).collect();
+                // A display that culls by occlusion culls its early phase below instead.
+                let occludes = |view: CullView| match view {
+                    CullView::Display(i) => visibility.get(i).is_some_and(Option::is_some),
+                    _ => false,
+                };
+                let plain: Vec<_> = plan.culls.iter().filter(|c| !occludes(c.view)).collect();
+                let jobs: Vec<_> = plain.iter().map(|c| c.job).collect();
+                let culled = cpu::cull_frame(layout, &jobs, &plan.cull);
+                *outputs = plain.iter().map(|c| c.view).zip(culled).collect();
                 // Outside the coarse cull: one more pass for the light and the insets.
                 let apart: Vec<_> = plan.light_cull.iter().chain(&plan.inset_culls).collect();
                 if !apart.is_empty() {
