@@ -29,35 +29,14 @@ pub struct Config {
 
 /// Times `configs` (two: the second over the first) on `rig` in `rounds` alternating
 /// rounds of `frames` frames after a warm-up round; prints each round's ratio, each
-/// configuration's median phases, and the median ratio, which it returns.
-pub fn compare(
-    gpu: &Gpu,
-    rig: &Rig,
-    configs: &mut [Config; 2],
-    (rounds, frames): (u32, u32),
-) -> f64 {
-    let mut all: Vec<Vec<Phases>> = vec![Vec::new(); 2];
-    let mut ratios = Vec::new();
-    for round in 0..=rounds {
-        let mut medians = Vec::new();
-        for (k, c) in configs.iter_mut().enumerate() {
-            let timed: Vec<Phases> = (0..frames)
-                .map(|_| frame(gpu, &mut c.renderer, &c.targets, rig))
-                .collect();
-            let totals: Vec<f64> = timed.iter().map(|p| p.iter().sum()).collect();
-            medians.push(percentile(&totals, 0.5));
-            // Round 0 warms up: the first frames compile llvmpipe's shader variants.
-            if round > 0 {
-                all[k].extend(timed);
-            }
-        }
-        if round > 0 {
-            ratios.push(medians[1] / medians[0]);
-            println!(
-                "round {round}: CPU per frame {:.3}",
-                ratios[ratios.len() - 1]
-            );
-        }
+/// configuration's median phases, and the median ratio, which it returns. Then the
+/// same recorded only.
+pub fn compare(gpu: &Gpu, rig: &Rig, configs: &mut [Config; 2], shape: (u32, u32)) -> f64 {
+    let waited = |c: &mut Config| frame(gpu, &mut c.renderer, &c.targets, rig);
+    let total = |p: &Phases| p.iter().sum();
+    let (all, ratios) = alternate(configs, shape, waited, total, || ());
+    for (round, r) in ratios.iter().enumerate() {
+        println!("round {}: CPU per frame {r:.3}", round + 1);
     }
     for (c, timed) in configs.iter().zip(&all) {
         let phase = |i: usize| percentile(&timed.iter().map(|p| p[i]).collect::<Vec<_>>(), 0.5);
@@ -75,35 +54,15 @@ pub fn compare(
         "{} / {}, median of the rounds: {ratio:.3}",
         configs[1].name, configs[0].name
     );
-    compare_recorded(gpu, rig, configs, (rounds, frames));
-    ratio
-}
-
-/// [`compare`]'s rounds with frames recorded and dropped, not submitted; prints each
-/// configuration's median and the median ratio of the rounds.
-fn compare_recorded(gpu: &Gpu, rig: &Rig, configs: &mut [Config; 2], (rounds, frames): (u32, u32)) {
-    let mut all: Vec<Vec<f64>> = vec![Vec::new(); 2];
-    let mut ratios = Vec::new();
-    for round in 0..=rounds {
-        let mut medians = Vec::new();
-        for (k, c) in configs.iter_mut().enumerate() {
-            let timed: Vec<f64> = (0..frames)
-                .map(|_| recorded(gpu, &mut c.renderer, &c.targets, rig))
-                .collect();
-            medians.push(percentile(&timed, 0.5));
-            // The buffer writes of the frames' prepares, which no frame submitted.
-            gpu.queue.submit([]);
-            gpu.device
-                .poll(wgpu::PollType::wait_indefinitely())
-                .expect("poll");
-            if round > 0 {
-                all[k].extend(timed);
-            }
-        }
-        if round > 0 {
-            ratios.push(medians[1] / medians[0]);
-        }
-    }
+    let record_only = |c: &mut Config| recorded(gpu, &mut c.renderer, &c.targets, rig);
+    // The buffer writes of the frames' prepares, which no frame submitted.
+    let flush = || {
+        gpu.queue.submit([]);
+        gpu.device
+            .poll(wgpu::PollType::wait_indefinitely())
+            .expect("poll");
+    };
+    let (all, ratios) = alternate(configs, shape, record_only, |t| *t, flush);
     for (c, timed) in configs.iter().zip(&all) {
         println!(
             "{} recorded only: median {:.1} us",
@@ -117,6 +76,37 @@ fn compare_recorded(gpu: &Gpu, rig: &Rig, configs: &mut [Config; 2], (rounds, fr
         configs[0].name,
         percentile(&ratios, 0.5)
     );
+    ratio
+}
+
+/// `rounds` alternating rounds of `frames` frames of each configuration after a warm-up
+/// round (the first frames compile llvmpipe's shader variants), `after` each block:
+/// each configuration's frames and each round's ratio of the medians of `total`.
+fn alternate<T>(
+    configs: &mut [Config; 2],
+    (rounds, frames): (u32, u32),
+    mut run: impl FnMut(&mut Config) -> T,
+    total: impl Fn(&T) -> f64,
+    mut after: impl FnMut(),
+) -> ([Vec<T>; 2], Vec<f64>) {
+    let mut all = [Vec::new(), Vec::new()];
+    let mut ratios = Vec::new();
+    for round in 0..=rounds {
+        let mut medians = [0.0; 2];
+        for (k, c) in configs.iter_mut().enumerate() {
+            let timed: Vec<T> = (0..frames).map(|_| run(c)).collect();
+            let totals: Vec<f64> = timed.iter().map(&total).collect();
+            medians[k] = percentile(&totals, 0.5);
+            after();
+            if round > 0 {
+                all[k].extend(timed);
+            }
+        }
+        if round > 0 {
+            ratios.push(medians[1] / medians[0]);
+        }
+    }
+    (all, ratios)
 }
 
 /// Microseconds to prepare, encode and finish one frame, which is then dropped.
