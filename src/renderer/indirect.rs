@@ -139,8 +139,8 @@ impl IndirectPath {
     }
 
     /// Writes `plan`'s display contexts and the culler's results for every view: each
-    /// display's, each far layer's, the light's.
-    /// Culling on the CPU with occlusion, the plan stays for the frame's late culls.
+    /// display's, each far layer's, the light's. Culling on the CPU with occlusion, the
+    /// plan is kept for the frame's late culls.
     pub(super) fn prepare(&mut self, queue: &wgpu::Queue, plan: FramePlan) -> FrameStats {
         let mut stats = FrameStats::default();
         let start = Instant::now();
