@@ -1166,3 +1166,263 @@ fn cpu_culling_with_occlusion_needs_two_halves() {
             .is_some()
     );
 }
+
+/// One step of a churned sequence: what it does to the live scene.
+#[derive(Clone, Copy, Debug, PartialEq)]
+enum Churn {
+    /// A dozen instances removed (kept for `Insert`).
+    Remove,
+    /// A dozen removed and inserted again as they were (the CLI's `--churn`): each
+    /// lands in its mesh's lowest vacant place, often one a drawn instance just left.
+    Reinsert,
+    /// A dozen moved into view in front of the viewer and out of it behind walls.
+    Move,
+    /// A dozen removed ones inserted again elsewhere, into the places removes left.
+    Insert,
+    /// A few of each of the above in one change set.
+    Mix,
+    /// More instances than the renderer has slots: everything uploaded again.
+    Reallocate,
+    /// One mesh given more instances than it has vacant places: the cull order laid
+    /// out again into the same buffers.
+    Reload,
+}
+
+/// The churned sequence: each kind of edit alone on two frames running, then mixed
+/// with the others; the re-layout comes after the reallocation, which gives the
+/// buffers room for it.
+const CHURNED: [Churn; 15] = [
+    Churn::Remove,
+    Churn::Remove,
+    Churn::Reinsert,
+    Churn::Reinsert,
+    Churn::Move,
+    Churn::Move,
+    Churn::Insert,
+    Churn::Insert,
+    Churn::Mix,
+    Churn::Mix,
+    Churn::Reallocate,
+    Churn::Mix,
+    Churn::Reload,
+    Churn::Mix,
+    Churn::Mix,
+];
+
+/// Edits a live scene by [`Churn`] steps from a seeded generator.
+struct Churner {
+    rng: Pcg64Mcg,
+    /// Instances removed and not yet inserted again.
+    removed: Vec<Instance>,
+}
+
+impl Churner {
+    fn apply(&mut self, live: &mut LiveScene, churn: Churn) {
+        match churn {
+            Churn::Remove => self.remove(live, 12),
+            Churn::Reinsert => self.reinsert(live, 12),
+            Churn::Move => self.moved(live, 12),
+            Churn::Insert => self.insert(live, 12),
+            Churn::Mix => {
+                self.remove(live, 4);
+                self.reinsert(live, 4);
+                self.moved(live, 4);
+                self.insert(live, 4);
+            }
+            Churn::Reallocate => {
+                let extra = live.slot_count() / 2 + 1;
+                for _ in 0..extra {
+                    let mut copy = *live.get(self.pick(live)).unwrap();
+                    copy.world_from_local = self.somewhere() * copy.world_from_local;
+                    live.insert(copy).unwrap();
+                }
+            }
+            Churn::Reload => {
+                // The mesh with the fewest vacant places, filled and one more.
+                let places = live.places();
+                let vacant = |m: u32| {
+                    let (first, count) = places.range(m);
+                    let slots = &places.slots()[first as usize..(first + count) as usize];
+                    slots.iter().filter(|&&s| s == LiveScene::VACANT).count()
+                };
+                let meshes = live.scene().meshes.len() as u32;
+                let mesh = (0..meshes).min_by_key(|&m| vacant(m)).unwrap();
+                let template = (live.handles().into_iter())
+                    .find(|&h| live.get(h).unwrap().mesh == mesh)
+                    .unwrap();
+                for _ in 0..=vacant(mesh) {
+                    let mut copy = *live.get(template).unwrap();
+                    copy.world_from_local = self.somewhere() * copy.world_from_local;
+                    live.insert(copy).unwrap();
+                }
+            }
+        }
+    }
+
+    fn pick(&mut self, live: &LiveScene) -> stereocull::live::Handle {
+        let handles = live.handles();
+        handles[self.rng.random_range(0..handles.len())]
+    }
+
+    fn remove(&mut self, live: &mut LiveScene, n: usize) {
+        for _ in 0..n {
+            let handle = self.pick(live);
+            self.removed.push(live.remove(handle).unwrap());
+        }
+    }
+
+    fn reinsert(&mut self, live: &mut LiveScene, n: usize) {
+        let gone: Vec<_> = (0..n)
+            .map(|_| {
+                let handle = self.pick(live);
+                live.remove(handle).unwrap()
+            })
+            .collect();
+        for instance in gone {
+            live.insert(instance).unwrap();
+        }
+    }
+
+    fn insert(&mut self, live: &mut LiveScene, n: usize) {
+        for _ in 0..n.min(self.removed.len()) {
+            let mut instance = self.removed.swap_remove(0);
+            instance.world_from_local = self.somewhere() * instance.world_from_local;
+            live.insert(instance).unwrap();
+        }
+    }
+
+    fn moved(&mut self, live: &mut LiveScene, n: usize) {
+        for _ in 0..n {
+            let handle = self.pick(live);
+            let at = live.get(handle).unwrap().world_from_local;
+            live.set_transform(handle, self.somewhere() * at).unwrap();
+        }
+    }
+
+    /// A shift of a few meters: into a room beside or out of view as often as into it.
+    fn somewhere(&mut self) -> Affine3A {
+        let step = Vec3::new(
+            self.rng.random_range(-6.0..6.0),
+            0.0,
+            self.rng.random_range(-6.0..6.0),
+        );
+        Affine3A::from_translation(step)
+    }
+}
+
+/// Through a churned sequence of live edits (removes, re-inserts into places drawn
+/// instances left, moves, inserts, each alone and mixed, a re-layout of the cull order
+/// and a reallocation), on random scenes of rooms and props, on `hmd`, `cave` (the
+/// coarse cull on) and `hmd-peripheral` in multiview: culling on the CPU with
+/// occlusion writes the GPU cull's early and late phases and visibility words byte for
+/// byte, and draws its images exactly; and the images with occlusion equal the images
+/// without it (the GPU's; multiview within its ties), so neither side drops anything
+/// visible. `hmd-foveated` culls no occlusion (`RendererOptions::occludes`).
+#[test]
+fn cpu_and_gpu_culls_agree_with_occlusion_through_churn() {
+    let gpu = gpu();
+    for (seed, preset, mode, coarse) in [
+        (21, "hmd", StereoMode::Instanced, CoarseMode::Off),
+        (22, "cave", StereoMode::Instanced, CoarseMode::On),
+        (23, "hmd-peripheral", StereoMode::Multiview, CoarseMode::Off),
+    ] {
+        let rig = sized(preset, 72, 56);
+        let scene = rooms_and_props(seed);
+        let made = |cull, occlusion| RendererOptions {
+            cull,
+            mode,
+            coarse_cull: coarse,
+            ..options(occlusion)
+        };
+        let mut sessions = [
+            (CullMode::Gpu, OcclusionMode::On),
+            (CullMode::Cpu, OcclusionMode::On),
+            (CullMode::Gpu, OcclusionMode::Off),
+        ]
+        .map(|(cull, occlusion)| Session::new(&gpu, &scene, &rig, made(cull, occlusion)));
+        let mut live = LiveScene::new(scene.clone());
+        let mut churner = Churner {
+            rng: Pcg64Mcg::seed_from_u64(seed),
+            removed: Vec::new(),
+        };
+        let tolerance = match mode {
+            StereoMode::Multiview => MULTIVIEW_TIES,
+            _ => Tolerance::EXACT,
+        };
+        let mut late = 0;
+        for (step, churn) in std::iter::once(None).chain(CHURNED.map(Some)).enumerate() {
+            let what = format!("churn-{preset}-step{step}-{churn:?}");
+            if let Some(churn) = churn {
+                churner.apply(&mut live, churn);
+            }
+            let stats = sync_all(&gpu, &mut sessions, &live);
+            match churn {
+                Some(Churn::Reallocate) => assert!(stats.reallocated, "{what}: {stats:?}"),
+                Some(Churn::Reload) => {
+                    assert!(stats.reloaded && !stats.reallocated, "{what}: {stats:?}")
+                }
+                // Other steps may fill a mesh's room too, and lay out again.
+                _ => {}
+            }
+            late += churned_frame(&gpu, &mut sessions, &rig, (&what, tolerance));
+        }
+        assert!(late > 0, "{preset}: nothing drawn late after the edits");
+    }
+}
+
+/// Syncs every session with `live`'s changes (one copy each); returns the first's
+/// figures, which the others' match.
+fn sync_all(
+    gpu: &Gpu,
+    sessions: &mut [Session],
+    live: &LiveScene,
+) -> stereocull::renderer::SyncStats {
+    let stats: Vec<_> = (sessions.iter_mut())
+        .map(|s| {
+            let mut copy = live.clone();
+            let stats = s.renderer.sync(&gpu.device, &gpu.queue, &mut copy);
+            s.scene = copy.scene().clone();
+            stats.unwrap()
+        })
+        .collect();
+    // Alike but for the bytes (the CPU culler's layout takes its edits in memory).
+    let kind = |s: &stereocull::renderer::SyncStats| (s.placed, s.moved, s.reloaded, s.reallocated);
+    assert!(
+        stats.windows(2).all(|w| kind(&w[0]) == kind(&w[1])),
+        "{stats:?}"
+    );
+    stats[0]
+}
+
+/// One frame of `[GPU with occlusion, CPU with occlusion, GPU without]`: the first
+/// two's culls, words and images equal exactly, and the images with occlusion equal the
+/// image without within `tolerance`. Returns the instances drawn late.
+fn churned_frame(
+    gpu: &Gpu,
+    [on_gpu, on_cpu, off]: &mut [Session; 3],
+    rig: &Rig,
+    (what, tolerance): (&str, Tolerance),
+) -> usize {
+    let (a, b, c) = (
+        on_gpu.frame(gpu, rig),
+        on_cpu.frame(gpu, rig),
+        off.frame(gpu, rig),
+    );
+    let g = on_gpu.renderer.diagnostics(&gpu.device, &gpu.queue);
+    let k = on_cpu.renderer.diagnostics(&gpu.device, &gpu.queue);
+    let mut late = 0;
+    for d in 0..rig.displays.len() {
+        let what = format!("{what}-display{d}");
+        assert_eq!(k.cull(d).unwrap(), g.cull(d).unwrap(), "{what}: early");
+        let late_k = k.late_cull(d).unwrap();
+        assert_eq!(late_k, g.late_cull(d).unwrap(), "{what}: late");
+        late += late_k.map_or(0, |l| l.visible.len());
+        let (words_k, words_g) = (k.visibility(d).unwrap(), g.visibility(d).unwrap());
+        if let (Some((_, cpu)), Some((_, gpu_words))) = (words_k, words_g) {
+            assert_eq!(cpu[..], gpu_words[..cpu.len()], "{what}: visibility words");
+        }
+        assert_images_match(&format!("{what}-cpu"), &b[d], &a[d], Tolerance::EXACT);
+        assert_images_match(&format!("{what}-off"), &a[d], &c[d], tolerance);
+    }
+    late
+}

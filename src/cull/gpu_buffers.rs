@@ -219,7 +219,8 @@ impl CullScene {
                 device,
                 "stereocull.occlusion",
                 4 * (pyramid_offset + occlusion.pyramid_texels).max(1) as u64,
-                scratch | wgpu::BufferUsages::COPY_SRC,
+                // A reload clears the visibility words from the queue.
+                scratch | wgpu::BufferUsages::COPY_SRC | wgpu::BufferUsages::COPY_DST,
             ),
             occlusion_layout,
             visibility_slots: occlusion.displays,

@@ -317,11 +317,12 @@ impl Culler {
                 visibility,
                 ..
             } => {
+                // Laid out afresh, no place holds what it held: every instance starts
+                // as not drawn last frame, as the GPU's reload clears its words.
                 let words = layout.spheres.len().div_ceil(SPAN as usize);
-                visibility
-                    .iter_mut()
-                    .flatten()
-                    .for_each(|w| w.resize(words, 0));
+                for w in visibility.iter_mut().flatten() {
+                    *w = vec![0; words];
+                }
                 *own = layout;
                 0
             }
@@ -353,11 +354,19 @@ impl Culler {
     }
 
     /// The places filled and vacated, into the CPU culler's layout (the GPU's are
-    /// scattered).
+    /// scattered). Whoever now holds a place was not drawn last frame: its bit goes in
+    /// every display's words, as `wgsl/scatter_places.wgsl` clears the GPU's.
     pub(super) fn place(&mut self, placed: &[PlaceEdit]) {
-        if let Kind::Cpu { layout, .. } = &mut self.kind {
+        if let Kind::Cpu {
+            layout, visibility, ..
+        } = &mut self.kind
+        {
             for edit in placed {
                 layout.set_place((edit.place, edit.slot, CullLayout::VACANT_SPHERE));
+                let (word, bit) = ((edit.place / SPAN) as usize, edit.place % SPAN);
+                for words in visibility.iter_mut().flatten() {
+                    words[word] &= !(1 << bit);
+                }
             }
         }
     }
