@@ -3,7 +3,8 @@
 //! `hmd-peripheral`'s three displays with and without the coarse cull's blocks.
 
 use criterion::{Criterion, Throughput, criterion_group, criterion_main};
-use stereocull::cull::cpu::{self, FrameCull, FrameLod};
+use stereocull::cull::cpu;
+use stereocull::cull::{FrameCull, FrameLod};
 use stereocull::procedural;
 use stereocull::records::CullLayout;
 use stereocull::rig::Rig;

@@ -32,7 +32,9 @@ mod buffers;
 #[cfg(feature = "cli")]
 #[doc(hidden)]
 pub mod cli;
-pub mod composite;
+/// The old path of [`foveated_composite`], kept for one release.
+#[doc(hidden)]
+pub use foveated_composite as composite;
 pub mod contexts;
 pub mod crowd;
 pub mod cull;
@@ -40,11 +42,11 @@ pub mod device;
 pub mod draw;
 pub mod error;
 pub mod far_layer;
+pub mod foveated_composite;
 pub mod frustum;
 pub mod gltf_import;
 pub mod live;
 pub mod materials;
-mod modes;
 pub mod occlusion;
 pub mod pbr;
 pub mod places;

@@ -8,7 +8,7 @@ use glam::DQuat;
 use image::{RgbaImage, imageops};
 use rand::{Rng, SeedableRng};
 use rand_pcg::Pcg64Mcg;
-use stereocull::composite::{CompositeParams, FoveatedComposite, composite_cpu};
+use stereocull::foveated_composite::{CompositeParams, FoveatedComposite, composite_cpu};
 use stereocull::frustum::{Fov, sphere_in_planes};
 use stereocull::readback::read_rgba8;
 use stereocull::renderer::{CullMode, RendererOptions, StereoMode};

@@ -8,7 +8,8 @@ use std::collections::HashMap;
 
 use glam::{Affine3A, Quat, Vec3, Vec4};
 use stereocull::cull::CullOutput;
-use stereocull::cull::cpu::{self, FrameLod};
+use stereocull::cull::FrameLod;
+use stereocull::cull::cpu;
 use stereocull::device::Gpu;
 use stereocull::records::CullLayout;
 use stereocull::renderer::{RendererOptions, StereoMode, frame_lod};

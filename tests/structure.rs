@@ -55,7 +55,9 @@ fn named_paths(module: &[String], code: &str, modules: &BTreeSet<Vec<String>>) -
     let starts: [(&str, &[String]); 2] = [("crate::", &[]), ("super::", parent)];
     for (prefix, base) in starts {
         for (i, _) in code.match_indices(prefix) {
+            // `pub(in crate::renderer)` limits an item's reach; it names no dependency.
             if code[..i].ends_with("::")
+                || code[..i].ends_with("(in ")
                 || code[..i].ends_with(|c: char| c.is_alphanumeric() || c == '_')
             {
                 continue;
@@ -173,14 +175,23 @@ fn top_level_modules_form_no_circle() {
 fn module_files_form_no_circle() {
     let graph = file_graph();
     assert!(
-        graph["renderer::indirect"].contains("renderer::culler"),
+        graph["renderer::display::indirect"].contains("renderer::culler"),
         "{graph:?}"
     );
-    assert!(
-        graph["renderer"].contains("renderer::indirect"),
-        "{graph:?}"
-    );
+    assert!(graph["renderer"].contains("renderer::display"), "{graph:?}");
     assert_no_circle(&graph);
+}
+
+/// The files of `renderer/` that extend `Renderer` itself (its methods, by the part of
+/// the embedding API they serve): they assemble the levels, so they may name them all.
+const RENDERER_API: [&str; 5] = ["sync", "encode", "diagnostics", "own_passes", "checks"];
+
+/// The modules of `renderer/` below `renderer` itself, but the API's files.
+fn renderer_inner(files: &[(Vec<String>, String)]) -> Vec<&(Vec<String>, String)> {
+    (files.iter())
+        .filter(|(m, _)| m.len() >= 2 && m[0] == "renderer")
+        .filter(|(m, _)| !(m.len() == 2 && RENDERER_API.contains(&m[1].as_str())))
+        .collect()
 }
 
 /// From `Renderer::prepare` to the last draw a reader never climbs back into
@@ -189,23 +200,9 @@ fn module_files_form_no_circle() {
 fn the_files_a_frame_runs_through_never_name_their_parent() {
     let files = module_files();
     let modules: BTreeSet<Vec<String>> = files.iter().map(|(m, _)| m.clone()).collect();
-    let frame = [
-        "frame",
-        "culler",
-        "indirect",
-        "classic",
-        "view_pass",
-        "far_pass",
-        "shadow_pass",
-        "passes",
-        "options",
-        "targets",
-        "checks",
-    ];
-    for (module, code) in files
-        .iter()
-        .filter(|(m, _)| m.len() == 2 && m[0] == "renderer" && frame.contains(&m[1].as_str()))
-    {
+    let inner = renderer_inner(&files);
+    assert!(inner.len() > 12, "{}", inner.len());
+    for (module, code) in inner {
         for path in named_paths(module, code, &modules) {
             let target = resolve(&path, &modules);
             assert_ne!(
@@ -217,6 +214,41 @@ fn the_files_a_frame_runs_through_never_name_their_parent() {
             );
         }
     }
+}
+
+/// The renderer's rooms by the chapter's levels, one way: a file of the frame level
+/// (`renderer/frame/`) never names the display level's room (`renderer/display/`), nor
+/// the other way; they meet only through what both name below them (the plan, the
+/// view, the culler, the pass recorder). Those shared modules name neither room; only
+/// the embedding API's files assemble them.
+#[test]
+fn the_levels_rooms_name_each_other_only_through_the_plan_and_the_view() {
+    let files = module_files();
+    let modules: BTreeSet<Vec<String>> = files.iter().map(|(m, _)| m.clone()).collect();
+    let room = |m: &[String]| match m {
+        [r, level, ..] if r == "renderer" && (level == "frame" || level == "display") => {
+            Some(level.clone())
+        }
+        _ => None,
+    };
+    let mut seen = BTreeSet::new();
+    for (module, code) in renderer_inner(&files) {
+        let own = room(module);
+        seen.extend(own.clone());
+        for path in named_paths(module, code, &modules) {
+            let Some(target) = resolve(&path, &modules) else {
+                continue;
+            };
+            let theirs = room(&target);
+            assert!(
+                theirs.is_none() || theirs == own,
+                "{} names {} in another level's room",
+                module.join("::"),
+                target.join("::")
+            );
+        }
+    }
+    assert_eq!(seen.len(), 2, "{seen:?}");
 }
 
 #[test]

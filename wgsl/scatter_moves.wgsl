@@ -1,7 +1,7 @@
 // Moved instances: the new transform's rows into the instance record and, under GPU
 // culling, the world sphere at the slot's cull position. The radius comes computed on
 // the CPU; the center is computed here exactly as the CPU does (transform_center in
-// src/scene.rs: same products, sums left to right, no fma), so that the GPU and the
+// src/scene/mod.rs: same products, sums left to right, no fma), so that the GPU and the
 // CPU culler test the very same sphere.
 
 struct Edits {

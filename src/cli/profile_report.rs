@@ -7,7 +7,7 @@ use wgpu_profiler::GpuTimerQueryResult;
 use super::occlusion_report::OcclusionReport;
 use super::render::PassReport;
 use crate::error::{Error, Result};
-use crate::modes::StereoMode;
+use crate::renderer::StereoMode;
 use crate::renderer::{CullMode, FarSplit};
 
 /// One configuration's figures: the CSV columns first, then the details.

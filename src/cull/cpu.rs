@@ -11,6 +11,8 @@ use glam::{Vec3, Vec4};
 
 use super::coarse::{BLOCK, block_of};
 use super::{BinDraws, CoarseCull, CullJob, CullOutput, Split};
+/// Their old path, kept for one release: they are the frame's, not the CPU culler's.
+pub use super::{FrameCull, FrameLod};
 use crate::frustum::plane_distance;
 use crate::records::{CullLayout, DrawArgs, lod_level};
 use crate::scene::MAX_LODS;
@@ -24,27 +26,6 @@ const WORDS_PER_CHUNK: usize = CHUNK / 64;
 /// Culls every instance for one job and builds its draws.
 pub fn cull(layout: &CullLayout, job: &CullJob) -> CullOutput {
     cull_many(layout, std::slice::from_ref(job)).remove(0)
-}
-
-/// The frame's level-of-detail choice (what the frame context carries to the GPU): the
-/// viewer's position, the scale, and how many levels are culled into (1: LOD off).
-#[derive(Clone, Copy, Debug, PartialEq)]
-pub struct FrameLod {
-    /// The viewer's position: distances are measured from it, not from an eye.
-    pub viewer: Vec3,
-    /// (pixels per radian / pixels of error allowed)^2 on the sharpest display.
-    pub lod_scale: f32,
-    /// Levels culled into: 1 with LOD off.
-    pub levels: u32,
-}
-
-impl FrameLod {
-    /// One level: every instance at its mesh's own triangles.
-    pub const OFF: FrameLod = FrameLod {
-        viewer: Vec3::ZERO,
-        lod_scale: 0.0,
-        levels: 1,
-    };
 }
 
 /// Culls for several displays (or eyes) at once: every sphere is read once for all of
@@ -61,16 +42,6 @@ pub fn cull_many_lod(layout: &CullLayout, displays: &[CullJob], lod: &FrameLod) 
         coarse: None,
     };
     cull_frame(layout, displays, &frame)
-}
-
-/// What the frame level decides for every display's cull: the levels of detail, and
-/// the coarse cull's test when it runs.
-#[derive(Clone, Copy, Debug, PartialEq)]
-pub struct FrameCull {
-    /// The levels of detail every cull of the frame picks.
-    pub lod: FrameLod,
-    /// The coarse cull's frame test, when it runs.
-    pub coarse: Option<CoarseCull>,
 }
 
 /// [`cull_many_lod`], with the frame's coarse cull first when it runs: each group of

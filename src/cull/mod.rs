@@ -111,3 +111,34 @@ impl CullOutput {
             .collect()
     }
 }
+
+/// The frame's level-of-detail choice (what the frame context carries to the GPU): the
+/// viewer's position, the scale, and how many levels are culled into (1: LOD off).
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub struct FrameLod {
+    /// The viewer's position: distances are measured from it, not from an eye.
+    pub viewer: Vec3,
+    /// (pixels per radian / pixels of error allowed)^2 on the sharpest display.
+    pub lod_scale: f32,
+    /// Levels culled into: 1 with LOD off.
+    pub levels: u32,
+}
+
+impl FrameLod {
+    /// One level: every instance at its mesh's own triangles.
+    pub const OFF: FrameLod = FrameLod {
+        viewer: Vec3::ZERO,
+        lod_scale: 0.0,
+        levels: 1,
+    };
+}
+
+/// What the frame level decides for every display's cull: the levels of detail, and
+/// the coarse cull's test when it runs.
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub struct FrameCull {
+    /// The levels of detail every cull of the frame picks.
+    pub lod: FrameLod,
+    /// The coarse cull's frame test, when it runs.
+    pub coarse: Option<CoarseCull>,
+}

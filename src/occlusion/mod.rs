@@ -19,7 +19,8 @@
 use glam::{Mat4, UVec2, Vec4};
 
 use crate::contexts::{DisplayContext, EyeContext};
-use crate::cull::cpu::{self, FrameLod};
+use crate::cull::FrameLod;
+use crate::cull::cpu;
 use crate::cull::{CullJob, CullOutput};
 use crate::frustum::sphere_in_planes;
 use crate::records::CullLayout;

@@ -1,10 +1,10 @@
 //! What a device must have for the options and scene asked of it, said before anything
 //! is built.
 
+use super::options::StereoMode;
 use super::options::{CullMode, PosingMode, RendererOptions};
 use crate::draw::DrawScene;
 use crate::error::{Error, Result};
-use crate::modes::StereoMode;
 use crate::records::MeshRecord;
 use crate::rig::Rig;
 use crate::scene::{Scene, Shading, Vertex};

@@ -75,50 +75,45 @@
 
 use crate::buffers::{uniform_buffer, write};
 use crate::contexts::FrameContext;
-use crate::draw::DrawScene;
+use crate::draw::{DrawScene, Drawing};
 use crate::error::{Error, Result};
-pub use crate::modes::StereoMode;
+
 use crate::places::Places;
 use crate::records::{CullLayout, uniform_bytes};
 use crate::rig::Rig;
-use crate::scatter::Scatters;
+use crate::scatter::{ScatterTargets, Scatters};
 use crate::scene::Scene;
 
 mod checks;
-mod classic;
-mod cpu_occlusion;
 mod culler;
-mod far_pass;
+mod diagnostics;
+mod display;
+mod encode;
 mod frame;
-mod indirect;
-mod inputs;
-mod occlusion_pass;
 mod options;
 mod own_passes;
-mod passes;
-mod pose_pass;
-mod readback;
-mod record;
-mod shadow_pass;
-mod skin_pass;
+mod plan;
+mod recorder;
 mod sync;
 mod targets;
-mod view_pass;
+mod view;
 
 use checks::check_device;
 pub use checks::check_rig;
-use classic::ClassicPath;
-pub use frame::{CullView, FramePlan, FrameStats, PlannedCull, instances_per_object};
-use indirect::IndirectPath;
-use inputs::PathInputs;
-pub use occlusion_pass::OcclusionBytes;
+pub use diagnostics::{Diagnostics, FarSplit, OcclusionCounts};
+use display::PathInputs;
+use display::classic::ClassicPath;
+use display::indirect::IndirectPath;
+pub use display::occlusion::OcclusionBytes;
+use frame::pose::{self, PosePass};
+use frame::shadow::ShadowPass;
+use frame::skin::SkinPass;
 pub use options::{
-    CoarseMode, CullMode, LOD_PIXELS, OcclusionMode, PosingMode, RendererOptions, frame_lod,
+    CoarseMode, CullMode, LOD_PIXELS, OcclusionMode, PosingMode, RendererOptions, StereoMode,
+    frame_lod,
 };
-pub use passes::{Level, PassRecord};
-use pose_pass::PosePass;
-pub use readback::{Diagnostics, FarSplit, OcclusionCounts};
-use skin_pass::SkinPass;
+pub use plan::{CullView, FramePlan, FrameStats, PlannedCull, instances_per_object};
+pub use recorder::{Level, PassRecord};
 pub use sync::SyncStats;
 pub use targets::{DisplayTarget, TargetShape, TargetViews};
 
@@ -166,6 +161,42 @@ impl Path {
             Path::Classic(p) => (&p.draw_scene.instances, &mut p.culler),
         }
     }
+
+    /// The culler every view of the path culls through.
+    fn culler(&self) -> &culler::Culler {
+        match self {
+            Path::Indirect(p) => &p.culler,
+            Path::Classic(p) => &p.culler,
+        }
+    }
+
+    /// Where the scatter passes (and the pose pass) write edits.
+    fn scatter_targets(&self) -> ScatterTargets<'_> {
+        let (spheres, visibility) = self.culler().scatter_targets();
+        ScatterTargets {
+            instances: &self.draw_scene_ref().instances,
+            spheres,
+            visibility,
+        }
+    }
+
+    /// The frame's shadow pass over the path's culler and scene, with shadows on.
+    fn shadow_pass(
+        &self,
+        device: &wgpu::Device,
+        options: &RendererOptions,
+        frame: &wgpu::Buffer,
+    ) -> Option<ShadowPass> {
+        (options.shadows).then(|| ShadowPass::new(device, self.drawing(), frame, self.culler()))
+    }
+
+    /// The path's pipelines and scene, as a frame-level pass draws them.
+    fn drawing(&self) -> Drawing<'_> {
+        match self {
+            Path::Indirect(p) => p.drawing(),
+            Path::Classic(p) => p.drawing(),
+        }
+    }
 }
 
 /// The scene submission backend: one per scene and rig shape, see the module docs for the
@@ -185,6 +216,9 @@ pub struct Renderer {
     skin: Option<SkinPass>,
     /// Posing on the GPU, with animations: the frame's pose pass.
     pose: Option<PosePass>,
+    /// With shadows: the frame's shadow pass (the light culled as one more view of the
+    /// path's culler).
+    shadow: Option<ShadowPass>,
     /// Instance slots the buffers have room for.
     slots: u32,
     /// The rig as made: the displays (and far layer sizes) a reallocation rebuilds for.
@@ -225,14 +259,16 @@ impl Renderer {
             options: &options,
             slots,
         };
-        let mut path = Path::new(device, inputs)?;
+        let path = Path::new(device, inputs)?;
         let skin = SkinPass::new(device, &scene.skins, &path.draw_scene_ref().vertices);
-        let gpu = pose_pass::GpuParts {
+        let gpu = pose::GpuParts {
             frame: &frame,
             skin: skin.as_ref(),
             windows: options.windows(device, slots),
+            scatter: path.scatter_targets(),
         };
-        let pose = pose_pass::build(device, scene, &options, (&mut path, gpu), |_| true)?;
+        let pose = pose::build(device, scene, &options, gpu, |_| true)?;
+        let shadow = path.shadow_pass(device, &options, &frame);
         let shapes = rig
             .displays
             .iter()
@@ -253,6 +289,7 @@ impl Renderer {
             scatter,
             skin,
             pose,
+            shadow,
             slots,
             rig: rig.clone(),
             coarse,
@@ -274,7 +311,7 @@ impl Renderer {
     /// Where display `index`'s views lie in its target: side by side at their own sizes,
     /// or in multiview one layer each (read back side by side, as
     /// [`crate::readback::read_rgba8`] places them). What a foveated display's composite
-    /// takes ([`crate::composite::CompositeParams::new`]).
+    /// takes ([`crate::foveated_composite::CompositeParams::new`]).
     pub fn layout(&self, index: usize) -> Option<crate::rig::ViewLayout> {
         self.shapes.get(index).map(|s| s.layout)
     }
@@ -336,10 +373,17 @@ impl Renderer {
     pub fn prepare(&mut self, queue: &wgpu::Queue, rig: &Rig, time: f32) -> Result<FrameStats> {
         let plan = self.plan(rig, time)?;
         let frame_bytes = write(queue, &self.frame, &uniform_bytes(&plan.frame));
+        let light = plan.light_cull.as_ref().map(|_| plan.light);
         let mut stats = match &mut self.path {
             Path::Indirect(p) => p.prepare(queue, plan),
             Path::Classic(p) => p.prepare(queue, &plan),
         };
+        if let (Some(shadow), Some(light)) = (&self.shadow, light) {
+            let start = std::time::Instant::now();
+            let size = self.path.drawing().scene.shadow_map.size;
+            stats.bytes_uploaded += shadow.prepare(queue, &light, size, self.path.culler());
+            stats.cpu_upload += start.elapsed();
+        }
         // Texels go up with the first frame: `new` has no queue.
         stats.bytes_uploaded += frame_bytes + self.path.draw_scene().materials.upload(queue);
         Ok(stats)

@@ -2,8 +2,8 @@
 //! into its encoder, then each display's draws inside a render pass it began, with the
 //! built-in pipelines or one of its own.
 
-use super::frame::FrameStats;
-use super::passes::{close, open_display};
+use super::plan::FrameStats;
+use super::recorder::{close, open_display};
 use super::{Path, Renderer};
 use crate::cull::gpu_buffers::CullTargets;
 use crate::draw::OwnPipeline;

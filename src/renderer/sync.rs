@@ -2,15 +2,15 @@
 //! [`LiveScene`] changed since the last sync, sparsely where it can.
 
 use super::checks::check_device;
-use super::frame::FramePlan;
-use super::inputs::PathInputs;
-use super::pose_pass::{self, GpuParts};
-use super::skin_pass::SkinPass;
+use super::display::PathInputs;
+use super::frame::pose::{self, GpuParts};
+use super::frame::skin::SkinPass;
+use super::plan::FramePlan;
 use super::{Path, Renderer};
 use crate::error::Result;
 use crate::live::{Changes, LiveScene, MoveEdit, PlaceEdit};
 use crate::records::{CullLayout, InstanceRecord, RecordEdit, instance_records};
-use crate::scatter::{ScatterTargets, Scatters, record_edit};
+use crate::scatter::{Scatters, record_edit};
 use crate::scene::Scene;
 
 /// What [`Renderer::sync`] did.
@@ -135,9 +135,10 @@ impl Renderer {
             frame: &self.frame,
             skin: self.skin.as_ref(),
             windows,
+            scatter: self.path.scatter_targets(),
         };
-        let path = (&mut self.path, gpu);
-        self.pose = pose_pass::build(device, scene, &self.options, path, |s| live.animates(s))?;
+        self.pose = pose::build(device, scene, &self.options, gpu, |s| live.animates(s))?;
+        self.shadow = self.path.shadow_pass(device, &self.options, &self.frame);
         let bytes = (scene.instances.len() * size_of::<InstanceRecord>()) as u64;
         Ok(SyncStats {
             bytes_uploaded: bytes,
@@ -173,14 +174,8 @@ impl Renderer {
             return (SyncStats::default(), placed);
         }
         let count = placed.len() as u32;
-        let (instances, culler) = self.path.edit_targets();
-        culler.place(&placed);
-        let (spheres, visibility) = culler.scatter_targets();
-        let targets = ScatterTargets {
-            instances,
-            spheres,
-            visibility,
-        };
+        self.path.edit_targets().1.place(&placed);
+        let targets = self.path.scatter_targets();
         let (bytes, spare) = self.scatter.stage_places(device, placed, targets);
         let stats = SyncStats {
             bytes_uploaded: bytes,
@@ -202,14 +197,8 @@ impl Renderer {
             return (SyncStats::default(), moved);
         }
         let count = moved.len() as u32;
-        let (instances, culler) = self.path.edit_targets();
-        culler.moved(scene, &moved);
-        let (spheres, visibility) = culler.scatter_targets();
-        let targets = ScatterTargets {
-            instances,
-            spheres,
-            visibility,
-        };
+        self.path.edit_targets().1.moved(scene, &moved);
+        let targets = self.path.scatter_targets();
         let (bytes, spare) = self.scatter.moves.stage(device, moved, targets);
         let stats = SyncStats {
             bytes_uploaded: bytes,
@@ -229,13 +218,7 @@ impl Renderer {
             .iter()
             .map(|&slot| record_edit(scene, slot))
             .collect();
-        let (instances, culler) = self.path.edit_targets();
-        let (spheres, visibility) = culler.scatter_targets();
-        let targets = ScatterTargets {
-            instances,
-            spheres,
-            visibility,
-        };
+        let targets = self.path.scatter_targets();
         self.scatter.records.stage(device, records, targets).0
     }
 }

@@ -8,9 +8,9 @@
 
 mod diagnostics;
 
-use super::frame::{CullView, FramePlan};
 use super::options::CullMode;
-use super::passes::{Logged, PassRecord, Recording, Timing, close, compute_pass, open_display};
+use super::plan::{CullView, FramePlan};
+use super::recorder::{Logged, PassRecord, Recording, Timing, close, compute_pass, open_display};
 use crate::bins::BinRange;
 use crate::contexts::DisplayContext;
 use crate::cull::CullOutput;

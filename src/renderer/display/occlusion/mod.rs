@@ -2,33 +2,35 @@
 //! draw, its depth pyramids, its late cull and its late draw; which displays cull by
 //! occlusion, and what it costs in GPU memory. The technique is [`crate::occlusion`]'s.
 
+pub(in crate::renderer) mod read_back;
+
 use std::sync::Mutex;
 
-use super::culler::Culler;
-use super::frame::{FramePlan, FrameStats};
-use super::options::RendererOptions;
-use super::passes::{PassRecord, Timing, compute_pass, draw_pass};
-use super::targets::TargetViews;
-use super::view_pass::ViewPass;
 use crate::draw::{BinPipelines, Drawing, OwnPipelines};
 use crate::error::Result;
-use crate::modes::StereoMode;
 use crate::occlusion::PyramidShape;
 use crate::occlusion::pyramid::PyramidPass;
+use crate::renderer::culler::Culler;
+use crate::renderer::options::RendererOptions;
+use crate::renderer::options::StereoMode;
+use crate::renderer::plan::{FramePlan, FrameStats};
+use crate::renderer::recorder::{PassRecord, Timing, compute_pass, draw_pass};
+use crate::renderer::targets::TargetViews;
+use crate::renderer::view::ViewPass;
 use crate::shaders::DrawKey;
 
 /// A display's late occlusion phase: its cull and draw, the shape of its pyramids and
 /// their bind group for the depth target it was last made for (a caller usually
 /// renders into the same targets every frame: no bind group per frame then).
-pub(super) struct LatePhase {
-    pub(super) view: ViewPass,
-    pub(super) shape: PyramidShape,
+pub(in crate::renderer) struct LatePhase {
+    pub(in crate::renderer) view: ViewPass,
+    pub(in crate::renderer) shape: PyramidShape,
     bound: Mutex<Option<(wgpu::TextureView, wgpu::BindGroup)>>,
 }
 
 impl LatePhase {
     /// The late phase of a display whose pyramids are `shape`, culled and drawn by `view`.
-    pub(super) fn new(view: ViewPass, shape: PyramidShape) -> LatePhase {
+    pub(in crate::renderer) fn new(view: ViewPass, shape: PyramidShape) -> LatePhase {
         LatePhase {
             view,
             shape,
@@ -60,7 +62,7 @@ impl LatePhase {
 
 /// The depth pyramids' passes (over side-by-side eyes, and over a layer per eye for
 /// multiview), and the device that binds each frame's depth target to them.
-pub(super) struct Pyramids {
+pub(in crate::renderer) struct Pyramids {
     side_by_side: PyramidPass,
     layered: Option<PyramidPass>,
     device: wgpu::Device,
@@ -68,7 +70,7 @@ pub(super) struct Pyramids {
 
 impl Pyramids {
     /// The passes `options` need: a layered variant in single-sampled multiview.
-    pub(super) fn new(device: &wgpu::Device, options: &RendererOptions) -> Pyramids {
+    pub(in crate::renderer) fn new(device: &wgpu::Device, options: &RendererOptions) -> Pyramids {
         let samples = options.sample_count;
         let layered = (options.mode == StereoMode::Multiview && samples == 1)
             .then(|| PyramidPass::new(device, 1, true));
@@ -95,24 +97,24 @@ pub struct OcclusionBytes {
 /// What a display's late phase is recorded with besides its own state: the path's
 /// culler, drawing and pyramid passes, and the display's index, pipeline variant,
 /// context and target.
-pub(super) struct LateInputs<'a> {
-    pub(super) culler: &'a Culler,
-    pub(super) drawing: Drawing<'a>,
-    pub(super) pyramids: &'a Pyramids,
+pub(in crate::renderer) struct LateInputs<'a> {
+    pub(in crate::renderer) culler: &'a Culler,
+    pub(in crate::renderer) drawing: Drawing<'a>,
+    pub(in crate::renderer) pyramids: &'a Pyramids,
     /// The buffer the display's pyramids go into, and where they start (bytes).
-    pub(super) texels: (&'a wgpu::Buffer, u64),
-    pub(super) index: usize,
-    pub(super) key: DrawKey,
+    pub(in crate::renderer) texels: (&'a wgpu::Buffer, u64),
+    pub(in crate::renderer) index: usize,
+    pub(in crate::renderer) key: DrawKey,
     /// The display's pipelines of the caller's own.
-    pub(super) own: &'a OwnPipelines,
-    pub(super) context: &'a wgpu::Buffer,
-    pub(super) target: &'a TargetViews<'a>,
+    pub(in crate::renderer) own: &'a OwnPipelines,
+    pub(in crate::renderer) context: &'a wgpu::Buffer,
+    pub(in crate::renderer) target: &'a TargetViews<'a>,
 }
 
 impl LatePhase {
     /// The display's second phase after its early draw, up to its draw: the pyramids of
     /// the early depth and the late cull.
-    pub(super) fn encode_cull(
+    pub(in crate::renderer) fn encode_cull(
         &self,
         encoder: &mut wgpu::CommandEncoder,
         inputs: &LateInputs,
@@ -148,7 +150,7 @@ impl LatePhase {
 
     /// The late draw: a pass that keeps what the early one drew, opening with what
     /// `first` draws (a far layer's composite). Returns the draw calls.
-    pub(super) fn encode_draw(
+    pub(in crate::renderer) fn encode_draw(
         &self,
         encoder: &mut wgpu::CommandEncoder,
         inputs: &LateInputs,
@@ -167,7 +169,7 @@ impl LatePhase {
 
 /// Whether each display with occlusion (`late`, per display) can read its depth target
 /// into its pyramids.
-pub(super) fn check_depth<'a>(
+pub(in crate::renderer) fn check_depth<'a>(
     late: impl Iterator<Item = Option<&'a LatePhase>>,
     targets: &[TargetViews],
 ) -> Result<()> {
@@ -183,7 +185,7 @@ pub(super) fn check_depth<'a>(
 /// What occlusion adds in GPU memory for displays' `late` phases (`None` without any):
 /// culling on the GPU, the bits and the shared pyramids; culling on the CPU, the
 /// `read_back` pyramids (one region per display; the bits stay on the CPU).
-pub(super) fn occlusion_bytes<'a>(
+pub(in crate::renderer) fn occlusion_bytes<'a>(
     late: impl Iterator<Item = &'a LatePhase> + Clone,
     culler: &Culler,
     read_back: Option<u64>,
@@ -206,7 +208,7 @@ pub(super) fn occlusion_bytes<'a>(
 
 /// Each display's pyramid shape where it culls by occlusion ([`RendererOptions::occludes`])
 /// in a scene of `triangles` triangles.
-pub(super) fn pyramid_shapes(
+pub(in crate::renderer) fn pyramid_shapes(
     plan: &FramePlan,
     options: &RendererOptions,
     triangles: u64,

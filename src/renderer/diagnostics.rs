@@ -2,7 +2,7 @@
 //! display's cull buffers (and its far layer's), visible totals, the far/near split,
 //! and what the coarse cull saved. None of it is needed to draw.
 
-use super::indirect::IndirectPath;
+use super::display::indirect::IndirectPath;
 use super::{Path, Renderer};
 use crate::cull::gpu_buffers::{COUNTS_BYTES, CullTargets};
 use crate::cull::{BinDraws, CullOutput};
@@ -363,7 +363,7 @@ impl IndirectPath {
         device: &wgpu::Device,
         queue: &wgpu::Queue,
     ) -> Result<Vec<u32>> {
-        let count = |view: &super::view_pass::ViewPass| -> Result<u32> {
+        let count = |view: &super::view::ViewPass| -> Result<u32> {
             Ok(read_counts(device, queue, view.cull())?[1])
         };
         (self.displays.iter())

@@ -7,26 +7,26 @@
 
 use std::time::Instant;
 
-use super::culler::{Culler, ViewCull};
-use super::far_pass::Far;
-use super::frame::{FramePlan, FrameStats};
 use crate::error::Result;
 use crate::occlusion::PyramidShape;
 use crate::readback::read_pod;
+use crate::renderer::culler::{Culler, ViewCull};
+use crate::renderer::display::far_layer::Far;
+use crate::renderer::plan::{FramePlan, FrameStats};
 
 /// What the CPU culler's late phases need between a frame's two halves.
-pub(super) struct CpuLate {
-    pub(super) pyramids: PyramidReadback,
-    pub(super) plan: Option<FramePlan>,
+pub(in crate::renderer) struct CpuLate {
+    pub(in crate::renderer) pyramids: PyramidReadback,
+    pub(in crate::renderer) plan: Option<FramePlan>,
 }
 
 /// Per display, its pyramids read back and their shape (`None` without occlusion).
-pub(super) type ReadPyramids = Vec<Option<(Vec<f32>, PyramidShape)>>;
+pub(in crate::renderer) type ReadPyramids = Vec<Option<(Vec<f32>, PyramidShape)>>;
 
 /// Every occluding display's pyramids in one buffer, each at its own offset (the
 /// GPU-culled path shares one region: its late cull follows each display's pyramids in
 /// the same submission; here all are built before any is read).
-pub(super) struct PyramidReadback {
+pub(in crate::renderer) struct PyramidReadback {
     buffer: wgpu::Buffer,
     /// Per display: where its pyramids start (bytes) and their shape.
     regions: Vec<Option<(u64, PyramidShape)>>,
@@ -34,7 +34,10 @@ pub(super) struct PyramidReadback {
 
 impl PyramidReadback {
     /// Room for the pyramids of each display with a shape.
-    pub(super) fn new(device: &wgpu::Device, shapes: &[Option<PyramidShape>]) -> PyramidReadback {
+    pub(in crate::renderer) fn new(
+        device: &wgpu::Device,
+        shapes: &[Option<PyramidShape>],
+    ) -> PyramidReadback {
         let align = device.limits().min_storage_buffer_offset_alignment as u64;
         let mut end = 0u64;
         let regions = (shapes.iter())
@@ -55,13 +58,17 @@ impl PyramidReadback {
     }
 
     /// Display `i`'s pyramids: the buffer and where they start.
-    pub(super) fn texels(&self, i: usize) -> Option<(&wgpu::Buffer, u64)> {
+    pub(in crate::renderer) fn texels(&self, i: usize) -> Option<(&wgpu::Buffer, u64)> {
         let (at, _) = (*self.regions.get(i)?)?;
         Some((&self.buffer, at))
     }
 
     /// Every display's pyramids as the last submitted frame built them (waits for it).
-    pub(super) fn read(&self, device: &wgpu::Device, queue: &wgpu::Queue) -> Result<ReadPyramids> {
+    pub(in crate::renderer) fn read(
+        &self,
+        device: &wgpu::Device,
+        queue: &wgpu::Queue,
+    ) -> Result<ReadPyramids> {
         let all: Vec<f32> = read_pod(device, queue, &self.buffer, self.buffer.size())?;
         Ok((self.regions.iter())
             .map(|r| {
@@ -73,7 +80,7 @@ impl PyramidReadback {
     }
 
     /// The buffer's bytes.
-    pub(super) fn bytes(&self) -> u64 {
+    pub(in crate::renderer) fn bytes(&self) -> u64 {
         self.buffer.size()
     }
 }
@@ -83,7 +90,7 @@ impl CpuLate {
     /// (waiting for the GPU), culls each display's late phase (`late[i]`, its view) and
     /// its far layer (in `far`) against them on `culler`, and uploads both. Returns the
     /// bytes uploaded and the CPU time the culls took.
-    pub(super) fn cull_late(
+    pub(in crate::renderer) fn cull_late(
         &self,
         (device, queue): (&wgpu::Device, &wgpu::Queue),
         culler: &mut Culler,

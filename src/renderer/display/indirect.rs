@@ -7,51 +7,48 @@
 
 use std::time::Instant;
 
-use super::cpu_occlusion::{CpuLate, PyramidReadback, ReadPyramids};
-use super::culler::{CullShape, Culler};
-use super::far_pass::{Far, FarDisplay, FarLayers};
-use super::frame::{CullView, FramePlan, FrameStats};
-use super::inputs::PathInputs;
-use super::occlusion_pass::{
+use super::PathInputs;
+use super::far_layer::{Far, FarDisplay, FarLayers};
+use super::occlusion::read_back::{CpuLate, PyramidReadback, ReadPyramids};
+use super::occlusion::{
     LateInputs, LatePhase, OcclusionBytes, Pyramids, check_depth, occlusion_bytes, pyramid_shapes,
 };
-use super::passes::{PassRecord, Recording, Timing, draw_pass};
-use super::shadow_pass::ShadowPass;
-use super::targets::TargetViews;
-use super::view_pass::ViewPass;
 use crate::contexts::context_buffer;
 use crate::cull::gpu_buffers::{CullTargets, OcclusionRoom};
 use crate::draw::{
     BinPipelines, DrawFeatures, DrawScene, Drawer, Drawing, OwnPipeline, OwnPipelines,
 };
 use crate::error::{Error, Result};
-use crate::modes::StereoMode;
 use crate::occlusion::{Phase, PyramidShape};
+use crate::renderer::culler::{CullShape, Culler};
+use crate::renderer::options::StereoMode;
+use crate::renderer::plan::{CullView, FramePlan, FrameStats};
+use crate::renderer::recorder::{PassRecord, Recording, Timing, draw_pass};
+use crate::renderer::targets::TargetViews;
+use crate::renderer::view::ViewPass;
 use crate::scene::Shading;
 use crate::shaders::DrawKey;
 
 /// One display: a view (its context, cull and draw bindings) and its pipeline variant,
 /// which also fixes the instances per visible object; with the inset cull, a foveated
 /// display's inset pair is one more view, drawn by the same pipeline in the same pass.
-pub(super) struct IndirectDisplay {
-    pub(super) view: ViewPass,
+pub(in crate::renderer) struct IndirectDisplay {
+    pub(in crate::renderer) view: ViewPass,
     key: DrawKey,
     /// Pipelines of the caller's own for its [`crate::scene::Shading::Own`] bins.
     own: OwnPipelines,
-    pub(super) inset: Option<ViewPass>,
+    pub(in crate::renderer) inset: Option<ViewPass>,
     /// With occlusion: the late phase (`view` is then the early one).
-    pub(super) late: Option<LatePhase>,
+    pub(in crate::renderer) late: Option<LatePhase>,
 }
 
-pub(super) struct IndirectPath {
-    pub(super) culler: Culler,
+pub(in crate::renderer) struct IndirectPath {
+    pub(in crate::renderer) culler: Culler,
     drawer: Drawer,
-    pub(super) draw_scene: DrawScene,
-    pub(super) displays: Vec<IndirectDisplay>,
-    /// With shadows: the frame's shadow pass.
-    shadow: Option<ShadowPass>,
+    pub(in crate::renderer) draw_scene: DrawScene,
+    pub(in crate::renderer) displays: Vec<IndirectDisplay>,
     /// With the far layer: the stereo displays' far layers.
-    pub(super) far: Option<Far>,
+    pub(in crate::renderer) far: Option<Far>,
     /// With occlusion: the depth pyramids' passes (over side-by-side eyes, and over a
     /// layer per eye for multiview), and the device that binds each frame's depth
     /// target to them (the caller may hand a different target each frame).
@@ -64,7 +61,10 @@ pub(super) struct IndirectPath {
 impl IndirectPath {
     /// The path for `inputs`: built for its plan (the rig as made, which sizes the far
     /// layers) and its coarse cull.
-    pub(super) fn new(device: &wgpu::Device, inputs: PathInputs) -> Result<IndirectPath> {
+    pub(in crate::renderer) fn new(
+        device: &wgpu::Device,
+        inputs: PathInputs,
+    ) -> Result<IndirectPath> {
         let PathInputs {
             scene,
             layout,
@@ -116,9 +116,6 @@ impl IndirectPath {
         };
         let displays = indirect_displays(device, (&keys, plan, &shapes), drawing, frame, &culler);
         let pyramid = (occlusion.displays > 0).then(|| Box::new(Pyramids::new(device, options)));
-        let shadow = options
-            .shadows
-            .then(|| ShadowPass::new(device, drawing, frame, &culler));
         let far = options.far_layer.then(|| {
             let layers = FarLayers::new(device, (target, &kinds), shaders, windows);
             let contexts: Vec<&wgpu::Buffer> = displays.iter().map(|d| d.view.context()).collect();
@@ -131,7 +128,6 @@ impl IndirectPath {
             drawer,
             draw_scene,
             displays,
-            shadow,
             far,
             pyramid,
             readback,
@@ -141,7 +137,11 @@ impl IndirectPath {
     /// Writes `plan`'s display contexts and the culler's results for every view: each
     /// display's, each far layer's, the light's. Culling on the CPU with occlusion, the
     /// plan is kept for the frame's late culls.
-    pub(super) fn prepare(&mut self, queue: &wgpu::Queue, plan: FramePlan) -> FrameStats {
+    pub(in crate::renderer) fn prepare(
+        &mut self,
+        queue: &wgpu::Queue,
+        plan: FramePlan,
+    ) -> FrameStats {
         let mut stats = FrameStats::default();
         let start = Instant::now();
         stats.bytes_uploaded += self.culler.prepare(queue, &plan);
@@ -156,10 +156,6 @@ impl IndirectPath {
         if let Some(far) = &mut self.far {
             stats.bytes_uploaded += far.prepare(queue, &plan, &self.culler);
         }
-        if let (Some(shadow), Some(_)) = (&self.shadow, &plan.light_cull) {
-            let size = self.draw_scene.shadow_map.size;
-            stats.bytes_uploaded += shadow.prepare(queue, &plan.light, size, &self.culler);
-        }
         stats.cpu_upload = start.elapsed();
         if let Some(readback) = &mut self.readback {
             readback.plan = Some(plan);
@@ -167,33 +163,28 @@ impl IndirectPath {
         stats
     }
 
-    /// The frame level's passes: the coarse cull (when it runs, on the GPU), then the
-    /// shadow pass (with shadows).
-    pub(super) fn encode_frame(
+    /// The path's frame-level pass: the coarse cull (when it runs, on the GPU).
+    /// Returns the dispatches.
+    pub(in crate::renderer) fn encode_frame(
         &self,
         encoder: &mut wgpu::CommandEncoder,
-        mut recording: Recording,
-    ) -> FrameStats {
+        recording: Recording,
+    ) -> u32 {
         let any = self.displays.first().map(|d| d.view.view_cull());
-        let mut stats = FrameStats {
-            dispatches: self.culler.encode_frame(encoder, any, recording.again()),
-            ..Default::default()
-        };
-        if let Some(shadow) = &self.shadow {
-            let drawing = Drawing {
-                drawer: &self.drawer,
-                scene: &self.draw_scene,
-            };
-            let (dispatches, draw_calls) = shadow.encode(encoder, drawing, &self.culler, recording);
-            stats.dispatches += dispatches;
-            stats.draw_calls += draw_calls;
+        self.culler.encode_frame(encoder, any, recording)
+    }
+
+    /// Its pipelines and scene.
+    pub(in crate::renderer) fn drawing(&self) -> Drawing<'_> {
+        Drawing {
+            drawer: &self.drawer,
+            scene: &self.draw_scene,
         }
-        stats
     }
 
     /// Display `index`: its cull dispatches (GPU culling), then one pass with one draw
     /// call, timed inside `display`; with occlusion both halves of its two phases.
-    pub(super) fn encode_display(
+    pub(in crate::renderer) fn encode_display(
         &self,
         encoder: &mut wgpu::CommandEncoder,
         index: usize,
@@ -209,7 +200,7 @@ impl IndirectPath {
     /// occlusion the early one) and its pyramids (and, culling on the GPU, its late
     /// cull). Culling on the CPU with occlusion the frame stops here until
     /// [`IndirectPath::cull_late`] has the pyramids.
-    pub(super) fn encode_early(
+    pub(in crate::renderer) fn encode_early(
         &self,
         encoder: &mut wgpu::CommandEncoder,
         (index, target): (usize, &TargetViews),
@@ -244,7 +235,7 @@ impl IndirectPath {
     /// With occlusion, the rest of display `index`'s late phase after
     /// [`IndirectPath::encode_early`]: with a far layer its cull against the pyramids
     /// and its pass, then the late draw (opening with the far composite).
-    pub(super) fn encode_rest(
+    pub(in crate::renderer) fn encode_rest(
         &self,
         encoder: &mut wgpu::CommandEncoder,
         (index, target): (usize, &TargetViews),
@@ -323,7 +314,7 @@ impl IndirectPath {
     /// Culling on the CPU with occlusion, after the frame's early half was submitted:
     /// each display's late phase and far layer culled against its pyramids, read back
     /// ([`CpuLate::cull_late`]).
-    pub(super) fn cull_late(
+    pub(in crate::renderer) fn cull_late(
         &mut self,
         device: &wgpu::Device,
         queue: &wgpu::Queue,
@@ -340,7 +331,7 @@ impl IndirectPath {
 
     /// Culling on the CPU with occlusion, every display's pyramids of the last frame
     /// (`None` otherwise).
-    pub(super) fn read_back_pyramids(
+    pub(in crate::renderer) fn read_back_pyramids(
         &self,
         device: &wgpu::Device,
         queue: &wgpu::Queue,
@@ -352,12 +343,12 @@ impl IndirectPath {
     }
 
     /// Whether each display with occlusion can read its depth target into its pyramids.
-    pub(super) fn check_depth(&self, targets: &[TargetViews]) -> Result<()> {
+    pub(in crate::renderer) fn check_depth(&self, targets: &[TargetViews]) -> Result<()> {
         check_depth(self.displays.iter().map(|d| d.late.as_ref()), targets)
     }
 
-    /// See [`super::Renderer::occlusion_bytes`].
-    pub(super) fn occlusion_bytes(&self) -> Option<OcclusionBytes> {
+    /// See [`crate::renderer::Renderer::occlusion_bytes`].
+    pub(in crate::renderer) fn occlusion_bytes(&self) -> Option<OcclusionBytes> {
         let late = self.displays.iter().filter_map(|d| d.late.as_ref());
         let read_back = self.readback.as_ref().map(|r| r.pyramids.bytes());
         occlusion_bytes(late, &self.culler, read_back)
@@ -367,7 +358,7 @@ impl IndirectPath {
     /// with a far layer, its far cull and far layer pass, timed inside `display`. For a
     /// display drawn in `one_pass` (the caller's), with occlusion its cull is the
     /// frustum's alone, which draws everything in that pass.
-    pub(super) fn encode_cull(
+    pub(in crate::renderer) fn encode_cull(
         &self,
         encoder: &mut wgpu::CommandEncoder,
         (index, one_pass): (usize, bool),
@@ -402,7 +393,11 @@ impl IndirectPath {
 
     /// Display `index`'s one multi-draw-indirect call into `pass`, whose pipeline the
     /// caller set (built on [`Drawer::layout`] and the decode).
-    pub(super) fn draw_with_own_pipeline(&self, pass: &mut wgpu::RenderPass, index: usize) {
+    pub(in crate::renderer) fn draw_with_own_pipeline(
+        &self,
+        pass: &mut wgpu::RenderPass,
+        index: usize,
+    ) {
         self.displays[index]
             .view
             .draw(pass, self.drawing(), BinPipelines::Own);
@@ -410,12 +405,17 @@ impl IndirectPath {
 
     /// Sets display `index`'s pipeline of the caller's own for its
     /// [`Shading::Own`]`(shading)` bins.
-    pub(super) fn set_own_pipeline(&mut self, index: usize, shading: u32, own: OwnPipeline) {
+    pub(in crate::renderer) fn set_own_pipeline(
+        &mut self,
+        index: usize,
+        shading: u32,
+        own: OwnPipeline,
+    ) {
         self.displays[index].own.insert(shading, own);
     }
 
     /// Display `index` must have a pipeline for each [`Shading::Own`] bin it draws.
-    pub(super) fn check_own_pipelines(&self, index: usize) -> Result<()> {
+    pub(in crate::renderer) fn check_own_pipelines(&self, index: usize) -> Result<()> {
         let own = &self.displays[index].own;
         let missing = (self.culler.bins().iter()).find_map(|b| match b.kind.shading {
             Shading::Own(i) if !own.contains_key(&i) => Some(i),
@@ -428,22 +428,22 @@ impl IndirectPath {
     }
 
     /// How the instance records are bound.
-    pub(super) fn windows(&self) -> crate::shaders::Windows {
+    pub(in crate::renderer) fn windows(&self) -> crate::shaders::Windows {
         self.drawer.windows
     }
 
-    pub(super) fn bind_group_layout(&self) -> &wgpu::BindGroupLayout {
+    pub(in crate::renderer) fn bind_group_layout(&self) -> &wgpu::BindGroupLayout {
         self.drawer.layout()
     }
 
-    pub(super) fn cull_targets(&self, index: usize) -> &CullTargets {
+    pub(in crate::renderer) fn cull_targets(&self, index: usize) -> &CullTargets {
         self.displays[index].view.cull()
     }
 
     /// Display `index`'s one multi-draw-indirect call into `pass`.
     /// With a far layer, its composite goes first (one more draw call); with an inset
     /// cull, the inset pair's multi-draw follows (one more).
-    pub(super) fn draw(&self, pass: &mut wgpu::RenderPass, index: usize) -> u32 {
+    pub(in crate::renderer) fn draw(&self, pass: &mut wgpu::RenderPass, index: usize) -> u32 {
         self.draw_views(pass, index, true)
     }
 
@@ -461,13 +461,6 @@ impl IndirectPath {
             None => 0,
         };
         composite + outer + insets
-    }
-
-    fn drawing(&self) -> Drawing<'_> {
-        Drawing {
-            drawer: &self.drawer,
-            scene: &self.draw_scene,
-        }
     }
 }
 

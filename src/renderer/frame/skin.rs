@@ -2,15 +2,15 @@
 //! dispatch per frame over every skinned vertex, before the shadow pass and every
 //! display, writing into the vertex buffer they all draw from.
 
-use super::passes::{Recording, frame_compute_pass};
 use crate::buffers::init_buffer;
+use crate::renderer::recorder::{Recording, frame_compute_pass};
 use crate::shaders::{compute_pipeline, dispatch_size, skin_source};
 use std::ops::Range;
 
 use crate::skinning::{JointMatrix, Skins};
 
 /// What the pass reads and writes, and its pipeline.
-pub(super) struct SkinPass {
+pub(in crate::renderer) struct SkinPass {
     pipeline: wgpu::ComputePipeline,
     bind_group: wgpu::BindGroup,
     joints: wgpu::Buffer,
@@ -22,7 +22,7 @@ const WORKGROUP: u32 = 64;
 
 impl SkinPass {
     /// The pass for `skins` writing into `vertex_buffer` (`None` without skins).
-    pub(super) fn new(
+    pub(in crate::renderer) fn new(
         device: &wgpu::Device,
         skins: &Skins,
         vertex_buffer: &wgpu::Buffer,
@@ -108,7 +108,12 @@ impl SkinPass {
     }
 
     /// Writes `skins`' current joint matrices in `range`; returns the bytes.
-    pub(super) fn upload(&self, queue: &wgpu::Queue, skins: &Skins, range: Range<u32>) -> u64 {
+    pub(in crate::renderer) fn upload(
+        &self,
+        queue: &wgpu::Queue,
+        skins: &Skins,
+        range: Range<u32>,
+    ) -> u64 {
         let matrices = &skins.joint_matrices[range.start as usize..range.end as usize];
         let bytes: &[u8] = bytemuck::cast_slice(matrices);
         let offset = range.start as u64 * size_of::<JointMatrix>() as u64;
@@ -117,7 +122,11 @@ impl SkinPass {
     }
 
     /// Records the frame's one skinning dispatch, logged as the frame pass `skin`.
-    pub(super) fn encode(&self, encoder: &mut wgpu::CommandEncoder, recording: Recording) -> u32 {
+    pub(in crate::renderer) fn encode(
+        &self,
+        encoder: &mut wgpu::CommandEncoder,
+        recording: Recording,
+    ) -> u32 {
         frame_compute_pass(encoder, recording, "skin", |pass| {
             pass.set_pipeline(&self.pipeline);
             pass.set_bind_group(0, &self.bind_group, &[]);
@@ -127,12 +136,12 @@ impl SkinPass {
     }
 
     /// The joint matrices the pass applies (the pose pass writes them on the GPU).
-    pub(super) fn joint_matrices(&self) -> &wgpu::Buffer {
+    pub(in crate::renderer) fn joint_matrices(&self) -> &wgpu::Buffer {
         &self.joints
     }
 
     /// Skinned vertices per frame.
-    pub(super) fn vertices(&self) -> u32 {
+    pub(in crate::renderer) fn vertices(&self) -> u32 {
         self.vertices
     }
 }

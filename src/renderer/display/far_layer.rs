@@ -2,10 +2,6 @@
 //! far instances' cull (by the frame's culler), one pass drawing them once into the
 //! display's far layer, and the composite that opens the display's own pass.
 
-use super::culler::Culler;
-use super::frame::{CullView, FramePlan};
-use super::passes::{PassRecord, Recording, opener, render_pass};
-use super::view_pass::ViewPass;
 use crate::bins::Bin;
 use crate::contexts::DisplayContext;
 use crate::draw::{
@@ -14,12 +10,16 @@ use crate::draw::{
 };
 use crate::far_layer::FarPlan;
 use crate::occlusion::Phase;
+use crate::renderer::culler::Culler;
+use crate::renderer::plan::{CullView, FramePlan};
+use crate::renderer::recorder::{PassRecord, Recording, opener, render_pass};
+use crate::renderer::view::ViewPass;
 use crate::shaders::{DrawKey, Shaders, far_composite_source};
 use wgpu_profiler::GpuProfilerQuery;
 
 /// What every far layer shares: the mono pipeline drawing into them (single-sampled),
 /// the composite pipeline and its layout.
-pub(super) struct FarLayers {
+pub(in crate::renderer) struct FarLayers {
     drawer: Drawer,
     composite: wgpu::RenderPipeline,
     composite_layout: wgpu::BindGroupLayout,
@@ -28,19 +28,19 @@ pub(super) struct FarLayers {
 }
 
 /// One stereo display's far layer: one more view, and its textures.
-pub(super) struct FarDisplay {
+pub(in crate::renderer) struct FarDisplay {
     /// The display it belongs to (and whose coarse blocks its cull runs over).
     index: usize,
-    pub(super) view: ViewPass,
+    pub(in crate::renderer) view: ViewPass,
     color: wgpu::TextureView,
     depth: wgpu::TextureView,
     composite_bind_group: wgpu::BindGroup,
     /// Texels, fixed when made (the plan of the rig as made).
-    pub(super) size: (u32, u32),
+    pub(in crate::renderer) size: (u32, u32),
 }
 
 impl FarLayers {
-    pub(super) fn new(
+    pub(in crate::renderer) fn new(
         device: &wgpu::Device,
         (format, kinds): (TargetFormat, &[Bin]),
         shaders: Shaders,
@@ -70,7 +70,7 @@ impl FarLayers {
 
     /// Display `index`'s far layer for `plan`, drawn as `view`: its textures and the
     /// composite's bindings (`display` is the display's context, which it reads).
-    pub(super) fn display(
+    pub(in crate::renderer) fn display(
         &self,
         device: &wgpu::Device,
         index: usize,
@@ -126,7 +126,7 @@ impl FarLayers {
     /// Records `far`'s cull in `phase` (on the GPU: over its display's blocks with the
     /// coarse cull; [`Phase::Tested`] after its display's pyramids) and its far layer
     /// pass, timed inside `display`. Returns (dispatches, draw calls).
-    pub(super) fn encode(
+    pub(in crate::renderer) fn encode(
         &self,
         encoder: &mut wgpu::CommandEncoder,
         (far, phase): (&FarDisplay, Phase),
@@ -179,7 +179,11 @@ impl FarLayers {
 
     /// The composite into the display's pass, before its near geometry (with occlusion,
     /// before what its late phase draws): one draw, one instance per eye.
-    pub(super) fn composite(&self, pass: &mut wgpu::RenderPass, far: &FarDisplay) -> u32 {
+    pub(in crate::renderer) fn composite(
+        &self,
+        pass: &mut wgpu::RenderPass,
+        far: &FarDisplay,
+    ) -> u32 {
         pass.set_pipeline(&self.composite);
         pass.set_bind_group(0, &far.composite_bind_group, &[]);
         pass.draw(0..3, 0..2);
@@ -192,7 +196,7 @@ impl FarDisplay {
     /// coarse cull's `slot`, its display's), with occlusion the context its cull tests
     /// with (paired with `display`'s), and the culler's far cull. Returns the bytes
     /// written.
-    pub(super) fn prepare(
+    pub(in crate::renderer) fn prepare(
         &self,
         queue: &wgpu::Queue,
         (plan, display): (&FarPlan, &DisplayContext),
@@ -206,7 +210,7 @@ impl FarDisplay {
 
     /// The context its cull tests with for `plan` (at the layer's fixed size) in the
     /// display whose context is `display` ([`FarPlan::tested_context`]).
-    pub(super) fn tested_context(
+    pub(in crate::renderer) fn tested_context(
         &self,
         plan: &FarPlan,
         display: &DisplayContext,
@@ -326,12 +330,12 @@ fn composite_pipeline(
 
 /// The indirect path's far layers: what they share, each stereo display's own, and this
 /// frame's plans.
-pub(super) struct Far {
-    pub(super) layers: FarLayers,
+pub(in crate::renderer) struct Far {
+    pub(in crate::renderer) layers: FarLayers,
     /// Per display; `None` for mono displays (nothing to share between eyes).
-    pub(super) displays: Vec<Option<FarDisplay>>,
+    pub(in crate::renderer) displays: Vec<Option<FarDisplay>>,
     /// The last prepared frame's far distance per display.
-    pub(super) distances: Vec<Option<f32>>,
+    pub(in crate::renderer) distances: Vec<Option<f32>>,
 }
 
 impl Far {
@@ -339,7 +343,7 @@ impl Far {
     /// them), each composited into the display whose context is `contexts[i]` (and,
     /// where `tested[i]`, culled against its pyramids), culled by `culler` and drawn
     /// from `scene` with the frame context `frame`.
-    pub(super) fn new(
+    pub(in crate::renderer) fn new(
         device: &wgpu::Device,
         (layers, plan): (FarLayers, &FramePlan),
         (scene, frame): (&DrawScene, &wgpu::Buffer),
@@ -367,7 +371,7 @@ impl Far {
 
     /// Writes every far layer's context for `plan` and the culler's far culls. Returns
     /// the bytes written.
-    pub(super) fn prepare(
+    pub(in crate::renderer) fn prepare(
         &mut self,
         queue: &wgpu::Queue,
         plan: &FramePlan,

@@ -7,13 +7,13 @@
 
 use std::time::Duration;
 
+use super::options::StereoMode;
 use super::options::{RendererOptions, frame_lod};
 use crate::contexts::{DisplayContext, FrameContext};
-use crate::cull::cpu::FrameCull;
+use crate::cull::FrameCull;
 use crate::cull::{CoarseCull, CullJob};
 use crate::error::{Error, Result};
 use crate::far_layer::FarPlan;
-use crate::modes::StereoMode;
 use crate::rig::{ResolvedRig, Rig};
 use crate::shadow::LightView;
 

@@ -2,8 +2,8 @@
 //! display's (whole, or in two halves around a submission where the CPU culler needs the
 //! pyramids), and the headless conveniences that prepare, record and submit.
 
-use super::frame::FrameStats;
-use super::passes::{Recording, close, open_display};
+use super::plan::FrameStats;
+use super::recorder::{Recording, close, open_display};
 use super::{DisplayTarget, PassRecord, Path, Renderer, TargetViews};
 use crate::error::{Error, Result};
 use crate::profiling::GpuTimer;
@@ -140,14 +140,21 @@ impl Renderer {
             Some(skin) => skin.encode(encoder, recording.again()),
             None => 0,
         };
-        let stats = match &self.path {
-            Path::Indirect(p) => p.encode_frame(encoder, recording),
-            Path::Classic(p) => p.encode_frame(encoder, recording),
+        let coarse = match &self.path {
+            Path::Indirect(p) => p.encode_frame(encoder, recording.again()),
+            Path::Classic(_) => 0,
+        };
+        let (shadowed, draw_calls) = match &self.shadow {
+            Some(shadow) => {
+                shadow.encode(encoder, self.path.drawing(), self.path.culler(), recording)
+            }
+            None => (0, 0),
         };
         FrameStats {
-            dispatches: stats.dispatches + scattered + posed + skinned,
+            dispatches: scattered + posed + skinned + coarse + shadowed,
+            draw_calls,
             cpu_staging,
-            ..stats
+            ..Default::default()
         }
     }
 

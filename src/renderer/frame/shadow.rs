@@ -2,21 +2,21 @@
 //! over the coarse cull's blocks) and one depth-only pass with one multi-draw-indirect
 //! call into the shadow map, once per frame, before any display.
 
-use super::culler::Culler;
-use super::frame::CullView;
-use super::passes::{PassRecord, Recording, close, open_display, opener, render_pass};
-use super::view_pass::ViewPass;
 use crate::contexts::DisplayContext;
 use crate::draw::{BinPipelines, Drawing, cleared_depth};
+use crate::renderer::culler::Culler;
+use crate::renderer::plan::CullView;
+use crate::renderer::recorder::{PassRecord, Recording, close, open_display, opener, render_pass};
+use crate::renderer::view::ViewPass;
 use crate::shadow::LightView;
 
 /// The light as one more view.
-pub(super) struct ShadowPass {
+pub(in crate::renderer) struct ShadowPass {
     view: ViewPass,
 }
 
 impl ShadowPass {
-    pub(super) fn new(
+    pub(in crate::renderer) fn new(
         device: &wgpu::Device,
         drawing: Drawing,
         frame: &wgpu::Buffer,
@@ -29,7 +29,7 @@ impl ShadowPass {
 
     /// Writes the light's context for `view` and the culler's result for it. Returns the
     /// bytes written.
-    pub(super) fn prepare(
+    pub(in crate::renderer) fn prepare(
         &self,
         queue: &wgpu::Queue,
         view: &LightView,
@@ -43,7 +43,7 @@ impl ShadowPass {
     /// Records the light's cull (on the GPU) and the shadow pass, timed as
     /// `shadow_cull` and `shadow` inside a `shadow` scope, logged at the frame level.
     /// Returns (dispatches, draw calls).
-    pub(super) fn encode(
+    pub(in crate::renderer) fn encode(
         &self,
         encoder: &mut wgpu::CommandEncoder,
         drawing: Drawing,

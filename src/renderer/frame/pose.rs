@@ -3,12 +3,11 @@
 //! they wrote, in one compute pass before the skinning pass, from the frame context's
 //! time. Built only with [`crate::renderer::Posing::Gpu`] and a scene that moves.
 
-use super::Path;
-use super::options::{PosingMode, RendererOptions};
-use super::passes::{Recording, frame_compute_pass};
-use super::skin_pass::SkinPass;
+use super::skin::SkinPass;
 use crate::buffers::init_buffer;
 use crate::error::Result;
+use crate::renderer::options::{PosingMode, RendererOptions};
+use crate::renderer::recorder::{Recording, frame_compute_pass};
 use crate::scene::Scene;
 use std::collections::HashMap;
 
@@ -18,7 +17,7 @@ use crate::scatter::{GpuMoves, ScatterTargets};
 use crate::shaders::{Windows, dispatch_size, pose_source};
 
 /// The pass's pipelines, tables and bindings.
-pub(super) struct PosePass {
+pub(in crate::renderer) struct PosePass {
     pipelines: [wgpu::ComputePipeline; 3],
     bind_groups: [wgpu::BindGroup; 3],
     dispatches: [(u32, u32); 3],
@@ -30,7 +29,7 @@ pub(super) struct PosePass {
 }
 
 /// Where the pass writes: the skins' joint matrices and the scatter's targets.
-pub(super) struct PoseOutputs<'a> {
+pub(in crate::renderer) struct PoseOutputs<'a> {
     pub joint_matrices: &'a wgpu::Buffer,
     pub scatter: ScatterTargets<'a>,
     pub windows: Windows,
@@ -38,7 +37,7 @@ pub(super) struct PoseOutputs<'a> {
 
 impl PosePass {
     /// The pass for `tables`, reading the frame context `frame`.
-    pub(super) fn new(
+    pub(in crate::renderer) fn new(
         device: &wgpu::Device,
         tables: &PoseTables,
         frame: &wgpu::Buffer,
@@ -145,7 +144,7 @@ impl PosePass {
 
     /// Stops posing the instance in `slot` (removed, or posed by the engine now): its
     /// target's slot goes void (4 bytes); returns the bytes written.
-    pub(super) fn stop(&mut self, queue: &wgpu::Queue, slot: u32) -> u64 {
+    pub(in crate::renderer) fn stop(&mut self, queue: &wgpu::Queue, slot: u32) -> u64 {
         let Some(k) = self.targets_of.remove(&slot) else {
             return 0;
         };
@@ -157,7 +156,11 @@ impl PosePass {
 
     /// Records the frame's posing, logged as the frame pass `pose`; returns its
     /// dispatches.
-    pub(super) fn encode(&self, encoder: &mut wgpu::CommandEncoder, recording: Recording) -> u32 {
+    pub(in crate::renderer) fn encode(
+        &self,
+        encoder: &mut wgpu::CommandEncoder,
+        recording: Recording,
+    ) -> u32 {
         frame_compute_pass(encoder, recording, "pose", |pass| {
             for k in 0..3 {
                 pass.set_pipeline(&self.pipelines[k]);
@@ -171,25 +174,27 @@ impl PosePass {
     }
 
     /// GPU bytes of its tables and scratch.
-    pub(super) fn gpu_bytes(&self) -> u64 {
+    pub(in crate::renderer) fn gpu_bytes(&self) -> u64 {
         self.gpu_bytes
     }
 }
 
-/// What the pose pass binds besides the path's buffers.
-pub(super) struct GpuParts<'a> {
-    pub(super) frame: &'a wgpu::Buffer,
-    pub(super) skin: Option<&'a SkinPass>,
-    pub(super) windows: Windows,
+/// What the pose pass binds: the frame context, the skins' joint matrices, and where
+/// its moves go (the path's scatter targets).
+pub(in crate::renderer) struct GpuParts<'a> {
+    pub(in crate::renderer) frame: &'a wgpu::Buffer,
+    pub(in crate::renderer) skin: Option<&'a SkinPass>,
+    pub(in crate::renderer) windows: Windows,
+    pub(in crate::renderer) scatter: ScatterTargets<'a>,
 }
 
 /// The pose pass, with [`PosingMode::Gpu`] and a scene that moves; `posed(slot)`: whether
 /// it still poses the instance in `slot`.
-pub(super) fn build(
+pub(in crate::renderer) fn build(
     device: &wgpu::Device,
     scene: &Scene,
     options: &RendererOptions,
-    (path, gpu): (&mut Path, GpuParts),
+    gpu: GpuParts,
     posed: impl Fn(u32) -> bool,
 ) -> Result<Option<PosePass>> {
     if options.posing != PosingMode::Gpu {
@@ -208,15 +213,9 @@ pub(super) fn build(
             &stand_in
         }
     };
-    let (instances, culler) = path.edit_targets();
-    let (spheres, visibility) = culler.scatter_targets();
     let outputs = PoseOutputs {
         joint_matrices,
-        scatter: ScatterTargets {
-            instances,
-            spheres,
-            visibility,
-        },
+        scatter: gpu.scatter,
         windows: gpu.windows,
     };
     Ok(Some(PosePass::new(device, &tables, gpu.frame, outputs)))

@@ -5,12 +5,7 @@
 
 use std::time::Instant;
 
-use super::culler::{CullShape, Culler};
-use super::frame::{CullView, FramePlan, FrameStats};
-use super::inputs::PathInputs;
-use super::passes::{PassRecord, Recording, Timing, draw_pass};
-use super::shadow_pass::ShadowPass;
-use super::targets::TargetViews;
+use super::PathInputs;
 use crate::buffers::{storage_buffer, write};
 use crate::contexts::context_buffer;
 use crate::cull::CullOutput;
@@ -18,8 +13,12 @@ use crate::draw::{
     BinDraw, BinPipelines, DrawFeatures, DrawScene, Drawer, Drawing, NO_OWN_PIPELINES, set_viewport,
 };
 use crate::error::Result;
-use crate::modes::StereoMode;
 use crate::records::uniform_bytes;
+use crate::renderer::culler::{CullShape, Culler};
+use crate::renderer::options::StereoMode;
+use crate::renderer::plan::{CullView, FramePlan, FrameStats};
+use crate::renderer::recorder::{PassRecord, Timing, draw_pass};
+use crate::renderer::targets::TargetViews;
 use crate::shaders::DrawKey;
 
 /// One view of a stereo display (an eye, or a foveated display's inset): its own
@@ -43,15 +42,13 @@ struct ClassicDisplay {
     eyes: Vec<EyeState>,
 }
 
-pub(super) struct ClassicPath {
+pub(in crate::renderer) struct ClassicPath {
     mode: StereoMode,
     /// The CPU culler (the classic modes draw per instance from its results).
-    pub(super) culler: Culler,
+    pub(in crate::renderer) culler: Culler,
     drawer: Drawer,
-    pub(super) draw_scene: DrawScene,
+    pub(in crate::renderer) draw_scene: DrawScene,
     displays: Vec<ClassicDisplay>,
-    /// With shadows: the frame's shadow pass.
-    shadow: Option<ShadowPass>,
 }
 
 /// What a view the frame did not cull draws: nothing.
@@ -64,7 +61,10 @@ static NOTHING: CullOutput = CullOutput {
 
 impl ClassicPath {
     /// The path for `inputs`, for the displays of its plan.
-    pub(super) fn new(device: &wgpu::Device, inputs: PathInputs) -> Result<ClassicPath> {
+    pub(in crate::renderer) fn new(
+        device: &wgpu::Device,
+        inputs: PathInputs,
+    ) -> Result<ClassicPath> {
         let PathInputs {
             scene,
             layout,
@@ -102,31 +102,27 @@ impl ClassicPath {
         };
         let per_eye_lists = options.mode == StereoMode::MultiCamera;
         let displays = classic_displays(device, plan, drawing, frame, slots, per_eye_lists);
-        let shadow = options
-            .shadows
-            .then(|| ShadowPass::new(device, drawing, frame, &culler));
         Ok(ClassicPath {
             mode: options.mode,
             culler,
             drawer,
             draw_scene,
             displays,
-            shadow,
         })
     }
 
     /// Culls on the CPU (every display and eye of `plan` in one pass over the spheres),
     /// writes the contexts and uploads the visible lists the draws index.
-    pub(super) fn prepare(&mut self, queue: &wgpu::Queue, plan: &FramePlan) -> FrameStats {
+    pub(in crate::renderer) fn prepare(
+        &mut self,
+        queue: &wgpu::Queue,
+        plan: &FramePlan,
+    ) -> FrameStats {
         let mut stats = FrameStats::default();
         let start = Instant::now();
         stats.bytes_uploaded += self.culler.prepare(queue, plan);
         stats.cpu_cull = start.elapsed();
         let start = Instant::now();
-        if let (Some(shadow), Some(_)) = (&self.shadow, &plan.light_cull) {
-            let size = self.draw_scene.shadow_map.size;
-            stats.bytes_uploaded += shadow.prepare(queue, &plan.light, size, &self.culler);
-        }
         for (i, (state, ctx)) in self.displays.iter().zip(&plan.displays).enumerate() {
             stats.bytes_uploaded += write(queue, &state.context, &uniform_bytes(ctx));
             for (e, eye) in state.eyes.iter().enumerate() {
@@ -162,30 +158,17 @@ impl ClassicPath {
             .unwrap_or(&NOTHING)
     }
 
-    /// The frame level's passes: the shadow pass, when on.
-    pub(super) fn encode_frame(
-        &self,
-        encoder: &mut wgpu::CommandEncoder,
-        recording: Recording,
-    ) -> FrameStats {
-        let Some(shadow) = &self.shadow else {
-            return FrameStats::default();
-        };
-        let drawing = Drawing {
+    /// Its pipelines and scene.
+    pub(in crate::renderer) fn drawing(&self) -> Drawing<'_> {
+        Drawing {
             drawer: &self.drawer,
             scene: &self.draw_scene,
-        };
-        let (dispatches, draw_calls) = shadow.encode(encoder, drawing, &self.culler, recording);
-        FrameStats {
-            draw_calls,
-            dispatches,
-            ..Default::default()
         }
     }
 
     /// Display `index` into its own passes, timed inside `display`: one per eye for a
     /// stereo display in multi-pass and multi-camera, else one.
-    pub(super) fn encode_display(
+    pub(in crate::renderer) fn encode_display(
         &self,
         encoder: &mut wgpu::CommandEncoder,
         index: usize,
@@ -231,7 +214,7 @@ impl ClassicPath {
     /// Display `index` into one pass: a mono display's instances; a stereo display's in
     /// the single-pass cadence, or (multi-pass, multi-camera) each eye in turn in its
     /// half. Returns the draw calls.
-    pub(super) fn draw(&self, pass: &mut wgpu::RenderPass, index: usize) -> u32 {
+    pub(in crate::renderer) fn draw(&self, pass: &mut wgpu::RenderPass, index: usize) -> u32 {
         let (state, cull) = (&self.displays[index], self.cull_of(index, None));
         match (self.mode, state.eyes.as_slice()) {
             (_, []) => {
@@ -278,11 +261,11 @@ impl ClassicPath {
     }
 
     /// This frame's cull of display `index` (multi-camera: its left eye's).
-    pub(super) fn cull_output(&self, index: usize) -> CullOutput {
+    pub(in crate::renderer) fn cull_output(&self, index: usize) -> CullOutput {
         self.cull_of(index, Some(0)).clone()
     }
 
-    pub(super) fn visible_counts(&self) -> Vec<u32> {
+    pub(in crate::renderer) fn visible_counts(&self) -> Vec<u32> {
         (0..self.displays.len())
             .map(|i| self.cull_of(i, Some(0)).visible.len() as u32)
             .collect()

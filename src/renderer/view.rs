@@ -3,8 +3,8 @@
 //! drawn with one multi-draw-indirect call.
 
 use super::culler::{Culler, ViewCull};
-use super::frame::CullView;
-use super::passes::{Logged, Timing};
+use super::plan::CullView;
+use super::recorder::{Logged, Timing};
 use crate::bins::BinRange;
 use crate::buffers::write;
 use crate::contexts::DisplayContext;

@@ -1,0 +1,29 @@
+//! The display level: everything recorded once per display, for both eyes. The path
+//! chosen once in `Renderer::new` ([`indirect`]: the GPU-driven `instanced` and
+//! `multiview`, one cull and one multi-draw per display; [`classic`]: the per-instance
+//! modes, the only ones with passes per eye), the far layer (`far_layer.rs`) and
+//! occlusion's passes (`occlusion/`), and what a path is built from.
+
+pub(in crate::renderer) mod classic;
+pub(in crate::renderer) mod far_layer;
+pub(in crate::renderer) mod indirect;
+pub(in crate::renderer) mod occlusion;
+
+use crate::records::CullLayout;
+use crate::renderer::options::RendererOptions;
+use crate::renderer::plan::FramePlan;
+use crate::scene::Scene;
+
+/// The scene, its cull layout, the frame plan of the rig as made, and the options.
+pub(in crate::renderer) struct PathInputs<'a> {
+    pub(in crate::renderer) scene: &'a Scene,
+    /// The scene's instances at their places of the cull order.
+    pub(in crate::renderer) layout: CullLayout,
+    /// The rig as made: its displays, coarse cull and far layer sizes.
+    pub(in crate::renderer) plan: &'a FramePlan,
+    /// The frame context's uniform, bound by every pass.
+    pub(in crate::renderer) frame: &'a wgpu::Buffer,
+    pub(in crate::renderer) options: &'a RendererOptions,
+    /// Instance slots (and places) of room.
+    pub(in crate::renderer) slots: u32,
+}
