@@ -146,7 +146,7 @@ fn the_far_layer_with_occlusion_draws_alike_in_the_callers_pass() {
     let own = read_rgba8(&gpu.device, &gpu.queue, &targets[0].color).unwrap();
     let engine = draw_in_engine_passes(&gpu, (&scene, &rig), options, false, |_, _| {});
     // Exact on any CPU: the same pipelines draw the same surfaces; the composite wins
-    // the same ties in either order (see far_pass.rs), and what occlusion dropped is
+    // the same ties in either order (see src/renderer/display/far_layer.rs), and what occlusion dropped is
     // hidden.
     assert_images_match(
         "engine-pass-far-occlusion",

@@ -1,5 +1,5 @@
 // The far layer into one stereo display's target, before its near geometry
-// (src/far_layer.rs, src/renderer/far_pass.rs). One draw of two instances, the
+// (src/far_layer.rs, src/renderer/display/far_layer.rs). One draw of two instances, the
 // instance index the eye: a triangle over that eye's half, whose fragments take the far
 // layer in the direction through their pixel (the eye's exact mapping at infinity),
 // with that far point's depth as this eye sees it, so that near geometry drawn next

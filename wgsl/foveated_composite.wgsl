@@ -1,7 +1,7 @@
 // A foveated display's four views composited into one image per eye, as XR runtimes
 // present them: each eye's outer view stretched over the eye's whole window, its inset
 // laid over the part of the window it covers, faded in over a soft border. Drawn as one
-// triangle per eye into a double-wide target (src/composite.rs; its CPU twin is
+// triangle per eye into a double-wide target (src/foveated_composite.rs; its CPU twin is
 // composite_cpu there, which this file's arithmetic mirrors step for step).
 //
 // Texels are read with textureLoad and filtered here rather than by a sampler, so that

@@ -1,4 +1,4 @@
-// The frame's posing pass (src/pose_tables.rs, src/renderer/pose_pass.rs): once per
+// The frame's posing pass (src/pose_tables.rs, src/renderer/frame/pose.rs): once per
 // frame, before the skinning pass and every cull, from the frame context's time alone.
 // Three entry points, dispatched in order: `locals` samples each node's channels,
 // `worlds` composes each node's world transform, `targets` writes each posed

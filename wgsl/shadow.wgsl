@@ -1,4 +1,4 @@
-// The frame's shadow pass (src/renderer/shadow_pass.rs; the light's view comes from
+// The frame's shadow pass (src/renderer/frame/shadow.rs; the light's view comes from
 // src/shadow.rs), once per frame before any display: depth only, from the light's cull
 // outputs, the light's view in the display context's eye 0.
 // Bindings: DRAW_BINDINGS in src/shaders/bindings.rs (group 0).

@@ -64,14 +64,18 @@
 //! # Ok(()) }
 //! ```
 //!
-//! One frame, in the order it runs: [`Renderer::prepare`] makes the frame's plan
-//! (`frame.rs`: the rig resolved once, every context, every cull, the levels of detail,
-//! the coarse cull, the far/near split, the light) and hands it to the path chosen once
-//! in [`Renderer::new`]: the GPU-driven one (`indirect.rs`: `instanced`, `multiview`) or
-//! the classic per-instance modes (`classic.rs`). Both cull every view through the one
-//! culler (`culler/`: GPU passes or the CPU culler); [`Renderer::encode`] records the
-//! frame-level passes (scatter, coarse cull, shadow) and then each display's cull and
-//! draw pass (`far_pass.rs`, `shadow_pass.rs` and `view_pass.rs` for the extra views).
+//! One frame, in the order it runs, by the chapter's levels (the directories below):
+//! [`Renderer::prepare`] makes the frame's plan (`plan.rs`: the rig resolved once,
+//! every context, every cull, the levels of detail, the coarse cull, the far/near split,
+//! the light) and hands it to the path chosen once in [`Renderer::new`]
+//! (`display/indirect.rs`: `instanced`, `multiview`; `display/classic.rs`: the
+//! per-instance modes). [`Renderer::encode`] (`encode.rs`) records the frame level's
+//! passes (the scatter of edits, `frame/`: posing, skinning, the shadow map; the coarse
+//! cull), then each display's cull and passes (`display/`, with the far layer and
+//! occlusion). Every view (display, eye, far layer, light) is a `view.rs` culled through
+//! the one culler (`culler/`: GPU passes or the CPU culler); `recorder.rs` times and
+//! logs the passes. The eye level lives in the contexts (`eye[e]`) and the shaders, and
+//! in the classic modes' per-eye passes.
 
 use crate::buffers::{uniform_buffer, write};
 use crate::contexts::FrameContext;

@@ -329,7 +329,7 @@ pub const SHADOW_DECLARATIONS: &str = "\
 ";
 
 /// The far-layer composite's group 0 (`wgsl/far_composite.wgsl`; the layout is
-/// `renderer::far_pass`'s): the display's and the far layer's contexts, the far layer.
+/// `renderer::display::far_layer`'s): the display's and the far layer's contexts, the far layer.
 pub const FAR_DECLARATIONS: &str = "\
 @group(0) @binding(0) var<uniform> display: DisplayContext;
 @group(0) @binding(1) var<uniform> far: DisplayContext;
