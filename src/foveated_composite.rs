@@ -213,32 +213,9 @@ impl FoveatedComposite {
 }
 
 fn bind_group_layout(device: &wgpu::Device) -> wgpu::BindGroupLayout {
-    let fragment = wgpu::ShaderStages::FRAGMENT;
-    device.create_bind_group_layout(&wgpu::BindGroupLayoutDescriptor {
-        label: Some("stereocull.foveated_composite"),
-        entries: &[
-            wgpu::BindGroupLayoutEntry {
-                binding: 0,
-                visibility: fragment,
-                ty: wgpu::BindingType::Buffer {
-                    ty: wgpu::BufferBindingType::Uniform,
-                    has_dynamic_offset: false,
-                    min_binding_size: None,
-                },
-                count: None,
-            },
-            wgpu::BindGroupLayoutEntry {
-                binding: 1,
-                visibility: fragment,
-                ty: wgpu::BindingType::Texture {
-                    sample_type: wgpu::TextureSampleType::Float { filterable: false },
-                    view_dimension: wgpu::TextureViewDimension::D2,
-                    multisampled: false,
-                },
-                count: None,
-            },
-        ],
-    })
+    let list = &crate::shaders::FOVEATED_COMPOSITE_BINDINGS;
+    let windows = &crate::shaders::Windows::WHOLE;
+    crate::shaders::bind_group_layout(device, "stereocull.foveated_composite", list, windows)
 }
 
 /// The CPU twin of the GPU composite, on an sRGB RGBA8 image of the display's target:

@@ -16,6 +16,7 @@ use crate::bins::{check_override, mesh_material, vertex_material};
 use crate::buffers::init_buffer;
 use crate::error::{Error, Result};
 use crate::scene::{AlphaMode, Encoding, Material, Scene};
+use crate::shaders::Windows;
 
 /// The largest layer side: bigger textures are scaled down to it.
 pub const MAX_LAYER_SIZE: u32 = 1024;
@@ -63,50 +64,10 @@ impl MaterialRecord {
     pub const UNTEXTURED: u32 = u32::MAX;
 }
 
-/// Group 1's WGSL declarations.
-pub const DECLARATIONS: &str = "\
-@group(1) @binding(0) var color_textures: texture_2d_array<f32>;
-@group(1) @binding(1) var texture_sampler: sampler;
-@group(1) @binding(2) var<storage, read> materials: array<MaterialRecord>;
-@group(1) @binding(3) var data_textures: texture_2d_array<f32>;
-";
-
-/// Group 1's layout, matching [`DECLARATIONS`].
+/// Group 1's layout ([`crate::shaders::MATERIAL_BINDINGS`]).
 pub fn bind_group_layout(device: &wgpu::Device) -> wgpu::BindGroupLayout {
-    let fragment = wgpu::ShaderStages::FRAGMENT;
-    let array = |binding| wgpu::BindGroupLayoutEntry {
-        binding,
-        visibility: fragment,
-        ty: wgpu::BindingType::Texture {
-            sample_type: wgpu::TextureSampleType::Float { filterable: true },
-            view_dimension: wgpu::TextureViewDimension::D2Array,
-            multisampled: false,
-        },
-        count: None,
-    };
-    device.create_bind_group_layout(&wgpu::BindGroupLayoutDescriptor {
-        label: Some("stereocull.materials"),
-        entries: &[
-            array(0),
-            wgpu::BindGroupLayoutEntry {
-                binding: 1,
-                visibility: fragment,
-                ty: wgpu::BindingType::Sampler(wgpu::SamplerBindingType::Filtering),
-                count: None,
-            },
-            wgpu::BindGroupLayoutEntry {
-                binding: 2,
-                visibility: fragment,
-                ty: wgpu::BindingType::Buffer {
-                    ty: wgpu::BufferBindingType::Storage { read_only: true },
-                    has_dynamic_offset: false,
-                    min_binding_size: None,
-                },
-                count: None,
-            },
-            array(3),
-        ],
-    })
+    let list = &crate::shaders::MATERIAL_BINDINGS;
+    crate::shaders::bind_group_layout(device, "stereocull.materials", list, &Windows::WHOLE)
 }
 
 /// The records of `scene`'s materials (one untextured record when it has none), after

@@ -9,6 +9,7 @@ use glam::{DMat4, DVec3, Mat4, Vec3, Vec4};
 use crate::cull::CullJob;
 use crate::frustum::ROUNDING_SLACK;
 use crate::rig::ResolvedRig;
+use crate::shaders::Windows;
 
 /// The frame's light and its shadow map.
 #[derive(Clone, Copy, Debug, PartialEq)]
@@ -123,30 +124,10 @@ impl LightView {
 /// The shadow map's depth format.
 pub const SHADOW_FORMAT: wgpu::TextureFormat = wgpu::TextureFormat::Depth32Float;
 
-/// Group 2's layout, matching [`crate::shaders::SHADOW_DECLARATIONS`].
+/// Group 2's layout ([`crate::shaders::SHADOW_MAP_BINDINGS`]).
 pub fn bind_group_layout(device: &wgpu::Device) -> wgpu::BindGroupLayout {
-    let fragment = wgpu::ShaderStages::FRAGMENT;
-    device.create_bind_group_layout(&wgpu::BindGroupLayoutDescriptor {
-        label: Some("stereocull.shadow_map"),
-        entries: &[
-            wgpu::BindGroupLayoutEntry {
-                binding: 0,
-                visibility: fragment,
-                ty: wgpu::BindingType::Texture {
-                    sample_type: wgpu::TextureSampleType::Depth,
-                    view_dimension: wgpu::TextureViewDimension::D2,
-                    multisampled: false,
-                },
-                count: None,
-            },
-            wgpu::BindGroupLayoutEntry {
-                binding: 1,
-                visibility: fragment,
-                ty: wgpu::BindingType::Sampler(wgpu::SamplerBindingType::Comparison),
-                count: None,
-            },
-        ],
-    })
+    let list = &crate::shaders::SHADOW_MAP_BINDINGS;
+    crate::shaders::bind_group_layout(device, "stereocull.shadow_map", list, &Windows::WHOLE)
 }
 
 /// The shadow map on the GPU (1 x 1 and never drawn with shadows off, so that the draw

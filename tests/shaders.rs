@@ -17,7 +17,10 @@ use stereocull::records::{storage_bytes, uniform_bytes};
 use stereocull::scene::Vertex;
 use stereocull::shaders::{
     Access, Binding, COARSE_BINDINGS, CULL_BINDINGS, CullPass, DRAW_BINDINGS, DrawKey, EditKind,
-    SCATTER_BINDINGS, Window, Windows, all_sources, scatter_source, shadow_source,
+    FAR_COMPOSITE_BINDINGS, FOVEATED_COMPOSITE_BINDINGS, MATERIAL_BINDINGS, POSE_BINDINGS,
+    SCATTER_BINDINGS, SHADOW_MAP_BINDINGS, SKIN_BINDINGS, Window, Windows, all_sources,
+    far_composite_source, foveated_composite_source, pose_source, pyramid_bindings, pyramid_source,
+    scatter_source, shadow_cutout_source, shadow_source, skin_source,
 };
 
 fn parse(label: &str, source: &str) -> Module {
@@ -443,96 +446,169 @@ fn contexts_match_wgsl() {
     );
 }
 
-/// Every pass declares exactly its family's binding list: each global at binding `i`
-/// is `list[i]`, with its name, address space and access.
-#[test]
-fn every_pass_binds_what_its_list_declares() {
-    let passes = CullPass::variants()
-        .into_iter()
-        .map(|(p, c)| (p.label(c), p.source(c, &Windows::WHOLE), &CULL_BINDINGS[..]))
-        .chain(DrawKey::ALL.map(|k| (k.label(), k.source(), &DRAW_BINDINGS[..])))
+/// Every pipeline the crate builds, with its source and its bind groups' lists in
+/// group order.
+fn pipelines_and_their_lists() -> Vec<(String, String, Vec<Vec<Binding>>)> {
+    let whole = &Windows::WHOLE;
+    let lists = |l: &[&[Binding]]| l.iter().map(|g| g.to_vec()).collect::<Vec<_>>();
+    let cull_lists = |label: &str| match label.starts_with("stereocull.coarse") {
+        true => lists(&[&CULL_BINDINGS, &COARSE_BINDINGS]),
+        false => lists(&[&CULL_BINDINGS]),
+    };
+    let draw = lists(&[&DRAW_BINDINGS, &MATERIAL_BINDINGS, &SHADOW_MAP_BINDINGS]);
+    let mut out: Vec<_> = (CullPass::variants().into_iter())
+        .map(|(p, c)| (p.label(c), p.source(c, whole)))
         .chain(
-            [EditKind::Places, EditKind::Moves, EditKind::Records].map(|kind| {
-                let label = format!("stereocull.scatter.{kind:?}");
-                (
-                    label,
-                    scatter_source(&Windows::WHOLE, kind),
-                    &SCATTER_BINDINGS[..],
-                )
-            }),
+            (CullPass::occlusion_variants().into_iter())
+                .map(|(p, c, phase)| (phase.label(&p.label(c)), p.phased_source(c, phase, whole))),
         )
-        .chain([(
-            "stereocull.shadow".to_string(),
-            shadow_source(&Windows::WHOLE),
-            &DRAW_BINDINGS[..],
-        )]);
-    for (label, source, list) in passes {
+        .map(|(label, source)| {
+            let groups = cull_lists(&label);
+            (label, source, groups)
+        })
+        .collect();
+    out.extend(
+        (DrawKey::ALL.iter().flat_map(|k| k.alpha_variants()))
+            .map(|k| (k.label(), k.source_with(None, whole), draw.clone())),
+    );
+    out.extend(
+        [EditKind::Places, EditKind::Moves, EditKind::Records].map(|kind| {
+            let label = format!("stereocull.scatter.{kind:?}");
+            (
+                label,
+                scatter_source(whole, kind),
+                lists(&[&SCATTER_BINDINGS]),
+            )
+        }),
+    );
+    let others: [(&str, String, Vec<Vec<Binding>>); 6] = [
+        ("shadow", shadow_source(whole), lists(&[&DRAW_BINDINGS])),
+        (
+            "shadow.cutout",
+            shadow_cutout_source(whole),
+            lists(&[&DRAW_BINDINGS, &MATERIAL_BINDINGS]),
+        ),
+        (
+            "far_composite",
+            far_composite_source(),
+            lists(&[&FAR_COMPOSITE_BINDINGS]),
+        ),
+        (
+            "foveated_composite",
+            foveated_composite_source(),
+            lists(&[&FOVEATED_COMPOSITE_BINDINGS]),
+        ),
+        ("skin", skin_source(), lists(&[&SKIN_BINDINGS])),
+        ("pose", pose_source(), lists(&[&POSE_BINDINGS])),
+    ];
+    out.extend(others.map(|(l, s, g)| (format!("stereocull.{l}"), s, g)));
+    out.extend(
+        [(1, false), (4, false), (1, true)].map(|(samples, layered)| {
+            let label = format!("stereocull.occlusion_pyramid.x{samples}.{layered}");
+            let list = pyramid_bindings(samples, layered).to_vec();
+            (label, pyramid_source(samples, layered), vec![list])
+        }),
+    );
+    out
+}
+
+/// Whether WGSL global `var` of `module` is what `want` declares: a buffer in its
+/// address space and access, a texture of its dimension, sample type and sampling, a
+/// sampler of its kind.
+fn global_is(module: &Module, var: &naga::GlobalVariable, want: &Binding) -> bool {
+    use naga::{AddressSpace, ImageClass, ImageDimension, ScalarKind, StorageAccess};
+    let inner = &module.types[var.ty].inner;
+    match (want.access, var.space, inner) {
+        (Access::Uniform | Access::UniformDynamic, AddressSpace::Uniform, _) => true,
+        (Access::StorageRead, AddressSpace::Storage { access }, _) => {
+            !access.contains(StorageAccess::STORE)
+        }
+        (Access::StorageReadWrite, AddressSpace::Storage { access }, _) => {
+            access.contains(StorageAccess::STORE)
+        }
+        (
+            Access::Texture(kind),
+            AddressSpace::Handle,
+            TypeInner::Image {
+                dim,
+                arrayed,
+                class,
+            },
+        ) => {
+            let class_matches = match (kind.sample, class) {
+                (wgpu::TextureSampleType::Depth, ImageClass::Depth { multi }) => {
+                    *multi == kind.multisampled
+                }
+                (wgpu::TextureSampleType::Float { .. }, ImageClass::Sampled { kind: k, multi }) => {
+                    *k == ScalarKind::Float && *multi == kind.multisampled
+                }
+                _ => false,
+            };
+            let array = kind.dimension == wgpu::TextureViewDimension::D2Array;
+            *dim == ImageDimension::D2 && *arrayed == array && class_matches
+        }
+        (Access::Sampler(ty), AddressSpace::Handle, TypeInner::Sampler { comparison }) => {
+            *comparison == (ty == wgpu::SamplerBindingType::Comparison)
+        }
+        _ => false,
+    }
+}
+
+/// Every pipeline declares exactly its bind groups' lists (whose layouts are made from
+/// the same lists): each global at group `g`, binding `i` is list `g`'s `i`th entry,
+/// with its name and kind (buffer space and access, texture, sampler), and every entry
+/// of every list is declared.
+#[test]
+fn every_pipeline_binds_what_its_lists_declare() {
+    let pipelines = pipelines_and_their_lists();
+    assert!(pipelines.len() > 40, "{}", pipelines.len());
+    for (label, source, lists) in pipelines {
         let module = parse(&label, &source);
         let mut seen = Vec::new();
-        let mut group_1 = Vec::new();
-        let mut group_2 = Vec::new();
         for (_, var) in module.global_variables.iter() {
             let Some(binding) = &var.binding else {
                 continue;
             };
             let name = var.name.as_deref().unwrap_or_default();
-            if binding.group == 1 {
-                group_1.push((binding.binding, name.to_string()));
-                continue;
-            }
-            if binding.group == 2 {
-                group_2.push((binding.binding, name.to_string()));
-                continue;
-            }
-            assert_eq!(binding.group, 0, "{label}");
-            let want: &Binding = list
-                .get(binding.binding as usize)
-                .unwrap_or_else(|| panic!("{label}: binding {} not in its list", binding.binding));
-            assert_eq!(name, want.name, "{label}: binding {}", binding.binding);
-            let access = match var.space {
-                naga::AddressSpace::Uniform => Access::Uniform,
-                naga::AddressSpace::Storage { access }
-                    if access.contains(naga::StorageAccess::STORE) =>
-                {
-                    Access::StorageReadWrite
-                }
-                naga::AddressSpace::Storage { .. } => Access::StorageRead,
-                other => panic!("{label}: {name} in {other:?}"),
-            };
-            assert_eq!(access, want.access, "{label}: {name}");
-            seen.push(binding.binding);
+            let want = (lists.get(binding.group as usize))
+                .and_then(|list| list.get(binding.binding as usize))
+                .unwrap_or_else(|| panic!("{label}: {name} at {binding:?} is in no list"));
+            assert_eq!(name, want.name, "{label}: {binding:?}");
+            assert!(
+                global_is(&module, var, want),
+                "{label}: {name} is not {want:?}"
+            );
+            seen.push((binding.group, binding.binding));
         }
         seen.sort();
-        let all: Vec<u32> = (0..list.len() as u32).collect();
+        let all: Vec<(u32, u32)> = (lists.iter().enumerate())
+            .flat_map(|(g, list)| (0..list.len() as u32).map(move |i| (g as u32, i)))
+            .collect();
         assert_eq!(seen, all, "{label}: bindings");
-        // Group 1: the draw pipelines' materials (stereocull::materials::bind_group_layout),
-        // the coarse passes' indirect dispatch (COARSE_BINDINGS).
-        group_1.sort();
-        // Group 2: the draw pipelines' shadow map (stereocull::shadow::bind_group_layout).
-        group_2.sort();
-        let shadow_map: Vec<(u32, String)> = match label.starts_with("stereocull.draw") {
-            true => vec![(0, "shadow_map".into()), (1, "shadow_sampler".into())],
-            false => Vec::new(),
-        };
-        assert_eq!(group_2, shadow_map, "{label}: group 2");
-        let want: Vec<(u32, String)> = if label.starts_with("stereocull.draw") {
-            vec![
-                (0, "color_textures".into()),
-                (1, "texture_sampler".into()),
-                (2, "materials".into()),
-                (3, "data_textures".into()),
-            ]
-        } else if label.starts_with("stereocull.coarse") {
-            COARSE_BINDINGS
-                .iter()
-                .enumerate()
-                .map(|(i, b)| (i as u32, b.name.into()))
-                .collect()
-        } else {
-            Vec::new()
-        };
-        assert_eq!(group_1, want, "{label}: group 1");
     }
+}
+
+/// No WGSL file declares a binding: every one comes from a list in
+/// `src/shaders/bindings.rs`, which the layouts are made from too.
+#[test]
+fn no_wgsl_file_declares_its_own_bindings() {
+    let dir = std::path::Path::new(env!("CARGO_MANIFEST_DIR")).join("wgsl");
+    let mut files = 0;
+    for sub in [dir.clone(), dir.join("shared")] {
+        for entry in std::fs::read_dir(sub).unwrap() {
+            let path = entry.unwrap().path();
+            if path.extension().is_some_and(|e| e == "wgsl") {
+                let text = std::fs::read_to_string(&path).unwrap();
+                assert!(
+                    !text.contains("@group("),
+                    "{} declares a binding",
+                    path.display()
+                );
+                files += 1;
+            }
+        }
+    }
+    assert!(files > 30, "{files}");
 }
 
 /// The vertex buffer: each attribute's location, format and offset match `VertexInput`

@@ -5,7 +5,7 @@
 // with that far point's depth as this eye sees it, so that near geometry drawn next
 // hides it or is hidden by it as it should. Where the far layer holds nothing the
 // fragment is discarded and the clear color stays.
-// Bindings: FAR_DECLARATIONS in src/shaders/mod.rs (group 0).
+// Bindings: FAR_COMPOSITE_BINDINGS in src/shaders/bindings.rs.
 
 // The vertex stage: wgsl/shared/eye_halves.wgsl.
 

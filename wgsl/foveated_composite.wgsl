@@ -28,8 +28,7 @@ struct CompositeParams {
     border: f32,
 }
 
-@group(0) @binding(0) var<uniform> params: CompositeParams;
-@group(0) @binding(1) var source: texture_2d<f32>;
+// Bindings: FOVEATED_COMPOSITE_BINDINGS in src/shaders/bindings.rs.
 
 // The vertex stage: wgsl/shared/eye_halves.wgsl.
 

@@ -9,11 +9,11 @@
 // (each invocation a 2 x 2 block of it) and reduces it to one texel.
 // Composed after occlusion.wgsl's layout helpers, the contexts, the constants
 // LEVELS_PER_DISPATCH (6: 32 x 32 texels of the first level down to 1 x 1) and SIDE
-// (16, invocations per workgroup side), and these bindings:
-//   display: DisplayContext (uniform), level: PyramidLevel (uniform, dynamic offset),
-//   pyramid: array<f32> (read_write), depth: the depth target, read by
-//   depth_texel(pixel, eye) (src/shaders/mod.rs: a layer per eye in multiview; under
-//   MSAA every sample, the farthest kept).
+// (16, invocations per workgroup side), and the bindings of pyramid_bindings
+// (src/shaders/bindings.rs: the display's context, each dispatch's level, the
+// pyramids, the depth target), the depth read by depth_texel(pixel, eye)
+// (src/shaders/cull_passes.rs: a layer per eye in multiview; under MSAA every sample,
+// the farthest kept).
 
 struct PyramidLevel {
     index: u32,

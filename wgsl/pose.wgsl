@@ -64,17 +64,7 @@ alias Rows = array<vec4<f32>, 3>;
 
 const ROOT: u32 = 0xffffffffu;
 
-@group(0) @binding(0) var<uniform> frame: FrameContext;
-@group(0) @binding(1) var<storage, read> nodes: array<PoseNode>;
-@group(0) @binding(2) var<storage, read> channels: array<PoseChannel>;
-@group(0) @binding(3) var<storage, read> times: array<f32>;
-@group(0) @binding(4) var<storage, read> values: array<vec4<f32>>;
-@group(0) @binding(5) var<storage, read_write> locals: array<Rows>;
-@group(0) @binding(6) var<storage, read_write> worlds: array<Rows>;
-@group(0) @binding(7) var<storage, read> targets: array<PoseTarget>;
-@group(0) @binding(8) var<storage, read> skin_joints: array<SkinJoint>;
-@group(0) @binding(9) var<storage, read_write> joint_matrices: array<Rows>;
-@group(0) @binding(10) var<storage, read_write> edits: Edits;
+// Bindings: POSE_BINDINGS in src/shaders/bindings.rs.
 
 // Invocations per row of the node and the target dispatches (x workgroups times
 // POSE_GROUP: a dispatch's y spreads past the device's limit per dimension).
@@ -86,7 +76,6 @@ struct PoseParams {
     targets: u32,
 }
 
-@group(0) @binding(11) var<uniform> params: PoseParams;
 
 // Clip time: the frame's time at the clip's pace and phase, looped over its duration
 // (Clip::looped: rem_euclid).

@@ -22,11 +22,8 @@ struct SkinParams {
     row: u32,
 }
 
-@group(0) @binding(0) var<storage, read> rest: array<SkinVertex>;
-@group(0) @binding(1) var<storage, read> joints: array<array<vec4<f32>, 3>>;
-// The scene's vertices (scene::Vertex), ten words each.
-@group(0) @binding(2) var<storage, read_write> vertices: array<u32>;
-@group(0) @binding(3) var<uniform> params: SkinParams;
+// Bindings: SKIN_BINDINGS in src/shaders/bindings.rs; `vertices` holds the scene's
+// vertices (scene::Vertex), ten words each.
 
 const VERTEX_WORDS: u32 = 10u;
 const TANGENT_WORD: u32 = 9u;

@@ -5,7 +5,10 @@
 
 use super::PyramidShape;
 use crate::buffers::init_buffer;
-use crate::shaders::{PYRAMID_LEVELS_PER_DISPATCH, PYRAMID_SIDE, compute_pipeline, pyramid_source};
+use crate::shaders::{
+    PYRAMID_LEVELS_PER_DISPATCH, PYRAMID_SIDE, Windows, compute_pipeline, pyramid_bindings,
+    pyramid_source,
+};
 
 /// The pyramid passes for depth targets of one sample count and layering.
 pub struct PyramidPass {
@@ -116,46 +119,7 @@ fn entry(binding: u32, resource: wgpu::BindingResource<'_>) -> wgpu::BindGroupEn
 }
 
 fn bind_group_layout(device: &wgpu::Device, samples: u32, layered: bool) -> wgpu::BindGroupLayout {
-    // No minimum sizes: wgpu checks the bound sizes against the shader at pipeline
-    // creation (and the context's size is the contexts module's, above this one).
-    let uniform = |binding, dynamic| wgpu::BindGroupLayoutEntry {
-        binding,
-        visibility: wgpu::ShaderStages::COMPUTE,
-        ty: wgpu::BindingType::Buffer {
-            ty: wgpu::BufferBindingType::Uniform,
-            has_dynamic_offset: dynamic,
-            min_binding_size: None,
-        },
-        count: None,
-    };
-    device.create_bind_group_layout(&wgpu::BindGroupLayoutDescriptor {
-        label: Some("stereocull.occlusion_pyramid"),
-        entries: &[
-            uniform(0, false),
-            uniform(1, true),
-            wgpu::BindGroupLayoutEntry {
-                binding: 2,
-                visibility: wgpu::ShaderStages::COMPUTE,
-                ty: wgpu::BindingType::Buffer {
-                    ty: wgpu::BufferBindingType::Storage { read_only: false },
-                    has_dynamic_offset: false,
-                    min_binding_size: None,
-                },
-                count: None,
-            },
-            wgpu::BindGroupLayoutEntry {
-                binding: 3,
-                visibility: wgpu::ShaderStages::COMPUTE,
-                ty: wgpu::BindingType::Texture {
-                    sample_type: wgpu::TextureSampleType::Depth,
-                    view_dimension: match layered {
-                        true => wgpu::TextureViewDimension::D2Array,
-                        false => wgpu::TextureViewDimension::D2,
-                    },
-                    multisampled: samples > 1,
-                },
-                count: None,
-            },
-        ],
-    })
+    let list = pyramid_bindings(samples, layered);
+    let label = "stereocull.occlusion_pyramid";
+    crate::shaders::bind_group_layout(device, label, &list, &Windows::WHOLE)
 }

@@ -1,9 +1,11 @@
-//! The binding lists of the buffer-bound pipeline families, and everything made from
-//! them: WGSL declarations, bind-group layouts and bind groups, pipelines.
+//! The binding lists of every pipeline's bind groups, and everything made from them:
+//! WGSL declarations, bind-group layouts and bind groups, pipelines. No WGSL file
+//! declares a binding of its own (`tests/shaders.rs` holds every pipeline's globals to
+//! its lists).
 
 use super::windows::{Windowed, Windows};
 
-/// One buffer binding of group 0: its WGSL declaration and its layout entry both come
+/// One binding of a bind group: its WGSL declaration and its layout entry both come
 /// from here; its binding number is its position in the list (a windowed binding takes
 /// one number per window, so windowed bindings come last).
 #[derive(Clone, Copy, Debug, PartialEq, Eq)]
@@ -12,7 +14,7 @@ pub struct Binding {
     pub name: &'static str,
     /// Its address space and access.
     pub access: Access,
-    /// Its WGSL type.
+    /// Its WGSL type (for textures and samplers, the one their kind spells).
     pub wgsl_type: &'static str,
     /// The stages that read it.
     pub stages: wgpu::ShaderStages,
@@ -27,15 +29,57 @@ fn window_counts<'a>(windows: &'a Windows, list: &'a [Binding]) -> impl Iterator
         .map(|b| b.windowed.map_or(1, |w| windows.of(w).count))
 }
 
-/// A binding's address space and access.
+/// A binding's kind: a buffer's address space and access, or a texture or sampler.
 #[derive(Clone, Copy, Debug, PartialEq, Eq)]
 pub enum Access {
     /// `var<uniform>`.
     Uniform,
+    /// `var<uniform>` bound at a dynamic offset (one buffer of records, one a dispatch).
+    UniformDynamic,
     /// `var<storage, read>`.
     StorageRead,
     /// `var<storage, read_write>`.
     StorageReadWrite,
+    /// A sampled texture.
+    Texture(TextureKind),
+    /// A sampler (`sampler_comparison` for [`wgpu::SamplerBindingType::Comparison`]).
+    Sampler(wgpu::SamplerBindingType),
+}
+
+/// What a sampled texture binding holds.
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+pub struct TextureKind {
+    /// Float (filterable or not) or depth.
+    pub sample: wgpu::TextureSampleType,
+    /// 2D or a 2D array.
+    pub dimension: wgpu::TextureViewDimension,
+    /// Several samples per texel.
+    pub multisampled: bool,
+}
+
+impl TextureKind {
+    /// A single-sampled 2D texture of `sample`.
+    pub const fn d2(sample: wgpu::TextureSampleType) -> TextureKind {
+        TextureKind {
+            sample,
+            dimension: wgpu::TextureViewDimension::D2,
+            multisampled: false,
+        }
+    }
+
+    /// Its WGSL type.
+    const fn wgsl_type(self) -> &'static str {
+        use wgpu::TextureSampleType as S;
+        use wgpu::TextureViewDimension as D;
+        match (self.sample, self.dimension, self.multisampled) {
+            (S::Depth, D::D2, false) => "texture_depth_2d",
+            (S::Depth, D::D2, true) => "texture_depth_multisampled_2d",
+            (S::Depth, D::D2Array, false) => "texture_depth_2d_array",
+            (S::Float { .. }, D::D2, false) => "texture_2d<f32>",
+            (S::Float { .. }, D::D2Array, false) => "texture_2d_array<f32>",
+            _ => panic!("a texture kind no pipeline binds"),
+        }
+    }
 }
 
 const fn binding(
@@ -66,7 +110,25 @@ const fn windowed(
     }
 }
 
+const fn texture(name: &'static str, kind: TextureKind, stages: wgpu::ShaderStages) -> Binding {
+    binding(name, Access::Texture(kind), kind.wgsl_type(), stages)
+}
+
+const fn sampler(
+    name: &'static str,
+    ty: wgpu::SamplerBindingType,
+    stages: wgpu::ShaderStages,
+) -> Binding {
+    let wgsl_type = match ty {
+        wgpu::SamplerBindingType::Comparison => "sampler_comparison",
+        _ => "sampler",
+    };
+    binding(name, Access::Sampler(ty), wgsl_type, stages)
+}
+
 const COMPUTE: wgpu::ShaderStages = wgpu::ShaderStages::COMPUTE;
+const FRAGMENT: wgpu::ShaderStages = wgpu::ShaderStages::FRAGMENT;
+const FILTERABLE: wgpu::TextureSampleType = wgpu::TextureSampleType::Float { filterable: true };
 
 /// Every cull pass's bindings: the frame context, per display its context and outputs,
 /// the scene data uploaded once, scratch shared by all displays, and the frame's coarse
@@ -227,6 +289,147 @@ pub const SCATTER_BINDINGS: [Binding; 7] = [
     ),
 ];
 
+/// Group 1 of the draw pipelines (and the shadow's cutouts): the materials' textures,
+/// their sampler and records (`crate::materials`).
+pub const MATERIAL_BINDINGS: [Binding; 4] = [
+    texture(
+        "color_textures",
+        TextureKind {
+            dimension: wgpu::TextureViewDimension::D2Array,
+            ..TextureKind::d2(FILTERABLE)
+        },
+        FRAGMENT,
+    ),
+    sampler(
+        "texture_sampler",
+        wgpu::SamplerBindingType::Filtering,
+        FRAGMENT,
+    ),
+    binding(
+        "materials",
+        Access::StorageRead,
+        "array<MaterialRecord>",
+        FRAGMENT,
+    ),
+    texture(
+        "data_textures",
+        TextureKind {
+            dimension: wgpu::TextureViewDimension::D2Array,
+            ..TextureKind::d2(FILTERABLE)
+        },
+        FRAGMENT,
+    ),
+];
+
+/// Group 2 of the built-in draw pipelines: the frame's shadow map and its comparison
+/// sampler (`light_reaching` in `wgsl/shared/draw_common.wgsl`).
+pub const SHADOW_MAP_BINDINGS: [Binding; 2] = [
+    texture(
+        "shadow_map",
+        TextureKind::d2(wgpu::TextureSampleType::Depth),
+        FRAGMENT,
+    ),
+    sampler(
+        "shadow_sampler",
+        wgpu::SamplerBindingType::Comparison,
+        FRAGMENT,
+    ),
+];
+
+/// The far layer's composite (`wgsl/far_composite.wgsl`): the display's and the far
+/// layer's contexts, the far layer's color and depth.
+pub const FAR_COMPOSITE_BINDINGS: [Binding; 5] = [
+    binding("display", Access::Uniform, "DisplayContext", FRAGMENT),
+    binding("far", Access::Uniform, "DisplayContext", FRAGMENT),
+    texture("far_color", TextureKind::d2(FILTERABLE), FRAGMENT),
+    texture(
+        "far_depth",
+        TextureKind::d2(wgpu::TextureSampleType::Depth),
+        FRAGMENT,
+    ),
+    sampler("far_sampler", wgpu::SamplerBindingType::Filtering, FRAGMENT),
+];
+
+/// A foveated display's composite (`wgsl/foveated_composite.wgsl`): its parameters and
+/// the display's target, read texel by texel.
+pub const FOVEATED_COMPOSITE_BINDINGS: [Binding; 2] = [
+    binding("params", Access::Uniform, "CompositeParams", FRAGMENT),
+    texture(
+        "source",
+        TextureKind::d2(wgpu::TextureSampleType::Float { filterable: false }),
+        FRAGMENT,
+    ),
+];
+
+/// The frame's skinning pass (`wgsl/skin.wgsl`).
+pub const SKIN_BINDINGS: [Binding; 4] = [
+    binding("rest", Access::StorageRead, "array<SkinVertex>", COMPUTE),
+    // Each joint's matrix, three rows.
+    binding(
+        "joints",
+        Access::StorageRead,
+        "array<array<vec4<f32>, 3>>",
+        COMPUTE,
+    ),
+    // The vertex buffer every later pass draws, as words (its Vertex layout).
+    binding("vertices", Access::StorageReadWrite, "array<u32>", COMPUTE),
+    binding("params", Access::Uniform, "SkinParams", COMPUTE),
+];
+
+/// The frame's pose pass (`wgsl/pose.wgsl`), one group for its three entry points:
+/// the frame, the tables, each node's local and world rows, and what it writes for the
+/// skins and the scatter of moves.
+pub const POSE_BINDINGS: [Binding; 12] = [
+    binding("frame", Access::Uniform, "FrameContext", COMPUTE),
+    binding("nodes", Access::StorageRead, "array<PoseNode>", COMPUTE),
+    binding(
+        "channels",
+        Access::StorageRead,
+        "array<PoseChannel>",
+        COMPUTE,
+    ),
+    binding("times", Access::StorageRead, "array<f32>", COMPUTE),
+    binding("values", Access::StorageRead, "array<vec4<f32>>", COMPUTE),
+    binding("locals", Access::StorageReadWrite, "array<Rows>", COMPUTE),
+    binding("worlds", Access::StorageReadWrite, "array<Rows>", COMPUTE),
+    binding("targets", Access::StorageRead, "array<PoseTarget>", COMPUTE),
+    binding(
+        "skin_joints",
+        Access::StorageRead,
+        "array<SkinJoint>",
+        COMPUTE,
+    ),
+    binding(
+        "joint_matrices",
+        Access::StorageReadWrite,
+        "array<Rows>",
+        COMPUTE,
+    ),
+    binding("edits", Access::StorageReadWrite, "Edits", COMPUTE),
+    binding("params", Access::Uniform, "PoseParams", COMPUTE),
+];
+
+/// The occlusion pyramids' pass (`wgsl/occlusion_pyramid.wgsl`) over a depth target of
+/// `samples` per pixel, its eyes side by side or (`layered`) a layer each: the
+/// display's context, each dispatch's level record (a dynamic offset), the pyramids,
+/// the depth.
+pub fn pyramid_bindings(samples: u32, layered: bool) -> [Binding; 4] {
+    let depth = TextureKind {
+        dimension: match layered {
+            true => wgpu::TextureViewDimension::D2Array,
+            false => wgpu::TextureViewDimension::D2,
+        },
+        multisampled: samples > 1,
+        ..TextureKind::d2(wgpu::TextureSampleType::Depth)
+    };
+    [
+        binding("display", Access::Uniform, "DisplayContext", COMPUTE),
+        binding("level", Access::UniformDynamic, "PyramidLevel", COMPUTE),
+        binding("pyramid", Access::StorageReadWrite, "array<f32>", COMPUTE),
+        texture("depth", depth, COMPUTE),
+    ]
+}
+
 /// A pipeline layout of one bind group, `group`.
 pub(crate) fn pipeline_layout(
     device: &wgpu::Device,
@@ -270,19 +473,20 @@ pub(crate) fn dispatch_size(groups: u32, max_per_dimension: u32) -> (u32, u32) {
 
 /// The WGSL declarations of `bindings`, in `group`, windowed ones as `windows` says,
 /// each with its accessors.
-pub(super) fn declarations(bindings: &[Binding], group: u32, windows: &Windows) -> String {
+pub fn declarations(bindings: &[Binding], group: u32, windows: &Windows) -> String {
     let mut number = 0;
     let mut out = String::new();
     for (b, count) in bindings.iter().zip(window_counts(windows, bindings)) {
         let space = match b.access {
-            Access::Uniform => "uniform",
-            Access::StorageRead => "storage, read",
-            Access::StorageReadWrite => "storage, read_write",
+            Access::Uniform | Access::UniformDynamic => "<uniform>",
+            Access::StorageRead => "<storage, read>",
+            Access::StorageReadWrite => "<storage, read_write>",
+            Access::Texture(_) | Access::Sampler(_) => "",
         };
         let names = window_names(b.name, count);
         for name in &names {
             out += &format!(
-                "@group({group}) @binding({number}) var<{space}> {name}: {};\n",
+                "@group({group}) @binding({number}) var{space} {name}: {};\n",
                 b.wgsl_type
             );
             number += 1;
@@ -362,17 +566,7 @@ pub fn bind_group_layout(
             entries.push(wgpu::BindGroupLayoutEntry {
                 binding: entries.len() as u32,
                 visibility: b.stages,
-                ty: wgpu::BindingType::Buffer {
-                    ty: match b.access {
-                        Access::Uniform => wgpu::BufferBindingType::Uniform,
-                        Access::StorageRead => wgpu::BufferBindingType::Storage { read_only: true },
-                        Access::StorageReadWrite => {
-                            wgpu::BufferBindingType::Storage { read_only: false }
-                        }
-                    },
-                    has_dynamic_offset: false,
-                    min_binding_size: None,
-                },
+                ty: binding_type(b.access),
                 count: None,
             });
         }
@@ -381,6 +575,29 @@ pub fn bind_group_layout(
         label: Some(label),
         entries: &entries,
     })
+}
+
+/// The layout entry's type of a binding of kind `access`. No minimum sizes: wgpu checks
+/// the bound sizes against the shader when a pipeline is made.
+fn binding_type(access: Access) -> wgpu::BindingType {
+    let buffer = |ty, has_dynamic_offset| wgpu::BindingType::Buffer {
+        ty,
+        has_dynamic_offset,
+        min_binding_size: None,
+    };
+    let storage = |read_only| wgpu::BufferBindingType::Storage { read_only };
+    match access {
+        Access::Uniform => buffer(wgpu::BufferBindingType::Uniform, false),
+        Access::UniformDynamic => buffer(wgpu::BufferBindingType::Uniform, true),
+        Access::StorageRead => buffer(storage(true), false),
+        Access::StorageReadWrite => buffer(storage(false), false),
+        Access::Texture(kind) => wgpu::BindingType::Texture {
+            sample_type: kind.sample,
+            view_dimension: kind.dimension,
+            multisampled: kind.multisampled,
+        },
+        Access::Sampler(ty) => wgpu::BindingType::Sampler(ty),
+    }
 }
 
 /// A bind group with `buffers[i]` for `bindings[i]` (the list `layout` was made from):

@@ -3,7 +3,7 @@
 //! the occlusion pyramids' passes. Composed from the includes and constants of
 //! [`super`] and the binding lists of `bindings.rs`.
 
-use super::bindings::declarations;
+use super::bindings::{declarations, pyramid_bindings};
 use super::{
     COARSE_BINDINGS, CONTEXTS, CULL_BINDINGS, CULL_MATH, CULL_SUBGROUPS, OCCLUSION, PYRAMID,
     RECORDS, WORKGROUP_SIZE, Windows, constants,
@@ -213,7 +213,7 @@ pub const PYRAMID_SIDE: u32 = 1 << (PYRAMID_LEVELS_PER_DISPATCH - 2);
 
 /// The depth pyramid's passes (`wgsl/occlusion_pyramid.wgsl`) over a depth target of
 /// `samples` samples per pixel, `layered` (multiview: a layer per eye) or not (the eyes
-/// side by side); the layout is [`crate::occlusion::pyramid`]'s. WebGPU has no
+/// side by side); its bindings are [`super::pyramid_bindings`]. WebGPU has no
 /// multisampled array textures, so a layered target has one sample.
 pub fn pyramid_source(samples: u32, layered: bool) -> String {
     // A layer per eye starts at its layer's corner (the viewports say where the views
@@ -222,28 +222,21 @@ pub fn pyramid_source(samples: u32, layered: bool) -> String {
         true => "vec2(0u)",
         false => "vec2<u32>(display.eye[e].viewport.xy)",
     };
-    let (depth, read) = match (samples, layered) {
-        (_, true) => (
-            "texture_depth_2d_array",
-            "return textureLoad(depth, p, e, 0);",
-        ),
-        (1, false) => ("texture_depth_2d", "return textureLoad(depth, p, 0);"),
-        _ => (
-            "texture_depth_multisampled_2d",
-            "var d = 0.0;\n    for (var i = 0; i < SAMPLES; i++) {\n        d = max(d, textureLoad(depth, p, i));\n    }\n    return d;",
-        ),
+    let read = match (samples, layered) {
+        (_, true) => "return textureLoad(depth, p, e, 0);",
+        (1, false) => "return textureLoad(depth, p, 0);",
+        _ => {
+            "var d = 0.0;\n    for (var i = 0; i < SAMPLES; i++) {\n        d = max(d, textureLoad(depth, p, i));\n    }\n    return d;"
+        }
     };
     let bindings = format!(
         "const SAMPLES: i32 = {samples};\n\
          const LEVELS_PER_DISPATCH: u32 = {PYRAMID_LEVELS_PER_DISPATCH}u;\n\
          const SIDE: u32 = {PYRAMID_SIDE}u;\n\
-         @group(0) @binding(0) var<uniform> display: DisplayContext;\n\
-         @group(0) @binding(1) var<uniform> level: PyramidLevel;\n\
-         @group(0) @binding(2) var<storage, read_write> pyramid: array<f32>;\n\
-         @group(0) @binding(3) var depth: {depth};\n\
          fn depth_texel(p: vec2<u32>, e: u32) -> f32 {{\n    {read}\n}}\n\
          fn eye_origin(e: u32) -> vec2<u32> {{\n    return {origin};\n}}\n"
     );
+    let declared = declarations(&pyramid_bindings(samples, layered), 0, &Windows::WHOLE);
     let body = include_str!("../../wgsl/occlusion_pyramid.wgsl");
-    [CONTEXTS, &bindings, PYRAMID, body].concat()
+    [CONTEXTS, &declared, &bindings, PYRAMID, body].concat()
 }

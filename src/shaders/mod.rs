@@ -57,10 +57,11 @@ mod windows;
 
 use crate::bins::{Bin, BinKind};
 use crate::scene::Shading;
-use bindings::declarations;
 pub use bindings::{
-    Access, Binding, COARSE_BINDINGS, CULL_BINDINGS, DRAW_BINDINGS, SCATTER_BINDINGS, bind_group,
-    bind_group_layout,
+    Access, Binding, COARSE_BINDINGS, CULL_BINDINGS, DRAW_BINDINGS, FAR_COMPOSITE_BINDINGS,
+    FOVEATED_COMPOSITE_BINDINGS, MATERIAL_BINDINGS, POSE_BINDINGS, SCATTER_BINDINGS,
+    SHADOW_MAP_BINDINGS, SKIN_BINDINGS, TextureKind, bind_group, bind_group_layout, declarations,
+    pyramid_bindings,
 };
 pub(crate) use bindings::{compute_pipeline, dispatch_size, pipeline_layout};
 pub use cull_passes::{
@@ -279,9 +280,9 @@ impl DrawKey {
             prelude,
             &decode_source_with(self.views, windows),
             &alpha,
-            crate::materials::DECLARATIONS,
+            &declarations(&MATERIAL_BINDINGS, 1, windows),
             BASE_COLOR,
-            SHADOW_DECLARATIONS,
+            &declarations(&SHADOW_MAP_BINDINGS, 2, windows),
             DRAW_COMMON,
             PBR,
             &shading,
@@ -320,37 +321,20 @@ fn constants() -> String {
     )
 }
 
-/// Group 2 of the built-in draw pipelines: the frame's shadow map and its comparison
-/// sampler (`light_reaching` in `wgsl/shared/draw_common.wgsl`; the layout is
-/// `shadow::bind_group_layout`).
-pub const SHADOW_DECLARATIONS: &str = "\
-@group(2) @binding(0) var shadow_map: texture_depth_2d;
-@group(2) @binding(1) var shadow_sampler: sampler_comparison;
-";
-
-/// The far-layer composite's group 0 (`wgsl/far_composite.wgsl`; the layout is
-/// `renderer::display::far_layer`'s): the display's and the far layer's contexts, the far layer.
-pub const FAR_DECLARATIONS: &str = "\
-@group(0) @binding(0) var<uniform> display: DisplayContext;
-@group(0) @binding(1) var<uniform> far: DisplayContext;
-@group(0) @binding(2) var far_color: texture_2d<f32>;
-@group(0) @binding(3) var far_depth: texture_depth_2d;
-@group(0) @binding(4) var far_sampler: sampler;
-";
-
 /// The far layer's composite into a stereo display (`wgsl/far_composite.wgsl`).
 pub fn far_composite_source() -> String {
     let body = include_str!("../../wgsl/far_composite.wgsl");
-    [&constants(), CONTEXTS, FAR_DECLARATIONS, EYE_HALVES, body].concat()
+    let bindings = declarations(&FAR_COMPOSITE_BINDINGS, 0, &Windows::WHOLE);
+    [&constants(), CONTEXTS, &bindings, EYE_HALVES, body].concat()
 }
 
 const EYE_HALVES: &str = include_str!("../../wgsl/shared/eye_halves.wgsl");
 
-/// A foveated display's views composited per eye (`crate::composite`): its one bind
-/// group declared in the file.
+/// A foveated display's views composited per eye (`crate::foveated_composite`).
 pub fn foveated_composite_source() -> String {
     let body = include_str!("../../wgsl/foveated_composite.wgsl");
-    [EYE_HALVES, body].concat()
+    let bindings = declarations(&FOVEATED_COMPOSITE_BINDINGS, 0, &Windows::WHOLE);
+    [EYE_HALVES, &bindings, body].concat()
 }
 
 /// The frame's shadow pass: depth only, the light as the display's eye 0
@@ -369,16 +353,17 @@ pub fn shadow_source(windows: &Windows) -> String {
 pub fn shadow_cutout_source(windows: &Windows) -> String {
     [
         &decode_source_with(1, windows),
-        crate::materials::DECLARATIONS,
+        &declarations(&MATERIAL_BINDINGS, 1, windows),
         BASE_COLOR,
         include_str!("../../wgsl/shadow_cutout.wgsl"),
     ]
     .concat()
 }
 
-/// The frame's skinning pass (`wgsl/skin.wgsl`: its one bind group declared in the file).
+/// The frame's skinning pass (`wgsl/skin.wgsl`).
 pub fn skin_source() -> String {
-    include_str!("../../wgsl/skin.wgsl").into()
+    let bindings = declarations(&SKIN_BINDINGS, 0, &Windows::WHOLE);
+    [&bindings, include_str!("../../wgsl/skin.wgsl")].concat()
 }
 
 /// The frame's posing pass (`wgsl/pose.wgsl`, three entry points): the frame context
@@ -392,7 +377,8 @@ pub fn pose_source() -> String {
     );
     let scatter = include_str!("../../wgsl/shared/scatter.wgsl");
     let body = include_str!("../../wgsl/pose.wgsl");
-    [&constants(), &pose, CONTEXTS, scatter, body].concat()
+    let bindings = declarations(&POSE_BINDINGS, 0, &Windows::WHOLE);
+    [&constants(), &pose, CONTEXTS, scatter, &bindings, body].concat()
 }
 
 /// Every shader variant the crate can build, with its label.

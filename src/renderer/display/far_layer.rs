@@ -14,7 +14,9 @@ use crate::renderer::culler::Culler;
 use crate::renderer::plan::{CullView, FramePlan};
 use crate::renderer::recorder::{PassRecord, Recording, opener, render_pass};
 use crate::renderer::view::ViewPass;
-use crate::shaders::{DrawKey, Shaders, far_composite_source};
+use crate::shaders::{
+    DrawKey, FAR_COMPOSITE_BINDINGS, Shaders, Windows, bind_group_layout, far_composite_source,
+};
 use wgpu_profiler::GpuProfilerQuery;
 
 /// What every far layer shares: the mono pipeline drawing into them (single-sampled),
@@ -241,44 +243,10 @@ fn view_entry(binding: u32, view: &wgpu::TextureView) -> wgpu::BindGroupEntry<'_
     }
 }
 
-/// The layout of `shaders::FAR_DECLARATIONS`.
+/// The composite's layout ([`FAR_COMPOSITE_BINDINGS`]).
 fn composite_layout(device: &wgpu::Device) -> wgpu::BindGroupLayout {
-    let fragment = wgpu::ShaderStages::FRAGMENT;
-    let uniform = |binding| wgpu::BindGroupLayoutEntry {
-        binding,
-        visibility: fragment,
-        ty: wgpu::BindingType::Buffer {
-            ty: wgpu::BufferBindingType::Uniform,
-            has_dynamic_offset: false,
-            min_binding_size: None,
-        },
-        count: None,
-    };
-    let texture = |binding, sample_type| wgpu::BindGroupLayoutEntry {
-        binding,
-        visibility: fragment,
-        ty: wgpu::BindingType::Texture {
-            sample_type,
-            view_dimension: wgpu::TextureViewDimension::D2,
-            multisampled: false,
-        },
-        count: None,
-    };
-    device.create_bind_group_layout(&wgpu::BindGroupLayoutDescriptor {
-        label: Some("stereocull.far_composite"),
-        entries: &[
-            uniform(0),
-            uniform(1),
-            texture(2, wgpu::TextureSampleType::Float { filterable: true }),
-            texture(3, wgpu::TextureSampleType::Depth),
-            wgpu::BindGroupLayoutEntry {
-                binding: 4,
-                visibility: fragment,
-                ty: wgpu::BindingType::Sampler(wgpu::SamplerBindingType::Filtering),
-                count: None,
-            },
-        ],
-    })
+    let label = "stereocull.far_composite";
+    bind_group_layout(device, label, &FAR_COMPOSITE_BINDINGS, &Windows::WHOLE)
 }
 
 /// Writes color and the far points' depth as each eye sees them where nothing drawn

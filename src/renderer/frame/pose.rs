@@ -14,12 +14,16 @@ use std::collections::HashMap;
 use crate::places::Places;
 use crate::pose_tables::{POSE_GROUP, PoseTables, PoseTargetRecord};
 use crate::scatter::{GpuMoves, ScatterTargets};
-use crate::shaders::{Windows, dispatch_size, pose_source};
+use crate::shaders::{
+    POSE_BINDINGS, Windows, bind_group, bind_group_layout, dispatch_size, pipeline_layout,
+    pose_source,
+};
 
 /// The pass's pipelines, tables and bindings.
 pub(in crate::renderer) struct PosePass {
     pipelines: [wgpu::ComputePipeline; 3],
-    bind_groups: [wgpu::BindGroup; 3],
+    /// One group for its three entry points (`POSE_BINDINGS`).
+    bind_group: wgpu::BindGroup,
     dispatches: [(u32, u32); 3],
     moves: GpuMoves,
     /// Each posed slot's target (to void a removed instance's).
@@ -83,54 +87,37 @@ impl PosePass {
             label: Some("stereocull.pose"),
             source: wgpu::ShaderSource::Wgsl(pose_source().into()),
         });
-        let all: [(u32, &wgpu::Buffer); 12] = [
-            (0, frame),
-            (1, &nodes),
-            (2, &channels),
-            (3, &times),
-            (4, &values),
-            (5, &locals),
-            (6, &worlds),
-            (7, &targets),
-            (8, &joints),
-            (9, outputs.joint_matrices),
-            (10, moves.edits()),
-            (11, &params),
+        let buffers = [
+            frame,
+            &nodes,
+            &channels,
+            &times,
+            &values,
+            &locals,
+            &worlds,
+            &targets,
+            &joints,
+            outputs.joint_matrices,
+            moves.edits(),
+            &params,
         ];
-        // Each entry point binds what it uses (its layout derived from the shader).
-        let uses: [&[u32]; 3] = [
-            &[0, 1, 2, 3, 4, 5, 11],
-            &[1, 5, 6, 11],
-            &[6, 7, 8, 9, 10, 11],
-        ];
-        let entries = ["locals_main", "worlds_main", "targets_main"];
-        let pipelines = entries.map(|entry| {
+        let (label, whole) = ("stereocull.pose", &Windows::WHOLE);
+        let layout = bind_group_layout(device, label, &POSE_BINDINGS, whole);
+        let bind_group = bind_group(device, label, &layout, &POSE_BINDINGS, whole, buffers);
+        let pipeline_layout = pipeline_layout(device, label, &layout);
+        let pipelines = ["locals_main", "worlds_main", "targets_main"].map(|entry| {
             device.create_compute_pipeline(&wgpu::ComputePipelineDescriptor {
-                label: Some("stereocull.pose"),
-                layout: None,
+                label: Some(label),
+                layout: Some(&pipeline_layout),
                 module: &module,
                 entry_point: Some(entry),
                 compilation_options: Default::default(),
                 cache: None,
             })
         });
-        let bind_groups = std::array::from_fn(|k| {
-            let entries: Vec<wgpu::BindGroupEntry> = (all.iter())
-                .filter(|(b, _)| uses[k].contains(b))
-                .map(|(b, buffer)| wgpu::BindGroupEntry {
-                    binding: *b,
-                    resource: buffer.as_entire_binding(),
-                })
-                .collect();
-            device.create_bind_group(&wgpu::BindGroupDescriptor {
-                label: Some("stereocull.pose"),
-                layout: &pipelines[k].get_bind_group_layout(0),
-                entries: &entries,
-            })
-        });
         PosePass {
             pipelines,
-            bind_groups,
+            bind_group,
             dispatches: [node_groups, node_groups, target_groups],
             moves,
             targets_of: (tables.targets.iter().enumerate())
@@ -164,7 +151,7 @@ impl PosePass {
         frame_compute_pass(encoder, recording, "pose", |pass| {
             for k in 0..3 {
                 pass.set_pipeline(&self.pipelines[k]);
-                pass.set_bind_group(0, &self.bind_groups[k], &[]);
+                pass.set_bind_group(0, &self.bind_group, &[]);
                 let (x, y) = self.dispatches[k];
                 pass.dispatch_workgroups(x, y, 1);
             }

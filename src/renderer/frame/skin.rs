@@ -4,7 +4,9 @@
 
 use crate::buffers::init_buffer;
 use crate::renderer::recorder::{Recording, frame_compute_pass};
-use crate::shaders::{compute_pipeline, dispatch_size, skin_source};
+use crate::shaders::{
+    SKIN_BINDINGS, Windows, bind_group_layout, compute_pipeline, dispatch_size, skin_source,
+};
 use std::ops::Range;
 
 use crate::skinning::{JointMatrix, Skins};
@@ -55,24 +57,8 @@ impl SkinPass {
             bytemuck::cast_slice(&[vertices, dispatch.0 * WORKGROUP]),
             wgpu::BufferUsages::UNIFORM,
         );
-        let layout = device.create_bind_group_layout(&wgpu::BindGroupLayoutDescriptor {
-            label: Some("stereocull.skin"),
-            entries: &[
-                storage_entry(0, true),
-                storage_entry(1, true),
-                storage_entry(2, false),
-                wgpu::BindGroupLayoutEntry {
-                    binding: 3,
-                    visibility: wgpu::ShaderStages::COMPUTE,
-                    ty: wgpu::BindingType::Buffer {
-                        ty: wgpu::BufferBindingType::Uniform,
-                        has_dynamic_offset: false,
-                        min_binding_size: None,
-                    },
-                    count: None,
-                },
-            ],
-        });
+        let whole = &Windows::WHOLE;
+        let layout = bind_group_layout(device, "stereocull.skin", &SKIN_BINDINGS, whole);
         let entries = [&rest, &joints, vertex_buffer, &params]
             .iter()
             .enumerate()
@@ -143,18 +129,5 @@ impl SkinPass {
     /// Skinned vertices per frame.
     pub(in crate::renderer) fn vertices(&self) -> u32 {
         self.vertices
-    }
-}
-
-fn storage_entry(binding: u32, read_only: bool) -> wgpu::BindGroupLayoutEntry {
-    wgpu::BindGroupLayoutEntry {
-        binding,
-        visibility: wgpu::ShaderStages::COMPUTE,
-        ty: wgpu::BindingType::Buffer {
-            ty: wgpu::BufferBindingType::Storage { read_only },
-            has_dynamic_offset: false,
-            min_binding_size: None,
-        },
-        count: None,
     }
 }
