@@ -10,7 +10,9 @@ use crate::shaders::{
     pyramid_source,
 };
 
-/// The pyramid passes for depth targets of one sample count and layering.
+/// The pyramid passes for depth targets of one sample count and layering (cloned
+/// handles share them).
+#[derive(Clone)]
 pub struct PyramidPass {
     layout: wgpu::BindGroupLayout,
     reduce_depth: wgpu::ComputePipeline,

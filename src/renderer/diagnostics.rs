@@ -175,7 +175,7 @@ impl Diagnostics<'_> {
         let Path::Indirect(p) = &self.renderer.path else {
             return Ok(None);
         };
-        if let Some(read) = p.read_back_pyramids(self.device, self.queue)? {
+        if let Some(read) = p.culler.read_back_pyramids(self.device, self.queue)? {
             return Ok(read.into_iter().flatten().last().map(|(texels, _)| texels));
         }
         let (Some(shape), Some((buffer, _, offset))) = (

@@ -230,6 +230,8 @@ pub struct Renderer {
     /// Whether each frame starts with the coarse cull ([`RendererOptions::coarse_for`]),
     /// decided once: it sizes buffers.
     coarse: bool,
+    /// Per display, its far layer's texels as made (every frame's plan is sized so).
+    far_sizes: Vec<Option<(u32, u32)>>,
     /// What the last `encode` or `encode_culls` recorded, pass by pass.
     passes: Vec<PassRecord>,
 }
@@ -297,6 +299,7 @@ impl Renderer {
             slots,
             rig: rig.clone(),
             coarse,
+            far_sizes: plan.far_sizes(),
             passes: Vec::new(),
         })
     }
@@ -367,7 +370,8 @@ impl Renderer {
                 "the rig's displays differ from the renderer's (in number or views, or a foveated display's layout: it has a gaze or none for the renderer's life)",
             ));
         }
-        FramePlan::new(rig, &self.options, self.coarse, time)
+        let plan = FramePlan::new(rig, &self.options, self.coarse, time)?;
+        Ok(plan.with_far_sizes(&self.far_sizes))
     }
 
     /// Writes this frame's contexts (and, culling on the CPU, the cull results), all

@@ -193,6 +193,23 @@ impl FramePlan {
         })
     }
 
+    /// Each far layer at the size it was made for (`sizes[i]`, from the plan of the rig
+    /// the renderer was made with): a layer's texture keeps its size, while a posed
+    /// view's field of view may move the size a new plan asks for.
+    pub(super) fn with_far_sizes(mut self, sizes: &[Option<(u32, u32)>]) -> FramePlan {
+        for (far, size) in self.far.iter_mut().zip(sizes) {
+            if let (Some(far), Some(size)) = (far, size) {
+                far.size = *size;
+            }
+        }
+        self
+    }
+
+    /// The far layers' sizes.
+    pub(super) fn far_sizes(&self) -> Vec<Option<(u32, u32)>> {
+        self.far.iter().map(|f| f.map(|p| p.size)).collect()
+    }
+
     /// The jobs of [`FramePlan::culls`], in order: what the CPU culler takes.
     pub fn jobs(&self) -> Vec<CullJob> {
         self.culls.iter().map(|c| c.job).collect()

@@ -7,18 +7,18 @@
 //! read back after a frame, in `diagnostics.rs`).
 
 mod diagnostics;
+mod occlusion;
 
 use super::options::CullMode;
 use super::plan::{CullView, FramePlan};
 use super::recorder::{Logged, PassRecord, Recording, Timing, close, compute_pass, open_display};
 use crate::bins::BinRange;
-use crate::contexts::DisplayContext;
 use crate::cull::CullOutput;
 use crate::cull::cpu;
 use crate::cull::gpu::{CullerFeatures, GpuCuller};
 use crate::cull::gpu_buffers::{CullScene, CullTargets, OcclusionRoom};
 use crate::error::Result;
-use crate::occlusion::{self, Phase, PyramidShape};
+use crate::occlusion::{Phase, cull_early};
 use crate::records::{CullLayout, MoveEdit, PlaceEdit};
 use crate::scene::Scene;
 use crate::shaders::{SPAN, Windows};
@@ -42,11 +42,13 @@ enum Kind {
     },
     /// The CPU culler over its own copy of the cull layout, and this frame's results;
     /// with occlusion, per display that culls by it its visibility words (the CPU's
-    /// copy of what the GPU keeps in its occlusion buffer).
+    /// copy of what the GPU keeps in its occlusion buffer), and the pyramids it reads
+    /// back between a frame's halves with the plan of the frame they serve.
     Cpu {
         layout: CullLayout,
         outputs: Vec<(CullView, CullOutput)>,
         visibility: Vec<Option<Vec<u32>>>,
+        late: Option<Box<occlusion::LateReadback>>,
     },
 }
 
@@ -88,6 +90,7 @@ impl Culler {
                 layout,
                 outputs: Vec::new(),
                 visibility: Vec::new(),
+                late: None,
             },
             CullMode::Gpu => {
                 let features = CullerFeatures {
@@ -163,6 +166,7 @@ impl Culler {
                 layout,
                 outputs,
                 visibility,
+                ..
             } => {
                 // A display that culls by occlusion culls its early phase below instead.
                 let occludes = |view: CullView| match view {
@@ -185,7 +189,7 @@ impl Culler {
                     let (Some(words), Some(job)) = (words, plan.job(CullView::Display(i))) else {
                         continue;
                     };
-                    let early = occlusion::cull_early(layout, &job, &plan.cull.lod, words);
+                    let early = cull_early(layout, &job, &plan.cull.lod, words);
                     set_output(outputs, CullView::Display(i), early);
                 }
                 0
@@ -380,73 +384,6 @@ impl Culler {
                 let sphere = scene.world_sphere(&scene.instances[slot]);
                 layout.set_sphere(layout.positions[slot], sphere);
             }
-        }
-    }
-}
-
-/// Occlusion with CPU culling: the early phase from visibility words the CPU keeps, the
-/// late phase (and a far layer's tested cull) from pyramids read back mid-frame.
-impl Culler {
-    /// Keeps visibility words for each display where `occluding` says (CPU culling;
-    /// the GPU culler keeps its own). Every place starts as not drawn.
-    pub(super) fn track_visibility(&mut self, occluding: &[bool]) {
-        if let Kind::Cpu {
-            layout, visibility, ..
-        } = &mut self.kind
-        {
-            let words = layout.spheres.len().div_ceil(SPAN as usize);
-            *visibility = (occluding.iter())
-                .map(|&o| o.then(|| vec![0; words]))
-                .collect();
-        }
-    }
-
-    /// Whether a frame needs its pyramids on the CPU before its late phase: CPU culling
-    /// with occlusion.
-    pub(super) fn reads_back(&self) -> bool {
-        matches!(&self.kind, Kind::Cpu { visibility, .. } if visibility.iter().any(Option::is_some))
-    }
-
-    /// Display `i`'s visibility words on the CPU (`None` on the GPU or without
-    /// occlusion).
-    pub(super) fn cpu_visibility(&self, i: usize) -> Option<&[u32]> {
-        match &self.kind {
-            Kind::Cpu { visibility, .. } => visibility.get(i)?.as_deref(),
-            Kind::Gpu { .. } => None,
-        }
-    }
-
-    /// Display `i`'s late phase of `plan` on the CPU against its `pyramid` (read back),
-    /// and with `far` (its far layer's tested context) the far cull against it too; the
-    /// display's visibility words rewritten. [`Culler::upload`] then writes them.
-    pub(super) fn cull_late(
-        &mut self,
-        (plan, i): (&FramePlan, usize),
-        pyramid: (&[f32], PyramidShape),
-        far: Option<&DisplayContext>,
-    ) {
-        let Kind::Cpu {
-            layout,
-            outputs,
-            visibility,
-        } = &mut self.kind
-        else {
-            return;
-        };
-        let (Some(words), Some(job)) = (
-            visibility.get_mut(i).and_then(Option::as_mut),
-            plan.job(CullView::Display(i)),
-        ) else {
-            return;
-        };
-        let lod = &plan.cull.lod;
-        let display = (&job, &plan.displays[i]);
-        let (late, seen) = occlusion::cull_late(layout, display, lod, words, pyramid);
-        *words = seen;
-        set_output(outputs, CullView::Late(i), late);
-        if let (Some(far), Some(far_job)) = (far, plan.job(CullView::Far(i))) {
-            let tested = occlusion::cull_tested(layout, (&far_job, far), lod, pyramid);
-            set_output(outputs, CullView::Far(i), tested);
         }
     }
 }

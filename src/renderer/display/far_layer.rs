@@ -37,8 +37,6 @@ pub(in crate::renderer) struct FarDisplay {
     color: wgpu::TextureView,
     depth: wgpu::TextureView,
     composite_bind_group: wgpu::BindGroup,
-    /// Texels, fixed when made (the plan of the rig as made).
-    pub(in crate::renderer) size: (u32, u32),
 }
 
 impl FarLayers {
@@ -121,7 +119,6 @@ impl FarLayers {
             color,
             depth,
             composite_bind_group,
-            size: plan.size,
         }
     }
 
@@ -194,38 +191,18 @@ impl FarLayers {
 }
 
 impl FarDisplay {
-    /// Writes this frame's far context for `plan` (at the layer's fixed size, over the
-    /// coarse cull's `slot`, its display's), with occlusion the context its cull tests
-    /// with (paired with `display`'s), and the culler's far cull. Returns the bytes
-    /// written.
+    /// Writes this frame's far context for `plan` (over the coarse cull's `slot`, its
+    /// display's), with occlusion the context its cull tests with (paired with
+    /// `display`'s), and the culler's far cull. Returns the bytes written.
     pub(in crate::renderer) fn prepare(
         &self,
         queue: &wgpu::Queue,
         (plan, display): (&FarPlan, &DisplayContext),
         culler: &Culler,
     ) -> u64 {
-        let sized = self.sized(plan);
         let slot = self.index as u32;
-        self.view.prepare(queue, &sized.context(slot), culler)
-            + (self.view).prepare_cull_context(queue, &sized.tested_context(display))
-    }
-
-    /// The context its cull tests with for `plan` (at the layer's fixed size) in the
-    /// display whose context is `display` ([`FarPlan::tested_context`]).
-    pub(in crate::renderer) fn tested_context(
-        &self,
-        plan: &FarPlan,
-        display: &DisplayContext,
-    ) -> DisplayContext {
-        self.sized(plan).tested_context(display)
-    }
-
-    /// `plan` at the layer's fixed size (the rig as made).
-    fn sized(&self, plan: &FarPlan) -> FarPlan {
-        FarPlan {
-            size: self.size,
-            ..*plan
-        }
+        self.view.prepare(queue, &plan.context(slot), culler)
+            + (self.view).prepare_cull_context(queue, &plan.tested_context(display))
     }
 }
 

@@ -9,9 +9,8 @@ use std::time::Instant;
 
 use super::PathInputs;
 use super::far_layer::{Far, FarDisplay, FarLayers};
-use super::occlusion::read_back::{CpuLate, PyramidReadback, ReadPyramids};
 use super::occlusion::{
-    LateInputs, LatePhase, OcclusionBytes, Pyramids, check_depth, occlusion_bytes, pyramid_shapes,
+    LatePhase, OcclusionBytes, Pyramids, check_depth, occlusion_bytes, pyramid_shapes,
 };
 use crate::contexts::context_buffer;
 use crate::cull::gpu_buffers::{CullTargets, OcclusionRoom};
@@ -49,13 +48,6 @@ pub(in crate::renderer) struct IndirectPath {
     pub(in crate::renderer) displays: Vec<IndirectDisplay>,
     /// With the far layer: the stereo displays' far layers.
     pub(in crate::renderer) far: Option<Far>,
-    /// With occlusion: the depth pyramids' passes (over side-by-side eyes, and over a
-    /// layer per eye for multiview), and the device that binds each frame's depth
-    /// target to them (the caller may hand a different target each frame).
-    pyramid: Option<Box<Pyramids>>,
-    /// Culling on the CPU with occlusion: the pyramids read back mid-frame and the plan
-    /// of the frame prepared, which the late culls take.
-    readback: Option<CpuLate>,
 }
 
 impl IndirectPath {
@@ -93,11 +85,7 @@ impl IndirectPath {
         };
         let kinds = layout.bins.kinds.clone();
         let mut culler = Culler::new(device, options.cull, layout, shape, windows);
-        culler.track_visibility(&shapes.iter().map(Option::is_some).collect::<Vec<_>>());
-        let readback = culler.reads_back().then(|| CpuLate {
-            pyramids: PyramidReadback::new(device, &shapes),
-            plan: None,
-        });
+        culler.track_visibility(device, &shapes);
         let keys = draw_keys(device, plan, options.mode);
         let shaders = options.shaders();
         let target = options.target_format();
@@ -114,8 +102,9 @@ impl IndirectPath {
             drawer: &drawer,
             scene: &draw_scene,
         };
-        let displays = indirect_displays(device, (&keys, plan, &shapes), drawing, frame, &culler);
-        let pyramid = (occlusion.displays > 0).then(|| Box::new(Pyramids::new(device, options)));
+        let pyramids = (occlusion.displays > 0).then(|| Pyramids::new(device, options));
+        let shaped = (&keys[..], plan, &shapes[..], pyramids.as_ref());
+        let displays = indirect_displays(device, shaped, drawing, frame, &culler);
         let far = options.far_layer.then(|| {
             let layers = FarLayers::new(device, (target, &kinds), shaders, windows);
             let contexts: Vec<&wgpu::Buffer> = displays.iter().map(|d| d.view.context()).collect();
@@ -129,8 +118,6 @@ impl IndirectPath {
             draw_scene,
             displays,
             far,
-            pyramid,
-            readback,
         })
     }
 
@@ -157,9 +144,7 @@ impl IndirectPath {
             stats.bytes_uploaded += far.prepare(queue, &plan, &self.culler);
         }
         stats.cpu_upload = start.elapsed();
-        if let Some(readback) = &mut self.readback {
-            readback.plan = Some(plan);
-        }
+        self.culler.keep_for_late(plan);
         stats
     }
 
@@ -221,8 +206,8 @@ impl IndirectPath {
             what,
             |pass| self.draw_views(pass, index, composite),
         );
-        let pyramids = match self.late_inputs(index, target) {
-            Some((late, inputs)) => late.encode_cull(encoder, &inputs, (timer, display), log),
+        let pyramids = match &self.displays[index].late {
+            Some(late) => late.encode_cull(encoder, (&self.culler, target), (timer, display), log),
             None => FrameStats::default(),
         };
         FrameStats {
@@ -242,15 +227,13 @@ impl IndirectPath {
         (timer, display): Timing,
         log: &mut Vec<PassRecord>,
     ) -> FrameStats {
-        let Some((late, inputs)) = self.late_inputs(index, target) else {
+        let state = &self.displays[index];
+        let Some(late) = &state.late else {
             return FrameStats::default();
         };
         let mut stats = self.encode_far(encoder, (index, Phase::Tested), (timer, display), log);
-        let composite = |pass: &mut wgpu::RenderPass| match self.far_layer(index) {
-            Some((far, layer)) => far.layers.composite(pass, layer),
-            None => 0,
-        };
-        stats.draw_calls += late.encode_draw(encoder, &inputs, composite, (timer, display), log);
+        let with = (self.drawing(), &state.own, self.far_layer(index));
+        stats.draw_calls += late.encode_draw(encoder, with, target, (timer, display), log);
         stats
     }
 
@@ -282,64 +265,22 @@ impl IndirectPath {
         }
     }
 
-    /// Display `index`'s late phase and what it is recorded with, where it has one.
-    fn late_inputs<'a>(
-        &'a self,
-        index: usize,
-        target: &'a TargetViews,
-    ) -> Option<(&'a LatePhase, LateInputs<'a>)> {
-        let state = &self.displays[index];
-        let (late, pyramids) = (state.late.as_ref()?, self.pyramid.as_deref()?);
-        let texels = match &self.readback {
-            Some(readback) => readback.pyramids.texels(index)?,
-            None => self
-                .culler
-                .occlusion()
-                .map(|(buffer, _, at)| (buffer, at))?,
-        };
-        let inputs = LateInputs {
-            culler: &self.culler,
-            drawing: self.drawing(),
-            pyramids,
-            texels,
-            index,
-            key: state.key,
-            own: &state.own,
-            context: state.view.context(),
-            target,
-        };
-        Some((late, inputs))
-    }
-
     /// Culling on the CPU with occlusion, after the frame's early half was submitted:
     /// each display's late phase and far layer culled against its pyramids, read back
-    /// ([`CpuLate::cull_late`]).
+    /// ([`Culler::cull_late`]).
     pub(in crate::renderer) fn cull_late(
         &mut self,
         device: &wgpu::Device,
         queue: &wgpu::Queue,
     ) -> Result<FrameStats> {
-        let Some(readback) = &self.readback else {
-            return Ok(FrameStats::default());
-        };
-        let late: Vec<_> = (self.displays.iter())
-            .map(|d| d.late.as_ref().map(|l| l.view.view_cull()))
+        let far = |i: usize| self.far.as_ref()?.displays[i].as_ref();
+        let views: Vec<_> = (self.displays.iter().enumerate())
+            .map(|(i, d)| {
+                let late = d.late.as_ref().map(|l| l.view.view_cull());
+                (late, far(i).map(|layer| layer.view.view_cull()))
+            })
             .collect();
-        let views = (&late[..], self.far.as_ref());
-        readback.cull_late((device, queue), &mut self.culler, views)
-    }
-
-    /// Culling on the CPU with occlusion, every display's pyramids of the last frame
-    /// (`None` otherwise).
-    pub(in crate::renderer) fn read_back_pyramids(
-        &self,
-        device: &wgpu::Device,
-        queue: &wgpu::Queue,
-    ) -> Result<Option<ReadPyramids>> {
-        match &self.readback {
-            Some(r) => r.pyramids.read(device, queue).map(Some),
-            None => Ok(None),
-        }
+        self.culler.cull_late((device, queue), &views)
     }
 
     /// Whether each display with occlusion can read its depth target into its pyramids.
@@ -350,8 +291,7 @@ impl IndirectPath {
     /// See [`crate::renderer::Renderer::occlusion_bytes`].
     pub(in crate::renderer) fn occlusion_bytes(&self) -> Option<OcclusionBytes> {
         let late = self.displays.iter().filter_map(|d| d.late.as_ref());
-        let read_back = self.readback.as_ref().map(|r| r.pyramids.bytes());
-        occlusion_bytes(late, &self.culler, read_back)
+        occlusion_bytes(late, &self.culler)
     }
 
     /// Display `index`'s cull (on the GPU; the culler's upload wrote a CPU cull) and,
@@ -468,7 +408,12 @@ impl IndirectPath {
 /// `plan` culls the display's insets.
 fn indirect_displays(
     device: &wgpu::Device,
-    (keys, plan, shapes): (&[DrawKey], &FramePlan, &[Option<PyramidShape>]),
+    (keys, plan, shapes, pyramids): (
+        &[DrawKey],
+        &FramePlan,
+        &[Option<PyramidShape>],
+        Option<&Pyramids>,
+    ),
     drawing: Drawing,
     frame: &wgpu::Buffer,
     culler: &Culler,
@@ -477,15 +422,18 @@ fn indirect_displays(
     let phased = |v, context| ViewPass::phased(device, drawing, frame, culler, v, context);
     (keys.iter().enumerate().zip(shapes))
         .map(|((i, &key), shape)| {
-            let (display, late) = match shape {
-                Some(shape) => {
+            let (display, late) = match (shape, pyramids) {
+                (Some(shape), Some(pyramids)) => {
                     let early =
                         phased((CullView::Display(i), Phase::Early), context_buffer(device));
                     let context = early.context().clone();
                     let late = phased((CullView::Late(i), Phase::Late), context);
-                    (early, Some(LatePhase::new(late, *shape)))
+                    (
+                        early,
+                        Some(LatePhase::new((i, key), late, *shape, pyramids)),
+                    )
                 }
-                None => (view(CullView::Display(i)), None),
+                _ => (view(CullView::Display(i)), None),
             };
             IndirectDisplay {
                 view: display,

@@ -1,11 +1,12 @@
 //! Occlusion's passes on the GPU-driven path (`indirect.rs`): after a display's early
 //! draw, its depth pyramids, its late cull and its late draw; which displays cull by
-//! occlusion, and what it costs in GPU memory. The technique is [`crate::occlusion`]'s.
-
-pub(in crate::renderer) mod read_back;
+//! occlusion, and what it costs in GPU memory. The technique is [`crate::occlusion`]'s;
+//! where the late cull reads the pyramids, and culling on the CPU its late phase
+//! between the frame's halves, is the culler's (`culler/occlusion.rs`).
 
 use std::sync::Mutex;
 
+use super::far_layer::{Far, FarDisplay};
 use crate::draw::{BinPipelines, Drawing, OwnPipelines};
 use crate::error::Result;
 use crate::occlusion::PyramidShape;
@@ -19,21 +20,44 @@ use crate::renderer::targets::TargetViews;
 use crate::renderer::view::ViewPass;
 use crate::shaders::DrawKey;
 
-/// A display's late occlusion phase: its cull and draw, the shape of its pyramids and
-/// their bind group for the depth target it was last made for (a caller usually
-/// renders into the same targets every frame: no bind group per frame then).
+/// Display `index`'s late occlusion phase, with what it is recorded with: its cull and
+/// draw, its pipeline variant and context, the pyramid pass for its depth target and
+/// the shape of its pyramids, and their bind group for the depth target it was last
+/// made for (a caller usually renders into the same targets every frame: no bind group
+/// per frame then).
 pub(in crate::renderer) struct LatePhase {
     pub(in crate::renderer) view: ViewPass,
     pub(in crate::renderer) shape: PyramidShape,
+    index: usize,
+    key: DrawKey,
+    context: wgpu::Buffer,
+    pyramid: PyramidPass,
+    device: wgpu::Device,
     bound: Mutex<Option<(wgpu::TextureView, wgpu::BindGroup)>>,
 }
 
 impl LatePhase {
-    /// The late phase of a display whose pyramids are `shape`, culled and drawn by `view`.
-    pub(in crate::renderer) fn new(view: ViewPass, shape: PyramidShape) -> LatePhase {
+    /// Display `index`'s late phase, drawn with pipeline variant `key` and culled and
+    /// drawn by `view` (whose context is the display's), its pyramids `shape` reduced
+    /// by the pass of `pyramids` its variant's target needs.
+    pub(in crate::renderer) fn new(
+        (index, key): (usize, DrawKey),
+        view: ViewPass,
+        shape: PyramidShape,
+        pyramids: &Pyramids,
+    ) -> LatePhase {
+        let pyramid = match (key.multiview, &pyramids.layered) {
+            (true, Some(layered)) => layered,
+            _ => &pyramids.side_by_side,
+        };
         LatePhase {
+            context: view.context().clone(),
             view,
             shape,
+            index,
+            key,
+            pyramid: pyramid.clone(),
+            device: pyramids.device.clone(),
             bound: Mutex::new(None),
         }
     }
@@ -94,75 +118,58 @@ pub struct OcclusionBytes {
     pub pyramids: u64,
 }
 
-/// What a display's late phase is recorded with besides its own state: the path's
-/// culler, drawing and pyramid passes, and the display's index, pipeline variant,
-/// context and target.
-pub(in crate::renderer) struct LateInputs<'a> {
-    pub(in crate::renderer) culler: &'a Culler,
-    pub(in crate::renderer) drawing: Drawing<'a>,
-    pub(in crate::renderer) pyramids: &'a Pyramids,
-    /// The buffer the display's pyramids go into, and where they start (bytes).
-    pub(in crate::renderer) texels: (&'a wgpu::Buffer, u64),
-    pub(in crate::renderer) index: usize,
-    pub(in crate::renderer) key: DrawKey,
-    /// The display's pipelines of the caller's own.
-    pub(in crate::renderer) own: &'a OwnPipelines,
-    pub(in crate::renderer) context: &'a wgpu::Buffer,
-    pub(in crate::renderer) target: &'a TargetViews<'a>,
-}
-
 impl LatePhase {
     /// The display's second phase after its early draw, up to its draw: the pyramids of
-    /// the early depth and the late cull.
+    /// the early depth (in `target`), reduced where `culler` reads them, and the late
+    /// cull.
     pub(in crate::renderer) fn encode_cull(
         &self,
         encoder: &mut wgpu::CommandEncoder,
-        inputs: &LateInputs,
+        (culler, target): (&Culler, &TargetViews),
         (timer, display): Timing,
         log: &mut Vec<PassRecord>,
     ) -> FrameStats {
-        let (buffer, offset) = inputs.texels;
-        let pyramids = inputs.pyramids;
-        let pyramid = match (inputs.key.multiview, &pyramids.layered) {
-            (true, Some(layered)) => layered,
-            _ => &pyramids.side_by_side,
+        let Some((buffer, offset)) = culler.pyramid_texels(self.index) else {
+            return FrameStats::default();
         };
-        let group = self.bind_group(inputs.target.depth, |depth| {
+        let group = self.bind_group(target.depth, |depth| {
             let texels = wgpu::BufferBinding {
                 buffer,
                 offset,
                 size: std::num::NonZeroU64::new(4 * self.shape.len() as u64),
             };
-            pyramid.bind_group(&pyramids.device, inputs.context, texels, depth)
+            (self.pyramid).bind_group(&self.device, &self.context, texels, depth)
         });
         let mut dispatches = 0;
-        let what = (&mut *log, PassRecord::display("pyramid", inputs.index));
+        let what = (&mut *log, PassRecord::display("pyramid", self.index));
         compute_pass(encoder, (&mut *timer, display), what, |pass| {
-            dispatches += pyramid.encode(pass, &group, self.shape);
+            dispatches += self.pyramid.encode(pass, &group, self.shape);
         });
-        let what = (log, PassRecord::display("late_cull", inputs.index));
-        dispatches += (self.view).encode_cull(encoder, inputs.culler, (timer, display), what);
+        let what = (log, PassRecord::display("late_cull", self.index));
+        dispatches += (self.view).encode_cull(encoder, culler, (timer, display), what);
         FrameStats {
             dispatches,
             ..FrameStats::default()
         }
     }
 
-    /// The late draw: a pass that keeps what the early one drew, opening with what
-    /// `first` draws (a far layer's composite). Returns the draw calls.
+    /// The late draw into `target`: a pass that keeps what the early one drew, opening
+    /// with the display's far layer composited (where it has one). Returns the draw
+    /// calls.
     pub(in crate::renderer) fn encode_draw(
         &self,
         encoder: &mut wgpu::CommandEncoder,
-        inputs: &LateInputs,
-        first: impl FnOnce(&mut wgpu::RenderPass) -> u32,
+        (drawing, own, far): (Drawing, &OwnPipelines, Option<(&Far, &FarDisplay)>),
+        target: &TargetViews,
         timing: Timing,
         log: &mut Vec<PassRecord>,
     ) -> u32 {
-        let what = (log, PassRecord::display("late_draw", inputs.index));
-        let mask = inputs.key.multiview_mask();
-        let with = BinPipelines::Draw(inputs.key, inputs.own);
-        draw_pass(encoder, inputs.target, false, mask, timing, what, |pass| {
-            first(pass) + self.view.draw(pass, inputs.drawing, with)
+        let what = (log, PassRecord::display("late_draw", self.index));
+        let mask = self.key.multiview_mask();
+        let with = BinPipelines::Draw(self.key, own);
+        draw_pass(encoder, target, false, mask, timing, what, |pass| {
+            let composite = far.map_or(0, |(far, layer)| far.layers.composite(pass, layer));
+            composite + self.view.draw(pass, drawing, with)
         })
     }
 }
@@ -188,12 +195,11 @@ pub(in crate::renderer) fn check_depth<'a>(
 pub(in crate::renderer) fn occlusion_bytes<'a>(
     late: impl Iterator<Item = &'a LatePhase> + Clone,
     culler: &Culler,
-    read_back: Option<u64>,
 ) -> Option<OcclusionBytes> {
     let pyramids = 4 * late.clone().map(|l| l.shape.len() as u64).max()?;
     let targets = late.clone().next()?.view.cull();
     let outputs = targets.visible.size() + targets.draws.size() + targets.counts.size();
-    if let Some(read_back) = read_back {
+    if let Some(read_back) = culler.read_back_bytes() {
         return Some(OcclusionBytes {
             per_display: outputs,
             pyramids: read_back,
