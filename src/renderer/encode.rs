@@ -3,7 +3,7 @@
 //! pyramids), and the headless conveniences that prepare, record and submit.
 
 use super::plan::FrameStats;
-use super::recorder::{Recording, close, open_display};
+use super::recorder::Recorder;
 use super::{DisplayTarget, PassRecord, Path, Renderer, TargetViews};
 use crate::error::{Error, Result};
 use crate::profiling::GpuTimer;
@@ -75,7 +75,7 @@ impl Renderer {
         &mut self,
         encoder: &mut wgpu::CommandEncoder,
         targets: &[TargetViews],
-        mut timer: Option<&mut GpuTimer>,
+        timer: Option<&mut GpuTimer>,
         part: Part,
     ) -> Result<FrameStats> {
         if targets.len() != self.shapes.len() {
@@ -88,66 +88,59 @@ impl Renderer {
             p.check_depth(targets)?;
             (0..self.shapes.len()).try_for_each(|i| p.check_own_pipelines(i))?;
         }
+        // The second half's log continues the first's.
+        let log = match part {
+            Part::Rest => std::mem::take(&mut self.passes),
+            _ => Vec::new(),
+        };
+        let mut rec = Recorder::new(timer, log);
         let mut stats = match part {
             Part::Rest => FrameStats::default(),
-            _ => self.encode_frame(encoder, &mut timer),
+            _ => self.encode_frame(encoder, &mut rec),
         };
         for (i, target) in targets.iter().enumerate() {
-            let display = open_display(&timer, &self.names[i], encoder);
-            let timing = (&mut timer, &display);
-            let log = &mut self.passes;
+            rec.enter(encoder, &self.names[i]);
             let at = (i, target);
             let recorded = match (&self.path, part) {
-                (Path::Indirect(p), Part::Whole) => {
-                    p.encode_display(encoder, i, target, timing, log)
-                }
-                (Path::Indirect(p), Part::Early) => p.encode_early(encoder, at, timing, log),
-                (Path::Indirect(p), Part::Rest) => p.encode_rest(encoder, at, timing, log),
+                (Path::Indirect(p), Part::Whole) => p.encode_display(encoder, at, &mut rec),
+                (Path::Indirect(p), Part::Early) => p.encode_early(encoder, at, &mut rec),
+                (Path::Indirect(p), Part::Rest) => p.encode_rest(encoder, at, &mut rec),
                 (Path::Classic(_), Part::Rest) => FrameStats::default(),
-                (Path::Classic(p), _) => p.encode_display(encoder, i, target, timing, log),
+                (Path::Classic(p), _) => p.encode_display(encoder, at, &mut rec),
             };
             stats.draw_calls += recorded.draw_calls;
             stats.dispatches += recorded.dispatches;
-            close(&timer, encoder, display);
+            rec.leave(encoder);
         }
-        if let Some(t) = timer.filter(|_| part != Part::Early) {
-            t.resolve(encoder);
-        }
+        self.passes = rec.finish(encoder, part != Part::Early);
         Ok(stats)
     }
 
-    /// The frame level's passes, before any display's (and a new pass log): the
-    /// scatter of moved instances, the coarse cull, the shadow pass.
+    /// The frame level's passes, before any display's: the scatter of moved instances,
+    /// posing, skinning, the coarse cull, the shadow pass.
     pub(super) fn encode_frame(
         &mut self,
         encoder: &mut wgpu::CommandEncoder,
-        timer: &mut Option<&mut GpuTimer>,
+        rec: &mut Recorder,
     ) -> FrameStats {
-        self.passes.clear();
         let (scattered, cpu_staging) = self.scatter.encode(encoder);
         if scattered > 0 {
-            self.passes.push(PassRecord::frame("scatter"));
+            rec.log(PassRecord::frame("scatter"));
         }
-        let mut recording = Recording {
-            timer,
-            log: &mut self.passes,
-        };
         let posed = match &self.pose {
-            Some(pose) => pose.encode(encoder, recording.again()),
+            Some(pose) => pose.encode(encoder, rec),
             None => 0,
         };
         let skinned = match &self.skin {
-            Some(skin) => skin.encode(encoder, recording.again()),
+            Some(skin) => skin.encode(encoder, rec),
             None => 0,
         };
         let coarse = match &self.path {
-            Path::Indirect(p) => p.encode_frame(encoder, recording.again()),
+            Path::Indirect(p) => p.encode_frame(encoder, rec),
             Path::Classic(_) => 0,
         };
         let (shadowed, draw_calls) = match &self.shadow {
-            Some(shadow) => {
-                shadow.encode(encoder, self.path.drawing(), self.path.culler(), recording)
-            }
+            Some(shadow) => shadow.encode(encoder, self.path.drawing(), self.path.culler(), rec),
             None => (0, 0),
         };
         FrameStats {

@@ -3,7 +3,7 @@
 //! built-in pipelines or one of its own.
 
 use super::plan::FrameStats;
-use super::recorder::{close, open_display};
+use super::recorder::Recorder;
 use super::{Path, Renderer};
 use crate::cull::gpu_buffers::CullTargets;
 use crate::draw::OwnPipeline;
@@ -22,27 +22,24 @@ impl Renderer {
     pub fn encode_culls(
         &mut self,
         encoder: &mut wgpu::CommandEncoder,
-        mut timer: Option<&mut GpuTimer>,
+        timer: Option<&mut GpuTimer>,
     ) -> Result<FrameStats> {
         if self.reads_back() {
             return Err(Error::Unsupported(
                 "occlusion with CPU culling draws in the renderer's own passes (encode_early, encode_late): make the renderer with occlusion off to draw in passes of your own".into(),
             ));
         }
-        let mut stats = self.encode_frame(encoder, &mut timer);
+        let mut rec = Recorder::new(timer, Vec::new());
+        let mut stats = self.encode_frame(encoder, &mut rec);
         if let Path::Indirect(p) = &self.path {
             for i in 0..self.shapes.len() {
-                let display = open_display(&timer, &self.names[i], encoder);
-                let timing = (&mut timer, &display);
-                let culled = p.encode_cull(encoder, (i, true), timing, &mut self.passes);
+                rec.enter(encoder, &self.names[i]);
+                let culled = p.encode_cull(encoder, (i, true), &mut rec);
                 stats.dispatches += culled.dispatches;
                 stats.draw_calls += culled.draw_calls;
-                close(&timer, encoder, display);
             }
         }
-        if let Some(t) = timer {
-            t.resolve(encoder);
-        }
+        self.passes = rec.finish(encoder, true);
         Ok(stats)
     }
 

@@ -68,159 +68,160 @@ impl PassRecord {
     }
 }
 
-/// Records one draw pass into `target`, clearing it or not (and in multiview or not):
-/// [`render_pass`] named `draw`.
-pub(super) fn draw_pass(
-    encoder: &mut wgpu::CommandEncoder,
-    target: &TargetViews,
-    clear: bool,
-    multiview_mask: Option<std::num::NonZeroU32>,
-    timing: Timing,
-    logged: Logged,
-    record: impl FnOnce(&mut wgpu::RenderPass) -> u32,
-) -> u32 {
-    let begin = opener(|encoder, writes| {
-        begin_pass(encoder, target.attachments(), clear, multiview_mask, writes).forget_lifetime()
-    });
-    render_pass(encoder, begin, (timing, logged), record)
+/// Where a frame's passes are recorded besides the encoder, as one value every pass
+/// function takes: the frame's GPU timer (if any), the scope of the level a pass nests
+/// in (a display's, `frame` or `shadow`), and the log of what the frame recorded. A pass
+/// function opens its pass ([`Recorder::open`]), begins it with the writes that gives
+/// and closes it ([`Recorder::close_compute`], [`Recorder::close_render`]).
+pub(super) struct Recorder<'a> {
+    timer: Option<&'a mut GpuTimer>,
+    /// The open level scope, when timing.
+    scope: Option<GpuProfilerQuery>,
+    log: Vec<PassRecord>,
 }
 
-/// Where a frame's passes are recorded besides the encoder: the frame's timer, if any,
-/// and the pass log.
-pub(super) struct Recording<'a, 'b> {
-    pub(super) timer: &'a mut Option<&'b mut GpuTimer>,
-    pub(super) log: &'a mut Vec<PassRecord>,
+/// A pass being recorded: its timer scope (when timing) and its log entry.
+pub(super) struct OpenPass {
+    scope: Option<GpuProfilerQuery>,
+    what: PassRecord,
 }
 
-impl<'b> Recording<'_, 'b> {
-    /// The same recording, for one more pass (a shorter reborrow).
-    pub(super) fn again(&mut self) -> Recording<'_, 'b> {
-        Recording {
-            timer: &mut *self.timer,
-            log: &mut *self.log,
+impl OpenPass {
+    /// The timestamp writes of a render pass's descriptor.
+    pub(super) fn render_writes(&self) -> Option<wgpu::RenderPassTimestampWrites<'_>> {
+        self.scope.as_ref()?.render_pass_timestamp_writes()
+    }
+
+    /// The compute pass it opened, begun in `encoder`.
+    pub(super) fn compute(&self, encoder: &mut wgpu::CommandEncoder) -> wgpu::ComputePass<'static> {
+        let label = format!("stereocull.{}", self.what.name);
+        let writes = self
+            .scope
+            .as_ref()
+            .and_then(|q| q.compute_pass_timestamp_writes());
+        encoder
+            .begin_compute_pass(&wgpu::ComputePassDescriptor {
+                label: Some(&label),
+                timestamp_writes: writes,
+            })
+            .forget_lifetime()
+    }
+}
+
+impl<'a> Recorder<'a> {
+    /// A frame's recording, its log continuing `log` (empty for a new frame).
+    pub(super) fn new(timer: Option<&'a mut GpuTimer>, log: Vec<PassRecord>) -> Recorder<'a> {
+        Recorder {
+            timer,
+            scope: None,
+            log,
         }
     }
-}
 
-/// The frame's timer, if any, and the scope a pass nests in.
-pub(super) type Timing<'a, 'b> = (
-    &'a mut Option<&'b mut GpuTimer>,
-    &'a Option<GpuProfilerQuery>,
-);
+    /// Opens the level scope `name` (a display's name, `frame`, `shadow`) that the
+    /// passes opened until [`Recorder::leave`] nest in.
+    pub(super) fn enter(&mut self, encoder: &mut wgpu::CommandEncoder, name: &str) {
+        self.leave(encoder);
+        self.scope = self.timer.as_deref().map(|t| t.scope(name, encoder));
+    }
 
-/// The frame's pass log, and the entry a pass adds to it.
-pub(super) type Logged<'a> = (&'a mut Vec<PassRecord>, PassRecord);
+    /// Closes the open level scope.
+    pub(super) fn leave(&mut self, encoder: &mut wgpu::CommandEncoder) {
+        if let (Some(t), Some(scope)) = (self.timer.as_deref(), self.scope.take()) {
+            t.end(encoder, scope);
+        }
+    }
 
-/// How [`render_pass`] opens its pass: from the encoder and the scope's timestamp
-/// writes. (Typing the closure here gives it the signature for every lifetime.)
-pub(super) fn opener<F>(begin: F) -> F
-where
-    F: FnOnce(
-        &mut wgpu::CommandEncoder,
-        Option<wgpu::RenderPassTimestampWrites>,
-    ) -> wgpu::RenderPass<'static>,
-{
-    begin
-}
+    /// Opens pass `what` inside the level scope.
+    pub(super) fn open(&self, encoder: &mut wgpu::CommandEncoder, what: PassRecord) -> OpenPass {
+        let scope = match (self.timer.as_deref(), &self.scope) {
+            (Some(t), Some(parent)) => Some(t.pass(what.name, parent, encoder)),
+            _ => None,
+        };
+        OpenPass { scope, what }
+    }
 
-/// Records one render pass that `begin` opens (given its timestamp writes): a timer
-/// scope named as `what` inside `parent`'s, and pipeline statistics around what `record`
-/// draws (it returns its draw calls); logs the pass as `what`.
-pub(super) fn render_pass(
-    encoder: &mut wgpu::CommandEncoder,
-    begin: impl FnOnce(
-        &mut wgpu::CommandEncoder,
-        Option<wgpu::RenderPassTimestampWrites>,
-    ) -> wgpu::RenderPass<'static>,
-    ((timer, parent), (log, what)): (Timing, Logged),
-    record: impl FnOnce(&mut wgpu::RenderPass) -> u32,
-) -> u32 {
-    let scope = open_pass(timer, what.name, parent, encoder);
-    let writes = scope
-        .as_ref()
-        .and_then(|q| q.render_pass_timestamp_writes());
-    let mut pass = begin(encoder, writes);
-    let statistics = timer
-        .as_deref_mut()
-        .and_then(|t| t.begin_statistics(&mut pass));
-    let calls = record(&mut pass);
-    GpuTimer::end_statistics(&mut pass, statistics.is_some());
-    drop(pass);
-    close(timer, encoder, scope);
-    log.push(PassRecord { statistics, ..what });
-    calls
-}
+    /// One compute pass, opened as `what`, for a frame pass or a display's.
+    pub(super) fn compute_pass(
+        &self,
+        encoder: &mut wgpu::CommandEncoder,
+        what: PassRecord,
+    ) -> (wgpu::ComputePass<'static>, OpenPass) {
+        let open = self.open(encoder, what);
+        (open.compute(encoder), open)
+    }
 
-/// Records one compute pass, timed as `what`'s name inside `parent`'s scope and logged
-/// as `what`; `record` fills it.
-pub(super) fn compute_pass(
-    encoder: &mut wgpu::CommandEncoder,
-    (timer, parent): Timing,
-    (log, what): Logged,
-    record: impl FnOnce(&mut wgpu::ComputePass),
-) {
-    let scope = open_pass(timer, what.name, parent, encoder);
-    let writes = scope
-        .as_ref()
-        .and_then(|q| q.compute_pass_timestamp_writes());
-    let label = format!("stereocull.{}", what.name);
-    let mut pass = encoder.begin_compute_pass(&wgpu::ComputePassDescriptor {
-        label: Some(&label),
-        timestamp_writes: writes,
-    });
-    record(&mut pass);
-    drop(pass);
-    close(timer, encoder, scope);
-    log.push(what);
-}
+    /// Ends compute pass `pass` of `open`: its scope closed, the pass logged.
+    pub(super) fn close_compute(
+        &mut self,
+        encoder: &mut wgpu::CommandEncoder,
+        pass: wgpu::ComputePass<'static>,
+        open: OpenPass,
+    ) {
+        drop(pass);
+        self.close(encoder, open);
+    }
 
-/// Records one frame-level compute pass logged and timed as `name`, inside a `frame`
-/// scope as the other frame-level passes are; `record` fills it.
-pub(super) fn frame_compute_pass(
-    encoder: &mut wgpu::CommandEncoder,
-    Recording { timer, log }: Recording,
-    name: &'static str,
-    record: impl FnOnce(&mut wgpu::ComputePass),
-) {
-    let frame = open_display(timer, "frame", encoder);
-    compute_pass(
-        encoder,
-        (timer, &frame),
-        (log, PassRecord::frame(name)),
-        record,
-    );
-    close(timer, encoder, frame);
-}
+    /// Counts render pass `pass` of `open` (pipeline statistics, when timing) from here
+    /// to [`Recorder::close_render`].
+    pub(super) fn count(&mut self, pass: &mut wgpu::RenderPass, open: &mut OpenPass) {
+        open.what.statistics = self
+            .timer
+            .as_deref_mut()
+            .and_then(|t| t.begin_statistics(pass));
+    }
 
-/// Opens display `name`'s timer scope, when timing.
-pub(super) fn open_display(
-    timer: &Option<&mut GpuTimer>,
-    name: &str,
-    encoder: &mut wgpu::CommandEncoder,
-) -> Option<GpuProfilerQuery> {
-    timer.as_deref().map(|t| t.scope(name, encoder))
-}
+    /// Ends render pass `pass` of `open`: its statistics and scope closed, the pass
+    /// logged.
+    pub(super) fn close_render(
+        &mut self,
+        encoder: &mut wgpu::CommandEncoder,
+        mut pass: wgpu::RenderPass<'static>,
+        open: OpenPass,
+    ) {
+        GpuTimer::end_statistics(&mut pass, open.what.statistics.is_some());
+        drop(pass);
+        self.close(encoder, open);
+    }
 
-/// Opens a pass scope inside a display's, when timing; its timestamp writes go into
-/// the pass descriptor.
-pub(super) fn open_pass(
-    timer: &Option<&mut GpuTimer>,
-    label: &str,
-    display: &Option<GpuProfilerQuery>,
-    encoder: &mut wgpu::CommandEncoder,
-) -> Option<GpuProfilerQuery> {
-    match (timer.as_deref(), display) {
-        (Some(t), Some(parent)) => Some(t.pass(label, parent, encoder)),
-        _ => None,
+    fn close(&mut self, encoder: &mut wgpu::CommandEncoder, open: OpenPass) {
+        if let (Some(t), Some(scope)) = (self.timer.as_deref(), open.scope) {
+            t.end(encoder, scope);
+        }
+        self.log.push(open.what);
+    }
+
+    /// Logs a pass recorded without a scope of its own (the scatter of edits).
+    pub(super) fn log(&mut self, what: PassRecord) {
+        self.log.push(what);
+    }
+
+    /// The recording's end: the level scope closed, with `resolve` the timer's queries
+    /// resolved into `encoder`; returns the log.
+    pub(super) fn finish(
+        mut self,
+        encoder: &mut wgpu::CommandEncoder,
+        resolve: bool,
+    ) -> Vec<PassRecord> {
+        self.leave(encoder);
+        if let Some(t) = self.timer.filter(|_| resolve) {
+            t.resolve(encoder);
+        }
+        self.log
     }
 }
 
-pub(super) fn close(
-    timer: &Option<&mut GpuTimer>,
+/// Begins the draw pass into `target`, clearing it or not (and in multiview or not),
+/// for `open`, counted.
+pub(super) fn begin_draw_pass(
     encoder: &mut wgpu::CommandEncoder,
-    scope: Option<GpuProfilerQuery>,
-) {
-    if let (Some(t), Some(scope)) = (timer.as_deref(), scope) {
-        t.end(encoder, scope);
-    }
+    rec: &mut Recorder,
+    (target, clear, multiview_mask): (&TargetViews, bool, Option<std::num::NonZeroU32>),
+    open: &mut OpenPass,
+) -> wgpu::RenderPass<'static> {
+    let writes = open.render_writes();
+    let mut pass =
+        begin_pass(encoder, target.attachments(), clear, multiview_mask, writes).forget_lifetime();
+    rec.count(&mut pass, open);
+    pass
 }

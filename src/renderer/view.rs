@@ -4,7 +4,7 @@
 
 use super::culler::{Culler, ViewCull};
 use super::plan::CullView;
-use super::recorder::{Logged, Timing};
+use super::recorder::{PassRecord, Recorder};
 use crate::bins::BinRange;
 use crate::buffers::write;
 use crate::contexts::DisplayContext;
@@ -143,16 +143,16 @@ impl ViewPass {
         }
     }
 
-    /// Records the view's cull (on the GPU) in its phase, timed and logged as `logged`.
+    /// Records the view's cull (on the GPU) in its phase, timed and logged as `what`.
     /// Returns the dispatches.
     pub(super) fn encode_cull(
         &self,
         encoder: &mut wgpu::CommandEncoder,
         culler: &Culler,
-        timing: Timing,
-        logged: Logged,
+        rec: &mut Recorder,
+        what: PassRecord,
     ) -> u32 {
-        self.encode_cull_in(encoder, (culler, self.cull.phase()), timing, logged)
+        self.encode_cull_in(encoder, (culler, self.cull.phase()), rec, what)
     }
 
     /// [`ViewPass::encode_cull`] in `phase` (a tested view culled by its frustum alone
@@ -161,10 +161,10 @@ impl ViewPass {
         &self,
         encoder: &mut wgpu::CommandEncoder,
         (culler, phase): (&Culler, Phase),
-        timing: Timing,
-        logged: Logged,
+        rec: &mut Recorder,
+        what: PassRecord,
     ) -> u32 {
-        culler.encode(encoder, (&self.cull, phase), timing, logged)
+        culler.encode(encoder, (&self.cull, phase), rec, what)
     }
 
     /// The view's draws into `pass`: per material bin, its pipeline of `with` and one

@@ -11,7 +11,7 @@ mod occlusion;
 
 use super::options::CullMode;
 use super::plan::{CullView, FramePlan};
-use super::recorder::{Logged, PassRecord, Recording, Timing, close, compute_pass, open_display};
+use super::recorder::{PassRecord, Recorder};
 use crate::bins::BinRange;
 use crate::cull::CullOutput;
 use crate::cull::cpu;
@@ -222,7 +222,7 @@ impl Culler {
         &self,
         encoder: &mut wgpu::CommandEncoder,
         any: Option<&ViewCull>,
-        Recording { timer, log }: Recording,
+        rec: &mut Recorder,
     ) -> u32 {
         let (
             Kind::Gpu {
@@ -241,33 +241,31 @@ impl Culler {
         if coarse.is_none() && !culler.has_floor() {
             return 0;
         }
-        let frame = open_display(timer, "frame", encoder);
+        rec.enter(encoder, "frame");
         let mut dispatches = 0;
         if let Some(args) = coarse {
-            let what = (&mut *log, PassRecord::frame("coarse_cull"));
-            compute_pass(encoder, (timer, &frame), what, |pass| {
-                dispatches += culler.encode_frame(pass, scene, [display, args]);
-            });
+            let (mut pass, open) = rec.compute_pass(encoder, PassRecord::frame("coarse_cull"));
+            dispatches += culler.encode_frame(&mut pass, scene, [display, args]);
+            rec.close_compute(encoder, pass, open);
         }
         if culler.has_floor() {
-            let what = (&mut *log, PassRecord::frame("cull_floor"));
-            compute_pass(encoder, (timer, &frame), what, |pass| {
-                dispatches += u32::from(culler.encode_floor(pass, scene, display));
-            });
+            let (mut pass, open) = rec.compute_pass(encoder, PassRecord::frame("cull_floor"));
+            dispatches += u32::from(culler.encode_floor(&mut pass, scene, display));
+            rec.close_compute(encoder, pass, open);
         }
-        close(timer, encoder, frame);
+        rec.leave(encoder);
         dispatches
     }
 
     /// Records `view`'s cull on the GPU (over its display's blocks with the coarse
-    /// cull), timed and logged as `logged`; nothing on the CPU (`upload` wrote it).
-    /// Returns the dispatches.
+    /// cull), its pass timed and logged as `what`; nothing on the CPU (`upload` wrote
+    /// it). Returns the dispatches.
     pub(super) fn encode(
         &self,
         encoder: &mut wgpu::CommandEncoder,
         (view, phase): (&ViewCull, Phase),
-        timing: Timing,
-        logged: Logged,
+        rec: &mut Recorder,
+        what: PassRecord,
     ) -> u32 {
         let (
             Kind::Gpu {
@@ -281,9 +279,9 @@ impl Culler {
             return 0;
         };
         let slot = coarse.as_ref().and(view.view.coarse_slot());
-        compute_pass(encoder, timing, logged, |pass| {
-            culler.encode(pass, scene, group, (slot, phase));
-        });
+        let (mut pass, open) = rec.compute_pass(encoder, what);
+        culler.encode(&mut pass, scene, group, (slot, phase));
+        rec.close_compute(encoder, pass, open);
         culler.dispatches_per_display()
     }
 

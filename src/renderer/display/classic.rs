@@ -17,7 +17,7 @@ use crate::records::uniform_bytes;
 use crate::renderer::culler::{CullShape, Culler};
 use crate::renderer::options::StereoMode;
 use crate::renderer::plan::{CullView, FramePlan, FrameStats};
-use crate::renderer::recorder::{PassRecord, Timing, draw_pass};
+use crate::renderer::recorder::{PassRecord, Recorder, begin_draw_pass};
 use crate::renderer::targets::TargetViews;
 use crate::shaders::DrawKey;
 
@@ -166,43 +166,31 @@ impl ClassicPath {
         }
     }
 
-    /// Display `index` into its own passes, timed inside `display`: one per eye for a
-    /// stereo display in multi-pass and multi-camera, else one.
+    /// Display `index` into its own passes, inside its display's scope: one per eye for
+    /// a stereo display in multi-pass and multi-camera, else one.
     pub(in crate::renderer) fn encode_display(
         &self,
         encoder: &mut wgpu::CommandEncoder,
-        index: usize,
-        target: &TargetViews,
-        (timer, display): Timing,
-        log: &mut Vec<PassRecord>,
+        (index, target): (usize, &TargetViews),
+        rec: &mut Recorder,
     ) -> FrameStats {
         let views = self.displays[index].eyes.len();
         let draw_calls = match self.mode {
             StereoMode::MultiCamera | StereoMode::MultiPass if views > 0 => (0..views)
                 .map(|e| {
-                    let what = (&mut *log, PassRecord::eye("draw", index, e));
-                    draw_pass(
-                        encoder,
-                        target,
-                        e == 0,
-                        None,
-                        (timer, display),
-                        what,
-                        |pass| self.draw_eye(pass, index, e),
-                    )
+                    let mut open = rec.open(encoder, PassRecord::eye("draw", index, e));
+                    let mut pass = begin_draw_pass(encoder, rec, (target, e == 0, None), &mut open);
+                    let calls = self.draw_eye(&mut pass, index, e);
+                    rec.close_render(encoder, pass, open);
+                    calls
                 })
                 .sum(),
             _ => {
-                let what = (log, PassRecord::display("draw", index));
-                draw_pass(
-                    encoder,
-                    target,
-                    true,
-                    None,
-                    (timer, display),
-                    what,
-                    |pass| self.draw(pass, index),
-                )
+                let mut open = rec.open(encoder, PassRecord::display("draw", index));
+                let mut pass = begin_draw_pass(encoder, rec, (target, true, None), &mut open);
+                let calls = self.draw(&mut pass, index);
+                rec.close_render(encoder, pass, open);
+                calls
             }
         };
         FrameStats {

@@ -12,12 +12,11 @@ use crate::far_layer::FarPlan;
 use crate::occlusion::Phase;
 use crate::renderer::culler::Culler;
 use crate::renderer::plan::{CullView, FramePlan};
-use crate::renderer::recorder::{PassRecord, Recording, opener, render_pass};
+use crate::renderer::recorder::{PassRecord, Recorder};
 use crate::renderer::view::ViewPass;
 use crate::shaders::{
     DrawKey, FAR_COMPOSITE_BINDINGS, Shaders, Windows, bind_group_layout, far_composite_source,
 };
-use wgpu_profiler::GpuProfilerQuery;
 
 /// What every far layer shares: the mono pipeline drawing into them (single-sampled),
 /// the composite pipeline and its layout.
@@ -124,48 +123,40 @@ impl FarLayers {
 
     /// Records `far`'s cull in `phase` (on the GPU: over its display's blocks with the
     /// coarse cull; [`Phase::Tested`] after its display's pyramids) and its far layer
-    /// pass, timed inside `display`. Returns (dispatches, draw calls).
+    /// pass, inside its display's scope. Returns (dispatches, draw calls).
     pub(in crate::renderer) fn encode(
         &self,
         encoder: &mut wgpu::CommandEncoder,
         (far, phase): (&FarDisplay, Phase),
         (scene, culler): (&DrawScene, &Culler),
-        Recording { timer, log }: Recording,
-        display: &Option<GpuProfilerQuery>,
+        rec: &mut Recorder,
     ) -> (u32, u32) {
         let index = far.index;
-        let what = (&mut *log, PassRecord::display("far_cull", index));
-        let culling = (culler, phase);
-        let dispatches = (far.view).encode_cull_in(encoder, culling, (timer, display), what);
-        let begin = opener(|encoder, writes| {
-            encoder
-                .begin_render_pass(&wgpu::RenderPassDescriptor {
-                    label: Some("stereocull.far_layer"),
-                    color_attachments: &[Some(wgpu::RenderPassColorAttachment {
-                        view: &far.color,
-                        depth_slice: None,
-                        resolve_target: None,
-                        ops: wgpu::Operations {
-                            load: wgpu::LoadOp::Clear(CLEAR_COLOR),
-                            store: wgpu::StoreOp::Store,
-                        },
-                    })],
-                    depth_stencil_attachment: Some(cleared_depth(&far.depth)),
-                    timestamp_writes: writes,
-                    occlusion_query_set: None,
-                    multiview_mask: None,
-                })
-                .forget_lifetime()
-        });
-        let logged = (log, PassRecord::display("far_layer", index));
-        let drawing = self.drawing(scene);
-        let draw_calls = render_pass(encoder, begin, ((timer, display), logged), |pass| {
-            far.view.draw(
-                pass,
-                drawing,
-                BinPipelines::Draw(DrawKey::new(1, false), NO_OWN_PIPELINES),
-            )
-        });
+        let cull = PassRecord::display("far_cull", index);
+        let dispatches = (far.view).encode_cull_in(encoder, (culler, phase), rec, cull);
+        let mut open = rec.open(encoder, PassRecord::display("far_layer", index));
+        let mut pass = encoder
+            .begin_render_pass(&wgpu::RenderPassDescriptor {
+                label: Some("stereocull.far_layer"),
+                color_attachments: &[Some(wgpu::RenderPassColorAttachment {
+                    view: &far.color,
+                    depth_slice: None,
+                    resolve_target: None,
+                    ops: wgpu::Operations {
+                        load: wgpu::LoadOp::Clear(CLEAR_COLOR),
+                        store: wgpu::StoreOp::Store,
+                    },
+                })],
+                depth_stencil_attachment: Some(cleared_depth(&far.depth)),
+                timestamp_writes: open.render_writes(),
+                occlusion_query_set: None,
+                multiview_mask: None,
+            })
+            .forget_lifetime();
+        rec.count(&mut pass, &mut open);
+        let with = BinPipelines::Draw(DrawKey::new(1, false), NO_OWN_PIPELINES);
+        let draw_calls = far.view.draw(&mut pass, self.drawing(scene), with);
+        rec.close_render(encoder, pass, open);
         (dispatches, draw_calls)
     }
 

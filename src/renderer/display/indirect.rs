@@ -22,7 +22,7 @@ use crate::occlusion::{Phase, PyramidShape};
 use crate::renderer::culler::{CullShape, Culler};
 use crate::renderer::options::StereoMode;
 use crate::renderer::plan::{CullView, FramePlan, FrameStats};
-use crate::renderer::recorder::{PassRecord, Recording, Timing, draw_pass};
+use crate::renderer::recorder::{PassRecord, Recorder, begin_draw_pass};
 use crate::renderer::targets::TargetViews;
 use crate::renderer::view::ViewPass;
 use crate::scene::Shading;
@@ -153,10 +153,10 @@ impl IndirectPath {
     pub(in crate::renderer) fn encode_frame(
         &self,
         encoder: &mut wgpu::CommandEncoder,
-        recording: Recording,
+        rec: &mut Recorder,
     ) -> u32 {
         let any = self.displays.first().map(|d| d.view.view_cull());
-        self.culler.encode_frame(encoder, any, recording)
+        self.culler.encode_frame(encoder, any, rec)
     }
 
     /// Its pipelines and scene.
@@ -168,17 +168,15 @@ impl IndirectPath {
     }
 
     /// Display `index`: its cull dispatches (GPU culling), then one pass with one draw
-    /// call, timed inside `display`; with occlusion both halves of its two phases.
+    /// call, inside its display's scope; with occlusion both halves of its two phases.
     pub(in crate::renderer) fn encode_display(
         &self,
         encoder: &mut wgpu::CommandEncoder,
-        index: usize,
-        target: &TargetViews,
-        (timer, display): Timing,
-        log: &mut Vec<PassRecord>,
+        at: (usize, &TargetViews),
+        rec: &mut Recorder,
     ) -> FrameStats {
-        let early = self.encode_early(encoder, (index, target), (&mut *timer, display), log);
-        early + self.encode_rest(encoder, (index, target), (timer, display), log)
+        let early = self.encode_early(encoder, at, rec);
+        early + self.encode_rest(encoder, at, rec)
     }
 
     /// Display `index` up to what its late phase needs: its cull, its draw (with
@@ -189,25 +187,18 @@ impl IndirectPath {
         &self,
         encoder: &mut wgpu::CommandEncoder,
         (index, target): (usize, &TargetViews),
-        (timer, display): Timing,
-        log: &mut Vec<PassRecord>,
+        rec: &mut Recorder,
     ) -> FrameStats {
-        let culled = self.encode_cull(encoder, (index, false), (timer, display), log);
+        let culled = self.encode_cull(encoder, (index, false), rec);
         let multiview = self.displays[index].key.multiview_mask();
-        let what = (&mut *log, PassRecord::display("draw", index));
         // With occlusion the far layer is drawn and composited in the late phase.
         let composite = self.displays[index].late.is_none();
-        let draw_calls = draw_pass(
-            encoder,
-            target,
-            true,
-            multiview,
-            (timer, display),
-            what,
-            |pass| self.draw_views(pass, index, composite),
-        );
+        let mut open = rec.open(encoder, PassRecord::display("draw", index));
+        let mut pass = begin_draw_pass(encoder, rec, (target, true, multiview), &mut open);
+        let draw_calls = self.draw_views(&mut pass, index, composite);
+        rec.close_render(encoder, pass, open);
         let pyramids = match &self.displays[index].late {
-            Some(late) => late.encode_cull(encoder, (&self.culler, target), (timer, display), log),
+            Some(late) => late.encode_cull(encoder, (&self.culler, target), rec),
             None => FrameStats::default(),
         };
         FrameStats {
@@ -224,16 +215,15 @@ impl IndirectPath {
         &self,
         encoder: &mut wgpu::CommandEncoder,
         (index, target): (usize, &TargetViews),
-        (timer, display): Timing,
-        log: &mut Vec<PassRecord>,
+        rec: &mut Recorder,
     ) -> FrameStats {
         let state = &self.displays[index];
         let Some(late) = &state.late else {
             return FrameStats::default();
         };
-        let mut stats = self.encode_far(encoder, (index, Phase::Tested), (timer, display), log);
+        let mut stats = self.encode_far(encoder, (index, Phase::Tested), rec);
         let with = (self.drawing(), &state.own, self.far_layer(index));
-        stats.draw_calls += late.encode_draw(encoder, with, target, (timer, display), log);
+        stats.draw_calls += late.encode_draw(encoder, with, target, rec);
         stats
     }
 
@@ -248,16 +238,13 @@ impl IndirectPath {
         &self,
         encoder: &mut wgpu::CommandEncoder,
         (index, phase): (usize, Phase),
-        (timer, display): Timing,
-        log: &mut Vec<PassRecord>,
+        rec: &mut Recorder,
     ) -> FrameStats {
         let Some((far, layer)) = self.far_layer(index) else {
             return FrameStats::default();
         };
-        let recording = Recording { timer, log };
         let culling = (&self.draw_scene, &self.culler);
-        let (dispatches, draw_calls) =
-            (far.layers).encode(encoder, (layer, phase), culling, recording, display);
+        let (dispatches, draw_calls) = (far.layers).encode(encoder, (layer, phase), culling, rec);
         FrameStats {
             dispatches,
             draw_calls,
@@ -302,31 +289,28 @@ impl IndirectPath {
         &self,
         encoder: &mut wgpu::CommandEncoder,
         (index, one_pass): (usize, bool),
-        (timer, display): Timing,
-        log: &mut Vec<PassRecord>,
+        rec: &mut Recorder,
     ) -> FrameStats {
         let state = &self.displays[index];
-        let what = (&mut *log, PassRecord::display("cull", index));
-        let timing = (&mut *timer, display);
+        let what = PassRecord::display("cull", index);
         let dispatches = match one_pass {
             true => {
                 let frustum = (state.view.view_cull(), Phase::Frustum);
-                self.culler.encode(encoder, frustum, timing, what)
+                self.culler.encode(encoder, frustum, rec, what)
             }
-            false => state.view.encode_cull(encoder, &self.culler, timing, what),
+            false => state.view.encode_cull(encoder, &self.culler, rec, what),
         };
         let mut stats = FrameStats {
             dispatches,
             ..FrameStats::default()
         };
         if let Some(inset) = &state.inset {
-            let what = (&mut *log, PassRecord::display("inset_cull", index));
-            stats.dispatches += inset.encode_cull(encoder, &self.culler, (timer, display), what);
+            let what = PassRecord::display("inset_cull", index);
+            stats.dispatches += inset.encode_cull(encoder, &self.culler, rec, what);
         }
         // With occlusion in the renderer's passes, the far layer waits for the pyramids.
         if one_pass || state.late.is_none() {
-            stats =
-                stats + self.encode_far(encoder, (index, Phase::Frustum), (timer, display), log);
+            stats = stats + self.encode_far(encoder, (index, Phase::Frustum), rec);
         }
         stats
     }

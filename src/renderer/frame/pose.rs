@@ -7,7 +7,7 @@ use super::skin::SkinPass;
 use crate::buffers::init_buffer;
 use crate::error::Result;
 use crate::renderer::options::{PosingMode, RendererOptions};
-use crate::renderer::recorder::{Recording, frame_compute_pass};
+use crate::renderer::recorder::{PassRecord, Recorder};
 use crate::scene::Scene;
 use std::collections::HashMap;
 
@@ -146,17 +146,19 @@ impl PosePass {
     pub(in crate::renderer) fn encode(
         &self,
         encoder: &mut wgpu::CommandEncoder,
-        recording: Recording,
+        rec: &mut Recorder,
     ) -> u32 {
-        frame_compute_pass(encoder, recording, "pose", |pass| {
-            for k in 0..3 {
-                pass.set_pipeline(&self.pipelines[k]);
-                pass.set_bind_group(0, &self.bind_group, &[]);
-                let (x, y) = self.dispatches[k];
-                pass.dispatch_workgroups(x, y, 1);
-            }
-            self.moves.encode(pass);
-        });
+        rec.enter(encoder, "frame");
+        let (mut pass, open) = rec.compute_pass(encoder, PassRecord::frame("pose"));
+        for k in 0..3 {
+            pass.set_pipeline(&self.pipelines[k]);
+            pass.set_bind_group(0, &self.bind_group, &[]);
+            let (x, y) = self.dispatches[k];
+            pass.dispatch_workgroups(x, y, 1);
+        }
+        self.moves.encode(&mut pass);
+        rec.close_compute(encoder, pass, open);
+        rec.leave(encoder);
         4
     }
 

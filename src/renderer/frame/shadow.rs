@@ -6,7 +6,7 @@ use crate::contexts::DisplayContext;
 use crate::draw::{BinPipelines, Drawing, cleared_depth};
 use crate::renderer::culler::Culler;
 use crate::renderer::plan::CullView;
-use crate::renderer::recorder::{PassRecord, Recording, close, open_display, opener, render_pass};
+use crate::renderer::recorder::{PassRecord, Recorder};
 use crate::renderer::view::ViewPass;
 use crate::shadow::LightView;
 
@@ -48,33 +48,29 @@ impl ShadowPass {
         encoder: &mut wgpu::CommandEncoder,
         drawing: Drawing,
         culler: &Culler,
-        Recording { timer, log }: Recording,
+        rec: &mut Recorder,
     ) -> (u32, u32) {
         if drawing.drawer.shadow.is_none() {
             return (0, 0);
         }
-        let frame = open_display(timer, "shadow", encoder);
-        let what = (&mut *log, PassRecord::frame("shadow_cull"));
-        let dispatches = self
-            .view
-            .encode_cull(encoder, culler, (timer, &frame), what);
-        let begin = opener(|encoder, writes| {
-            encoder
-                .begin_render_pass(&wgpu::RenderPassDescriptor {
-                    label: Some("stereocull.shadow"),
-                    color_attachments: &[],
-                    depth_stencil_attachment: Some(cleared_depth(&drawing.scene.shadow_map.view)),
-                    timestamp_writes: writes,
-                    occlusion_query_set: None,
-                    multiview_mask: None,
-                })
-                .forget_lifetime()
-        });
-        let logged = (log, PassRecord::frame("shadow"));
-        let draw_calls = render_pass(encoder, begin, ((timer, &frame), logged), |pass| {
-            self.view.draw(pass, drawing, BinPipelines::Shadow)
-        });
-        close(timer, encoder, frame);
+        rec.enter(encoder, "shadow");
+        let cull = PassRecord::frame("shadow_cull");
+        let dispatches = self.view.encode_cull(encoder, culler, rec, cull);
+        let mut open = rec.open(encoder, PassRecord::frame("shadow"));
+        let mut pass = encoder
+            .begin_render_pass(&wgpu::RenderPassDescriptor {
+                label: Some("stereocull.shadow"),
+                color_attachments: &[],
+                depth_stencil_attachment: Some(cleared_depth(&drawing.scene.shadow_map.view)),
+                timestamp_writes: open.render_writes(),
+                occlusion_query_set: None,
+                multiview_mask: None,
+            })
+            .forget_lifetime();
+        rec.count(&mut pass, &mut open);
+        let draw_calls = self.view.draw(&mut pass, drawing, BinPipelines::Shadow);
+        rec.close_render(encoder, pass, open);
+        rec.leave(encoder);
         (dispatches, draw_calls)
     }
 }

@@ -3,7 +3,7 @@
 //! display, writing into the vertex buffer they all draw from.
 
 use crate::buffers::init_buffer;
-use crate::renderer::recorder::{Recording, frame_compute_pass};
+use crate::renderer::recorder::{PassRecord, Recorder};
 use crate::shaders::{
     SKIN_BINDINGS, Windows, bind_group_layout, compute_pipeline, dispatch_size, skin_source,
 };
@@ -111,13 +111,15 @@ impl SkinPass {
     pub(in crate::renderer) fn encode(
         &self,
         encoder: &mut wgpu::CommandEncoder,
-        recording: Recording,
+        rec: &mut Recorder,
     ) -> u32 {
-        frame_compute_pass(encoder, recording, "skin", |pass| {
-            pass.set_pipeline(&self.pipeline);
-            pass.set_bind_group(0, &self.bind_group, &[]);
-            pass.dispatch_workgroups(self.dispatch.0, self.dispatch.1, 1);
-        });
+        rec.enter(encoder, "frame");
+        let (mut pass, open) = rec.compute_pass(encoder, PassRecord::frame("skin"));
+        pass.set_pipeline(&self.pipeline);
+        pass.set_bind_group(0, &self.bind_group, &[]);
+        pass.dispatch_workgroups(self.dispatch.0, self.dispatch.1, 1);
+        rec.close_compute(encoder, pass, open);
+        rec.leave(encoder);
         1
     }
 

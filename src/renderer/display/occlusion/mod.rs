@@ -15,7 +15,7 @@ use crate::renderer::culler::Culler;
 use crate::renderer::options::RendererOptions;
 use crate::renderer::options::StereoMode;
 use crate::renderer::plan::{FramePlan, FrameStats};
-use crate::renderer::recorder::{PassRecord, Timing, compute_pass, draw_pass};
+use crate::renderer::recorder::{PassRecord, Recorder, begin_draw_pass};
 use crate::renderer::targets::TargetViews;
 use crate::renderer::view::ViewPass;
 use crate::shaders::DrawKey;
@@ -126,8 +126,7 @@ impl LatePhase {
         &self,
         encoder: &mut wgpu::CommandEncoder,
         (culler, target): (&Culler, &TargetViews),
-        (timer, display): Timing,
-        log: &mut Vec<PassRecord>,
+        rec: &mut Recorder,
     ) -> FrameStats {
         let Some((buffer, offset)) = culler.pyramid_texels(self.index) else {
             return FrameStats::default();
@@ -140,13 +139,12 @@ impl LatePhase {
             };
             (self.pyramid).bind_group(&self.device, &self.context, texels, depth)
         });
-        let mut dispatches = 0;
-        let what = (&mut *log, PassRecord::display("pyramid", self.index));
-        compute_pass(encoder, (&mut *timer, display), what, |pass| {
-            dispatches += self.pyramid.encode(pass, &group, self.shape);
-        });
-        let what = (log, PassRecord::display("late_cull", self.index));
-        dispatches += (self.view).encode_cull(encoder, culler, (timer, display), what);
+        let (mut pass, open) =
+            rec.compute_pass(encoder, PassRecord::display("pyramid", self.index));
+        let mut dispatches = self.pyramid.encode(&mut pass, &group, self.shape);
+        rec.close_compute(encoder, pass, open);
+        let what = PassRecord::display("late_cull", self.index);
+        dispatches += (self.view).encode_cull(encoder, culler, rec, what);
         FrameStats {
             dispatches,
             ..FrameStats::default()
@@ -161,16 +159,16 @@ impl LatePhase {
         encoder: &mut wgpu::CommandEncoder,
         (drawing, own, far): (Drawing, &OwnPipelines, Option<(&Far, &FarDisplay)>),
         target: &TargetViews,
-        timing: Timing,
-        log: &mut Vec<PassRecord>,
+        rec: &mut Recorder,
     ) -> u32 {
-        let what = (log, PassRecord::display("late_draw", self.index));
+        let mut open = rec.open(encoder, PassRecord::display("late_draw", self.index));
         let mask = self.key.multiview_mask();
+        let mut pass = begin_draw_pass(encoder, rec, (target, false, mask), &mut open);
+        let composite = far.map_or(0, |(far, layer)| far.layers.composite(&mut pass, layer));
         let with = BinPipelines::Draw(self.key, own);
-        draw_pass(encoder, target, false, mask, timing, what, |pass| {
-            let composite = far.map_or(0, |(far, layer)| far.layers.composite(pass, layer));
-            composite + self.view.draw(pass, drawing, with)
-        })
+        let calls = composite + self.view.draw(&mut pass, drawing, with);
+        rec.close_render(encoder, pass, open);
+        calls
     }
 }
 
