@@ -2,14 +2,11 @@
 //! display's cull buffers (and its far layer's), visible totals, the far/near split,
 //! and what the coarse cull saved. None of it is needed to draw.
 
-use super::display::indirect::IndirectPath;
 use super::{Path, Renderer};
-use crate::cull::gpu_buffers::{COUNTS_BYTES, CullTargets};
-use crate::cull::{BinDraws, CullOutput};
+use crate::cull::CullOutput;
 use crate::error::Result;
 use crate::occlusion::PyramidShape;
 use crate::readback::read_pod;
-use crate::records::DrawArgs;
 
 /// One display's far/near split in a frame ([`Diagnostics::far_split`]).
 #[derive(Clone, Copy, Debug, PartialEq, serde::Serialize)]
@@ -114,12 +111,7 @@ impl Diagnostics<'_> {
     pub fn late_cull(&self, index: usize) -> Result<Option<CullOutput>> {
         match &self.renderer.path {
             Path::Indirect(p) if index < self.renderer.shapes.len() => {
-                match &p.displays[index].late {
-                    Some(late) => p
-                        .read_targets(self.device, self.queue, late.view.cull())
-                        .map(Some),
-                    None => Ok(None),
-                }
+                p.read_late_cull(self.device, self.queue, index)
             }
             _ => Ok(None),
         }
@@ -128,19 +120,10 @@ impl Diagnostics<'_> {
     /// Per display, what its two occlusion phases drew in the last frame (read back
     /// from their counts buffers); `None` for a display without occlusion.
     pub fn occlusion_counts(&self) -> Result<Vec<Option<OcclusionCounts>>> {
-        let Path::Indirect(p) = &self.renderer.path else {
-            return Ok(vec![None; self.renderer.shapes.len()]);
-        };
-        (p.displays.iter())
-            .map(|d| {
-                let Some(late) = &d.late else {
-                    return Ok(None);
-                };
-                let early = read_counts(self.device, self.queue, d.view.cull())?[1];
-                let late = read_counts(self.device, self.queue, late.view.cull())?[1];
-                Ok(Some(OcclusionCounts { early, late }))
-            })
-            .collect()
+        match &self.renderer.path {
+            Path::Indirect(p) => p.read_occlusion_counts(self.device, self.queue),
+            Path::Classic(_) => Ok(vec![None; self.renderer.shapes.len()]),
+        }
     }
 
     /// Display `index`'s occlusion state after the last frame: its pyramids' shape and
@@ -151,17 +134,13 @@ impl Diagnostics<'_> {
         let Path::Indirect(p) = &self.renderer.path else {
             return Ok(None);
         };
-        let Some(shape) = p
-            .displays
-            .get(index)
-            .and_then(|d| Some(d.late.as_ref()?.shape))
-        else {
+        let Some(shape) = p.pyramid_shapes().get(index).copied().flatten() else {
             return Ok(None);
         };
-        if let Some(words) = p.culler.cpu_visibility(index) {
+        if let Some(words) = p.core.culler.cpu_visibility(index) {
             return Ok(Some((shape, words.to_vec())));
         }
-        let Some((buffer, words, _)) = p.culler.occlusion() else {
+        let Some((buffer, words, _)) = p.core.culler.occlusion() else {
             return Ok(None);
         };
         let bytes = 4 * words as u64;
@@ -175,16 +154,11 @@ impl Diagnostics<'_> {
         let Path::Indirect(p) = &self.renderer.path else {
             return Ok(None);
         };
-        if let Some(read) = p.culler.read_back_pyramids(self.device, self.queue)? {
+        if let Some(read) = p.core.culler.read_back_pyramids(self.device, self.queue)? {
             return Ok(read.into_iter().flatten().last().map(|(texels, _)| texels));
         }
-        let (Some(shape), Some((buffer, _, offset))) = (
-            p.displays
-                .iter()
-                .rev()
-                .find_map(|d| Some(d.late.as_ref()?.shape)),
-            p.culler.occlusion(),
-        ) else {
+        let last = p.pyramid_shapes().into_iter().flatten().last();
+        let (Some(shape), Some((buffer, _, offset))) = (last, p.core.culler.occlusion()) else {
             return Ok(None);
         };
         let bytes = offset + 4 * shape.len() as u64;
@@ -222,22 +196,23 @@ impl Diagnostics<'_> {
         let Path::Indirect(p) = &self.renderer.path else {
             return Ok(None);
         };
-        let views: Vec<_> = p.displays.iter().map(|d| d.view.view_cull()).collect();
-        p.culler
+        let views = p.display_culls();
+        p.core
+            .culler
             .time_against_floor(self.device, self.queue, &views, rounds)
     }
 
     /// The scene's vertices as the frame drew them: skinned meshes as the skinning
     /// pass posed them (in their instances' local space), the rest as uploaded.
     pub fn vertices(&self) -> Result<Vec<crate::scene::Vertex>> {
-        let buffer = &self.renderer.path.draw_scene_ref().vertices;
+        let buffer = &&self.renderer.path.core().draw_scene.vertices;
         read_pod(self.device, self.queue, buffer, buffer.size())
     }
 
     /// Every slot's instance record as the frame drew it (a posed instance's
     /// transform as the pose pass wrote it, with GPU posing).
     pub fn instance_records(&self) -> Result<Vec<crate::records::InstanceRecord>> {
-        let buffer = &self.renderer.path.draw_scene_ref().instances;
+        let buffer = &&self.renderer.path.core().draw_scene.instances;
         let mut records: Vec<crate::records::InstanceRecord> =
             read_pod(self.device, self.queue, buffer, buffer.size())?;
         records.truncate(self.renderer.slots as usize);
@@ -275,107 +250,9 @@ impl Renderer {
     /// The frame's culler, and how many displays it culls for.
     fn culler(&self) -> (&super::culler::Culler, usize) {
         let culler = match &self.path {
-            Path::Indirect(p) => &p.culler,
-            Path::Classic(p) => &p.culler,
+            Path::Indirect(p) => &p.core.culler,
+            Path::Classic(p) => &p.core.culler,
         };
         (culler, self.shapes.len())
     }
-}
-
-impl IndirectPath {
-    /// Display `index`'s cull buffers, read back after the frame was submitted.
-    pub(super) fn read_cull(
-        &self,
-        device: &wgpu::Device,
-        queue: &wgpu::Queue,
-        index: usize,
-    ) -> Result<CullOutput> {
-        self.read_targets(device, queue, self.displays[index].view.cull())
-    }
-
-    /// Display `index`'s far layer's cull buffers (`None` without one), read back after
-    /// the frame was submitted.
-    pub(super) fn read_far_cull(
-        &self,
-        device: &wgpu::Device,
-        queue: &wgpu::Queue,
-        index: usize,
-    ) -> Result<Option<CullOutput>> {
-        match self.far.as_ref().and_then(|f| f.displays[index].as_ref()) {
-            Some(far) => self.read_targets(device, queue, far.view.cull()).map(Some),
-            None => Ok(None),
-        }
-    }
-
-    /// Display `index`'s inset cull buffers (`None` without an inset cull), read back
-    /// after the frame was submitted.
-    pub(super) fn read_inset_cull(
-        &self,
-        device: &wgpu::Device,
-        queue: &wgpu::Queue,
-        index: usize,
-    ) -> Result<Option<CullOutput>> {
-        match &self.displays[index].inset {
-            Some(inset) => self.read_targets(device, queue, inset.cull()).map(Some),
-            None => Ok(None),
-        }
-    }
-
-    /// This frame's far distance per display, with the far layer (`None` per display
-    /// without one).
-    pub(super) fn far_distances(&self) -> Vec<Option<f32>> {
-        match &self.far {
-            Some(far) => far.distances.clone(),
-            None => vec![None; self.displays.len()],
-        }
-    }
-
-    pub(super) fn read_targets(
-        &self,
-        device: &wgpu::Device,
-        queue: &wgpu::Queue,
-        cull: &CullTargets,
-    ) -> Result<CullOutput> {
-        let counts = read_counts(device, queue, cull)?;
-        let [draw_count, visible_total] = [counts[0], counts[1]];
-        let visible = match visible_total {
-            0 => Vec::new(),
-            n => read_pod(device, queue, &cull.visible, 4 * n as u64)?,
-        };
-        let draws_bytes = (size_of::<DrawArgs>() as u32 * self.culler.draws()) as u64;
-        Ok(CullOutput {
-            visible,
-            draws: read_pod(device, queue, &cull.draws, draws_bytes)?,
-            draw_count,
-            bins: (self.culler.bins().iter().zip(&counts[2..]))
-                .map(|(r, &count)| BinDraws {
-                    first: r.first,
-                    count,
-                })
-                .collect(),
-        })
-    }
-
-    /// Every display's visible total, from its counts buffer (with occlusion, both
-    /// phases': what it drew).
-    pub(super) fn visible_counts(
-        &self,
-        device: &wgpu::Device,
-        queue: &wgpu::Queue,
-    ) -> Result<Vec<u32>> {
-        let count = |view: &super::view::ViewPass| -> Result<u32> {
-            Ok(read_counts(device, queue, view.cull())?[1])
-        };
-        (self.displays.iter())
-            .map(|d| {
-                let late = d.late.as_ref().map_or(Ok(0), |late| count(&late.view))?;
-                Ok(count(&d.view)? + late)
-            })
-            .collect()
-    }
-}
-
-/// The counts buffer: the draw count, the visible total, each bin's draw count.
-fn read_counts(device: &wgpu::Device, queue: &wgpu::Queue, cull: &CullTargets) -> Result<Vec<u32>> {
-    read_pod(device, queue, &cull.counts, COUNTS_BYTES)
 }

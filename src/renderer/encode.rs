@@ -67,7 +67,7 @@ impl Renderer {
     /// then record it with [`Renderer::encode_early`], submit, and
     /// [`Renderer::encode_late`].
     pub fn reads_back(&self) -> bool {
-        matches!(&self.path, Path::Indirect(p) if p.culler.reads_back())
+        matches!(&self.path, Path::Indirect(p) if p.core.culler.reads_back())
     }
 
     /// Records `part` of the frame into `encoder`.
@@ -140,7 +140,12 @@ impl Renderer {
             Path::Classic(_) => 0,
         };
         let (shadowed, draw_calls) = match &self.shadow {
-            Some(shadow) => shadow.encode(encoder, self.path.drawing(), self.path.culler(), rec),
+            Some(shadow) => shadow.encode(
+                encoder,
+                self.path.core().drawing(),
+                &self.path.core().culler,
+                rec,
+            ),
             None => (0, 0),
         };
         FrameStats {

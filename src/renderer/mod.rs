@@ -79,7 +79,7 @@
 
 use crate::buffers::{uniform_buffer, write};
 use crate::contexts::FrameContext;
-use crate::draw::{DrawScene, Drawing};
+use crate::draw::DrawScene;
 use crate::error::{Error, Result};
 
 use crate::places::Places;
@@ -105,10 +105,10 @@ mod view;
 use checks::check_device;
 pub use checks::check_rig;
 pub use diagnostics::{Diagnostics, FarSplit, OcclusionCounts};
-use display::PathInputs;
 use display::classic::ClassicPath;
 use display::indirect::IndirectPath;
 pub use display::occlusion::OcclusionBytes;
+use display::{PathCore, PathInputs};
 use frame::pose::{self, PosePass};
 use frame::shadow::ShadowPass;
 use frame::skin::SkinPass;
@@ -144,41 +144,27 @@ impl Path {
         path
     }
 
-    fn draw_scene(&mut self) -> &mut DrawScene {
+    /// The path's culler, pipelines and scene.
+    fn core(&self) -> &PathCore {
         match self {
-            Path::Indirect(p) => &mut p.draw_scene,
-            Path::Classic(p) => &mut p.draw_scene,
+            Path::Indirect(p) => &p.core,
+            Path::Classic(p) => &p.core,
         }
     }
 
-    fn draw_scene_ref(&self) -> &DrawScene {
+    fn core_mut(&mut self) -> &mut PathCore {
         match self {
-            Path::Indirect(p) => &p.draw_scene,
-            Path::Classic(p) => &p.draw_scene,
-        }
-    }
-
-    /// The instance records and the culler: what edits change.
-    fn edit_targets(&mut self) -> (&wgpu::Buffer, &mut culler::Culler) {
-        match self {
-            Path::Indirect(p) => (&p.draw_scene.instances, &mut p.culler),
-            Path::Classic(p) => (&p.draw_scene.instances, &mut p.culler),
-        }
-    }
-
-    /// The culler every view of the path culls through.
-    fn culler(&self) -> &culler::Culler {
-        match self {
-            Path::Indirect(p) => &p.culler,
-            Path::Classic(p) => &p.culler,
+            Path::Indirect(p) => &mut p.core,
+            Path::Classic(p) => &mut p.core,
         }
     }
 
     /// Where the scatter passes (and the pose pass) write edits.
     fn scatter_targets(&self) -> ScatterTargets<'_> {
-        let (spheres, visibility) = self.culler().scatter_targets();
+        let core = self.core();
+        let (spheres, visibility) = core.culler.scatter_targets();
         ScatterTargets {
-            instances: &self.draw_scene_ref().instances,
+            instances: &core.draw_scene.instances,
             spheres,
             visibility,
         }
@@ -191,15 +177,8 @@ impl Path {
         options: &RendererOptions,
         frame: &wgpu::Buffer,
     ) -> Option<ShadowPass> {
-        (options.shadows).then(|| ShadowPass::new(device, self.drawing(), frame, self.culler()))
-    }
-
-    /// The path's pipelines and scene, as a frame-level pass draws them.
-    fn drawing(&self) -> Drawing<'_> {
-        match self {
-            Path::Indirect(p) => p.drawing(),
-            Path::Classic(p) => p.drawing(),
-        }
+        let core = self.core();
+        (options.shadows).then(|| ShadowPass::new(device, core.drawing(), frame, &core.culler))
     }
 }
 
@@ -266,7 +245,7 @@ impl Renderer {
             slots,
         };
         let path = Path::new(device, inputs)?;
-        let skin = SkinPass::new(device, &scene.skins, &path.draw_scene_ref().vertices);
+        let skin = SkinPass::new(device, &scene.skins, &path.core().draw_scene.vertices);
         let gpu = pose::GpuParts {
             frame: &frame,
             skin: skin.as_ref(),
@@ -388,12 +367,14 @@ impl Renderer {
         };
         if let (Some(shadow), Some(light)) = (&self.shadow, light) {
             let start = std::time::Instant::now();
-            let size = self.path.drawing().scene.shadow_map.size;
-            stats.bytes_uploaded += shadow.prepare(queue, &light, size, self.path.culler());
+            let core = self.path.core();
+            let size = core.draw_scene.shadow_map.size;
+            stats.bytes_uploaded += shadow.prepare(queue, &light, size, &core.culler);
             stats.cpu_upload += start.elapsed();
         }
         // Texels go up with the first frame: `new` has no queue.
-        stats.bytes_uploaded += frame_bytes + self.path.draw_scene().materials.upload(queue);
+        stats.bytes_uploaded +=
+            frame_bytes + self.path.core_mut().draw_scene.materials.upload(queue);
         Ok(stats)
     }
 

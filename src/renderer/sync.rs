@@ -87,7 +87,7 @@ impl Renderer {
         if changes.restructured {
             let layout = CullLayout::with_places(scene, places);
             // A blended bin's range has an entry per place of its meshes.
-            let (_, culler) = self.path.edit_targets();
+            let culler = &self.path.core().culler;
             if culler.bins() != layout.bin_ranges(self.options.lod_levels()) {
                 return self.reallocate(device, live, needed);
             }
@@ -126,7 +126,7 @@ impl Renderer {
             slots: room,
         };
         self.path = Path::new(device, inputs)?;
-        self.skin = SkinPass::new(device, &scene.skins, &self.path.draw_scene_ref().vertices);
+        self.skin = SkinPass::new(device, &scene.skins, &self.path.core().draw_scene.vertices);
         self.slots = room;
         // The bindings may now need more windows.
         let windows = self.options.windows(device, room);
@@ -152,9 +152,13 @@ impl Renderer {
     fn reload(&mut self, queue: &wgpu::Queue, scene: &Scene, layout: CullLayout) -> SyncStats {
         self.scatter.reset();
         let records = instance_records(scene);
-        let (instances, culler) = self.path.edit_targets();
-        queue.write_buffer(instances, 0, bytemuck::cast_slice(&records));
-        let layout_bytes = culler.reload(queue, layout);
+        let core = self.path.core_mut();
+        queue.write_buffer(
+            &core.draw_scene.instances,
+            0,
+            bytemuck::cast_slice(&records),
+        );
+        let layout_bytes = core.culler.reload(queue, layout);
         SyncStats {
             bytes_uploaded: std::mem::size_of_val(&records[..]) as u64 + layout_bytes,
             reloaded: true,
@@ -174,7 +178,7 @@ impl Renderer {
             return (SyncStats::default(), placed);
         }
         let count = placed.len() as u32;
-        self.path.edit_targets().1.place(&placed);
+        self.path.core_mut().culler.place(&placed);
         let targets = self.path.scatter_targets();
         let (bytes, spare) = self.scatter.stage_places(device, placed, targets);
         let stats = SyncStats {
@@ -197,7 +201,7 @@ impl Renderer {
             return (SyncStats::default(), moved);
         }
         let count = moved.len() as u32;
-        self.path.edit_targets().1.moved(scene, &moved);
+        self.path.core_mut().culler.moved(scene, &moved);
         let targets = self.path.scatter_targets();
         let (bytes, spare) = self.scatter.moves.stage(device, moved, targets);
         let stats = SyncStats {

@@ -5,7 +5,7 @@
 
 use std::time::Instant;
 
-use super::PathInputs;
+use super::{PathCore, PathInputs};
 use crate::buffers::{storage_buffer, write};
 use crate::contexts::context_buffer;
 use crate::cull::CullOutput;
@@ -44,10 +44,8 @@ struct ClassicDisplay {
 
 pub(in crate::renderer) struct ClassicPath {
     mode: StereoMode,
-    /// The CPU culler (the classic modes draw per instance from its results).
-    pub(in crate::renderer) culler: Culler,
-    drawer: Drawer,
-    pub(in crate::renderer) draw_scene: DrawScene,
+    /// The culler is the CPU's (the classic modes draw per instance from its results).
+    pub(in crate::renderer) core: PathCore,
     displays: Vec<ClassicDisplay>,
 }
 
@@ -104,9 +102,11 @@ impl ClassicPath {
         let displays = classic_displays(device, plan, drawing, frame, slots, per_eye_lists);
         Ok(ClassicPath {
             mode: options.mode,
-            culler,
-            drawer,
-            draw_scene,
+            core: PathCore {
+                culler,
+                drawer,
+                draw_scene,
+            },
             displays,
         })
     }
@@ -120,7 +120,7 @@ impl ClassicPath {
     ) -> FrameStats {
         let mut stats = FrameStats::default();
         let start = Instant::now();
-        stats.bytes_uploaded += self.culler.prepare(queue, plan);
+        stats.bytes_uploaded += self.core.culler.prepare(queue, plan);
         stats.cpu_cull = start.elapsed();
         let start = Instant::now();
         for (i, (state, ctx)) in self.displays.iter().zip(&plan.displays).enumerate() {
@@ -153,17 +153,9 @@ impl ClassicPath {
     /// multi-camera) draws from: the eye's own where the plan culled it, else the
     /// display's.
     fn cull_of(&self, index: usize, eye: Option<usize>) -> &CullOutput {
-        let own = eye.and_then(|e| self.culler.output(CullView::Eye(index, e)));
-        own.or_else(|| self.culler.output(CullView::Display(index)))
+        let own = eye.and_then(|e| self.core.culler.output(CullView::Eye(index, e)));
+        own.or_else(|| self.core.culler.output(CullView::Display(index)))
             .unwrap_or(&NOTHING)
-    }
-
-    /// Its pipelines and scene.
-    pub(in crate::renderer) fn drawing(&self) -> Drawing<'_> {
-        Drawing {
-            drawer: &self.drawer,
-            scene: &self.draw_scene,
-        }
     }
 
     /// Display `index` into its own passes, inside its display's scope: one per eye for
@@ -230,18 +222,18 @@ impl ClassicPath {
     }
 
     fn bind(&self, pass: &mut wgpu::RenderPass, bind_group: &wgpu::BindGroup) {
-        Drawer::bind(pass, &self.draw_scene, bind_group);
+        Drawer::bind(pass, &self.core.draw_scene, bind_group);
     }
 
     /// The one-view pipelines of the scene's material bins.
     fn bin_drawer(&self) -> BinDrawer<'_> {
-        let with = BinPipelines::Draw(self.drawer.key(1), NO_OWN_PIPELINES);
-        let pipeline = |kind| match self.drawer.bin_pipeline(with, kind) {
+        let with = BinPipelines::Draw(self.core.drawer.key(1), NO_OWN_PIPELINES);
+        let pipeline = |kind| match self.core.drawer.bin_pipeline(with, kind) {
             Some(BinDraw::BuiltIn(pipeline)) => Some(pipeline),
             _ => None,
         };
         BinDrawer {
-            pipelines: (self.culler.bins().iter())
+            pipelines: (self.core.culler.bins().iter())
                 .filter_map(|b| pipeline(b.kind))
                 .collect(),
             current: None,

@@ -7,11 +7,11 @@
 
 use std::time::Instant;
 
-use super::PathInputs;
 use super::far_layer::{Far, FarDisplay, FarLayers};
 use super::occlusion::{
     LatePhase, OcclusionBytes, Pyramids, check_depth, occlusion_bytes, pyramid_shapes,
 };
+use super::{PathCore, PathInputs};
 use crate::contexts::context_buffer;
 use crate::cull::gpu_buffers::{CullTargets, OcclusionRoom};
 use crate::draw::{
@@ -31,23 +31,21 @@ use crate::shaders::DrawKey;
 /// One display: a view (its context, cull and draw bindings) and its pipeline variant,
 /// which also fixes the instances per visible object; with the inset cull, a foveated
 /// display's inset pair is one more view, drawn by the same pipeline in the same pass.
-pub(in crate::renderer) struct IndirectDisplay {
-    pub(in crate::renderer) view: ViewPass,
+pub(super) struct IndirectDisplay {
+    pub(super) view: ViewPass,
     key: DrawKey,
     /// Pipelines of the caller's own for its [`crate::scene::Shading::Own`] bins.
     own: OwnPipelines,
-    pub(in crate::renderer) inset: Option<ViewPass>,
+    pub(super) inset: Option<ViewPass>,
     /// With occlusion: the late phase (`view` is then the early one).
-    pub(in crate::renderer) late: Option<LatePhase>,
+    pub(super) late: Option<LatePhase>,
 }
 
 pub(in crate::renderer) struct IndirectPath {
-    pub(in crate::renderer) culler: Culler,
-    drawer: Drawer,
-    pub(in crate::renderer) draw_scene: DrawScene,
-    pub(in crate::renderer) displays: Vec<IndirectDisplay>,
+    pub(in crate::renderer) core: PathCore,
+    pub(super) displays: Vec<IndirectDisplay>,
     /// With the far layer: the stereo displays' far layers.
-    pub(in crate::renderer) far: Option<Far>,
+    pub(super) far: Option<Far>,
 }
 
 impl IndirectPath {
@@ -113,9 +111,11 @@ impl IndirectPath {
             Far::new(device, (layers, plan), scene, (&contexts, &tested), &culler)
         });
         Ok(IndirectPath {
-            culler,
-            drawer,
-            draw_scene,
+            core: PathCore {
+                culler,
+                drawer,
+                draw_scene,
+            },
             displays,
             far,
         })
@@ -131,20 +131,20 @@ impl IndirectPath {
     ) -> FrameStats {
         let mut stats = FrameStats::default();
         let start = Instant::now();
-        stats.bytes_uploaded += self.culler.prepare(queue, &plan);
+        stats.bytes_uploaded += self.core.culler.prepare(queue, &plan);
         stats.cpu_cull = start.elapsed();
         let start = Instant::now();
         for ((state, ctx), inset) in self.displays.iter().zip(&plan.displays).zip(&plan.insets) {
-            stats.bytes_uploaded += state.view.prepare(queue, ctx, &self.culler);
+            stats.bytes_uploaded += state.view.prepare(queue, ctx, &self.core.culler);
             if let (Some(view), Some(inset)) = (&state.inset, inset) {
-                stats.bytes_uploaded += view.prepare(queue, inset, &self.culler);
+                stats.bytes_uploaded += view.prepare(queue, inset, &self.core.culler);
             }
         }
         if let Some(far) = &mut self.far {
-            stats.bytes_uploaded += far.prepare(queue, &plan, &self.culler);
+            stats.bytes_uploaded += far.prepare(queue, &plan, &self.core.culler);
         }
         stats.cpu_upload = start.elapsed();
-        self.culler.keep_for_late(plan);
+        self.core.culler.keep_for_late(plan);
         stats
     }
 
@@ -156,15 +156,7 @@ impl IndirectPath {
         rec: &mut Recorder,
     ) -> u32 {
         let any = self.displays.first().map(|d| d.view.view_cull());
-        self.culler.encode_frame(encoder, any, rec)
-    }
-
-    /// Its pipelines and scene.
-    pub(in crate::renderer) fn drawing(&self) -> Drawing<'_> {
-        Drawing {
-            drawer: &self.drawer,
-            scene: &self.draw_scene,
-        }
+        self.core.culler.encode_frame(encoder, any, rec)
     }
 
     /// Display `index`: its cull dispatches (GPU culling), then one pass with one draw
@@ -198,7 +190,7 @@ impl IndirectPath {
         let draw_calls = self.draw_views(&mut pass, index, composite);
         rec.close_render(encoder, pass, open);
         let pyramids = match &self.displays[index].late {
-            Some(late) => late.encode_cull(encoder, (&self.culler, target), rec),
+            Some(late) => late.encode_cull(encoder, (&self.core.culler, target), rec),
             None => FrameStats::default(),
         };
         FrameStats {
@@ -222,7 +214,7 @@ impl IndirectPath {
             return FrameStats::default();
         };
         let mut stats = self.encode_far(encoder, (index, Phase::Tested), rec);
-        let with = (self.drawing(), &state.own, self.far_layer(index));
+        let with = (self.core.drawing(), &state.own, self.far_layer(index));
         stats.draw_calls += late.encode_draw(encoder, with, target, rec);
         stats
     }
@@ -243,7 +235,7 @@ impl IndirectPath {
         let Some((far, layer)) = self.far_layer(index) else {
             return FrameStats::default();
         };
-        let culling = (&self.draw_scene, &self.culler);
+        let culling = (&self.core.draw_scene, &self.core.culler);
         let (dispatches, draw_calls) = (far.layers).encode(encoder, (layer, phase), culling, rec);
         FrameStats {
             dispatches,
@@ -267,7 +259,7 @@ impl IndirectPath {
                 (late, far(i).map(|layer| layer.view.view_cull()))
             })
             .collect();
-        self.culler.cull_late((device, queue), &views)
+        self.core.culler.cull_late((device, queue), &views)
     }
 
     /// Whether each display with occlusion can read its depth target into its pyramids.
@@ -278,7 +270,7 @@ impl IndirectPath {
     /// See [`crate::renderer::Renderer::occlusion_bytes`].
     pub(in crate::renderer) fn occlusion_bytes(&self) -> Option<OcclusionBytes> {
         let late = self.displays.iter().filter_map(|d| d.late.as_ref());
-        occlusion_bytes(late, &self.culler)
+        occlusion_bytes(late, &self.core.culler)
     }
 
     /// Display `index`'s cull (on the GPU; the culler's upload wrote a CPU cull) and,
@@ -296,9 +288,11 @@ impl IndirectPath {
         let dispatches = match one_pass {
             true => {
                 let frustum = (state.view.view_cull(), Phase::Frustum);
-                self.culler.encode(encoder, frustum, rec, what)
+                self.core.culler.encode(encoder, frustum, rec, what)
             }
-            false => state.view.encode_cull(encoder, &self.culler, rec, what),
+            false => state
+                .view
+                .encode_cull(encoder, &self.core.culler, rec, what),
         };
         let mut stats = FrameStats {
             dispatches,
@@ -306,7 +300,7 @@ impl IndirectPath {
         };
         if let Some(inset) = &state.inset {
             let what = PassRecord::display("inset_cull", index);
-            stats.dispatches += inset.encode_cull(encoder, &self.culler, rec, what);
+            stats.dispatches += inset.encode_cull(encoder, &self.core.culler, rec, what);
         }
         // With occlusion in the renderer's passes, the far layer waits for the pyramids.
         if one_pass || state.late.is_none() {
@@ -324,7 +318,7 @@ impl IndirectPath {
     ) {
         self.displays[index]
             .view
-            .draw(pass, self.drawing(), BinPipelines::Own);
+            .draw(pass, self.core.drawing(), BinPipelines::Own);
     }
 
     /// Sets display `index`'s pipeline of the caller's own for its
@@ -341,7 +335,7 @@ impl IndirectPath {
     /// Display `index` must have a pipeline for each [`Shading::Own`] bin it draws.
     pub(in crate::renderer) fn check_own_pipelines(&self, index: usize) -> Result<()> {
         let own = &self.displays[index].own;
-        let missing = (self.culler.bins().iter()).find_map(|b| match b.kind.shading {
+        let missing = (self.core.culler.bins().iter()).find_map(|b| match b.kind.shading {
             Shading::Own(i) if !own.contains_key(&i) => Some(i),
             _ => None,
         });
@@ -353,11 +347,11 @@ impl IndirectPath {
 
     /// How the instance records are bound.
     pub(in crate::renderer) fn windows(&self) -> crate::shaders::Windows {
-        self.drawer.windows
+        self.core.drawer.windows
     }
 
     pub(in crate::renderer) fn bind_group_layout(&self) -> &wgpu::BindGroupLayout {
-        self.drawer.layout()
+        self.core.drawer.layout()
     }
 
     pub(in crate::renderer) fn cull_targets(&self, index: usize) -> &CullTargets {
@@ -379,9 +373,9 @@ impl IndirectPath {
             _ => 0,
         };
         let with = BinPipelines::Draw(state.key, &state.own);
-        let outer = state.view.draw(pass, self.drawing(), with);
+        let outer = state.view.draw(pass, self.core.drawing(), with);
         let insets = match &state.inset {
-            Some(inset) => inset.draw(pass, self.drawing(), with),
+            Some(inset) => inset.draw(pass, self.core.drawing(), with),
             None => 0,
         };
         composite + outer + insets

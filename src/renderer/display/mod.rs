@@ -5,11 +5,14 @@
 //! occlusion's passes (`occlusion/`), and what a path is built from.
 
 pub(in crate::renderer) mod classic;
+mod diagnostics;
 pub(in crate::renderer) mod far_layer;
 pub(in crate::renderer) mod indirect;
 pub(in crate::renderer) mod occlusion;
 
+use crate::draw::{DrawScene, Drawer, Drawing};
 use crate::records::CullLayout;
+use crate::renderer::culler::Culler;
 use crate::renderer::options::RendererOptions;
 use crate::renderer::plan::FramePlan;
 use crate::scene::Scene;
@@ -26,4 +29,22 @@ pub(in crate::renderer) struct PathInputs<'a> {
     pub(in crate::renderer) options: &'a RendererOptions,
     /// Instance slots (and places) of room.
     pub(in crate::renderer) slots: u32,
+}
+
+/// What every path has: the one culler all its views cull through, the draw pipelines,
+/// and the scene as the GPU draws it.
+pub(in crate::renderer) struct PathCore {
+    pub(in crate::renderer) culler: Culler,
+    pub(in crate::renderer) drawer: Drawer,
+    pub(in crate::renderer) draw_scene: DrawScene,
+}
+
+impl PathCore {
+    /// The pipelines and the scene, as a pass draws them.
+    pub(in crate::renderer) fn drawing(&self) -> Drawing<'_> {
+        Drawing {
+            drawer: &self.drawer,
+            scene: &self.draw_scene,
+        }
+    }
 }

@@ -26,8 +26,8 @@ use crate::shaders::DrawKey;
 /// made for (a caller usually renders into the same targets every frame: no bind group
 /// per frame then).
 pub(in crate::renderer) struct LatePhase {
-    pub(in crate::renderer) view: ViewPass,
-    pub(in crate::renderer) shape: PyramidShape,
+    pub(in crate::renderer::display) view: ViewPass,
+    pub(in crate::renderer::display) shape: PyramidShape,
     index: usize,
     key: DrawKey,
     context: wgpu::Buffer,
