@@ -137,15 +137,11 @@ impl Diagnostics<'_> {
         let Some(shape) = p.pyramid_shapes().get(index).copied().flatten() else {
             return Ok(None);
         };
-        if let Some(words) = p.core.culler.cpu_visibility(index) {
-            return Ok(Some((shape, words.to_vec())));
-        }
-        let Some((buffer, words, _)) = p.core.culler.occlusion() else {
-            return Ok(None);
-        };
-        let bytes = 4 * words as u64;
-        let all: Vec<u32> = read_pod(self.device, self.queue, buffer, bytes * (index as u64 + 1))?;
-        Ok(Some((shape, all[index * words as usize..].to_vec())))
+        let words = p
+            .core
+            .culler
+            .read_visibility(self.device, self.queue, index)?;
+        Ok(words.map(|words| (shape, words)))
     }
 
     /// The depth pyramids the last display with occlusion built in the last frame (the
@@ -154,16 +150,8 @@ impl Diagnostics<'_> {
         let Path::Indirect(p) = &self.renderer.path else {
             return Ok(None);
         };
-        if let Some(read) = p.core.culler.read_back_pyramids(self.device, self.queue)? {
-            return Ok(read.into_iter().flatten().last().map(|(texels, _)| texels));
-        }
         let last = p.pyramid_shapes().into_iter().flatten().last();
-        let (Some(shape), Some((buffer, _, offset))) = (last, p.core.culler.occlusion()) else {
-            return Ok(None);
-        };
-        let bytes = offset + 4 * shape.len() as u64;
-        let all: Vec<f32> = read_pod(self.device, self.queue, buffer, bytes)?;
-        Ok(Some(all[offset as usize / 4..].to_vec()))
+        p.core.culler.read_pyramid(self.device, self.queue, last)
     }
 
     /// The last frame's far/near split per display (`None` for displays without a far

@@ -285,19 +285,6 @@ impl Culler {
         culler.dispatches_per_display()
     }
 
-    /// The occlusion buffer, the words of visibility bits per display in it and where
-    /// the displays' shared depth pyramids start (bytes), GPU culling.
-    pub(super) fn occlusion(&self) -> Option<(&wgpu::Buffer, u32, u64)> {
-        match &self.kind {
-            Kind::Gpu { scene, .. } => Some((
-                scene.occlusion(),
-                scene.visibility_words(),
-                scene.pyramid_offset(),
-            )),
-            Kind::Cpu { .. } => None,
-        }
-    }
-
     /// GPU bytes per instance the culler keeps besides the views' outputs.
     pub(super) fn bytes_per_instance(mode: CullMode) -> u64 {
         match mode {

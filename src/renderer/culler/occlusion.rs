@@ -121,33 +121,58 @@ impl Culler {
         }
     }
 
-    /// Display `i`'s visibility words on the CPU (`None` on the GPU or without
-    /// occlusion).
-    pub(in crate::renderer) fn cpu_visibility(&self, i: usize) -> Option<&[u32]> {
-        match &self.kind {
-            Kind::Cpu { visibility, .. } => visibility.get(i)?.as_deref(),
-            Kind::Gpu { .. } => None,
-        }
-    }
-
-    /// Culling on the CPU with occlusion, every display's pyramids of the last
-    /// submitted frame (`None` otherwise).
-    pub(in crate::renderer) fn read_back_pyramids(
+    /// Display `i`'s visibility words after the last frame: the CPU's, or the GPU's
+    /// read back (`None` for a display without occlusion).
+    pub(in crate::renderer) fn read_visibility(
         &self,
         device: &wgpu::Device,
         queue: &wgpu::Queue,
-    ) -> Result<Option<ReadPyramids>> {
+        i: usize,
+    ) -> Result<Option<Vec<u32>>> {
         match &self.kind {
-            Kind::Cpu { late: Some(l), .. } => l.read(device, queue).map(Some),
+            Kind::Cpu { visibility, .. } => Ok(visibility.get(i).cloned().flatten()),
+            Kind::Gpu { scene, .. } => {
+                let (words, slots) = scene.visibility_shape();
+                if i as u32 >= slots {
+                    return Ok(None);
+                }
+                let bytes = 4 * words as u64 * (i as u64 + 1);
+                let all: Vec<u32> = read_pod(device, queue, scene.occlusion(), bytes)?;
+                Ok(Some(all[i * words as usize..].to_vec()))
+            }
+        }
+    }
+
+    /// The pyramids of the last display with occlusion (of `shape`) as the last frame
+    /// built them, read back (`None` without occlusion).
+    pub(in crate::renderer) fn read_pyramid(
+        &self,
+        device: &wgpu::Device,
+        queue: &wgpu::Queue,
+        shape: Option<PyramidShape>,
+    ) -> Result<Option<Vec<f32>>> {
+        match (&self.kind, shape) {
+            (Kind::Cpu { late: Some(l), .. }, _) => {
+                let read = l.read(device, queue)?;
+                Ok(read.into_iter().flatten().last().map(|(texels, _)| texels))
+            }
+            (Kind::Gpu { scene, .. }, Some(shape)) => {
+                let offset = scene.pyramid_offset();
+                let bytes = offset + 4 * shape.len() as u64;
+                let all: Vec<f32> = read_pod(device, queue, scene.occlusion(), bytes)?;
+                Ok(Some(all[offset as usize / 4..].to_vec()))
+            }
             _ => Ok(None),
         }
     }
 
-    /// The read-back buffer's bytes (culling on the CPU with occlusion).
-    pub(in crate::renderer) fn read_back_bytes(&self) -> Option<u64> {
+    /// GPU bytes occlusion adds to the culler: per display, its visibility words (on
+    /// the GPU; the CPU keeps its own), and once the pyramids' room, `shared` where the
+    /// displays share one region (the GPU culler's), else the read-back buffer's.
+    pub(in crate::renderer) fn occlusion_bytes(&self, shared: u64) -> (u64, u64) {
         match &self.kind {
-            Kind::Cpu { late: Some(l), .. } => Some(l.buffer.size()),
-            _ => None,
+            Kind::Gpu { scene, .. } => (4 * scene.visibility_words() as u64, shared),
+            Kind::Cpu { late, .. } => (0, late.as_ref().map_or(0, |l| l.buffer.size())),
         }
     }
 

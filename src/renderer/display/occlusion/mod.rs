@@ -194,18 +194,12 @@ pub(in crate::renderer) fn occlusion_bytes<'a>(
     late: impl Iterator<Item = &'a LatePhase> + Clone,
     culler: &Culler,
 ) -> Option<OcclusionBytes> {
-    let pyramids = 4 * late.clone().map(|l| l.shape.len() as u64).max()?;
+    let shared = 4 * late.clone().map(|l| l.shape.len() as u64).max()?;
     let targets = late.clone().next()?.view.cull();
     let outputs = targets.visible.size() + targets.draws.size() + targets.counts.size();
-    if let Some(read_back) = culler.read_back_bytes() {
-        return Some(OcclusionBytes {
-            per_display: outputs,
-            pyramids: read_back,
-        });
-    }
-    let (_, words, _) = culler.occlusion()?;
+    let (words, pyramids) = culler.occlusion_bytes(shared);
     Some(OcclusionBytes {
-        per_display: 4 * words as u64 + outputs,
+        per_display: words + outputs,
         pyramids,
     })
 }
