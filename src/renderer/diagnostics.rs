@@ -85,8 +85,8 @@ impl Diagnostics<'_> {
     /// once; the contract's buffers with V = 1), read back after it was submitted;
     /// `None` for a display without a far layer.
     pub fn far_cull(&self, index: usize) -> Result<Option<CullOutput>> {
-        match &self.renderer.path {
-            Path::Indirect(p) if index < self.renderer.shapes.len() => {
+        match self.renderer.path.indirect() {
+            Some(p) if index < self.renderer.shapes.len() => {
                 p.read_far_cull(self.device, self.queue, index)
             }
             _ => Ok(None),
@@ -97,8 +97,8 @@ impl Diagnostics<'_> {
     /// with [`super::RendererOptions::inset_cull`]; the contract's buffers with V = 2),
     /// read back after it was submitted; `None` for a display without one.
     pub fn inset_cull(&self, index: usize) -> Result<Option<CullOutput>> {
-        match &self.renderer.path {
-            Path::Indirect(p) if index < self.renderer.shapes.len() => {
+        match self.renderer.path.indirect() {
+            Some(p) if index < self.renderer.shapes.len() => {
                 p.read_inset_cull(self.device, self.queue, index)
             }
             _ => Ok(None),
@@ -109,8 +109,8 @@ impl Diagnostics<'_> {
     /// did not draw and its pyramids do not hide; the contract's buffers), read back
     /// after it was submitted; `None` for a display without occlusion.
     pub fn late_cull(&self, index: usize) -> Result<Option<CullOutput>> {
-        match &self.renderer.path {
-            Path::Indirect(p) if index < self.renderer.shapes.len() => {
+        match self.renderer.path.indirect() {
+            Some(p) if index < self.renderer.shapes.len() => {
                 p.read_late_cull(self.device, self.queue, index)
             }
             _ => Ok(None),
@@ -131,7 +131,7 @@ impl Diagnostics<'_> {
     /// SPAN` of word `k / SPAN` set where the late phase found place `k` not hidden),
     /// read back; `None` for a display without occlusion.
     pub fn visibility(&self, index: usize) -> Result<Option<(PyramidShape, Vec<u32>)>> {
-        let Path::Indirect(p) = &self.renderer.path else {
+        let Some(p) = self.renderer.path.indirect() else {
             return Ok(None);
         };
         let Some(shape) = p.pyramid_shapes().get(index).copied().flatten() else {
@@ -147,7 +147,7 @@ impl Diagnostics<'_> {
     /// The depth pyramids the last display with occlusion built in the last frame (the
     /// displays share one buffer), read back; `None` without occlusion.
     pub fn pyramid(&self) -> Result<Option<Vec<f32>>> {
-        let Path::Indirect(p) = &self.renderer.path else {
+        let Some(p) = self.renderer.path.indirect() else {
             return Ok(None);
         };
         let last = p.pyramid_shapes().into_iter().flatten().last();
@@ -157,7 +157,7 @@ impl Diagnostics<'_> {
     /// The last frame's far/near split per display (`None` for displays without a far
     /// layer): the far distance and the visible far and near instances, read back.
     pub fn far_split(&self) -> Result<Vec<Option<FarSplit>>> {
-        let Path::Indirect(p) = &self.renderer.path else {
+        let Some(p) = self.renderer.path.indirect() else {
             return Ok(vec![None; self.renderer.shapes.len()]);
         };
         let near = p.visible_counts(self.device, self.queue)?;
@@ -181,7 +181,7 @@ impl Diagnostics<'_> {
     /// Where timestamps are unreliable (lavapipe), this is the cost; on a GPU it adds a
     /// submission's latency to each.
     pub fn cull_against_floor(&self, rounds: u32) -> Result<Option<(f64, Vec<f64>)>> {
-        let Path::Indirect(p) = &self.renderer.path else {
+        let Some(p) = self.renderer.path.indirect() else {
             return Ok(None);
         };
         let views = p.display_culls();
@@ -237,10 +237,6 @@ impl Diagnostics<'_> {
 impl Renderer {
     /// The frame's culler, and how many displays it culls for.
     fn culler(&self) -> (&super::culler::Culler, usize) {
-        let culler = match &self.path {
-            Path::Indirect(p) => &p.core.culler,
-            Path::Classic(p) => &p.core.culler,
-        };
-        (culler, self.shapes.len())
+        (&self.path.core().culler, self.shapes.len())
     }
 }

@@ -67,7 +67,7 @@ impl Renderer {
     /// then record it with [`Renderer::encode_early`], submit, and
     /// [`Renderer::encode_late`].
     pub fn reads_back(&self) -> bool {
-        matches!(&self.path, Path::Indirect(p) if p.core.culler.reads_back())
+        self.path.core().culler.reads_back()
     }
 
     /// Records `part` of the frame into `encoder`.
@@ -84,7 +84,7 @@ impl Renderer {
                 displays: self.shapes.len(),
             });
         }
-        if let Path::Indirect(p) = &self.path {
+        if let Some(p) = self.path.indirect() {
             p.check_depth(targets)?;
             (0..self.shapes.len()).try_for_each(|i| p.check_own_pipelines(i))?;
         }

@@ -144,6 +144,14 @@ impl Path {
         path
     }
 
+    /// The GPU-driven path, if it is the one.
+    fn indirect(&self) -> Option<&IndirectPath> {
+        match self {
+            Path::Indirect(p) => Some(p),
+            Path::Classic(_) => None,
+        }
+    }
+
     /// The path's culler, pipelines and scene.
     fn core(&self) -> &PathCore {
         match self {
@@ -329,9 +337,7 @@ impl Renderer {
     /// the late phase's visible list and draws) and once for the renderer (the depth
     /// pyramids, which the displays share); `None` without occlusion.
     pub fn occlusion_bytes(&self) -> Option<OcclusionBytes> {
-        let Path::Indirect(p) = &self.path else {
-            return None;
-        };
+        let p = self.path.indirect()?;
         p.occlusion_bytes()
     }
 

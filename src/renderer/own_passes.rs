@@ -31,7 +31,7 @@ impl Renderer {
         }
         let mut rec = Recorder::new(timer, Vec::new());
         let mut stats = self.encode_frame(encoder, &mut rec);
-        if let Path::Indirect(p) = &self.path {
+        if let Some(p) = self.path.indirect() {
             for i in 0..self.shapes.len() {
                 rec.enter(encoder, &self.names[i]);
                 let culled = p.encode_cull(encoder, (i, true), &mut rec);
@@ -90,19 +90,14 @@ impl Renderer {
     /// build its pipeline layout on (its own bind groups from group 1), with
     /// [`Renderer::decode_source`] as the shader's start. `None` in the classic modes.
     pub fn bind_group_layout(&self) -> Option<&wgpu::BindGroupLayout> {
-        match &self.path {
-            Path::Indirect(p) => Some(p.bind_group_layout()),
-            Path::Classic(_) => None,
-        }
+        self.path.indirect().map(|p| p.bind_group_layout())
     }
 
     /// Display `index`'s cull outputs on the GPU (the indirect modes): the visible list,
     /// the draws and the counts, per the README's cull contract.
     pub fn cull_buffers(&self, index: usize) -> Option<&CullTargets> {
-        match &self.path {
-            Path::Indirect(p) if index < self.shapes.len() => Some(p.cull_targets(index)),
-            _ => None,
-        }
+        let p = self.path.indirect().filter(|_| index < self.shapes.len())?;
+        Some(p.cull_targets(index))
     }
 
     /// Display `index`'s one multi-draw-indirect call, in a pass the caller began with a
@@ -136,9 +131,7 @@ impl Renderer {
     /// ([`crate::shaders::decode_source_with`] with this renderer's binding windows):
     /// `None` in the classic modes.
     pub fn decode_source(&self, views: u32) -> Option<String> {
-        match &self.path {
-            Path::Indirect(p) => Some(crate::shaders::decode_source_with(views, &p.windows())),
-            Path::Classic(_) => None,
-        }
+        let p = self.path.indirect()?;
+        Some(crate::shaders::decode_source_with(views, &p.windows()))
     }
 }

@@ -3,7 +3,8 @@
 //! the occlusion pyramids' passes. Composed from the includes and constants of
 //! [`super`] and the binding lists of `bindings.rs`.
 
-use super::bindings::{declarations, pyramid_bindings};
+use super::binding_lists::pyramid_bindings;
+use super::bindings::declarations;
 use super::{
     COARSE_BINDINGS, CONTEXTS, CULL_BINDINGS, CULL_MATH, CULL_SUBGROUPS, OCCLUSION, PYRAMID,
     RECORDS, WORKGROUP_SIZE, Windows, constants,

@@ -50,6 +50,7 @@ const PBR: &str = include_str!("../../wgsl/shared/pbr.wgsl");
 const DRAW: &str = include_str!("../../wgsl/draw.wgsl");
 const DRAW_MULTIVIEW: &str = include_str!("../../wgsl/draw_multiview.wgsl");
 
+mod binding_lists;
 mod bindings;
 mod cull_passes;
 mod hooks;
@@ -57,12 +58,12 @@ mod windows;
 
 use crate::bins::{Bin, BinKind};
 use crate::scene::Shading;
-pub use bindings::{
-    Access, Binding, COARSE_BINDINGS, CULL_BINDINGS, DRAW_BINDINGS, FAR_COMPOSITE_BINDINGS,
+pub use binding_lists::{
+    COARSE_BINDINGS, CULL_BINDINGS, DRAW_BINDINGS, FAR_COMPOSITE_BINDINGS,
     FOVEATED_COMPOSITE_BINDINGS, MATERIAL_BINDINGS, POSE_BINDINGS, SCATTER_BINDINGS,
-    SHADOW_MAP_BINDINGS, SKIN_BINDINGS, TextureKind, bind_group, bind_group_layout, declarations,
-    pyramid_bindings,
+    SHADOW_MAP_BINDINGS, SKIN_BINDINGS, pyramid_bindings,
 };
+pub use bindings::{Access, Binding, TextureKind, bind_group, bind_group_layout, declarations};
 pub(crate) use bindings::{compute_pipeline, dispatch_size, pipeline_layout};
 pub use cull_passes::{
     CullPass, PYRAMID_LEVELS_PER_DISPATCH, PYRAMID_SIDE, Phase, pyramid_source, subgroup_tier,

@@ -1,0 +1,355 @@
+//! Every pipeline's bind groups as binding lists: the cull passes, the draw pipelines
+//! (the instances, the materials, the shadow map), the scatter of edits, the frame's
+//! posing and skinning, the composites and the occlusion pyramids. Each list makes its
+//! WGSL declarations and its layout (`bindings.rs`), so the two cannot disagree.
+
+use super::bindings::{Access, Binding, TextureKind};
+use super::windows::Windowed;
+
+const fn binding(
+    name: &'static str,
+    access: Access,
+    wgsl_type: &'static str,
+    stages: wgpu::ShaderStages,
+) -> Binding {
+    Binding {
+        name,
+        access,
+        wgsl_type,
+        stages,
+        windowed: None,
+    }
+}
+
+const fn windowed(
+    name: &'static str,
+    access: Access,
+    wgsl_type: &'static str,
+    stages: wgpu::ShaderStages,
+    which: Windowed,
+) -> Binding {
+    Binding {
+        windowed: Some(which),
+        ..binding(name, access, wgsl_type, stages)
+    }
+}
+
+const fn texture(name: &'static str, kind: TextureKind, stages: wgpu::ShaderStages) -> Binding {
+    binding(name, Access::Texture(kind), kind.wgsl_type(), stages)
+}
+
+const fn sampler(
+    name: &'static str,
+    ty: wgpu::SamplerBindingType,
+    stages: wgpu::ShaderStages,
+) -> Binding {
+    let wgsl_type = match ty {
+        wgpu::SamplerBindingType::Comparison => "sampler_comparison",
+        _ => "sampler",
+    };
+    binding(name, Access::Sampler(ty), wgsl_type, stages)
+}
+
+const COMPUTE: wgpu::ShaderStages = wgpu::ShaderStages::COMPUTE;
+const FRAGMENT: wgpu::ShaderStages = wgpu::ShaderStages::FRAGMENT;
+const FILTERABLE: wgpu::TextureSampleType = wgpu::TextureSampleType::Float { filterable: true };
+
+/// Every cull pass's bindings: the frame context, per display its context and outputs,
+/// the scene data uploaded once, scratch shared by all displays, and the frame's coarse
+/// cull results.
+pub const CULL_BINDINGS: [Binding; 19] = [
+    binding("frame", Access::Uniform, "FrameContext", COMPUTE),
+    binding("display", Access::Uniform, "DisplayContext", COMPUTE),
+    binding("params", Access::Uniform, "CullParams", COMPUTE),
+    // Instance id at each cull position.
+    binding("order", Access::StorageRead, "array<u32>", COMPUTE),
+    binding("meshes", Access::StorageRead, "array<MeshRecord>", COMPUTE),
+    // MAX_LODS levels per mesh.
+    binding("lods", Access::StorageRead, "array<LodRecord>", COMPUTE),
+    // Mesh of each cull position.
+    binding("mesh_of", Access::StorageRead, "array<u32>", COMPUTE),
+    // Per position culled: its entry (visible bit, level, per level its prefix in its
+    // span; see ENTRY_VISIBLE in wgsl/shared/cull_math.wgsl).
+    binding("entries", Access::StorageReadWrite, "array<u32>", COMPUTE),
+    // Per level, each span's count then prefix in its group; then each group's total
+    // then prefix.
+    binding("span_sums", Access::StorageReadWrite, "array<u32>", COMPUTE),
+    binding("visible", Access::StorageReadWrite, "array<u32>", COMPUTE),
+    binding(
+        "draws",
+        Access::StorageReadWrite,
+        "array<DrawArgs>",
+        COMPUTE,
+    ),
+    // The draw count (what multi_draw_indexed_indirect_count reads), visible total.
+    binding("counts", Access::StorageReadWrite, "array<u32, 2>", COMPUTE),
+    // The frame's coarse cull (src/cull/coarse.rs), per slot and block of BLOCK cull
+    // positions: its mark (kept bit, then listed blocks before it), the listed blocks
+    // ascending, per slot the listed positions' count and each mesh's (start, count)
+    // among them, and per slot the block test.
+    binding(
+        "block_marks",
+        Access::StorageReadWrite,
+        "array<u32>",
+        COMPUTE,
+    ),
+    binding(
+        "block_list",
+        Access::StorageReadWrite,
+        "array<u32>",
+        COMPUTE,
+    ),
+    binding(
+        "candidate_count",
+        Access::StorageReadWrite,
+        "array<u32>",
+        COMPUTE,
+    ),
+    binding(
+        "candidate_ranges",
+        Access::StorageReadWrite,
+        "array<vec2<u32>>",
+        COMPUTE,
+    ),
+    binding(
+        "block_tests",
+        Access::StorageRead,
+        "array<CoarseTest>",
+        COMPUTE,
+    ),
+    // Occlusion (wgsl/shared/occlusion.wgsl): per display slot, a word per span of
+    // places whose low SPAN bits say which places that display drew last frame; then,
+    // from params.pyramid_offset, the display's eyes' depth pyramids (src/occlusion.rs,
+    // f32 bits), rebuilt per display. One binding: GL has 16 storage buffers a stage.
+    binding("occlusion", Access::StorageReadWrite, "array<u32>", COMPUTE),
+    // World bounding spheres in cull order.
+    windowed(
+        "spheres",
+        Access::StorageRead,
+        "array<vec4<f32>>",
+        COMPUTE,
+        Windowed::Spheres,
+    ),
+];
+
+/// The frame-level coarse passes' group 1: the display passes' indirect dispatch,
+/// which they write and nothing else binds (a buffer read as dispatch arguments may not
+/// be bound for writing in the same dispatch).
+pub const COARSE_BINDINGS: [Binding; 1] = [binding(
+    "coarse_args",
+    Access::StorageReadWrite,
+    "array<u32>",
+    COMPUTE,
+)];
+
+/// Every draw pipeline's bindings.
+pub const DRAW_BINDINGS: [Binding; 4] = [
+    binding(
+        "frame",
+        Access::Uniform,
+        "FrameContext",
+        wgpu::ShaderStages::VERTEX_FRAGMENT,
+    ),
+    binding(
+        "display",
+        Access::Uniform,
+        "DisplayContext",
+        wgpu::ShaderStages::VERTEX_FRAGMENT,
+    ),
+    binding(
+        "visible",
+        Access::StorageRead,
+        "array<u32>",
+        wgpu::ShaderStages::VERTEX,
+    ),
+    windowed(
+        "instances",
+        Access::StorageRead,
+        "array<InstanceRecord>",
+        wgpu::ShaderStages::VERTEX_FRAGMENT,
+        Windowed::Instances,
+    ),
+];
+
+/// The scatter pass's bindings (`wgsl/scatter_*.wgsl`): the frame's edits, and where
+/// they go.
+pub const SCATTER_BINDINGS: [Binding; 7] = [
+    // The header and one kind's edits (`Edits` in each wgsl/scatter_*.wgsl).
+    binding("edits", Access::StorageRead, "Edits", COMPUTE),
+    // Cull position of each slot (the places scatter writes, the moves read).
+    binding("positions", Access::StorageReadWrite, "array<u32>", COMPUTE),
+    // Slot at each cull position.
+    binding("order", Access::StorageReadWrite, "array<u32>", COMPUTE),
+    // The GPU culler's occlusion words (CULL_BINDINGS' `occlusion`): places filled or
+    // vacated lose their visibility bits.
+    binding(
+        "visibility",
+        Access::StorageReadWrite,
+        "array<atomic<u32>>",
+        COMPUTE,
+    ),
+    // Each mesh's local bounding sphere (center, radius): where a moved sphere's
+    // center comes from.
+    binding(
+        "mesh_bounds",
+        Access::StorageRead,
+        "array<vec4<f32>>",
+        COMPUTE,
+    ),
+    windowed(
+        "instances",
+        Access::StorageReadWrite,
+        "array<InstanceRecord>",
+        COMPUTE,
+        Windowed::Instances,
+    ),
+    // World bounding spheres in cull order (the GPU culler's; a stand-in otherwise).
+    windowed(
+        "spheres",
+        Access::StorageReadWrite,
+        "array<vec4<f32>>",
+        COMPUTE,
+        Windowed::Spheres,
+    ),
+];
+
+/// Group 1 of the draw pipelines (and the shadow's cutouts): the materials' textures,
+/// their sampler and records (`crate::materials`).
+pub const MATERIAL_BINDINGS: [Binding; 4] = [
+    texture(
+        "color_textures",
+        TextureKind {
+            dimension: wgpu::TextureViewDimension::D2Array,
+            ..TextureKind::d2(FILTERABLE)
+        },
+        FRAGMENT,
+    ),
+    sampler(
+        "texture_sampler",
+        wgpu::SamplerBindingType::Filtering,
+        FRAGMENT,
+    ),
+    binding(
+        "materials",
+        Access::StorageRead,
+        "array<MaterialRecord>",
+        FRAGMENT,
+    ),
+    texture(
+        "data_textures",
+        TextureKind {
+            dimension: wgpu::TextureViewDimension::D2Array,
+            ..TextureKind::d2(FILTERABLE)
+        },
+        FRAGMENT,
+    ),
+];
+
+/// Group 2 of the built-in draw pipelines: the frame's shadow map and its comparison
+/// sampler (`light_reaching` in `wgsl/shared/draw_common.wgsl`).
+pub const SHADOW_MAP_BINDINGS: [Binding; 2] = [
+    texture(
+        "shadow_map",
+        TextureKind::d2(wgpu::TextureSampleType::Depth),
+        FRAGMENT,
+    ),
+    sampler(
+        "shadow_sampler",
+        wgpu::SamplerBindingType::Comparison,
+        FRAGMENT,
+    ),
+];
+
+/// The far layer's composite (`wgsl/far_composite.wgsl`): the display's and the far
+/// layer's contexts, the far layer's color and depth.
+pub const FAR_COMPOSITE_BINDINGS: [Binding; 5] = [
+    binding("display", Access::Uniform, "DisplayContext", FRAGMENT),
+    binding("far", Access::Uniform, "DisplayContext", FRAGMENT),
+    texture("far_color", TextureKind::d2(FILTERABLE), FRAGMENT),
+    texture(
+        "far_depth",
+        TextureKind::d2(wgpu::TextureSampleType::Depth),
+        FRAGMENT,
+    ),
+    sampler("far_sampler", wgpu::SamplerBindingType::Filtering, FRAGMENT),
+];
+
+/// A foveated display's composite (`wgsl/foveated_composite.wgsl`): its parameters and
+/// the display's target, read texel by texel.
+pub const FOVEATED_COMPOSITE_BINDINGS: [Binding; 2] = [
+    binding("params", Access::Uniform, "CompositeParams", FRAGMENT),
+    texture(
+        "source",
+        TextureKind::d2(wgpu::TextureSampleType::Float { filterable: false }),
+        FRAGMENT,
+    ),
+];
+
+/// The frame's skinning pass (`wgsl/skin.wgsl`).
+pub const SKIN_BINDINGS: [Binding; 4] = [
+    binding("rest", Access::StorageRead, "array<SkinVertex>", COMPUTE),
+    // Each joint's matrix, three rows.
+    binding(
+        "joints",
+        Access::StorageRead,
+        "array<array<vec4<f32>, 3>>",
+        COMPUTE,
+    ),
+    // The vertex buffer every later pass draws, as words (its Vertex layout).
+    binding("vertices", Access::StorageReadWrite, "array<u32>", COMPUTE),
+    binding("params", Access::Uniform, "SkinParams", COMPUTE),
+];
+
+/// The frame's pose pass (`wgsl/pose.wgsl`), one group for its three entry points:
+/// the frame, the tables, each node's local and world rows, and what it writes for the
+/// skins and the scatter of moves.
+pub const POSE_BINDINGS: [Binding; 12] = [
+    binding("frame", Access::Uniform, "FrameContext", COMPUTE),
+    binding("nodes", Access::StorageRead, "array<PoseNode>", COMPUTE),
+    binding(
+        "channels",
+        Access::StorageRead,
+        "array<PoseChannel>",
+        COMPUTE,
+    ),
+    binding("times", Access::StorageRead, "array<f32>", COMPUTE),
+    binding("values", Access::StorageRead, "array<vec4<f32>>", COMPUTE),
+    binding("locals", Access::StorageReadWrite, "array<Rows>", COMPUTE),
+    binding("worlds", Access::StorageReadWrite, "array<Rows>", COMPUTE),
+    binding("targets", Access::StorageRead, "array<PoseTarget>", COMPUTE),
+    binding(
+        "skin_joints",
+        Access::StorageRead,
+        "array<SkinJoint>",
+        COMPUTE,
+    ),
+    binding(
+        "joint_matrices",
+        Access::StorageReadWrite,
+        "array<Rows>",
+        COMPUTE,
+    ),
+    binding("edits", Access::StorageReadWrite, "Edits", COMPUTE),
+    binding("params", Access::Uniform, "PoseParams", COMPUTE),
+];
+
+/// The occlusion pyramids' pass (`wgsl/occlusion_pyramid.wgsl`) over a depth target of
+/// `samples` per pixel, its eyes side by side or (`layered`) a layer each: the
+/// display's context, each dispatch's level record (a dynamic offset), the pyramids,
+/// the depth.
+pub fn pyramid_bindings(samples: u32, layered: bool) -> [Binding; 4] {
+    let depth = TextureKind {
+        dimension: match layered {
+            true => wgpu::TextureViewDimension::D2Array,
+            false => wgpu::TextureViewDimension::D2,
+        },
+        multisampled: samples > 1,
+        ..TextureKind::d2(wgpu::TextureSampleType::Depth)
+    };
+    [
+        binding("display", Access::Uniform, "DisplayContext", COMPUTE),
+        binding("level", Access::UniformDynamic, "PyramidLevel", COMPUTE),
+        binding("pyramid", Access::StorageReadWrite, "array<f32>", COMPUTE),
+        texture("depth", depth, COMPUTE),
+    ]
+}
