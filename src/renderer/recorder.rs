@@ -151,6 +151,28 @@ impl<'a> Recorder<'a> {
         (open.compute(encoder), open)
     }
 
+    /// A frame-level compute pass `name`, alone in a `frame` scope (closed by
+    /// [`Recorder::close_frame_pass`]), as the frame's passes are timed.
+    pub(super) fn frame_pass(
+        &mut self,
+        encoder: &mut wgpu::CommandEncoder,
+        name: &'static str,
+    ) -> (wgpu::ComputePass<'static>, OpenPass) {
+        self.enter(encoder, "frame");
+        self.compute_pass(encoder, PassRecord::frame(name))
+    }
+
+    /// Ends a [`Recorder::frame_pass`] and its scope.
+    pub(super) fn close_frame_pass(
+        &mut self,
+        encoder: &mut wgpu::CommandEncoder,
+        pass: wgpu::ComputePass<'static>,
+        open: OpenPass,
+    ) {
+        self.close_compute(encoder, pass, open);
+        self.leave(encoder);
+    }
+
     /// Ends compute pass `pass` of `open`: its scope closed, the pass logged.
     pub(super) fn close_compute(
         &mut self,

@@ -7,7 +7,7 @@ use super::skin::SkinPass;
 use crate::buffers::init_buffer;
 use crate::error::Result;
 use crate::renderer::options::{PosingMode, RendererOptions};
-use crate::renderer::recorder::{PassRecord, Recorder};
+use crate::renderer::recorder::Recorder;
 use crate::scene::Scene;
 use std::collections::HashMap;
 
@@ -148,8 +148,7 @@ impl PosePass {
         encoder: &mut wgpu::CommandEncoder,
         rec: &mut Recorder,
     ) -> u32 {
-        rec.enter(encoder, "frame");
-        let (mut pass, open) = rec.compute_pass(encoder, PassRecord::frame("pose"));
+        let (mut pass, open) = rec.frame_pass(encoder, "pose");
         for k in 0..3 {
             pass.set_pipeline(&self.pipelines[k]);
             pass.set_bind_group(0, &self.bind_group, &[]);
@@ -157,8 +156,7 @@ impl PosePass {
             pass.dispatch_workgroups(x, y, 1);
         }
         self.moves.encode(&mut pass);
-        rec.close_compute(encoder, pass, open);
-        rec.leave(encoder);
+        rec.close_frame_pass(encoder, pass, open);
         4
     }
 

@@ -3,7 +3,7 @@
 //! display, writing into the vertex buffer they all draw from.
 
 use crate::buffers::init_buffer;
-use crate::renderer::recorder::{PassRecord, Recorder};
+use crate::renderer::recorder::Recorder;
 use crate::shaders::{
     SKIN_BINDINGS, Windows, bind_group_layout, compute_pipeline, dispatch_size, skin_source,
 };
@@ -113,13 +113,11 @@ impl SkinPass {
         encoder: &mut wgpu::CommandEncoder,
         rec: &mut Recorder,
     ) -> u32 {
-        rec.enter(encoder, "frame");
-        let (mut pass, open) = rec.compute_pass(encoder, PassRecord::frame("skin"));
+        let (mut pass, open) = rec.frame_pass(encoder, "skin");
         pass.set_pipeline(&self.pipeline);
         pass.set_bind_group(0, &self.bind_group, &[]);
         pass.dispatch_workgroups(self.dispatch.0, self.dispatch.1, 1);
-        rec.close_compute(encoder, pass, open);
-        rec.leave(encoder);
+        rec.close_frame_pass(encoder, pass, open);
         1
     }
 
