@@ -61,7 +61,7 @@ impl IndirectPath {
         }
     }
 
-    pub(in crate::renderer) fn read_targets(
+    pub(super) fn read_targets(
         &self,
         device: &wgpu::Device,
         queue: &wgpu::Queue,

@@ -32,14 +32,14 @@ pub(in crate::renderer) struct FarLayers {
 pub(in crate::renderer) struct FarDisplay {
     /// The display it belongs to (and whose coarse blocks its cull runs over).
     index: usize,
-    pub(in crate::renderer) view: ViewPass,
+    pub(super) view: ViewPass,
     color: wgpu::TextureView,
     depth: wgpu::TextureView,
     composite_bind_group: wgpu::BindGroup,
 }
 
 impl FarLayers {
-    pub(in crate::renderer) fn new(
+    pub(super) fn new(
         device: &wgpu::Device,
         (format, kinds): (TargetFormat, &[Bin]),
         shaders: Shaders,
@@ -69,7 +69,7 @@ impl FarLayers {
 
     /// Display `index`'s far layer for `plan`, drawn as `view`: its textures and the
     /// composite's bindings (`display` is the display's context, which it reads).
-    pub(in crate::renderer) fn display(
+    pub(super) fn display(
         &self,
         device: &wgpu::Device,
         index: usize,
@@ -124,7 +124,7 @@ impl FarLayers {
     /// Records `far`'s cull in `phase` (on the GPU: over its display's blocks with the
     /// coarse cull; [`Phase::Tested`] after its display's pyramids) and its far layer
     /// pass, inside its display's scope. Returns (dispatches, draw calls).
-    pub(in crate::renderer) fn encode(
+    pub(super) fn encode(
         &self,
         encoder: &mut wgpu::CommandEncoder,
         (far, phase): (&FarDisplay, Phase),
@@ -169,11 +169,7 @@ impl FarLayers {
 
     /// The composite into the display's pass, before its near geometry (with occlusion,
     /// before what its late phase draws): one draw, one instance per eye.
-    pub(in crate::renderer) fn composite(
-        &self,
-        pass: &mut wgpu::RenderPass,
-        far: &FarDisplay,
-    ) -> u32 {
+    pub(super) fn composite(&self, pass: &mut wgpu::RenderPass, far: &FarDisplay) -> u32 {
         pass.set_pipeline(&self.composite);
         pass.set_bind_group(0, &far.composite_bind_group, &[]);
         pass.draw(0..3, 0..2);
@@ -185,7 +181,7 @@ impl FarDisplay {
     /// Writes this frame's far context for `plan` (over the coarse cull's `slot`, its
     /// display's), with occlusion the context its cull tests with (paired with
     /// `display`'s), and the culler's far cull. Returns the bytes written.
-    pub(in crate::renderer) fn prepare(
+    pub(super) fn prepare(
         &self,
         queue: &wgpu::Queue,
         (plan, display): (&FarPlan, &DisplayContext),
@@ -267,11 +263,11 @@ fn composite_pipeline(
 /// The indirect path's far layers: what they share, each stereo display's own, and this
 /// frame's plans.
 pub(in crate::renderer) struct Far {
-    pub(in crate::renderer) layers: FarLayers,
+    pub(super) layers: FarLayers,
     /// Per display; `None` for mono displays (nothing to share between eyes).
-    pub(in crate::renderer) displays: Vec<Option<FarDisplay>>,
+    pub(super) displays: Vec<Option<FarDisplay>>,
     /// The last prepared frame's far distance per display.
-    pub(in crate::renderer) distances: Vec<Option<f32>>,
+    pub(super) distances: Vec<Option<f32>>,
 }
 
 impl Far {
@@ -279,7 +275,7 @@ impl Far {
     /// them), each composited into the display whose context is `contexts[i]` (and,
     /// where `tested[i]`, culled against its pyramids), culled by `culler` and drawn
     /// from `scene` with the frame context `frame`.
-    pub(in crate::renderer) fn new(
+    pub(super) fn new(
         device: &wgpu::Device,
         (layers, plan): (FarLayers, &FramePlan),
         (scene, frame): (&DrawScene, &wgpu::Buffer),
@@ -307,7 +303,7 @@ impl Far {
 
     /// Writes every far layer's context for `plan` and the culler's far culls. Returns
     /// the bytes written.
-    pub(in crate::renderer) fn prepare(
+    pub(super) fn prepare(
         &mut self,
         queue: &wgpu::Queue,
         plan: &FramePlan,

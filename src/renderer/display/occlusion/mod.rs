@@ -40,7 +40,7 @@ impl LatePhase {
     /// Display `index`'s late phase, drawn with pipeline variant `key` and culled and
     /// drawn by `view` (whose context is the display's), its pyramids `shape` reduced
     /// by the pass of `pyramids` its variant's target needs.
-    pub(in crate::renderer) fn new(
+    pub(in crate::renderer::display) fn new(
         (index, key): (usize, DrawKey),
         view: ViewPass,
         shape: PyramidShape,
@@ -86,7 +86,7 @@ impl LatePhase {
 
 /// The depth pyramids' passes (over side-by-side eyes, and over a layer per eye for
 /// multiview), and the device that binds each frame's depth target to them.
-pub(in crate::renderer) struct Pyramids {
+pub(in crate::renderer::display) struct Pyramids {
     side_by_side: PyramidPass,
     layered: Option<PyramidPass>,
     device: wgpu::Device,
@@ -94,7 +94,10 @@ pub(in crate::renderer) struct Pyramids {
 
 impl Pyramids {
     /// The passes `options` need: a layered variant in single-sampled multiview.
-    pub(in crate::renderer) fn new(device: &wgpu::Device, options: &RendererOptions) -> Pyramids {
+    pub(in crate::renderer::display) fn new(
+        device: &wgpu::Device,
+        options: &RendererOptions,
+    ) -> Pyramids {
         let samples = options.sample_count;
         let layered = (options.mode == StereoMode::Multiview && samples == 1)
             .then(|| PyramidPass::new(device, 1, true));
@@ -122,7 +125,7 @@ impl LatePhase {
     /// The display's second phase after its early draw, up to its draw: the pyramids of
     /// the early depth (in `target`), reduced where `culler` reads them, and the late
     /// cull.
-    pub(in crate::renderer) fn encode_cull(
+    pub(in crate::renderer::display) fn encode_cull(
         &self,
         encoder: &mut wgpu::CommandEncoder,
         (culler, target): (&Culler, &TargetViews),
@@ -154,7 +157,7 @@ impl LatePhase {
     /// The late draw into `target`: a pass that keeps what the early one drew, opening
     /// with the display's far layer composited (where it has one). Returns the draw
     /// calls.
-    pub(in crate::renderer) fn encode_draw(
+    pub(in crate::renderer::display) fn encode_draw(
         &self,
         encoder: &mut wgpu::CommandEncoder,
         (drawing, own, far): (Drawing, &OwnPipelines, Option<(&Far, &FarDisplay)>),
@@ -174,7 +177,7 @@ impl LatePhase {
 
 /// Whether each display with occlusion (`late`, per display) can read its depth target
 /// into its pyramids.
-pub(in crate::renderer) fn check_depth<'a>(
+pub(in crate::renderer::display) fn check_depth<'a>(
     late: impl Iterator<Item = Option<&'a LatePhase>>,
     targets: &[TargetViews],
 ) -> Result<()> {
@@ -190,7 +193,7 @@ pub(in crate::renderer) fn check_depth<'a>(
 /// What occlusion adds in GPU memory for displays' `late` phases (`None` without any):
 /// culling on the GPU, the bits and the shared pyramids; culling on the CPU, the
 /// `read_back` pyramids (one region per display; the bits stay on the CPU).
-pub(in crate::renderer) fn occlusion_bytes<'a>(
+pub(in crate::renderer::display) fn occlusion_bytes<'a>(
     late: impl Iterator<Item = &'a LatePhase> + Clone,
     culler: &Culler,
 ) -> Option<OcclusionBytes> {
@@ -206,7 +209,7 @@ pub(in crate::renderer) fn occlusion_bytes<'a>(
 
 /// Each display's pyramid shape where it culls by occlusion ([`RendererOptions::occludes`])
 /// in a scene of `triangles` triangles.
-pub(in crate::renderer) fn pyramid_shapes(
+pub(in crate::renderer::display) fn pyramid_shapes(
     plan: &FramePlan,
     options: &RendererOptions,
     triangles: u64,
