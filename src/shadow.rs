@@ -9,7 +9,6 @@ use glam::{DMat4, DVec3, Mat4, Vec3, Vec4};
 use crate::cull::CullJob;
 use crate::frustum::ROUNDING_SLACK;
 use crate::rig::ResolvedRig;
-use crate::shaders::Windows;
 
 /// The frame's light and its shadow map.
 #[derive(Clone, Copy, Debug, PartialEq)]
@@ -123,67 +122,3 @@ impl LightView {
 
 /// The shadow map's depth format.
 pub const SHADOW_FORMAT: wgpu::TextureFormat = wgpu::TextureFormat::Depth32Float;
-
-/// Group 2's layout ([`crate::shaders::SHADOW_MAP_BINDINGS`]).
-pub fn bind_group_layout(device: &wgpu::Device) -> wgpu::BindGroupLayout {
-    let list = &crate::shaders::SHADOW_MAP_BINDINGS;
-    crate::shaders::bind_group_layout(device, "stereocull.shadow_map", list, &Windows::WHOLE)
-}
-
-/// The shadow map on the GPU (1 x 1 and never drawn with shadows off, so that the draw
-/// pipelines bind the same groups either way).
-pub struct ShadowMap {
-    /// The depth texture's view.
-    pub view: wgpu::TextureView,
-    /// Group 2 of the draw pipelines: the map and its comparison sampler.
-    pub bind_group: wgpu::BindGroup,
-    /// Texels a side.
-    pub size: u32,
-}
-
-impl ShadowMap {
-    /// A `size` x `size` shadow map bound for `layout`.
-    pub fn new(device: &wgpu::Device, layout: &wgpu::BindGroupLayout, size: u32) -> ShadowMap {
-        let texture = device.create_texture(&wgpu::TextureDescriptor {
-            label: Some("stereocull.shadow_map"),
-            size: wgpu::Extent3d {
-                width: size,
-                height: size,
-                depth_or_array_layers: 1,
-            },
-            mip_level_count: 1,
-            sample_count: 1,
-            dimension: wgpu::TextureDimension::D2,
-            format: SHADOW_FORMAT,
-            usage: wgpu::TextureUsages::RENDER_ATTACHMENT | wgpu::TextureUsages::TEXTURE_BINDING,
-            view_formats: &[],
-        });
-        let view = texture.create_view(&Default::default());
-        let sampler = device.create_sampler(&wgpu::SamplerDescriptor {
-            label: Some("stereocull.shadow_sampler"),
-            mag_filter: wgpu::FilterMode::Linear,
-            min_filter: wgpu::FilterMode::Linear,
-            compare: Some(wgpu::CompareFunction::LessEqual),
-            ..Default::default()
-        });
-        let bind_group = device.create_bind_group(&wgpu::BindGroupDescriptor {
-            label: Some("stereocull.shadow_map"),
-            layout,
-            entries: &[
-                wgpu::BindGroupEntry {
-                    binding: 0,
-                    resource: wgpu::BindingResource::TextureView(&view),
-                },
-                wgpu::BindGroupEntry {
-                    binding: 1,
-                    resource: wgpu::BindingResource::Sampler(&sampler),
-                },
-            ],
-        });
-        ShadowMap {
-            view,
-            bind_group,
-            size,
-        }
-    }
-}

@@ -20,10 +20,9 @@ use crate::materials::{self, GpuMaterials};
 use crate::records::{DrawArgs, InstanceRecord, instance_records};
 use crate::scene::{Scene, Shading};
 use crate::shaders::{
-    DRAW_BINDINGS, DrawKey, Shaders, Windows, bind_group, bind_group_layout, shadow_cutout_source,
-    shadow_source,
+    DRAW_BINDINGS, DrawKey, SHADOW_MAP_BINDINGS, Shaders, Windows, bind_group, bind_group_layout,
+    shadow_cutout_source, shadow_source,
 };
-use crate::shadow::{self, ShadowMap};
 
 /// What a view's draw draws with: the pipelines and the scene on the GPU.
 #[derive(Clone, Copy)]
@@ -45,8 +44,8 @@ pub struct DrawScene {
     pub instances: wgpu::Buffer,
     /// Textures and material records (group 1).
     pub materials: GpuMaterials,
-    /// The shadow map (group 2).
-    pub shadow_map: ShadowMap,
+    /// Group 2: the frame's shadow map (the renderer's).
+    pub shadow_group: wgpu::BindGroup,
 }
 
 impl DrawScene {
@@ -55,15 +54,14 @@ impl DrawScene {
     pub fn new(
         device: &wgpu::Device,
         drawer: &Drawer,
-        scene: &Scene,
+        (scene, shadow_group): (&Scene, &wgpu::BindGroup),
         slots: u32,
     ) -> Result<DrawScene> {
         let init =
             |label: &str, contents: &[u8], usage| init_buffer(device, label, contents, usage);
-        let shadow_size = drawer.shadow.as_ref().map_or(1, |s| s.size);
         Ok(DrawScene {
             materials: GpuMaterials::new(device, &drawer.materials_layout, scene)?,
-            shadow_map: ShadowMap::new(device, &drawer.shadow_layout, shadow_size),
+            shadow_group: shadow_group.clone(),
             vertices: init(
                 "stereocull.vertices",
                 bytemuck::cast_slice(&scene.vertices),
@@ -125,7 +123,6 @@ impl DrawFeatures {
 pub struct Drawer {
     layout: wgpu::BindGroupLayout,
     materials_layout: wgpu::BindGroupLayout,
-    shadow_layout: wgpu::BindGroupLayout,
     pipelines: HashMap<DrawKey, wgpu::RenderPipeline>,
     /// With shadows: the depth-only pipeline and the shadow map's size.
     pub shadow: Option<ShadowPipeline>,
@@ -167,7 +164,12 @@ impl Drawer {
     ) -> Drawer {
         let layout = bind_group_layout(device, "stereocull.draw", &DRAW_BINDINGS, &windows);
         let materials_layout = materials::bind_group_layout(device);
-        let shadow_layout = shadow::bind_group_layout(device);
+        let shadow_layout = bind_group_layout(
+            device,
+            "stereocull.shadow_map",
+            &SHADOW_MAP_BINDINGS,
+            &windows,
+        );
         let pipeline_layout = device.create_pipeline_layout(&wgpu::PipelineLayoutDescriptor {
             label: Some("stereocull.draw"),
             bind_group_layouts: &[Some(&layout), Some(&materials_layout), Some(&shadow_layout)],
@@ -208,7 +210,6 @@ impl Drawer {
         Drawer {
             layout,
             materials_layout,
-            shadow_layout,
             pipelines,
             shadow,
             windows,
@@ -248,7 +249,7 @@ impl Drawer {
     pub fn bind(pass: &mut wgpu::RenderPass, scene: &DrawScene, bind_group: &wgpu::BindGroup) {
         Drawer::bind_resources(pass, scene, bind_group);
         pass.set_bind_group(1, &scene.materials.bind_group, &[]);
-        pass.set_bind_group(2, &scene.shadow_map.bind_group, &[]);
+        pass.set_bind_group(2, &scene.shadow_group, &[]);
     }
 
     /// The geometry and group 0 on `pass`, for whatever pipeline it has (an engine's
@@ -304,7 +305,7 @@ impl Drawer {
                     pass.set_pipeline(pipeline);
                     if std::mem::take(&mut groups_taken) {
                         pass.set_bind_group(1, &scene.materials.bind_group, &[]);
-                        pass.set_bind_group(2, &scene.shadow_map.bind_group, &[]);
+                        pass.set_bind_group(2, &scene.shadow_group, &[]);
                     }
                 }
                 Some(BinDraw::Own(own)) => {

@@ -140,12 +140,15 @@ impl Renderer {
             Path::Classic(_) => 0,
         };
         let (shadowed, draw_calls) = match &self.shadow {
-            Some(shadow) => shadow.encode(
-                encoder,
-                self.path.core().drawing(),
-                &self.path.core().culler,
-                rec,
-            ),
+            Some(shadow) => {
+                let core = self.path.core();
+                shadow.encode(
+                    encoder,
+                    (core.drawing(), &core.culler),
+                    &self.shadow_map,
+                    rec,
+                )
+            }
             None => (0, 0),
         };
         FrameStats {

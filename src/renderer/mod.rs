@@ -110,7 +110,7 @@ use display::indirect::IndirectPath;
 pub use display::occlusion::OcclusionBytes;
 use display::{PathCore, PathInputs};
 use frame::pose::{self, PosePass};
-use frame::shadow::ShadowPass;
+use frame::shadow::{ShadowMap, ShadowPass};
 use frame::skin::SkinPass;
 pub use options::{
     CoarseMode, CullMode, LOD_PIXELS, OcclusionMode, PosingMode, RendererOptions, StereoMode,
@@ -210,6 +210,8 @@ pub struct Renderer {
     /// With shadows: the frame's shadow pass (the light culled as one more view of the
     /// path's culler).
     shadow: Option<ShadowPass>,
+    /// The map it draws (1 x 1 without shadows: the draw pipelines bind it either way).
+    shadow_map: ShadowMap,
     /// Instance slots the buffers have room for.
     slots: u32,
     /// The rig as made: the displays (and far layer sizes) a reallocation rebuilds for.
@@ -244,6 +246,7 @@ impl Renderer {
         let frame = uniform_buffer::<FrameContext>(device, "stereocull.frame_context");
         let slots = scene.instances.len() as u32;
         let places = Places::tight(scene);
+        let shadow_map = ShadowMap::new(device, options.shadow_size().unwrap_or(1));
         let inputs = PathInputs {
             scene,
             layout: CullLayout::with_places(scene, &places),
@@ -251,6 +254,7 @@ impl Renderer {
             frame: &frame,
             options: &options,
             slots,
+            shadow_group: &shadow_map.bind_group,
         };
         let path = Path::new(device, inputs)?;
         let skin = SkinPass::new(device, &scene.skins, &path.core().draw_scene.vertices);
@@ -283,6 +287,7 @@ impl Renderer {
             skin,
             pose,
             shadow,
+            shadow_map,
             slots,
             rig: rig.clone(),
             coarse,
@@ -373,9 +378,8 @@ impl Renderer {
         };
         if let (Some(shadow), Some(light)) = (&self.shadow, light) {
             let start = std::time::Instant::now();
-            let core = self.path.core();
-            let size = core.draw_scene.shadow_map.size;
-            stats.bytes_uploaded += shadow.prepare(queue, &light, size, &core.culler);
+            let (size, culler) = (self.shadow_map.size, &self.path.core().culler);
+            stats.bytes_uploaded += shadow.prepare(queue, &light, size, culler);
             stats.cpu_upload += start.elapsed();
         }
         // Texels go up with the first frame: `new` has no queue.

@@ -124,6 +124,7 @@ impl Renderer {
             frame: &self.frame,
             options: &self.options,
             slots: room,
+            shadow_group: &self.shadow_map.bind_group,
         };
         self.path = Path::new(device, inputs)?;
         self.skin = SkinPass::new(device, &scene.skins, &self.path.core().draw_scene.vertices);

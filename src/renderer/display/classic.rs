@@ -70,6 +70,7 @@ impl ClassicPath {
             frame,
             options,
             slots,
+            shadow_group,
         } = inputs;
         let clip = DrawFeatures::of(device).clip_distances;
         let windows = options.windows(device, slots);
@@ -93,7 +94,7 @@ impl ClassicPath {
             tested: false,
         };
         let culler = Culler::new(device, options.cull, layout, shape, windows);
-        let draw_scene = DrawScene::new(device, &drawer, scene, slots)?;
+        let draw_scene = DrawScene::new(device, &drawer, (scene, shadow_group), slots)?;
         let drawing = Drawing {
             drawer: &drawer,
             scene: &draw_scene,

@@ -62,6 +62,7 @@ impl IndirectPath {
             frame,
             options,
             slots,
+            shadow_group,
         } = inputs;
         let windows = options.windows(device, slots);
         let coarse_slots = match plan.cull.coarse {
@@ -95,7 +96,7 @@ impl IndirectPath {
             options.shadow_size(),
             windows,
         );
-        let draw_scene = DrawScene::new(device, &drawer, scene, slots)?;
+        let draw_scene = DrawScene::new(device, &drawer, (scene, shadow_group), slots)?;
         let drawing = Drawing {
             drawer: &drawer,
             scene: &draw_scene,

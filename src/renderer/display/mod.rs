@@ -29,6 +29,8 @@ pub(in crate::renderer) struct PathInputs<'a> {
     pub(in crate::renderer) options: &'a RendererOptions,
     /// Instance slots (and places) of room.
     pub(in crate::renderer) slots: u32,
+    /// Group 2 of the draw pipelines: the frame's shadow map.
+    pub(in crate::renderer) shadow_group: &'a wgpu::BindGroup,
 }
 
 /// What every path has: the one culler all its views cull through, the draw pipelines,

@@ -8,7 +8,8 @@ use crate::renderer::culler::Culler;
 use crate::renderer::plan::CullView;
 use crate::renderer::recorder::{PassRecord, Recorder};
 use crate::renderer::view::ViewPass;
-use crate::shadow::LightView;
+use crate::shaders::{SHADOW_MAP_BINDINGS, Windows, bind_group_layout};
+use crate::shadow::{LightView, SHADOW_FORMAT};
 
 /// The light as one more view.
 pub(in crate::renderer) struct ShadowPass {
@@ -46,8 +47,8 @@ impl ShadowPass {
     pub(in crate::renderer) fn encode(
         &self,
         encoder: &mut wgpu::CommandEncoder,
-        drawing: Drawing,
-        culler: &Culler,
+        (drawing, culler): (Drawing, &Culler),
+        map: &ShadowMap,
         rec: &mut Recorder,
     ) -> (u32, u32) {
         if drawing.drawer.shadow.is_none() {
@@ -61,7 +62,7 @@ impl ShadowPass {
             .begin_render_pass(&wgpu::RenderPassDescriptor {
                 label: Some("stereocull.shadow"),
                 color_attachments: &[],
-                depth_stencil_attachment: Some(cleared_depth(&drawing.scene.shadow_map.view)),
+                depth_stencil_attachment: Some(cleared_depth(&map.view)),
                 timestamp_writes: open.render_writes(),
                 occlusion_query_set: None,
                 multiview_mask: None,
@@ -72,5 +73,66 @@ impl ShadowPass {
         rec.close_render(encoder, pass, open);
         rec.leave(encoder);
         (dispatches, draw_calls)
+    }
+}
+
+/// The frame's shadow map on the GPU (1 x 1 and never drawn with shadows off, so that
+/// the draw pipelines bind the same groups either way).
+pub(in crate::renderer) struct ShadowMap {
+    /// The depth texture's view.
+    view: wgpu::TextureView,
+    /// Group 2 of the draw pipelines ([`SHADOW_MAP_BINDINGS`]): the map and its
+    /// comparison sampler.
+    pub(in crate::renderer) bind_group: wgpu::BindGroup,
+    /// Texels a side.
+    pub(in crate::renderer) size: u32,
+}
+
+impl ShadowMap {
+    /// A `size` x `size` shadow map.
+    pub(in crate::renderer) fn new(device: &wgpu::Device, size: u32) -> ShadowMap {
+        let texture = device.create_texture(&wgpu::TextureDescriptor {
+            label: Some("stereocull.shadow_map"),
+            size: wgpu::Extent3d {
+                width: size,
+                height: size,
+                depth_or_array_layers: 1,
+            },
+            mip_level_count: 1,
+            sample_count: 1,
+            dimension: wgpu::TextureDimension::D2,
+            format: SHADOW_FORMAT,
+            usage: wgpu::TextureUsages::RENDER_ATTACHMENT | wgpu::TextureUsages::TEXTURE_BINDING,
+            view_formats: &[],
+        });
+        let view = texture.create_view(&Default::default());
+        let sampler = device.create_sampler(&wgpu::SamplerDescriptor {
+            label: Some("stereocull.shadow_sampler"),
+            mag_filter: wgpu::FilterMode::Linear,
+            min_filter: wgpu::FilterMode::Linear,
+            compare: Some(wgpu::CompareFunction::LessEqual),
+            ..Default::default()
+        });
+        let list = &SHADOW_MAP_BINDINGS;
+        let layout = &bind_group_layout(device, "stereocull.shadow_map", list, &Windows::WHOLE);
+        let bind_group = device.create_bind_group(&wgpu::BindGroupDescriptor {
+            label: Some("stereocull.shadow_map"),
+            layout,
+            entries: &[
+                wgpu::BindGroupEntry {
+                    binding: 0,
+                    resource: wgpu::BindingResource::TextureView(&view),
+                },
+                wgpu::BindGroupEntry {
+                    binding: 1,
+                    resource: wgpu::BindingResource::Sampler(&sampler),
+                },
+            ],
+        });
+        ShadowMap {
+            view,
+            bind_group,
+            size,
+        }
     }
 }
