@@ -21,16 +21,15 @@ use crate::renderer::view::ViewPass;
 use crate::shaders::DrawKey;
 
 /// Display `index`'s late occlusion phase, with what it is recorded with: its cull and
-/// draw, its pipeline variant and context, the pyramid pass for its depth target and
-/// the shape of its pyramids, and their bind group for the depth target it was last
-/// made for (a caller usually renders into the same targets every frame: no bind group
-/// per frame then).
+/// draw (whose context is the display's, which the pyramids read too), its pipeline
+/// variant, the pyramid pass for its depth target and the shape of its pyramids, and
+/// their bind group for the depth target it was last made for (a caller usually renders
+/// into the same targets every frame: no bind group per frame then).
 pub(in crate::renderer) struct LatePhase {
     pub(in crate::renderer::display) view: ViewPass,
     pub(in crate::renderer::display) shape: PyramidShape,
     index: usize,
     key: DrawKey,
-    context: wgpu::Buffer,
     pyramid: PyramidPass,
     device: wgpu::Device,
     bound: Mutex<Option<(wgpu::TextureView, wgpu::BindGroup)>>,
@@ -51,7 +50,6 @@ impl LatePhase {
             _ => &pyramids.side_by_side,
         };
         LatePhase {
-            context: view.context().clone(),
             view,
             shape,
             index,
@@ -140,7 +138,7 @@ impl LatePhase {
                 offset,
                 size: std::num::NonZeroU64::new(4 * self.shape.len() as u64),
             };
-            (self.pyramid).bind_group(&self.device, &self.context, texels, depth)
+            (self.pyramid).bind_group(&self.device, self.view.context(), texels, depth)
         });
         let (mut pass, open) =
             rec.compute_pass(encoder, PassRecord::display("pyramid", self.index));
