@@ -87,6 +87,7 @@ use crate::records::{CullLayout, uniform_bytes};
 use crate::rig::Rig;
 use crate::scatter::{ScatterTargets, Scatters};
 use crate::scene::Scene;
+use crate::shaders::Windows;
 
 mod checks;
 mod culler;
@@ -178,15 +179,29 @@ impl Path {
         }
     }
 
-    /// The frame's shadow pass over the path's culler and scene, with shadows on.
-    fn shadow_pass(
+    /// The frame level's passes over this path's scene and culler, bound to `frame` and
+    /// in `windows`: skinning (with skins), posing on the GPU (with animations;
+    /// `posed(slot)`: whether it poses the instance in `slot`) and the shadow pass (with
+    /// shadows).
+    fn frame_passes(
         &self,
         device: &wgpu::Device,
-        options: &RendererOptions,
-        frame: &wgpu::Buffer,
-    ) -> Option<ShadowPass> {
+        (scene, options): (&Scene, &RendererOptions),
+        (frame, windows): (&wgpu::Buffer, Windows),
+        posed: impl Fn(u32) -> bool,
+    ) -> Result<(Option<SkinPass>, Option<PosePass>, Option<ShadowPass>)> {
         let core = self.core();
-        (options.shadows).then(|| ShadowPass::new(device, core.drawing(), frame, &core.culler))
+        let skin = SkinPass::new(device, &scene.skins, &core.draw_scene.vertices);
+        let gpu = pose::GpuParts {
+            frame,
+            skin: skin.as_ref(),
+            windows,
+            scatter: self.scatter_targets(),
+        };
+        let pose = pose::build(device, scene, options, gpu, posed)?;
+        let shadow =
+            (options.shadows).then(|| ShadowPass::new(device, core.drawing(), frame, &core.culler));
+        Ok((skin, pose, shadow))
     }
 }
 
@@ -257,15 +272,8 @@ impl Renderer {
             shadow_group: &shadow_map.bind_group,
         };
         let path = Path::new(device, inputs)?;
-        let skin = SkinPass::new(device, &scene.skins, &path.core().draw_scene.vertices);
-        let gpu = pose::GpuParts {
-            frame: &frame,
-            skin: skin.as_ref(),
-            windows: options.windows(device, slots),
-            scatter: path.scatter_targets(),
-        };
-        let pose = pose::build(device, scene, &options, gpu, |_| true)?;
-        let shadow = path.shadow_pass(device, &options, &frame);
+        let bound = (&frame, options.windows(device, slots));
+        let (skin, pose, shadow) = path.frame_passes(device, (scene, &options), bound, |_| true)?;
         let shapes = rig
             .displays
             .iter()

@@ -3,8 +3,6 @@
 
 use super::checks::check_device;
 use super::display::PathInputs;
-use super::frame::pose::{self, GpuParts};
-use super::frame::skin::SkinPass;
 use super::plan::FramePlan;
 use super::{Path, Renderer};
 use crate::error::Result;
@@ -127,19 +125,14 @@ impl Renderer {
             shadow_group: &self.shadow_map.bind_group,
         };
         self.path = Path::new(device, inputs)?;
-        self.skin = SkinPass::new(device, &scene.skins, &self.path.core().draw_scene.vertices);
         self.slots = room;
         // The bindings may now need more windows.
         let windows = self.options.windows(device, room);
         self.scatter = Scatters::new(device, windows);
-        let gpu = GpuParts {
-            frame: &self.frame,
-            skin: self.skin.as_ref(),
-            windows,
-            scatter: self.path.scatter_targets(),
-        };
-        self.pose = pose::build(device, scene, &self.options, gpu, |s| live.animates(s))?;
-        self.shadow = self.path.shadow_pass(device, &self.options, &self.frame);
+        let made = (scene, &self.options);
+        let posed = |s| live.animates(s);
+        (self.skin, self.pose, self.shadow) =
+            (self.path).frame_passes(device, made, (&self.frame, windows), posed)?;
         let bytes = (scene.instances.len() * size_of::<InstanceRecord>()) as u64;
         Ok(SyncStats {
             bytes_uploaded: bytes,
