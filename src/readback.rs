@@ -17,6 +17,16 @@ pub fn read_buffer(
     buffer: &wgpu::Buffer,
     size: u64,
 ) -> Result<Vec<u8>> {
+    read_range(device, queue, (buffer, 0), size)
+}
+
+/// [`read_buffer`] from `offset` on (a multiple of 4).
+pub fn read_range(
+    device: &wgpu::Device,
+    queue: &wgpu::Queue,
+    (buffer, offset): (&wgpu::Buffer, u64),
+    size: u64,
+) -> Result<Vec<u8>> {
     let staging = device.create_buffer(&wgpu::BufferDescriptor {
         label: Some("stereocull.readback"),
         size: size.max(4),
@@ -24,7 +34,7 @@ pub fn read_buffer(
         mapped_at_creation: false,
     });
     let mut encoder = device.create_command_encoder(&Default::default());
-    encoder.copy_buffer_to_buffer(buffer, 0, &staging, 0, size.max(4));
+    encoder.copy_buffer_to_buffer(buffer, offset, &staging, 0, size.max(4));
     queue.submit([encoder.finish()]);
     map(device, &staging, size)
 }
@@ -36,8 +46,18 @@ pub fn read_pod<T: bytemuck::Pod>(
     buffer: &wgpu::Buffer,
     size: u64,
 ) -> Result<Vec<T>> {
-    Ok(bytemuck::pod_collect_to_vec(&read_buffer(
-        device, queue, buffer, size,
+    read_pod_at(device, queue, (buffer, 0), size)
+}
+
+/// [`read_pod`] from `offset` on (a multiple of 4).
+pub fn read_pod_at<T: bytemuck::Pod>(
+    device: &wgpu::Device,
+    queue: &wgpu::Queue,
+    at: (&wgpu::Buffer, u64),
+    size: u64,
+) -> Result<Vec<T>> {
+    Ok(bytemuck::pod_collect_to_vec(&read_range(
+        device, queue, at, size,
     )?))
 }
 

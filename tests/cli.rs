@@ -8,6 +8,7 @@ mod support;
 use encase::ShaderType;
 use serde_json::Value;
 use stereocull::contexts::{DisplayContext, FrameContext};
+use stereocull::cull::rig::RigView;
 
 fn stereocull(args: &[&str]) -> std::process::Output {
     Command::new(env!("CARGO_BIN_EXE_stereocull"))
@@ -458,9 +459,12 @@ fn stress_reports_per_frame_and_summary_figures() {
     assert_eq!(s["draw_calls_per_frame"].as_u64(), Some(5), "one per wall");
     assert_eq!(
         s["dispatches_per_frame"].as_u64(),
-        Some(15),
-        "three per wall: cull, draws, compact"
+        Some(3),
+        "the rig cull's three for the five walls: cull, draws, compact"
     );
+    let levels = &s["dispatches_per_level"];
+    assert_eq!(levels["frame"].as_u64(), Some(3), "{levels}");
+    assert_eq!(levels["display"].as_u64(), Some(0), "{levels}");
     assert!(s["cpu_ms_median"].as_f64().unwrap() > 0.0);
     assert_eq!(
         s["memory"].as_array().unwrap().len(),
@@ -565,10 +569,11 @@ fn profile_writes_table_csv_json_and_chart() {
         .iter()
         .position(|n| *n == "hmd instanced gpu 900")
         .unwrap();
-    // GPU culling times the floor kernel in the frame scope, before the display.
+    // GPU culling times the floor kernel and the rig cull in the frame scope, before
+    // the display.
     assert_eq!(
         names[instanced + 1..instanced + 6],
-        ["frame", "cull_floor", "hmd", "cull", "draw"]
+        ["frame", "cull_floor", "rig_cull", "hmd", "draw"]
     );
     let csv = std::fs::read_to_string(dir.path().join("profile.csv")).unwrap();
     let mut lines = csv.lines();
@@ -824,11 +829,13 @@ fn stress_with_moving_instances_reports_what_they_cost() {
     assert_eq!(frame["moved"], 500);
     assert_eq!(
         frame["dispatches"], 4,
-        "the scatter, then three cull passes"
+        "the scatter, then the rig cull's three passes"
     );
     // The edits' header, 56 bytes per moved instance, then the frame and display
-    // contexts.
-    let contexts = FrameContext::min_size().get() + DisplayContext::min_size().get();
+    // contexts and the display's record in the rig cull.
+    let contexts = FrameContext::min_size().get()
+        + DisplayContext::min_size().get()
+        + RigView::min_size().get();
     let header = size_of::<stereocull::records::EditHeader>() as u64;
     assert_eq!(frame["bytes_uploaded"], header + 56 * 500 + contexts);
     assert!(frame["staging_ms"].as_f64().unwrap() > 0.0, "{frame}");

@@ -8,6 +8,7 @@ use naga::{Module, TypeInner};
 use stereocull::contexts::{DisplayContext, EyeContext, FrameContext};
 use stereocull::cull::CoarseCull;
 use stereocull::cull::gpu_buffers::CullParams;
+use stereocull::cull::rig::{MAX_RIG_VIEWS, RigCull, RigView};
 use stereocull::draw::VERTEX_ATTRIBUTES;
 use stereocull::materials::MaterialRecord;
 use stereocull::records::{
@@ -428,6 +429,8 @@ fn contexts_match_wgsl() {
         bin_count: 11,
         first_blend_bin: 13,
         blend_first: 17,
+        member_entries: 19,
+        member_sums: 23,
     };
     check_uniform(
         "CullParams",
@@ -442,8 +445,52 @@ fn contexts_match_wgsl() {
             ("bin_count", f32::from_bits(11)),
             ("first_blend_bin", f32::from_bits(13)),
             ("blend_first", f32::from_bits(17)),
+            ("member_entries", f32::from_bits(19)),
+            ("member_sums", f32::from_bits(23)),
         ],
     );
+}
+
+#[test]
+fn rig_records_match_wgsl() {
+    let view = |k: f32| RigView {
+        planes: std::array::from_fn(|i| Vec4::splat(k + i as f32)),
+        position: Vec3::splat(k + 10.0),
+        split_keep: 2,
+        sort_origin: Vec3::splat(k + 11.0),
+        split_distance: k + 12.0,
+        instances_per_object: 4,
+        visible_at: 5,
+        draws_at: 6,
+        counts_at: 7,
+    };
+    check_uniform(
+        "RigView",
+        &uniform_bytes(&view(1.0)),
+        &[
+            ("planes", 1.0),
+            ("position", 11.0),
+            ("split_keep", f32::from_bits(2)),
+            ("sort_origin", 12.0),
+            ("split_distance", 13.0),
+            ("instances_per_object", f32::from_bits(4)),
+            ("visible_at", f32::from_bits(5)),
+            ("draws_at", f32::from_bits(6)),
+            ("counts_at", f32::from_bits(7)),
+        ],
+    );
+    // Three members of MAX_RIG_VIEWS: the third's planes a whole RigView after the
+    // second's, the count after every record.
+    let views: Vec<RigView> = (0..3).map(|k| view(100.0 * k as f32)).collect();
+    let bytes = uniform_bytes(&RigCull::new(&views));
+    check_uniform(
+        "RigCull",
+        &bytes,
+        &[("views", 0.0), ("members", f32::from_bits(3))],
+    );
+    let (_, span) = wgsl_struct(&module(), "RigView");
+    assert_eq!(f32_at(&bytes, 2 * span + 5 * 16), 205.0);
+    assert_eq!(f32_at(&bytes, (MAX_RIG_VIEWS as u32 - 1) * span), 0.0);
 }
 
 /// Every pipeline the crate builds, with its source and its bind groups' lists in

@@ -21,6 +21,47 @@ fn cull(
     write_span_sums(group, local, n, workgroup_exclusive_scan4(local, counts));
 }
 
+// The rig's cull (RIG): the same spans, entries and sums as `cull` for every member at
+// once, each member's in its own scratch. Each sphere is read once and its level chosen
+// once (the frame's, whatever the member) for the whole rig; each member's planes and
+// split then decide its entry, as the member's own `cull` would (same operations).
+// The workgroup scans once per member: the barriers of a display's cull, per member.
+@compute @workgroup_size(WORKGROUP_SIZE)
+fn cull_rig(
+    @builtin(workgroup_id) wid: vec3<u32>,
+    @builtin(num_workgroups) groups: vec3<u32>,
+    @builtin(local_invocation_index) local: u32,
+) {
+    let n = params.instance_count;
+    let group = wid.y * groups.x + wid.x;
+    let first = (group * WORKGROUP_SIZE + local) * SPAN;
+    // Per member, its span's visible positions so far per level (the entry's fields).
+    var fields: array<u32, MAX_RIG_VIEWS>;
+    for (var j = first; j < min(first + SPAN, n); j++) {
+        let s = spheres_at(j);
+        var level = MAX_LODS;
+        for (var b = 0u; b < rig.members; b++) {
+            let view = &rig.views[b];
+            var entry = 0u;
+            if (sphere_in_planes((*view).planes, s) && in_split_of((*view).split_keep, (*view).split_distance, (*view).position, s)) {
+                if (level == MAX_LODS) {
+                    level = lod_level(j, s);
+                }
+                entry = ENTRY_VISIBLE | (level << ENTRY_LEVEL_SHIFT);
+            }
+            entries[b * params.member_entries + j] = fields[b] | entry;
+            if (entry != 0u) {
+                fields[b] += 1u << (7u * level);
+            }
+        }
+    }
+    for (var b = 0u; b < rig.members; b++) {
+        member = b;
+        let counts = (vec4(fields[b]) >> vec4(0u, 7u, 14u, 21u)) & vec4(0x7fu);
+        write_span_sums(group, local, n, workgroup_exclusive_scan4(local, counts));
+    }
+}
+
 // Walks span `span` of the n positions run over, writing each entry; returns the span's
 // visible count per level.
 fn cull_span(span: u32, n: u32) -> vec4<u32> {
@@ -33,7 +74,7 @@ fn cull_span(span: u32, n: u32) -> vec4<u32> {
         let tested = cull_entry(j);
         let entry = tested & ~ENTRY_SEEN;
         seen |= select(0u, 1u << (j - first), tested != entry);
-        entries[j] = fields | entry;
+        entries[entry_index(j)] = fields | entry;
         if ((entry & ENTRY_VISIBLE) != 0u) {
             fields += 1u << (7u * ((entry >> ENTRY_LEVEL_SHIFT) & 3u));
         }
@@ -56,10 +97,10 @@ fn write_span_sums(group: u32, index: u32, n: u32, scan: Scan4) {
     let span = group * WORKGROUP_SIZE + index;
     for (var l = 0u; l < params.lod_levels; l++) {
         if (span < spans) {
-            span_sums[l * spans + span] = scan.before[l];
+            span_sums[sum_index(l * spans + span)] = scan.before[l];
         }
         if (index == 0u) {
-            span_sums[group_slot(n, l, group)] = scan.total[l];
+            span_sums[sum_index(group_slot(n, l, group))] = scan.total[l];
         }
     }
 }

@@ -17,6 +17,17 @@ var<workgroup> blend_total: u32;
 
 @compute @workgroup_size(WORKGROUP_SIZE)
 fn blend_main(@builtin(local_invocation_index) local: u32) {
+    blend(local);
+}
+
+// The rig's blend pass (RIG): a workgroup per member, `blend_main` for each.
+@compute @workgroup_size(WORKGROUP_SIZE)
+fn blend_rig(@builtin(workgroup_id) wid: vec3<u32>, @builtin(local_invocation_index) local: u32) {
+    member = wid.y;
+    blend(local);
+}
+
+fn blend(local: u32) {
     let n = workgroup_cull_count(local);
     var start = params.blend_first;
     var all = 0u;
@@ -25,19 +36,22 @@ fn blend_main(@builtin(local_invocation_index) local: u32) {
         sort(start, total, local);
         let capacity = write_draws(bin, start, total, local);
         if (local == 0u) {
-            counts[2u + bin] = total;
+            counts[count_index(2u + bin)] = total;
         }
         start += capacity;
         all += total;
     }
     if (local == 0u) {
-        counts[0] += all;
+        counts[count_index(0u)] += all;
     }
 }
 
 // Blended instances sort from the midpoint of the display's eyes, or a far layer's
 // from its apex (DisplayContext::sort_origin).
 fn sort_origin() -> vec3<f32> {
+    if (RIG) {
+        return rig.views[member].sort_origin;
+    }
     if (display.split_keep == 2u) {
         return display.position;
     }
@@ -63,7 +77,7 @@ fn gather(bin: u32, start: u32, n: u32, local: u32) -> u32 {
         var at = start + written + scan.x;
         for (var j = first; j < end; j++) {
             if (gathers(j, bin)) {
-                draws[at] = record(j, n, origin);
+                draws[draw_index(at)] = record(j, n, origin);
                 at++;
             }
         }
@@ -77,7 +91,7 @@ fn gather(bin: u32, start: u32, n: u32, local: u32) -> u32 {
 
 // Whether position j (of those run over) is visible and of `bin`.
 fn gathers(j: u32, bin: u32) -> bool {
-    return (entries[j] & ENTRY_VISIBLE) != 0u && meshes[mesh_of[cull_position(j)]].bin == bin;
+    return (entries[entry_index(j)] & ENTRY_VISIBLE) != 0u && meshes[mesh_of[cull_position(j)]].bin == bin;
 }
 
 // Visible position j's record: its sort key (the squared distance of its sphere's
@@ -85,7 +99,7 @@ fn gathers(j: u32, bin: u32) -> bool {
 // the five words of a DrawArgs.
 fn record(j: u32, n: u32, origin: vec3<f32>) -> DrawArgs {
     let k = cull_position(j);
-    let level = (entries[j] >> ENTRY_LEVEL_SHIFT) & 3u;
+    let level = (entries[entry_index(j)] >> ENTRY_LEVEL_SHIFT) & 3u;
     let d = spheres_at(k).xyz - origin;
     let key = ~bitcast<u32>(d.x * d.x + d.y * d.y + d.z * d.z);
     return DrawArgs(key, order[k], flagged_before(level, j, n, 0u), bitcast<i32>(mesh_of[k]), level);
@@ -119,25 +133,25 @@ fn order_pair(start: u32, i: u32, p: u32, total: u32) {
     if (p >= total) {
         return;
     }
-    let a = draws[start + i];
-    let b = draws[start + p];
+    let a = draws[draw_index(start + i)];
+    let b = draws[draw_index(start + p)];
     let before = b.index_count < a.index_count
         || (b.index_count == a.index_count && b.instance_count < a.instance_count);
     if (before) {
-        draws[start + i] = b;
-        draws[start + p] = a;
+        draws[draw_index(start + i)] = b;
+        draws[draw_index(start + p)] = a;
     }
 }
 
 // Turns the sorted records into draws and zeroes the rest of the bin's range; returns
 // the range's length (the places of the bin's meshes).
 fn write_draws(bin: u32, start: u32, total: u32, local: u32) -> u32 {
-    let v = display.instances_per_object;
+    let v = instances_per_object();
     for (var i = local; i < total; i += WORKGROUP_SIZE) {
-        let record = draws[start + i];
+        let record = draws[draw_index(start + i)];
         let mesh = bitcast<u32>(record.base_vertex);
         let lod = lods[mesh * MAX_LODS + record.first_instance];
-        draws[start + i] = DrawArgs(lod.index_count, v, lod.first_index, meshes[mesh].base_vertex, v * record.first_index);
+        draws[draw_index(start + i)] = DrawArgs(lod.index_count, v, lod.first_index, meshes[mesh].base_vertex, v * record.first_index);
     }
     var capacity = 0u;
     for (var base = 0u; base < params.mesh_count; base += WORKGROUP_SIZE) {
@@ -149,7 +163,7 @@ fn write_draws(bin: u32, start: u32, total: u32, local: u32) -> u32 {
         capacity += workgroup_exclusive_scan(local, places).y;
     }
     for (var i = total + local; i < capacity; i += WORKGROUP_SIZE) {
-        draws[start + i] = DrawArgs(0u, 0u, 0u, 0, 0u);
+        draws[draw_index(start + i)] = DrawArgs(0u, 0u, 0u, 0, 0u);
     }
     return capacity;
 }

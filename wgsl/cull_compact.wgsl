@@ -15,9 +15,32 @@ fn compact(
     if (j >= n) {
         return;
     }
-    let entry = entries[j];
+    place(j, n);
+}
+
+// The rig's compact pass (RIG): each position placed in every member's list.
+@compute @workgroup_size(WORKGROUP_SIZE)
+fn compact_rig(
+    @builtin(workgroup_id) wid: vec3<u32>,
+    @builtin(num_workgroups) groups: vec3<u32>,
+    @builtin(local_invocation_index) local: u32,
+) {
+    let n = params.instance_count;
+    let j = (wid.y * groups.x + wid.x) * WORKGROUP_SIZE + local;
+    if (j >= n) {
+        return;
+    }
+    for (var b = 0u; b < rig.members; b++) {
+        member = b;
+        place(j, n);
+    }
+}
+
+// Writes position j's id to its slot of the list of `member`, if visible there.
+fn place(j: u32, n: u32) {
+    let entry = entries[entry_index(j)];
     if ((entry & ENTRY_VISIBLE) != 0u) {
         let level = (entry >> ENTRY_LEVEL_SHIFT) & 3u;
-        visible[flagged_before(level, j, n, 0u)] = order[cull_position(j)];
+        visible[visible_index(flagged_before(level, j, n, 0u))] = order[cull_position(j)];
     }
 }

@@ -10,6 +10,17 @@
 
 @compute @workgroup_size(WORKGROUP_SIZE)
 fn draws_main(@builtin(local_invocation_index) local: u32) {
+    pack(local);
+}
+
+// The rig's draws pass (RIG): a workgroup per member, `draws_main` for each.
+@compute @workgroup_size(WORKGROUP_SIZE)
+fn draws_rig(@builtin(workgroup_id) wid: vec3<u32>, @builtin(local_invocation_index) local: u32) {
+    member = wid.y;
+    pack(local);
+}
+
+fn pack(local: u32) {
     let n = workgroup_cull_count(local);
     let groups = group_count(span_count(n));
     // Visible positions up to and including each level.
@@ -34,17 +45,17 @@ fn draws_main(@builtin(local_invocation_index) local: u32) {
         }
         let end = first + members * params.lod_levels;
         for (var d = first + packed + local; d < end; d += WORKGROUP_SIZE) {
-            draws[d] = DrawArgs(0u, 0u, 0u, 0, 0u);
+            draws[draw_index(d)] = DrawArgs(0u, 0u, 0u, 0, 0u);
         }
         if (local == 0u) {
-            counts[2u + bin] = packed;
+            counts[count_index(2u + bin)] = packed;
         }
         first = end;
         all += packed;
     }
     if (local == 0u) {
-        counts[0] = all;
-        counts[1] = carry;
+        counts[count_index(0u)] = all;
+        counts[count_index(1u)] = carry;
     }
 }
 
@@ -67,12 +78,12 @@ fn pack_draws(at: vec2<u32>, n: u32, total: u32, packed: u32, local: u32) -> vec
         if (count > 0u) {
             let mesh = meshes[m];
             let lod = lods[m * MAX_LODS + at.y];
-            draws[packed + written.x + scan.before.x] = DrawArgs(
+            draws[draw_index(packed + written.x + scan.before.x)] = DrawArgs(
                 lod.index_count,
-                display.instances_per_object * count,
+                instances_per_object() * count,
                 lod.first_index,
                 mesh.base_vertex,
-                display.instances_per_object * offset,
+                instances_per_object() * offset,
             );
         }
         written += scan.total.xy;

@@ -94,6 +94,10 @@ pub struct SceneArgs {
     /// The frame-level coarse cull before the display culls (auto: where the rig gains).
     #[arg(long, value_enum, default_value = "auto")]
     pub coarse_cull: CoarseMode,
+    /// GPU culling: the displays' frustum culls in one set of dispatches for the whole
+    /// rig (off: a set per display, to compare against).
+    #[arg(long, value_enum, default_value = "on")]
+    pub rig_cull: Switch,
     /// Occlusion culling: what the display drew last frame first, then the rest against
     /// each eye's depth pyramid (auto: off; on where it applies: GPU cull, instanced).
     #[arg(long, value_enum, default_value = "auto")]
@@ -162,6 +166,7 @@ impl SceneArgs {
         RendererOptions {
             lod: self.lod.on(),
             coarse_cull: self.coarse_cull,
+            rig_cull: self.rig_cull.on(),
             occlusion: self.occlusion,
             shadows: self.shadows.on(),
             far_layer: self.far_layer.on(),

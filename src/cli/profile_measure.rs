@@ -18,8 +18,8 @@ use crate::device::Gpu;
 use crate::error::Result;
 use crate::profiling::{GpuTimer, percentile};
 use crate::renderer::{
-    CoarseMode, CullMode, OcclusionMode, PosingMode, Renderer, RendererOptions, StereoMode,
-    SyncStats,
+    CoarseMode, CullMode, DispatchLevels, OcclusionMode, PosingMode, Renderer, RendererOptions,
+    StereoMode, SyncStats, WallCulls,
 };
 use crate::rig::Rig;
 use crate::scene::Scene;
@@ -249,7 +249,7 @@ pub(super) fn measure(
                     .map(|(_, v)| v)
                     .sum::<f64>()
             };
-            samples.gpu_cull.push(of("cull"));
+            samples.gpu_cull.push(of("cull") + of("rig_cull"));
             samples.gpu_draw.push(of("draw"));
             samples.gpu_pyramid.push(of("pyramid"));
             samples.gpu_late.push(of("late_cull") + of("late_draw"));
@@ -264,6 +264,7 @@ pub(super) fn measure(
         if let Some(t) = timer.as_deref() {
             samples.floors.push(cull_and_floor(t.last_frame(), rig));
         }
+        samples.levels = recorded.dispatch_levels;
         samples.last = (
             recorded.draw_calls,
             recorded.dispatches,
@@ -295,6 +296,7 @@ pub(super) fn measure(
         gpu_ms_p95: (!samples.gpu.is_empty()).then(|| percentile(&samples.gpu, 0.95)),
         draw_calls: samples.last.0,
         dispatches: samples.last.1,
+        dispatches_per_level: samples.levels,
         bytes_uploaded: samples.last.2,
         adapter: gpu.adapter_line(),
         cull_ms_median: med(&samples.cull),
@@ -331,7 +333,8 @@ pub(super) fn measure(
         far_near,
         shadow_passes: samples.passes.iter().filter(|p| p.name == "shadow").count(),
         floor_ms_median: over_floor.as_ref().map(|f| f.0),
-        wall_floor_ms_median: wall.as_ref().map(|w| w.0),
+        wall_floor_ms_median: wall.as_ref().map(|w| w.floor_ms),
+        rig_cull_wall_ms: wall.as_ref().map(|w| w.rig_ms),
         cull_over_floor: over_floor.map_or(Vec::new(), |f| f.1),
         passes: samples.passes,
         trace: timer.map(|t| t.last_frame().to_vec()).unwrap_or_default(),
@@ -358,54 +361,82 @@ struct Samples {
     gpu_draw: Vec<f64>,
     gpu_pyramid: Vec<f64>,
     gpu_late: Vec<f64>,
+    /// The last frame's dispatches by level.
+    levels: DispatchLevels,
     /// Draw calls, dispatches and bytes uploaded of the last frame (the same every frame).
     last: (u32, u32, u64),
     /// Vertex-shader invocations and clipped primitives of the last frame.
     statistics: Option<(u64, u64)>,
     passes: Vec<PassReport>,
-    /// Per frame, each display's GPU cull ms and the floor kernel's (when it ran).
-    floors: Vec<(Vec<f64>, Option<f64>)>,
+    /// Per frame, each display's GPU cull ms (or the rig's) and the floor kernel's
+    /// (when it ran).
+    floors: Vec<FrameCulls>,
 }
 
-/// One frame's GPU cull ms per display (the `cull` pass in the display's scope) and the
-/// floor kernel's (`cull_floor` in the frame scope), from the timer's scopes.
-fn cull_and_floor(scopes: &[GpuTimerQueryResult], rig: &Rig) -> (Vec<f64>, Option<f64>) {
+/// One frame's GPU cull ms per display (the `cull` pass in the display's scope), or with
+/// the rig cull the rig's alone (`rig_cull` in the frame scope), and the floor kernel's
+/// (`cull_floor` in the frame scope), from the timer's scopes.
+fn cull_and_floor(scopes: &[GpuTimerQueryResult], rig: &Rig) -> FrameCulls {
     let ms = |scope: &str, pass: &str| {
         let outer = scopes.iter().find(|s| s.label == scope)?;
         let inner = outer.nested_queries.iter().find(|s| s.label == pass)?;
         inner.time.as_ref().map(|t| (t.end - t.start) * 1e3)
     };
-    let culls = rig
-        .displays
-        .iter()
-        .map(|d| ms(&d.name, "cull").unwrap_or(0.0))
-        .collect();
-    (culls, ms("frame", "cull_floor"))
+    let rig_cull = ms("frame", "rig_cull");
+    let culls = match rig_cull {
+        Some(rig_cull) => vec![rig_cull],
+        None => (rig.displays.iter())
+            .map(|d| ms(&d.name, "cull").unwrap_or(0.0))
+            .collect(),
+    };
+    FrameCulls {
+        culls,
+        floor: ms("frame", "cull_floor"),
+        rig: rig_cull.is_some(),
+    }
 }
 
-/// The floor kernel's median ms and, per display, its median GPU cull over that floor
-/// (medians over the frames; `None` where the floor did not run), beside the same by
-/// the wall clock (`wall`: the floor's ms and each display's cull's).
+/// One frame's GPU culls: per display, or the rig's alone (`rig`), and the floor's.
+struct FrameCulls {
+    culls: Vec<f64>,
+    floor: Option<f64>,
+    rig: bool,
+}
+
+/// The floor kernel's median ms and, per display (with the rig cull, for the rig as
+/// one, named `rig`), its median GPU cull over that floor (medians over the frames;
+/// `None` where the floor did not run), beside the same by the wall clock (`wall`).
 fn floor_ratios(
-    frames: &[(Vec<f64>, Option<f64>)],
+    frames: &[FrameCulls],
     rig: &Rig,
-    wall: Option<&(f64, Vec<f64>)>,
+    wall: Option<&WallCulls>,
 ) -> Option<(f64, Vec<CullOverFloor>)> {
-    let floors: Vec<f64> = frames.iter().filter_map(|f| f.1).collect();
+    let floors: Vec<f64> = frames.iter().filter_map(|f| f.floor).collect();
     if floors.is_empty() {
         return None;
     }
     let floor = percentile(&floors, 0.5);
-    let displays = rig.displays.iter().enumerate().map(|(d, display)| {
-        let culls: Vec<f64> = frames.iter().filter_map(|f| f.0.get(d).copied()).collect();
+    let rig_culled = frames.iter().any(|f| f.rig);
+    let names: Vec<String> = match rig_culled {
+        true => vec!["rig".to_string()],
+        false => rig.displays.iter().map(|d| d.name.clone()).collect(),
+    };
+    let displays = names.into_iter().enumerate().map(|(d, display)| {
+        let culls: Vec<f64> = frames
+            .iter()
+            .filter_map(|f| f.culls.get(d).copied())
+            .collect();
         let cull_ms = percentile(&culls, 0.5);
-        let wall_cull_ms = wall.and_then(|w| w.1.get(d).copied());
+        let wall_cull_ms = match rig_culled {
+            true => wall.map(|w| w.rig_ms),
+            false => wall.and_then(|w| w.views_ms.get(d).copied()),
+        };
         CullOverFloor {
-            display: display.name.clone(),
+            display,
             cull_ms,
             ratio: cull_ms / floor,
             wall_cull_ms,
-            wall_ratio: wall.zip(wall_cull_ms).map(|(w, c)| c / w.0),
+            wall_ratio: wall.zip(wall_cull_ms).map(|(w, c)| c / w.floor_ms),
         }
     });
     Some((floor, displays.collect()))

@@ -8,7 +8,7 @@ use super::occlusion_report::OcclusionReport;
 use super::render::PassReport;
 use crate::error::{Error, Result};
 use crate::renderer::StereoMode;
-use crate::renderer::{CullMode, FarSplit};
+use crate::renderer::{CullMode, DispatchLevels, FarSplit};
 
 /// One configuration's figures: the CSV columns first, then the details.
 #[derive(Clone, Debug, Serialize)]
@@ -25,6 +25,8 @@ pub struct Row {
     pub gpu_ms_p95: Option<f64>,
     pub draw_calls: u32,
     pub dispatches: u32,
+    /// The dispatches by level (frame, displays).
+    pub dispatches_per_level: DispatchLevels,
     pub bytes_uploaded: u64,
     pub adapter: String,
     pub cull_ms_median: f64,
@@ -88,6 +90,10 @@ pub struct Row {
     /// The floor kernel by the wall clock, submitted alone and waited for (median over
     /// `--frames` submissions): what it costs where timestamps mislead (lavapipe).
     pub wall_floor_ms_median: Option<f64>,
+    /// The frame's whole cull by the wall clock, submitted alone (median over
+    /// `--frames` submissions): the rig cull's dispatches and every view's that culls
+    /// apart (all of them, per display, without the rig cull).
+    pub rig_cull_wall_ms: Option<f64>,
     /// Per display, its median GPU cull ms and that over `floor_ms_median`.
     pub cull_over_floor: Vec<CullOverFloor>,
     /// The last frame's passes, with level and vertex-shader invocations.

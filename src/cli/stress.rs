@@ -12,7 +12,7 @@ use super::render::{PassReport, Session, far_near, pass_reports, passes_per_leve
 use super::{FRAME_SECONDS, SceneArgs};
 use crate::error::Result;
 use crate::profiling::{GpuTimer, percentile};
-use crate::renderer::{CullMode, OcclusionBytes, StereoMode};
+use crate::renderer::{CullMode, DispatchLevels, OcclusionBytes, StereoMode};
 
 #[derive(Args)]
 pub struct StressArgs {
@@ -63,6 +63,8 @@ struct FrameRecord {
     passes: Vec<PassReport>,
     draw_calls: u32,
     dispatches: u32,
+    /// The dispatches by level (frame, displays).
+    dispatch_levels: DispatchLevels,
     bytes_uploaded: u64,
 }
 
@@ -94,6 +96,8 @@ struct Summary {
     far_near: Vec<serde_json::Value>,
     draw_calls_per_frame: u32,
     dispatches_per_frame: u32,
+    /// The last frame's dispatches by level (frame, displays).
+    dispatches_per_level: DispatchLevels,
     bytes_uploaded_per_frame: u64,
     /// Median over the frames of the triangles submitted (pipeline statistics).
     triangles_submitted_median: Option<f64>,
@@ -215,6 +219,7 @@ pub fn stress(args: &StressArgs) -> Result<()> {
             passes,
             draw_calls: stats.draw_calls,
             dispatches: stats.dispatches,
+            dispatch_levels: stats.dispatch_levels,
             bytes_uploaded: stats.bytes_uploaded,
         };
         bar.set_message(format!("cpu {cpu_ms:.3} ms, frame {frame_ms:.1} ms"));
@@ -297,6 +302,7 @@ fn summarize(
             .collect(),
         draw_calls_per_frame: last.map_or(0, |r| r.draw_calls),
         dispatches_per_frame: last.map_or(0, |r| r.dispatches),
+        dispatches_per_level: last.map_or(DispatchLevels::default(), |r| r.dispatch_levels),
         bytes_uploaded_per_frame: last.map_or(0, |r| r.bytes_uploaded),
         triangles_submitted_median: median_of(records, |r| r.triangles_submitted),
         sphere_tests_median: median_of(records, |r| r.sphere_tests),

@@ -10,11 +10,14 @@
 //! count. The buffers they read and write are [`super::gpu_buffers`]'s.
 
 use crate::cull::gpu_buffers::{CullScene, CullTargets};
+use crate::cull::rig::{self, MAX_RIG_VIEWS, RigCull};
+use crate::shaders::Bound;
 use crate::shaders::Phase;
 use crate::shaders::{
     COARSE_BINDINGS, CULL_BINDINGS, CullPass, Windows, bind_group, bind_group_layout,
     compute_pipeline, pipeline_layout, subgroup_tier,
 };
+use encase::ShaderType;
 
 /// The cull pipelines and their shared bind-group layout.
 pub struct GpuCuller {
@@ -33,6 +36,9 @@ pub struct GpuCuller {
     /// With blended bins: the blend pass over everything and (with the coarse cull)
     /// over candidates.
     blend: Vec<(bool, wgpu::ComputePipeline)>,
+    /// With the rig cull: its passes in dispatch order (the blend pass last, with
+    /// blended bins).
+    rig: Vec<wgpu::ComputePipeline>,
 }
 
 /// What a [`GpuCuller`] is built for besides the display passes.
@@ -48,6 +54,9 @@ pub struct CullerFeatures {
     pub tested: bool,
     /// Blended material bins: the blend pass after the display passes.
     pub blend: bool,
+    /// The rig cull ([`crate::cull::rig`]): its passes, and the floor kernel as the
+    /// rig's.
+    pub rig: bool,
 }
 
 /// The coarse cull's pipelines.
@@ -70,6 +79,7 @@ impl GpuCuller {
             occlusion,
             tested,
             blend,
+            rig,
         } = features;
         let layout = bind_group_layout(device, "stereocull.cull", &CULL_BINDINGS, &windows);
         let build = |passes: &[CullPass], candidates: bool, with: &wgpu::PipelineLayout| {
@@ -102,7 +112,19 @@ impl GpuCuller {
                 args_layout,
             }
         });
-        let floor = floor.then(|| build(&[CullPass::Floor], false, &display_layout).remove(0));
+        let floor_pass = if rig {
+            CullPass::RigFloor
+        } else {
+            CullPass::Floor
+        };
+        let floor = floor.then(|| build(&[floor_pass], false, &display_layout).remove(0));
+        let rig_passes = CullPass::RIG
+            .into_iter()
+            .chain(blend.then_some(CullPass::RigBlend));
+        let rig = match rig {
+            true => build(&rig_passes.collect::<Vec<_>>(), false, &display_layout),
+            false => Vec::new(),
+        };
         let cull = display[0];
         let phased = |candidates: bool, phase: Phase| {
             let source = cull.phased_source(candidates, phase, &windows);
@@ -137,39 +159,73 @@ impl GpuCuller {
             floor,
             phases,
             blend,
+            rig,
         }
     }
 
     /// The bind group for one display: the frame context, shared scene data, and the
-    /// display's context and outputs.
+    /// display's context and outputs (its ranges of them).
     pub fn bind_group(
         &self,
         device: &wgpu::Device,
         scene: &CullScene,
-        [frame_context, display_context]: [&wgpu::Buffer; 2],
+        contexts: [&wgpu::Buffer; 2],
         targets: &CullTargets,
     ) -> wgpu::BindGroup {
+        self.group(device, scene, (contexts, 0), targets.bindings())
+    }
+
+    /// The bind groups of the rig cull, one per group of members: `contexts` are the
+    /// frame's and any view's (the rig passes read no view's context), `targets` any
+    /// member's (the rig passes bind the buffers the members share, whole).
+    pub fn rig_bind_groups(
+        &self,
+        device: &wgpu::Device,
+        scene: &CullScene,
+        contexts: [&wgpu::Buffer; 2],
+        targets: &CullTargets,
+    ) -> Vec<wgpu::BindGroup> {
+        let whole = [&targets.visible, &targets.draws, &targets.counts];
+        (0..rig::groups(scene.rig_members))
+            .map(|g| self.group(device, scene, (contexts, g), whole.map(|b| b.bound())))
+            .collect()
+    }
+
+    /// Group 0 with the rig's group `rig_group` of members and `targets`.
+    fn group<'a>(
+        &self,
+        device: &wgpu::Device,
+        scene: &'a CullScene,
+        ([frame_context, display_context], rig_group): ([&'a wgpu::Buffer; 2], u32),
+        [visible, draws, counts]: [wgpu::BufferBinding<'a>; 3],
+    ) -> wgpu::BindGroup {
+        let rig = wgpu::BufferBinding {
+            buffer: &scene.rig,
+            offset: rig_group as u64 * scene.rig_stride,
+            size: Some(RigCull::min_size()),
+        };
         // In CULL_BINDINGS order.
         let buffers = [
-            frame_context,
-            display_context,
-            &scene.params,
-            &scene.order,
-            &scene.meshes,
-            &scene.lods,
-            &scene.mesh_of,
-            &scene.entries,
-            &scene.span_sums,
-            &targets.visible,
-            &targets.draws,
-            &targets.counts,
-            &scene.block_marks,
-            &scene.block_list,
-            &scene.candidate_count,
-            &scene.candidate_ranges,
-            &scene.block_tests,
-            &scene.occlusion,
-            &scene.spheres,
+            frame_context.bound(),
+            display_context.bound(),
+            scene.params.bound(),
+            rig,
+            scene.order.bound(),
+            scene.meshes.bound(),
+            scene.lods.bound(),
+            scene.mesh_of.bound(),
+            scene.entries.bound(),
+            scene.span_sums.bound(),
+            visible,
+            draws,
+            counts,
+            scene.block_marks.bound(),
+            scene.block_list.bound(),
+            scene.candidate_count.bound(),
+            scene.candidate_ranges.bound(),
+            scene.block_tests.bound(),
+            scene.occlusion.bound(),
+            scene.spheres.bound(),
         ];
         let (label, layout) = ("stereocull.cull", &self.layout);
         bind_group(
@@ -275,6 +331,44 @@ impl GpuCuller {
         }
     }
 
+    /// Records the rig cull: one set of dispatches per group of members (`groups`,
+    /// [`GpuCuller::rig_bind_groups`]). Returns the dispatches.
+    pub fn encode_rig(
+        &self,
+        pass: &mut wgpu::ComputePass,
+        scene: &CullScene,
+        groups: &[wgpu::BindGroup],
+    ) -> u32 {
+        let mut dispatches = 0;
+        let members = scene.rig_members;
+        for (g, group) in groups.iter().enumerate() {
+            let in_group = (members - g as u32 * MAX_RIG_VIEWS as u32).min(MAX_RIG_VIEWS as u32);
+            pass.set_bind_group(0, group, &[]);
+            let rig_passes = [
+                CullPass::RigCull,
+                CullPass::RigDraws,
+                CullPass::RigCompact,
+                CullPass::RigBlend,
+            ];
+            for (pipeline, kind) in self.rig.iter().zip(rig_passes) {
+                pass.set_pipeline(pipeline);
+                let (x, y) = match kind {
+                    CullPass::RigCull => scene.groups.spans,
+                    CullPass::RigCompact => scene.groups.positions,
+                    _ => (1, in_group),
+                };
+                pass.dispatch_workgroups(x, y, 1);
+                dispatches += 1;
+            }
+        }
+        dispatches
+    }
+
+    /// Whether the rig cull's pipelines were built.
+    pub fn has_rig(&self) -> bool {
+        !self.rig.is_empty()
+    }
+
     /// Dispatches per display: the three passes, and the blend pass with blended bins.
     pub fn dispatches_per_display(&self) -> u32 {
         Self::DISPATCHES_PER_DISPLAY + u32::from(!self.blend.is_empty())
@@ -285,22 +379,27 @@ impl GpuCuller {
         self.floor.is_some()
     }
 
-    /// Records the floor kernel over every instance with `bind_group` (any display's;
-    /// it writes that display's scratch). Returns whether it was built.
-    pub fn encode_floor(
+    /// Records the floor kernel over every instance with each of `bind_groups` (any
+    /// display's, whose scratch it writes; with the rig cull, the rig's groups, every
+    /// member's). Returns the dispatches.
+    pub fn encode_floor<'a>(
         &self,
         pass: &mut wgpu::ComputePass,
         scene: &CullScene,
-        bind_group: &wgpu::BindGroup,
-    ) -> bool {
+        bind_groups: impl IntoIterator<Item = &'a wgpu::BindGroup>,
+    ) -> u32 {
         let Some(floor) = &self.floor else {
-            return false;
+            return 0;
         };
-        pass.set_bind_group(0, bind_group, &[]);
         pass.set_pipeline(floor);
-        let (x, y) = scene.groups.positions;
-        pass.dispatch_workgroups(x, y, 1);
-        true
+        let mut dispatches = 0;
+        for group in bind_groups {
+            pass.set_bind_group(0, group, &[]);
+            let (x, y) = scene.groups.positions;
+            pass.dispatch_workgroups(x, y, 1);
+            dispatches += 1;
+        }
+        dispatches
     }
 
     /// Compute dispatches per display: cull, draws, compact.

@@ -6,6 +6,7 @@ use crate::bins::{BinKind, MAX_BINS};
 use crate::buffers::{init_buffer, init_buffer_with_room, storage_buffer};
 use crate::cull::CullOutput;
 use crate::cull::coarse::{BLOCK, CoarseCull};
+use crate::cull::rig::{self, MAX_RIG_VIEWS, MemberAt, RigCull, RigView};
 use crate::records::{CullLayout, DrawArgs};
 use crate::records::{storage_bytes, uniform_bytes};
 use crate::shaders::{SPAN, WORKGROUP_SIZE, dispatch_size};
@@ -36,6 +37,10 @@ pub struct CullParams {
     pub first_blend_bin: u32,
     /// Where the blended bins' ranges of the draws start.
     pub blend_first: u32,
+    /// Words of `entries` per member of the rig cull ([`crate::cull::rig`]).
+    pub member_entries: u32,
+    /// Words of `span_sums` per member of the rig cull.
+    pub member_sums: u32,
 }
 
 /// Bytes of the counts buffer: the draw count, the visible total, then each material
@@ -66,6 +71,14 @@ pub struct CullScene {
     pub(super) lods: wgpu::Buffer,
     pub(super) entries: wgpu::Buffer,
     pub(super) span_sums: wgpu::Buffer,
+    /// Words of `entries` and of `span_sums` per rig member (what the room holds).
+    member_strides: (u32, u32),
+    /// The rig cull's members, a [`RigCull`] per group of [`MAX_RIG_VIEWS`] (at least
+    /// one: every cull pass binds it), [`CullScene::rig_stride`] bytes apart.
+    pub(super) rig: wgpu::Buffer,
+    pub(super) rig_stride: u64,
+    /// The rig cull's members (0: it does not run).
+    pub(super) rig_members: u32,
     /// The coarse cull's slots (displays; 0 without it) and its buffers per slot.
     pub(super) coarse_slots: u32,
     pub(super) block_marks: wgpu::Buffer,
@@ -97,27 +110,40 @@ pub struct OcclusionRoom {
     pub pyramid_texels: u32,
 }
 
-/// One display's cull outputs: what its draw pass consumes.
+/// One view's cull outputs: what its draw pass consumes. A view with buffers of its own
+/// has its ranges at 0; a member of the rig cull has its ranges of buffers the rig's
+/// members share ([`CullTargets::bank`]), which one set of dispatches writes.
+#[derive(Clone)]
 pub struct CullTargets {
-    /// The visible ids, per the cull contract.
+    /// The visible ids, per the cull contract, from [`CullTargets::visible_at`].
     pub visible: wgpu::Buffer,
-    /// The packed draws (meshes times levels entries), for the multi-draw.
+    /// The packed draws (meshes times levels entries), for the multi-draw, from
+    /// [`CullTargets::draws_at`].
     pub draws: wgpu::Buffer,
-    /// [`COUNTS_BYTES`]: the draw count (what `multi_draw_indexed_indirect_count`
-    /// reads), then the visible total (for statistics without reading `visible`).
+    /// [`COUNTS_BYTES`] from [`CullTargets::counts_at`]: the draw count (what
+    /// `multi_draw_indexed_indirect_count` reads), then the visible total (for
+    /// statistics without reading `visible`), then each bin's draw count.
     pub counts: wgpu::Buffer,
+    /// Where the view's visible list starts in `visible`, in bytes.
+    pub visible_at: u64,
+    /// Where its draws start in `draws`, in bytes.
+    pub draws_at: u64,
+    /// Where its counts start in `counts`, in bytes.
+    pub counts_at: u64,
+    /// Bytes of its visible list and of its draws.
+    sizes: (u64, u64),
 }
 
 impl CullScene {
     /// Uploads `layout`, with room for `slots` instances (a live scene's capacity), for
     /// culling into `levels` levels of detail (1: LOD off), with room for the coarse
-    /// cull's lists of `coarse_slots` displays (0: no coarse cull).
+    /// cull's lists of `coarse_slots` displays (0: no coarse cull), for occlusion, and
+    /// for the scratch of `rig_members` members of the rig cull (0: it does not run).
     pub fn new(
         device: &wgpu::Device,
         layout: &CullLayout,
-        slots: u32,
-        levels: u32,
-        (coarse_slots, occlusion): (u32, OcclusionRoom),
+        (slots, levels): (u32, u32),
+        (coarse_slots, occlusion, rig_members): (u32, OcclusionRoom, u32),
     ) -> CullScene {
         let slots = slots
             .max(layout.positions.len() as u32)
@@ -129,7 +155,20 @@ impl CullScene {
         let align = device.limits().min_storage_buffer_offset_alignment / 4;
         let pyramid_offset = (occlusion.displays * words).next_multiple_of(align);
         let occlusion_layout = (words, pyramid_offset);
-        let (params, groups) = cull_params(layout, (max_groups, levels, occlusion_layout));
+        // The display passes may run past the last instance to the end of its block.
+        let positions = slots.next_multiple_of(BLOCK);
+        let (spans, scan_groups) = span_shape(positions);
+        let member_strides = (positions, (spans + scan_groups) * levels);
+        let room = Room {
+            max_groups,
+            levels,
+            occlusion: occlusion_layout,
+            members: member_strides,
+        };
+        let (params, groups) = cull_params(layout, room);
+        let scratch_members = rig_members.clamp(1, MAX_RIG_VIEWS as u32) as u64;
+        let rig_stride = (RigCull::min_size().get())
+            .next_multiple_of(device.limits().min_uniform_buffer_offset_alignment as u64);
         let room = |label: &str, contents: &[u8], per_slot: u64| {
             // COPY_SRC: the spheres are read back by diagnostics (`spheres`).
             let usage = wgpu::BufferUsages::STORAGE
@@ -138,12 +177,9 @@ impl CullScene {
             init_buffer_with_room(device, label, contents, per_slot * slots as u64, usage)
         };
         let scratch = wgpu::BufferUsages::STORAGE;
-        // The display passes may run past the last instance to the end of its block.
-        let positions = slots.next_multiple_of(BLOCK) as u64;
         let per_slot = |bytes: u64| bytes * coarse_slots as u64;
         let block_bytes = per_slot(4 * slots.div_ceil(BLOCK) as u64);
         let meshes = layout.meshes.len() as u64;
-        let (spans, scan_groups) = span_shape(positions as u32);
         CullScene {
             instance_count: params.instance_count,
             groups,
@@ -178,16 +214,29 @@ impl CullScene {
                 0,
             ),
             lods: room("stereocull.lods", bytemuck::cast_slice(&layout.lods), 0),
-            entries: storage_buffer(device, "stereocull.entries", 4 * positions, scratch),
+            entries: storage_buffer(
+                device,
+                "stereocull.entries",
+                4 * positions as u64 * scratch_members,
+                scratch,
+            ),
             span_sums: storage_buffer(
                 device,
                 "stereocull.span_sums",
                 // The coarse cull's group totals use it before the display culls do.
-                4 * ((spans + scan_groups) * levels)
-                    .max(coarse_slots * slots.div_ceil(BLOCK).div_ceil(WORKGROUP_SIZE))
-                    as u64,
+                4 * (member_strides.1 as u64 * scratch_members)
+                    .max((coarse_slots * slots.div_ceil(BLOCK).div_ceil(WORKGROUP_SIZE)) as u64),
                 scratch,
             ),
+            member_strides,
+            rig: init_buffer(
+                device,
+                "stereocull.rig",
+                &rig_groups(rig_members, rig_stride),
+                wgpu::BufferUsages::UNIFORM | wgpu::BufferUsages::COPY_DST,
+            ),
+            rig_stride,
+            rig_members,
             coarse_slots,
             block_marks: storage_buffer(device, "stereocull.block_marks", block_bytes, scratch),
             block_list: storage_buffer(device, "stereocull.block_list", block_bytes, scratch),
@@ -240,10 +289,24 @@ impl CullScene {
         bytes.len() as u64
     }
 
+    /// Writes rig member `m`'s record for this frame; returns the bytes written.
+    pub fn write_rig_member(&self, queue: &wgpu::Queue, m: u32, record: &RigView) -> u64 {
+        let (group, index) = (m as usize / MAX_RIG_VIEWS, m as usize % MAX_RIG_VIEWS);
+        let bytes = uniform_bytes(record);
+        let at = group as u64 * self.rig_stride + (index * bytes.len()) as u64;
+        queue.write_buffer(&self.rig, at, &bytes);
+        bytes.len() as u64
+    }
+
     /// Writes a new `layout` (instances inserted or removed) into the buffers, which must
     /// have room for it (same meshes, no more slots than made for); returns the bytes.
     pub fn reload(&mut self, queue: &wgpu::Queue, layout: &CullLayout) -> u64 {
-        let room = (self.max_groups, self.levels, self.occlusion_layout);
+        let room = Room {
+            max_groups: self.max_groups,
+            levels: self.levels,
+            occlusion: self.occlusion_layout,
+            members: self.member_strides,
+        };
         let (params, groups) = cull_params(layout, room);
         (self.instance_count, self.groups) = (params.instance_count, groups);
         let writes: [(&wgpu::Buffer, &[u8]); 6] = [
@@ -330,20 +393,75 @@ impl CullScene {
 impl CullTargets {
     /// Sized for every instance visible and `draws` draws (meshes times levels).
     pub fn new(device: &wgpu::Device, instance_count: u32, draws: u32) -> CullTargets {
+        CullTargets::bank(device, instance_count, draws, 1).remove(0)
+    }
+
+    /// `members` views' outputs in one set of buffers, each sized as
+    /// [`CullTargets::new`] and starting where a storage binding may (the draw pass
+    /// binds a view's visible list, a view's own cull its three ranges); each draws
+    /// range also starts on a whole draw.
+    pub fn bank(
+        device: &wgpu::Device,
+        instance_count: u32,
+        draws: u32,
+        members: u32,
+    ) -> Vec<CullTargets> {
+        let align = device.limits().min_storage_buffer_offset_alignment as u64;
+        let draw = size_of::<DrawArgs>() as u64;
+        let sizes = (4 * instance_count as u64, draw * draws as u64);
+        // A multiple of both the alignment and a draw's bytes.
+        let draw_align = align / gcd(align, draw) * draw;
+        let strides = [
+            sizes.0.next_multiple_of(align).max(align),
+            sizes.1.next_multiple_of(draw_align).max(draw_align),
+            COUNTS_BYTES.next_multiple_of(align),
+        ];
         let out = wgpu::BufferUsages::STORAGE
             | wgpu::BufferUsages::COPY_SRC
             | wgpu::BufferUsages::COPY_DST;
         let indirect = out | wgpu::BufferUsages::INDIRECT;
-        CullTargets {
-            visible: storage_buffer(device, "stereocull.visible", 4 * instance_count as u64, out),
-            draws: storage_buffer(
-                device,
-                "stereocull.draws",
-                (size_of::<DrawArgs>() as u32 * draws) as u64,
-                indirect,
-            ),
-            counts: storage_buffer(device, "stereocull.counts", COUNTS_BYTES, indirect),
+        let n = members.max(1) as u64;
+        let [visible, draws_buffer, counts] = [
+            ("stereocull.visible", strides[0], out),
+            ("stereocull.draws", strides[1], indirect),
+            ("stereocull.counts", strides[2], indirect),
+        ]
+        .map(|(label, stride, usage)| storage_buffer(device, label, stride * n, usage));
+        (0..n)
+            .map(|m| CullTargets {
+                visible: visible.clone(),
+                draws: draws_buffer.clone(),
+                counts: counts.clone(),
+                visible_at: m * strides[0],
+                draws_at: m * strides[1],
+                counts_at: m * strides[2],
+                sizes,
+            })
+            .collect()
+    }
+
+    /// Where its ranges start, in elements (words, draws, words): a rig member's
+    /// [`MemberAt`].
+    pub fn member_at(&self) -> MemberAt {
+        MemberAt {
+            visible: (self.visible_at / 4) as u32,
+            draws: (self.draws_at / size_of::<DrawArgs>() as u64) as u32,
+            counts: (self.counts_at / 4) as u32,
         }
+    }
+
+    /// Its visible list, as a binding.
+    pub fn visible_binding(&self) -> wgpu::BufferBinding<'_> {
+        range(&self.visible, self.visible_at, self.sizes.0)
+    }
+
+    /// Its visible list, draws and counts, as bindings (what its own cull writes).
+    pub fn bindings(&self) -> [wgpu::BufferBinding<'_>; 3] {
+        [
+            self.visible_binding(),
+            range(&self.draws, self.draws_at, self.sizes.1),
+            range(&self.counts, self.counts_at, COUNTS_BYTES),
+        ]
     }
 
     /// Writes a CPU cull's `out` into these buffers; returns the bytes written.
@@ -354,19 +472,55 @@ impl CullTargets {
         for (word, bin) in counts[2..].iter_mut().zip(&out.bins) {
             *word = bin.count;
         }
-        let writes: [(&wgpu::Buffer, &[u8]); 3] = [
-            (&self.visible, bytemuck::cast_slice(&out.visible)),
-            (&self.draws, bytemuck::cast_slice(&out.draws)),
-            (&self.counts, bytemuck::cast_slice(&counts)),
+        let writes: [(&wgpu::Buffer, u64, &[u8]); 3] = [
+            (
+                &self.visible,
+                self.visible_at,
+                bytemuck::cast_slice(&out.visible),
+            ),
+            (&self.draws, self.draws_at, bytemuck::cast_slice(&out.draws)),
+            (&self.counts, self.counts_at, bytemuck::cast_slice(&counts)),
         ];
         writes
             .iter()
-            .filter(|(_, bytes)| !bytes.is_empty())
-            .map(|(buffer, bytes)| {
-                queue.write_buffer(buffer, 0, bytes);
+            .filter(|(_, _, bytes)| !bytes.is_empty())
+            .map(|(buffer, at, bytes)| {
+                queue.write_buffer(buffer, *at, bytes);
                 bytes.len() as u64
             })
             .sum()
+    }
+}
+
+/// The rig cull's groups of `members` members, `stride` bytes apart (at least one):
+/// each its member count, its records written each frame
+/// ([`CullScene::write_rig_member`]).
+fn rig_groups(members: u32, stride: u64) -> Vec<u8> {
+    let groups = rig::groups(members).max(1);
+    let views = vec![RigView::default(); members as usize];
+    let mut bytes = vec![0; (stride * groups as u64) as usize];
+    for (g, group) in views.chunks(MAX_RIG_VIEWS).enumerate() {
+        let set = uniform_bytes(&RigCull::new(group));
+        let at = g * stride as usize;
+        bytes[at..at + set.len()].copy_from_slice(&set);
+    }
+    bytes
+}
+
+/// `size` bytes of `buffer` from `offset` (at least 4: an empty scene's list binds one
+/// word).
+fn range(buffer: &wgpu::Buffer, offset: u64, size: u64) -> wgpu::BufferBinding<'_> {
+    wgpu::BufferBinding {
+        buffer,
+        offset,
+        size: wgpu::BufferSize::new(size.max(4)),
+    }
+}
+
+fn gcd(a: u64, b: u64) -> u64 {
+    match b {
+        0 => a,
+        _ => gcd(b, a % b),
     }
 }
 
@@ -389,10 +543,24 @@ pub(super) struct Grids {
     pub blocks: u32,
 }
 
-fn cull_params(
-    layout: &CullLayout,
-    (max_groups, levels, (visibility_words, pyramid_offset)): (u32, u32, (u32, u32)),
-) -> (CullParams, Grids) {
+/// What a scene's buffers were made with room for: the device's workgroup limit, the
+/// levels, the occlusion words per slot and where the pyramids start, and the words
+/// of `entries` and `span_sums` per rig member.
+#[derive(Clone, Copy)]
+struct Room {
+    max_groups: u32,
+    levels: u32,
+    occlusion: (u32, u32),
+    members: (u32, u32),
+}
+
+fn cull_params(layout: &CullLayout, room: Room) -> (CullParams, Grids) {
+    let Room {
+        max_groups,
+        levels,
+        occlusion: (visibility_words, pyramid_offset),
+        members: (member_entries, member_sums),
+    } = room;
     let n = layout.spheres.len() as u32;
     let groups = Grids {
         positions: dispatch_size(n.div_ceil(WORKGROUP_SIZE), max_groups),
@@ -411,6 +579,8 @@ fn cull_params(
         blend_first: (layout.bin_ranges(levels).iter())
             .find(|r| r.kind.alpha == BinKind::Blend)
             .map_or(0, |r| r.first),
+        member_entries,
+        member_sums,
     };
     (params, groups)
 }

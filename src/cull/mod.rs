@@ -15,6 +15,7 @@ pub mod coarse;
 pub mod cpu;
 pub mod gpu;
 pub mod gpu_buffers;
+pub mod rig;
 
 pub use coarse::CoarseCull;
 

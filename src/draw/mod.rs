@@ -19,6 +19,7 @@ use crate::error::Result;
 use crate::materials::{self, GpuMaterials};
 use crate::records::{DrawArgs, InstanceRecord, instance_records};
 use crate::scene::{Scene, Shading};
+use crate::shaders::Bound;
 use crate::shaders::{
     DRAW_BINDINGS, DrawKey, SHADOW_MAP_BINDINGS, Shaders, Windows, bind_group, bind_group_layout,
     shadow_cutout_source, shadow_source,
@@ -229,10 +230,15 @@ impl Drawer {
         device: &wgpu::Device,
         [frame_context, display_context]: [&wgpu::Buffer; 2],
         scene: &DrawScene,
-        visible: &wgpu::Buffer,
+        visible: wgpu::BufferBinding,
     ) -> wgpu::BindGroup {
         // In DRAW_BINDINGS order.
-        let buffers = [frame_context, display_context, visible, &scene.instances];
+        let buffers = [
+            frame_context.bound(),
+            display_context.bound(),
+            visible,
+            scene.instances.bound(),
+        ];
         let (label, layout) = ("stereocull.draw", &self.layout);
         bind_group(
             device,
@@ -316,9 +322,9 @@ impl Drawer {
                     groups_taken = true;
                 }
             }
-            let offset = range.first as u64 * size_of::<DrawArgs>() as u64;
+            let offset = cull.draws_at + range.first as u64 * size_of::<DrawArgs>() as u64;
             if self.features.indirect_count {
-                let count_offset = COUNTS_BIN_OFFSET + 4 * b as u64;
+                let count_offset = cull.counts_at + COUNTS_BIN_OFFSET + 4 * b as u64;
                 pass.multi_draw_indexed_indirect_count(
                     &cull.draws,
                     offset,

@@ -2,7 +2,7 @@
 //! display's cull buffers (and its far layer's), visible totals, the far/near split,
 //! and what the coarse cull saved. None of it is needed to draw.
 
-use super::{Path, Renderer};
+use super::{Path, Renderer, WallCulls};
 use crate::cull::CullOutput;
 use crate::error::Result;
 use crate::occlusion::PyramidShape;
@@ -175,12 +175,12 @@ impl Diagnostics<'_> {
             .collect()
     }
 
-    /// The floor kernel's and each display's GPU cull's wall-clock milliseconds, medians
-    /// over `rounds` submissions each, submitted and waited for alone (made with
-    /// [`super::RendererOptions::cull_floor`] on the indirect path; `None` otherwise).
-    /// Where timestamps are unreliable (lavapipe), this is the cost; on a GPU it adds a
-    /// submission's latency to each.
-    pub fn cull_against_floor(&self, rounds: u32) -> Result<Option<(f64, Vec<f64>)>> {
+    /// The floor kernel's, the frame's whole cull's and each display's GPU cull's
+    /// wall-clock milliseconds, medians over `rounds` submissions each, submitted and
+    /// waited for alone (made with [`super::RendererOptions::cull_floor`] on the indirect
+    /// path; `None` otherwise). Where timestamps are unreliable (lavapipe), this is the
+    /// cost; on a GPU it adds a submission's latency to each.
+    pub fn cull_against_floor(&self, rounds: u32) -> Result<Option<WallCulls>> {
         let Some(p) = self.renderer.path.indirect() else {
             return Ok(None);
         };

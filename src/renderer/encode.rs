@@ -98,6 +98,7 @@ impl Renderer {
             Part::Rest => FrameStats::default(),
             _ => self.encode_frame(encoder, &mut rec),
         };
+        stats.dispatch_levels.frame = stats.dispatches;
         for (i, target) in targets.iter().enumerate() {
             rec.enter(encoder, &self.names[i]);
             let at = (i, target);
@@ -110,6 +111,7 @@ impl Renderer {
             };
             stats.draw_calls += recorded.draw_calls;
             stats.dispatches += recorded.dispatches;
+            stats.dispatch_levels.display += recorded.dispatches;
             rec.leave(encoder);
         }
         self.passes = rec.finish(encoder, part != Part::Early);

@@ -105,6 +105,7 @@ mod view;
 
 use checks::check_device;
 pub use checks::check_rig;
+pub use culler::WallCulls;
 pub use diagnostics::{Diagnostics, FarSplit, OcclusionCounts};
 use display::classic::ClassicPath;
 use display::indirect::IndirectPath;
@@ -117,7 +118,9 @@ pub use options::{
     CoarseMode, CullMode, LOD_PIXELS, OcclusionMode, PosingMode, RendererOptions, StereoMode,
     frame_lod,
 };
-pub use plan::{CullView, FramePlan, FrameStats, PlannedCull, instances_per_object};
+pub use plan::{
+    CullView, DispatchLevels, FramePlan, FrameStats, PlannedCull, instances_per_object,
+};
 pub use recorder::{Level, PassRecord};
 pub use sync::SyncStats;
 pub use targets::{DisplayTarget, TargetShape, TargetViews};

@@ -182,6 +182,12 @@ pub struct RendererOptions {
     pub lod: bool,
     /// Whether frames start with the coarse cull.
     pub coarse_cull: CoarseMode,
+    /// GPU culling: every view that culls by its frustum alone over every instance
+    /// (each display without occlusion, its far layer, its inset pair) culled by one
+    /// set of dispatches for the whole rig ([`crate::cull::rig`]), each sphere read once;
+    /// off, each view runs its own (what profiles compare the rig cull against). The
+    /// outputs are the same byte for byte either way.
+    pub rig_cull: bool,
     /// The frame's shadow map ([`crate::shadow`]): drawn once per frame from `light`,
     /// sampled by every display and eye.
     pub shadows: bool,
@@ -308,6 +314,7 @@ impl Default for RendererOptions {
             mode: StereoMode::Instanced,
             lod: false,
             coarse_cull: CoarseMode::Auto,
+            rig_cull: true,
             shadows: false,
             light: Light::default(),
             far_layer: false,

@@ -24,6 +24,10 @@ pub struct FrameStats {
     pub draw_calls: u32,
     /// Compute dispatches recorded.
     pub dispatches: u32,
+    /// The same by level: the frame's (once per frame, whatever the displays: posing,
+    /// skinning, the coarse cull, the rig cull, the shadow pass) and the displays'
+    /// (those culls that run per display, their pyramids).
+    pub dispatch_levels: DispatchLevels,
     /// Bytes written to GPU buffers (contexts, CPU culls, texels, edits).
     pub bytes_uploaded: u64,
     /// CPU culling (zero on the GPU path).
@@ -38,6 +42,15 @@ pub struct FrameStats {
     pub cpu_staging: Duration,
 }
 
+/// A frame's compute dispatches by the level that records them.
+#[derive(Clone, Copy, Debug, Default, PartialEq, Eq, serde::Serialize)]
+pub struct DispatchLevels {
+    /// Recorded once per frame.
+    pub frame: u32,
+    /// Recorded per display (the sum over the displays).
+    pub display: u32,
+}
+
 /// The two halves of a frame culled on the CPU with occlusion, together.
 impl std::ops::Add for FrameStats {
     type Output = FrameStats;
@@ -46,6 +59,10 @@ impl std::ops::Add for FrameStats {
         FrameStats {
             draw_calls: self.draw_calls + other.draw_calls,
             dispatches: self.dispatches + other.dispatches,
+            dispatch_levels: DispatchLevels {
+                frame: self.dispatch_levels.frame + other.dispatch_levels.frame,
+                display: self.dispatch_levels.display + other.dispatch_levels.display,
+            },
             bytes_uploaded: self.bytes_uploaded + other.bytes_uploaded,
             cpu_cull: self.cpu_cull + other.cpu_cull,
             cpu_upload: self.cpu_upload + other.cpu_upload,

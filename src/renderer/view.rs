@@ -95,7 +95,7 @@ impl ViewPass {
                 device,
                 [frame, &context],
                 drawing.scene,
-                &cull.targets.visible,
+                cull.targets.visible_binding(),
             ),
             context,
             cull_context,
@@ -127,7 +127,10 @@ impl ViewPass {
         context: &DisplayContext,
         culler: &Culler,
     ) -> u64 {
-        write(queue, &self.context, &uniform_bytes(context)) + culler.upload(queue, &self.cull)
+        let member = culler.write_member(queue, &self.cull, context);
+        write(queue, &self.context, &uniform_bytes(context))
+            + culler.upload(queue, &self.cull)
+            + member
     }
 
     /// Writes this frame's cull context, for a view that has one of its own

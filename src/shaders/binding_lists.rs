@@ -57,10 +57,13 @@ const FILTERABLE: wgpu::TextureSampleType = wgpu::TextureSampleType::Float { fil
 /// Every cull pass's bindings: the frame context, per display its context and outputs,
 /// the scene data uploaded once, scratch shared by all displays, and the frame's coarse
 /// cull results.
-pub const CULL_BINDINGS: [Binding; 19] = [
+pub const CULL_BINDINGS: [Binding; 20] = [
     binding("frame", Access::Uniform, "FrameContext", COMPUTE),
     binding("display", Access::Uniform, "DisplayContext", COMPUTE),
     binding("params", Access::Uniform, "CullParams", COMPUTE),
+    // The rig passes' members (src/cull/rig.rs): their planes, splits and where their
+    // outputs start in the shared targets.
+    binding("rig", Access::Uniform, "RigCull", COMPUTE),
     // Instance id at each cull position.
     binding("order", Access::StorageRead, "array<u32>", COMPUTE),
     binding("meshes", Access::StorageRead, "array<MeshRecord>", COMPUTE),
@@ -81,8 +84,9 @@ pub const CULL_BINDINGS: [Binding; 19] = [
         "array<DrawArgs>",
         COMPUTE,
     ),
-    // The draw count (what multi_draw_indexed_indirect_count reads), visible total.
-    binding("counts", Access::StorageReadWrite, "array<u32, 2>", COMPUTE),
+    // Per view: the draw count (what multi_draw_indexed_indirect_count reads), the
+    // visible total, then each material bin's draw count.
+    binding("counts", Access::StorageReadWrite, "array<u32>", COMPUTE),
     // The frame's coarse cull (src/cull/coarse.rs), per slot and block of BLOCK cull
     // positions: its mark (kept bit, then listed blocks before it), the listed blocks
     // ascending, per slot the listed positions' count and each mesh's (start, count)

@@ -252,18 +252,39 @@ fn binding_type(access: Access) -> wgpu::BindingType {
     }
 }
 
+/// What a bind group binds a buffer binding to: a whole buffer or a range of one.
+pub trait Bound<'a> {
+    /// The binding.
+    fn bound(self) -> wgpu::BufferBinding<'a>;
+}
+
+impl<'a> Bound<'a> for &'a wgpu::Buffer {
+    fn bound(self) -> wgpu::BufferBinding<'a> {
+        self.as_entire_buffer_binding()
+    }
+}
+
+impl<'a> Bound<'a> for wgpu::BufferBinding<'a> {
+    fn bound(self) -> wgpu::BufferBinding<'a> {
+        self
+    }
+}
+
 /// A bind group with `buffers[i]` for `bindings[i]` (the list `layout` was made from):
-/// whole, or a windowed one as its windows, each `1 << shift` elements further.
-pub fn bind_group<const N: usize>(
+/// whole or the range given, or a windowed one (always a whole buffer) as its windows,
+/// each `1 << shift` elements further.
+pub fn bind_group<'a, B: Bound<'a>, const N: usize>(
     device: &wgpu::Device,
     label: &str,
     layout: &wgpu::BindGroupLayout,
     bindings: &[Binding],
     windows: &Windows,
-    buffers: [&wgpu::Buffer; N],
+    buffers: [B; N],
 ) -> wgpu::BindGroup {
     let mut entries = Vec::new();
-    for (b, buffer) in bindings.iter().zip(buffers) {
+    for (b, bound) in bindings.iter().zip(buffers) {
+        let bound = bound.bound();
+        let buffer = bound.buffer;
         let window = b.windowed.map(|w| (windows.of(w), w.stride()));
         match window {
             Some((w, stride)) if w.count > 1 => {
@@ -288,7 +309,7 @@ pub fn bind_group<const N: usize>(
             }
             _ => entries.push(wgpu::BindGroupEntry {
                 binding: entries.len() as u32,
-                resource: buffer.as_entire_binding(),
+                resource: wgpu::BindingResource::Buffer(bound),
             }),
         }
     }

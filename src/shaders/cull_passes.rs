@@ -67,6 +67,17 @@ pub enum CullPass {
     Blend,
     /// One read and one flag per instance: the least a cull could do (`profile`).
     Floor,
+    /// The rig cull's [`CullPass::Cull`]: every member's entries and sums, each sphere
+    /// read once for the rig.
+    RigCull,
+    /// [`CullPass::Draws`] for every member (a workgroup each).
+    RigDraws,
+    /// [`CullPass::Compact`] for every member, a position per invocation.
+    RigCompact,
+    /// [`CullPass::Blend`] for every member (a workgroup each).
+    RigBlend,
+    /// [`CullPass::Floor`] for the rig: one read per instance, every member's test.
+    RigFloor,
 }
 
 impl CullPass {
@@ -78,6 +89,8 @@ impl CullPass {
     ];
     /// The display passes, in dispatch order.
     pub const DISPLAY: [CullPass; 3] = [CullPass::Cull, CullPass::Draws, CullPass::Compact];
+    /// The rig passes, in dispatch order: the display passes for every member at once.
+    pub const RIG: [CullPass; 3] = [CullPass::RigCull, CullPass::RigDraws, CullPass::RigCompact];
 
     /// The pipeline's label; display passes over the coarse cull's candidates say so.
     pub fn label(self, over_candidates: bool) -> String {
@@ -91,6 +104,11 @@ impl CullPass {
             CullPass::Compact => "cull_compact",
             CullPass::Blend => "cull_blend",
             CullPass::Floor => "cull_floor",
+            CullPass::RigCull => "rig_cull",
+            CullPass::RigDraws => "rig_draws",
+            CullPass::RigCompact => "rig_compact",
+            CullPass::RigBlend => "rig_blend",
+            CullPass::RigFloor => "rig_floor",
         };
         let tail = if over_candidates && !self.is_frame() {
             ".candidates"
@@ -105,6 +123,18 @@ impl CullPass {
         Self::FRAME.contains(&self)
     }
 
+    /// Whether the pass is one of the rig cull's (every member of `RigCull` at once).
+    pub fn is_rig(self) -> bool {
+        matches!(
+            self,
+            CullPass::RigCull
+                | CullPass::RigDraws
+                | CullPass::RigCompact
+                | CullPass::RigBlend
+                | CullPass::RigFloor
+        )
+    }
+
     /// The pass's WGSL entry point.
     pub fn entry_point(self) -> &'static str {
         match self {
@@ -117,6 +147,11 @@ impl CullPass {
             CullPass::Compact => "compact",
             CullPass::Blend => "blend_main",
             CullPass::Floor => "floor",
+            CullPass::RigCull => "cull_rig",
+            CullPass::RigDraws => "draws_rig",
+            CullPass::RigCompact => "compact_rig",
+            CullPass::RigBlend => "blend_rig",
+            CullPass::RigFloor => "floor_rig",
         }
     }
 
@@ -132,17 +167,20 @@ impl CullPass {
             CullPass::CoarseBlocks | CullPass::CoarseLists | CullPass::CoarsePlace => {
                 include_str!("../../wgsl/cull_coarse.wgsl")
             }
-            CullPass::Cull => include_str!("../../wgsl/cull.wgsl"),
+            CullPass::Cull | CullPass::RigCull => include_str!("../../wgsl/cull.wgsl"),
             CullPass::CullSubgroups => CULL_SUBGROUPS,
-            CullPass::Draws => include_str!("../../wgsl/cull_draws.wgsl"),
-            CullPass::Compact => include_str!("../../wgsl/cull_compact.wgsl"),
-            CullPass::Blend => include_str!("../../wgsl/cull_blend.wgsl"),
-            CullPass::Floor => include_str!("../../wgsl/cull_floor.wgsl"),
+            CullPass::Draws | CullPass::RigDraws => include_str!("../../wgsl/cull_draws.wgsl"),
+            CullPass::Compact | CullPass::RigCompact => {
+                include_str!("../../wgsl/cull_compact.wgsl")
+            }
+            CullPass::Blend | CullPass::RigBlend => include_str!("../../wgsl/cull_blend.wgsl"),
+            CullPass::Floor | CullPass::RigFloor => include_str!("../../wgsl/cull_floor.wgsl"),
         };
         let coarse = format!(
-            "const COARSE: bool = {};\nconst OCCLUSION: u32 = {}u;\n",
+            "const COARSE: bool = {};\nconst OCCLUSION: u32 = {}u;\nconst RIG: bool = {};\n",
             over_candidates && !self.is_frame(),
-            phase as u32
+            phase as u32,
+            self.is_rig(),
         );
         let mut bindings = declarations(&CULL_BINDINGS, 0, windows);
         if self.is_frame() {
@@ -174,7 +212,8 @@ impl CullPass {
     }
 
     /// Every cull pipeline variant: the frame passes, the display passes (both tiers
-    /// of the cull pass) over everything and over candidates, and the floor kernel.
+    /// of the cull pass) over everything and over candidates, the floor kernel, and the
+    /// rig passes.
     pub fn variants() -> Vec<(CullPass, bool)> {
         let display = [false, true].into_iter().flat_map(|c| {
             Self::DISPLAY
@@ -187,6 +226,8 @@ impl CullPass {
             .into_iter()
             .chain(display)
             .chain([(CullPass::Floor, false)])
+            .chain(Self::RIG.map(|p| (p, false)))
+            .chain([(CullPass::RigBlend, false), (CullPass::RigFloor, false)])
             .collect()
     }
 }

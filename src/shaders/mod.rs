@@ -63,7 +63,9 @@ pub use binding_lists::{
     FOVEATED_COMPOSITE_BINDINGS, MATERIAL_BINDINGS, POSE_BINDINGS, SCATTER_BINDINGS,
     SHADOW_MAP_BINDINGS, SKIN_BINDINGS, pyramid_bindings,
 };
-pub use bindings::{Access, Binding, TextureKind, bind_group, bind_group_layout, declarations};
+pub use bindings::{
+    Access, Binding, Bound, TextureKind, bind_group, bind_group_layout, declarations,
+};
 pub(crate) use bindings::{compute_pipeline, dispatch_size, pipeline_layout};
 pub use cull_passes::{
     CullPass, PYRAMID_LEVELS_PER_DISPATCH, PYRAMID_SIDE, Phase, pyramid_source, subgroup_tier,
@@ -93,7 +95,9 @@ pub fn scatter_source(windows: &Windows, kind: EditKind) -> String {
         EditKind::Records => include_str!("../../wgsl/scatter_records.wgsl"),
     };
     let shared = include_str!("../../wgsl/shared/scatter.wgsl");
-    let span = format!("const VISIBILITY_SPAN: u32 = {SPAN}u;\n");
+    let rig = crate::cull::rig::MAX_RIG_VIEWS;
+    let span =
+        format!("const VISIBILITY_SPAN: u32 = {SPAN}u;\nconst MAX_RIG_VIEWS: u32 = {rig}u;\n");
     [&span, RECORDS, &bindings, shared, body].concat()
 }
 
@@ -315,8 +319,10 @@ pub fn decode_source_with(views: u32, windows: &Windows) -> String {
 
 fn constants() -> String {
     let lods = crate::scene::MAX_LODS;
+    let rig = crate::cull::rig::MAX_RIG_VIEWS;
     format!(
         "\nconst WORKGROUP_SIZE: u32 = {WORKGROUP_SIZE}u;\nconst MAX_LODS: u32 = {lods}u;\n\
+         const MAX_RIG_VIEWS: u32 = {rig}u;\n\
          const BLOCK: u32 = {BLOCK}u;\nconst SPAN: u32 = {SPAN}u;\nconst BLOCK_GROWTH: f32 = {BLOCK_GROWTH:?};\n\
          const BLOCK_SLACK: f32 = {BLOCK_SLACK:?};\n"
     )

@@ -14,13 +14,60 @@ fn sphere_in_planes(planes: array<vec4<f32>, 6>, s: vec4<f32>) -> bool {
 // the far ones (entirely beyond split_distance from the display's apex), with 1 the
 // rest, with 0 every sphere. The CPU twin is Split::keeps: same operations, same order.
 fn in_split(s: vec4<f32>) -> bool {
-    if (display.split_keep == 0u) {
+    return in_split_of(display.split_keep, display.split_distance, display.position, s);
+}
+
+// in_split for any split (a rig member's): `keep` and `distance` from `apex`.
+fn in_split_of(keep: u32, distance: f32, apex: vec3<f32>, s: vec4<f32>) -> bool {
+    if (keep == 0u) {
         return true;
     }
-    let d = s.xyz - display.position;
+    let d = s.xyz - apex;
     let d2 = d.x * d.x + d.y * d.y + d.z * d.z;
-    let reach = display.split_distance + s.w;
-    return (d2 >= reach * reach) == (display.split_keep == 2u);
+    let reach = distance + s.w;
+    return (d2 >= reach * reach) == (keep == 2u);
+}
+
+// The member of the rig cull whose scratch and outputs the functions below address
+// (RIG: the rig passes set it); 0 in a single view's passes, which write their own
+// outputs from their start.
+var<private> member: u32;
+
+fn entry_index(j: u32) -> u32 {
+    return member * params.member_entries + j;
+}
+
+fn sum_index(i: u32) -> u32 {
+    return member * params.member_sums + i;
+}
+
+fn visible_index(i: u32) -> u32 {
+    if (RIG) {
+        return rig.views[member].visible_at + i;
+    }
+    return i;
+}
+
+fn draw_index(i: u32) -> u32 {
+    if (RIG) {
+        return rig.views[member].draws_at + i;
+    }
+    return i;
+}
+
+fn count_index(i: u32) -> u32 {
+    if (RIG) {
+        return rig.views[member].counts_at + i;
+    }
+    return i;
+}
+
+// The cull contract's V of the view culled.
+fn instances_per_object() -> u32 {
+    if (RIG) {
+        return rig.views[member].instances_per_object;
+    }
+    return display.instances_per_object;
 }
 
 // The level of detail of cull position k, whose sphere is s, from the viewer's position
@@ -115,8 +162,8 @@ fn flagged_before(level: u32, pos: u32, n: u32, total: u32) -> u32 {
         return total;
     }
     let span = pos / SPAN;
-    let within = (entries[pos] >> (7u * level)) & 0x7fu;
-    return span_sums[group_slot(n, level, span / WORKGROUP_SIZE)] + span_sums[level * span_count(n) + span] + within;
+    let within = (entries[entry_index(pos)] >> (7u * level)) & 0x7fu;
+    return span_sums[sum_index(group_slot(n, level, span / WORKGROUP_SIZE))] + span_sums[sum_index(level * span_count(n) + span)] + within;
 }
 
 // Turns `groups` group totals from span_sums[first] on into prefixes starting at
@@ -128,11 +175,11 @@ fn prefix_groups(first: u32, groups: u32, carry_in: u32, local: u32) -> u32 {
         let g = base + local;
         var sum = 0u;
         if (g < groups) {
-            sum = span_sums[first + g];
+            sum = span_sums[sum_index(first + g)];
         }
         let scan = workgroup_exclusive_scan(local, sum);
         if (g < groups) {
-            span_sums[first + g] = carry + scan.x;
+            span_sums[sum_index(first + g)] = carry + scan.x;
         }
         carry += scan.y;
     }

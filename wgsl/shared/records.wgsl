@@ -91,6 +91,31 @@ struct CullParams {
     first_blend_bin: u32,
     // Where the blended bins' ranges of the draws start (the blend pass's).
     blend_first: u32,
+    // Words of `entries` and of `span_sums` per member of the rig cull (RigCull): each
+    // member's scratch starts at its index times these.
+    member_entries: u32,
+    member_sums: u32,
+}
+
+// One member of the rig cull (src/cull/rig.rs, RigView): what its context holds for
+// culling, and where its outputs start in the rig's shared targets (in elements).
+struct RigView {
+    planes: array<vec4<f32>, 6>,
+    position: vec3<f32>,
+    split_keep: u32,
+    // Where its blended instances sort from (cull_blend.wgsl's sort_origin).
+    sort_origin: vec3<f32>,
+    split_distance: f32,
+    instances_per_object: u32,
+    visible_at: u32,
+    draws_at: u32,
+    counts_at: u32,
+}
+
+// The views one set of rig dispatches culls: the first `members` of `views`.
+struct RigCull {
+    views: array<RigView, MAX_RIG_VIEWS>,
+    members: u32,
 }
 
 // One slot's block test of the coarse cull (src/cull/coarse.rs): a display's planes

@@ -8,27 +8,41 @@ use crate::error::Result;
 use crate::profiling::percentile;
 use crate::readback::{read_pod, wait_idle};
 
+/// Wall-clock medians of culls submitted alone ([`Culler::time_against_floor`]).
+#[derive(Clone, Debug, PartialEq)]
+pub struct WallCulls {
+    /// The floor kernel's (with the rig cull, the rig's floor: one read per instance).
+    pub floor_ms: f64,
+    /// The frame's whole cull: the rig cull and every other view's.
+    pub rig_ms: f64,
+    /// Each view's cull alone.
+    pub views_ms: Vec<f64>,
+}
+
 /// Diagnostics read back after a frame was submitted.
 impl Culler {
     /// Wall-clock medians over `rounds` submissions each (submit, then wait) of the
-    /// floor kernel alone and of each of `views`' culls alone (over the last frame's
-    /// coarse lists, with the coarse cull), a round being one of each. `None` without
-    /// the floor kernel (GPU culling with [`super::RendererOptions::cull_floor`]). For
-    /// adapters whose in-pass timestamps do not bracket a compute pass's first dispatch
-    /// (lavapipe): on a CPU device the wall clock is the cost. The culls rewrite the
-    /// same outputs.
+    /// floor kernel alone, of each of `views`' culls alone (over the last frame's
+    /// coarse lists, with the coarse cull; a rig member by its own three dispatches),
+    /// and of the frame's whole cull of `views` (the rig cull's dispatches and every
+    /// other view's), a round being one of each. `None` without the floor kernel (GPU
+    /// culling with [`super::RendererOptions::cull_floor`]). For adapters whose in-pass
+    /// timestamps do not bracket a compute pass's first dispatch (lavapipe): on a CPU
+    /// device the wall clock is the cost. The culls rewrite the same outputs.
     pub(in crate::renderer) fn time_against_floor(
         &self,
         device: &wgpu::Device,
         queue: &wgpu::Queue,
         views: &[&ViewCull],
         rounds: u32,
-    ) -> Result<Option<(f64, Vec<f64>)>> {
+    ) -> Result<Option<WallCulls>> {
         let (
             Kind::Gpu {
                 culler,
                 scene,
                 coarse,
+                rig_groups,
+                ..
             },
             Some(any),
         ) = (&self.kind, views.first())
@@ -38,6 +52,7 @@ impl Culler {
         let Some(group) = any.bind_group.as_ref().filter(|_| culler.has_floor()) else {
             return Ok(None);
         };
+        let rig = rig_groups.get().map_or(&[][..], Vec::as_slice);
         let once = |record: &dyn Fn(&mut wgpu::ComputePass)| -> Result<f64> {
             let mut encoder = device.create_command_encoder(&Default::default());
             record(&mut encoder.begin_compute_pass(&Default::default()));
@@ -50,23 +65,39 @@ impl Culler {
             .iter()
             .filter_map(|v| Some((v, v.bind_group.as_ref()?)))
             .collect();
+        let encode_view = |pass: &mut wgpu::ComputePass, v: &ViewCull, group| {
+            let slot = coarse.as_ref().and(v.view.coarse_slot());
+            culler.encode(pass, scene, group, (slot, v.phase));
+        };
         // Rounds interleave the floor and every cull, so that each sees the host as the
         // others do (a 2-core VM's neighbours move a median by a third between seconds).
-        let mut samples = vec![Vec::new(); 1 + groups.len()];
+        let mut samples = vec![Vec::new(); 2 + groups.len()];
         for _ in 0..rounds.max(1) {
             samples[0].push(once(&|pass| {
-                culler.encode_floor(pass, scene, group);
+                match rig.is_empty() {
+                    true => culler.encode_floor(pass, scene, [group]),
+                    false => culler.encode_floor(pass, scene, rig),
+                };
             })?);
-            for ((v, group), s) in groups.iter().zip(&mut samples[1..]) {
-                let slot = coarse.as_ref().and(v.view.coarse_slot());
-                let phased = (slot, v.phase);
-                s.push(once(&|pass| culler.encode(pass, scene, group, phased))?);
+            samples[1].push(once(&|pass| {
+                if let (Some(args), false) = (coarse, groups.is_empty()) {
+                    culler.encode_frame(pass, scene, [group, args]);
+                }
+                culler.encode_rig(pass, scene, rig);
+                for (v, group) in groups.iter().filter(|(v, _)| v.member.is_none()) {
+                    encode_view(pass, v, group);
+                }
+            })?);
+            for ((v, group), s) in groups.iter().zip(&mut samples[2..]) {
+                s.push(once(&|pass| encode_view(pass, v, group))?);
             }
         }
         let mut medians = samples.iter().map(|s| percentile(s, 0.5));
-        let floor = medians.next().unwrap_or_default();
-        let culls = medians.collect();
-        Ok(Some((floor, culls)))
+        Ok(Some(WallCulls {
+            floor_ms: medians.next().unwrap_or_default(),
+            rig_ms: medians.next().unwrap_or_default(),
+            views_ms: medians.collect(),
+        }))
     }
 
     /// The coarse cull's candidates per display (GPU culling with it on).

@@ -7,26 +7,33 @@
 //! read back after a frame, in `diagnostics.rs`).
 
 mod diagnostics;
+
+pub use diagnostics::WallCulls;
 mod occlusion;
 
 use super::options::CullMode;
 use super::plan::{CullView, FramePlan};
 use super::recorder::{PassRecord, Recorder};
 use crate::bins::BinRange;
+use crate::contexts::DisplayContext;
 use crate::cull::CullOutput;
 use crate::cull::cpu;
 use crate::cull::gpu::{CullerFeatures, GpuCuller};
 use crate::cull::gpu_buffers::{CullScene, CullTargets, OcclusionRoom};
+use crate::cull::rig::RigView;
 use crate::error::Result;
 use crate::occlusion::{Phase, cull_early};
 use crate::records::{CullLayout, MoveEdit, PlaceEdit};
 use crate::scene::Scene;
 use crate::shaders::{SPAN, Windows};
+use std::sync::OnceLock;
 
 pub(super) struct Culler {
     kind: Kind,
     /// Instance slots of room: what every view's visible list holds.
     slots: u32,
+    /// The rig cull's members, in order (none: it does not run).
+    members: Vec<CullView>,
     /// The material bins' ranges of every view's draws (fixed: meshes do not change;
     /// a re-layout that would change them reallocates).
     bins: Vec<BinRange>,
@@ -39,6 +46,10 @@ enum Kind {
         culler: GpuCuller,
         scene: Box<CullScene>,
         coarse: Option<wgpu::BindGroup>,
+        /// With the rig cull: its members' outputs, in member order, and its bind
+        /// groups (made with the first member's view).
+        rig: Vec<CullTargets>,
+        rig_groups: OnceLock<Vec<wgpu::BindGroup>>,
     },
     /// The CPU culler over its own copy of the cull layout, and this frame's results;
     /// with occlusion, per display that culls by it its visibility words (the CPU's
@@ -55,8 +66,11 @@ enum Kind {
 /// What a culler is made for: the slots of room, the levels of detail, how many
 /// displays the coarse cull lists blocks for (0: no coarse cull), and whether it times
 /// the floor kernel ([`super::RendererOptions::cull_floor`]).
-#[derive(Clone, Copy, Debug)]
+#[derive(Clone, Debug)]
 pub(super) struct CullShape {
+    /// The views the rig cull culls together (GPU culling; empty: none), each in
+    /// [`Phase::Frustum`].
+    pub rig: Vec<CullView>,
     pub slots: u32,
     pub levels: u32,
     pub coarse_slots: u32,
@@ -73,6 +87,9 @@ pub(super) struct ViewCull {
     phase: Phase,
     pub(super) targets: CullTargets,
     bind_group: Option<wgpu::BindGroup>,
+    /// Its index among the rig cull's members, if it is one (the rig's dispatches cull
+    /// it in its phase).
+    member: Option<u32>,
 }
 
 impl Culler {
@@ -85,6 +102,10 @@ impl Culler {
         windows: Windows,
     ) -> Culler {
         let bins = layout.bin_ranges(shape.levels);
+        let members = match mode {
+            CullMode::Gpu => shape.rig.clone(),
+            CullMode::Cpu => Vec::new(),
+        };
         let kind = match mode {
             CullMode::Cpu => Kind::Cpu {
                 layout,
@@ -99,23 +120,32 @@ impl Culler {
                     occlusion: shape.occlusion.displays > 0,
                     tested: shape.tested,
                     blend: layout.bins.first_blend_bin() != u32::MAX,
+                    rig: !members.is_empty(),
                 };
                 let culler = GpuCuller::new(device, features, windows);
-                let (slots, levels) = (shape.slots, shape.levels);
-                let room = (shape.coarse_slots, shape.occlusion);
-                let scene = CullScene::new(device, &layout, slots, levels, room);
+                let rig_members = members.len() as u32;
+                let room = (shape.coarse_slots, shape.occlusion, rig_members);
+                let scene = CullScene::new(device, &layout, (shape.slots, shape.levels), room);
                 let scene = Box::new(scene);
                 let coarse = culler.coarse_bind_group(device, &scene);
+                let draws = bins.iter().map(|r| r.capacity).sum();
+                let rig = match rig_members {
+                    0 => Vec::new(),
+                    n => CullTargets::bank(device, shape.slots, draws, n),
+                };
                 Kind::Gpu {
                     culler,
                     scene,
                     coarse,
+                    rig,
+                    rig_groups: OnceLock::new(),
                 }
             }
         };
         Culler {
             kind,
             slots: shape.slots,
+            members,
             bins,
         }
     }
@@ -130,26 +160,43 @@ impl Culler {
         &self.bins
     }
 
-    /// `view`'s cull outputs (room for every slot and draw) and its bindings to the
-    /// frame's and the view's contexts.
+    /// `view`'s cull outputs (room for every slot and draw: a rig member's range of
+    /// the rig's) and its bindings to the frame's and the view's contexts.
     pub(super) fn view(
         &self,
         device: &wgpu::Device,
         (view, phase): (CullView, Phase),
         contexts: [&wgpu::Buffer; 2],
     ) -> ViewCull {
-        let targets = CullTargets::new(device, self.slots, self.draws());
-        let bind_group = match &self.kind {
-            Kind::Gpu { culler, scene, .. } => {
-                Some(culler.bind_group(device, scene, contexts, &targets))
+        let member =
+            (self.members.iter().position(|m| *m == view)).filter(|_| phase == Phase::Frustum);
+        let (targets, bind_group) = match &self.kind {
+            Kind::Gpu {
+                culler,
+                scene,
+                rig,
+                rig_groups,
+                ..
+            } => {
+                let targets = match member {
+                    Some(m) => rig[m].clone(),
+                    None => CullTargets::new(device, self.slots, self.draws()),
+                };
+                if member.is_some() {
+                    rig_groups
+                        .get_or_init(|| culler.rig_bind_groups(device, scene, contexts, &targets));
+                }
+                let group = culler.bind_group(device, scene, contexts, &targets);
+                (targets, Some(group))
             }
-            Kind::Cpu { .. } => None,
+            Kind::Cpu { .. } => (CullTargets::new(device, self.slots, self.draws()), None),
         };
         ViewCull {
             view,
             phase,
             targets,
             bind_group,
+            member: member.map(|m| m as u32),
         }
     }
 
@@ -213,44 +260,68 @@ impl Culler {
             .map_or(0, |out| view.targets.upload(queue, out))
     }
 
+    /// Writes a rig member's record for this frame from `context`, the context it culls
+    /// by (nothing for another view); returns the bytes written.
+    pub(super) fn write_member(
+        &self,
+        queue: &wgpu::Queue,
+        view: &ViewCull,
+        context: &DisplayContext,
+    ) -> u64 {
+        match (&self.kind, view.member) {
+            (Kind::Gpu { scene, .. }, Some(m)) => {
+                let record = RigView::new(context, view.targets.member_at());
+                scene.write_rig_member(queue, m, &record)
+            }
+            _ => 0,
+        }
+    }
+
     /// Records the frame's coarse cull (GPU culling with it on), timed as `coarse_cull`
-    /// inside a `frame` scope, and the floor kernel when asked for, timed as
-    /// `cull_floor`; `any` is any display's view (the frame passes read none of its
-    /// bindings; the floor writes its scratch, which its cull overwrites). Returns the
-    /// dispatches.
+    /// inside a `frame` scope, the floor kernel when asked for, timed as `cull_floor`,
+    /// and the rig cull, timed as `rig_cull`; `any` is any display's view (the coarse
+    /// passes read none of its bindings; without the rig cull the floor writes its
+    /// scratch, which its cull overwrites). Returns the dispatches.
     pub(super) fn encode_frame(
         &self,
         encoder: &mut wgpu::CommandEncoder,
         any: Option<&ViewCull>,
         rec: &mut Recorder,
     ) -> u32 {
-        let (
-            Kind::Gpu {
-                culler,
-                scene,
-                coarse,
-            },
-            Some(ViewCull {
-                bind_group: Some(display),
-                ..
-            }),
-        ) = (&self.kind, any)
+        let Kind::Gpu {
+            culler,
+            scene,
+            coarse,
+            rig_groups,
+            ..
+        } = &self.kind
         else {
             return 0;
         };
-        if coarse.is_none() && !culler.has_floor() {
+        let display = any.and_then(|v| v.bind_group.as_ref());
+        let rig = rig_groups.get().map_or(&[][..], Vec::as_slice);
+        let coarse = coarse.as_ref().zip(display);
+        if coarse.is_none() && !culler.has_floor() && rig.is_empty() {
             return 0;
         }
         rec.enter(encoder, "frame");
         let mut dispatches = 0;
-        if let Some(args) = coarse {
+        if let Some((args, display)) = coarse {
             let (mut pass, open) = rec.compute_pass(encoder, PassRecord::frame("coarse_cull"));
             dispatches += culler.encode_frame(&mut pass, scene, [display, args]);
             rec.close_compute(encoder, pass, open);
         }
         if culler.has_floor() {
             let (mut pass, open) = rec.compute_pass(encoder, PassRecord::frame("cull_floor"));
-            dispatches += u32::from(culler.encode_floor(&mut pass, scene, display));
+            dispatches += match rig.is_empty() {
+                true => culler.encode_floor(&mut pass, scene, display),
+                false => culler.encode_floor(&mut pass, scene, rig),
+            };
+            rec.close_compute(encoder, pass, open);
+        }
+        if !rig.is_empty() {
+            let (mut pass, open) = rec.compute_pass(encoder, PassRecord::frame("rig_cull"));
+            dispatches += culler.encode_rig(&mut pass, scene, rig);
             rec.close_compute(encoder, pass, open);
         }
         rec.leave(encoder);
@@ -259,7 +330,8 @@ impl Culler {
 
     /// Records `view`'s cull on the GPU (over its display's blocks with the coarse
     /// cull), its pass timed and logged as `what`; nothing on the CPU (`upload` wrote
-    /// it). Returns the dispatches.
+    /// it) or for a rig member (the frame's rig cull culled it). Returns the
+    /// dispatches.
     pub(super) fn encode(
         &self,
         encoder: &mut wgpu::CommandEncoder,
@@ -272,9 +344,11 @@ impl Culler {
                 culler,
                 scene,
                 coarse,
+                ..
             },
             Some(group),
-        ) = (&self.kind, &view.bind_group)
+            None,
+        ) = (&self.kind, &view.bind_group, view.member)
         else {
             return 0;
         };

@@ -19,6 +19,7 @@ use crate::renderer::options::StereoMode;
 use crate::renderer::plan::{CullView, FramePlan, FrameStats};
 use crate::renderer::recorder::{PassRecord, Recorder, begin_draw_pass};
 use crate::renderer::targets::TargetViews;
+use crate::shaders::Bound;
 use crate::shaders::DrawKey;
 
 /// One view of a stereo display (an eye, or a foveated display's inset): its own
@@ -86,6 +87,7 @@ impl ClassicPath {
             windows,
         );
         let shape = CullShape {
+            rig: Vec::new(),
             slots,
             levels: options.lod_levels(),
             coarse_slots: 0,
@@ -267,7 +269,7 @@ fn classic_displays(
     let usage = wgpu::BufferUsages::STORAGE | wgpu::BufferUsages::COPY_DST;
     let visible_list = || storage_buffer(device, "stereocull.visible", 4 * slots as u64, usage);
     let bind = |context: &wgpu::Buffer, list: &wgpu::Buffer| {
-        (drawing.drawer).bind_group(device, [frame, context], drawing.scene, list)
+        (drawing.drawer).bind_group(device, [frame, context], drawing.scene, list.bound())
     };
     let views = plan.resolved.displays.iter().map(|r| r.eyes.len());
     plan.displays

@@ -7,7 +7,7 @@ use crate::cull::gpu_buffers::{COUNTS_BYTES, CullTargets};
 use crate::cull::{BinDraws, CullOutput};
 use crate::error::Result;
 use crate::occlusion::PyramidShape;
-use crate::readback::read_pod;
+use crate::readback::read_pod_at;
 use crate::records::DrawArgs;
 use crate::renderer::culler::ViewCull;
 use crate::renderer::diagnostics::OcclusionCounts;
@@ -71,12 +71,17 @@ impl IndirectPath {
         let [draw_count, visible_total] = [counts[0], counts[1]];
         let visible = match visible_total {
             0 => Vec::new(),
-            n => read_pod(device, queue, &cull.visible, 4 * n as u64)?,
+            n => read_pod_at(
+                device,
+                queue,
+                (&cull.visible, cull.visible_at),
+                4 * n as u64,
+            )?,
         };
         let draws_bytes = (size_of::<DrawArgs>() as u32 * self.core.culler.draws()) as u64;
         Ok(CullOutput {
             visible,
-            draws: read_pod(device, queue, &cull.draws, draws_bytes)?,
+            draws: read_pod_at(device, queue, (&cull.draws, cull.draws_at), draws_bytes)?,
             draw_count,
             bins: (self.core.culler.bins().iter().zip(&counts[2..]))
                 .map(|(r, &count)| BinDraws {
@@ -153,5 +158,5 @@ impl IndirectPath {
 
 /// The counts buffer: the draw count, the visible total, each bin's draw count.
 fn read_counts(device: &wgpu::Device, queue: &wgpu::Queue, cull: &CullTargets) -> Result<Vec<u32>> {
-    read_pod(device, queue, &cull.counts, COUNTS_BYTES)
+    read_pod_at(device, queue, (&cull.counts, cull.counts_at), COUNTS_BYTES)
 }

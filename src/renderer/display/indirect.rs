@@ -75,6 +75,10 @@ impl IndirectPath {
             pyramid_texels: shapes.iter().flatten().map(|s| s.len()).max().unwrap_or(0),
         };
         let shape = CullShape {
+            rig: match options.rig_cull {
+                true => rig_members(plan, &shapes, coarse_slots > 0),
+                false => Vec::new(),
+            },
             slots,
             levels: options.lod_levels(),
             coarse_slots,
@@ -423,6 +427,27 @@ fn indirect_displays(
             }
         })
         .collect()
+}
+
+/// The views the rig cull culls together: every view of `plan` that culls by its
+/// frustum alone over every instance (not over the coarse cull's blocks): each display
+/// without occlusion (`shapes[i]` none), its far layer, and each inset pair. The
+/// light's cull stays apart: it runs in the frame's shadow pass, before the displays'
+/// culls, and its box is no display's.
+fn rig_members(plan: &FramePlan, shapes: &[Option<PyramidShape>], coarse: bool) -> Vec<CullView> {
+    if coarse {
+        return Vec::new();
+    }
+    let displays = (shapes.iter().enumerate())
+        .filter(|(_, s)| s.is_none())
+        .map(|(i, _)| CullView::Display(i));
+    let far = (plan.far.iter().zip(shapes).enumerate())
+        .filter(|(_, (far, shape))| far.is_some() && shape.is_none())
+        .map(|(i, _)| CullView::Far(i));
+    let insets = (plan.insets.iter().enumerate())
+        .filter(|(_, inset)| inset.is_some())
+        .map(|(i, _)| CullView::Inset(i));
+    displays.chain(far).chain(insets).collect()
 }
 
 /// Each display's pipeline variant: multiview for stereo in `multiview`, else one, two

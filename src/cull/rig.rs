@@ -1,0 +1,102 @@
+//! The rig cull: every view of the frame that culls by its frustum alone, culled by one
+//! set of dispatches (`cull_rig`, `draws_rig`, `compact_rig` and, with blended bins,
+//! `blend_rig` in `wgsl/`). An invocation reads each sphere once and chooses its level
+//! once for the whole rig, then tests it against every member's planes; each member
+//! keeps its own scratch and its own ranges of the rig's shared targets, so its outputs
+//! are byte for byte what its own three dispatches write (the cull contract and the
+//! CPU twin do not change).
+//!
+//! One set of dispatches takes up to [`MAX_RIG_VIEWS`] members: a member costs the cull
+//! pass a running count (a register) and one workgroup scan (three barriers), the draws
+//! and blend passes a workgroup, the compact pass a read of its entry per position.
+//! A larger rig culls in groups of that many members, one set of dispatches each.
+
+use encase::ShaderType;
+use glam::{Vec3, Vec4};
+
+use crate::contexts::DisplayContext;
+
+/// Members of one set of rig dispatches; larger rigs cull in groups of this many.
+pub const MAX_RIG_VIEWS: usize = 16;
+
+/// One member of the rig cull (`RigView` in `wgsl/shared/records.wgsl`): what its
+/// context holds for culling and where its outputs start in the shared targets, in
+/// elements.
+#[derive(Clone, Copy, Debug, Default, PartialEq, ShaderType)]
+pub struct RigView {
+    /// Its frustum's planes ([`DisplayContext::planes`]).
+    pub planes: [Vec4; 6],
+    /// The apex its far split is measured from.
+    pub position: Vec3,
+    /// Its far split: 0 none, 1 keep near, 2 keep far.
+    pub split_keep: u32,
+    /// Where its blended instances sort from ([`DisplayContext::sort_origin`]).
+    pub sort_origin: Vec3,
+    /// The far split's distance.
+    pub split_distance: f32,
+    /// The cull contract's V.
+    pub instances_per_object: u32,
+    /// Its visible list's first word in the shared visible buffer.
+    pub visible_at: u32,
+    /// Its first draw in the shared draws buffer.
+    pub draws_at: u32,
+    /// Its counts' first word in the shared counts buffer.
+    pub counts_at: u32,
+}
+
+/// Where a member's outputs start in the shared targets, in elements (words, draws,
+/// words).
+#[derive(Clone, Copy, Debug, Default, PartialEq, Eq)]
+pub struct MemberAt {
+    /// Its visible list's first word.
+    pub visible: u32,
+    /// Its first draw.
+    pub draws: u32,
+    /// Its counts' first word.
+    pub counts: u32,
+}
+
+impl RigView {
+    /// The member culled as `context` says, its outputs `at`.
+    pub fn new(context: &DisplayContext, at: MemberAt) -> RigView {
+        RigView {
+            planes: context.planes,
+            position: context.position,
+            split_keep: context.split_keep,
+            sort_origin: context.sort_origin(),
+            split_distance: context.split_distance,
+            instances_per_object: context.instances_per_object,
+            visible_at: at.visible,
+            draws_at: at.draws,
+            counts_at: at.counts,
+        }
+    }
+}
+
+/// One set of rig dispatches' members (`RigCull` in `wgsl/shared/records.wgsl`): the
+/// first `members` of `views`.
+#[derive(Clone, Copy, Debug, PartialEq, ShaderType)]
+pub struct RigCull {
+    /// The members, then unused records.
+    pub views: [RigView; MAX_RIG_VIEWS],
+    /// How many of `views` are members.
+    pub members: u32,
+}
+
+impl RigCull {
+    /// `views` (at most [`MAX_RIG_VIEWS`]; the rest are dropped) as one set's members.
+    pub fn new(views: &[RigView]) -> RigCull {
+        let mut all = [RigView::default(); MAX_RIG_VIEWS];
+        let members = views.len().min(MAX_RIG_VIEWS);
+        all[..members].copy_from_slice(&views[..members]);
+        RigCull {
+            views: all,
+            members: members as u32,
+        }
+    }
+}
+
+/// Sets of rig dispatches for `members` members: groups of [`MAX_RIG_VIEWS`].
+pub fn groups(members: u32) -> u32 {
+    members.div_ceil(MAX_RIG_VIEWS as u32)
+}

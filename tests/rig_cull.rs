@@ -1,0 +1,179 @@
+//! The rig cull (`stereocull::cull::rig`): one set of dispatches culls every view of the
+//! frame that culls by its frustum alone. On random rigs of 1 to 12 displays (stereo,
+//! mono, foveated, head-mounted and world-fixed, with LOD, blended bins, the far layer
+//! and the inset cull), its buffers are byte for byte the CPU culler's and each view's
+//! own dispatches'; its images are exactly theirs; and the frame's dispatch count
+//! follows a formula in which the display count does not appear.
+
+mod support;
+
+use rand::{Rng, SeedableRng};
+use stereocull::cull::CullOutput;
+use stereocull::cull::rig::MAX_RIG_VIEWS;
+use stereocull::device::Gpu;
+use stereocull::procedural;
+use stereocull::renderer::{CoarseMode, CullMode, Renderer, RendererOptions};
+use stereocull::rig::Rig;
+use stereocull::scene::Scene;
+use support::{frustum_only, gpu};
+
+/// `displays` displays drawn at random (fixed `seed`) from every preset's (a CAVE's
+/// walls are world-fixed, the others head-mounted; mono panels, a foveated display),
+/// renamed apart, at 32 x 32 pixels per view, the viewer turned at random.
+fn mixed_rig(displays: usize, seed: u64) -> Rig {
+    let mut rng = rand_pcg::Pcg64::seed_from_u64(seed);
+    let pool: Vec<_> = ["hmd", "cave", "hmd-peripheral", "hmd-foveated"]
+        .iter()
+        .flat_map(|p| Rig::preset(p).unwrap().displays)
+        .collect();
+    let mut rig = Rig::preset("cave").unwrap();
+    rig.viewer.yaw_deg = rng.random_range(-180.0..180.0);
+    rig.viewer.pitch_deg = rng.random_range(-30.0..30.0);
+    rig.displays = (0..displays)
+        .map(|k| {
+            let mut d = pool[rng.random_range(0..pool.len())].clone();
+            d.name = format!("d{k}");
+            d.resolution = [32, 32];
+            d
+        })
+        .collect();
+    rig
+}
+
+/// Every view's cull outputs after one frame: per display its own, its far layer's and
+/// its inset pair's (where it has them).
+fn culls(gpu: &Gpu, renderer: &Renderer, rig: &Rig) -> Vec<Option<CullOutput>> {
+    let d = renderer.diagnostics(&gpu.device, &gpu.queue);
+    (0..rig.displays.len())
+        .flat_map(|i| {
+            [
+                Some(d.cull(i).unwrap()),
+                d.far_cull(i).unwrap(),
+                d.inset_cull(i).unwrap(),
+            ]
+        })
+        .collect()
+}
+
+fn options(cull: CullMode, rig_cull: bool, k: u64) -> RendererOptions {
+    RendererOptions {
+        cull,
+        rig_cull,
+        lod: k.is_multiple_of(2),
+        far_layer: k % 3 != 1,
+        inset_cull: k % 2 == 1,
+        coarse_cull: CoarseMode::Off,
+        ..frustum_only()
+    }
+}
+
+/// A scene of 3,000 instances around the rig, its meshes in every material bin.
+fn scene(seed: u64) -> Scene {
+    support::with_random_bins(procedural::scene(3_000, 9, seed), seed)
+}
+
+#[test]
+fn the_rig_cull_matches_the_cpu_and_each_views_own_cull_on_random_rigs() {
+    let gpu = gpu();
+    for displays in 1..=12 {
+        let k = displays as u64;
+        let rig = mixed_rig(displays, k);
+        let scene = scene(k);
+        let rig_cull = support::one_frame(&gpu, &scene, &rig, options(CullMode::Gpu, true, k));
+        let own = support::one_frame(&gpu, &scene, &rig, options(CullMode::Gpu, false, k));
+        let cpu = support::one_frame(&gpu, &scene, &rig, options(CullMode::Cpu, true, k));
+        let got = culls(&gpu, &rig_cull, &rig);
+        assert!(
+            got.iter().flatten().any(|c| !c.visible.is_empty()),
+            "{displays} displays: something visible"
+        );
+        assert!(
+            got == culls(&gpu, &own, &rig),
+            "{displays} displays: own culls"
+        );
+        assert!(
+            got == culls(&gpu, &cpu, &rig),
+            "{displays} displays: CPU culls"
+        );
+    }
+}
+
+/// The frame's cull dispatches on the GPU without occlusion or the coarse cull: three
+/// (four with blended bins) per group of [`MAX_RIG_VIEWS`] views, all at the frame
+/// level; none per display.
+fn formula(views: usize, blended: bool) -> u32 {
+    let per_group = 3 + u32::from(blended);
+    views.div_ceil(MAX_RIG_VIEWS) as u32 * per_group
+}
+
+#[test]
+fn the_frames_dispatches_do_not_grow_with_the_displays() {
+    let gpu = gpu();
+    for (displays, far_layer) in [(1, false), (5, false), (12, false), (12, true)] {
+        let rig = mixed_rig(displays, 40 + displays as u64);
+        let scene = scene(7);
+        let options = RendererOptions {
+            far_layer,
+            inset_cull: true,
+            coarse_cull: CoarseMode::Off,
+            ..frustum_only()
+        };
+        let mut renderer = Renderer::new(&gpu.device, &scene, &rig, options).unwrap();
+        let targets = renderer.create_targets(&gpu.device);
+        let stats = renderer
+            .submit_frame(&gpu.device, &gpu.queue, &rig, 0.0, &targets)
+            .unwrap();
+        let d = renderer.diagnostics(&gpu.device, &gpu.queue);
+        let far = (0..displays).filter(|&i| d.far_cull(i).unwrap().is_some());
+        let insets = (0..displays).filter(|&i| d.inset_cull(i).unwrap().is_some());
+        let views = displays + far.count() + insets.count();
+        let want = formula(views, true);
+        assert_eq!(
+            stats.dispatch_levels.frame, want,
+            "{displays} displays, {views} views"
+        );
+        assert_eq!(stats.dispatch_levels.display, 0, "{displays} displays");
+        assert_eq!(stats.dispatches, want);
+    }
+}
+
+#[test]
+fn the_rig_cull_draws_the_images_each_views_own_cull_draws() {
+    let gpu = gpu();
+    for displays in [3, 12] {
+        let k = displays as u64;
+        let rig = mixed_rig(displays, 80 + k);
+        let scene = scene(k);
+        let with = support::render(&gpu, &scene, &rig, options(CullMode::Gpu, true, k)).unwrap();
+        let without =
+            support::render(&gpu, &scene, &rig, options(CullMode::Gpu, false, k)).unwrap();
+        // Exact: the same pipelines draw the same draws from the same buffers' bytes in
+        // the same order; only where the culls ran differs.
+        for (d, (a, b)) in with.iter().zip(&without).enumerate() {
+            assert!(a == b, "{displays} displays: display {d}'s image differs");
+        }
+    }
+}
+
+#[test]
+fn the_twelve_display_rig_file_runs() {
+    let gpu = gpu();
+    let path = concat!(env!("CARGO_MANIFEST_DIR"), "/assets/rigs/ring-12.json");
+    let mut rig = Rig::load(path).unwrap();
+    assert_eq!(rig.displays.len(), 12);
+    for d in &mut rig.displays {
+        d.resolution = [32, 32];
+    }
+    let scene = scene(12);
+    let gpu_culled = support::one_frame(&gpu, &scene, &rig, options(CullMode::Gpu, true, 0));
+    let cpu_culled = support::one_frame(&gpu, &scene, &rig, options(CullMode::Cpu, true, 0));
+    let got = culls(&gpu, &gpu_culled, &rig);
+    assert!(got == culls(&gpu, &cpu_culled, &rig));
+    let walls_with_something = got.iter().step_by(3).flatten();
+    assert!(
+        walls_with_something
+            .filter(|c| !c.visible.is_empty())
+            .count()
+            >= 6
+    );
+}
