@@ -7,6 +7,7 @@ use encase::ShaderType;
 use glam::{Mat4, Vec2, Vec3, Vec4};
 
 use crate::cull::CoarseCull;
+use crate::cull::rig::{MemberAt, RigView};
 use crate::frustum::View;
 use crate::rig::{ResolvedDisplay, ViewLayout, Viewer};
 use crate::shadow::LightView;
@@ -202,6 +203,21 @@ impl DisplayContext {
             (2, _) => self.position,
             (_, true) => (self.eye[0].position + self.eye[1].position) * 0.5,
             (_, false) => self.eye[0].position,
+        }
+    }
+
+    /// Its record as a member of the rig cull, its outputs `at`: what it culls by.
+    pub fn rig_view(&self, at: MemberAt) -> RigView {
+        RigView {
+            planes: self.planes,
+            position: self.position,
+            split_keep: self.split_keep,
+            sort_origin: self.sort_origin(),
+            split_distance: self.split_distance,
+            instances_per_object: self.instances_per_object,
+            visible_at: at.visible,
+            draws_at: at.draws,
+            counts_at: at.counts,
         }
     }
 

@@ -593,7 +593,8 @@ fn the_inset_cull_is_exact_and_smaller() {
     }
 }
 
-/// One pass, two multi-draws (the outer pair's, the insets'), two culls.
+/// One pass, two multi-draws (the outer pair's, the insets'), two culls: with the rig
+/// cull, two members of its one set of dispatches; without, a cull pass each.
 #[test]
 fn the_inset_cull_adds_one_cull_and_one_draw() {
     let gpu = gpu();
@@ -607,7 +608,20 @@ fn the_inset_cull_adds_one_cull_and_one_draw() {
         .unwrap();
     assert_eq!(stats.draw_calls, 2);
     let names: Vec<_> = renderer.passes().iter().map(|p| p.name).collect();
+    assert_eq!(names, ["rig_cull", "draw"]);
+    assert_eq!(stats.dispatches, 3, "the rig cull's three for both culls");
+    let apart = RendererOptions {
+        rig_cull: false,
+        ..inset_culled(CullMode::Gpu)
+    };
+    let mut renderer = stereocull::Renderer::new(&gpu.device, &scene, &rig, apart).unwrap();
+    let stats = renderer
+        .submit_frame(&gpu.device, &gpu.queue, &rig, 0.0, &targets)
+        .unwrap();
+    assert_eq!(stats.draw_calls, 2);
+    let names: Vec<_> = renderer.passes().iter().map(|p| p.name).collect();
     assert_eq!(names, ["cull", "inset_cull", "draw"]);
+    assert_eq!(stats.dispatches, 6);
 }
 
 /// Lavapipe's multiview (Mesa 22.3) clips some triangles crossing the near plane a pixel

@@ -14,6 +14,7 @@ use rand_pcg::Pcg64Mcg;
 use stereocull::Error;
 use stereocull::contexts::{DisplayContext, FrameContext};
 use stereocull::cull::cpu;
+use stereocull::cull::rig::RigView;
 use stereocull::device::Gpu;
 use stereocull::live::{Handle, LiveScene};
 use stereocull::places::Places;
@@ -458,8 +459,11 @@ fn a_moved_instance_renders_like_a_fresh_scene_with_it_there() {
             "the scatter dispatch is gone"
         );
         if mode == StereoMode::Instanced {
-            // The frame and display contexts, nothing per instance.
-            let contexts = FrameContext::min_size().get() + DisplayContext::min_size().get();
+            // The frame and display contexts and the display's record in the rig cull,
+            // nothing per instance.
+            let contexts = FrameContext::min_size().get()
+                + DisplayContext::min_size().get()
+                + RigView::min_size().get();
             assert_eq!(still.bytes_uploaded, contexts, "{still:?}");
         }
     }
@@ -514,7 +518,11 @@ fn edits_of_two_syncs_before_a_frame_merge() {
     let second = renderer.sync(&gpu.device, &gpu.queue, &mut live).unwrap();
     assert_eq!(second.moved, 1000);
     let frame = frame_matches_reference(&gpu, &mut renderer, &live, &rig);
-    assert_eq!(frame.dispatches, 1 + 5 * 3, "one scatter for both syncs");
+    assert_eq!(
+        frame.dispatches,
+        1 + 3,
+        "one scatter for both syncs, the rig cull's three for the five walls"
+    );
 }
 
 /// A move staged by one sync, then its instance removed before the frame (some slots

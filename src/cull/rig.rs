@@ -14,23 +14,21 @@
 use encase::ShaderType;
 use glam::{Vec3, Vec4};
 
-use crate::contexts::DisplayContext;
-
-/// Members of one set of rig dispatches; larger rigs cull in groups of this many.
-pub const MAX_RIG_VIEWS: usize = 16;
+pub use crate::shaders::MAX_RIG_VIEWS;
 
 /// One member of the rig cull (`RigView` in `wgsl/shared/records.wgsl`): what its
 /// context holds for culling and where its outputs start in the shared targets, in
 /// elements.
 #[derive(Clone, Copy, Debug, Default, PartialEq, ShaderType)]
 pub struct RigView {
-    /// Its frustum's planes ([`DisplayContext::planes`]).
+    /// Its frustum's planes ([`crate::contexts::DisplayContext::planes`]).
     pub planes: [Vec4; 6],
     /// The apex its far split is measured from.
     pub position: Vec3,
     /// Its far split: 0 none, 1 keep near, 2 keep far.
     pub split_keep: u32,
-    /// Where its blended instances sort from ([`DisplayContext::sort_origin`]).
+    /// Where its blended instances sort from
+    /// ([`crate::contexts::DisplayContext::sort_origin`]).
     pub sort_origin: Vec3,
     /// The far split's distance.
     pub split_distance: f32,
@@ -45,7 +43,7 @@ pub struct RigView {
 }
 
 /// Where a member's outputs start in the shared targets, in elements (words, draws,
-/// words).
+/// words). [`crate::contexts::DisplayContext::rig_view`] makes a member's record.
 #[derive(Clone, Copy, Debug, Default, PartialEq, Eq)]
 pub struct MemberAt {
     /// Its visible list's first word.
@@ -54,23 +52,6 @@ pub struct MemberAt {
     pub draws: u32,
     /// Its counts' first word.
     pub counts: u32,
-}
-
-impl RigView {
-    /// The member culled as `context` says, its outputs `at`.
-    pub fn new(context: &DisplayContext, at: MemberAt) -> RigView {
-        RigView {
-            planes: context.planes,
-            position: context.position,
-            split_keep: context.split_keep,
-            sort_origin: context.sort_origin(),
-            split_distance: context.split_distance,
-            instances_per_object: context.instances_per_object,
-            visible_at: at.visible,
-            draws_at: at.draws,
-            counts_at: at.counts,
-        }
-    }
 }
 
 /// One set of rig dispatches' members (`RigCull` in `wgsl/shared/records.wgsl`): the

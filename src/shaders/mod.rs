@@ -17,6 +17,11 @@ pub const WORKGROUP_SIZE: u32 = 256;
 pub const SPAN: u32 = 16;
 const _: () = assert!(SPAN <= 128 && crate::scene::MAX_LODS <= 4);
 
+/// Members of one set of rig dispatches ([`crate::cull::rig`]); larger rigs cull in
+/// groups of this many. Each member costs the rig's cull pass a running count per
+/// invocation: 16 keeps them in registers.
+pub const MAX_RIG_VIEWS: usize = 16;
+
 /// Cull positions per block of the frame's coarse cull ([`crate::cull::coarse`]): the
 /// CPU culler's 64 lanes.
 pub const BLOCK: u32 = 64;
@@ -95,7 +100,7 @@ pub fn scatter_source(windows: &Windows, kind: EditKind) -> String {
         EditKind::Records => include_str!("../../wgsl/scatter_records.wgsl"),
     };
     let shared = include_str!("../../wgsl/shared/scatter.wgsl");
-    let rig = crate::cull::rig::MAX_RIG_VIEWS;
+    let rig = MAX_RIG_VIEWS;
     let span =
         format!("const VISIBILITY_SPAN: u32 = {SPAN}u;\nconst MAX_RIG_VIEWS: u32 = {rig}u;\n");
     [&span, RECORDS, &bindings, shared, body].concat()
@@ -319,7 +324,7 @@ pub fn decode_source_with(views: u32, windows: &Windows) -> String {
 
 fn constants() -> String {
     let lods = crate::scene::MAX_LODS;
-    let rig = crate::cull::rig::MAX_RIG_VIEWS;
+    let rig = MAX_RIG_VIEWS;
     format!(
         "\nconst WORKGROUP_SIZE: u32 = {WORKGROUP_SIZE}u;\nconst MAX_LODS: u32 = {lods}u;\n\
          const MAX_RIG_VIEWS: u32 = {rig}u;\n\

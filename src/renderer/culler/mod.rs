@@ -20,7 +20,6 @@ use crate::cull::CullOutput;
 use crate::cull::cpu;
 use crate::cull::gpu::{CullerFeatures, GpuCuller};
 use crate::cull::gpu_buffers::{CullScene, CullTargets, OcclusionRoom};
-use crate::cull::rig::RigView;
 use crate::error::Result;
 use crate::occlusion::{Phase, cull_early};
 use crate::records::{CullLayout, MoveEdit, PlaceEdit};
@@ -270,7 +269,7 @@ impl Culler {
     ) -> u64 {
         match (&self.kind, view.member) {
             (Kind::Gpu { scene, .. }, Some(m)) => {
-                let record = RigView::new(context, view.targets.member_at());
+                let record = context.rig_view(view.targets.member_at());
                 scene.write_rig_member(queue, m, &record)
             }
             _ => 0,
