@@ -178,8 +178,10 @@ fn without_grown_radii_corner_spheres_are_dropped() {
 #[test]
 fn auto_runs_the_coarse_cull_where_it_pays() {
     let gpu = support::gpu();
+    // Without the rig cull, as GPU culling without it and CPU culling decide.
     let auto = |cull| RendererOptions {
         cull,
+        rig_cull: false,
         ..frustum_only()
     };
     let on = |preset: &str, cull, device| {
@@ -194,6 +196,18 @@ fn auto_runs_the_coarse_cull_where_it_pays() {
             "one display: the coarse cull would only add tests"
         );
     }
+    // The rig cull reads each sphere once for the rig: the GPU needs no coarse cull.
+    let resolved = Rig::preset("cave").unwrap().resolve().unwrap();
+    let rig_culled = RendererOptions {
+        rig_cull: true,
+        ..auto(CullMode::Gpu)
+    };
+    assert!(!rig_culled.coarse_for(&resolved, None));
+    let cpu = RendererOptions {
+        cull: CullMode::Cpu,
+        ..rig_culled
+    };
+    assert!(cpu.coarse_for(&resolved, None), "the CPU culls as before");
     let software = gpu.device.adapter_info().device_type == wgpu::DeviceType::Cpu;
     assert_eq!(
         on("cave", CullMode::Gpu, Some(&gpu.device)),

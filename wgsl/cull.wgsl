@@ -25,7 +25,6 @@ fn cull(
 // once, each member's in its own scratch. Each sphere is read once and its level chosen
 // once (the frame's, whatever the member) for the whole rig; each member's planes and
 // split then decide its entry, as the member's own `cull` would (same operations).
-// The workgroup scans once per member: the barriers of a display's cull, per member.
 @compute @workgroup_size(WORKGROUP_SIZE)
 fn cull_rig(
     @builtin(workgroup_id) wid: vec3<u32>,
@@ -55,10 +54,31 @@ fn cull_rig(
             }
         }
     }
-    for (var b = 0u; b < rig.members; b++) {
-        member = b;
-        let counts = (vec4(fields[b]) >> vec4(0u, 7u, 14u, 21u)) & vec4(0x7fu);
-        write_span_sums(group, local, n, workgroup_exclusive_scan4(local, counts));
+    scan_rig_fields(group, local, n, fields);
+}
+
+// The workgroup's scans of every member's span counts, eight (member, level) fields at
+// a time: a workgroup's total per field is at most WORKGROUP_SIZE * SPAN = 4096, so two
+// fit a word. Field f is member f / levels's level f % levels. Three barriers per eight
+// fields, where a scan per member would take three per member.
+fn scan_rig_fields(group: u32, local: u32, n: u32, fields: array<u32, MAX_RIG_VIEWS>) {
+    let all = rig.members * params.lod_levels;
+    for (var base = 0u; base < all; base += 8u) {
+        var packed = vec4(0u);
+        for (var i = 0u; i < min(8u, all - base); i++) {
+            let f = base + i;
+            let count = (fields[f / params.lod_levels] >> (7u * (f % params.lod_levels))) & 0x7fu;
+            packed[i / 2u] |= count << (16u * (i % 2u));
+        }
+        let scan = workgroup_exclusive_scan4(local, packed);
+        for (var i = 0u; i < min(8u, all - base); i++) {
+            let f = base + i;
+            member = f / params.lod_levels;
+            let half = 16u * (i % 2u);
+            let before = (scan.before[i / 2u] >> half) & 0xffffu;
+            let total = (scan.total[i / 2u] >> half) & 0xffffu;
+            write_level_sums(vec2(group, local), n, f % params.lod_levels, vec2(before, total));
+        }
     }
 }
 
@@ -90,18 +110,25 @@ fn cull_span(span: u32, n: u32) -> vec4<u32> {
 // The span at `index` of workgroup `group`: its prefix within the workgroup per level,
 // and (index 0) the workgroup's totals.
 fn write_span_sums(group: u32, index: u32, n: u32, scan: Scan4) {
+    for (var l = 0u; l < params.lod_levels; l++) {
+        write_level_sums(vec2(group, index), n, l, vec2(scan.before[l], scan.total[l]));
+    }
+}
+
+// write_span_sums for one level: `sums` the span's prefix and the workgroup's total.
+fn write_level_sums(at: vec2<u32>, n: u32, level: u32, sums: vec2<u32>) {
     let spans = span_count(n);
+    let group = at.x;
+    let index = at.y;
     if (group >= group_count(spans)) {
         return;
     }
     let span = group * WORKGROUP_SIZE + index;
-    for (var l = 0u; l < params.lod_levels; l++) {
-        if (span < spans) {
-            span_sums[sum_index(l * spans + span)] = scan.before[l];
-        }
-        if (index == 0u) {
-            span_sums[sum_index(group_slot(n, l, group))] = scan.total[l];
-        }
+    if (span < spans) {
+        span_sums[sum_index(level * spans + span)] = sums.x;
+    }
+    if (index == 0u) {
+        span_sums[sum_index(group_slot(n, level, group))] = sums.y;
     }
 }
 

@@ -95,9 +95,11 @@ pub enum CullMode {
 pub enum CoarseMode {
     /// On where it is expected to save sphere tests by a fifth or more
     /// ([`crate::rig::ResolvedRig::expected_coarse_tests`]): rigs of several displays
-    /// (`hmd-peripheral`, `cave`), not one display. Off for GPU culling on software
-    /// adapters (lavapipe), where wgpu's validation of indirect calls (on by default)
-    /// costs milliseconds per indirect dispatch, more than the cull saves.
+    /// (`hmd-peripheral`, `cave`), not one display. Off for GPU culling with the rig
+    /// cull ([`RendererOptions::rig_cull`]: each sphere is read once for the rig
+    /// already) and on software adapters (lavapipe), where wgpu's validation of
+    /// indirect calls (on by default) costs milliseconds per indirect dispatch, more
+    /// than the cull saves.
     #[default]
     Auto,
     /// Always.
@@ -247,7 +249,11 @@ impl RendererOptions {
                 let software =
                     |d: &wgpu::Device| d.adapter_info().device_type == wgpu::DeviceType::Cpu;
                 let gains = resolved.expected_coarse_tests() <= 0.8;
-                gains && !(self.cull == CullMode::Gpu && device.is_some_and(software))
+                // GPU culling with the rig cull reads each sphere once for the whole
+                // rig already, in a fixed number of dispatches that the coarse cull's
+                // per-display passes would multiply again.
+                let gpu = self.cull == CullMode::Gpu;
+                gains && !(gpu && (self.rig_cull || device.is_some_and(software)))
             }
         }
     }

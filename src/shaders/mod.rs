@@ -16,6 +16,9 @@ pub const WORKGROUP_SIZE: u32 = 256;
 /// per invocation still leave 65,536 invocations at 1M instances.
 pub const SPAN: u32 = 16;
 const _: () = assert!(SPAN <= 128 && crate::scene::MAX_LODS <= 4);
+// The rig cull scans two (member, level) counts to a word: a workgroup's total must fit
+// 16 bits (`scan_rig_fields` in wgsl/cull.wgsl).
+const _: () = assert!(WORKGROUP_SIZE * SPAN < 1 << 16);
 
 /// Members of one set of rig dispatches ([`crate::cull::rig`]); larger rigs cull in
 /// groups of this many. Each member costs the rig's cull pass a running count per
