@@ -218,6 +218,7 @@ impl DisplayContext {
             visible_at: at.visible,
             draws_at: at.draws,
             counts_at: at.counts,
+            block: CoarseCull::around(self.planes),
         }
     }
 

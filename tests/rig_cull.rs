@@ -98,6 +98,32 @@ fn the_rig_cull_matches_the_cpu_and_each_views_own_cull_on_random_rigs() {
     }
 }
 
+/// The rig's cull skips a member's sphere tests for a span whose box fails the
+/// member's block test (the coarse cull's guarantee, per span): on rigs anywhere within
+/// a million meters and scenes from a tenth of a millimeter to a hundred meters, out to
+/// two thousand kilometers, it keeps exactly what the CPU keeps.
+#[test]
+fn the_rig_cull_keeps_what_the_cpu_keeps_far_from_the_origin() {
+    let gpu = gpu();
+    for (k, rig) in support::presets_and_random_rigs(5).into_iter().enumerate() {
+        let scene = support::extreme_scene(&rig, 20_000, 5, 90 + k as u64);
+        let options = |cull| RendererOptions {
+            cull,
+            lod: true,
+            coarse_cull: CoarseMode::Off,
+            ..frustum_only()
+        };
+        let got = support::one_frame(&gpu, &scene, &rig, options(CullMode::Gpu));
+        let want = support::one_frame(&gpu, &scene, &rig, options(CullMode::Cpu));
+        let got = culls(&gpu, &got, &rig);
+        assert!(
+            got.iter().flatten().any(|c| !c.visible.is_empty()),
+            "rig {k}"
+        );
+        assert!(got == culls(&gpu, &want, &rig), "rig {k}");
+    }
+}
+
 /// The frame's cull dispatches on the GPU without occlusion or the coarse cull: three
 /// (four with blended bins) per group of [`MAX_RIG_VIEWS`] views, all at the frame
 /// level; none per display.

@@ -463,6 +463,11 @@ fn rig_records_match_wgsl() {
         visible_at: 5,
         draws_at: 6,
         counts_at: 7,
+        block: CoarseCull {
+            planes: std::array::from_fn(|i| Vec4::splat(k + 20.0 + i as f32)),
+            inflation: k + 30.0,
+            slack: k + 31.0,
+        },
     };
     check_uniform(
         "RigView",
@@ -477,8 +482,14 @@ fn rig_records_match_wgsl() {
             ("visible_at", f32::from_bits(5)),
             ("draws_at", f32::from_bits(6)),
             ("counts_at", f32::from_bits(7)),
+            ("block", 21.0),
         ],
     );
+    let (members, _) = wgsl_struct(&module(), "RigView");
+    let block = members.iter().find(|(m, _)| m == "block").unwrap().1;
+    let (test, _) = wgsl_struct(&module(), "CoarseTest");
+    let inflation = test.iter().find(|(m, _)| m == "inflation").unwrap().1;
+    assert_eq!(f32_at(&uniform_bytes(&view(1.0)), block + inflation), 31.0);
     // Three members of MAX_RIG_VIEWS: the third's planes a whole RigView after the
     // second's, the count after every record.
     let views: Vec<RigView> = (0..3).map(|k| view(100.0 * k as f32)).collect();

@@ -25,6 +25,8 @@ fn cull(
 // once, each member's in its own scratch. Each sphere is read once and its level chosen
 // once (the frame's, whatever the member) for the whole rig; each member's planes and
 // split then decide its entry, as the member's own `cull` would (same operations).
+// Members outside, positions inside: a member's record is loaded once per span, not
+// once per position (on lavapipe a load at a member's index is a gather per lane).
 @compute @workgroup_size(WORKGROUP_SIZE)
 fn cull_rig(
     @builtin(workgroup_id) wid: vec3<u32>,
@@ -34,25 +36,44 @@ fn cull_rig(
     let n = params.instance_count;
     let group = wid.y * groups.x + wid.x;
     let first = (group * WORKGROUP_SIZE + local) * SPAN;
-    // Per member, its span's visible positions so far per level (the entry's fields).
+    let count = select(0u, min(SPAN, n - first), first < n);
+    var spheres: array<vec4<f32>, SPAN>;
+    var low = vec3(3.0e38);
+    var high = vec3(-3.0e38);
+    for (var i = 0u; i < count; i++) {
+        let s = spheres_at(first + i);
+        spheres[i] = s;
+        low = min(low, s.xyz - s.w);
+        high = max(high, s.xyz + s.w);
+    }
+    let bound = grown_bound(low, high);
+    // Each position's level (two bits), chosen when a member first keeps it.
+    var levels = 0u;
+    var chosen = 0u;
+    // Per member, its span's visible count per level (the entry's fields).
     var fields: array<u32, MAX_RIG_VIEWS>;
-    for (var j = first; j < min(first + SPAN, n); j++) {
-        let s = spheres_at(j);
-        var level = MAX_LODS;
-        for (var b = 0u; b < rig.members; b++) {
-            let view = &rig.views[b];
+    for (var b = 0u; b < rig.members; b++) {
+        let view = rig.views[b];
+        // The coarse cull's guarantee, for a span: a sphere the member keeps makes the
+        // span's box pass its block test. A span that fails keeps nothing.
+        let tested = block_test(view.block, bound.sphere, bound.extent);
+        var field = 0u;
+        for (var i = 0u; i < count; i++) {
+            let s = spheres[i];
             var entry = 0u;
-            if (sphere_in_planes((*view).planes, s) && in_split_of((*view).split_keep, (*view).split_distance, (*view).position, s)) {
-                if (level == MAX_LODS) {
-                    level = lod_level(j, s);
+            if (tested && sphere_in_planes(view.planes, s) && in_split_of(view.split_keep, view.split_distance, view.position, s)) {
+                if (((chosen >> i) & 1u) == 0u) {
+                    levels |= lod_level(first + i, s) << (2u * i);
+                    chosen |= 1u << i;
                 }
-                entry = ENTRY_VISIBLE | (level << ENTRY_LEVEL_SHIFT);
+                entry = ENTRY_VISIBLE | (((levels >> (2u * i)) & 3u) << ENTRY_LEVEL_SHIFT);
             }
-            entries[b * params.member_entries + j] = fields[b] | entry;
+            entries[b * params.member_entries + first + i] = field | entry;
             if (entry != 0u) {
-                fields[b] += 1u << (7u * level);
+                field += 1u << (7u * ((levels >> (2u * i)) & 3u));
             }
         }
+        fields[b] = field;
     }
     scan_rig_fields(group, local, n, fields);
 }

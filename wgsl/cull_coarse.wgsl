@@ -21,20 +21,6 @@ fn grown_test(planes: array<vec4<f32>, 6>, inflation: f32, slack: f32, s: vec4<f
     return true;
 }
 
-// A block's box (center c.xyz, half extents e) against a slot's test. The CPU twin
-// is CoarseCull::test_block.
-fn block_test(t: CoarseTest, c: vec4<f32>, e: vec3<f32>) -> bool {
-    let slack = t.slack * (abs(c.x) + abs(c.y) + abs(c.z));
-    for (var i = 0u; i < 6u; i++) {
-        let p = t.planes[i];
-        let reach = (abs(p.x) * e.x + abs(p.y) * e.y + abs(p.z) * e.z) * t.inflation;
-        if (p.x * c.x + p.y * c.y + p.z * c.z + p.w < -(reach + slack)) {
-            return false;
-        }
-    }
-    return true;
-}
-
 // Bit 31 of a block mark: the block is kept. The rest: kept blocks of the slot
 // before it in its group of WORKGROUP_SIZE blocks (kept_before adds the group's prefix).
 const KEPT_BIT: u32 = 0x80000000u;
@@ -70,14 +56,11 @@ fn coarse_blocks(
         low = min(low, s.xyz - s.w);
         high = max(high, s.xyz + s.w);
     }
-    let center = (low + high) * 0.5;
-    let magnitude = abs(center.x) + abs(center.y) + abs(center.z);
-    let extent = (high - low) * 0.5 * BLOCK_GROWTH + magnitude * BLOCK_SLACK;
-    let sphere = vec4(center, length(extent) * BLOCK_GROWTH);
+    let bound = grown_bound(low, high);
     let in_frame = block < blocks
-        && grown_test(frame.coarse_planes, frame.coarse_inflation, frame.coarse_slack, sphere);
+        && grown_test(frame.coarse_planes, frame.coarse_inflation, frame.coarse_slack, bound.sphere);
     for (var slot = 0u; slot < arrayLength(&block_tests); slot++) {
-        let kept = in_frame && block_test(block_tests[slot], sphere, extent);
+        let kept = in_frame && block_test(block_tests[slot], bound.sphere, bound.extent);
         let scan = workgroup_exclusive_scan(local, select(0u, 1u, kept));
         if (block < blocks) {
             block_marks[slot * blocks + block] = scan.x | select(0u, KEPT_BIT, kept);

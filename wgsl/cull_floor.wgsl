@@ -15,19 +15,35 @@ fn floor(
     }
 }
 
-// The rig's floor (RIG): one read of every sphere for the whole rig, each member's plane
-// test and flag, into the member's scratch.
+// The rig's floor (RIG): one read of every sphere for the whole rig, each member's
+// plane tests (skipped for a span whose box fails the member's block test) and flag
+// into the member's scratch; a span per invocation, members outside, as the rig's cull
+// walks them.
 @compute @workgroup_size(WORKGROUP_SIZE)
 fn floor_rig(
     @builtin(workgroup_id) wid: vec3<u32>,
     @builtin(num_workgroups) groups: vec3<u32>,
     @builtin(local_invocation_index) local: u32,
 ) {
-    let k = (wid.y * groups.x + wid.x) * WORKGROUP_SIZE + local;
-    if (k < params.instance_count) {
-        let s = spheres_at(k);
-        for (var b = 0u; b < rig.members; b++) {
-            entries[b * params.member_entries + k] = select(0u, 1u, sphere_in_planes(rig.views[b].planes, s));
+    let n = params.instance_count;
+    let first = ((wid.y * groups.x + wid.x) * WORKGROUP_SIZE + local) * SPAN;
+    let count = select(0u, min(SPAN, n - first), first < n);
+    var spheres: array<vec4<f32>, SPAN>;
+    var low = vec3(3.0e38);
+    var high = vec3(-3.0e38);
+    for (var i = 0u; i < count; i++) {
+        let s = spheres_at(first + i);
+        spheres[i] = s;
+        low = min(low, s.xyz - s.w);
+        high = max(high, s.xyz + s.w);
+    }
+    let bound = grown_bound(low, high);
+    for (var b = 0u; b < rig.members; b++) {
+        let view = rig.views[b];
+        let tested = block_test(view.block, bound.sphere, bound.extent);
+        for (var i = 0u; i < count; i++) {
+            let kept = tested && sphere_in_planes(view.planes, spheres[i]);
+            entries[b * params.member_entries + first + i] = select(0u, 1u, kept);
         }
     }
 }

@@ -55,6 +55,7 @@ pub fn profile(args: &ProfileArgs) -> Result<()> {
     let variants = args.glass.len()
         * args.moving.len()
         * args.coarse_cull.len()
+        * args.rig_cull.len()
         * args.far_layer.len()
         * args.inset_cull.len()
         * args.occlusion.len()
@@ -84,13 +85,17 @@ pub fn profile(args: &ProfileArgs) -> Result<()> {
                 .moving
                 .iter()
                 .flat_map(|m| args.coarse_cull.iter().map(move |c| (*m, *c)))
+                .flat_map(|(m, c)| args.rig_cull.iter().map(move |r| (m, (c, r.on()))))
                 .flat_map(|(m, c)| args.far_layer.iter().map(move |f| (m, c, f.on())))
                 .flat_map(|v| args.inset_cull.iter().map(move |i| (v, i.on())))
                 .filter(|(_, inset)| !inset || rig.displays.iter().any(|d| d.views() == 4))
                 .flat_map(|v| args.occlusion.iter().map(move |o| (v, *o)))
                 .flat_map(|v| args.posing.iter().map(move |p| (v, *p)))
                 .collect();
-            for (&(mode, cull), &((((moving, coarse, far), inset), occlusion), posing)) in configs
+            for (
+                &(mode, cull),
+                &((((moving, (coarse, rig_cull), far), inset), occlusion), posing),
+            ) in configs
                 .iter()
                 .flat_map(|c| variants.iter().map(move |v| (c, v)))
             {
@@ -124,6 +129,7 @@ pub fn profile(args: &ProfileArgs) -> Result<()> {
                     mode,
                     cull,
                     coarse,
+                    rig_cull,
                     far,
                     inset,
                     occlusion,

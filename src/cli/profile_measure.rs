@@ -115,6 +115,11 @@ pub struct ProfileArgs {
     /// The frame-level coarse cull, one configuration each (`on,off` compares them).
     #[arg(long, value_delimiter = ',', value_enum, default_value = "auto")]
     pub coarse_cull: Vec<CoarseMode>,
+    /// GPU culling: the rig cull (every display's frustum cull in one set of
+    /// dispatches), one configuration each (`on,off` compares it with a set per
+    /// display).
+    #[arg(long, value_delimiter = ',', value_enum, default_value = "on")]
+    pub rig_cull: Vec<Switch>,
     /// Also write a Chrome trace (chrome://tracing, Perfetto) of the last timed frame of
     /// every configuration: per display a scope, per pass (`cull`, `draw`) one inside it.
     #[arg(long)]
@@ -128,6 +133,7 @@ pub(super) struct Config<'a> {
     pub(super) mode: StereoMode,
     pub(super) cull: CullMode,
     pub(super) coarse: CoarseMode,
+    pub(super) rig_cull: bool,
     pub(super) far: bool,
     pub(super) inset: bool,
     pub(super) occlusion: OcclusionMode,
@@ -146,6 +152,7 @@ pub(super) fn measure(
         mode,
         cull,
         coarse,
+        rig_cull,
         far,
         inset,
         occlusion,
@@ -163,6 +170,7 @@ pub(super) fn measure(
         sample_count: args.msaa,
         lod: args.lod.on(),
         coarse_cull: coarse,
+        rig_cull,
         shadows: args.shadows.on(),
         far_layer: far,
         far_threshold_px: args.far_threshold,
@@ -330,6 +338,7 @@ pub(super) fn measure(
         shadows: args.shadows.on(),
         far_layer: far,
         inset_cull: inset,
+        rig_cull,
         far_near,
         shadow_passes: samples.passes.iter().filter(|p| p.name == "shadow").count(),
         floor_ms_median: over_floor.as_ref().map(|f| f.0),

@@ -80,6 +80,8 @@ pub struct Row {
     pub far_layer: bool,
     /// Foveated displays' inset cull.
     pub inset_cull: bool,
+    /// GPU culling: the rig cull (`--rig-cull`).
+    pub rig_cull: bool,
     /// The last frame's far/near split per display (with the far layer).
     pub far_near: Vec<Option<FarSplit>>,
     /// The last frame's shadow passes (1 with shadows, whatever the rig).
@@ -141,7 +143,7 @@ pub struct OcclusionRatios {
 pub fn price_occlusion(rows: &mut [Row]) {
     let key = |r: &Row| {
         let (a, b) = (r.moving_percent.to_bits(), r.churn_percent.to_bits());
-        let flags = (r.coarse_cull, r.far_layer, r.inset_cull);
+        let flags = (r.coarse_cull, r.far_layer, r.inset_cull, r.rig_cull);
         let glass = r.glass_percent.to_bits();
         (
             r.mode,
@@ -231,6 +233,7 @@ pub fn price_edits(rows: &mut [Row]) {
             a.coarse_cull,
             a.far_layer,
             a.inset_cull,
+            a.rig_cull,
             a.churn_percent,
             a.occlusion,
             a.glass_percent,
@@ -242,6 +245,7 @@ pub fn price_edits(rows: &mut [Row]) {
             b.coarse_cull,
             b.far_layer,
             b.inset_cull,
+            b.rig_cull,
             b.churn_percent,
             b.occlusion,
             b.glass_percent,
@@ -355,6 +359,10 @@ pub(super) fn print_table(rows: &[Row]) {
             format!("{rig}+inset")
         } else {
             rig
+        };
+        let rig = match (r.rig_cull, r.cull) {
+            (false, CullMode::Gpu) => format!("{rig}/apart"),
+            _ => rig,
         };
         println!(
             "{:>14} {:>13} {:>4} {:>9} {:>6} | {:>9.3} {:>9.3} | {:>9} {:>9} | {:>8.3} {:>8.3} {:>8.3} {:>8.3} | {:>9} {:>5} {:>10} | {:>11} {:>11} | {:>7} {:>7}",

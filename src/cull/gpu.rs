@@ -395,7 +395,11 @@ impl GpuCuller {
         let mut dispatches = 0;
         for group in bind_groups {
             pass.set_bind_group(0, group, &[]);
-            let (x, y) = scene.groups.positions;
+            // The rig's floor walks spans, as the rig's cull does.
+            let (x, y) = match self.has_rig() {
+                true => scene.groups.spans,
+                false => scene.groups.positions,
+            };
             pass.dispatch_workgroups(x, y, 1);
             dispatches += 1;
         }

@@ -14,12 +14,14 @@
 use encase::ShaderType;
 use glam::{Vec3, Vec4};
 
+use crate::cull::coarse::CoarseCull;
+
 pub use crate::shaders::MAX_RIG_VIEWS;
 
 /// One member of the rig cull (`RigView` in `wgsl/shared/records.wgsl`): what its
 /// context holds for culling and where its outputs start in the shared targets, in
 /// elements.
-#[derive(Clone, Copy, Debug, Default, PartialEq, ShaderType)]
+#[derive(Clone, Copy, Debug, PartialEq, ShaderType)]
 pub struct RigView {
     /// Its frustum's planes ([`crate::contexts::DisplayContext::planes`]).
     pub planes: [Vec4; 6],
@@ -40,6 +42,28 @@ pub struct RigView {
     pub draws_at: u32,
     /// Its counts' first word in the shared counts buffer.
     pub counts_at: u32,
+    /// Its planes grown for rounding ([`CoarseCull::around`]): the rig's cull skips
+    /// the sphere tests of a span whose box fails it, as the coarse cull skips a block
+    /// (a sphere the planes keep makes its box pass).
+    pub block: CoarseCull,
+}
+
+impl Default for RigView {
+    /// An unused record: it keeps nothing.
+    fn default() -> RigView {
+        RigView {
+            planes: [Vec4::ZERO; 6],
+            position: Vec3::ZERO,
+            split_keep: 0,
+            sort_origin: Vec3::ZERO,
+            split_distance: 0.0,
+            instances_per_object: 0,
+            visible_at: 0,
+            draws_at: 0,
+            counts_at: 0,
+            block: CoarseCull::EVERYTHING,
+        }
+    }
 }
 
 /// Where a member's outputs start in the shared targets, in elements (words, draws,

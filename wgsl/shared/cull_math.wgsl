@@ -10,6 +10,35 @@ fn sphere_in_planes(planes: array<vec4<f32>, 6>, s: vec4<f32>) -> bool {
     return true;
 }
 
+// A block's box (center c.xyz, half extents e) against a slot's test. The CPU twin
+// is CoarseCull::test_block.
+fn block_test(t: CoarseTest, c: vec4<f32>, e: vec3<f32>) -> bool {
+    let slack = t.slack * (abs(c.x) + abs(c.y) + abs(c.z));
+    for (var i = 0u; i < 6u; i++) {
+        let p = t.planes[i];
+        let reach = (abs(p.x) * e.x + abs(p.y) * e.y + abs(p.z) * e.z) * t.inflation;
+        if (p.x * c.x + p.y * c.y + p.z * c.z + p.w < -(reach + slack)) {
+            return false;
+        }
+    }
+    return true;
+}
+
+// The box from `low` to `high` (of a group of spheres) grown for rounding, as the
+// coarse cull bounds a block: the sphere through its corners and its half extents.
+// What block_test takes.
+struct Bound {
+    sphere: vec4<f32>,
+    extent: vec3<f32>,
+}
+
+fn grown_bound(low: vec3<f32>, high: vec3<f32>) -> Bound {
+    let center = (low + high) * 0.5;
+    let magnitude = abs(center.x) + abs(center.y) + abs(center.z);
+    let extent = (high - low) * 0.5 * BLOCK_GROWTH + magnitude * BLOCK_SLACK;
+    return Bound(vec4(center, length(extent) * BLOCK_GROWTH), extent);
+}
+
 // Whether the display's far split (src/far_layer.rs) keeps sphere s: with split_keep 2
 // the far ones (entirely beyond split_distance from the display's apex), with 1 the
 // rest, with 0 every sphere. The CPU twin is Split::keeps: same operations, same order.

@@ -110,6 +110,9 @@ struct RigView {
     visible_at: u32,
     draws_at: u32,
     counts_at: u32,
+    // Its planes grown for rounding, as the coarse cull tests a block against a
+    // display: a span whose box fails it holds nothing the member keeps.
+    block: CoarseTest,
 }
 
 // The views one set of rig dispatches culls: the first `members` of `views`.
