@@ -429,7 +429,7 @@ fn contexts_match_wgsl() {
         bin_count: 11,
         first_blend_bin: 13,
         blend_first: 17,
-        member_entries: 19,
+        position_room: 19,
         member_sums: 23,
     };
     check_uniform(
@@ -445,7 +445,7 @@ fn contexts_match_wgsl() {
             ("bin_count", f32::from_bits(11)),
             ("first_blend_bin", f32::from_bits(13)),
             ("blend_first", f32::from_bits(17)),
-            ("member_entries", f32::from_bits(19)),
+            ("position_room", f32::from_bits(19)),
             ("member_sums", f32::from_bits(23)),
         ],
     );

@@ -21,12 +21,16 @@ fn cull(
     write_span_sums(group, local, n, workgroup_exclusive_scan4(local, counts));
 }
 
-// The rig's cull (RIG): the same spans, entries and sums as `cull` for every member at
-// once, each member's in its own scratch. Each sphere is read once and its level chosen
-// once (the frame's, whatever the member) for the whole rig; each member's planes and
-// split then decide its entry, as the member's own `cull` would (same operations).
-// Members outside, positions inside: a member's record is loaded once per span, not
-// once per position (on lavapipe a load at a member's index is a gather per lane).
+// The rig's cull (RIG): the same spans and sums as `cull` for every member at once,
+// each member's in its own scratch, its entries compressed (RIG_ENTRIES in
+// cull_math.wgsl: per span a word of levels for the rig and a mask per member). Each
+// sphere is read once and its level chosen once (the frame's, whatever the member) for
+// the whole rig; each member's planes and split then decide what it keeps, as the
+// member's own `cull` would (same operations). Members outside, positions inside: a
+// member's record is loaded once per span (on lavapipe a load at a member's index is a
+// gather per lane), and its sphere tests skipped for a span whose box fails its block
+// test (the coarse cull's guarantee, per span: a sphere the member keeps makes the
+// span's box pass).
 @compute @workgroup_size(WORKGROUP_SIZE)
 fn cull_rig(
     @builtin(workgroup_id) wid: vec3<u32>,
@@ -35,7 +39,8 @@ fn cull_rig(
 ) {
     let n = params.instance_count;
     let group = wid.y * groups.x + wid.x;
-    let first = (group * WORKGROUP_SIZE + local) * SPAN;
+    let span = group * WORKGROUP_SIZE + local;
+    let first = span * SPAN;
     let count = select(0u, min(SPAN, n - first), first < n);
     var spheres: array<vec4<f32>, SPAN>;
     var low = vec3(3.0e38);
@@ -47,48 +52,49 @@ fn cull_rig(
         high = max(high, s.xyz + s.w);
     }
     let bound = grown_bound(low, high);
-    // Each position's level (two bits), chosen when a member first keeps it.
+    // Each position's level (bits 2i, 2i + 1), chosen when a member first keeps it.
     var levels = 0u;
     var chosen = 0u;
-    // Per member, its span's visible count per level (the entry's fields).
-    var fields: array<u32, MAX_RIG_VIEWS>;
+    var masks: array<u32, MAX_RIG_VIEWS>;
     for (var b = 0u; b < rig.members; b++) {
         let view = rig.views[b];
-        // The coarse cull's guarantee, for a span: a sphere the member keeps makes the
-        // span's box pass its block test. A span that fails keeps nothing.
-        let tested = block_test(view.block, bound.sphere, bound.extent);
-        var field = 0u;
-        for (var i = 0u; i < count; i++) {
+        // A loop, not a branch: a SIMD CPU adapter (lavapipe) runs both sides of a
+        // branch under a mask, but leaves a loop once no lane has an iteration left.
+        let tested = select(0u, count, block_test(view.block, bound.sphere, bound.extent));
+        var mask = 0u;
+        for (var i = 0u; i < tested; i++) {
             let s = spheres[i];
-            var entry = 0u;
-            if (tested && sphere_in_planes(view.planes, s) && in_split_of(view.split_keep, view.split_distance, view.position, s)) {
+            if (sphere_in_planes(view.planes, s) && in_split_of(view.split_keep, view.split_distance, view.position, s)) {
                 if (((chosen >> i) & 1u) == 0u) {
                     levels |= lod_level(first + i, s) << (2u * i);
                     chosen |= 1u << i;
                 }
-                entry = ENTRY_VISIBLE | (((levels >> (2u * i)) & 3u) << ENTRY_LEVEL_SHIFT);
-            }
-            entries[b * params.member_entries + first + i] = field | entry;
-            if (entry != 0u) {
-                field += 1u << (7u * ((levels >> (2u * i)) & 3u));
+                mask |= 1u << (2u * i);
             }
         }
-        fields[b] = field;
+        masks[b] = mask;
+        if (count > 0u) {
+            entries[rig_mask_index(b, span)] = mask;
+        }
     }
-    scan_rig_fields(group, local, n, fields);
+    if (count > 0u) {
+        entries[span] = levels;
+    }
+    scan_rig_fields(group, local, n, masks, levels);
 }
 
 // The workgroup's scans of every member's span counts, eight (member, level) fields at
 // a time: a workgroup's total per field is at most WORKGROUP_SIZE * SPAN = 4096, so two
 // fit a word. Field f is member f / levels's level f % levels. Three barriers per eight
 // fields, where a scan per member would take three per member.
-fn scan_rig_fields(group: u32, local: u32, n: u32, fields: array<u32, MAX_RIG_VIEWS>) {
+fn scan_rig_fields(group: u32, local: u32, n: u32, masks: array<u32, MAX_RIG_VIEWS>, levels: u32) {
     let all = rig.members * params.lod_levels;
     for (var base = 0u; base < all; base += 8u) {
         var packed = vec4(0u);
         for (var i = 0u; i < min(8u, all - base); i++) {
             let f = base + i;
-            let count = (fields[f / params.lod_levels] >> (7u * (f % params.lod_levels))) & 0x7fu;
+            let level = f % params.lod_levels;
+            let count = countOneBits(masks[f / params.lod_levels] & level_match(levels, level));
             packed[i / 2u] |= count << (16u * (i % 2u));
         }
         let scan = workgroup_exclusive_scan4(local, packed);
@@ -115,7 +121,7 @@ fn cull_span(span: u32, n: u32) -> vec4<u32> {
         let tested = cull_entry(j);
         let entry = tested & ~ENTRY_SEEN;
         seen |= select(0u, 1u << (j - first), tested != entry);
-        entries[entry_index(j)] = fields | entry;
+        entries[j] = fields | entry;
         if ((entry & ENTRY_VISIBLE) != 0u) {
             fields += 1u << (7u * ((entry >> ENTRY_LEVEL_SHIFT) & 3u));
         }

@@ -91,7 +91,7 @@ fn gather(bin: u32, start: u32, n: u32, local: u32) -> u32 {
 
 // Whether position j (of those run over) is visible and of `bin`.
 fn gathers(j: u32, bin: u32) -> bool {
-    return (entries[entry_index(j)] & ENTRY_VISIBLE) != 0u && meshes[mesh_of[cull_position(j)]].bin == bin;
+    return (entry_of(j) & ENTRY_VISIBLE) != 0u && meshes[mesh_of[cull_position(j)]].bin == bin;
 }
 
 // Visible position j's record: its sort key (the squared distance of its sphere's
@@ -99,7 +99,7 @@ fn gathers(j: u32, bin: u32) -> bool {
 // the five words of a DrawArgs.
 fn record(j: u32, n: u32, origin: vec3<f32>) -> DrawArgs {
     let k = cull_position(j);
-    let level = (entries[entry_index(j)] >> ENTRY_LEVEL_SHIFT) & 3u;
+    let level = (entry_of(j) >> ENTRY_LEVEL_SHIFT) & 3u;
     let d = spheres_at(k).xyz - origin;
     let key = ~bitcast<u32>(d.x * d.x + d.y * d.y + d.z * d.z);
     return DrawArgs(key, order[k], flagged_before(level, j, n, 0u), bitcast<i32>(mesh_of[k]), level);

@@ -37,9 +37,13 @@ fn compact_rig(
 }
 
 // Writes position j's id to its slot of the list of `member`, if visible there.
+// A loop of at most one turn, not a branch: a SIMD CPU adapter (lavapipe) runs a
+// branch's body under a mask for every lane, but skips a loop no lane enters (in the
+// rig's compact pass, most members see few of a SIMD group's positions).
 fn place(j: u32, n: u32) {
-    let entry = entries[entry_index(j)];
-    if ((entry & ENTRY_VISIBLE) != 0u) {
+    let entry = entry_of(j);
+    let turns = select(0u, 1u, (entry & ENTRY_VISIBLE) != 0u);
+    for (var t = 0u; t < turns; t++) {
         let level = (entry >> ENTRY_LEVEL_SHIFT) & 3u;
         visible[visible_index(flagged_before(level, j, n, 0u))] = order[cull_position(j)];
     }

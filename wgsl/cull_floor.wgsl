@@ -16,9 +16,9 @@ fn floor(
 }
 
 // The rig's floor (RIG): one read of every sphere for the whole rig, each member's
-// plane tests (skipped for a span whose box fails the member's block test) and flag
-// into the member's scratch; a span per invocation, members outside, as the rig's cull
-// walks them.
+// plane tests (skipped for a span whose box fails the member's block test) and its
+// mask of the span (RIG_ENTRIES); a span per invocation, members outside, as the rig's
+// cull walks them.
 @compute @workgroup_size(WORKGROUP_SIZE)
 fn floor_rig(
     @builtin(workgroup_id) wid: vec3<u32>,
@@ -26,7 +26,8 @@ fn floor_rig(
     @builtin(local_invocation_index) local: u32,
 ) {
     let n = params.instance_count;
-    let first = ((wid.y * groups.x + wid.x) * WORKGROUP_SIZE + local) * SPAN;
+    let span = (wid.y * groups.x + wid.x) * WORKGROUP_SIZE + local;
+    let first = span * SPAN;
     let count = select(0u, min(SPAN, n - first), first < n);
     var spheres: array<vec4<f32>, SPAN>;
     var low = vec3(3.0e38);
@@ -40,10 +41,15 @@ fn floor_rig(
     let bound = grown_bound(low, high);
     for (var b = 0u; b < rig.members; b++) {
         let view = rig.views[b];
-        let tested = block_test(view.block, bound.sphere, bound.extent);
-        for (var i = 0u; i < count; i++) {
-            let kept = tested && sphere_in_planes(view.planes, spheres[i]);
-            entries[b * params.member_entries + first + i] = select(0u, 1u, kept);
+        // A loop, not a branch: a SIMD CPU adapter (lavapipe) runs both sides of a
+        // branch under a mask, but leaves a loop once no lane has an iteration left.
+        let tested = select(0u, count, block_test(view.block, bound.sphere, bound.extent));
+        var mask = 0u;
+        for (var i = 0u; i < tested; i++) {
+            mask |= select(0u, 1u << (2u * i), sphere_in_planes(view.planes, spheres[i]));
+        }
+        if (count > 0u) {
+            entries[rig_mask_index(b, span)] = mask;
         }
     }
 }

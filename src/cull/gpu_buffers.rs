@@ -37,8 +37,10 @@ pub struct CullParams {
     pub first_blend_bin: u32,
     /// Where the blended bins' ranges of the draws start.
     pub blend_first: u32,
-    /// Words of `entries` per member of the rig cull ([`crate::cull::rig`]).
-    pub member_entries: u32,
+    /// Cull positions of room (a multiple of [`SPAN`]): the rig cull
+    /// ([`crate::cull::rig`]) keeps a word per span of them for the rig's levels and one
+    /// per span per member.
+    pub position_room: u32,
     /// Words of `span_sums` per member of the rig cull.
     pub member_sums: u32,
 }
@@ -71,7 +73,7 @@ pub struct CullScene {
     pub(super) lods: wgpu::Buffer,
     pub(super) entries: wgpu::Buffer,
     pub(super) span_sums: wgpu::Buffer,
-    /// Words of `entries` and of `span_sums` per rig member (what the room holds).
+    /// Cull positions of room, and words of `span_sums` per rig member.
     member_strides: (u32, u32),
     /// The rig cull's members, a [`RigCull`] per group of [`MAX_RIG_VIEWS`] (at least
     /// one: every cull pass binds it), [`CullScene::rig_stride`] bytes apart.
@@ -217,7 +219,9 @@ impl CullScene {
             entries: storage_buffer(
                 device,
                 "stereocull.entries",
-                4 * positions as u64 * scratch_members,
+                // A word per position (a view's own cull), or with the rig cull a word
+                // per span for the levels and one per span per member.
+                4 * (positions as u64).max((1 + scratch_members) * (spans as u64)),
                 scratch,
             ),
             span_sums: storage_buffer(
@@ -544,8 +548,8 @@ pub(super) struct Grids {
 }
 
 /// What a scene's buffers were made with room for: the device's workgroup limit, the
-/// levels, the occlusion words per slot and where the pyramids start, and the words
-/// of `entries` and `span_sums` per rig member.
+/// levels, the occlusion words per slot and where the pyramids start, and the cull
+/// positions of room and the words of `span_sums` per rig member.
 #[derive(Clone, Copy)]
 struct Room {
     max_groups: u32,
@@ -559,7 +563,7 @@ fn cull_params(layout: &CullLayout, room: Room) -> (CullParams, Grids) {
         max_groups,
         levels,
         occlusion: (visibility_words, pyramid_offset),
-        members: (member_entries, member_sums),
+        members: (position_room, member_sums),
     } = room;
     let n = layout.spheres.len() as u32;
     let groups = Grids {
@@ -579,7 +583,7 @@ fn cull_params(layout: &CullLayout, room: Room) -> (CullParams, Grids) {
         blend_first: (layout.bin_ranges(levels).iter())
             .find(|r| r.kind.alpha == BinKind::Blend)
             .map_or(0, |r| r.first),
-        member_entries,
+        position_room,
         member_sums,
     };
     (params, groups)

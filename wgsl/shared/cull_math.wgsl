@@ -62,10 +62,6 @@ fn in_split_of(keep: u32, distance: f32, apex: vec3<f32>, s: vec4<f32>) -> bool 
 // outputs from their start.
 var<private> member: u32;
 
-fn entry_index(j: u32) -> u32 {
-    return member * params.member_entries + j;
-}
-
 fn sum_index(i: u32) -> u32 {
     return member * params.member_sums + i;
 }
@@ -191,8 +187,45 @@ fn flagged_before(level: u32, pos: u32, n: u32, total: u32) -> u32 {
         return total;
     }
     let span = pos / SPAN;
-    let within = (entries[entry_index(pos)] >> (7u * level)) & 0x7fu;
+    let within = within_span(level, pos);
     return span_sums[sum_index(group_slot(n, level, span / WORKGROUP_SIZE))] + span_sums[sum_index(level * span_count(n) + span)] + within;
+}
+
+// The rig's entries (RIG_ENTRIES): per span of SPAN positions, at `entries[span]` a
+// word of the positions' levels (position i's in bits 2i and 2i + 1) and at
+// rig_mask_index(b, span) member b's mask (bit 2i: it keeps position i). A span's
+// words for the whole rig, where a member's own cull writes a word per position.
+fn rig_mask_index(b: u32, span: u32) -> u32 {
+    return (1u + b) * (params.position_room / SPAN) + span;
+}
+
+// Bit 2i set where position i of a span's `levels` word has level `level`.
+fn level_match(levels: u32, level: u32) -> u32 {
+    let x = levels ^ (level * 0x55555555u);
+    return ~(x | (x >> 1u)) & 0x55555555u;
+}
+
+// Visible entries of `level` before `pos` within its span, for the member addressed.
+fn within_span(level: u32, pos: u32) -> u32 {
+    if (RIG) {
+        let span = pos / SPAN;
+        let kept = entries[rig_mask_index(member, span)] & level_match(entries[span], level);
+        return countOneBits(kept & ((1u << (2u * (pos % SPAN))) - 1u));
+    }
+    return (entries[pos] >> (7u * level)) & 0x7fu;
+}
+
+// Position j's entry for the member addressed: its visible bit and level (the span
+// fields only without RIG).
+fn entry_of(j: u32) -> u32 {
+    if (RIG) {
+        let span = j / SPAN;
+        let shift = 2u * (j % SPAN);
+        let kept = (entries[rig_mask_index(member, span)] >> shift) & 1u;
+        let level = (entries[span] >> shift) & 3u;
+        return select(0u, ENTRY_VISIBLE | (level << ENTRY_LEVEL_SHIFT), kept != 0u);
+    }
+    return entries[j];
 }
 
 // Turns `groups` group totals from span_sums[first] on into prefixes starting at

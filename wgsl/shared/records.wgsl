@@ -91,9 +91,12 @@ struct CullParams {
     first_blend_bin: u32,
     // Where the blended bins' ranges of the draws start (the blend pass's).
     blend_first: u32,
-    // Words of `entries` and of `span_sums` per member of the rig cull (RigCull): each
-    // member's scratch starts at its index times these.
-    member_entries: u32,
+    // Cull positions of room (a multiple of SPAN): the rig cull's entries hold a word
+    // per span of them for the rig's levels, then one per span per member (RIG_ENTRIES
+    // in cull_math.wgsl).
+    position_room: u32,
+    // Words of `span_sums` per member of the rig cull (RigCull): each member's sums
+    // start at its index times this.
     member_sums: u32,
 }
 
