@@ -43,15 +43,7 @@ fn cull_rig(
     let first = span * SPAN;
     let count = select(0u, min(SPAN, n - first), first < n);
     var spheres: array<vec4<f32>, SPAN>;
-    var low = vec3(3.0e38);
-    var high = vec3(-3.0e38);
-    for (var i = 0u; i < count; i++) {
-        let s = spheres_at(first + i);
-        spheres[i] = s;
-        low = min(low, s.xyz - s.w);
-        high = max(high, s.xyz + s.w);
-    }
-    let bound = grown_bound(low, high);
+    let bound = read_span(first, count, &spheres);
     // Each position's level (bits 2i, 2i + 1), chosen when a member first keeps it.
     var levels = 0u;
     var chosen = 0u;

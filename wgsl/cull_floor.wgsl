@@ -30,15 +30,7 @@ fn floor_rig(
     let first = span * SPAN;
     let count = select(0u, min(SPAN, n - first), first < n);
     var spheres: array<vec4<f32>, SPAN>;
-    var low = vec3(3.0e38);
-    var high = vec3(-3.0e38);
-    for (var i = 0u; i < count; i++) {
-        let s = spheres_at(first + i);
-        spheres[i] = s;
-        low = min(low, s.xyz - s.w);
-        high = max(high, s.xyz + s.w);
-    }
-    let bound = grown_bound(low, high);
+    let bound = read_span(first, count, &spheres);
     for (var b = 0u; b < rig.members; b++) {
         let view = rig.views[b];
         // A loop, not a branch: a SIMD CPU adapter (lavapipe) runs both sides of a

@@ -32,6 +32,20 @@ struct Bound {
     extent: vec3<f32>,
 }
 
+// Reads the `count` spheres of the span from `first` into `spheres`; returns their
+// grown box (the rig's passes: each sphere read once for the rig).
+fn read_span(first: u32, count: u32, spheres: ptr<function, array<vec4<f32>, SPAN>>) -> Bound {
+    var low = vec3(3.0e38);
+    var high = vec3(-3.0e38);
+    for (var i = 0u; i < count; i++) {
+        let s = spheres_at(first + i);
+        (*spheres)[i] = s;
+        low = min(low, s.xyz - s.w);
+        high = max(high, s.xyz + s.w);
+    }
+    return grown_bound(low, high);
+}
+
 fn grown_bound(low: vec3<f32>, high: vec3<f32>) -> Bound {
     let center = (low + high) * 0.5;
     let magnitude = abs(center.x) + abs(center.y) + abs(center.z);
