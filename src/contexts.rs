@@ -206,8 +206,9 @@ impl DisplayContext {
         }
     }
 
-    /// Its record as a member of the rig cull, its outputs `at`: what it culls by.
-    pub fn rig_view(&self, at: MemberAt) -> RigView {
+    /// Its record as a member of the rig cull, its outputs `at`, culled in the early
+    /// occlusion phase where `early`: what it culls by.
+    pub fn rig_view(&self, at: MemberAt, early: bool) -> RigView {
         RigView {
             planes: self.planes,
             position: self.position,
@@ -218,6 +219,8 @@ impl DisplayContext {
             visible_at: at.visible,
             draws_at: at.draws,
             counts_at: at.counts,
+            cull_slot: self.cull_slot,
+            early: u32::from(early),
             block: CoarseCull::around(self.planes),
         }
     }

@@ -463,6 +463,8 @@ fn rig_records_match_wgsl() {
         visible_at: 5,
         draws_at: 6,
         counts_at: 7,
+        cull_slot: 8,
+        early: 1,
         block: CoarseCull {
             planes: std::array::from_fn(|i| Vec4::splat(k + 20.0 + i as f32)),
             inflation: k + 30.0,
@@ -482,6 +484,8 @@ fn rig_records_match_wgsl() {
             ("visible_at", f32::from_bits(5)),
             ("draws_at", f32::from_bits(6)),
             ("counts_at", f32::from_bits(7)),
+            ("cull_slot", f32::from_bits(8)),
+            ("early", f32::from_bits(1)),
             ("block", 21.0),
         ],
     );

@@ -25,8 +25,9 @@ fn cull(
 // each member's in its own scratch, its entries compressed (RIG_ENTRIES in
 // cull_math.wgsl: per span a word of levels for the rig and a mask per member). Each
 // sphere is read once and its level chosen once (the frame's, whatever the member) for
-// the whole rig; each member's planes and split then decide what it keeps, as the
-// member's own `cull` would (same operations). Members outside, positions inside: a
+// the whole rig; each member's planes and split (and in the early occlusion phase what
+// its display drew last frame) then decide what it keeps, as the member's own `cull`
+// would (same operations). Members outside, positions inside: a
 // member's record is loaded once per span (on lavapipe a load at a member's index is a
 // gather per lane), and its sphere tests skipped for a span whose box fails its block
 // test (the coarse cull's guarantee, per span: a sphere the member keeps makes the
@@ -56,7 +57,8 @@ fn cull_rig(
         var mask = 0u;
         for (var i = 0u; i < tested; i++) {
             let s = spheres[i];
-            if (sphere_in_planes(view.planes, s) && in_split_of(view.split_keep, view.split_distance, view.position, s)) {
+            let seen = view.early == 0u || drawn_by(view.cull_slot, first + i);
+            if (sphere_in_planes(view.planes, s) && in_split_of(view.split_keep, view.split_distance, view.position, s) && seen) {
                 if (((chosen >> i) & 1u) == 0u) {
                     levels |= lod_level(first + i, s) << (2u * i);
                     chosen |= 1u << i;

@@ -42,6 +42,11 @@ pub struct RigView {
     pub draws_at: u32,
     /// Its counts' first word in the shared counts buffer.
     pub counts_at: u32,
+    /// Its display's slot of occlusion visibility words.
+    pub cull_slot: u32,
+    /// 1 where it culls in the early occlusion phase: it keeps only what its display
+    /// drew last frame (`Phase::Early`); else 0.
+    pub early: u32,
     /// Its planes grown for rounding ([`CoarseCull::around`]): the rig's cull skips
     /// the sphere tests of a span whose box fails it, as the coarse cull skips a block
     /// (a sphere the planes keep makes its box pass).
@@ -61,6 +66,8 @@ impl Default for RigView {
             visible_at: 0,
             draws_at: 0,
             counts_at: 0,
+            cull_slot: 0,
+            early: 0,
             block: CoarseCull::EVERYTHING,
         }
     }

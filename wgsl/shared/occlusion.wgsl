@@ -13,7 +13,12 @@ const DEPTH_MARGIN: f32 = 1.0 / 1048576.0;
 
 // Whether the display drew cull position k last frame.
 fn drawn_last_frame(k: u32) -> bool {
-    let word = occlusion[display.cull_slot * params.visibility_words + k / SPAN];
+    return drawn_by(display.cull_slot, k);
+}
+
+// Whether the display of visibility slot `slot` drew cull position k last frame.
+fn drawn_by(slot: u32, k: u32) -> bool {
+    let word = occlusion[slot * params.visibility_words + k / SPAN];
     return ((word >> (k % SPAN)) & 1u) != 0u;
 }
 

@@ -113,6 +113,10 @@ struct RigView {
     visible_at: u32,
     draws_at: u32,
     counts_at: u32,
+    // Its display's slot of visibility words, and 1 where it culls in the early
+    // occlusion phase (keeping only what its display drew last frame), else 0.
+    cull_slot: u32,
+    early: u32,
     // Its planes grown for rounding, as the coarse cull tests a block against a
     // display: a span whose box fails it holds nothing the member keeps.
     block: CoarseTest,

@@ -167,8 +167,8 @@ impl Culler {
         (view, phase): (CullView, Phase),
         contexts: [&wgpu::Buffer; 2],
     ) -> ViewCull {
-        let member =
-            (self.members.iter().position(|m| *m == view)).filter(|_| phase == Phase::Frustum);
+        let member = (self.members.iter().position(|m| *m == view))
+            .filter(|_| matches!(phase, Phase::Frustum | Phase::Early));
         let (targets, bind_group) = match &self.kind {
             Kind::Gpu {
                 culler,
@@ -269,7 +269,8 @@ impl Culler {
     ) -> u64 {
         match (&self.kind, view.member) {
             (Kind::Gpu { scene, .. }, Some(m)) => {
-                let record = context.rig_view(view.targets.member_at());
+                let early = view.phase == Phase::Early;
+                let record = context.rig_view(view.targets.member_at(), early);
                 scene.write_rig_member(queue, m, &record)
             }
             _ => 0,
@@ -346,11 +347,14 @@ impl Culler {
                 ..
             },
             Some(group),
-            None,
-        ) = (&self.kind, &view.bind_group, view.member)
+        ) = (&self.kind, &view.bind_group)
         else {
             return 0;
         };
+        // A rig member in its own phase was culled by the frame's rig cull.
+        if view.member.is_some() && phase == view.phase {
+            return 0;
+        }
         let slot = coarse.as_ref().and(view.view.coarse_slot());
         let (mut pass, open) = rec.compute_pass(encoder, what);
         culler.encode(&mut pass, scene, group, (slot, phase));

@@ -429,18 +429,18 @@ fn indirect_displays(
         .collect()
 }
 
-/// The views the rig cull culls together: every view of `plan` that culls by its
-/// frustum alone over every instance (not over the coarse cull's blocks): each display
-/// without occlusion (`shapes[i]` none), its far layer, and each inset pair. The
-/// light's cull stays apart: it runs in the frame's shadow pass, before the displays'
-/// culls, and its box is no display's.
+/// The views the rig cull culls together: every view of `plan` that culls over every
+/// instance (not over the coarse cull's blocks) by its frustum alone or in the early
+/// occlusion phase: each display (with occlusion, `shapes[i]`, its early phase), its
+/// far layer (where it is not tested against its display's pyramids), and each inset
+/// pair. The light's cull stays apart: it runs in the frame's shadow pass, before the
+/// displays' culls, and its box is no display's. A late phase waits for its display's
+/// early draw and pyramids, and so does a far layer tested against them.
 fn rig_members(plan: &FramePlan, shapes: &[Option<PyramidShape>], coarse: bool) -> Vec<CullView> {
     if coarse {
         return Vec::new();
     }
-    let displays = (shapes.iter().enumerate())
-        .filter(|(_, s)| s.is_none())
-        .map(|(i, _)| CullView::Display(i));
+    let displays = (0..shapes.len()).map(CullView::Display);
     let far = (plan.far.iter().zip(shapes).enumerate())
         .filter(|(_, (far, shape))| far.is_some() && shape.is_none())
         .map(|(i, _)| CullView::Far(i));
