@@ -17,11 +17,11 @@ use stereocull::records::{
 use stereocull::records::{storage_bytes, uniform_bytes};
 use stereocull::scene::Vertex;
 use stereocull::shaders::{
-    Access, Binding, COARSE_BINDINGS, CULL_BINDINGS, CullPass, DRAW_BINDINGS, DrawKey, EditKind,
-    FAR_COMPOSITE_BINDINGS, FOVEATED_COMPOSITE_BINDINGS, MATERIAL_BINDINGS, POSE_BINDINGS,
-    SCATTER_BINDINGS, SHADOW_MAP_BINDINGS, SKIN_BINDINGS, Window, Windows, all_sources,
-    far_composite_source, foveated_composite_source, pose_source, pyramid_bindings, pyramid_source,
-    scatter_source, shadow_cutout_source, shadow_source, skin_source,
+    Access, Binding, CANDIDATE_BINDINGS, COARSE_BINDINGS, CULL_BINDINGS, CullPass, DRAW_BINDINGS,
+    DrawKey, EditKind, FAR_COMPOSITE_BINDINGS, FOVEATED_COMPOSITE_BINDINGS, MATERIAL_BINDINGS,
+    POSE_BINDINGS, SCATTER_BINDINGS, SHADOW_MAP_BINDINGS, SKIN_BINDINGS, Window, Windows,
+    all_sources, far_composite_source, foveated_composite_source, pose_source, pyramid_bindings,
+    pyramid_source, scatter_source, shadow_cutout_source, shadow_source, skin_source,
 };
 
 fn parse(label: &str, source: &str) -> Module {
@@ -513,9 +513,14 @@ fn rig_records_match_wgsl() {
 fn pipelines_and_their_lists() -> Vec<(String, String, Vec<Vec<Binding>>)> {
     let whole = &Windows::WHOLE;
     let lists = |l: &[&[Binding]]| l.iter().map(|g| g.to_vec()).collect::<Vec<_>>();
-    let cull_lists = |label: &str| match label.starts_with("stereocull.coarse") {
-        true => lists(&[&CULL_BINDINGS, &COARSE_BINDINGS]),
-        false => lists(&[&CULL_BINDINGS]),
+    let cull_lists = |label: &str| {
+        if label.starts_with("stereocull.coarse") {
+            lists(&[&CULL_BINDINGS, &COARSE_BINDINGS])
+        } else if label.contains(".candidates") {
+            lists(&[&CULL_BINDINGS, &CANDIDATE_BINDINGS])
+        } else {
+            lists(&[&CULL_BINDINGS])
+        }
     };
     let draw = lists(&[&DRAW_BINDINGS, &MATERIAL_BINDINGS, &SHADOW_MAP_BINDINGS]);
     let mut out: Vec<_> = (CullPass::variants().into_iter())

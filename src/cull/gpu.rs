@@ -14,8 +14,8 @@ use crate::cull::rig::{self, MAX_RIG_VIEWS, RigCull};
 use crate::shaders::Bound;
 use crate::shaders::Phase;
 use crate::shaders::{
-    COARSE_BINDINGS, CULL_BINDINGS, CullPass, Windows, bind_group, bind_group_layout,
-    compute_pipeline, pipeline_layout, subgroup_tier,
+    CANDIDATE_BINDINGS, COARSE_BINDINGS, CULL_BINDINGS, CullPass, Windows, bind_group,
+    bind_group_layout, compute_pipeline, pipeline_layout, subgroup_tier,
 };
 use encase::ShaderType;
 
@@ -63,10 +63,21 @@ pub struct CullerFeatures {
 struct CoarsePipelines {
     /// The display passes over the candidates.
     display: Vec<wgpu::ComputePipeline>,
-    /// The frame passes, and their group 1's layout (their writes of the display
-    /// passes' indirect dispatch).
+    /// The frame passes, and their group 1's layout (what they write: the lists, the
+    /// marks, the display passes' indirect dispatches; and the block tests).
     frame: Vec<wgpu::ComputePipeline>,
     args_layout: wgpu::BindGroupLayout,
+    /// The display passes' group 1 over the candidates: the lists, read only.
+    candidates_layout: wgpu::BindGroupLayout,
+}
+
+/// The coarse cull's bind groups: the frame passes' group 1 and the display passes'
+/// over the candidates.
+pub struct CoarseGroups {
+    /// The frame passes' ([`COARSE_BINDINGS`]).
+    pub args: wgpu::BindGroup,
+    /// The display passes' over candidates ([`CANDIDATE_BINDINGS`]).
+    pub candidates: wgpu::BindGroup,
 }
 
 impl GpuCuller {
@@ -97,19 +108,35 @@ impl GpuCuller {
             p => p,
         });
         let pipelines = build(&display, false, &display_layout);
-        let coarse = coarse.then(|| {
-            let whole = &Windows::WHOLE;
+        let whole = &Windows::WHOLE;
+        let with_group_1 = |label: &str, second: &wgpu::BindGroupLayout| {
+            device.create_pipeline_layout(&wgpu::PipelineLayoutDescriptor {
+                label: Some(label),
+                bind_group_layouts: &[Some(&layout), Some(second)],
+                immediate_size: 0,
+            })
+        };
+        let candidates_layout = coarse.then(|| {
+            let label = "stereocull.candidates";
+            bind_group_layout(device, label, &CANDIDATE_BINDINGS, whole)
+        });
+        let over_candidates = candidates_layout
+            .as_ref()
+            .map(|l| with_group_1("stereocull.candidates", l));
+        // The display passes' layout over everything or (`true`) over candidates.
+        let layout_over = |candidates: bool| match (candidates, &over_candidates) {
+            (true, Some(l)) => l,
+            _ => &display_layout,
+        };
+        let coarse = candidates_layout.map(|candidates_layout| {
             let args_layout =
                 bind_group_layout(device, "stereocull.coarse", &COARSE_BINDINGS, whole);
-            let both = device.create_pipeline_layout(&wgpu::PipelineLayoutDescriptor {
-                label: Some("stereocull.coarse"),
-                bind_group_layouts: &[Some(&layout), Some(&args_layout)],
-                immediate_size: 0,
-            });
+            let both = with_group_1("stereocull.coarse", &args_layout);
             CoarsePipelines {
-                display: build(&display, true, &display_layout),
+                display: build(&display, true, layout_over(true)),
                 frame: build(&CullPass::FRAME, false, &both),
                 args_layout,
+                candidates_layout,
             }
         });
         let floor_pass = if rig {
@@ -129,8 +156,8 @@ impl GpuCuller {
         let phased = |candidates: bool, phase: Phase| {
             let source = cull.phased_source(candidates, phase, &windows);
             let label = phase.label(&cull.label(candidates));
-            let pipeline =
-                compute_pipeline(device, &label, &display_layout, source, cull.entry_point());
+            let with = layout_over(candidates);
+            let pipeline = compute_pipeline(device, &label, with, source, cull.entry_point());
             ((candidates, phase), pipeline)
         };
         let over = [Some(false), features.coarse.then_some(true)];
@@ -147,7 +174,7 @@ impl GpuCuller {
                 let entry = pass.entry_point();
                 (
                     c,
-                    compute_pipeline(device, &label, &display_layout, source, entry),
+                    compute_pipeline(device, &label, layout_over(c), source, entry),
                 )
             })
             .collect();
@@ -219,11 +246,6 @@ impl GpuCuller {
             visible,
             draws,
             counts,
-            scene.block_marks.bound(),
-            scene.block_list.bound(),
-            scene.candidate_count.bound(),
-            scene.candidate_ranges.bound(),
-            scene.block_tests.bound(),
             scene.occlusion.bound(),
             scene.spheres.bound(),
         ];
@@ -238,26 +260,53 @@ impl GpuCuller {
         )
     }
 
-    /// Group 1 of the frame passes (with the coarse cull).
-    pub fn coarse_bind_group(
+    /// Group 1 of the frame passes and of the display passes over candidates (with the
+    /// coarse cull).
+    pub fn coarse_bind_groups(
         &self,
         device: &wgpu::Device,
         scene: &CullScene,
-    ) -> Option<wgpu::BindGroup> {
+    ) -> Option<CoarseGroups> {
         let coarse = self.coarse.as_ref()?;
-        Some(bind_group(
-            device,
-            "stereocull.coarse",
-            &coarse.args_layout,
-            &COARSE_BINDINGS,
-            &Windows::WHOLE,
-            [&scene.coarse_args],
-        ))
+        let lists = [
+            &scene.block_list,
+            &scene.candidate_count,
+            &scene.candidate_ranges,
+        ];
+        let [list, count, ranges] = lists;
+        // In COARSE_BINDINGS order.
+        let writes = [
+            &scene.coarse_args,
+            &scene.block_marks,
+            list,
+            count,
+            ranges,
+            &scene.block_tests,
+        ];
+        let whole = &Windows::WHOLE;
+        Some(CoarseGroups {
+            args: bind_group(
+                device,
+                "stereocull.coarse",
+                &coarse.args_layout,
+                &COARSE_BINDINGS,
+                whole,
+                writes,
+            ),
+            candidates: bind_group(
+                device,
+                "stereocull.candidates",
+                &coarse.candidates_layout,
+                &CANDIDATE_BINDINGS,
+                whole,
+                lists,
+            ),
+        })
     }
 
     /// Records the frame's coarse cull (nothing without it): `bind_groups` are any
     /// display's group 0 (the frame passes read none of its display's bindings) and
-    /// [`GpuCuller::coarse_bind_group`]. Returns the dispatches.
+    /// [`CoarseGroups::args`]. Returns the dispatches.
     pub fn encode_frame(
         &self,
         pass: &mut wgpu::ComputePass,
@@ -285,19 +334,23 @@ impl GpuCuller {
     }
 
     /// Records the three dispatches for one display: a fixed count, whatever the
-    /// number of instances; with the coarse cull's `slot` they run over that slot's
-    /// listed blocks, dispatched as the coarse passes sized them. The cull pass runs in
-    /// occlusion `phase` (built with occlusion, else the frustum alone).
+    /// number of instances; with the coarse cull's `slot` (and its candidates group,
+    /// [`CoarseGroups::candidates`]) they run over that slot's listed blocks,
+    /// dispatched as the coarse passes sized them. The cull pass runs in occlusion
+    /// `phase` (built with occlusion, else the frustum alone).
     pub fn encode(
         &self,
         pass: &mut wgpu::ComputePass,
         scene: &CullScene,
         bind_group: &wgpu::BindGroup,
-        (slot, phase): (Option<u32>, Phase),
+        (slot, phase): (Option<(u32, &wgpu::BindGroup)>, Phase),
     ) {
         pass.set_bind_group(0, bind_group, &[]);
         let (pipelines, slot) = match (&self.coarse, slot) {
-            (Some(c), Some(slot)) => (&c.display, Some(slot)),
+            (Some(c), Some((slot, candidates))) => {
+                pass.set_bind_group(1, candidates, &[]);
+                (&c.display, Some(slot))
+            }
             _ => (&self.pipelines, None),
         };
         let candidates = slot.is_some();

@@ -57,7 +57,7 @@ const FILTERABLE: wgpu::TextureSampleType = wgpu::TextureSampleType::Float { fil
 /// Every cull pass's bindings: the frame context, per display its context and outputs,
 /// the scene data uploaded once, scratch shared by all displays, and the frame's coarse
 /// cull results.
-pub const CULL_BINDINGS: [Binding; 20] = [
+pub const CULL_BINDINGS: [Binding; 15] = [
     binding("frame", Access::Uniform, "FrameContext", COMPUTE),
     binding("display", Access::Uniform, "DisplayContext", COMPUTE),
     binding("params", Access::Uniform, "CullParams", COMPUTE),
@@ -87,40 +87,6 @@ pub const CULL_BINDINGS: [Binding; 20] = [
     // Per view: the draw count (what multi_draw_indexed_indirect_count reads), the
     // visible total, then each material bin's draw count.
     binding("counts", Access::StorageReadWrite, "array<u32>", COMPUTE),
-    // The frame's coarse cull (src/cull/coarse.rs), per slot and block of BLOCK cull
-    // positions: its mark (kept bit, then listed blocks before it), the listed blocks
-    // ascending, per slot the listed positions' count and each mesh's (start, count)
-    // among them, and per slot the block test.
-    binding(
-        "block_marks",
-        Access::StorageReadWrite,
-        "array<u32>",
-        COMPUTE,
-    ),
-    binding(
-        "block_list",
-        Access::StorageReadWrite,
-        "array<u32>",
-        COMPUTE,
-    ),
-    binding(
-        "candidate_count",
-        Access::StorageReadWrite,
-        "array<u32>",
-        COMPUTE,
-    ),
-    binding(
-        "candidate_ranges",
-        Access::StorageReadWrite,
-        "array<vec2<u32>>",
-        COMPUTE,
-    ),
-    binding(
-        "block_tests",
-        Access::StorageRead,
-        "array<CoarseTest>",
-        COMPUTE,
-    ),
     // Occlusion (wgsl/shared/occlusion.wgsl): per display slot, a word per span of
     // places whose low SPAN bits say which places that display drew last frame; then,
     // from params.pyramid_offset, the display's eyes' depth pyramids (src/occlusion.rs,
@@ -136,15 +102,53 @@ pub const CULL_BINDINGS: [Binding; 20] = [
     ),
 ];
 
-/// The frame-level coarse passes' group 1: the display passes' indirect dispatch,
-/// which they write and nothing else binds (a buffer read as dispatch arguments may not
-/// be bound for writing in the same dispatch).
-pub const COARSE_BINDINGS: [Binding; 1] = [binding(
-    "coarse_args",
-    Access::StorageReadWrite,
-    "array<u32>",
-    COMPUTE,
-)];
+/// The frame's coarse cull (src/cull/coarse.rs), per slot and block of BLOCK cull
+/// positions: the listed blocks ascending, per slot the listed positions' count and
+/// each mesh's (start, count) among them, as `access` binds them.
+const fn coarse_lists(access: Access) -> [Binding; 3] {
+    [
+        binding("block_list", access, "array<u32>", COMPUTE),
+        binding("candidate_count", access, "array<u32>", COMPUTE),
+        binding("candidate_ranges", access, "array<vec2<u32>>", COMPUTE),
+    ]
+}
+
+/// The display passes' group 1 over the coarse cull's candidates: its lists, read only.
+/// A display pass binds none of the coarse passes' writes (nor, without the coarse cull,
+/// any of this group).
+pub const CANDIDATE_BINDINGS: [Binding; 3] = coarse_lists(Access::StorageRead);
+
+/// The frame-level coarse passes' group 1: what they write (the lists, each block's mark
+/// and the display passes' indirect dispatches, which nothing else binds: a buffer read
+/// as dispatch arguments may not be bound for writing in the same dispatch) and the
+/// slots' block tests.
+pub const COARSE_BINDINGS: [Binding; 6] = {
+    let [list, count, ranges] = coarse_lists(Access::StorageReadWrite);
+    [
+        binding(
+            "coarse_args",
+            Access::StorageReadWrite,
+            "array<u32>",
+            COMPUTE,
+        ),
+        // Per slot and block: its mark (kept bit, then listed blocks before it).
+        binding(
+            "block_marks",
+            Access::StorageReadWrite,
+            "array<u32>",
+            COMPUTE,
+        ),
+        list,
+        count,
+        ranges,
+        binding(
+            "block_tests",
+            Access::StorageRead,
+            "array<CoarseTest>",
+            COMPUTE,
+        ),
+    ]
+};
 
 /// Every draw pipeline's bindings.
 pub const DRAW_BINDINGS: [Binding; 4] = [

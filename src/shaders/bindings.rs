@@ -281,6 +281,8 @@ pub fn bind_group<'a, B: Bound<'a>, const N: usize>(
     windows: &Windows,
     buffers: [B; N],
 ) -> wgpu::BindGroup {
+    // A programming error, not an input's: every list names each of its buffers once.
+    assert_eq!(bindings.len(), N, "{label}: one buffer per binding");
     let mut entries = Vec::new();
     for (b, bound) in bindings.iter().zip(buffers) {
         let bound = bound.bound();

@@ -6,9 +6,12 @@
 use super::binding_lists::pyramid_bindings;
 use super::bindings::declarations;
 use super::{
-    COARSE_BINDINGS, CONTEXTS, CULL_BINDINGS, CULL_MATH, CULL_SUBGROUPS, OCCLUSION, PYRAMID,
-    RECORDS, WORKGROUP_SIZE, Windows, constants,
+    CANDIDATE_BINDINGS, COARSE_BINDINGS, CONTEXTS, CULL_BINDINGS, CULL_MATH, CULL_SUBGROUPS,
+    OCCLUSION, PYRAMID, RECORDS, WORKGROUP_SIZE, Windows, constants,
 };
+
+const OVER_EVERYTHING: &str = include_str!("../../wgsl/shared/over_everything.wgsl");
+const OVER_CANDIDATES: &str = include_str!("../../wgsl/shared/over_candidates.wgsl");
 
 /// Which part of a display's two-phase cull a cull pass runs (`OCCLUSION` in
 /// `wgsl/shared/occlusion.wgsl`; see [`crate::occlusion`]).
@@ -176,16 +179,25 @@ impl CullPass {
             CullPass::Blend | CullPass::RigBlend => include_str!("../../wgsl/cull_blend.wgsl"),
             CullPass::Floor | CullPass::RigFloor => include_str!("../../wgsl/cull_floor.wgsl"),
         };
+        let candidates = over_candidates && !self.is_frame();
         let coarse = format!(
-            "const COARSE: bool = {};\nconst OCCLUSION: u32 = {}u;\nconst RIG: bool = {};\n",
-            over_candidates && !self.is_frame(),
+            "const OCCLUSION: u32 = {}u;\nconst RIG: bool = {};\n",
             phase as u32,
             self.is_rig(),
         );
         let mut bindings = declarations(&CULL_BINDINGS, 0, windows);
-        if self.is_frame() {
-            bindings += &declarations(&COARSE_BINDINGS, 1, &Windows::WHOLE);
-        }
+        let whole = &Windows::WHOLE;
+        let over = match (self.is_frame(), candidates) {
+            (true, _) => {
+                bindings += &declarations(&COARSE_BINDINGS, 1, whole);
+                OVER_EVERYTHING
+            }
+            (false, true) => {
+                bindings += &declarations(&CANDIDATE_BINDINGS, 1, whole);
+                OVER_CANDIDATES
+            }
+            (false, false) => OVER_EVERYTHING,
+        };
         [
             &constants(),
             &coarse,
@@ -193,6 +205,7 @@ impl CullPass {
             RECORDS,
             &bindings,
             CULL_MATH,
+            over,
             PYRAMID,
             OCCLUSION,
             body,

@@ -134,31 +134,8 @@ fn block_count() -> u32 {
     return (params.instance_count + BLOCK - 1u) / BLOCK;
 }
 
-// What a display's passes run over: every cull position, or, after the frame's coarse
-// cull (COARSE), the positions of the blocks listed for its slot, ascending (the last
-// block's may run past the instances: cull_position then passes instance_count).
-fn cull_count() -> u32 {
-    if (COARSE) {
-        return candidate_count[display.cull_slot];
-    }
-    return params.instance_count;
-}
-
-fn cull_position(j: u32) -> u32 {
-    if (COARSE) {
-        let listed = block_list[display.cull_slot * block_count() + j / BLOCK];
-        return listed * BLOCK + j % BLOCK;
-    }
-    return j;
-}
-
-// Mesh m's (start, count) among what the passes run over.
-fn mesh_range(m: u32) -> vec2<u32> {
-    if (COARSE) {
-        return candidate_ranges[display.cull_slot * params.mesh_count + m];
-    }
-    return vec2(meshes[m].cull_start, meshes[m].cull_count);
-}
+// What a display's passes run over (cull_count, cull_position, mesh_range): every cull
+// position (over_everything.wgsl) or its coarse blocks' (over_candidates.wgsl).
 
 var<workgroup> uniform_count: u32;
 

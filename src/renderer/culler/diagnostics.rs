@@ -66,7 +66,7 @@ impl Culler {
             .filter_map(|v| Some((v, v.bind_group.as_ref()?)))
             .collect();
         let encode_view = |pass: &mut wgpu::ComputePass, v: &ViewCull, group| {
-            let slot = coarse.as_ref().and(v.view.coarse_slot());
+            let slot = super::over_candidates(coarse.as_ref(), v);
             culler.encode(pass, scene, group, (slot, v.phase));
         };
         // Rounds interleave the floor and every cull, so that each sees the host as the
@@ -80,8 +80,8 @@ impl Culler {
                 };
             })?);
             samples[1].push(once(&|pass| {
-                if let (Some(args), false) = (coarse, groups.is_empty()) {
-                    culler.encode_frame(pass, scene, [group, args]);
+                if let (Some(coarse), false) = (coarse, groups.is_empty()) {
+                    culler.encode_frame(pass, scene, [group, &coarse.args]);
                 }
                 culler.encode_rig(pass, scene, rig);
                 for (v, group) in groups.iter().filter(|(v, _)| v.member.is_none()) {

@@ -18,7 +18,7 @@ use crate::bins::BinRange;
 use crate::contexts::DisplayContext;
 use crate::cull::CullOutput;
 use crate::cull::cpu;
-use crate::cull::gpu::{CullerFeatures, GpuCuller};
+use crate::cull::gpu::{CoarseGroups, CullerFeatures, GpuCuller};
 use crate::cull::gpu_buffers::{CullScene, CullTargets, OcclusionRoom};
 use crate::error::Result;
 use crate::occlusion::{Phase, cull_early};
@@ -39,12 +39,12 @@ pub(super) struct Culler {
 }
 
 enum Kind {
-    /// Passes over scene data on the GPU; `coarse` is the coarse cull's group 1, when it
+    /// Passes over scene data on the GPU; `coarse` is the coarse cull's groups 1, when it
     /// runs.
     Gpu {
         culler: GpuCuller,
         scene: Box<CullScene>,
-        coarse: Option<wgpu::BindGroup>,
+        coarse: Option<CoarseGroups>,
         /// With the rig cull: its members' outputs, in member order, and its bind
         /// groups (made with the first member's view).
         rig: Vec<CullTargets>,
@@ -126,7 +126,7 @@ impl Culler {
                 let room = (shape.coarse_slots, shape.occlusion, rig_members);
                 let scene = CullScene::new(device, &layout, (shape.slots, shape.levels), room);
                 let scene = Box::new(scene);
-                let coarse = culler.coarse_bind_group(device, &scene);
+                let coarse = culler.coarse_bind_groups(device, &scene);
                 let draws = bins.iter().map(|r| r.capacity).sum();
                 let rig = match rig_members {
                     0 => Vec::new(),
@@ -300,7 +300,7 @@ impl Culler {
         };
         let display = any.and_then(|v| v.bind_group.as_ref());
         let rig = rig_groups.get().map_or(&[][..], Vec::as_slice);
-        let coarse = coarse.as_ref().zip(display);
+        let coarse = coarse.as_ref().map(|g| &g.args).zip(display);
         if coarse.is_none() && !culler.has_floor() && rig.is_empty() {
             return 0;
         }
@@ -355,7 +355,7 @@ impl Culler {
         if view.member.is_some() && phase == view.phase {
             return 0;
         }
-        let slot = coarse.as_ref().and(view.view.coarse_slot());
+        let slot = over_candidates(coarse.as_ref(), view);
         let (mut pass, open) = rec.compute_pass(encoder, what);
         culler.encode(&mut pass, scene, group, (slot, phase));
         rec.close_compute(encoder, pass, open);
@@ -448,6 +448,15 @@ impl Culler {
             }
         }
     }
+}
+
+/// With the coarse cull, `view`'s slot and the candidates group its passes read (a view
+/// that takes no blocks runs over everything).
+fn over_candidates<'a>(
+    coarse: Option<&'a CoarseGroups>,
+    view: &ViewCull,
+) -> Option<(u32, &'a wgpu::BindGroup)> {
+    Some((view.view.coarse_slot()?, &coarse?.candidates))
 }
 
 /// Sets (or adds) `view`'s output.
