@@ -1,15 +1,16 @@
-//! The rig cull: every view of the frame that culls by its frustum alone, culled by one
-//! set of dispatches (`cull_rig`, `draws_rig`, `compact_rig` and, with blended bins,
-//! `blend_rig` in `wgsl/`). An invocation reads each sphere once and chooses its level
-//! once for the whole rig, then tests it against every member's planes; each member
-//! keeps its own scratch and its own ranges of the rig's shared targets, so its outputs
-//! are byte for byte what its own three dispatches write (the cull contract and the
-//! CPU twin do not change).
+//! The rig cull: every view of the frame that culls over every instance by its frustum
+//! alone or in the early occlusion phase, culled by one set of dispatches (`cull_rig`,
+//! `draws_rig`, `compact_rig` and, with blended bins, `blend_rig` in `wgsl/`). An
+//! invocation reads each sphere once and chooses its level once for the whole rig, then
+//! tests it against every member's planes (skipping a span whose box fails a member's
+//! block test); each member keeps its own masks and sums and its own ranges of the rig's
+//! shared targets, so its outputs are byte for byte what its own three dispatches write
+//! (the cull contract and the CPU twin do not change).
 //!
 //! One set of dispatches takes up to [`MAX_RIG_VIEWS`] members: a member costs the cull
-//! pass a running count (a register) and one workgroup scan (three barriers), the draws
-//! and blend passes a workgroup, the compact pass a read of its entry per position.
-//! A larger rig culls in groups of that many members, one set of dispatches each.
+//! pass its plane tests, a mask per span and a quarter of a workgroup scan, the draws
+//! and blend passes a workgroup, the compact pass two reads per position. A larger rig
+//! culls in groups of that many members, one set of dispatches each.
 
 use encase::ShaderType;
 use glam::{Vec3, Vec4};

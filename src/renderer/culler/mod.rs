@@ -1,6 +1,8 @@
 //! The one culler every view of a frame goes through: each display, each eye in
 //! `multi-camera`, each far layer, the light. On the GPU it is compute passes over scene
-//! data uploaded once (four per view, after the frame's coarse cull when it runs); on
+//! data uploaded once: the rig cull's, once per frame, for every view it takes
+//! ([`crate::cull::rig`]), and up to four per other view (after the frame's coarse
+//! cull when it runs); on
 //! the CPU one parallel pass over the spheres per frame for every view the frame frustum
 //! holds, one for the light, and an upload per view. A view's pass takes the culler and
 //! never asks which it is: this module is the only place that does (its diagnostics,
