@@ -963,8 +963,8 @@ fn render_culls_the_far_layer_against_the_pyramids() {
         .filter(|p| p["level"] == "display")
         .map(|p| p["name"].as_str().unwrap())
         .collect();
+    // The early cull is the frame's rig cull's.
     let order = [
-        "cull",
         "draw",
         "pyramid",
         "late_cull",
@@ -973,6 +973,7 @@ fn render_culls_the_far_layer_against_the_pyramids() {
         "late_draw",
     ];
     assert_eq!(passes, order, "{stats}");
+    assert_eq!(stats["passes"][0]["name"], "rig_cull", "{stats}");
     let report = &stats["occlusion"][0];
     let n = |k: &str| report[k].as_u64().unwrap();
     assert!(

@@ -258,14 +258,19 @@ fn info() -> Result<()> {
         ),
     }
     println!(
-        "coarse cull with --coarse-cull auto, GPU culling on this adapter \
+        "coarse cull with --coarse-cull auto, GPU culling on this adapter: off with the rig \
+         cull (it reads each sphere once for the rig); with --rig-cull off \
          (sphere tests expected with it / without):"
     );
+    let apart = RendererOptions {
+        rig_cull: false,
+        ..Default::default()
+    };
     for preset in crate::rig::PRESETS {
         let resolved = Rig::preset(preset)?.resolve()?;
         let expected = resolved.expected_coarse_tests();
-        let on = RendererOptions::default().coarse_for(&resolved, Some(&gpu.device));
-        let gains = RendererOptions::default().coarse_for(&resolved, None);
+        let on = apart.coarse_for(&resolved, Some(&gpu.device));
+        let gains = apart.coarse_for(&resolved, None);
         let why = match (on, gains) {
             (false, true) => "; a software adapter: indirect validation costs more",
             _ => "",
