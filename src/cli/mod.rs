@@ -41,8 +41,9 @@ struct Cli {
 
 #[derive(Subcommand)]
 enum Command {
-    /// Print the adapter, backend, driver and which optional features are present.
-    Info,
+    /// Print the adapter, backend, driver and which optional features are present; with
+    /// `--scene`, what a scene file uses and what of it is read instead.
+    Info(InfoArgs),
     /// Cull a scene for every display of a rig and dump the visible lists and draws.
     Cull(cull::CullArgs),
     /// Render one frame: one PNG per display (double-wide for stereo) and stats.json.
@@ -53,6 +54,14 @@ enum Command {
     Profile(profile::ProfileArgs),
     /// Compare two images: how many pixels differ and by how much (e.g. LOD on and off).
     Diff(diff::DiffArgs),
+}
+
+#[derive(Args, Clone, Debug)]
+pub struct InfoArgs {
+    /// A scene (as `render --scene` takes it) to describe instead of the adapter: a glTF
+    /// file's extensions, which of them are read, and what it loads as.
+    #[arg(long)]
+    pub scene: Option<String>,
 }
 
 /// Where the scene and viewer come from; shared by every command that draws.
@@ -228,7 +237,8 @@ fn parse_finite<const N: usize>(s: &str, expected: &str) -> std::result::Result<
 pub fn run() -> Result<()> {
     match Cli::parse().command {
         None => render::render(&render::RenderArgs::parse_from(["render"])),
-        Some(Command::Info) => info(),
+        Some(Command::Info(InfoArgs { scene: Some(scene) })) => scene_info(&scene),
+        Some(Command::Info(_)) => info(),
         Some(Command::Cull(args)) => cull::cull(&args),
         Some(Command::Render(args)) => render::render(&args),
         Some(Command::Stress(args)) => stress::stress(&args),
@@ -299,6 +309,44 @@ fn info() -> Result<()> {
             .collect();
         println!("  {preset:40} {}", from.join(", "));
     }
+    Ok(())
+}
+
+/// `info --scene`: a glTF file's extensions (required ones marked) and whether each is
+/// read, then what the scene loads as (no adapter is opened).
+fn scene_info(spec: &str) -> Result<()> {
+    println!("scene: {spec}");
+    let gltf = [".gltf", ".glb"]
+        .iter()
+        .any(|e| spec.to_lowercase().ends_with(e));
+    if gltf {
+        let uses = crate::gltf_import::extension_uses(Path::new(spec))?;
+        if uses.is_empty() {
+            println!("  extensions: none");
+        }
+        for u in uses {
+            let what = match (u.read, u.required) {
+                (true, _) => "read",
+                (false, false) => "not read: drawn without it",
+                (false, true) => "not read, and required: the file is refused",
+            };
+            let name = format!("{}{}", u.name, if u.required { " (required)" } else { "" });
+            println!("  extension {name:48} {what}");
+        }
+    }
+    let scene = crate::scene_spec::load(spec)?;
+    let triangles: u64 = (scene.instances.iter())
+        .map(|i| scene.meshes[i.mesh as usize].index_count as u64 / 3)
+        .sum();
+    println!(
+        "  loads: {} instances of {} meshes ({} triangles at the finest level), {} materials, {} textures, {} skins",
+        scene.instances.len(),
+        scene.meshes.len(),
+        triangles,
+        scene.materials.len(),
+        scene.textures.len(),
+        scene.skins.skins.len(),
+    );
     Ok(())
 }
 

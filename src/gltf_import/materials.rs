@@ -10,7 +10,7 @@ use base64::engine::general_purpose::STANDARD as BASE64;
 use gltf::{Document, Semantic};
 use image::RgbaImage;
 
-use super::{Importer, Step, check_accessor};
+use super::{Importer, Step};
 use crate::scene::{AlphaMode, Encoding, Material, Shading, Texture};
 
 /// A material's texture slots: what it reads, and the set of coordinates and the
@@ -55,31 +55,10 @@ impl Importer<'_> {
                 "{where_}: its material's textures read TEXCOORD_{set} and TEXCOORD_{other}; one set per material is read"
             ));
         }
-        if let Some(accessor) = primitive.get(&Semantic::TexCoords(set)) {
-            let what = format!("{where_} TEXCOORD_{set}");
-            check_accessor(&accessor, accessor.size(), &what)?;
-            // The gltf crate's reader is `unreachable!` on any other component type, and
-            // asserts two components.
-            use gltf::accessor::DataType::{F32, U8, U16};
-            let vec2 = accessor.dimensions() == gltf::accessor::Dimensions::Vec2;
-            if !matches!(accessor.data_type(), F32 | U8 | U16) || !vec2 {
-                return Err(format!(
-                    "{what}: accessors[{}] holds {:?} {:?}; texture coordinates are VEC2 of float, unsigned byte or unsigned short",
-                    accessor.index(),
-                    accessor.dimensions(),
-                    accessor.data_type()
-                ));
-            }
-        }
-        let buffers = self.buffers;
-        let uvs: Vec<[f32; 2]> = primitive
-            .reader(|b| buffers.get(b.index()).map(|d| &d.0[..]))
-            .read_tex_coords(set)
-            .ok_or_else(|| {
-                format!("{where_}: its material's textures read TEXCOORD_{set}, which it lacks")
-            })?
-            .into_f32()
-            .collect();
+        let accessor = primitive.get(&Semantic::TexCoords(set)).ok_or_else(|| {
+            format!("{where_}: its material's textures read TEXCOORD_{set}, which it lacks")
+        })?;
+        let uvs = self.floats::<2>(&accessor, &format!("{where_} TEXCOORD_{set}"))?;
         if uvs.len() != count {
             return Err(format!(
                 "{where_}: TEXCOORD_{set} and POSITION differ in count"

@@ -9,7 +9,7 @@ use std::collections::{HashMap, HashSet};
 use std::path::Path;
 
 use glam::{Affine3A, Mat4, Quat, Vec3, Vec4};
-use gltf::accessor::{DataType, Dimensions};
+use gltf::accessor::{DataType, Dimensions, Item};
 use gltf::buffer::Data;
 use gltf::{Document, Semantic};
 
@@ -18,6 +18,8 @@ use crate::posing::NodeInstance;
 use crate::scene::{Animation, Instance, Scene, Vertex, both_windings};
 
 mod animations;
+mod buffers;
+pub mod extensions;
 mod materials;
 mod preconditions;
 mod skins;
@@ -36,6 +38,19 @@ pub fn import(path: &Path) -> Result<Scene> {
     import_bytes(&bytes, path.parent(), path)
 }
 
+/// The extensions the glTF or GLB file at `path` names, and whether the importer reads
+/// each (what `info --scene` lists).
+pub fn extension_uses(path: &Path) -> Result<Vec<extensions::ExtensionUse>> {
+    let fail = |message: String| Error::Scene {
+        path: path.into(),
+        message,
+    };
+    let bytes = std::fs::read(path).map_err(|e| fail(e.to_string()))?;
+    let raw = gltf::Gltf::from_slice_without_validation(&bytes)
+        .map_err(|e| fail(format!("not valid glTF: {e}")))?;
+    Ok(extensions::uses(raw.document.as_json()))
+}
+
 /// Imports glTF or GLB bytes; external buffers resolve against `base`, and errors
 /// name `origin`.
 pub fn import_bytes(bytes: &[u8], base: Option<&Path>, origin: &Path) -> Result<Scene> {
@@ -44,8 +59,19 @@ pub fn import_bytes(bytes: &[u8], base: Option<&Path>, origin: &Path) -> Result<
         message,
     };
     let gltf = parse(bytes).map_err(|e| fail(format!("not valid glTF: {e}")))?;
-    let buffers = gltf::import_buffers(&gltf.document, base, gltf.blob.clone())
+    let buffers = buffers::load(&gltf.document, base, gltf.blob.clone())
         .map_err(|e| fail(format!("buffer: {e}")))?;
+    let unread: Vec<_> = (extensions::uses(gltf.document.as_json()).into_iter())
+        .filter(|e| !e.read)
+        .map(|e| e.name)
+        .collect();
+    if !unread.is_empty() {
+        log::warn!(
+            "{}: uses extensions stereocull does not read (drawn without them): {}",
+            origin.display(),
+            unread.join(", ")
+        );
+    }
     check_images(&gltf.document, base).map_err(&fail)?;
     let mut importer = Importer {
         document: &gltf.document,
@@ -101,7 +127,7 @@ fn parse(bytes: &[u8]) -> Step<gltf::Gltf> {
         }
     }
     let raw = gltf::Gltf::from_slice_without_validation(bytes).map_err(|e| e.to_string())?;
-    let json = raw.document.into_json();
+    let mut json = raw.document.into_json();
     for (m, mesh) in json.meshes.iter().enumerate() {
         for (p, primitive) in mesh.primitives.iter().enumerate() {
             let position = primitive
@@ -116,6 +142,7 @@ fn parse(bytes: &[u8]) -> Step<gltf::Gltf> {
         }
     }
     preconditions::check(&json)?;
+    extensions::check_required(&mut json)?;
     let document = gltf::Document::from_json(json).map_err(|e| e.to_string())?;
     Ok(gltf::Gltf {
         document,
@@ -232,13 +259,13 @@ impl Importer<'_> {
                 .and_then(|v| v.as_u64())
         };
         let t: Option<Vec<[f32; 3]>> = attribute("TRANSLATION")
-            .map(|i| self.read(i, &where_))
+            .map(|i| self.read_floats(i, &where_))
             .transpose()?;
         let r: Option<Vec<[f32; 4]>> = attribute("ROTATION")
-            .map(|i| self.read(i, &where_))
+            .map(|i| self.read_floats(i, &where_))
             .transpose()?;
         let s: Option<Vec<[f32; 3]>> = attribute("SCALE")
-            .map(|i| self.read(i, &where_))
+            .map(|i| self.read_floats(i, &where_))
             .transpose()?;
         let lens = [
             t.as_ref().map(Vec::len),
@@ -261,21 +288,93 @@ impl Importer<'_> {
             .collect())
     }
 
-    fn read<T: gltf::accessor::Item>(
+    fn read<T: Item>(&self, index: u64, where_: &dyn Fn() -> String) -> Step<Vec<T>> {
+        self.items(&self.accessor(index, where_)?, &where_())
+    }
+
+    /// [`Importer::floats`] of accessor `index`.
+    fn read_floats<const N: usize>(
         &self,
         index: u64,
         where_: &dyn Fn() -> String,
-    ) -> Step<Vec<T>> {
-        let accessor = self
-            .document
-            .accessors()
-            .nth(index as usize)
-            .ok_or_else(|| format!("{}: accessor {index} does not exist", where_()))?;
-        check_accessor(&accessor, std::mem::size_of::<T>(), &where_())?;
-        let iter = gltf::accessor::Iter::<T>::new(accessor, |b| {
+    ) -> Step<Vec<[f32; N]>>
+    where
+        [f32; N]: Item,
+        [i8; N]: Item,
+        [u8; N]: Item,
+        [i16; N]: Item,
+        [u16; N]: Item,
+    {
+        self.floats(&self.accessor(index, where_)?, &where_())
+    }
+
+    fn accessor(&self, index: u64, where_: &dyn Fn() -> String) -> Step<gltf::Accessor<'_>> {
+        (self.document.accessors().nth(index as usize))
+            .ok_or_else(|| format!("{}: accessor {index} does not exist", where_()))
+    }
+
+    /// The accessor's elements of N components as floats: floats as they are, and
+    /// (core glTF for some attributes, `KHR_mesh_quantization` for all) bytes and
+    /// shorts, signed or not, as integers or, where normalized, mapped onto [-1, 1] or
+    /// [0, 1] as the specification's equations say.
+    fn floats<const N: usize>(&self, accessor: &gltf::Accessor, what: &str) -> Step<Vec<[f32; N]>>
+    where
+        [f32; N]: Item,
+        [i8; N]: Item,
+        [u8; N]: Item,
+        [i16; N]: Item,
+        [u16; N]: Item,
+    {
+        let dimensions = [Dimensions::Vec2, Dimensions::Vec3, Dimensions::Vec4];
+        if accessor.dimensions() != dimensions[N.clamp(2, 4) - 2] {
+            return Err(format!(
+                "{what}: accessors[{}] holds {:?} {:?}; {N} components are expected here",
+                accessor.index(),
+                accessor.dimensions(),
+                accessor.data_type()
+            ));
+        }
+        let normalized = accessor.normalized();
+        let signed = |max: f32| move |c: f32| if normalized { (c / max).max(-1.0) } else { c };
+        let unsigned = |max: f32| move |c: f32| if normalized { c / max } else { c };
+        match accessor.data_type() {
+            DataType::F32 => self.items(accessor, what),
+            DataType::I8 => Ok(scaled(
+                self.items::<[i8; N]>(accessor, what)?,
+                signed(127.0),
+            )),
+            DataType::U8 => Ok(scaled(
+                self.items::<[u8; N]>(accessor, what)?,
+                unsigned(255.0),
+            )),
+            DataType::I16 => Ok(scaled(
+                self.items::<[i16; N]>(accessor, what)?,
+                signed(32767.0),
+            )),
+            DataType::U16 => Ok(scaled(
+                self.items::<[u16; N]>(accessor, what)?,
+                unsigned(65535.0),
+            )),
+            other => Err(format!(
+                "{what}: accessors[{}] holds {:?} {other:?}; attributes are floats, bytes or shorts",
+                accessor.index(),
+                accessor.dimensions(),
+            )),
+        }
+    }
+
+    /// The accessor's elements as `T`, once [`check_accessor`] holds for `T`.
+    fn items<T: Item>(&self, accessor: &gltf::Accessor, what: &str) -> Step<Vec<T>> {
+        check_accessor(accessor, std::mem::size_of::<T>(), what)?;
+        let iter = gltf::accessor::Iter::<T>::new(accessor.clone(), |b| {
             self.buffers.get(b.index()).map(|d| &d.0[..])
         })
-        .ok_or_else(|| format!("{}: accessor {index} has no readable data", where_()))?;
+        .ok_or_else(|| {
+            format!(
+                "{what}: accessors[{}] has no readable data",
+                accessor.index()
+            )
+        })?;
         Ok(iter.collect())
     }
 
@@ -317,12 +416,6 @@ impl Importer<'_> {
         key: (usize, usize),
     ) -> Step<(Vec<Vertex>, Vec<u32>)> {
         let where_ = format!("mesh {} primitive {}", key.0, key.1);
-        for semantic in [Semantic::Positions, Semantic::Normals] {
-            if let Some(accessor) = primitive.get(&semantic) {
-                let vec3 = std::mem::size_of::<[f32; 3]>();
-                check_accessor(&accessor, vec3, &format!("{where_} {semantic:?}"))?;
-            }
-        }
         if let Some(accessor) = primitive.indices() {
             let what = format!("{where_} indices");
             check_accessor(&accessor, accessor.data_type().size(), &what)?;
@@ -339,13 +432,19 @@ impl Importer<'_> {
                 ));
             }
         }
-        let buffers = self.buffers;
-        let reader = primitive.reader(|b| buffers.get(b.index()).map(|d| &d.0[..]));
-        let positions: Vec<Vec3> = reader
-            .read_positions()
-            .ok_or_else(|| format!("{where_}: no POSITION"))?
+        let attribute = |semantic: Semantic| {
+            let what = format!("{where_} {semantic:?}");
+            primitive
+                .get(&semantic)
+                .map(|a| self.floats::<3>(&a, &what))
+        };
+        let positions: Vec<Vec3> = attribute(Semantic::Positions)
+            .ok_or_else(|| format!("{where_}: no POSITION"))??
+            .into_iter()
             .map(Vec3::from)
             .collect();
+        let buffers = self.buffers;
+        let reader = primitive.reader(|b| buffers.get(b.index()).map(|d| &d.0[..]));
         let indices: Vec<u32> = match reader.read_indices() {
             Some(i) => i.into_u32().collect(),
             None => (0..positions.len() as u32).collect(),
@@ -362,8 +461,8 @@ impl Importer<'_> {
                 indices.len()
             ));
         }
-        let normals: Vec<Vec3> = match reader.read_normals() {
-            Some(n) => n.map(Vec3::from).collect(),
+        let normals: Vec<Vec3> = match attribute(Semantic::Normals) {
+            Some(n) => n?.into_iter().map(Vec3::from).collect(),
             None => smooth_normals(&positions, &indices),
         };
         if normals.len() != positions.len() {
@@ -409,18 +508,7 @@ impl Importer<'_> {
             return Ok(());
         };
         let what = format!("{where_} TANGENT");
-        check_accessor(&accessor, size_of::<[f32; 4]>(), &what)?;
-        if accessor.data_type() != DataType::F32 || accessor.dimensions() != Dimensions::Vec4 {
-            return Err(format!(
-                "{what}: accessors[{}] holds {:?} {:?}; tangents are VEC4 of float",
-                accessor.index(),
-                accessor.dimensions(),
-                accessor.data_type()
-            ));
-        }
-        let buffers = self.buffers;
-        let reader = primitive.reader(|b| buffers.get(b.index()).map(|d| &d.0[..]));
-        let tangents: Vec<[f32; 4]> = reader.read_tangents().into_iter().flatten().collect();
+        let tangents = self.floats::<4>(&accessor, &what)?;
         if tangents.len() != vertices.len() {
             return Err(format!("{what} and POSITION differ in count"));
         }
@@ -459,6 +547,16 @@ fn check_accessor(accessor: &gltf::Accessor, element: usize, what: &str) -> Step
         )),
         _ => Ok(()),
     }
+}
+
+/// Each component of `elements` through `scale`.
+fn scaled<T: Copy + Into<f32>, const N: usize>(
+    elements: Vec<[T; N]>,
+    scale: impl Fn(f32) -> f32,
+) -> Vec<[f32; N]> {
+    (elements.into_iter())
+        .map(|e| e.map(|c| scale(c.into())))
+        .collect()
 }
 
 /// Area-weighted vertex normals for primitives that carry none.

@@ -34,10 +34,9 @@
 //! - Texture transforms (`KHR_texture_transform`) are plain optional fields: nothing to
 //!   unwrap.
 //! - `Reader::read_tex_coords` is `unreachable!` on a component type other than float,
-//!   unsigned byte and unsigned short, and asserts two components, neither of which
-//!   `from_json` checks per attribute (found by fuzzing: a `TEXCOORD_0` of unsigned
-//!   ints, the size of two floats; one of three floats). `materials.rs` checks both
-//!   before reading.
+//!   unsigned byte and unsigned short, and asserts two components (found by fuzzing).
+//!   The importer no longer calls it: it reads every vertex attribute through
+//!   `Importer::floats`, which checks the components and the component type first.
 
 use gltf::json;
 

@@ -1,0 +1,513 @@
+//! glTF as optimizers and exporters write it: `EXT_meshopt_compression` (the shared
+//! samples recompressed here with meshoptimizer's own encoders), `KHR_mesh_quantization`
+//! (integer attributes), application-specific attributes, and the rule that only an
+//! unread extension the file *requires* is an error.
+
+use std::path::{Path, PathBuf};
+
+use serde_json::{Value, json};
+use stereocull::scene::Scene;
+use stereocull::scene_spec;
+
+mod support;
+
+/// A GLB's JSON and binary chunk.
+fn split_glb(bytes: &[u8]) -> (Value, Vec<u8>) {
+    let word = |at: usize| u32::from_le_bytes(bytes[at..at + 4].try_into().unwrap()) as usize;
+    assert_eq!(&bytes[..4], b"glTF");
+    let json_len = word(12);
+    let json = serde_json::from_slice(&bytes[20..20 + json_len]).unwrap();
+    let bin_at = 20 + json_len;
+    let bin = match bytes.len() > bin_at {
+        true => bytes[bin_at + 8..bin_at + 8 + word(bin_at)].to_vec(),
+        false => Vec::new(),
+    };
+    (json, bin)
+}
+
+fn write_glb(json: &Value, bin: &[u8]) -> Vec<u8> {
+    let mut text = json.to_string().into_bytes();
+    while !text.len().is_multiple_of(4) {
+        text.push(b' ');
+    }
+    let mut bin = bin.to_vec();
+    while !bin.len().is_multiple_of(4) {
+        bin.push(0);
+    }
+    let total = 12 + 8 + text.len() + 8 + bin.len();
+    let mut out = Vec::with_capacity(total);
+    out.extend_from_slice(b"glTF");
+    out.extend_from_slice(&2u32.to_le_bytes());
+    out.extend_from_slice(&(total as u32).to_le_bytes());
+    out.extend_from_slice(&(text.len() as u32).to_le_bytes());
+    out.extend_from_slice(b"JSON");
+    out.extend_from_slice(&text);
+    out.extend_from_slice(&(bin.len() as u32).to_le_bytes());
+    out.extend_from_slice(b"BIN\0");
+    out.extend_from_slice(&bin);
+    out
+}
+
+fn element_size(accessor: &Value) -> usize {
+    let components = match accessor["type"].as_str().unwrap() {
+        "SCALAR" => 1,
+        "VEC2" => 2,
+        "VEC3" => 3,
+        "VEC4" | "MAT2" => 4,
+        "MAT3" => 9,
+        _ => 16,
+    };
+    let bytes = match accessor["componentType"].as_u64().unwrap() {
+        5120 | 5121 => 1,
+        5122 | 5123 => 2,
+        _ => 4,
+    };
+    components * bytes
+}
+
+/// The accessors a mesh primitive reads as (indices, vertex attributes).
+fn primitive_accessors(json: &Value) -> (Vec<u64>, Vec<u64>) {
+    let primitives: Vec<&Value> = (json["meshes"].as_array().unwrap().iter())
+        .flat_map(|m| m["primitives"].as_array().unwrap().iter())
+        .collect();
+    let indices = primitives
+        .iter()
+        .filter_map(|p| p["indices"].as_u64())
+        .collect();
+    let attributes = (primitives.iter())
+        .flat_map(|p| p["attributes"].as_object().unwrap().values())
+        .filter_map(Value::as_u64)
+        .collect();
+    (indices, attributes)
+}
+
+/// How one buffer view would be compressed: its mode and element stride. A view of
+/// primitives' indices (of 16 or 32 bits, each whole triangles) is TRIANGLES; one of vertex attributes
+/// alone, of a stride that is a multiple of 4, is ATTRIBUTES; others stay plain.
+fn compression_of(json: &Value, view: usize) -> Option<(&'static str, usize)> {
+    let accessors: Vec<(u64, &Value)> = (json["accessors"].as_array()?.iter().enumerate())
+        .filter(|(_, a)| a["bufferView"].as_u64() == Some(view as u64))
+        .map(|(i, a)| (i as u64, a))
+        .collect();
+    let length = json["bufferViews"][view]["byteLength"].as_u64()? as usize;
+    let (indices, attributes) = primitive_accessors(json);
+    let &(index, first) = accessors.first()?;
+    if indices.contains(&index) {
+        let stride = element_size(first);
+        let whole_triangles = |(i, a): &(u64, &Value)| {
+            let count = a["count"].as_u64().unwrap_or(1) as usize;
+            let at = a["byteOffset"].as_u64().unwrap_or(0) as usize;
+            indices.contains(i)
+                && element_size(a) == stride
+                && count.is_multiple_of(3)
+                && (at / stride).is_multiple_of(3)
+        };
+        let fits = (stride == 2 || stride == 4) && (length / stride).is_multiple_of(3);
+        return (fits && accessors.iter().all(whole_triangles)).then_some(("TRIANGLES", stride));
+    }
+    let stride = (json["bufferViews"][view]["byteStride"].as_u64())
+        .map_or(element_size(first), |s| s as usize);
+    let fits = stride.is_multiple_of(4) && length.is_multiple_of(stride);
+    let all_attributes = accessors.iter().all(|(i, _)| attributes.contains(i));
+    (fits && all_attributes).then_some(("ATTRIBUTES", stride))
+}
+
+/// `glb` with every vertex and index view it can compress written as
+/// `EXT_meshopt_compression` requires: the compressed bytes in buffer 0, the views'
+/// decoded places in a fallback buffer 1 without data. Other views (images, animation
+/// data) stay plain in buffer 0. Returns the file and how many views it compressed.
+fn meshopt_compressed(glb: &[u8]) -> (Vec<u8>, usize) {
+    let (mut json, bin) = split_glb(glb);
+    let mut out = Vec::new();
+    let mut fallback = 0usize;
+    let mut compressed = 0;
+    let views = json["bufferViews"].as_array().unwrap().len();
+    for v in 0..views {
+        let view = json["bufferViews"][v].clone();
+        let at = view["byteOffset"].as_u64().unwrap_or(0) as usize;
+        let length = view["byteLength"].as_u64().unwrap() as usize;
+        let bytes = &bin[at..at + length];
+        while !out.len().is_multiple_of(4) {
+            out.push(0);
+        }
+        let Some((mode, stride)) = compression_of(&json, v) else {
+            json["bufferViews"][v]["byteOffset"] = json!(out.len());
+            out.extend_from_slice(bytes);
+            continue;
+        };
+        let count = length / stride;
+        let encoded = match (mode, stride) {
+            ("TRIANGLES", 2) => {
+                let indices: Vec<u32> = (bytes.chunks_exact(2))
+                    .map(|c| u16::from_le_bytes([c[0], c[1]]) as u32)
+                    .collect();
+                let vertices = *indices.iter().max().unwrap() as usize + 1;
+                meshopt::encode_index_buffer(&indices, vertices).unwrap()
+            }
+            ("TRIANGLES", _) => {
+                let indices: Vec<u32> = bytemuck::pod_collect_to_vec(bytes);
+                let vertices = *indices.iter().max().unwrap() as usize + 1;
+                meshopt::encode_index_buffer(&indices, vertices).unwrap()
+            }
+            _ => encode_vertices(bytes, stride),
+        };
+        let place = fallback;
+        fallback += length.next_multiple_of(4);
+        json["bufferViews"][v] = json!({
+            "buffer": 1, "byteOffset": place, "byteLength": length,
+            "extensions": {"EXT_meshopt_compression": {
+                "buffer": 0, "byteOffset": out.len(), "byteLength": encoded.len(),
+                "byteStride": stride, "count": count, "mode": mode}}
+        });
+        if let Some(s) = view.get("byteStride") {
+            json["bufferViews"][v]["byteStride"] = s.clone();
+        }
+        if let Some(t) = view.get("target") {
+            json["bufferViews"][v]["target"] = t.clone();
+        }
+        out.extend_from_slice(&encoded);
+        compressed += 1;
+    }
+    json["buffers"] = json!([
+        {"byteLength": out.len().next_multiple_of(4)},
+        {"byteLength": fallback, "extensions": {"EXT_meshopt_compression": {"fallback": true}}}
+    ]);
+    for list in ["extensionsUsed", "extensionsRequired"] {
+        let mut names = json[list].as_array().cloned().unwrap_or_default();
+        names.push(json!("EXT_meshopt_compression"));
+        json[list] = json!(names);
+    }
+    (write_glb(&json, &out), compressed)
+}
+
+/// meshoptimizer's vertex codec over elements of `stride` bytes (a multiple of 4): as
+/// words of that many bytes, which the codec treats as opaque bytes.
+fn encode_vertices(bytes: &[u8], stride: usize) -> Vec<u8> {
+    macro_rules! encode {
+        ($($n:literal)*) => {
+            match stride / 4 {
+                $($n => meshopt::encode_vertex_buffer::<[u32; $n]>(&bytemuck::pod_collect_to_vec(bytes)).unwrap(),)*
+                _ => panic!("stride {stride}"),
+            }
+        };
+    }
+    encode!(1 2 3 4 5 6 7 8 9 10 11 12 13 14 15 16)
+}
+
+fn load_bytes(dir: &Path, name: &str, bytes: &[u8]) -> Scene {
+    let path = dir.join(name);
+    std::fs::write(&path, bytes).unwrap();
+    scene_spec::load(path.to_str().unwrap()).unwrap()
+}
+
+/// Each triangle rotated to start at its least index: meshoptimizer's index codec may
+/// rotate a triangle's corners (keeping its winding), never reorder triangles.
+fn canonical_triangles(indices: &[u32]) -> Vec<[u32; 3]> {
+    (indices.chunks_exact(3))
+        .map(|t| {
+            let least = (0..3).min_by_key(|&i| t[i]).unwrap();
+            [t[least], t[(least + 1) % 3], t[(least + 2) % 3]]
+        })
+        .collect()
+}
+
+/// The same vertices, meshes and instances, and each mesh the same triangles at its
+/// finest level. Coarser levels are simplified from those triangles, and meshoptimizer's
+/// simplifier may choose differently for a rotated triangle, so they are not compared.
+fn assert_same_geometry(a: &Scene, b: &Scene, what: &str) {
+    assert_eq!(a.vertices, b.vertices, "{what}: vertices");
+    assert_eq!(a.meshes.len(), b.meshes.len(), "{what}: meshes");
+    for (m, (x, y)) in a.meshes.iter().zip(&b.meshes).enumerate() {
+        assert_eq!(
+            (x.first_index, x.index_count, x.base_vertex),
+            (y.first_index, y.index_count, y.base_vertex),
+            "{what}: mesh {m}"
+        );
+        let finest = |s: &Scene| {
+            let range = x.first_index as usize..(x.first_index + x.index_count) as usize;
+            canonical_triangles(&s.indices[range])
+        };
+        assert_eq!(finest(a), finest(b), "{what}: mesh {m}'s triangles");
+    }
+    assert_eq!(a.instances.len(), b.instances.len(), "{what}: instances");
+    assert!(
+        !a.vertices.is_empty() && !a.indices.is_empty(),
+        "{what}: empty"
+    );
+}
+
+/// Every GLB among the shared samples (written by nobody here), recompressed with
+/// meshoptimizer's encoders, imports to the same vertices, triangles (in order, each
+/// with its winding) and instances as the original: the decoders undo exactly what the
+/// encoders wrote.
+#[test]
+fn meshopt_compressed_samples_decode_to_their_originals() {
+    let dir = tempfile::tempdir().unwrap();
+    let mut total = 0;
+    for name in [
+        "Box",
+        "BoxAnimated",
+        "BoxTextured",
+        "CesiumMilkTruck",
+        "AlphaBlendModeTest",
+    ] {
+        let original_path = support::gltf_sample(name, "glb");
+        let glb = std::fs::read(&original_path).unwrap();
+        let original = scene_spec::load(original_path.to_str().unwrap()).unwrap();
+        let (packed, views) = meshopt_compressed(&glb);
+        assert!(views >= 2, "{name}: only {views} views compressed");
+        total += views;
+        let decoded = load_bytes(dir.path(), &format!("{name}-meshopt.glb"), &packed);
+        assert_same_geometry(&decoded, &original, name);
+    }
+    assert!(total >= 12, "{total} views compressed in all");
+}
+
+/// A filtered view (octahedral normals, as gltfpack writes them): the import applies
+/// the filter, so its normals are what meshoptimizer's own filter decoder gives (and
+/// within the encoding's error of the originals), not the raw encoded bytes.
+#[test]
+fn meshopt_octahedral_normals_are_unfiltered() {
+    let normals: Vec<[f32; 4]> = (0..12)
+        .map(|i| {
+            let a = i as f32 * 0.5;
+            let n = glam::Vec3::new(a.cos(), (a * 0.7).sin(), a.sin() + 0.3).normalize();
+            [n.x, n.y, n.z, 0.0]
+        })
+        .collect();
+    let encoded: Vec<[i8; 4]> = meshopt::encode_filter_oct(&normals, 8);
+    let mut expected = encoded.clone();
+    meshopt::decode_filter_oct(&mut expected);
+    let positions: Vec<[f32; 3]> = (0..12).map(|i| [i as f32, (i % 3) as f32, 0.5]).collect();
+    let packed_normals = encode_vertices(bytemuck::cast_slice(&encoded), 4);
+    let packed_positions = encode_vertices(bytemuck::cast_slice(&positions), 12);
+    let mut bin = packed_positions.clone();
+    while !bin.len().is_multiple_of(4) {
+        bin.push(0);
+    }
+    let normals_at = bin.len();
+    bin.extend_from_slice(&packed_normals);
+    let ext = |at: usize, len: usize, stride: usize, filter: &str| {
+        json!({"EXT_meshopt_compression": {"buffer": 0, "byteOffset": at, "byteLength": len,
+            "byteStride": stride, "count": 12, "mode": "ATTRIBUTES", "filter": filter}})
+    };
+    let json = json!({
+        "asset": {"version": "2.0"},
+        "extensionsUsed": ["EXT_meshopt_compression", "KHR_mesh_quantization"],
+        "extensionsRequired": ["EXT_meshopt_compression", "KHR_mesh_quantization"],
+        "scene": 0, "scenes": [{"nodes": [0]}], "nodes": [{"mesh": 0}],
+        "meshes": [{"primitives": [{"attributes": {"POSITION": 0, "NORMAL": 1}}]}],
+        "buffers": [{"byteLength": bin.len()},
+            {"byteLength": 192, "extensions": {"EXT_meshopt_compression": {"fallback": true}}}],
+        "bufferViews": [
+            {"buffer": 1, "byteOffset": 0, "byteLength": 144, "byteStride": 12, "target": 34962,
+             "extensions": ext(0, packed_positions.len(), 12, "NONE")},
+            {"buffer": 1, "byteOffset": 144, "byteLength": 48, "byteStride": 4, "target": 34962,
+             "extensions": ext(normals_at, packed_normals.len(), 4, "OCTAHEDRAL")}
+        ],
+        "accessors": [
+            {"bufferView": 0, "componentType": 5126, "count": 12, "type": "VEC3",
+             "min": [0, 0, 0.5], "max": [11, 2, 0.5]},
+            {"bufferView": 1, "componentType": 5120, "normalized": true, "count": 12, "type": "VEC3"}
+        ]
+    });
+    let dir = tempfile::tempdir().unwrap();
+    let scene = load_bytes(dir.path(), "oct.glb", &write_glb(&json, &bin));
+    for (i, v) in scene.vertices.iter().enumerate() {
+        assert_eq!(v.position, positions[i]);
+        let want = expected[i].map(|c| (c as f32 / 127.0).max(-1.0));
+        assert_eq!(v.normal, [want[0], want[1], want[2]], "vertex {i}");
+        let n = glam::Vec3::from(v.normal).normalize();
+        let dot = n.dot(glam::Vec4::from(normals[i]).truncate());
+        assert!(dot > 0.999, "vertex {i}: {dot}");
+    }
+}
+
+/// `KHR_mesh_quantization` as gltfpack writes it: positions as unnormalized shorts
+/// (scaled back by the node), normals as normalized bytes, coordinates as normalized
+/// unsigned shorts, tangents as normalized bytes; a custom attribute (`_BARYCENTRIC`)
+/// beside them is ignored. The values are chosen exact in both forms.
+#[test]
+fn quantized_attributes_and_custom_attributes_are_read() {
+    let positions: [[i16; 4]; 3] = [[0, 0, 0, 0], [200, 0, 0, 0], [0, 400, -100, 0]];
+    let normals: [[i8; 4]; 3] = [[0, 0, 127, 0], [0, 127, 0, 0], [-128, 0, 0, 0]];
+    let uvs: [[u16; 2]; 3] = [[0, 0], [65535, 0], [0, 65535]];
+    let tangents: [[i8; 4]; 3] = [[127, 0, 0, 127], [127, 0, 0, -127], [0, 0, 127, 127]];
+    let barycentric: [[u8; 4]; 3] = [[255, 0, 0, 0], [0, 255, 0, 0], [0, 0, 255, 0]];
+    let mut bin = Vec::new();
+    bin.extend_from_slice(bytemuck::cast_slice(&positions));
+    bin.extend_from_slice(bytemuck::cast_slice(&normals));
+    bin.extend_from_slice(bytemuck::cast_slice(&uvs));
+    bin.extend_from_slice(bytemuck::cast_slice(&tangents));
+    bin.extend_from_slice(bytemuck::cast_slice(&barycentric));
+    let view = |at: usize, len: usize, stride: usize| json!({"buffer": 0, "byteOffset": at, "byteLength": len, "byteStride": stride, "target": 34962});
+    let json = json!({
+        "asset": {"version": "2.0"},
+        "extensionsUsed": ["KHR_mesh_quantization"],
+        "extensionsRequired": ["KHR_mesh_quantization"],
+        "scene": 0, "scenes": [{"nodes": [0]}],
+        "nodes": [{"mesh": 0, "scale": [0.01, 0.01, 0.01]}],
+        "meshes": [{"primitives": [{"attributes": {"POSITION": 0, "NORMAL": 1, "TEXCOORD_0": 2,
+            "TANGENT": 3, "_BARYCENTRIC": 4}, "material": 0}]}],
+        "materials": [{"normalTexture": {"index": 0}}],
+        "textures": [{"source": 0}],
+        "images": [{"uri": "data:image/png;base64,iVBORw0KGgoAAAANSUhEUgAAAAEAAAABCAYAAAAfFcSJAAAADUlEQVR4nGNoaPj/HwAGggL/s75RMwAAAABJRU5ErkJggg=="}],
+        "buffers": [{"byteLength": bin.len()}],
+        "bufferViews": [view(0, 24, 8), view(24, 12, 4), view(36, 12, 4), view(48, 12, 4), view(60, 12, 4)],
+        "accessors": [
+            {"bufferView": 0, "componentType": 5122, "count": 3, "type": "VEC3",
+             "min": [0, 0, -100], "max": [200, 400, 0]},
+            {"bufferView": 1, "componentType": 5120, "normalized": true, "count": 3, "type": "VEC3"},
+            {"bufferView": 2, "componentType": 5123, "normalized": true, "count": 3, "type": "VEC2"},
+            {"bufferView": 3, "componentType": 5120, "normalized": true, "count": 3, "type": "VEC4"},
+            {"bufferView": 4, "componentType": 5121, "normalized": true, "count": 3, "type": "VEC3"}
+        ]
+    });
+    let dir = tempfile::tempdir().unwrap();
+    let scene = load_bytes(dir.path(), "quantized.glb", &write_glb(&json, &bin));
+    let got: Vec<_> = (scene.vertices.iter())
+        .map(|v| (v.position, v.normal, v.uv, v.tangent))
+        .collect();
+    assert_eq!(
+        got,
+        [
+            (
+                [0.0, 0.0, 0.0],
+                [0.0, 0.0, 1.0],
+                [0.0, 0.0],
+                [127, 0, 0, 127]
+            ),
+            (
+                [200.0, 0.0, 0.0],
+                [0.0, 1.0, 0.0],
+                [1.0, 0.0],
+                [127, 0, 0, -127]
+            ),
+            (
+                [0.0, 400.0, -100.0],
+                [-1.0, 0.0, 0.0],
+                [0.0, 1.0],
+                [0, 0, 127, 127]
+            ),
+        ]
+    );
+    let scale = scene.instances[0].world_from_local.matrix3.x_axis.x;
+    assert!((scale - 0.01).abs() < 1e-7, "{scale}");
+}
+
+fn write_with_extensions(dir: &Path, used: &[&str], required: &[&str]) -> PathBuf {
+    let floats: [f32; 9] = [0., 0., 0., 1., 0., 0., 0., 1., 0.];
+    let json = json!({
+        "asset": {"version": "2.0"},
+        "extensionsUsed": used, "extensionsRequired": required,
+        "scene": 0, "scenes": [{"nodes": [0]}],
+        "nodes": [{"mesh": 0, "extensions": {"VENDOR_thing": {"x": 1}}}],
+        "meshes": [{"primitives": [{"attributes": {"POSITION": 0}}]}],
+        "buffers": [{"byteLength": 36}],
+        "bufferViews": [{"buffer": 0, "byteLength": 36}],
+        "accessors": [{"bufferView": 0, "componentType": 5126, "count": 3, "type": "VEC3",
+            "min": [0, 0, 0], "max": [1, 1, 0]}]
+    });
+    let path = dir.join(format!("{}.glb", required.join("-")));
+    std::fs::write(&path, write_glb(&json, bytemuck::cast_slice(&floats))).unwrap();
+    path
+}
+
+/// An extension the file only uses is listed and ignored; one it requires and we do not
+/// read is an error naming it, and for Draco the way to a readable file.
+#[test]
+fn only_unread_required_extensions_are_errors() {
+    let dir = tempfile::tempdir().unwrap();
+    let used = [
+        "VENDOR_thing",
+        "KHR_lights_punctual",
+        "KHR_mesh_quantization",
+    ];
+    let path = write_with_extensions(dir.path(), &used, &["KHR_mesh_quantization"]);
+    let scene = scene_spec::load(path.to_str().unwrap()).unwrap();
+    assert_eq!(scene.instances.len(), 1);
+    let uses = stereocull::gltf_import::extension_uses(&path).unwrap();
+    let listed: Vec<_> = uses
+        .iter()
+        .map(|u| (u.name.as_str(), u.required, u.read))
+        .collect();
+    assert_eq!(
+        listed,
+        [
+            ("VENDOR_thing", false, false),
+            ("KHR_lights_punctual", false, false),
+            ("KHR_mesh_quantization", true, true),
+        ]
+    );
+    let error = |required: &str| {
+        let path = write_with_extensions(dir.path(), &[required], &[required]);
+        let e = scene_spec::load(path.to_str().unwrap())
+            .unwrap_err()
+            .to_string();
+        assert!(
+            e.contains(&format!("requires the extension {required}")),
+            "{e}"
+        );
+        e
+    };
+    assert!(error("VENDOR_thing").contains("does not read"));
+    assert!(error("KHR_draco_mesh_compression").contains("gltf-transform"));
+}
+
+/// `info --scene` lists what the file uses and what of it is read; `render` warns once
+/// of what it draws without, and draws.
+#[test]
+fn info_lists_extensions_and_render_warns_once_of_unread_ones() {
+    let dir = tempfile::tempdir().unwrap();
+    let used = ["VENDOR_thing", "KHR_mesh_quantization"];
+    let path = write_with_extensions(dir.path(), &used, &["KHR_mesh_quantization"]);
+    let run = |args: &[&str]| {
+        let out = std::process::Command::new(env!("CARGO_BIN_EXE_stereocull"))
+            .args(args)
+            .output()
+            .unwrap();
+        let text = String::from_utf8_lossy(&out.stdout).to_string();
+        let errors = String::from_utf8_lossy(&out.stderr).to_string();
+        assert!(out.status.success(), "{args:?}: {text}{errors}");
+        (text, errors)
+    };
+    let scene = path.to_str().unwrap();
+    let (text, _) = run(&["info", "--scene", scene]);
+    let line = |name: &str| {
+        text.lines()
+            .find(|l| l.contains(name))
+            .unwrap_or("")
+            .to_string()
+    };
+    assert!(
+        line("VENDOR_thing").ends_with("not read: drawn without it"),
+        "{text}"
+    );
+    assert!(
+        line("KHR_mesh_quantization (required)").ends_with("read"),
+        "{text}"
+    );
+    assert!(text.contains("loads: 1 instances of 1 meshes"), "{text}");
+    let out = dir.path().join("out");
+    let (_, errors) = run(&[
+        "render",
+        "--scene",
+        scene,
+        "--width",
+        "32",
+        "--height",
+        "32",
+        "--out",
+        out.to_str().unwrap(),
+    ]);
+    let warnings: Vec<_> = errors
+        .lines()
+        .filter(|l| l.contains("VENDOR_thing"))
+        .collect();
+    assert_eq!(warnings.len(), 1, "{errors}");
+    let named = warnings[0]
+        .split("drawn without them)")
+        .nth(1)
+        .unwrap_or("");
+    assert_eq!(named.trim(), ": VENDOR_thing", "{errors}");
+}
