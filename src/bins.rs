@@ -9,7 +9,7 @@
 //! surfaces come last, over everything that writes depth.
 
 use crate::error::{Error, Result};
-use crate::scene::{AlphaMode, Instance, Material, Mesh, Scene, Shading};
+use crate::scene::{AlphaMode, Instance, Material, Mesh, Scene, SecondUv, Shading};
 
 /// The pipeline state a bin's draws need, in drawing order.
 #[derive(Clone, Copy, Debug, Default, PartialEq, Eq, Hash, PartialOrd, Ord)]
@@ -47,6 +47,12 @@ impl BinKind {
 pub struct Bin {
     /// The alpha mode's pipeline state (first: it orders the bins).
     pub alpha: BinKind,
+    /// Its materials read two sets of texture coordinates ([`Material::second_uv`]):
+    /// its pipeline passes the second to the fragment stage. Apart from the others
+    /// because a varying more is not free: lavapipe's multiview misroutes clipped
+    /// triangles as varyings grow, and a software rasterizer sets up every varying of
+    /// every triangle.
+    pub second_uv: bool,
     /// The shading function.
     pub shading: Shading,
 }
@@ -81,6 +87,7 @@ impl Bin {
     pub fn of(material: Option<&Material>) -> Bin {
         material.map_or(Bin::default(), |m| Bin {
             alpha: BinKind::of(m.alpha),
+            second_uv: m.second_uv != SecondUv::default(),
             shading: m.shading,
         })
     }

@@ -30,7 +30,7 @@ const _: () = assert!(size_of::<MaterialRecord>() <= crate::buffers::MIN_BUFFER)
 #[repr(C)]
 #[derive(Clone, Copy, Debug, PartialEq, Pod, Zeroable)]
 pub struct MaterialRecord {
-    /// [`Material::emissive`], linear RGB.
+    /// [`Material::emissive`] times [`Material::emissive_strength`], linear RGB.
     pub emissive: [f32; 3],
     /// Layer of the color array.
     pub base_color_layer: u32,
@@ -55,8 +55,8 @@ pub struct MaterialRecord {
     pub normal_scale: f32,
     /// [`Material::occlusion_strength`].
     pub occlusion_strength: f32,
-    /// [`Material::emissive_strength`].
-    pub emissive_strength: f32,
+    /// [`Material::second_uv`]: a bit per slot that reads the second coordinates.
+    pub second_uv: u32,
 }
 
 impl MaterialRecord {
@@ -134,7 +134,7 @@ fn record(scene: &Scene, m: &Material) -> Result<MaterialRecord> {
     check_factors(m)?;
     let t = m.uv_transform;
     Ok(MaterialRecord {
-        emissive: m.emissive.into(),
+        emissive: (m.emissive * m.emissive_strength).into(),
         base_color_layer: layer(m.base_color_texture, Encoding::Srgb, "base color")?,
         uv_transform: [
             t.matrix2.x_axis.into(),
@@ -154,7 +154,7 @@ fn record(scene: &Scene, m: &Material) -> Result<MaterialRecord> {
         roughness: m.roughness,
         normal_scale: m.normal_scale,
         occlusion_strength: m.occlusion_strength,
-        emissive_strength: m.emissive_strength,
+        second_uv: m.second_uv.0,
     })
 }
 

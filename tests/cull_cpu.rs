@@ -132,6 +132,7 @@ fn naive(scene: &Scene, job: &CullJob) -> CullOutput {
         let material = scene.materials.get(mesh_material(scene, m) as usize);
         material.map_or(Bin::default(), |m| Bin {
             alpha: BinKind::of(m.alpha),
+            second_uv: m.second_uv != Default::default(),
             shading: m.shading,
         })
     };

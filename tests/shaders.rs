@@ -145,10 +145,7 @@ fn records_match_wgsl() {
                 "occlusion_strength",
                 offset_of!(MaterialRecord, occlusion_strength),
             ),
-            (
-                "emissive_strength",
-                offset_of!(MaterialRecord, emissive_strength),
-            ),
+            ("second_uv", offset_of!(MaterialRecord, second_uv)),
         ],
     );
     check(
@@ -698,6 +695,7 @@ fn vertex_layout_matches_wgsl() {
         ("uv", offset_of!(Vertex, uv)),
         ("material", offset_of!(Vertex, material)),
         ("tangent", offset_of!(Vertex, tangent)),
+        ("uv1", offset_of!(Vertex, uv1)),
     ];
     assert_eq!(members.len(), rust.len());
     for ((member, (name, offset)), attribute) in members.iter().zip(rust).zip(VERTEX_ATTRIBUTES) {
@@ -729,7 +727,7 @@ fn vertex_layout_matches_wgsl() {
         };
         assert_eq!(attribute.format, wgsl_format, "{name}");
     }
-    assert_eq!(size_of::<Vertex>(), 40);
+    assert_eq!(size_of::<Vertex>(), 48);
 }
 
 /// Past one binding, a windowed array takes one binding per window, in order, after the

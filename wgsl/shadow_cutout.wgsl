@@ -5,7 +5,8 @@
 
 struct CutoutVertex {
     @builtin(position) clip: vec4<f32>,
-    @location(0) uv: vec2<f32>,
+    // Both sets of texture coordinates (xy, zw).
+    @location(0) uvs: vec4<f32>,
     // The instance and its material.
     @location(1) @interpolate(flat) ids: vec2<u32>,
 }
@@ -13,13 +14,13 @@ struct CutoutVertex {
 @vertex
 fn vs_main(v: VertexInput, @builtin(instance_index) instance_index: u32) -> CutoutVertex {
     let d = decode(v, instance_index, 0u, false);
-    return CutoutVertex(d.clip, d.uv, vec2(d.instance, d.material));
+    return CutoutVertex(d.clip, vec4(d.uv, d.uv1), vec2(d.instance, d.material));
 }
 
 @fragment
 fn fs_main(in: CutoutVertex) {
     let color = unpack4x8unorm(instances_at(in.ids.x).color);
-    if (base_color_at(color, in.uv, in.ids.y).a < materials[in.ids.y].alpha_cutoff) {
+    if (base_color_at(color, in.uvs, in.ids.y).a < materials[in.ids.y].alpha_cutoff) {
         discard;
     }
 }

@@ -23,9 +23,9 @@ struct SkinParams {
 }
 
 // Bindings: SKIN_BINDINGS in src/shaders/bindings.rs; `vertices` holds the scene's
-// vertices (scene::Vertex), ten words each.
+// vertices (scene::Vertex), twelve words each.
 
-const VERTEX_WORDS: u32 = 10u;
+const VERTEX_WORDS: u32 = 12u;
 const TANGENT_WORD: u32 = 9u;
 
 fn joint_of(v: SkinVertex, k: u32) -> u32 {

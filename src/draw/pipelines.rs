@@ -21,8 +21,8 @@ pub struct TargetFormat {
 }
 /// How the draw pipelines read a [`Vertex`]: `VertexInput` in
 /// `wgsl/shared/decode.wgsl` (`tests/shaders.rs` checks both sides).
-pub const VERTEX_ATTRIBUTES: [wgpu::VertexAttribute; 5] = wgpu::vertex_attr_array![
-    0 => Float32x3, 1 => Float32x3, 2 => Float32x2, 3 => Uint32, 4 => Snorm8x4
+pub const VERTEX_ATTRIBUTES: [wgpu::VertexAttribute; 6] = wgpu::vertex_attr_array![
+    0 => Float32x3, 1 => Float32x3, 2 => Float32x2, 3 => Uint32, 4 => Snorm8x4, 5 => Float32x2
 ];
 
 /// The scene's vertex buffer as every pipeline drawing it reads it (an engine's own

@@ -97,11 +97,11 @@ impl Importer<'_> {
         let output = sampler.output().index() as u64;
         let values: Vec<Vec4> = match property {
             Property::Rotation => self
-                .read::<[f32; 4]>(output, &where_)?
+                .read_floats::<4>(output, &where_)?
                 .into_iter()
                 .map(Vec4::from)
                 .collect(),
-            _ => (self.read::<[f32; 3]>(output, &where_)?.into_iter())
+            _ => (self.read_floats::<3>(output, &where_)?.into_iter())
                 .map(|v| Vec3::from(v).extend(0.0))
                 .collect(),
         };

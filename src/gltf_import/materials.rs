@@ -11,7 +11,7 @@ use gltf::{Document, Semantic};
 use image::RgbaImage;
 
 use super::{Importer, Step};
-use crate::scene::{AlphaMode, Encoding, Material, Shading, Texture};
+use crate::scene::{AlphaMode, Encoding, Material, SecondUv, Shading, Texture};
 
 /// A material's texture slots: what it reads, and the set of coordinates and the
 /// transform each reads them with.
@@ -28,43 +28,76 @@ fn slots<'a>(material: &gltf::Material<'a>) -> Vec<(gltf::texture::Info<'a>, Enc
     .collect()
 }
 
-/// The coordinate set of every texture the material reads: the normal and occlusion
-/// maps' and the others' (we keep one set of coordinates per vertex).
-fn tex_coords(material: &gltf::Material) -> Vec<u32> {
-    let mut sets: Vec<u32> = slots(material).iter().map(|(t, _)| t.tex_coord()).collect();
-    sets.extend(material.normal_texture().map(|t| t.tex_coord()));
-    sets.extend(material.occlusion_texture().map(|t| t.tex_coord()));
-    sets
+/// The coordinate set each texture slot of the material reads (its `texCoord`, or its
+/// `KHR_texture_transform`'s override where the crate reads one: not for the normal and
+/// occlusion maps), with the slot.
+fn slot_sets(material: &gltf::Material) -> Vec<(u32, SecondUv)> {
+    let info = |t: &gltf::texture::Info| {
+        (t.texture_transform().and_then(|x| x.tex_coord())).unwrap_or(t.tex_coord())
+    };
+    let pbr = material.pbr_metallic_roughness();
+    [
+        pbr.base_color_texture()
+            .map(|t| (info(&t), SecondUv::BASE_COLOR)),
+        (pbr.metallic_roughness_texture()).map(|t| (info(&t), SecondUv::METALLIC_ROUGHNESS)),
+        material
+            .emissive_texture()
+            .map(|t| (info(&t), SecondUv::EMISSIVE)),
+        material
+            .normal_texture()
+            .map(|t| (t.tex_coord(), SecondUv::NORMAL)),
+        (material.occlusion_texture()).map(|t| (t.tex_coord(), SecondUv::OCCLUSION)),
+    ]
+    .into_iter()
+    .flatten()
+    .collect()
+}
+
+/// The sets of coordinates a material's textures read, ascending (at most two: a vertex
+/// keeps two), and the slots that read the second of them.
+pub(super) fn uv_sets(material: &gltf::Material) -> Step<(Vec<u32>, SecondUv)> {
+    let slots = slot_sets(material);
+    let mut sets: Vec<u32> = slots.iter().map(|&(set, _)| set).collect();
+    sets.sort_unstable();
+    sets.dedup();
+    if sets.len() > 2 {
+        let named: Vec<String> = sets.iter().map(|s| format!("TEXCOORD_{s}")).collect();
+        return Err(format!(
+            "material {:?}'s textures read {}; two sets per material are read",
+            material.name().unwrap_or(""),
+            named.join(", ")
+        ));
+    }
+    let second = (slots.iter())
+        .filter(|&&(set, _)| sets.len() == 2 && set == sets[1])
+        .fold(SecondUv::default(), |all, &(_, slot)| all | slot);
+    Ok((sets, second))
 }
 
 impl Importer<'_> {
-    /// The texture coordinates the material's textures read (their `texCoord` set), or
-    /// zeros for untextured materials. Textures of one material must read one set.
+    /// The texture coordinates the material's textures read: the first set of
+    /// [`uv_sets`] (zeros for untextured materials) and the second (zeros where one set
+    /// is read).
     pub(super) fn uvs(
         &self,
         primitive: &gltf::Primitive,
         where_: &str,
         count: usize,
-    ) -> Step<Vec<[f32; 2]>> {
-        let sets = tex_coords(&primitive.material());
-        let Some(&set) = sets.first() else {
-            return Ok(vec![[0.0; 2]; count]);
-        };
-        if let Some(other) = sets.iter().find(|&&s| s != set) {
-            return Err(format!(
-                "{where_}: its material's textures read TEXCOORD_{set} and TEXCOORD_{other}; one set per material is read"
-            ));
+    ) -> Step<[Vec<[f32; 2]>; 2]> {
+        let (sets, _) = uv_sets(&primitive.material()).map_err(|e| format!("{where_}: {e}"))?;
+        let mut read = [vec![[0.0; 2]; count], vec![[0.0; 2]; count]];
+        for (uvs, &set) in read.iter_mut().zip(&sets) {
+            let accessor = primitive.get(&Semantic::TexCoords(set)).ok_or_else(|| {
+                format!("{where_}: its material's textures read TEXCOORD_{set}, which it lacks")
+            })?;
+            *uvs = self.floats::<2>(&accessor, &format!("{where_} TEXCOORD_{set}"))?;
+            if uvs.len() != count {
+                return Err(format!(
+                    "{where_}: TEXCOORD_{set} and POSITION differ in count"
+                ));
+            }
         }
-        let accessor = primitive.get(&Semantic::TexCoords(set)).ok_or_else(|| {
-            format!("{where_}: its material's textures read TEXCOORD_{set}, which it lacks")
-        })?;
-        let uvs = self.floats::<2>(&accessor, &format!("{where_} TEXCOORD_{set}"))?;
-        if uvs.len() != count {
-            return Err(format!(
-                "{where_}: TEXCOORD_{set} and POSITION differ in count"
-            ));
-        }
-        Ok(uvs)
+        Ok(read)
     }
 
     /// Our material for a glTF material, created on first use (with its base color
@@ -80,6 +113,7 @@ impl Importer<'_> {
             None => "default".into(),
         };
         let alpha = alpha_mode(material).map_err(|e| format!("material {name:?}: {e}"))?;
+        let (_, second_uv) = uv_sets(material)?;
         let pbr = material.pbr_metallic_roughness();
         let mut texture = |info: Option<gltf::Texture>, encoding| match info {
             Some(t) => self.texture_id(t.source(), encoding).map(Some),
@@ -114,6 +148,7 @@ impl Importer<'_> {
             emissive: glam::Vec3::from(material.emissive_factor()),
             emissive_strength: material.emissive_strength().unwrap_or(1.0),
             uv_transform: uv_transform(material, &name),
+            second_uv,
             name,
         };
         crate::materials::check_factors(&built).map_err(|e| e.to_string())?;

@@ -469,13 +469,12 @@ impl Importer<'_> {
             return Err(format!("{where_}: NORMAL and POSITION differ in count"));
         }
         let material = self.material_id(&primitive.material())?;
-        let uvs = self.uvs(primitive, &where_, positions.len())?;
-        let mut vertices: Vec<Vertex> = positions
-            .iter()
-            .zip(&normals)
-            .zip(uvs)
-            .map(|((&p, &n), uv)| Vertex {
+        let [uvs, second] = self.uvs(primitive, &where_, positions.len())?;
+        let mut vertices: Vec<Vertex> = (positions.iter().zip(&normals))
+            .zip(uvs.into_iter().zip(second))
+            .map(|((&p, &n), (uv, uv1))| Vertex {
                 uv,
+                uv1,
                 material,
                 ..Vertex::new(p, n)
             })

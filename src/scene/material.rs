@@ -38,9 +38,37 @@ pub struct Material {
     pub emissive_texture: Option<u32>,
     /// Times `emissive`: glTF's `KHR_materials_emissive_strength`, for emission past 1.
     pub emissive_strength: f32,
-    /// Maps the vertices' `uv` to every texture's coordinates (glTF's
+    /// Maps the vertices' coordinates to every texture's (glTF's
     /// `KHR_texture_transform`, one per material): `uv' = matrix2 * uv + translation`.
     pub uv_transform: glam::Affine2,
+    /// The texture slots that read the vertices' second set of coordinates
+    /// ([`super::Vertex::uv1`]); the others read [`super::Vertex::uv`].
+    pub second_uv: SecondUv,
+}
+
+/// A set of texture slots, a bit each: those of a material that read
+/// [`super::Vertex::uv1`].
+#[derive(Clone, Copy, Debug, Default, PartialEq, Eq, Hash)]
+pub struct SecondUv(pub u32);
+
+impl SecondUv {
+    /// The base color texture (`BASE_COLOR_SLOT` in `wgsl/shared/base_color.wgsl`).
+    pub const BASE_COLOR: SecondUv = SecondUv(1);
+    /// The metallic-roughness texture.
+    pub const METALLIC_ROUGHNESS: SecondUv = SecondUv(2);
+    /// The normal map.
+    pub const NORMAL: SecondUv = SecondUv(4);
+    /// The occlusion texture.
+    pub const OCCLUSION: SecondUv = SecondUv(8);
+    /// The emissive texture.
+    pub const EMISSIVE: SecondUv = SecondUv(16);
+}
+
+impl std::ops::BitOr for SecondUv {
+    type Output = SecondUv;
+    fn bitor(self, other: SecondUv) -> SecondUv {
+        SecondUv(self.0 | other.0)
+    }
 }
 
 impl Default for Material {
@@ -63,6 +91,7 @@ impl Default for Material {
             emissive_texture: None,
             emissive_strength: 1.0,
             uv_transform: glam::Affine2::IDENTITY,
+            second_uv: SecondUv::default(),
         }
     }
 }

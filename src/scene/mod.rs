@@ -10,7 +10,7 @@ use glam::{Affine3A, Mat4, Vec3, Vec4};
 
 mod material;
 
-pub use material::{AlphaMode, Encoding, Material, Shading, Texture};
+pub use material::{AlphaMode, Encoding, Material, SecondUv, Shading, Texture};
 
 /// One vertex as the draw pipeline reads it (`VertexInput` in `wgsl/shared/decode.wgsl`).
 #[repr(C)]
@@ -20,7 +20,9 @@ pub struct Vertex {
     pub position: [f32; 3],
     /// Local space, not necessarily unit length.
     pub normal: [f32; 3],
-    /// Texture coordinates of the base color texture.
+    /// Texture coordinates: the set the material's textures read, or the first of the
+    /// two sets a material reads ([`Material::second_uv`] says which slots read
+    /// `uv1`).
     pub uv: [f32; 2],
     /// Index into [`Scene::materials`]. Per vertex because glTF gives each primitive (our
     /// mesh) one material: the vertex stage then needs no extra load to find it.
@@ -29,6 +31,9 @@ pub struct Vertex {
     /// `w * cross(normal, tangent)`), as signed normalized bytes: what normal maps need,
     /// in 4 bytes (8-bit normal maps resolve no finer than the byte's 1/127).
     pub tangent: [i8; 4],
+    /// The second set of texture coordinates, for materials whose textures read two
+    /// (glTF's `TEXCOORD_1` beside `TEXCOORD_0`, say); zero where none is read.
+    pub uv1: [f32; 2],
 }
 
 impl Vertex {
@@ -41,6 +46,7 @@ impl Vertex {
             uv: [0.0; 2],
             material: 0,
             tangent: pack_snorm8(across.extend(1.0)),
+            uv1: [0.0; 2],
         }
     }
 

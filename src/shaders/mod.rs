@@ -131,6 +131,8 @@ pub struct DrawKey {
     pub shading: Shading,
     /// A cutout under MSAA: alpha to coverage instead of a discard.
     pub coverage: bool,
+    /// The material bin reads two sets of texture coordinates: a varying more.
+    pub second_uv: bool,
 }
 
 impl DrawKey {
@@ -157,6 +159,7 @@ impl DrawKey {
         alpha: BinKind::Opaque,
         shading: Shading::Lit,
         coverage: false,
+        second_uv: false,
     };
 
     /// Multiview of a foveated display: four layers of one size, each view filling its
@@ -194,6 +197,7 @@ impl DrawKey {
             alpha: BinKind::Opaque,
             shading: Shading::Lit,
             coverage: false,
+            second_uv: false,
         }
     }
 
@@ -203,6 +207,7 @@ impl DrawKey {
             alpha: bin.alpha,
             shading: bin.shading,
             coverage: bin.alpha == BinKind::Mask && samples > 1,
+            second_uv: bin.second_uv,
             ..self
         }
     }
@@ -211,7 +216,7 @@ impl DrawKey {
     pub fn alpha_variants(self) -> [DrawKey; 4] {
         let bin = |alpha| Bin {
             alpha,
-            shading: Shading::Lit,
+            ..Bin::default()
         };
         [
             self,
@@ -244,7 +249,8 @@ impl DrawKey {
             Shading::Hook(i) => format!(".hook{i}"),
             Shading::Own(i) => format!(".own{i}"),
         };
-        format!("{}{alpha}{shading}", self.base_label())
+        let uvs = if self.second_uv { ".uv1" } else { "" };
+        format!("{}{alpha}{uvs}{shading}", self.base_label())
     }
 
     fn base_label(self) -> String {
@@ -289,14 +295,22 @@ impl DrawKey {
             ),
             None => "fn surface_color(s: Surface) -> vec4<f32> { return shade(s); }\n".into(),
         };
+        let (location, accessors) = match self.second_uv {
+            true => ("@location(3) uv1: vec2<f32>,", SECOND_UV_ON),
+            false => ("", SECOND_UV_OFF),
+        };
+        // The second coordinates' varying, where the bin reads two sets, takes the
+        // marker's line in the vertex output and the fragment input.
+        let marked = |s: &str| s.replace("// SECOND_UV", location);
         [
-            prelude,
+            &marked(prelude),
             &decode_source_with(self.views, windows),
             &alpha,
+            accessors,
             &declarations(&MATERIAL_BINDINGS, 1, windows),
             BASE_COLOR,
             &declarations(&SHADOW_MAP_BINDINGS, 2, windows),
-            DRAW_COMMON,
+            &marked(DRAW_COMMON),
             PBR,
             &shading,
             entry,
@@ -304,6 +318,13 @@ impl DrawKey {
         .concat()
     }
 }
+
+/// How the draw pipelines pass the second texture coordinates, in a bin that reads them.
+const SECOND_UV_ON: &str = "fn set_second_uv(out: ptr<function, VertexOutput>, d: Decoded) { (*out).uv1 = d.uv1; }\n\
+    fn second_uv(in: FragmentInput) -> vec2<f32> { return in.uv1; }\n";
+/// ... and in one that does not: no varying, zero coordinates.
+const SECOND_UV_OFF: &str = "fn set_second_uv(out: ptr<function, VertexOutput>, d: Decoded) {}\n\
+    fn second_uv(in: FragmentInput) -> vec2<f32> { return vec2(0.0); }\n";
 
 /// The shading function of [`Shading::Unlit`] materials: the base color alone.
 pub const UNLIT: &str = "fn material(s: Surface) -> vec4<f32> { return base_color(s); }\n";
@@ -414,6 +435,15 @@ pub fn all_sources() -> Vec<(String, String)> {
             let occlusion = (CullPass::occlusion_variants().into_iter())
                 .map(move |(p, c, phase)| (phase.label(&p.label(c)), p.phased_source(c, phase, w)));
             let draw = (DrawKey::ALL.iter().flat_map(|k| k.alpha_variants()))
+                .flat_map(|k| {
+                    [
+                        k,
+                        DrawKey {
+                            second_uv: true,
+                            ..k
+                        },
+                    ]
+                })
                 .map(move |k| (k.label(), k.source_with(None, w)));
             let others = [
                 (

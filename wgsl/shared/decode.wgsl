@@ -12,6 +12,8 @@ struct VertexInput {
     @location(3) material: u32,
     // Local tangent (xyz) and handedness (w): the bitangent is w * cross(normal, tangent).
     @location(4) tangent: vec4<f32>,
+    // The second texture coordinates, for materials that read two sets.
+    @location(5) uv1: vec2<f32>,
 }
 
 // Normals transform by the cofactor matrix (inverse transpose times determinant),
@@ -74,6 +76,7 @@ struct Decoded {
     material: u32,
     // World tangent and handedness (world_tangent).
     world_tangent: vec4<f32>,
+    uv1: vec2<f32>,
 }
 
 // Visible slot `slot` for view `eye`, animated by the frame's time; `double_wide`
@@ -108,5 +111,5 @@ fn decode(v: VertexInput, slot: u32, eye: u32, double_wide: bool) -> Decoded {
     let color = unpack4x8unorm(inst.color);
     let material = select(inst.material, v.material, inst.material == 0xffffffffu);
     let tangent = world_tangent(rows, vec4(spun * v.tangent.xyz, v.tangent.w));
-    return Decoded(clip, seam, edges, world, normal, color, id, true_eye, v.uv, material, tangent);
+    return Decoded(clip, seam, edges, world, normal, color, id, true_eye, v.uv, material, tangent, v.uv1);
 }

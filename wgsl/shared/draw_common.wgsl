@@ -15,6 +15,7 @@ fn vertex(v: VertexInput, slot: u32, eye: u32, double_wide: bool) -> VertexOutpu
     out.normal_u = vec4(d.world_normal, d.uv.x);
     out.ids = vec4(d.eye, d.instance, d.material, u32(d.world_tangent.w < 0.0));
     out.tangent_v = vec4(d.world_tangent.xyz, d.uv.y);
+    set_second_uv(&out, d);
     return out;
 }
 
@@ -24,6 +25,7 @@ struct FragmentInput {
     @location(0) normal_u: vec4<f32>,
     @location(1) @interpolate(flat) ids: vec4<u32>,
     @location(2) tangent_v: vec4<f32>,
+    // SECOND_UV
 }
 
 // What a material sees of one fragment: a caller's `fn material(s: Surface) ->
@@ -47,11 +49,14 @@ struct Surface {
     // World tangent (interpolated, not normalized) and handedness in w: the bitangent
     // is sign(w) * cross(normal, tangent).
     tangent: vec4<f32>,
+    // The second texture coordinates: the slots in materials[s.material].second_uv
+    // read them (zero in a bin whose materials read one set).
+    uv1: vec2<f32>,
 }
 
 // The surface's color times its material's base color texture, if any.
 fn base_color(s: Surface) -> vec4<f32> {
-    return base_color_at(s.color, s.uv, s.material);
+    return base_color_at(s.color, vec4(s.uv, s.uv1), s.material);
 }
 
 // How much of the frame's light reaches world position `p` (facing `n`, unit): 1 lit,
@@ -94,7 +99,7 @@ fn fragment(in: FragmentInput, eye: u32, viewport: vec4<f32>) -> vec4<f32> {
     // Handedness is the provoking vertex's: constant across a triangle in practice
     // (a mirrored uv seam splits its vertices).
     let tangent = vec4(in.tangent_v.xyz, select(1.0, -1.0, in.ids.w == 1u));
-    let s = Surface(world, in.normal_u.xyz, color, eye, in.ids.y, uv, in.ids.z, tangent);
+    let s = Surface(world, in.normal_u.xyz, color, eye, in.ids.y, uv, in.ids.z, tangent, second_uv(in));
     // The bin's alpha mode (ALPHA_MODE, src/bins.rs): only cutout pipelines discard,
     // so the opaque ones keep early depth testing.
     if (ALPHA_MODE == 1u && !ALPHA_TO_COVERAGE && base_color(s).a < materials[s.material].alpha_cutoff) {

@@ -38,13 +38,14 @@ fn data_at(layer: u32, at: TexelAt, none: vec4<f32>) -> vec4<f32> {
 
 fn pbr_inputs(s: Surface) -> Pbr {
     let m = materials[s.material];
-    let at = material_uv(s.uv, s.material);
-    let mr = data_at(m.metallic_roughness_layer, at, vec4(1.0));
-    let ao = data_at(m.occlusion_layer, at, vec4(1.0)).r;
-    let mapped = data_at(m.normal_layer, at, vec4(0.5, 0.5, 1.0, 1.0)).xyz;
-    var emissive = m.emissive * m.emissive_strength;
+    let uvs = vec4(s.uv, s.uv1);
+    let mr = data_at(m.metallic_roughness_layer, material_uv(uvs, s.material, METALLIC_ROUGHNESS_SLOT), vec4(1.0));
+    let ao = data_at(m.occlusion_layer, material_uv(uvs, s.material, OCCLUSION_SLOT), vec4(1.0)).r;
+    let mapped = data_at(m.normal_layer, material_uv(uvs, s.material, NORMAL_SLOT), vec4(0.5, 0.5, 1.0, 1.0)).xyz;
+    let lit = material_uv(uvs, s.material, EMISSIVE_SLOT);
+    var emissive = m.emissive;
     if (m.emissive_layer != UNTEXTURED) {
-        emissive *= textureSampleGrad(color_textures, texture_sampler, at.uv, m.emissive_layer, at.dx, at.dy).rgb;
+        emissive *= textureSampleGrad(color_textures, texture_sampler, lit.uv, m.emissive_layer, lit.dx, lit.dy).rgb;
     }
     let to_eye = display.eye[s.eye].position - s.world_position;
     let n = normalize(s.normal);

@@ -41,6 +41,7 @@ struct LodRecord {
 // material. Layers are of color_textures (base color, emissive: sRGB) or data_textures
 // (the rest: linear), 0xffffffff (UNTEXTURED) where a slot has no texture.
 struct MaterialRecord {
+    // Times the emissive strength.
     emissive: vec3<f32>,
     base_color_layer: u32,
     // KHR_texture_transform, for every texture: uv' = uv_transform * vec3(uv, 1).
@@ -57,7 +58,9 @@ struct MaterialRecord {
     roughness: f32,
     normal_scale: f32,
     occlusion_strength: f32,
-    emissive_strength: f32,
+    // A bit per texture slot that reads the vertex's second coordinates (uv1): base
+    // color 1, metallic-roughness 2, normal 4, occlusion 8, emissive 16.
+    second_uv: u32,
 }
 
 // Written whole by the draws pass every frame: see DrawArgs in src/records.rs.

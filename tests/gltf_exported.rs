@@ -1,7 +1,8 @@
 //! glTF as optimizers and exporters write it: `EXT_meshopt_compression` (the shared
 //! samples recompressed here with meshoptimizer's own encoders), `KHR_mesh_quantization`
-//! (integer attributes), application-specific attributes, and the rule that only an
-//! unread extension the file *requires* is an error.
+//! (integer attributes), a second set of texture coordinates, application-specific
+//! attributes, and the rule that only an unread extension the file *requires* is an
+//! error.
 
 use std::path::{Path, PathBuf};
 
@@ -510,4 +511,94 @@ fn info_lists_extensions_and_render_warns_once_of_unread_ones() {
         .nth(1)
         .unwrap_or("");
     assert_eq!(named.trim(), ": VENDOR_thing", "{errors}");
+}
+
+/// BoxTextured (written by nobody here) with its coordinates moved to `TEXCOORD_1`, and
+/// `TEXCOORD_0` holding other ones (each vertex's u and v swapped): the base color reads
+/// set `base`, and an emissive texture (times the default emissive factor, zero: it adds
+/// nothing) reads set 0, so the material reads two sets when `base` is 1.
+fn box_with_two_sets(base: u32) -> Vec<u8> {
+    let glb = std::fs::read(support::gltf_sample("BoxTextured", "glb")).unwrap();
+    let (mut json, mut bin) = split_glb(&glb);
+    let attributes = &json["meshes"][0]["primitives"][0]["attributes"];
+    let original = attributes["TEXCOORD_0"].as_u64().unwrap() as usize;
+    let accessor = json["accessors"][original].clone();
+    let view = &json["bufferViews"][accessor["bufferView"].as_u64().unwrap() as usize];
+    let at = view["byteOffset"].as_u64().unwrap_or(0) as usize
+        + accessor["byteOffset"].as_u64().unwrap_or(0) as usize;
+    let stride = view["byteStride"].as_u64().unwrap_or(8) as usize;
+    let count = accessor["count"].as_u64().unwrap() as usize;
+    let swapped: Vec<[f32; 2]> = (0..count)
+        .map(|i| {
+            let uv: [f32; 2] =
+                bytemuck::pod_read_unaligned(&bin[at + i * stride..at + i * stride + 8]);
+            [uv[1], uv[0]]
+        })
+        .collect();
+    while !bin.len().is_multiple_of(4) {
+        bin.push(0);
+    }
+    let views = json["bufferViews"].as_array().unwrap().len();
+    let accessors = json["accessors"].as_array().unwrap().len();
+    json["bufferViews"].as_array_mut().unwrap().push(json!(
+        {"buffer": 0, "byteOffset": bin.len(), "byteLength": count * 8}));
+    bin.extend_from_slice(bytemuck::cast_slice(&swapped));
+    json["accessors"].as_array_mut().unwrap().push(json!(
+        {"bufferView": views, "componentType": 5126, "count": count, "type": "VEC2"}));
+    json["buffers"][0]["byteLength"] = json!(bin.len());
+    let primitive = &mut json["meshes"][0]["primitives"][0];
+    primitive["attributes"]["TEXCOORD_1"] = json!(original);
+    primitive["attributes"]["TEXCOORD_0"] = json!(accessors);
+    let material = &mut json["materials"][0];
+    let texture = material["pbrMetallicRoughness"]["baseColorTexture"]["index"].clone();
+    material["pbrMetallicRoughness"]["baseColorTexture"]["texCoord"] = json!(base);
+    material["emissiveTexture"] = json!({"index": texture, "texCoord": 0});
+    write_glb(&json, &bin)
+}
+
+/// The view of BoxTextured's +Z face, in mono.
+fn facing_the_box() -> stereocull::rig::Rig {
+    let mut rig = stereocull::rig::Rig::preset("hmd").unwrap();
+    rig.viewer.position = [0.0, 0.0, 1.8];
+    let display = &mut rig.displays[0];
+    display.stereo = false;
+    display.resolution = [160, 160];
+    rig
+}
+
+/// A base color texture on `TEXCOORD_1` beside a texture on `TEXCOORD_0` reads the
+/// second set: the box draws as the original, whose one set holds the same coordinates.
+/// The two-set bin is another pipeline (a varying more), so the comparison allows what
+/// recompiling allows (`Tolerance::RECOMPILED`); reading the first set instead (the
+/// control) transposes the texture, far past it.
+#[test]
+fn a_texture_on_the_second_set_reads_the_second_set() {
+    let dir = tempfile::tempdir().unwrap();
+    let original_path = support::gltf_sample("BoxTextured", "glb");
+    let original = scene_spec::load(original_path.to_str().unwrap()).unwrap();
+    let two_sets = load_bytes(dir.path(), "two-sets.glb", &box_with_two_sets(1));
+    let control = load_bytes(dir.path(), "control.glb", &box_with_two_sets(0));
+    use stereocull::scene::SecondUv;
+    assert_eq!(two_sets.materials[0].second_uv, SecondUv::BASE_COLOR);
+    assert_eq!(control.materials[0].second_uv, SecondUv::default());
+    for (v, o) in two_sets.vertices.iter().zip(&original.vertices) {
+        assert_eq!(v.uv1, o.uv);
+        assert_eq!(v.uv, [o.uv[1], o.uv[0]]);
+    }
+    let gpu = support::gpu();
+    let rig = facing_the_box();
+    let draw = |scene: &Scene| {
+        let options = stereocull::renderer::RendererOptions::default();
+        support::render(&gpu, scene, &rig, options)
+            .unwrap()
+            .remove(0)
+    };
+    let reference = draw(&original);
+    let tolerance = support::Tolerance::RECOMPILED;
+    support::assert_images_match("second set", &draw(&two_sets), &reference, tolerance);
+    let control = draw(&control);
+    let differ = (control.pixels().zip(reference.pixels()))
+        .filter(|(a, b)| (0..3).any(|c| a[c].abs_diff(b[c]) > 8))
+        .count();
+    assert!(differ > 500, "the control differs at {differ} pixels only");
 }
