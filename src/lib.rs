@@ -47,6 +47,7 @@ pub mod frustum;
 pub mod gltf_import;
 pub mod live;
 pub mod materials;
+pub mod morphing;
 pub mod occlusion;
 pub mod pbr;
 pub mod places;

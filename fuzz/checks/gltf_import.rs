@@ -34,6 +34,18 @@ pub fn gltf_import(data: &[u8]) {
         let joints = v.joints.map(|j| v.joint_base as usize + j as usize);
         assert!(joints.iter().all(|&j| j < skins.joint_matrices.len()));
     }
+    // The morph pass reads only its offsets and weights and writes only the scene's
+    // vertices or the skins' rest vertices.
+    let morphs = &scene.morphs;
+    for v in &morphs.vertices {
+        let written = match v.skinned {
+            0 => scene.vertices.len(),
+            _ => skins.vertices.len(),
+        };
+        assert!((v.destination as usize) < written);
+        assert!((v.first_delta + v.targets) as usize <= morphs.deltas.len());
+        assert!((v.first_weight + v.targets) as usize <= morphs.weights.len());
+    }
     for time in [-1.0, 0.0, 0.37, 1e6] {
         scene.pose(time);
     }

@@ -339,13 +339,14 @@ fn scene_info(spec: &str) -> Result<()> {
         .map(|i| scene.meshes[i.mesh as usize].index_count as u64 / 3)
         .sum();
     println!(
-        "  loads: {} instances of {} meshes ({} triangles at the finest level), {} materials, {} textures, {} skins",
+        "  loads: {} instances of {} meshes ({} triangles at the finest level), {} materials, {} textures, {} skins, {} morphs",
         scene.instances.len(),
         scene.meshes.len(),
         triangles,
         scene.materials.len(),
         scene.textures.len(),
         scene.skins.skins.len(),
+        scene.morphs.morphs.len(),
     );
     Ok(())
 }

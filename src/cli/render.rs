@@ -105,6 +105,7 @@ impl Session {
         let mut scene = scene_spec::load(&args.scene)?;
         if !args.animation.on() {
             scene.posing.clips.clear();
+            scene.morphs.stop();
         }
         scene.pose(time);
         let gpu = Gpu::headless()?;

@@ -86,10 +86,10 @@ impl DrawScene {
         })
     }
 
-    /// The vertex buffer's uses: drawn, read back, and written by the skinning pass
-    /// when the scene has skins.
+    /// The vertex buffer's uses: drawn, read back, and written by the skinning and morph
+    /// passes when the scene has skins or morph targets.
     fn vertex_usage(scene: &Scene) -> wgpu::BufferUsages {
-        let skinned = match scene.skins.is_empty() {
+        let skinned = match scene.skins.is_empty() && scene.morphs.is_empty() {
             true => wgpu::BufferUsages::empty(),
             false => wgpu::BufferUsages::STORAGE,
         };

@@ -53,8 +53,8 @@ impl Importer<'_> {
         Some(index)
     }
 
-    /// Every animation's channels that move a node of the scene (morph weights are not
-    /// read), each checked ([`Channel::check`]).
+    /// Every animation's channels that move a node of the scene, each checked
+    /// ([`Channel::check`]); its channels of morph weights go to the node's morphs.
     pub(super) fn read_clips(&mut self) -> Step<()> {
         for animation in self.document.animations() {
             let at = format!("animations[{}]", animation.index());
@@ -64,9 +64,17 @@ impl Importer<'_> {
                 offset: 0.0,
                 speed: 1.0,
             };
+            let mut duration = 0.0f32;
+            for sampler in animation.samplers() {
+                let input = sampler.input().index() as u64;
+                let times: Vec<f32> = self.read(input, &|| at.clone())?;
+                duration = times.iter().fold(duration, |d, &t| d.max(t));
+            }
             for channel in animation.channels() {
                 let at = format!("{at}.channels[{}]", channel.index());
-                if let Some(c) = self.channel(&channel, &at)? {
+                if channel.target().property() == GltfProperty::MorphTargetWeights {
+                    self.weight_channel(&channel, (&at, duration))?;
+                } else if let Some(c) = self.channel(&channel, &at)? {
                     clip.channels.push(c);
                 }
             }
@@ -86,10 +94,7 @@ impl Importer<'_> {
             GltfProperty::Translation => Property::Translation,
             GltfProperty::Rotation => Property::Rotation,
             GltfProperty::Scale => Property::Scale,
-            GltfProperty::MorphTargetWeights => {
-                log::warn!("{at}: morph target weights are not read");
-                return Ok(None);
-            }
+            GltfProperty::MorphTargetWeights => return Ok(None), // read_clips takes them
         };
         let sampler = channel.sampler();
         let where_ = || at.to_owned();

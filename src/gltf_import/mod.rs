@@ -21,6 +21,7 @@ mod animations;
 mod buffers;
 pub mod extensions;
 mod materials;
+mod morphs;
 mod preconditions;
 mod skins;
 
@@ -89,6 +90,7 @@ pub fn import_bytes(bytes: &[u8], base: Option<&Path>, origin: &Path) -> Result<
             .collect(),
         pose_nodes: HashMap::new(),
         pending_skins: Vec::new(),
+        pending_morphs: Vec::new(),
     };
     let root = gltf
         .document
@@ -99,7 +101,8 @@ pub fn import_bytes(bytes: &[u8], base: Option<&Path>, origin: &Path) -> Result<
         importer.visit(node).map_err(&fail)?;
     }
     importer.read_clips().map_err(&fail)?;
-    importer.resolve_skins().map_err(&fail)?;
+    let morphed_skins = importer.finish_morphs();
+    importer.resolve_skins(&morphed_skins).map_err(&fail)?;
     if importer.skipped > 0 {
         log::warn!(
             "{}: skipped {} non-triangle primitive instance(s)",
@@ -175,6 +178,8 @@ struct Importer<'a> {
     pose_nodes: HashMap<usize, u32>,
     /// Skinned instances whose joints are resolved once every node is placed.
     pending_skins: Vec<skins::PendingSkin>,
+    /// Morphs whose bounds grow once their animations are read.
+    pending_morphs: Vec<morphs::PendingMorph>,
 }
 
 type Step<T> = std::result::Result<T, String>;
@@ -211,7 +216,11 @@ impl Importer<'_> {
         };
         let copies = self.instancing_copies(node)?;
         for primitive in mesh.primitives() {
-            let Some(id) = self.mesh_id(&mesh, &primitive)? else {
+            let id = match primitive.morph_targets().len() {
+                0 => self.mesh_id(&mesh, &primitive)?,
+                _ => self.morphed_mesh_id(node, &mesh, &primitive)?,
+            };
+            let Some(id) = id else {
                 self.skipped += copies.len();
                 continue;
             };
@@ -394,6 +403,32 @@ impl Importer<'_> {
         };
         self.primitive_mesh.insert(key, id);
         Ok(id)
+    }
+
+    /// A morphed primitive's mesh: the node's own (its copies share it), with its morph;
+    /// `None` for primitives that are not triangle lists.
+    fn morphed_mesh_id(
+        &mut self,
+        node: &gltf::Node,
+        mesh: &gltf::Mesh,
+        primitive: &gltf::Primitive,
+    ) -> Step<Option<u32>> {
+        if primitive.mode() != gltf::mesh::Mode::Triangles {
+            return Ok(None);
+        }
+        let key = (mesh.index(), primitive.index());
+        let (vertices, indices) = self.triangles(primitive, key)?;
+        let name = format!(
+            "{}#{} of node {}",
+            mesh.name().unwrap_or("mesh"),
+            primitive.index(),
+            node.index()
+        );
+        let id = self.scene.add_mesh(name, &vertices, &indices);
+        let base = self.scene.meshes[id as usize].base_vertex as u32;
+        let destinations = base..base + vertices.len() as u32;
+        self.add_morph((node, primitive), (&vertices, destinations), (id, false))?;
+        Ok(Some(id))
     }
 
     /// The mesh with reversed winding for mirroring transforms (created on first use), or

@@ -75,6 +75,8 @@ impl Importer<'_> {
                     destination: base + i as u32,
                 });
             }
+            let destinations = first..self.scene.skins.vertices.len() as u32;
+            self.add_morph((node, &primitive), (&vertices, destinations), (id, true))?;
             let color = Vec4::from(
                 primitive
                     .material()
@@ -171,8 +173,10 @@ impl Importer<'_> {
 
     /// The skins read while placing nodes, now that every joint is a posed node: their
     /// joints, inverse bind matrices and joints' bounds; then every skin posed at rest
-    /// (the node-animated instances keep the file's placement).
-    pub(super) fn resolve_skins(&mut self) -> Step<()> {
+    /// (the node-animated instances keep the file's placement). A morphed skin's
+    /// `(mesh, reach)` in `morphed` grows its joints' bounds by that reach, stretched by
+    /// each inverse bind matrix (the morph moves rest vertices in the mesh's space).
+    pub(super) fn resolve_skins(&mut self, morphed: &[(u32, f32)]) -> Step<()> {
         for pending in std::mem::take(&mut self.pending_skins) {
             let skin = self
                 .document
@@ -201,7 +205,14 @@ impl Importer<'_> {
             for v in vertices.iter_mut() {
                 v.joint_base = base;
             }
-            let joint_bounds = joint_bounds(vertices, &inverse_binds);
+            let mut joint_bounds = joint_bounds(vertices, &inverse_binds);
+            if let Some(&(_, reach)) = morphed.iter().find(|(m, _)| *m == pending.mesh) {
+                for (b, ib) in joint_bounds.iter_mut().zip(&inverse_binds) {
+                    if b.w >= 0.0 {
+                        b.w += reach * super::morphs::bind_stretch(ib);
+                    }
+                }
+            }
             self.scene.skins.skins.push(Skin {
                 instance: pending.instance,
                 rest_sphere: self.scene.meshes[pending.mesh as usize].bounds,

@@ -119,7 +119,7 @@ impl Renderer {
     }
 
     /// The frame level's passes, before any display's: the scatter of moved instances,
-    /// posing, skinning, the coarse cull, the shadow pass.
+    /// posing, morph targets, skinning, the coarse cull, the shadow pass.
     pub(super) fn encode_frame(
         &mut self,
         encoder: &mut wgpu::CommandEncoder,
@@ -131,6 +131,10 @@ impl Renderer {
         }
         let posed = match &self.pose {
             Some(pose) => pose.encode(encoder, rec),
+            None => 0,
+        };
+        let morphed = match &self.morph {
+            Some(morph) => morph.encode(encoder, rec),
             None => 0,
         };
         let skinned = match &self.skin {
@@ -154,7 +158,7 @@ impl Renderer {
             None => (0, 0),
         };
         FrameStats {
-            dispatches: scattered + posed + skinned + coarse + shadowed,
+            dispatches: scattered + posed + morphed + skinned + coarse + shadowed,
             draw_calls,
             cpu_staging,
             ..Default::default()

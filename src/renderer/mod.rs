@@ -111,6 +111,7 @@ use display::classic::ClassicPath;
 use display::indirect::IndirectPath;
 pub use display::occlusion::OcclusionBytes;
 use display::{PathCore, PathInputs};
+use frame::morph::MorphPass;
 use frame::pose::{self, PosePass};
 use frame::shadow::{ShadowMap, ShadowPass};
 use frame::skin::SkinPass;
@@ -192,9 +193,11 @@ impl Path {
         (scene, options): (&Scene, &RendererOptions),
         (frame, windows): (&wgpu::Buffer, Windows),
         posed: impl Fn(u32) -> bool,
-    ) -> Result<(Option<SkinPass>, Option<PosePass>, Option<ShadowPass>)> {
+    ) -> Result<FramePasses> {
         let core = self.core();
         let skin = SkinPass::new(device, &scene.skins, &core.draw_scene.vertices);
+        let targets = (&core.draw_scene.vertices, skin.as_ref().map(SkinPass::rest));
+        let morph = MorphPass::new(device, &scene.morphs, targets);
         let gpu = pose::GpuParts {
             frame,
             skin: skin.as_ref(),
@@ -204,8 +207,21 @@ impl Path {
         let pose = pose::build(device, scene, options, gpu, posed)?;
         let shadow =
             (options.shadows).then(|| ShadowPass::new(device, core.drawing(), frame, &core.culler));
-        Ok((skin, pose, shadow))
+        Ok(FramePasses {
+            skin,
+            morph,
+            pose,
+            shadow,
+        })
     }
+}
+
+/// The frame level's passes a renderer records (each where its scene needs it).
+struct FramePasses {
+    skin: Option<SkinPass>,
+    morph: Option<MorphPass>,
+    pose: Option<PosePass>,
+    shadow: Option<ShadowPass>,
 }
 
 /// The scene submission backend: one per scene and rig shape, see the module docs for the
@@ -223,6 +239,8 @@ pub struct Renderer {
     scatter: Scatters,
     /// With skins: the frame's skinning pass.
     skin: Option<SkinPass>,
+    /// With morph targets: the frame's morph pass.
+    morph: Option<MorphPass>,
     /// Posing on the GPU, with animations: the frame's pose pass.
     pose: Option<PosePass>,
     /// With shadows: the frame's shadow pass (the light culled as one more view of the
@@ -276,7 +294,12 @@ impl Renderer {
         };
         let path = Path::new(device, inputs)?;
         let bound = (&frame, options.windows(device, slots));
-        let (skin, pose, shadow) = path.frame_passes(device, (scene, &options), bound, |_| true)?;
+        let FramePasses {
+            skin,
+            morph,
+            pose,
+            shadow,
+        } = path.frame_passes(device, (scene, &options), bound, |_| true)?;
         let shapes = rig
             .displays
             .iter()
@@ -296,6 +319,7 @@ impl Renderer {
             names: rig.displays.iter().map(|d| d.name.clone()).collect(),
             scatter,
             skin,
+            morph,
             pose,
             shadow,
             shadow_map,
@@ -305,6 +329,11 @@ impl Renderer {
             far_sizes: plan.far_sizes(),
             passes: Vec::new(),
         })
+    }
+
+    /// Vertices the frame's morph pass moves (0 without morph targets).
+    pub fn morphed_vertices(&self) -> u32 {
+        self.morph.as_ref().map_or(0, MorphPass::vertices)
     }
 
     /// Vertices the frame's skinning pass poses (0 without skins): the same for any
@@ -392,6 +421,9 @@ impl Renderer {
             let (size, culler) = (self.shadow_map.size, &self.path.core().culler);
             stats.bytes_uploaded += shadow.prepare(queue, &light, size, culler);
             stats.cpu_upload += start.elapsed();
+        }
+        if let Some(morph) = &mut self.morph {
+            stats.bytes_uploaded += morph.prepare(queue, time);
         }
         // Texels go up with the first frame: `new` has no queue.
         stats.bytes_uploaded +=

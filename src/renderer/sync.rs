@@ -131,8 +131,9 @@ impl Renderer {
         self.scatter = Scatters::new(device, windows);
         let made = (scene, &self.options);
         let posed = |s| live.animates(s);
-        (self.skin, self.pose, self.shadow) =
-            (self.path).frame_passes(device, made, (&self.frame, windows), posed)?;
+        let passes = (self.path).frame_passes(device, made, (&self.frame, windows), posed)?;
+        (self.skin, self.morph, self.pose, self.shadow) =
+            (passes.skin, passes.morph, passes.pose, passes.shadow);
         let bytes = (scene.instances.len() * size_of::<InstanceRecord>()) as u64;
         Ok(SyncStats {
             bytes_uploaded: bytes,

@@ -166,14 +166,20 @@ pub struct Scene {
     pub posing: crate::posing::Posing,
     /// Skinned instances, moved by posed nodes ([`crate::skinning`]); empty without.
     pub skins: crate::skinning::Skins,
+    /// Morphed meshes, moved by their targets' weights ([`crate::morphing`]); empty
+    /// without.
+    pub morphs: crate::morphing::Morphs,
 }
 
 impl Scene {
     /// Poses the instances its node animations move at `time` seconds (what `render
-    /// --time` draws; a live scene poses with [`crate::live::LiveScene::pose`]).
+    /// --time` draws; a live scene poses with [`crate::live::LiveScene::pose`]), and
+    /// sets its morphs' weights to that time's (the renderer samples its own at each
+    /// frame's time, in `prepare`).
     pub fn pose(&mut self, time: f32) {
         let posed = self.posed(time);
         self.place(posed);
+        self.morphs.set_time(time);
     }
 
     /// Moves each of `posed`'s instances to its transform.

@@ -308,6 +308,18 @@ pub const SKIN_BINDINGS: [Binding; 4] = [
     binding("params", Access::Uniform, "SkinParams", COMPUTE),
 ];
 
+/// The frame's morph pass (`wgsl/morph.wgsl`): the morphed vertices at rest, their
+/// targets' offsets and the weights, and what it writes: the scene's vertices and the
+/// skins' rest vertices (a skinned mesh is morphed before it is skinned), as words.
+pub const MORPH_BINDINGS: [Binding; 6] = [
+    binding("rest", Access::StorageRead, "array<MorphVertex>", COMPUTE),
+    binding("deltas", Access::StorageRead, "array<MorphDelta>", COMPUTE),
+    binding("weights", Access::StorageRead, "array<f32>", COMPUTE),
+    binding("vertices", Access::StorageReadWrite, "array<u32>", COMPUTE),
+    binding("skin_rest", Access::StorageReadWrite, "array<u32>", COMPUTE),
+    binding("params", Access::Uniform, "MorphParams", COMPUTE),
+];
+
 /// The frame's pose pass (`wgsl/pose.wgsl`), one group for its three entry points:
 /// the frame, the tables, each node's local and world rows, and what it writes for the
 /// skins and the scatter of moves.

@@ -68,8 +68,8 @@ use crate::bins::{Bin, BinKind};
 use crate::scene::Shading;
 pub use binding_lists::{
     CANDIDATE_BINDINGS, COARSE_BINDINGS, CULL_BINDINGS, DRAW_BINDINGS, FAR_COMPOSITE_BINDINGS,
-    FOVEATED_COMPOSITE_BINDINGS, MATERIAL_BINDINGS, POSE_BINDINGS, SCATTER_BINDINGS,
-    SHADOW_MAP_BINDINGS, SKIN_BINDINGS, pyramid_bindings,
+    FOVEATED_COMPOSITE_BINDINGS, MATERIAL_BINDINGS, MORPH_BINDINGS, POSE_BINDINGS,
+    SCATTER_BINDINGS, SHADOW_MAP_BINDINGS, SKIN_BINDINGS, pyramid_bindings,
 };
 pub use bindings::{
     Access, Binding, Bound, TextureKind, bind_group, bind_group_layout, declarations,
@@ -402,6 +402,12 @@ pub fn skin_source() -> String {
     [&bindings, include_str!("../../wgsl/skin.wgsl")].concat()
 }
 
+/// The frame's morph pass (`wgsl/morph.wgsl`).
+pub fn morph_source() -> String {
+    let bindings = declarations(&MORPH_BINDINGS, 0, &Windows::WHOLE);
+    [&bindings, include_str!("../../wgsl/morph.wgsl")].concat()
+}
+
 /// The frame's posing pass (`wgsl/pose.wgsl`, three entry points): the frame context
 /// and the moves scatter's records come before it.
 pub fn pose_source() -> String {
@@ -472,6 +478,7 @@ pub fn all_sources() -> Vec<(String, String)> {
                     foveated_composite_source(),
                 ),
                 ("stereocull.skin".to_string(), skin_source()),
+                ("stereocull.morph".to_string(), morph_source()),
                 ("stereocull.pose".to_string(), pose_source()),
             ];
             let pyramids = [(1, false), (4, false), (1, true)].map(|(samples, layered)| {

@@ -5,6 +5,7 @@
 //! Each test binary uses part of it.
 #![allow(dead_code)]
 
+pub mod glb;
 pub mod room;
 
 use std::path::PathBuf;

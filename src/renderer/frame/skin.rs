@@ -15,6 +15,7 @@ use crate::skinning::{JointMatrix, Skins};
 pub(in crate::renderer) struct SkinPass {
     pipeline: wgpu::ComputePipeline,
     bind_group: wgpu::BindGroup,
+    rest: wgpu::Buffer,
     joints: wgpu::Buffer,
     vertices: u32,
     dispatch: (u32, u32),
@@ -87,6 +88,7 @@ impl SkinPass {
         Some(SkinPass {
             pipeline,
             bind_group,
+            rest,
             joints,
             vertices,
             dispatch,
@@ -119,6 +121,11 @@ impl SkinPass {
         pass.dispatch_workgroups(self.dispatch.0, self.dispatch.1, 1);
         rec.close_frame_pass(encoder, pass, open);
         1
+    }
+
+    /// The rest vertices the pass moves (the morph pass writes a morphed skin's).
+    pub(in crate::renderer) fn rest(&self) -> &wgpu::Buffer {
+        &self.rest
     }
 
     /// The joint matrices the pass applies (the pose pass writes them on the GPU).

@@ -1,0 +1,137 @@
+//! The frame's morph pass on the GPU ([`crate::morphing`], `wgsl/morph.wgsl`): one
+//! dispatch per frame over every morphed vertex, before the skinning pass (which moves
+//! what it writes into a skin's rest), the shadow pass and every display.
+
+use crate::buffers::init_buffer;
+use crate::morphing::Morphs;
+use crate::renderer::recorder::Recorder;
+use crate::shaders::{
+    MORPH_BINDINGS, Windows, bind_group, bind_group_layout, compute_pipeline, dispatch_size,
+    morph_source,
+};
+
+/// What the pass reads and writes, its pipeline, and the weights' animations.
+pub(in crate::renderer) struct MorphPass {
+    pipeline: wgpu::ComputePipeline,
+    bind_group: wgpu::BindGroup,
+    /// The weights (their defaults and channels; no vertices), sampled each frame.
+    morphs: Morphs,
+    weights: wgpu::Buffer,
+    vertices: u32,
+    dispatch: (u32, u32),
+}
+
+const WORKGROUP: u32 = 64;
+
+impl MorphPass {
+    /// The pass for `morphs` writing into `vertex_buffer` and, for skinned meshes, the
+    /// skins' `skin_rest` (`None` without morphs).
+    pub(in crate::renderer) fn new(
+        device: &wgpu::Device,
+        morphs: &Morphs,
+        (vertex_buffer, skin_rest): (&wgpu::Buffer, Option<&wgpu::Buffer>),
+    ) -> Option<MorphPass> {
+        if morphs.is_empty() {
+            return None;
+        }
+        let storage = wgpu::BufferUsages::STORAGE;
+        let buffer = |label, bytes: &[u8], usage| init_buffer(device, label, bytes, usage);
+        let rest = buffer(
+            "stereocull.morph_vertices",
+            bytemuck::cast_slice(&morphs.vertices),
+            storage,
+        );
+        let deltas = buffer(
+            "stereocull.morph_deltas",
+            bytemuck::cast_slice(&morphs.deltas),
+            storage,
+        );
+        let weights = buffer(
+            "stereocull.morph_weights",
+            bytemuck::cast_slice(&morphs.weights),
+            storage | wgpu::BufferUsages::COPY_DST,
+        );
+        // No skin: a word stands in for the skins' rest, which nothing then writes.
+        let stand_in = buffer("stereocull.morph_no_skin", &[0; 4], storage);
+        let vertices = morphs.vertices.len() as u32;
+        let dispatch = dispatch_size(
+            vertices.div_ceil(WORKGROUP),
+            device.limits().max_compute_workgroups_per_dimension,
+        );
+        let params = buffer(
+            "stereocull.morph_params",
+            bytemuck::cast_slice(&[vertices, dispatch.0 * WORKGROUP]),
+            wgpu::BufferUsages::UNIFORM,
+        );
+        let whole = &Windows::WHOLE;
+        let layout = bind_group_layout(device, "stereocull.morph", &MORPH_BINDINGS, whole);
+        let buffers = [
+            &rest,
+            &deltas,
+            &weights,
+            vertex_buffer,
+            skin_rest.unwrap_or(&stand_in),
+            &params,
+        ];
+        let bind_group = bind_group(
+            device,
+            "stereocull.morph",
+            &layout,
+            &MORPH_BINDINGS,
+            whole,
+            buffers,
+        );
+        let pipeline_layout = device.create_pipeline_layout(&wgpu::PipelineLayoutDescriptor {
+            label: Some("stereocull.morph"),
+            bind_group_layouts: &[Some(&layout)],
+            immediate_size: 0,
+        });
+        let pipeline = compute_pipeline(
+            device,
+            "stereocull.morph",
+            &pipeline_layout,
+            morph_source(),
+            "morph",
+        );
+        let weights_only = Morphs {
+            morphs: morphs.morphs.clone(),
+            weights: morphs.weights.clone(),
+            ..Morphs::default()
+        };
+        Some(MorphPass {
+            pipeline,
+            bind_group,
+            morphs: weights_only,
+            weights,
+            vertices,
+            dispatch,
+        })
+    }
+
+    /// Samples every morph's weights at `time` and writes them; returns the bytes.
+    pub(in crate::renderer) fn prepare(&mut self, queue: &wgpu::Queue, time: f32) -> u64 {
+        self.morphs.set_time(time);
+        let bytes: &[u8] = bytemuck::cast_slice(&self.morphs.weights);
+        queue.write_buffer(&self.weights, 0, bytes);
+        bytes.len() as u64
+    }
+
+    /// Records the frame's one morph dispatch, logged as the frame pass `morph`.
+    pub(in crate::renderer) fn encode(
+        &self,
+        encoder: &mut wgpu::CommandEncoder,
+        rec: &mut Recorder,
+    ) -> u32 {
+        let (mut pass, open) = rec.frame_pass(encoder, "morph");
+        pass.set_pipeline(&self.pipeline);
+        pass.set_bind_group(0, &self.bind_group, &[]);
+        pass.dispatch_workgroups(self.dispatch.0, self.dispatch.1, 1);
+        rec.close_frame_pass(encoder, pass, open);
+        1
+    }
+
+    /// Morphed vertices per frame.
+    pub(in crate::renderer) fn vertices(&self) -> u32 {
+        self.vertices
+    }
+}
