@@ -320,10 +320,12 @@ impl DrawKey {
 }
 
 /// How the draw pipelines pass the second texture coordinates, in a bin that reads them.
-const SECOND_UV_ON: &str = "fn set_second_uv(out: ptr<function, VertexOutput>, d: Decoded) { (*out).uv1 = d.uv1; }\n\
+const SECOND_UV_ON: &str = "const SECOND_UV: bool = true;\n\
+    fn set_second_uv(out: ptr<function, VertexOutput>, d: Decoded) { (*out).uv1 = d.uv1; }\n\
     fn second_uv(in: FragmentInput) -> vec2<f32> { return in.uv1; }\n";
 /// ... and in one that does not: no varying, zero coordinates.
-const SECOND_UV_OFF: &str = "fn set_second_uv(out: ptr<function, VertexOutput>, d: Decoded) {}\n\
+const SECOND_UV_OFF: &str = "const SECOND_UV: bool = false;\n\
+    fn set_second_uv(out: ptr<function, VertexOutput>, d: Decoded) {}\n\
     fn second_uv(in: FragmentInput) -> vec2<f32> { return vec2(0.0); }\n";
 
 /// The shading function of [`Shading::Unlit`] materials: the base color alone.
@@ -390,6 +392,8 @@ pub fn shadow_cutout_source(windows: &Windows) -> String {
     [
         &decode_source_with(1, windows),
         &declarations(&MATERIAL_BINDINGS, 1, windows),
+        // Its vertices carry both sets whatever the bin: one pipeline for every cutout.
+        "const SECOND_UV: bool = true;\n",
         BASE_COLOR,
         include_str!("../../wgsl/shadow_cutout.wgsl"),
     ]

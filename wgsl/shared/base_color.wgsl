@@ -17,9 +17,14 @@ struct TexelAt {
 // `uvs` holds both sets of coordinates (xy, zw); texture slot `slot` (a bit of
 // MaterialRecord::second_uv) reads the second where its bit is set. Both sets'
 // gradients are taken, and chosen after, for the same reason.
+// SECOND_UV is false in a bin whose materials read one set: its code is then the one
+// set's alone.
 fn material_uv(uvs: vec4<f32>, material: u32, slot: u32) -> TexelAt {
     let m = materials[material].uv_transform;
     let along = mat2x2(m[0], m[1]);
+    if (!SECOND_UV) {
+        return TexelAt(m * vec3(uvs.xy, 1.0), along * dpdx(uvs.xy), along * dpdy(uvs.xy));
+    }
     let dx = dpdx(uvs);
     let dy = dpdy(uvs);
     let second = (materials[material].second_uv & slot) != 0u;
