@@ -10,6 +10,11 @@ use std::time::{Duration, Instant};
 
 use serde_json::{Value, json};
 
+// The tests' GLB writer (its reader goes unused here).
+#[allow(dead_code)]
+#[path = "../tests/support/glb.rs"]
+mod glb;
+
 fn main() {
     let benching = std::env::args().any(|a| a == "--bench");
     let (side, rounds) = if benching { (500, 5) } else { (16, 1) };
@@ -265,7 +270,7 @@ impl Grid {
             "images": [{"uri": format!("data:image/png;base64,{png}")}],
             "buffers": buffers, "bufferViews": views, "accessors": accessors,
         });
-        glb(&json, &bin)
+        glb::write_glb(&json, &bin)
     }
 }
 
@@ -277,27 +282,4 @@ fn encode(bytes: &[u8], stride: usize) -> meshopt::Result<Vec<u8>> {
         12 => meshopt::encode_vertex_buffer::<[u8; 12]>(bytemuck::cast_slice(bytes)),
         _ => panic!("stride {stride}"),
     }
-}
-
-fn glb(json: &Value, bin: &[u8]) -> Vec<u8> {
-    let mut text = json.to_string().into_bytes();
-    text.resize(text.len().next_multiple_of(4), b' ');
-    let mut bin = bin.to_vec();
-    bin.resize(bin.len().next_multiple_of(4), 0);
-    let total = 12 + 8 + text.len() + 8 + bin.len();
-    let mut out = Vec::with_capacity(total);
-    for word in [
-        u32::from_le_bytes(*b"glTF"),
-        2,
-        total as u32,
-        text.len() as u32,
-    ] {
-        out.extend_from_slice(&word.to_le_bytes());
-    }
-    out.extend_from_slice(b"JSON");
-    out.extend_from_slice(&text);
-    out.extend_from_slice(&(bin.len() as u32).to_le_bytes());
-    out.extend_from_slice(b"BIN\0");
-    out.extend_from_slice(&bin);
-    out
 }

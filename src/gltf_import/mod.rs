@@ -416,6 +416,21 @@ impl Importer<'_> {
         if primitive.mode() != gltf::mesh::Mode::Triangles {
             return Ok(None);
         }
+        let (id, vertices) = self.own_mesh(node, mesh, primitive)?;
+        let base = self.scene.meshes[id as usize].base_vertex as u32;
+        let destinations = base..base + vertices.len() as u32;
+        self.add_morph((node, primitive), (&vertices, destinations), (id, false))?;
+        Ok(Some(id))
+    }
+
+    /// A triangle primitive as a mesh of `node`'s own (skinned or morphed: the passes
+    /// write its vertices), with the vertices it was read as.
+    fn own_mesh(
+        &mut self,
+        node: &gltf::Node,
+        mesh: &gltf::Mesh,
+        primitive: &gltf::Primitive,
+    ) -> Step<(u32, Vec<Vertex>)> {
         let key = (mesh.index(), primitive.index());
         let (vertices, indices) = self.triangles(primitive, key)?;
         let name = format!(
@@ -424,11 +439,7 @@ impl Importer<'_> {
             primitive.index(),
             node.index()
         );
-        let id = self.scene.add_mesh(name, &vertices, &indices);
-        let base = self.scene.meshes[id as usize].base_vertex as u32;
-        let destinations = base..base + vertices.len() as u32;
-        self.add_morph((node, primitive), (&vertices, destinations), (id, false))?;
-        Ok(Some(id))
+        Ok((self.scene.add_mesh(name, &vertices, &indices), vertices))
     }
 
     /// The mesh with reversed winding for mirroring transforms (created on first use), or

@@ -41,14 +41,7 @@ impl Importer<'_> {
                 continue;
             }
             let key = (mesh.index(), primitive.index());
-            let (vertices, indices) = self.triangles(&primitive, key)?;
-            let name = format!(
-                "{}#{} of node {}",
-                mesh.name().unwrap_or("mesh"),
-                primitive.index(),
-                node.index()
-            );
-            let id = self.scene.add_mesh(name, &vertices, &indices);
+            let (id, vertices) = self.own_mesh(node, &mesh, &primitive)?;
             let where_ = format!("mesh {} primitive {}", key.0, key.1);
             let influences = self.influences(&primitive, &where_, vertices.len())?;
             let joints = skin.joints().count();

@@ -122,12 +122,8 @@ impl MorphPass {
         encoder: &mut wgpu::CommandEncoder,
         rec: &mut Recorder,
     ) -> u32 {
-        let (mut pass, open) = rec.frame_pass(encoder, "morph");
-        pass.set_pipeline(&self.pipeline);
-        pass.set_bind_group(0, &self.bind_group, &[]);
-        pass.dispatch_workgroups(self.dispatch.0, self.dispatch.1, 1);
-        rec.close_frame_pass(encoder, pass, open);
-        1
+        let with = (&self.pipeline, &self.bind_group, self.dispatch);
+        super::one_dispatch(encoder, rec, "morph", with)
     }
 
     /// Morphed vertices per frame.
