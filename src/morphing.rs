@@ -9,9 +9,9 @@
 //! time (a few floats per morph), and the pass reads them from a small buffer.
 //!
 //! Culling: a morphed mesh is its node's own (the copies of one node share it), and its
-//! bounding sphere holds every weighted pose the file can reach: the rest sphere grown
-//! by the largest weight magnitude the file gives times the sum over targets of the
-//! longest position offset ([`Morph::reach`]).
+//! bounding sphere holds every weighted pose the file can reach (and any of weights up
+//! to 1): the rest sphere grown by the largest weight magnitude times the sum over
+//! targets of the longest position offset ([`Morph::reach`]).
 
 use bytemuck::{Pod, Zeroable};
 use glam::{Vec3, Vec4};
@@ -69,6 +69,8 @@ pub struct WeightChannel {
 /// One node's morphed primitive (the node's copies draw it alike).
 #[derive(Clone, Debug, PartialEq)]
 pub struct Morph {
+    /// The mesh it moves (a skinned one's: its skin's), which its instances draw.
+    pub mesh: u32,
     /// Its weights when nothing plays them, one per target.
     pub defaults: Vec<f32>,
     /// What plays them, if anything.
@@ -117,6 +119,32 @@ impl Morphs {
         }
     }
 
+    /// Morph `m`'s weights from now on `weights` (its channels stop): what an engine
+    /// that plays its own blend shapes sets. An error where `weights` are not one per
+    /// target, not finite, or past what the morph's culling sphere holds
+    /// ([`Morph::weight_bound`]).
+    pub fn set_weights(&mut self, m: usize, weights: &[f32]) -> Result<(), String> {
+        let morph = (self.morphs.get_mut(m)).ok_or_else(|| format!("no morph {m}"))?;
+        let bound = morph.weight_bound();
+        if weights.len() != morph.defaults.len() {
+            return Err(format!(
+                "morph {m}: {} weights for {} targets",
+                weights.len(),
+                morph.defaults.len()
+            ));
+        }
+        if let Some(w) = weights.iter().find(|w| !(w.abs() <= bound)) {
+            return Err(format!(
+                "morph {m}: weight {w} is past {bound}, the largest its culling sphere holds (the file's own weights, or 1)"
+            ));
+        }
+        morph.defaults = weights.to_vec();
+        morph.channels.clear();
+        let first = morph.first_weight as usize;
+        self.weights[first..first + weights.len()].copy_from_slice(weights);
+        Ok(())
+    }
+
     /// Drops every channel: the weights stay at the defaults (`--animation off`).
     pub fn stop(&mut self) {
         for m in &mut self.morphs {
@@ -136,7 +164,14 @@ impl Morph {
         (self.channels.iter()).fold(defaults, |m, c| m.max(channel_bound(&c.channel)))
     }
 
-    /// How far its morph can move a vertex from rest: [`Morph::largest_weight`] times
+    /// The weights its culling sphere holds, in magnitude: [`Morph::largest_weight`],
+    /// and at least 1 (glTF's customary range), so that an engine may play a file's
+    /// blend shapes whose weights the file leaves at zero.
+    pub fn weight_bound(&self) -> f32 {
+        self.largest_weight().max(1.0)
+    }
+
+    /// How far its morph can move a vertex from rest: [`Morph::weight_bound`] times
     /// the sum over its targets of their longest position offset, given its vertices'
     /// offsets `deltas` (per vertex, its targets in order).
     pub fn reach(&self, deltas: &[MorphDelta]) -> f32 {
@@ -148,7 +183,7 @@ impl Morph {
             }
         }
         // Rounding in the weighted sums: grow by 2^-16 of the reach.
-        let reach = self.largest_weight() * longest.iter().sum::<f32>();
+        let reach = self.weight_bound() * longest.iter().sum::<f32>();
         reach * (1.0 + 1.0 / 65536.0)
     }
 }

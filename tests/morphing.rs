@@ -353,3 +353,40 @@ fn a_morphed_skin_is_morphed_before_it_is_skinned() {
         }
     }
 }
+
+/// An engine's own weights replace a morph's animation from the next frame, the GPU
+/// equal to the CPU twin with them; weights past what the culling sphere holds (the
+/// file's largest, or 1) and the wrong count are errors naming the bound.
+#[test]
+fn an_engine_sets_its_own_weights_within_the_bound() {
+    let gpu = support::gpu();
+    let scene = load("morph.glb", &morph_file());
+    let rig = support::sized("hmd", 32, 32);
+    let options = RendererOptions::default();
+    let mut renderer = Renderer::new(&gpu.device, &scene, &rig, options).unwrap();
+    let targets = renderer.create_targets(&gpu.device);
+    let e = renderer
+        .set_morph_weights(0, &[5.0, 0.0])
+        .unwrap_err()
+        .to_string();
+    assert!(e.contains("past"), "{e}");
+    assert!(renderer.set_morph_weights(0, &[0.5]).is_err());
+    renderer.set_morph_weights(0, &[-0.5, 0.75]).unwrap();
+    renderer
+        .submit_frame(&gpu.device, &gpu.queue, &rig, 1.3, &targets)
+        .unwrap();
+    let drawn = renderer
+        .diagnostics(&gpu.device, &gpu.queue)
+        .vertices()
+        .unwrap();
+    let mut cpu = scene.morphs.clone();
+    cpu.set_time(1.3);
+    cpu.set_weights(0, &[-0.5, 0.75]).unwrap();
+    for v in &cpu.vertices {
+        let (position, normal, _) = morphed(&cpu, v);
+        let g = drawn[v.destination as usize];
+        assert_close(g.position, position, "set weights");
+        assert_close(g.normal, normal, "set weights");
+    }
+    assert_eq!(&cpu.weights[..2], &[-0.5, 0.75]);
+}

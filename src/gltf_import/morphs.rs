@@ -94,6 +94,7 @@ impl Importer<'_> {
         morphs.deltas.extend(deltas);
         morphs.weights.extend(&defaults);
         morphs.morphs.push(Morph {
+            mesh,
             defaults,
             channels: Vec::new(),
             first_weight,

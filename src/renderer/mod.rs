@@ -331,6 +331,17 @@ impl Renderer {
         })
     }
 
+    /// Morph `m`'s weights ([`crate::morphing::Morphs::morphs`], in the scene the
+    /// renderer was made with; `Morph::mesh` names the mesh it moves) from the next
+    /// `prepare` on, its animations stopped: for an engine that plays its own blend
+    /// shapes. Weights past the largest the file gives (or 1) are an error: the morphed
+    /// mesh's culling sphere holds no more ([`crate::morphing::Morph::weight_bound`]).
+    pub fn set_morph_weights(&mut self, m: usize, weights: &[f32]) -> Result<()> {
+        let morph = (self.morph.as_mut())
+            .ok_or_else(|| Error::InvalidScene("the scene has no morph targets".into()))?;
+        morph.set_weights(m, weights).map_err(Error::InvalidScene)
+    }
+
     /// Vertices the frame's morph pass moves (0 without morph targets).
     pub fn morphed_vertices(&self) -> u32 {
         self.morph.as_ref().map_or(0, MorphPass::vertices)

@@ -108,6 +108,15 @@ impl MorphPass {
         })
     }
 
+    /// See [`crate::renderer::Renderer::set_morph_weights`].
+    pub(in crate::renderer) fn set_weights(
+        &mut self,
+        m: usize,
+        weights: &[f32],
+    ) -> Result<(), String> {
+        self.morphs.set_weights(m, weights)
+    }
+
     /// Samples every morph's weights at `time` and writes them; returns the bytes.
     pub(in crate::renderer) fn prepare(&mut self, queue: &wgpu::Queue, time: f32) -> u64 {
         self.morphs.set_time(time);
