@@ -133,7 +133,7 @@ impl Morphs {
                 morph.defaults.len()
             ));
         }
-        if let Some(w) = weights.iter().find(|w| !(w.abs() <= bound)) {
+        if let Some(w) = weights.iter().find(|w| !w.is_finite() || w.abs() > bound) {
             return Err(format!(
                 "morph {m}: weight {w} is past {bound}, the largest its culling sphere holds (the file's own weights, or 1)"
             ));
