@@ -45,6 +45,7 @@ pub mod far_layer;
 pub mod foveated_composite;
 pub mod frustum;
 pub mod gltf_import;
+pub mod lights;
 pub mod live;
 pub mod materials;
 pub mod morphing;

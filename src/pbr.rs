@@ -1,10 +1,11 @@
-//! The built-in shading's CPU twin (`wgsl/shared/pbr.wgsl`): glTF's metallic-roughness
-//! BRDF lit by one light and an ambient term, with the same operations in the same
-//! order, so that tests can hold the GPU's pixels to it; and the tangents normal maps
+//! The built-in shading's CPU twin (`wgsl/shared/pbr.wgsl`, `wgsl/shared/lights.wgsl`):
+//! glTF's metallic-roughness BRDF lit by the frame's light, the punctual lights and an
+//! ambient term, with the same operations in the same order, so that tests can hold the GPU's pixels to it; and the tangents normal maps
 //! need where a file has none.
 
 use glam::{Vec2, Vec3, Vec4};
 
+use crate::lights::LightRecord;
 use crate::scene::{Vertex, pack_snorm8};
 
 /// The light's radiance (`LIGHT_RADIANCE`): a white diffuse surface facing it reads 0.75.
@@ -48,8 +49,52 @@ pub fn perturbed_normal(n: Vec3, t: Vec4, texel: Vec3, scale: f32) -> Vec3 {
 /// length), lit from unit direction `light`, `reaching` of the light arriving
 /// (`pbr_shade`).
 pub fn shade(p: &Pbr, to_eye: Vec3, light: Vec3, reaching: f32) -> Vec3 {
-    let clamp = |x: f32| x.clamp(0.0, 1.0);
     let v = to_eye.normalize();
+    let (terms, n_dot_l) = brdf(p, v, light);
+    let direct = terms * (LIGHT_RADIANCE * n_dot_l * reaching);
+    direct + p.base.truncate() * (AMBIENT * p.occlusion) + p.emissive
+}
+
+/// What the punctual `lights` bring to `p` at world point `at`, seen along `to_eye`
+/// (`lights_shading`, every light summed in order: one outside a point's cluster gives
+/// it nothing).
+pub fn shade_lights(p: &Pbr, to_eye: Vec3, lights: &[LightRecord], at: Vec3) -> Vec3 {
+    let v = to_eye.normalize();
+    let mut sum = Vec3::ZERO;
+    for l in lights {
+        let (toward, radiance) = light_at(l, at);
+        let (terms, n_dot_l) = brdf(p, v, toward);
+        sum += terms * (radiance * n_dot_l);
+    }
+    sum
+}
+
+/// The direction toward light `l` from world point `p` and its radiance there
+/// (`light_at` in WGSL): glTF's falloff, the inverse square windowed to zero at the
+/// light's range, and a spot's cone.
+pub fn light_at(l: &LightRecord, p: Vec3) -> (Vec3, Vec3) {
+    if l.kind == 3 {
+        return (-l.direction, l.color);
+    }
+    let to = l.position - p;
+    let d2 = to.dot(to).max(1e-8);
+    let d = d2.sqrt();
+    let toward = to / d;
+    let q = d2 / (l.range * l.range);
+    let window = (1.0 - q * q).clamp(0.0, 1.0);
+    let mut falloff = window * window / d2;
+    if l.kind == 2 {
+        let a = (l.direction.dot(-toward) * l.cone_scale + l.cone_offset).clamp(0.0, 1.0);
+        falloff *= a * a;
+    }
+    (toward, l.color * falloff)
+}
+
+/// glTF's BRDF for unit `v` (to the eye) and `l` (to the light): the diffuse and
+/// specular terms, and n . l (`brdf` in WGSL).
+fn brdf(p: &Pbr, v: Vec3, l: Vec3) -> (Vec3, f32) {
+    let clamp = |x: f32| x.clamp(0.0, 1.0);
+    let light = l;
     let n = p.normal;
     let h = (light + v).normalize();
     let n_dot_l = clamp(n.dot(light));
@@ -70,8 +115,7 @@ pub fn shade(p: &Pbr, to_eye: Vec3, light: Vec3, reaching: f32) -> Vec3 {
     let visibility = 0.5 / (from_light + from_eye);
     let diffuse = (Vec3::ONE - fresnel) * (base * (1.0 - p.metallic)) / std::f32::consts::PI;
     let specular = fresnel * (distribution * visibility);
-    let direct = (diffuse + specular) * (LIGHT_RADIANCE * n_dot_l * reaching);
-    direct + base * (AMBIENT * p.occlusion) + p.emissive
+    (diffuse + specular, n_dot_l)
 }
 
 /// Per-vertex tangents from the triangles' texture coordinates (each triangle's

@@ -4,7 +4,7 @@
 //! direction, matches the CPU's BRDF at sampled pixels of both eyes; and the highlight
 //! falls as roughness rises and stands out more as metalness rises.
 
-use glam::{DVec3, DVec4, Vec2, Vec3, Vec4};
+use glam::{Vec2, Vec3, Vec4};
 use image::{Rgba, RgbaImage};
 use stereocull::pbr::{self, Pbr};
 use stereocull::records::pack_unorm4x8;
@@ -132,36 +132,8 @@ fn options(light: Vec3) -> RendererOptions {
     }
 }
 
-/// Where the center of pixel (x, y) of eye `e` (its own half) sees the plane z = 0,
-/// and that eye's position.
-fn on_plane(rig: &Rig, e: usize, (x, y): (u32, u32)) -> (Vec3, Vec3) {
-    let view = rig.resolve().unwrap().displays[0].eyes[e];
-    let world_from_clip = view.world_from_clip().as_dmat4();
-    let ndc = |z: f64| {
-        let p = world_from_clip
-            * DVec4::new(
-                (x as f64 + 0.5) / EYE_W as f64 * 2.0 - 1.0,
-                1.0 - (y as f64 + 0.5) / EYE_H as f64 * 2.0,
-                z,
-                1.0,
-            );
-        p.truncate() / p.w
-    };
-    let (a, b) = (ndc(0.25), ndc(0.75));
-    let t = a.z / (a.z - b.z);
-    let p: DVec3 = a + (b - a) * t;
-    (p.as_vec3(), view.position())
-}
-
-/// Linear to 8-bit sRGB, as the target's format stores it.
-fn srgb(l: f32) -> f32 {
-    let l = l.clamp(0.0, 1.0);
-    let s = if l <= 0.003_130_8 {
-        12.92 * l
-    } else {
-        1.055 * l.powf(1.0 / 2.4) - 0.055
-    };
-    s * 255.0
+fn on_plane(rig: &Rig, e: usize, pixel: (u32, u32)) -> (Vec3, Vec3) {
+    support::on_plane(rig, e, pixel, (EYE_W, EYE_H))
 }
 
 /// The CPU twin's color at world point `p` (on the plane, seen from `eye`), with the
@@ -222,8 +194,10 @@ fn a_normal_mapped_plane_matches_the_cpu_brdf() {
                     continue;
                 }
                 let got = image.get_pixel(x + e as u32 * EYE_W, y);
-                let want = expected(&scene, p, eye, true).to_array().map(srgb);
-                let flat = expected(&scene, p, eye, false).to_array().map(srgb);
+                let want = expected(&scene, p, eye, true).to_array().map(support::srgb);
+                let flat = expected(&scene, p, eye, false)
+                    .to_array()
+                    .map(support::srgb);
                 for c in 0..3 {
                     let d = (got[c] as f32 - want[c]).abs();
                     worst = worst.max(d);

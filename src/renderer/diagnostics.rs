@@ -197,6 +197,13 @@ impl Diagnostics<'_> {
         read_pod(self.device, self.queue, buffer, buffer.size())
     }
 
+    /// The clusters buffer as the frame left it ([`crate::lights`]): the light count,
+    /// the slices' depths, then per display its matrices and its clusters' bits.
+    pub fn light_clusters(&self) -> Result<Vec<u32>> {
+        let buffer = &self.renderer.lighting.clusters;
+        read_pod(self.device, self.queue, buffer, buffer.size())
+    }
+
     /// Every slot's instance record as the frame drew it (a posed instance's
     /// transform as the pose pass wrote it, with GPU posing).
     pub fn instance_records(&self) -> Result<Vec<crate::records::InstanceRecord>> {

@@ -137,6 +137,7 @@ impl Renderer {
             Some(morph) => morph.encode(encoder, rec),
             None => 0,
         };
+        let clustered = self.lighting.encode(encoder, rec);
         let skinned = match &self.skin {
             Some(skin) => skin.encode(encoder, rec),
             None => 0,
@@ -158,7 +159,7 @@ impl Renderer {
             None => (0, 0),
         };
         FrameStats {
-            dispatches: scattered + posed + morphed + skinned + coarse + shadowed,
+            dispatches: scattered + posed + morphed + skinned + clustered + coarse + shadowed,
             draw_calls,
             cpu_staging,
             ..Default::default()

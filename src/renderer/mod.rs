@@ -111,6 +111,7 @@ use display::classic::ClassicPath;
 use display::indirect::IndirectPath;
 pub use display::occlusion::OcclusionBytes;
 use display::{PathCore, PathInputs};
+use frame::lights::Lighting;
 use frame::morph::MorphPass;
 use frame::pose::{self, PosePass};
 use frame::shadow::{ShadowMap, ShadowPass};
@@ -241,6 +242,8 @@ pub struct Renderer {
     skin: Option<SkinPass>,
     /// With morph targets: the frame's morph pass.
     morph: Option<MorphPass>,
+    /// The punctual lights and their clusters.
+    lighting: Lighting,
     /// Posing on the GPU, with animations: the frame's pose pass.
     pose: Option<PosePass>,
     /// With shadows: the frame's shadow pass (the light culled as one more view of the
@@ -282,7 +285,9 @@ impl Renderer {
         let frame = uniform_buffer::<FrameContext>(device, "stereocull.frame_context");
         let slots = scene.instances.len() as u32;
         let places = Places::tight(scene);
-        let shadow_map = ShadowMap::new(device, options.shadow_size().unwrap_or(1));
+        let lighting = Lighting::new(device, &scene.lights, rig.displays.len() as u32)?;
+        let lit = (&lighting.lights, &lighting.clusters);
+        let shadow_map = ShadowMap::new(device, options.shadow_size().unwrap_or(1), lit);
         let inputs = PathInputs {
             scene,
             layout: CullLayout::with_places(scene, &places),
@@ -323,12 +328,20 @@ impl Renderer {
             pose,
             shadow,
             shadow_map,
+            lighting,
             slots,
             rig: rig.clone(),
             coarse,
             far_sizes: plan.far_sizes(),
             passes: Vec::new(),
         })
+    }
+
+    /// The scene's punctual lights from the next frame on (each display's clusters
+    /// follow): an engine moves, adds and removes lights so. More than
+    /// [`crate::lights::MAX_LIGHTS`], or a light that is not valid, is an error.
+    pub fn set_lights(&mut self, lights: &[crate::lights::Light]) -> Result<()> {
+        self.lighting.set(lights)
     }
 
     /// Morph `m`'s weights ([`crate::morphing::Morphs::morphs`], in the scene the
@@ -422,6 +435,7 @@ impl Renderer {
     pub fn prepare(&mut self, queue: &wgpu::Queue, rig: &Rig, time: f32) -> Result<FrameStats> {
         let plan = self.plan(rig, time)?;
         let frame_bytes = write(queue, &self.frame, &uniform_bytes(&plan.frame));
+        let light_bytes = self.lighting.prepare(queue, &plan);
         let light = plan.light_cull.as_ref().map(|_| plan.light);
         let mut stats = match &mut self.path {
             Path::Indirect(p) => p.prepare(queue, plan),
@@ -438,7 +452,7 @@ impl Renderer {
         }
         // Texels go up with the first frame: `new` has no queue.
         stats.bytes_uploaded +=
-            frame_bytes + self.path.core_mut().draw_scene.materials.upload(queue);
+            frame_bytes + light_bytes + self.path.core_mut().draw_scene.materials.upload(queue);
         Ok(stats)
     }
 

@@ -169,6 +169,8 @@ pub struct Scene {
     /// Morphed meshes, moved by their targets' weights ([`crate::morphing`]); empty
     /// without.
     pub morphs: crate::morphing::Morphs,
+    /// Punctual lights ([`crate::lights`]), shaded through each display's clusters.
+    pub lights: Vec<crate::lights::Light>,
 }
 
 impl Scene {

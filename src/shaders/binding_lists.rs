@@ -255,7 +255,7 @@ pub const MATERIAL_BINDINGS: [Binding; 4] = [
 
 /// Group 2 of the built-in draw pipelines: the frame's shadow map and its comparison
 /// sampler (`light_reaching` in `wgsl/shared/draw_common.wgsl`).
-pub const SHADOW_MAP_BINDINGS: [Binding; 2] = [
+pub const SHADOW_MAP_BINDINGS: [Binding; 4] = [
     texture(
         "shadow_map",
         TextureKind::d2(wgpu::TextureSampleType::Depth),
@@ -265,6 +265,31 @@ pub const SHADOW_MAP_BINDINGS: [Binding; 2] = [
         "shadow_sampler",
         wgpu::SamplerBindingType::Comparison,
         FRAGMENT,
+    ),
+    // The punctual lights (crate::lights) and each display's clusters of them.
+    binding(
+        "lights",
+        Access::StorageRead,
+        "array<LightRecord>",
+        FRAGMENT,
+    ),
+    binding(
+        "light_clusters",
+        Access::StorageRead,
+        "array<u32>",
+        FRAGMENT,
+    ),
+];
+
+/// The light cluster pass (`wgsl/light_clusters.wgsl`): the lights, and the clusters it
+/// writes (each display's matrices and the slices' depths come from the CPU).
+pub const LIGHT_CLUSTER_BINDINGS: [Binding; 2] = [
+    binding("lights", Access::StorageRead, "array<LightRecord>", COMPUTE),
+    binding(
+        "light_clusters",
+        Access::StorageReadWrite,
+        "array<u32>",
+        COMPUTE,
     ),
 ];
 

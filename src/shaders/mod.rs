@@ -68,8 +68,8 @@ use crate::bins::{Bin, BinKind};
 use crate::scene::Shading;
 pub use binding_lists::{
     CANDIDATE_BINDINGS, COARSE_BINDINGS, CULL_BINDINGS, DRAW_BINDINGS, FAR_COMPOSITE_BINDINGS,
-    FOVEATED_COMPOSITE_BINDINGS, MATERIAL_BINDINGS, MORPH_BINDINGS, POSE_BINDINGS,
-    SCATTER_BINDINGS, SHADOW_MAP_BINDINGS, SKIN_BINDINGS, pyramid_bindings,
+    FOVEATED_COMPOSITE_BINDINGS, LIGHT_CLUSTER_BINDINGS, MATERIAL_BINDINGS, MORPH_BINDINGS,
+    POSE_BINDINGS, SCATTER_BINDINGS, SHADOW_MAP_BINDINGS, SKIN_BINDINGS, pyramid_bindings,
 };
 pub use bindings::{
     Access, Binding, Bound, TextureKind, bind_group, bind_group_layout, declarations,
@@ -312,6 +312,9 @@ impl DrawKey {
             &declarations(&SHADOW_MAP_BINDINGS, 2, windows),
             &marked(DRAW_COMMON),
             PBR,
+            &light_constants(),
+            LIGHT_RECORDS,
+            LIGHTS,
             &shading,
             entry,
         ]
@@ -406,6 +409,29 @@ pub fn skin_source() -> String {
     [&bindings, include_str!("../../wgsl/skin.wgsl")].concat()
 }
 
+const LIGHT_RECORDS: &str = include_str!("../../wgsl/shared/light_records.wgsl");
+const LIGHTS: &str = include_str!("../../wgsl/shared/lights.wgsl");
+
+/// The clusters' shape and the clusters buffer's layout ([`crate::lights`]).
+fn light_constants() -> String {
+    use crate::lights::*;
+    format!(
+        "const CLUSTER_X: u32 = {CLUSTER_X}u;\nconst CLUSTER_Y: u32 = {CLUSTER_Y}u;\n\
+         const CLUSTER_Z: u32 = {CLUSTER_Z}u;\nconst CLUSTERS: u32 = {CLUSTERS}u;\n\
+         const CLUSTER_WORDS: u32 = {CLUSTER_WORDS}u;\nconst CLUSTER_NEAR: f32 = {CLUSTER_NEAR:?};\n\
+         const CLUSTER_FAR: f32 = {CLUSTER_FAR:?};\nconst LIGHT_HEADER_WORDS: u32 = {HEADER_WORDS}u;\n\
+         const LIGHT_DISPLAY_WORDS: u32 = {DISPLAY_WORDS}u;\n\
+         const LIGHT_MATRIX_WORDS: u32 = {DISPLAY_HEADER_WORDS}u;\n"
+    )
+}
+
+/// Each display's light clusters (`wgsl/light_clusters.wgsl`).
+pub fn light_clusters_source() -> String {
+    let bindings = declarations(&LIGHT_CLUSTER_BINDINGS, 0, &Windows::WHOLE);
+    let body = include_str!("../../wgsl/light_clusters.wgsl");
+    [&light_constants(), &bindings, LIGHT_RECORDS, body].concat()
+}
+
 /// The frame's morph pass (`wgsl/morph.wgsl`).
 pub fn morph_source() -> String {
     let bindings = declarations(&MORPH_BINDINGS, 0, &Windows::WHOLE);
@@ -483,6 +509,10 @@ pub fn all_sources() -> Vec<(String, String)> {
                 ),
                 ("stereocull.skin".to_string(), skin_source()),
                 ("stereocull.morph".to_string(), morph_source()),
+                (
+                    "stereocull.light_clusters".to_string(),
+                    light_clusters_source(),
+                ),
                 ("stereocull.pose".to_string(), pose_source()),
             ];
             let pyramids = [(1, false), (4, false), (1, true)].map(|(samples, layered)| {

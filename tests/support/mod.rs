@@ -10,7 +10,7 @@ pub mod room;
 
 use std::path::PathBuf;
 
-use glam::{Affine3A, Quat, Vec3, Vec4};
+use glam::{Affine3A, DVec3, DVec4, Quat, Vec3, Vec4};
 use image::{Rgba, RgbaImage};
 use proptest::prelude::*;
 use rand::{Rng, SeedableRng};
@@ -373,4 +373,41 @@ pub fn with_random_bins(mut scene: Scene, seed: u64) -> Scene {
         }
     }
     scene
+}
+
+/// Where the center of pixel (x, y) of eye `e` (its own half, `eye_w` x `eye_h`) of
+/// display 0 sees the plane z = 0, and that eye's position.
+pub fn on_plane(
+    rig: &Rig,
+    e: usize,
+    (x, y): (u32, u32),
+    (eye_w, eye_h): (u32, u32),
+) -> (Vec3, Vec3) {
+    let view = rig.resolve().unwrap().displays[0].eyes[e];
+    let world_from_clip = view.world_from_clip().as_dmat4();
+    let ndc = |z: f64| {
+        let p = world_from_clip
+            * DVec4::new(
+                (x as f64 + 0.5) / eye_w as f64 * 2.0 - 1.0,
+                1.0 - (y as f64 + 0.5) / eye_h as f64 * 2.0,
+                z,
+                1.0,
+            );
+        p.truncate() / p.w
+    };
+    let (a, b) = (ndc(0.25), ndc(0.75));
+    let t = a.z / (a.z - b.z);
+    let p: DVec3 = a + (b - a) * t;
+    (p.as_vec3(), view.position())
+}
+
+/// Linear to 8-bit sRGB, as the target's format stores it.
+pub fn srgb(l: f32) -> f32 {
+    let l = l.clamp(0.0, 1.0);
+    let s = if l <= 0.003_130_8 {
+        12.92 * l
+    } else {
+        1.055 * l.powf(1.0 / 2.4) - 0.055
+    };
+    s * 255.0
 }

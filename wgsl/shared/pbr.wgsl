@@ -75,9 +75,9 @@ fn perturbed_normal(n: vec3<f32>, t: vec4<f32>, texel: vec3<f32>, scale: f32) ->
     return normalize(tangent * m.x + bitangent * m.y + n * m.z);
 }
 
-fn pbr_shade(s: Surface, p: Pbr) -> vec4<f32> {
-    let v = normalize(display.eye[s.eye].position - s.world_position);
-    let l = frame.light_direction;
+// glTF's BRDF for unit directions `v` (to the eye) and `l` (to the light): the
+// diffuse and specular terms (xyz) and n . l (w), which the light's radiance scales.
+fn brdf(p: Pbr, v: vec3<f32>, l: vec3<f32>) -> vec4<f32> {
     let n = p.normal;
     let h = normalize(l + v);
     let n_dot_l = clamp(dot(n, l), 0.0, 1.0);
@@ -97,8 +97,14 @@ fn pbr_shade(s: Surface, p: Pbr) -> vec4<f32> {
     let visibility = 0.5 / (from_light + from_eye);
     let diffuse = (vec3(1.0) - fresnel) * (p.base.rgb * (1.0 - p.metallic)) / PI;
     let specular = fresnel * (distribution * visibility);
+    return vec4(diffuse + specular, n_dot_l);
+}
+
+fn pbr_shade(s: Surface, p: Pbr) -> vec4<f32> {
+    let v = normalize(display.eye[s.eye].position - s.world_position);
+    let b = brdf(p, v, frame.light_direction);
     let reaching = light_reaching(s.world_position, p.geometric);
-    let direct = (diffuse + specular) * (LIGHT_RADIANCE * n_dot_l * reaching);
+    let direct = b.xyz * (LIGHT_RADIANCE * b.w * reaching) + lights_shading(s, p, v);
     let ambient = p.base.rgb * (AMBIENT * p.occlusion);
     return vec4(direct + ambient + p.emissive, p.base.a);
 }

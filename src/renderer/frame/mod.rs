@@ -5,6 +5,7 @@
 
 use crate::renderer::recorder::Recorder;
 
+pub(super) mod lights;
 pub(super) mod morph;
 pub(super) mod pose;
 pub(super) mod shadow;

@@ -89,8 +89,13 @@ pub(in crate::renderer) struct ShadowMap {
 }
 
 impl ShadowMap {
-    /// A `size` x `size` shadow map.
-    pub(in crate::renderer) fn new(device: &wgpu::Device, size: u32) -> ShadowMap {
+    /// A `size` x `size` shadow map, bound with the punctual lights and their
+    /// clusters (the rest of group 2).
+    pub(in crate::renderer) fn new(
+        device: &wgpu::Device,
+        size: u32,
+        (lights, clusters): (&wgpu::Buffer, &wgpu::Buffer),
+    ) -> ShadowMap {
         let texture = device.create_texture(&wgpu::TextureDescriptor {
             label: Some("stereocull.shadow_map"),
             size: wgpu::Extent3d {
@@ -126,6 +131,14 @@ impl ShadowMap {
                 wgpu::BindGroupEntry {
                     binding: 1,
                     resource: wgpu::BindingResource::Sampler(&sampler),
+                },
+                wgpu::BindGroupEntry {
+                    binding: 2,
+                    resource: lights.as_entire_binding(),
+                },
+                wgpu::BindGroupEntry {
+                    binding: 3,
+                    resource: clusters.as_entire_binding(),
                 },
             ],
         });

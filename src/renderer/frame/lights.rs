@@ -1,0 +1,155 @@
+//! The frame's punctual lights on the GPU ([`crate::lights`]): their records, and each
+//! display's clusters of them built by one dispatch for every display
+//! (`wgsl/light_clusters.wgsl`, z the display), both eyes at once, before any display
+//! draws. Without lights the buffers stay (group 2 binds them) and nothing is
+//! dispatched: the fragment stage sees a count of 0.
+
+use crate::buffers::init_buffer;
+use crate::error::{Error, Result};
+use crate::lights::{
+    CLUSTER_Z, CLUSTERS, DISPLAY_WORDS, HEADER_WORDS, Light, LightRecord, MAX_LIGHTS, slice_start,
+};
+use crate::records::storage_bytes;
+use crate::renderer::plan::FramePlan;
+use crate::renderer::recorder::Recorder;
+use crate::shaders::{
+    LIGHT_CLUSTER_BINDINGS, Windows, bind_group, bind_group_layout, compute_pipeline,
+    light_clusters_source,
+};
+
+const WORKGROUP: u32 = 64;
+
+/// The lights' buffers and the cluster pass.
+pub(in crate::renderer) struct Lighting {
+    pub(in crate::renderer) lights: wgpu::Buffer,
+    pub(in crate::renderer) clusters: wgpu::Buffer,
+    pipeline: wgpu::ComputePipeline,
+    bind_group: wgpu::BindGroup,
+    records: Vec<LightRecord>,
+    /// The records changed since they were last written.
+    dirty: bool,
+    displays: u32,
+}
+
+impl Lighting {
+    /// The buffers for `displays` displays, holding `lights` (at most [`MAX_LIGHTS`]).
+    pub(in crate::renderer) fn new(
+        device: &wgpu::Device,
+        lights: &[Light],
+        displays: u32,
+    ) -> Result<Lighting> {
+        let records = records(lights)?;
+        let storage = wgpu::BufferUsages::STORAGE | wgpu::BufferUsages::COPY_DST;
+        let room = vec![LightRecord::default(); MAX_LIGHTS];
+        let lights = init_buffer(device, "stereocull.lights", &storage_bytes(&room), storage);
+        let words = (HEADER_WORDS + displays * DISPLAY_WORDS) as usize;
+        let clusters = init_buffer(
+            device,
+            "stereocull.light_clusters",
+            bytemuck::cast_slice(&vec![0u32; words]),
+            // COPY_SRC: read back by diagnostics.
+            storage | wgpu::BufferUsages::COPY_SRC,
+        );
+        let whole = &Windows::WHOLE;
+        let list = &LIGHT_CLUSTER_BINDINGS;
+        let layout = bind_group_layout(device, "stereocull.light_clusters", list, whole);
+        let bind_group = bind_group(
+            device,
+            "stereocull.light_clusters",
+            &layout,
+            list,
+            whole,
+            [&lights, &clusters],
+        );
+        let pipeline_layout = device.create_pipeline_layout(&wgpu::PipelineLayoutDescriptor {
+            label: Some("stereocull.light_clusters"),
+            bind_group_layouts: &[Some(&layout)],
+            immediate_size: 0,
+        });
+        let pipeline = compute_pipeline(
+            device,
+            "stereocull.light_clusters",
+            &pipeline_layout,
+            light_clusters_source(),
+            "clusters",
+        );
+        Ok(Lighting {
+            lights,
+            clusters,
+            pipeline,
+            bind_group,
+            records,
+            dirty: true,
+            displays,
+        })
+    }
+
+    /// Replaces the lights from the next frame on.
+    pub(in crate::renderer) fn set(&mut self, lights: &[Light]) -> Result<()> {
+        self.records = records(lights)?;
+        self.dirty = true;
+        Ok(())
+    }
+
+    /// Writes the count, the slices' depths, the lights where they changed and each
+    /// display's combined frustum (`plan`'s); returns the bytes.
+    pub(in crate::renderer) fn prepare(&mut self, queue: &wgpu::Queue, plan: &FramePlan) -> u64 {
+        let mut header = vec![self.records.len() as u32];
+        header.extend((0..=CLUSTER_Z).map(|k| slice_start(k).to_bits()));
+        let mut bytes = write(queue, &self.clusters, 0, &header);
+        for (i, d) in plan.displays.iter().enumerate() {
+            let mut matrices = d.view_from_world.to_cols_array().to_vec();
+            matrices.extend(d.clip_from_view.to_cols_array());
+            let words: Vec<u32> = matrices.iter().map(|f| f.to_bits()).collect();
+            let at = (HEADER_WORDS + i as u32 * DISPLAY_WORDS) as u64;
+            bytes += write(queue, &self.clusters, at, &words);
+        }
+        if self.dirty {
+            let data = storage_bytes(&self.records);
+            queue.write_buffer(&self.lights, 0, &data);
+            bytes += data.len() as u64;
+            self.dirty = false;
+        }
+        bytes
+    }
+
+    /// Records the clusters of every display in one dispatch (none without lights).
+    pub(in crate::renderer) fn encode(
+        &self,
+        encoder: &mut wgpu::CommandEncoder,
+        rec: &mut Recorder,
+    ) -> u32 {
+        if self.records.is_empty() {
+            return 0;
+        }
+        let (mut pass, open) = rec.frame_pass(encoder, "light_clusters");
+        pass.set_pipeline(&self.pipeline);
+        pass.set_bind_group(0, &self.bind_group, &[]);
+        pass.dispatch_workgroups(CLUSTERS.div_ceil(WORKGROUP), 1, self.displays);
+        rec.close_frame_pass(encoder, pass, open);
+        1
+    }
+}
+
+fn write(queue: &wgpu::Queue, buffer: &wgpu::Buffer, word: u64, words: &[u32]) -> u64 {
+    let bytes: &[u8] = bytemuck::cast_slice(words);
+    queue.write_buffer(buffer, 4 * word, bytes);
+    bytes.len() as u64
+}
+
+/// The records of `lights`: an error past the budget or for a light that is not valid.
+fn records(lights: &[Light]) -> Result<Vec<LightRecord>> {
+    if lights.len() > MAX_LIGHTS {
+        return Err(Error::InvalidScene(format!(
+            "{} lights, past the budget of {MAX_LIGHTS} (lights::MAX_LIGHTS: a cluster keeps a bit per light)",
+            lights.len()
+        )));
+    }
+    (lights.iter().enumerate())
+        .map(|(i, l)| {
+            l.check()
+                .map(|()| l.record())
+                .map_err(|e| Error::InvalidScene(format!("light {i}: {e}")))
+        })
+        .collect()
+}
