@@ -25,8 +25,9 @@
 use encase::ShaderType;
 use glam::{Mat4, Vec3};
 
-/// The most lights a scene may hold: a cluster keeps a bit for each.
-pub const MAX_LIGHTS: usize = 256;
+/// The most lights a scene may hold: a cluster keeps a bit for each (`rooms:20000`'s
+/// lamps, one per room, and 256 more fit).
+pub const MAX_LIGHTS: usize = 2048;
 /// Tiles across a display's combined frustum.
 pub const CLUSTER_X: u32 = 16;
 /// Tiles down it.
@@ -37,19 +38,24 @@ pub const CLUSTER_Z: u32 = 24;
 pub const CLUSTERS: u32 = CLUSTER_X * CLUSTER_Y * CLUSTER_Z;
 /// Words of light bits per cluster.
 pub const CLUSTER_WORDS: u32 = MAX_LIGHTS as u32 / 32;
+/// Words of a cluster's record: a summary (bit `w` set where bit word `w` is not zero,
+/// so that a fragment loads only the words that name lights), then the bit words.
+pub const CLUSTER_RECORD_WORDS: u32 = CLUSTER_WORDS / 32 + CLUSTER_WORDS;
 /// Meters of view depth where the second slice starts.
 pub const CLUSTER_NEAR: f32 = 0.25;
 /// Meters where the last slice starts.
 pub const CLUSTER_FAR: f32 = 250.0;
 /// Where the last slice's box ends: farther than anything a light reaches.
 pub const CLUSTER_BEYOND: f32 = 1.0e6;
-/// Words before a display's cluster bits: its view and projection matrices.
-pub const DISPLAY_HEADER_WORDS: u32 = 32;
-/// Words of one display's region of the clusters buffer.
-pub const DISPLAY_WORDS: u32 = DISPLAY_HEADER_WORDS + CLUSTERS * CLUSTER_WORDS;
-/// Words before the first display's region: the light count, then each slice's
-/// starting depth and the last slice's end ([`slice_start`] of 0 to [`CLUSTER_Z`]).
+/// Words of a display's view in the views buffer: its combined frustum's view and
+/// projection matrices, column by column.
+pub const VIEW_WORDS: u32 = 32;
+/// Words of the views buffer before the first display's view: the light count, then
+/// each slice's starting depth and the last slice's end ([`slice_start`] of 0 to
+/// [`CLUSTER_Z`]).
 pub const HEADER_WORDS: u32 = 1 + CLUSTER_Z + 1;
+/// Words of one display's cluster records in the clusters buffer.
+pub const DISPLAY_WORDS: u32 = CLUSTERS * CLUSTER_RECORD_WORDS;
 /// A light without a `range` reaches where its illuminance falls to this (lux).
 pub const DIMMEST: f32 = 1.0 / 256.0;
 
@@ -100,6 +106,15 @@ impl Light {
             position,
             direction: Vec3::NEG_Z,
         }
+    }
+
+    /// Placed as a glTF light on a node of world transform `world`: at its origin,
+    /// shining along its -z.
+    pub fn place(&mut self, world: glam::Affine3A) {
+        self.position = world.translation.into();
+        self.direction = world
+            .transform_vector3(Vec3::NEG_Z)
+            .normalize_or(Vec3::NEG_Z);
     }
 
     /// How far it reaches: its range, or where it dims to [`DIMMEST`]; infinity for a
@@ -181,10 +196,12 @@ pub struct LightRecord {
     pub cone_offset: f32,
 }
 
-/// The bits of every cluster of a display whose combined frustum has
+/// The records of every cluster of a display whose combined frustum has
 /// `view_from_world` and projection `clip_from_view`, for `lights`: per cluster (x
-/// fastest, then y, then slice) [`CLUSTER_WORDS`] words, bit `i % 32` of word `i / 32`
-/// for light `i`. The GPU's pass computes the same (`wgsl/light_clusters.wgsl`).
+/// fastest, then y, then slice) [`CLUSTER_RECORD_WORDS`] words, the summary then bit
+/// `i % 32` of bit word `i / 32` for light `i`, set where the light's sphere touches the
+/// cluster's box. The GPU's pass sets the same bits (`wgsl/light_clusters.wgsl`),
+/// testing only the clusters near each light; this twin tests every pair.
 pub fn cluster_bits(
     lights: &[LightRecord],
     view_from_world: &Mat4,
@@ -193,16 +210,22 @@ pub fn cluster_bits(
     let centers: Vec<Vec3> = (lights.iter())
         .map(|l| view_point(view_from_world, l.position))
         .collect();
-    let mut bits = vec![0u32; (CLUSTERS * CLUSTER_WORDS) as usize];
-    for c in 0..CLUSTERS {
-        let (lo, hi) = cluster_box(c, clip_from_view);
+    let summary = (CLUSTER_WORDS / 32) as usize;
+    let mut records = vec![0u32; (CLUSTERS * CLUSTER_RECORD_WORDS) as usize];
+    for (c, record) in records
+        .chunks_exact_mut(CLUSTER_RECORD_WORDS as usize)
+        .enumerate()
+    {
+        let (lo, hi) = cluster_box(c as u32, clip_from_view);
         for (i, (l, center)) in lights.iter().zip(&centers).enumerate() {
             if touches(l, *center, lo, hi) {
-                bits[(c * CLUSTER_WORDS) as usize + i / 32] |= 1 << (i % 32);
+                let w = i / 32;
+                record[summary + w] |= 1 << (i % 32);
+                record[w / 32] |= 1 << (w % 32);
             }
         }
     }
-    bits
+    records
 }
 
 /// `m` times point `p`, summed left to right as `view_point` in WGSL.

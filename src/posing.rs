@@ -112,6 +112,10 @@ pub struct Posing {
     pub clips: Vec<Clip>,
     /// The instances on those nodes.
     pub instances: Vec<NodeInstance>,
+    /// The punctual lights on those nodes: each a light of [`crate::scene::Scene::lights`]
+    /// that moves with its node (`instance` names the light, `node_from_local` is the
+    /// identity: a glTF light is its node's).
+    pub lights: Vec<NodeInstance>,
 }
 
 impl Posing {

@@ -386,7 +386,7 @@ fn only_unread_required_extensions_are_errors() {
     let dir = tempfile::tempdir().unwrap();
     let used = [
         "VENDOR_thing",
-        "KHR_lights_punctual",
+        "KHR_materials_clearcoat",
         "KHR_mesh_quantization",
     ];
     let path = write_with_extensions(dir.path(), &used, &["KHR_mesh_quantization"]);
@@ -401,7 +401,7 @@ fn only_unread_required_extensions_are_errors() {
         listed,
         [
             ("VENDOR_thing", false, false),
-            ("KHR_lights_punctual", false, false),
+            ("KHR_materials_clearcoat", false, false),
             ("KHR_mesh_quantization", true, true),
         ]
     );

@@ -1,14 +1,12 @@
-// Each display's light clusters, once per frame for both eyes (src/lights.rs is the
-// CPU twin, cluster_bits: the same operations in the same order): one invocation per
-// cluster, the display the dispatch's z. A cluster's box in the display's view space
-// holds its tile of normalized device coordinates between its slice's depths (the
-// slices' starts come from the CPU, after the light count); a light's bit is set where
-// its sphere of influence touches the box.
+// Each display's light clusters, once per frame for both eyes: one invocation per
+// light, the display the dispatch's z (the records were cleared before). A light
+// tests the clusters of the slices its sphere's depth range reaches (a slice wider on
+// each side for the rounding of the logarithm; a box of another slice lies wholly
+// nearer or farther than the sphere) and each cluster's box
+// exactly as src/lights.rs's twin tests every cluster (cluster_box, touches: the same
+// operations in the same order), setting its bit and the bit word's summary bit with
+// atomic ors, whose order does not matter.
 // Bindings: LIGHT_CLUSTER_BINDINGS in src/shaders/binding_lists.rs.
-
-fn word_f32(i: u32) -> f32 {
-    return bitcast<f32>(light_clusters[i]);
-}
 
 fn view_point(m: mat4x4<f32>, p: vec3<f32>) -> vec3<f32> {
     return vec3(
@@ -31,45 +29,66 @@ fn across(n0: f32, n1: f32, scale: f32, shift: f32, d0: f32, d1: f32) -> vec2<f3
     return vec2(min(min(a, b), min(c, d)), max(max(a, b), max(c, d)));
 }
 
-@compute @workgroup_size(64)
-fn clusters(@builtin(global_invocation_id) id: vec3<u32>) {
-    let c = id.x;
-    if (c >= CLUSTERS) {
-        return;
-    }
-    let region = LIGHT_HEADER_WORDS + id.z * LIGHT_DISPLAY_WORDS;
-    let view_from_world = cluster_matrix(region);
-    let p = cluster_matrix(region + 16u);
+struct Box {
+    lo: vec3<f32>,
+    hi: vec3<f32>,
+}
+
+// Cluster c's box in the display's view space (projection p).
+fn cluster_box(c: u32, p: mat4x4<f32>) -> Box {
     let x = c % CLUSTER_X;
     let y = (c / CLUSTER_X) % CLUSTER_Y;
     let k = c / (CLUSTER_X * CLUSTER_Y);
-    let d0 = word_f32(1u + k);
-    let d1 = word_f32(2u + k);
+    let d0 = slice_start(k);
+    let d1 = slice_start(k + 1u);
     let xs = across(ndc(x, CLUSTER_X), ndc(x + 1u, CLUSTER_X), p[0].x, p[2].x, d0, d1);
     let ys = across(ndc(y, CLUSTER_Y), ndc(y + 1u, CLUSTER_Y), p[1].y, p[2].y, d0, d1);
-    let lo = vec3(xs.x, ys.x, -d1);
-    let hi = vec3(xs.y, ys.y, -d0);
-    let count = light_clusters[0];
-    let out = region + LIGHT_MATRIX_WORDS + c * CLUSTER_WORDS;
-    for (var w = 0u; w < CLUSTER_WORDS; w++) {
-        var bits = 0u;
-        for (var b = 0u; b < 32u; b++) {
-            let i = 32u * w + b;
-            if (i < count && touches(lights[i], view_point(view_from_world, lights[i].position), lo, hi)) {
-                bits |= 1u << b;
-            }
-        }
-        light_clusters[out + w] = bits;
-    }
+    return Box(vec3(xs.x, ys.x, -d1), vec3(xs.y, ys.y, -d0));
 }
 
-fn touches(l: LightRecord, center: vec3<f32>, lo: vec3<f32>, hi: vec3<f32>) -> bool {
+fn touches(l: LightRecord, center: vec3<f32>, b: Box) -> bool {
     if (l.kind == 0u) {
         return false;
     }
     if (l.kind == 3u) {
         return true;
     }
-    let d = center - clamp(center, lo, hi);
+    let d = center - clamp(center, b.lo, b.hi);
     return d.x * d.x + d.y * d.y + d.z * d.z <= l.range * l.range;
+}
+
+@compute @workgroup_size(64)
+fn clusters(@builtin(global_invocation_id) id: vec3<u32>) {
+    let i = id.x;
+    if (i >= light_count()) {
+        return;
+    }
+    let l = lights[i];
+    let view_from_world = cluster_matrix(id.z, 0u);
+    let p = cluster_matrix(id.z, 1u);
+    let center = view_point(view_from_world, l.position);
+    var ks = vec2(0u, CLUSTER_Z - 1u);
+    if (l.kind == 0u) {
+        return;
+    }
+    if (l.kind != 3u) {
+        let near = -center.z - l.range;
+        let far = -center.z + l.range;
+        if (far < 0.0) {
+            return;
+        }
+        ks = vec2(max(slice_of(near), 1u) - 1u, min(slice_of(far) + 1u, CLUSTER_Z - 1u));
+    }
+    let region = id.z * LIGHT_DISPLAY_WORDS;
+    let w = i / 32u;
+    let bit = 1u << (i % 32u);
+    let summary = 1u << (w % 32u);
+    let per_slice = CLUSTER_X * CLUSTER_Y;
+    for (var c = ks.x * per_slice; c < (ks.y + 1u) * per_slice; c++) {
+        if (touches(l, center, cluster_box(c, p))) {
+            let at = region + c * CLUSTER_RECORD_WORDS;
+            atomicOr(&light_clusters[at + CLUSTER_WORDS / 32u + w], bit);
+            atomicOr(&light_clusters[at + w / 32u], summary);
+        }
+    }
 }

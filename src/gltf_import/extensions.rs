@@ -18,6 +18,7 @@ pub const READ: &[&str] = &[
     "EXT_mesh_gpu_instancing",
     "EXT_meshopt_compression",
     "KHR_materials_emissive_strength",
+    "KHR_lights_punctual",
     "KHR_materials_unlit",
     "KHR_mesh_quantization",
     "KHR_texture_transform",

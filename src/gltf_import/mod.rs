@@ -14,6 +14,7 @@ use gltf::buffer::Data;
 use gltf::{Document, Semantic};
 
 use crate::error::{Error, Result};
+use crate::lights::{Light, LightKind};
 use crate::posing::NodeInstance;
 use crate::scene::{Animation, Instance, Scene, Vertex, both_windings};
 
@@ -200,10 +201,52 @@ impl Importer<'_> {
             let local = Mat4::from_cols_array_2d(&node.transform().matrix());
             let world = parent * Affine3A::from_mat4(local);
             let pose = self.pose_node(&node, parent, parent_pose);
+            self.place_light(&node, world, pose)?;
             self.place(&node, world, pose)?;
             let children: Vec<_> = node.children().collect();
             stack.extend(children.into_iter().rev().map(|c| (c, world, pose)));
         }
+        Ok(())
+    }
+
+    /// The node's `KHR_lights_punctual` light, at the node's origin shining along its
+    /// -z, moving with it where the node is posed.
+    fn place_light(&mut self, node: &gltf::Node, world: Affine3A, pose: Option<u32>) -> Step<()> {
+        let Some(light) = node.light() else {
+            return Ok(());
+        };
+        use gltf::khr_lights_punctual::Kind;
+        let kind = match light.kind() {
+            Kind::Directional => LightKind::Directional,
+            Kind::Point => LightKind::Point,
+            Kind::Spot {
+                inner_cone_angle,
+                outer_cone_angle,
+            } => LightKind::Spot {
+                inner: inner_cone_angle,
+                outer: outer_cone_angle,
+            },
+        };
+        let mut placed = Light {
+            kind,
+            color: Vec3::from(light.color()),
+            intensity: light.intensity(),
+            range: light.range(),
+            position: Vec3::ZERO,
+            direction: Vec3::NEG_Z,
+        };
+        placed.place(world);
+        placed
+            .check()
+            .map_err(|e| format!("node {} light {}: {e}", node.index(), light.index()))?;
+        if let Some(node) = pose {
+            self.scene.posing.lights.push(NodeInstance {
+                instance: self.scene.lights.len() as u32,
+                node,
+                node_from_local: Affine3A::IDENTITY,
+            });
+        }
+        self.scene.lights.push(placed);
         Ok(())
     }
 

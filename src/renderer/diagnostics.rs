@@ -197,8 +197,8 @@ impl Diagnostics<'_> {
         read_pod(self.device, self.queue, buffer, buffer.size())
     }
 
-    /// The clusters buffer as the frame left it ([`crate::lights`]): the light count,
-    /// the slices' depths, then per display its matrices and its clusters' bits.
+    /// The clusters buffer as the frame left it ([`crate::lights`]): per display its
+    /// clusters' records ([`crate::lights::cluster_bits`]).
     pub fn light_clusters(&self) -> Result<Vec<u32>> {
         let buffer = &self.renderer.lighting.clusters;
         read_pod(self.device, self.queue, buffer, buffer.size())

@@ -286,7 +286,7 @@ impl Renderer {
         let slots = scene.instances.len() as u32;
         let places = Places::tight(scene);
         let lighting = Lighting::new(device, &scene.lights, rig.displays.len() as u32)?;
-        let lit = (&lighting.lights, &lighting.clusters);
+        let lit = (&lighting.lights, &lighting.views, &lighting.clusters);
         let shadow_map = ShadowMap::new(device, options.shadow_size().unwrap_or(1), lit);
         let inputs = PathInputs {
             scene,

@@ -46,6 +46,9 @@ impl Renderer {
         live: &mut LiveScene,
     ) -> Result<SyncStats> {
         let mut changes = live.take_changes();
+        if changes.lights {
+            self.lighting.set(&live.lights())?;
+        }
         let joints = std::mem::take(&mut changes.joints);
         let driven = std::mem::take(&mut changes.driven);
         let stopped = changes

@@ -255,7 +255,7 @@ pub const MATERIAL_BINDINGS: [Binding; 4] = [
 
 /// Group 2 of the built-in draw pipelines: the frame's shadow map and its comparison
 /// sampler (`light_reaching` in `wgsl/shared/draw_common.wgsl`).
-pub const SHADOW_MAP_BINDINGS: [Binding; 4] = [
+pub const SHADOW_MAP_BINDINGS: [Binding; 5] = [
     texture(
         "shadow_map",
         TextureKind::d2(wgpu::TextureSampleType::Depth),
@@ -266,13 +266,15 @@ pub const SHADOW_MAP_BINDINGS: [Binding; 4] = [
         wgpu::SamplerBindingType::Comparison,
         FRAGMENT,
     ),
-    // The punctual lights (crate::lights) and each display's clusters of them.
+    // The punctual lights (crate::lights), each display's view of its clusters and
+    // their records.
     binding(
         "lights",
         Access::StorageRead,
         "array<LightRecord>",
         FRAGMENT,
     ),
+    binding("light_views", Access::StorageRead, "array<u32>", FRAGMENT),
     binding(
         "light_clusters",
         Access::StorageRead,
@@ -281,14 +283,16 @@ pub const SHADOW_MAP_BINDINGS: [Binding; 4] = [
     ),
 ];
 
-/// The light cluster pass (`wgsl/light_clusters.wgsl`): the lights, and the clusters it
-/// writes (each display's matrices and the slices' depths come from the CPU).
-pub const LIGHT_CLUSTER_BINDINGS: [Binding; 2] = [
+/// The light cluster pass (`wgsl/light_clusters.wgsl`): the lights, the views (the
+/// count, the slices' depths and each display's matrices, from the CPU) and the
+/// cluster records it sets bits of.
+pub const LIGHT_CLUSTER_BINDINGS: [Binding; 3] = [
     binding("lights", Access::StorageRead, "array<LightRecord>", COMPUTE),
+    binding("light_views", Access::StorageRead, "array<u32>", COMPUTE),
     binding(
         "light_clusters",
         Access::StorageReadWrite,
-        "array<u32>",
+        "array<atomic<u32>>",
         COMPUTE,
     ),
 ];

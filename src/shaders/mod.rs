@@ -421,7 +421,8 @@ fn light_constants() -> String {
          const CLUSTER_WORDS: u32 = {CLUSTER_WORDS}u;\nconst CLUSTER_NEAR: f32 = {CLUSTER_NEAR:?};\n\
          const CLUSTER_FAR: f32 = {CLUSTER_FAR:?};\nconst LIGHT_HEADER_WORDS: u32 = {HEADER_WORDS}u;\n\
          const LIGHT_DISPLAY_WORDS: u32 = {DISPLAY_WORDS}u;\n\
-         const LIGHT_MATRIX_WORDS: u32 = {DISPLAY_HEADER_WORDS}u;\n"
+         const LIGHT_VIEW_WORDS: u32 = {VIEW_WORDS}u;\n\
+         const CLUSTER_RECORD_WORDS: u32 = {CLUSTER_RECORD_WORDS}u;\n"
     )
 }
 

@@ -3,22 +3,17 @@
 // pipelines after light_records.wgsl, with group 2's `lights` and `light_clusters`
 // (a display's region is its cull_slot's).
 
-// The first word of the bits of the cluster holding world point `p` in display `slot`'s
-// grid: from the point, whichever eye draws it.
-fn cluster_bits_at(p: vec3<f32>, slot: u32) -> u32 {
-    let region = LIGHT_HEADER_WORDS + slot * LIGHT_DISPLAY_WORDS;
-    let view = cluster_matrix(region) * vec4(p, 1.0);
-    let clip = cluster_matrix(region + 16u) * view;
+// The first word of the record of the cluster holding world point `p` in display
+// `slot`'s grid: from the point, whichever eye draws it.
+fn cluster_record_at(p: vec3<f32>, slot: u32) -> u32 {
+    let view = cluster_matrix(slot, 0u) * vec4(p, 1.0);
+    let clip = cluster_matrix(slot, 1u) * view;
     let ndc = clip.xy / clip.w;
-    let tile = vec2<u32>(clamp((ndc * 0.5 + 0.5) * vec2(f32(CLUSTER_X), f32(CLUSTER_Y)), vec2(0.0), vec2(f32(CLUSTER_X - 1u), f32(CLUSTER_Y - 1u))));
-    let depth = -view.z;
-    var k = 0u;
-    if (depth >= CLUSTER_NEAR) {
-        let t = log(depth / CLUSTER_NEAR) / log(CLUSTER_FAR / CLUSTER_NEAR);
-        k = min(1u + u32(t * f32(CLUSTER_Z - 2u)), CLUSTER_Z - 1u);
-    }
+    let cells = vec2(f32(CLUSTER_X), f32(CLUSTER_Y));
+    let tile = vec2<u32>(clamp((ndc * 0.5 + 0.5) * cells, vec2(0.0), cells - 1.0));
+    let k = slice_of(-view.z);
     let cluster = (k * CLUSTER_Y + tile.y) * CLUSTER_X + tile.x;
-    return region + LIGHT_MATRIX_WORDS + cluster * CLUSTER_WORDS;
+    return slot * LIGHT_DISPLAY_WORDS + cluster * CLUSTER_RECORD_WORDS;
 }
 
 // What light `l` brings to world point `p`: the direction toward it (xyz) and its
@@ -41,22 +36,29 @@ fn light_at(l: LightRecord, p: vec3<f32>) -> array<vec3<f32>, 2> {
     return array(toward, l.color * falloff);
 }
 
-// Every light of the fragment's cluster, shaded like the frame's light but without a
-// shadow. Nothing without lights (a uniform branch).
+// Every light of the fragment's cluster (the summary names the bit words that hold
+// any), shaded like the frame's light but without a shadow. Nothing without lights (a
+// uniform branch).
 fn lights_shading(s: Surface, p: Pbr, v: vec3<f32>) -> vec3<f32> {
     var sum = vec3(0.0);
-    if (light_clusters[0] == 0u) {
+    if (light_count() == 0u) {
         return sum;
     }
-    let at = cluster_bits_at(s.world_position, display.cull_slot);
-    for (var w = 0u; w < CLUSTER_WORDS; w++) {
-        var bits = light_clusters[at + w];
-        while (bits != 0u) {
-            let i = 32u * w + firstTrailingBit(bits);
-            bits &= bits - 1u;
-            let l = light_at(lights[i], s.world_position);
-            let b = brdf(p, v, l[0]);
-            sum += b.xyz * (l[1] * b.w);
+    let at = cluster_record_at(s.world_position, display.cull_slot);
+    let words = at + CLUSTER_WORDS / 32u;
+    for (var u = 0u; u < CLUSTER_WORDS / 32u; u++) {
+        var used = light_clusters[at + u];
+        while (used != 0u) {
+            let w = 32u * u + firstTrailingBit(used);
+            used &= used - 1u;
+            var bits = light_clusters[words + w];
+            while (bits != 0u) {
+                let i = 32u * w + firstTrailingBit(bits);
+                bits &= bits - 1u;
+                let l = light_at(lights[i], s.world_position);
+                let b = brdf(p, v, l[0]);
+                sum += b.xyz * (l[1] * b.w);
+            }
         }
     }
     return sum;

@@ -1,13 +1,13 @@
-//! The frame's punctual lights on the GPU ([`crate::lights`]): their records, and each
-//! display's clusters of them built by one dispatch for every display
-//! (`wgsl/light_clusters.wgsl`, z the display), both eyes at once, before any display
-//! draws. Without lights the buffers stay (group 2 binds them) and nothing is
-//! dispatched: the fragment stage sees a count of 0.
+//! The frame's punctual lights on the GPU ([`crate::lights`]): their records, each
+//! display's view of its clusters, and the clusters, cleared and built by one dispatch
+//! for every display (`wgsl/light_clusters.wgsl`: a light an invocation, z the display),
+//! both eyes at once, before any display draws. Without lights the buffers stay (group
+//! 2 binds them) and nothing is recorded: the fragment stage sees a count of 0.
 
 use crate::buffers::init_buffer;
 use crate::error::{Error, Result};
 use crate::lights::{
-    CLUSTER_Z, CLUSTERS, DISPLAY_WORDS, HEADER_WORDS, Light, LightRecord, MAX_LIGHTS, slice_start,
+    CLUSTER_Z, DISPLAY_WORDS, HEADER_WORDS, Light, LightRecord, MAX_LIGHTS, VIEW_WORDS, slice_start,
 };
 use crate::records::storage_bytes;
 use crate::renderer::plan::FramePlan;
@@ -22,6 +22,7 @@ const WORKGROUP: u32 = 64;
 /// The lights' buffers and the cluster pass.
 pub(in crate::renderer) struct Lighting {
     pub(in crate::renderer) lights: wgpu::Buffer,
+    pub(in crate::renderer) views: wgpu::Buffer,
     pub(in crate::renderer) clusters: wgpu::Buffer,
     pipeline: wgpu::ComputePipeline,
     bind_group: wgpu::BindGroup,
@@ -42,11 +43,17 @@ impl Lighting {
         let storage = wgpu::BufferUsages::STORAGE | wgpu::BufferUsages::COPY_DST;
         let room = vec![LightRecord::default(); MAX_LIGHTS];
         let lights = init_buffer(device, "stereocull.lights", &storage_bytes(&room), storage);
-        let words = (HEADER_WORDS + displays * DISPLAY_WORDS) as usize;
+        let zeros = |words: u32| vec![0u32; words as usize];
+        let views = init_buffer(
+            device,
+            "stereocull.light_views",
+            bytemuck::cast_slice(&zeros(HEADER_WORDS + displays * VIEW_WORDS)),
+            storage,
+        );
         let clusters = init_buffer(
             device,
             "stereocull.light_clusters",
-            bytemuck::cast_slice(&vec![0u32; words]),
+            bytemuck::cast_slice(&zeros(displays * DISPLAY_WORDS)),
             // COPY_SRC: read back by diagnostics.
             storage | wgpu::BufferUsages::COPY_SRC,
         );
@@ -59,7 +66,7 @@ impl Lighting {
             &layout,
             list,
             whole,
-            [&lights, &clusters],
+            [&lights, &views, &clusters],
         );
         let pipeline_layout = device.create_pipeline_layout(&wgpu::PipelineLayoutDescriptor {
             label: Some("stereocull.light_clusters"),
@@ -75,6 +82,7 @@ impl Lighting {
         );
         Ok(Lighting {
             lights,
+            views,
             clusters,
             pipeline,
             bind_group,
@@ -96,13 +104,13 @@ impl Lighting {
     pub(in crate::renderer) fn prepare(&mut self, queue: &wgpu::Queue, plan: &FramePlan) -> u64 {
         let mut header = vec![self.records.len() as u32];
         header.extend((0..=CLUSTER_Z).map(|k| slice_start(k).to_bits()));
-        let mut bytes = write(queue, &self.clusters, 0, &header);
+        let mut bytes = write(queue, &self.views, 0, &header);
         for (i, d) in plan.displays.iter().enumerate() {
             let mut matrices = d.view_from_world.to_cols_array().to_vec();
             matrices.extend(d.clip_from_view.to_cols_array());
             let words: Vec<u32> = matrices.iter().map(|f| f.to_bits()).collect();
-            let at = (HEADER_WORDS + i as u32 * DISPLAY_WORDS) as u64;
-            bytes += write(queue, &self.clusters, at, &words);
+            let at = (HEADER_WORDS + i as u32 * VIEW_WORDS) as u64;
+            bytes += write(queue, &self.views, at, &words);
         }
         if self.dirty {
             let data = storage_bytes(&self.records);
@@ -113,7 +121,8 @@ impl Lighting {
         bytes
     }
 
-    /// Records the clusters of every display in one dispatch (none without lights).
+    /// Records the clusters of every display: cleared, then one dispatch (nothing
+    /// without lights).
     pub(in crate::renderer) fn encode(
         &self,
         encoder: &mut wgpu::CommandEncoder,
@@ -122,10 +131,12 @@ impl Lighting {
         if self.records.is_empty() {
             return 0;
         }
+        encoder.clear_buffer(&self.clusters, 0, None);
         let (mut pass, open) = rec.frame_pass(encoder, "light_clusters");
         pass.set_pipeline(&self.pipeline);
         pass.set_bind_group(0, &self.bind_group, &[]);
-        pass.dispatch_workgroups(CLUSTERS.div_ceil(WORKGROUP), 1, self.displays);
+        let groups = (self.records.len() as u32).div_ceil(WORKGROUP);
+        pass.dispatch_workgroups(groups, 1, self.displays);
         rec.close_frame_pass(encoder, pass, open);
         1
     }

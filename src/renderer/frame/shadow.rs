@@ -94,7 +94,7 @@ impl ShadowMap {
     pub(in crate::renderer) fn new(
         device: &wgpu::Device,
         size: u32,
-        (lights, clusters): (&wgpu::Buffer, &wgpu::Buffer),
+        (lights, views, clusters): (&wgpu::Buffer, &wgpu::Buffer, &wgpu::Buffer),
     ) -> ShadowMap {
         let texture = device.create_texture(&wgpu::TextureDescriptor {
             label: Some("stereocull.shadow_map"),
@@ -138,6 +138,10 @@ impl ShadowMap {
                 },
                 wgpu::BindGroupEntry {
                     binding: 3,
+                    resource: views.as_entire_binding(),
+                },
+                wgpu::BindGroupEntry {
+                    binding: 4,
                     resource: clusters.as_entire_binding(),
                 },
             ],
