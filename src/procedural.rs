@@ -5,6 +5,7 @@ use glam::{Affine3A, Quat, Vec3, Vec4};
 use rand::{Rng, SeedableRng};
 use rand_pcg::Pcg64Mcg;
 
+use crate::lights::Light;
 use crate::scene::{AlphaMode, Animation, Instance, Material, Scene, Texture};
 use crate::shapes::{self, Shape};
 
@@ -240,7 +241,53 @@ pub fn rooms(n: u32, seed: u64) -> Scene {
     }
     let offset = |i: &Instance| Vec3::from(i.world_from_local.translation) / half.max(1.0);
     scene.instances.sort_by_cached_key(|i| hilbert(offset(i)));
+    scene.lights = (0..cells)
+        .map(|cell| {
+            let (x, z) = ((cell % side) as f32 + 0.5, (cell / side) as f32 + 0.5);
+            let at = Vec3::new(x * ROOM - half, ROOM_HEIGHT - 0.8, z * ROOM - half);
+            Light::point(at, Vec3::new(1.0, 0.85, 0.65), LAMP_CANDELA, Some(ROOM))
+        })
+        .collect();
     scene
+}
+
+/// A room's ceiling lamp: a warm point light reaching a room's width.
+const LAMP_CANDELA: f32 = 3.0;
+
+/// `n` point lights scattered over `scene`'s instances (seeded): each somewhere over the
+/// box of their positions, 0.5 to 2.8 m above its floor, of 1 to 6 candela reaching 3 to
+/// 6 m, warm to cool white.
+pub fn scatter_lights(scene: &mut Scene, n: u32, seed: u64) {
+    let centers = scene
+        .instances
+        .iter()
+        .map(|i| Vec3::from(i.world_from_local.translation));
+    let (lo, hi) = centers.fold(
+        (Vec3::splat(f32::MAX), Vec3::splat(f32::MIN)),
+        |(lo, hi), c| (lo.min(c), hi.max(c)),
+    );
+    let (lo, hi) = if lo.x <= hi.x {
+        (lo, hi)
+    } else {
+        (Vec3::splat(-10.0), Vec3::splat(10.0))
+    };
+    let mut rng = Pcg64Mcg::seed_from_u64(seed ^ 0x11647);
+    for _ in 0..n {
+        let at = Vec3::new(
+            rng.random_range(lo.x..=hi.x),
+            lo.y + rng.random_range(0.5..2.8),
+            rng.random_range(lo.z..=hi.z),
+        );
+        let warmth: f32 = rng.random();
+        let color = Vec3::new(1.0, 0.8 + 0.2 * warmth, 0.6 + 0.4 * warmth);
+        let range = rng.random_range(3.0..6.0);
+        scene.lights.push(Light::point(
+            at,
+            color,
+            rng.random_range(1.0..6.0),
+            Some(range),
+        ));
+    }
 }
 
 /// The pieces of one room's wall along its length ([`ROOM`]): `(start, length, bottom,

@@ -433,3 +433,47 @@ fn live_lights_are_added_moved_and_removed_by_handle() {
     assert_eq!(off, dark, "removed: as before any light");
     assert!(live.set_light(handle, lamp).is_err());
 }
+
+/// `rooms:` hangs a lamp in every room; `--lights N[:SEED]` adds N more, the same for
+/// the same seed and elsewhere for another; `info --scene` counts them.
+#[test]
+fn rooms_have_lamps_and_the_cli_adds_seeded_lights() {
+    let scene = stereocull::scene_spec::load("rooms:200").unwrap();
+    assert_eq!(scene.lights.len(), 9, "a 3 x 3 grid of rooms");
+    let lights = |seed: u64| {
+        let mut s = stereocull::scene_spec::load("procedural:100").unwrap();
+        stereocull::procedural::scatter_lights(&mut s, 16, seed);
+        s.lights
+    };
+    assert_eq!(lights(3), lights(3));
+    assert_ne!(lights(3), lights(4));
+    assert!(lights(3).iter().all(|l| l.check().is_ok()));
+    let out = std::process::Command::new(env!("CARGO_BIN_EXE_stereocull"))
+        .args(["info", "--scene", "rooms:200"])
+        .output()
+        .unwrap();
+    let text = String::from_utf8_lossy(&out.stdout);
+    assert!(text.contains(", 9 lights"), "{text}");
+    let dir = tempfile::tempdir().unwrap();
+    let out = std::process::Command::new(env!("CARGO_BIN_EXE_stereocull"))
+        .args([
+            "render",
+            "--scene",
+            "rooms:200",
+            "--lights",
+            "40:2",
+            "--width",
+            "32",
+            "--height",
+            "32",
+        ])
+        .arg("--out")
+        .arg(dir.path())
+        .output()
+        .unwrap();
+    assert!(
+        out.status.success(),
+        "{}",
+        String::from_utf8_lossy(&out.stderr)
+    );
+}

@@ -46,6 +46,16 @@ pub fn gltf_import(data: &[u8]) {
         assert!((v.first_delta + v.targets) as usize <= morphs.deltas.len());
         assert!((v.first_weight + v.targets) as usize <= morphs.weights.len());
     }
+    // Lights are valid as read, and the posed ones exist.
+    assert!(scene.lights.iter().all(|l| l.check().is_ok()));
+    let lights = scene.lights.len();
+    assert!(
+        scene
+            .posing
+            .lights
+            .iter()
+            .all(|l| (l.instance as usize) < lights)
+    );
     for time in [-1.0, 0.0, 0.37, 1e6] {
         scene.pose(time);
     }

@@ -16,7 +16,6 @@ use crate::records::CullLayout;
 use crate::renderer::{CullMode, CullView, FramePlan, OcclusionMode, Renderer, RendererOptions};
 use crate::rig::Rig;
 use crate::scene::Scene;
-use crate::scene_spec;
 
 #[derive(Args)]
 pub(super) struct CullArgs {
@@ -86,7 +85,7 @@ pub fn display_dump(name: &str, views: u32, out: &CullOutput, scene: &Scene) -> 
 
 pub(super) fn cull(args: &CullArgs) -> Result<()> {
     let rig = args.scene.load_rig()?;
-    let mut live = LiveScene::new(scene_spec::load(&args.scene.scene)?);
+    let mut live = LiveScene::new(args.scene.load_scene()?);
     let mut driver = edits::EditDriver::new(&live, &args.edits)?;
     let options = args.scene.options();
     let culls = match (args.cull, options.occlusion) {

@@ -74,6 +74,11 @@ pub struct SceneArgs {
     /// A preset (hmd, cave, hmd-peripheral, hmd-foveated) or a .json/.toml rig file.
     #[arg(long, default_value = "hmd")]
     pub rig: String,
+    /// N[:SEED]: N point lights more, scattered over the scene (deterministic from
+    /// SEED, default 1), shaded through each display's clusters (`rooms:` has a lamp
+    /// per room already).
+    #[arg(long, value_parser = parse_lights)]
+    pub lights: Option<(u32, u64)>,
     /// Draw only these displays of the rig (names, comma-separated), the frame planned
     /// as for the whole rig: one process per CAVE wall (default: every display).
     #[arg(long, value_delimiter = ',')]
@@ -214,6 +219,24 @@ impl SceneArgs {
     }
 }
 
+fn parse_lights(s: &str) -> std::result::Result<(u32, u64), String> {
+    let (n, seed) = s.split_once(':').unwrap_or((s, "1"));
+    let n = n.parse().map_err(|e| format!("{n:?}: {e}"))?;
+    let seed = seed.parse().map_err(|e| format!("{seed:?}: {e}"))?;
+    Ok((n, seed))
+}
+
+impl SceneArgs {
+    /// The scene `--scene` names, with `--lights`' lights.
+    pub fn load_scene(&self) -> Result<crate::scene::Scene> {
+        let mut scene = crate::scene_spec::load(&self.scene)?;
+        if let Some((n, seed)) = self.lights {
+            crate::procedural::scatter_lights(&mut scene, n, seed);
+        }
+        Ok(scene)
+    }
+}
+
 fn parse_vec3(s: &str) -> std::result::Result<[f32; 3], String> {
     parse_finite(s, "three finite numbers x,y,z")
 }
@@ -339,7 +362,7 @@ fn scene_info(spec: &str) -> Result<()> {
         .map(|i| scene.meshes[i.mesh as usize].index_count as u64 / 3)
         .sum();
     println!(
-        "  loads: {} instances of {} meshes ({} triangles at the finest level), {} materials, {} textures, {} skins, {} morphs",
+        "  loads: {} instances of {} meshes ({} triangles at the finest level), {} materials, {} textures, {} skins, {} morphs, {} lights",
         scene.instances.len(),
         scene.meshes.len(),
         triangles,
@@ -347,6 +370,7 @@ fn scene_info(spec: &str) -> Result<()> {
         scene.textures.len(),
         scene.skins.skins.len(),
         scene.morphs.morphs.len(),
+        scene.lights.len(),
     );
     Ok(())
 }

@@ -21,7 +21,6 @@ use crate::renderer::{
 };
 use crate::rig::Rig;
 use crate::scene::Scene;
-use crate::scene_spec;
 
 #[derive(Parser)]
 pub struct RenderArgs {
@@ -102,7 +101,7 @@ impl Session {
         time: f32,
     ) -> Result<Session> {
         let rig = args.load_rig()?;
-        let mut scene = scene_spec::load(&args.scene)?;
+        let mut scene = args.load_scene()?;
         if !args.animation.on() {
             scene.posing.clips.clear();
             scene.morphs.stop();
