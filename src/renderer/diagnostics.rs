@@ -204,6 +204,25 @@ impl Diagnostics<'_> {
         read_pod(self.device, self.queue, buffer, buffer.size())
     }
 
+    /// The light cluster pass of the last prepared frame (its clear and dispatch)
+    /// submitted alone `rounds` times, each waited for: the median wall time in
+    /// milliseconds (0 without lights).
+    pub fn light_clusters_wall_ms(&self, rounds: u32) -> Result<f64> {
+        let mut times: Vec<f64> = (0..rounds.max(1))
+            .map(|_| {
+                let mut encoder = self.device.create_command_encoder(&Default::default());
+                let mut rec = super::recorder::Recorder::new(None, Vec::new());
+                self.renderer.lighting.encode(&mut encoder, &mut rec);
+                let start = std::time::Instant::now();
+                self.queue.submit([encoder.finish()]);
+                crate::readback::wait_idle(self.device)?;
+                Ok(start.elapsed().as_secs_f64() * 1e3)
+            })
+            .collect::<Result<_>>()?;
+        times.sort_by(f64::total_cmp);
+        Ok(times[times.len() / 2])
+    }
+
     /// Every slot's instance record as the frame drew it (a posed instance's
     /// transform as the pose pass wrote it, with GPU posing).
     pub fn instance_records(&self) -> Result<Vec<crate::records::InstanceRecord>> {
