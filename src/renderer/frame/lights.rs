@@ -80,6 +80,8 @@ impl Lighting {
             light_clusters_source(),
             "clusters",
         );
+        // The buffers start zeroed: a count of 0 needs no write.
+        let dirty = !records.is_empty();
         Ok(Lighting {
             lights,
             views,
@@ -87,7 +89,7 @@ impl Lighting {
             pipeline,
             bind_group,
             records,
-            dirty: true,
+            dirty,
             displays,
         })
     }
@@ -100,8 +102,12 @@ impl Lighting {
     }
 
     /// Writes the count, the slices' depths, the lights where they changed and each
-    /// display's combined frustum (`plan`'s); returns the bytes.
+    /// display's combined frustum (`plan`'s); returns the bytes. Nothing while there
+    /// are no lights (the count stays 0).
     pub(in crate::renderer) fn prepare(&mut self, queue: &wgpu::Queue, plan: &FramePlan) -> u64 {
+        if self.records.is_empty() && !self.dirty {
+            return 0;
+        }
         let mut header = vec![self.records.len() as u32];
         header.extend((0..=CLUSTER_Z).map(|k| slice_start(k).to_bits()));
         let mut bytes = write(queue, &self.views, 0, &header);
