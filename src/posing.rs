@@ -278,3 +278,18 @@ impl Channel {
         }
     }
 }
+
+/// Places each light of `on_nodes` (an index into `lights`) at its node's world
+/// transform in `worlds` ([`Posing::node_worlds`]).
+pub fn place_lights(
+    on_nodes: &[NodeInstance],
+    worlds: &[Affine3A],
+    lights: &mut [crate::lights::Light],
+) {
+    for l in on_nodes {
+        let light = lights.get_mut(l.instance as usize);
+        if let (Some(light), Some(world)) = (light, worlds.get(l.node as usize)) {
+            light.place(*world * l.node_from_local);
+        }
+    }
+}

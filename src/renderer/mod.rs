@@ -285,7 +285,10 @@ impl Renderer {
         let frame = uniform_buffer::<FrameContext>(device, "stereocull.frame_context");
         let slots = scene.instances.len() as u32;
         let places = Places::tight(scene);
-        let lighting = Lighting::new(device, &scene.lights, rig.displays.len() as u32)?;
+        let mut lighting = Lighting::new(device, &scene.lights, rig.displays.len() as u32)?;
+        if options.posing == PosingMode::Gpu {
+            lighting.pose_with(&scene.posing, &scene.lights);
+        }
         let lit = (&lighting.lights, &lighting.views, &lighting.clusters);
         let shadow_map = ShadowMap::new(device, options.shadow_size().unwrap_or(1), lit);
         let inputs = PathInputs {

@@ -203,14 +203,7 @@ impl Scene {
     /// and returns each posed instance (node and skinned) with its world transform.
     pub fn posed(&mut self, time: f32) -> Vec<(u32, Affine3A)> {
         let worlds = self.posing.node_worlds(time);
-        for l in &self.posing.lights {
-            if let (Some(light), Some(world)) = (
-                self.lights.get_mut(l.instance as usize),
-                worlds.get(l.node as usize),
-            ) {
-                light.place(*world * l.node_from_local);
-            }
-        }
+        crate::posing::place_lights(&self.posing.lights, &worlds, &mut self.lights);
         let nodes = self.posing.instance_transforms_in(&worlds);
         let mut posed: Vec<(u32, Affine3A)> =
             (self.posing.instances.iter().map(|i| i.instance).zip(nodes)).collect();

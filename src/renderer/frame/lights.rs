@@ -29,6 +29,9 @@ pub(in crate::renderer) struct Lighting {
     records: Vec<LightRecord>,
     /// The records changed since they were last written.
     dirty: bool,
+    /// Posing on the GPU, the scene's lights and the animations that move some of
+    /// them: posed at each frame's time here (until an engine sets lights itself).
+    posed: Option<(crate::posing::Posing, Vec<Light>)>,
     displays: u32,
 }
 
@@ -90,21 +93,43 @@ impl Lighting {
             bind_group,
             records,
             dirty,
+            posed: None,
             displays,
         })
     }
 
-    /// Replaces the lights from the next frame on.
+    /// Replaces the lights from the next frame on (the engine's: animations no longer
+    /// move them).
     pub(in crate::renderer) fn set(&mut self, lights: &[Light]) -> Result<()> {
         self.records = records(lights)?;
         self.dirty = true;
+        self.posed = None;
         Ok(())
+    }
+
+    /// Poses `lights` by `posing`'s animations at each frame's time (posing on the
+    /// GPU, where nothing on the CPU poses the scene); nothing without lights on
+    /// animated nodes.
+    pub(in crate::renderer) fn pose_with(
+        &mut self,
+        posing: &crate::posing::Posing,
+        lights: &[Light],
+    ) {
+        if !posing.lights.is_empty() {
+            self.posed = Some((posing.clone(), lights.to_vec()));
+        }
     }
 
     /// Writes the count, the slices' depths, the lights where they changed and each
     /// display's combined frustum (`plan`'s); returns the bytes. Nothing while there
     /// are no lights (the count stays 0).
     pub(in crate::renderer) fn prepare(&mut self, queue: &wgpu::Queue, plan: &FramePlan) -> u64 {
+        if let Some((posing, lights)) = &mut self.posed {
+            let worlds = posing.node_worlds(plan.frame.time);
+            crate::posing::place_lights(&posing.lights, &worlds, lights);
+            self.records = lights.iter().map(Light::record).collect();
+            self.dirty = true;
+        }
         if self.records.is_empty() && !self.dirty {
             return 0;
         }
