@@ -1,7 +1,8 @@
 //! Issue 40's import figures: one dense grid mesh written three ways (floats;
 //! `KHR_mesh_quantization`: shorts and bytes; `EXT_meshopt_compression` over the
 //! floats), each imported whole (levels of detail included), and meshoptimizer's
-//! decoders alone on the compressed streams.
+//! decoders alone on the compressed streams; then `KHR_texture_basisu`'s decode (KTX2 to
+//! RGBA8) of KTX-Software's two encodings of one 1024 x 1024 image.
 //!
 //! `cargo bench --bench gltf_import`; under `cargo test` one small round.
 
@@ -64,6 +65,29 @@ fn main() {
         "meshopt index decode: {:.0} M triangles/s",
         grid.indices.len() as f64 / 3.0 / time.as_secs_f64() / 1e6
     );
+    ktx2_decodes(rounds);
+}
+
+/// KTX2 (ETC1S with BasisLZ; UASTC with Zstandard) to RGBA8 texels.
+fn ktx2_decodes(rounds: usize) {
+    let dir = Path::new(env!("CARGO_MANIFEST_DIR")).join("tests/data/ktx2");
+    for name in [
+        "ktx_document_basis.ktx2",
+        "ktx_document_uastc_rdo4_zstd5.ktx2",
+    ] {
+        let file = std::fs::read(dir.join(name)).expect("the test KTX2 files are there");
+        let mut texels = 0;
+        let time = median(rounds, || {
+            let image = stereocull::gltf_import::basisu::decode(&file).expect("decodes");
+            texels = image.width() * image.height();
+        });
+        println!(
+            "ktx2 decode {name:36} {:6} bytes {:8.2} ms  {:.0} M texels/s",
+            file.len(),
+            ms(time),
+            f64::from(texels) / time.as_secs_f64() / 1e6
+        );
+    }
 }
 
 fn median(rounds: usize, mut run: impl FnMut()) -> Duration {

@@ -1,6 +1,7 @@
 //! glTF as optimizers and exporters write it: `EXT_meshopt_compression` (the shared
 //! samples recompressed here with meshoptimizer's own encoders), `KHR_mesh_quantization`
-//! (integer attributes), a second set of texture coordinates, application-specific
+//! (integer attributes), `KHR_texture_basisu` (KTX2 images KTX-Software wrote), a
+//! second set of texture coordinates, application-specific
 //! attributes, and the rule that only an unread extension the file *requires* is an
 //! error.
 
@@ -562,6 +563,79 @@ fn a_texture_on_the_second_set_reads_the_second_set() {
     let tolerance = support::Tolerance::RECOMPILED;
     support::assert_images_match("second set", &draw(&two_sets), &reference, tolerance);
     let control = draw(&control);
+    let differ = (control.pixels().zip(reference.pixels()))
+        .filter(|(a, b)| (0..3).any(|c| a[c].abs_diff(b[c]) > 8))
+        .count();
+    assert!(differ > 500, "the control differs at {differ} pixels only");
+}
+
+/// BoxTextured with its texture's image `ktx2` (a KTX2 in a new buffer view) through
+/// `KHR_texture_basisu`: `required` drops the core PNG source and requires the
+/// extension; otherwise the PNG stays as the fallback and the extension is only used.
+fn box_with_ktx2(ktx2: &[u8], required: bool) -> Vec<u8> {
+    let glb = std::fs::read(support::gltf_sample("BoxTextured", "glb")).unwrap();
+    let (mut json, mut bin) = split_glb(&glb);
+    while !bin.len().is_multiple_of(4) {
+        bin.push(0);
+    }
+    let views = json["bufferViews"].as_array().unwrap().len();
+    let images = json["images"].as_array().unwrap().len();
+    json["bufferViews"].as_array_mut().unwrap().push(json!(
+        {"buffer": 0, "byteOffset": bin.len(), "byteLength": ktx2.len()}));
+    bin.extend_from_slice(ktx2);
+    json["buffers"][0]["byteLength"] = json!(bin.len());
+    json["images"].as_array_mut().unwrap().push(json!(
+        {"bufferView": views, "mimeType": "image/ktx2"}));
+    let texture = &mut json["textures"][0];
+    texture["extensions"] = json!({"KHR_texture_basisu": {"source": images}});
+    let name = json!("KHR_texture_basisu");
+    json["extensionsUsed"] = json!([name]);
+    if required {
+        json["textures"][0]
+            .as_object_mut()
+            .unwrap()
+            .remove("source");
+        json["extensionsRequired"] = json!([name]);
+    }
+    write_glb(&json, &bin)
+}
+
+/// A texture whose only image is a KTX2 (Basis Universal, written by KTX-Software) loads
+/// as its transcoded texels and draws exactly as the same texels from a PNG would;
+/// beside a PNG fallback, the KTX2 is the one read. The control (the box's own PNG)
+/// differs.
+#[test]
+fn a_basis_universal_texture_loads_and_draws() {
+    let dir = tempfile::tempdir().unwrap();
+    let ktx2_path =
+        Path::new(env!("CARGO_MANIFEST_DIR")).join("tests/data/ktx2/ktx_document_basis.ktx2");
+    let ktx2 = std::fs::read(ktx2_path).unwrap();
+    let texels = stereocull::gltf_import::basisu::decode(&ktx2).unwrap();
+    let required = load_bytes(dir.path(), "required.glb", &box_with_ktx2(&ktx2, true));
+    let beside_png = load_bytes(dir.path(), "fallback.glb", &box_with_ktx2(&ktx2, false));
+    assert_eq!(required.textures.len(), 1);
+    assert!(required.textures[0].image == texels);
+    assert!(beside_png.textures[0].image == texels);
+    let original_path = support::gltf_sample("BoxTextured", "glb");
+    let original = scene_spec::load(original_path.to_str().unwrap()).unwrap();
+    let mut as_png = original.clone();
+    as_png.textures[0].image = texels;
+    let gpu = support::gpu();
+    let rig = facing_the_box();
+    let draw = |scene: &Scene| {
+        let options = stereocull::renderer::RendererOptions::default();
+        support::render(&gpu, scene, &rig, options)
+            .unwrap()
+            .remove(0)
+    };
+    let reference = draw(&as_png);
+    support::assert_images_match(
+        "basisu",
+        &draw(&required),
+        &reference,
+        support::Tolerance::EXACT,
+    );
+    let control = draw(&original);
     let differ = (control.pixels().zip(reference.pixels()))
         .filter(|(a, b)| (0..3).any(|c| a[c].abs_diff(b[c]) > 8))
         .count();

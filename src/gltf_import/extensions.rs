@@ -21,20 +21,15 @@ pub const READ: &[&str] = &[
     "KHR_lights_punctual",
     "KHR_materials_unlit",
     "KHR_mesh_quantization",
+    "KHR_texture_basisu",
     "KHR_texture_transform",
 ];
 
 /// How a file that requires an extension we do not read can be made readable.
-const REMEDIES: &[(&str, &str)] = &[
-    (
-        "KHR_draco_mesh_compression",
-        "no maintained Rust decoder exists; decompress it first, e.g. `gltf-transform copy IN OUT` or `gltfpack -i IN -o OUT -noq` (which can write EXT_meshopt_compression with -cc instead)",
-    ),
-    (
-        "KHR_texture_basisu",
-        "re-export it with PNG or JPEG textures, e.g. `gltf-transform png IN OUT`",
-    ),
-];
+const REMEDIES: &[(&str, &str)] = &[(
+    "KHR_draco_mesh_compression",
+    "no maintained Rust decoder exists; decompress it first, e.g. `gltf-transform copy IN OUT` or `gltfpack -i IN -o OUT -noq` (which can write EXT_meshopt_compression with -cc instead)",
+)];
 
 /// One extension a file names, and what the importer does with it.
 #[derive(Clone, Debug, PartialEq, Eq, serde::Serialize)]

@@ -1,5 +1,6 @@
 //! glTF materials: the metallic-roughness model's factors and textures (decoded with
-//! `image` from buffer views, data URIs or files; colors sRGB, data linear),
+//! `image`, or from KTX2 by [`basisu`], from buffer views, data URIs or files; colors
+//! sRGB, data linear),
 //! `KHR_materials_unlit`, `KHR_materials_emissive_strength` and `KHR_texture_transform`
 //! (one per material), and the UVs the textures are read at.
 
@@ -10,7 +11,7 @@ use base64::engine::general_purpose::STANDARD as BASE64;
 use gltf::{Document, Semantic};
 use image::RgbaImage;
 
-use super::{Importer, Step};
+use super::{Importer, Step, basisu};
 use crate::scene::{AlphaMode, Encoding, Material, SecondUv, Shading, Texture};
 
 /// A material's texture slots: what it reads, and the set of coordinates and the
@@ -116,7 +117,10 @@ impl Importer<'_> {
         let (_, second_uv) = uv_sets(material)?;
         let pbr = material.pbr_metallic_roughness();
         let mut texture = |info: Option<gltf::Texture>, encoding| match info {
-            Some(t) => self.texture_id(t.source(), encoding).map(Some),
+            Some(t) => {
+                let image = basisu::source(&t, self.document)?;
+                self.texture_id(image, encoding).map(Some)
+            }
             None => Ok(None),
         };
         let normal = material.normal_texture();
@@ -180,7 +184,8 @@ impl Importer<'_> {
         Ok(id)
     }
 
-    /// The image's pixels as sRGB RGBA8, from a buffer view, a data URI or a file.
+    /// The image's pixels as RGBA8 (PNG, JPEG, or KTX2 with Basis Universal texels),
+    /// from a buffer view, a data URI or a file.
     fn decode(&self, image: &gltf::Image) -> Step<RgbaImage> {
         let owned;
         let bytes: &[u8] = match image.source() {
@@ -211,6 +216,9 @@ impl Importer<'_> {
                 &owned
             }
         };
+        if basisu::is_ktx2(bytes) {
+            return basisu::decode(bytes);
+        }
         let decoded = image::load_from_memory(bytes).map_err(|e| e.to_string())?;
         Ok(decoded.to_rgba8())
     }

@@ -20,6 +20,7 @@ use crate::scene::{Animation, Instance, Scene, Vertex, both_windings};
 
 mod animations;
 mod attributes;
+pub mod basisu;
 mod buffers;
 pub mod extensions;
 mod lights;

@@ -6,6 +6,7 @@
 #![allow(dead_code)]
 
 pub mod glb;
+pub mod ktx2;
 pub mod room;
 
 use std::path::PathBuf;
