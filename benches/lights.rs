@@ -2,8 +2,9 @@
 //! replaced by one light, by 256 scattered point lights, and kept with 256 more (1,097
 //! lights): each frame waited for (prepare, encode, submit, wait) and its CPU part
 //! (prepare, encode, submit), in alternating rounds; and the cluster pass alone
-//! (`Diagnostics::light_clusters_wall_ms`). Memory of the clusters per display, against
-//! a grid per eye.
+//! (`Diagnostics::light_clusters_wall_ms`). Then the clusters built once per display
+//! against once per eye (the same eyes as two mono displays, a grid each): the pass's
+//! time and the clusters' memory, in the same run.
 //!
 //! `cargo bench --bench lights`; under `cargo test` one small round.
 
@@ -12,7 +13,7 @@ use std::time::Instant;
 use stereocull::device::Gpu;
 use stereocull::lights::DISPLAY_WORDS;
 use stereocull::renderer::{Renderer, RendererOptions};
-use stereocull::rig::Rig;
+use stereocull::rig::{Display, Mount, Rig};
 use stereocull::scene::Scene;
 
 fn main() {
@@ -43,7 +44,7 @@ fn main() {
     stereocull::procedural::scatter_lights(&mut all, 256, 1);
     let mut configs: Vec<(String, Renderer, Vec<_>)> = [
         ("1 light", one),
-        ("256 lights", scattered),
+        ("256 lights", scattered.clone()),
         ("1097 lights", all),
     ]
     .into_iter()
@@ -91,9 +92,43 @@ fn main() {
             c / base.1
         );
     }
-    let per_display = DISPLAY_WORDS as f64 * 4.0 / 1e6;
+    per_eye_grids(&gpu, &rig, &configs[1].1, scattered);
+}
+
+/// The clusters built once per display (both eyes, `renderer`'s rig) against once per
+/// eye: the same eyes as two mono displays, each with its own grid, on the same lights.
+fn per_eye_grids(gpu: &Gpu, rig: &Rig, renderer: &Renderer, scene: Scene) {
+    let mut apart = rig.as_posed().expect("the hmd poses");
+    let display = apart.displays.remove(0);
+    let Mount::Views(views) = &display.mount else {
+        unreachable!("as_posed mounts every display on its views")
+    };
+    for (eye, view) in ["left", "right"].into_iter().zip(views) {
+        apart.displays.push(Display {
+            name: eye.into(),
+            stereo: false,
+            mount: Mount::Views(vec![*view]),
+            ..display.clone()
+        });
+    }
+    let mut per_eye =
+        Renderer::new(&gpu.device, &scene, &apart, RendererOptions::default()).expect("renderer");
+    let targets = per_eye.create_targets(&gpu.device);
+    per_eye.prepare(&gpu.queue, &apart, 0.0).expect("prepare");
+    let mut encoder = gpu.device.create_command_encoder(&Default::default());
+    let views: Vec<_> = targets.iter().map(|t| t.views()).collect();
+    per_eye.encode(&mut encoder, &views, None).expect("encode");
+    gpu.queue.submit([encoder.finish()]);
+    let time = |r: &Renderer| {
+        (r.diagnostics(&gpu.device, &gpu.queue))
+            .light_clusters_wall_ms(5)
+            .expect("cluster pass")
+    };
+    let (once, twice) = (time(renderer), time(&per_eye));
+    let mb = DISPLAY_WORDS as f64 * 4.0 / 1e6;
     println!(
-        "clusters: {per_display:.2} MB per display (both eyes); a grid per eye: {:.2} MB and each light tested twice",
-        2.0 * per_display
+        "256 lights, clusters once per display: {once:.2} ms, {mb:.2} MB; once per eye: {twice:.2} ms ({:.2}), {:.2} MB",
+        twice / once,
+        2.0 * mb
     );
 }

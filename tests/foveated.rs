@@ -12,7 +12,7 @@ use stereocull::foveated_composite::{CompositeParams, FoveatedComposite, composi
 use stereocull::frustum::{Fov, sphere_in_planes};
 use stereocull::readback::read_rgba8;
 use stereocull::renderer::{CullMode, RendererOptions, StereoMode};
-use stereocull::rig::{FovAngles, Foveation, Gaze, Mount, PosedView, Rig};
+use stereocull::rig::{Foveation, Gaze, Mount, Rig};
 use stereocull::scene_spec;
 use support::{Tolerance, assert_images_match, gpu, sized};
 
@@ -268,31 +268,10 @@ fn the_gaze_moves_the_insets_of_a_frame() {
     assert!(err.contains("no foveated display"), "{err}");
 }
 
-/// `rig`'s four views as a runtime hands them over (OpenXR's quad views).
-fn as_posed(rig: &Rig) -> Rig {
-    let resolved = rig.resolve().unwrap();
-    let mut posed = rig.clone();
-    let angle = |t: f32| (t as f64).atan() as f32;
-    let views = resolved.displays[0].eyes.iter().map(|e| PosedView {
-        position: e.world_from_view.translation.as_vec3().to_array(),
-        orientation: DQuat::from_mat3(&e.world_from_view.matrix3)
-            .as_quat()
-            .to_array(),
-        fov: FovAngles {
-            angle_left: -angle(e.fov.left),
-            angle_right: angle(e.fov.right),
-            angle_up: angle(e.fov.up),
-            angle_down: -angle(e.fov.down),
-        },
-    });
-    posed.displays[0].mount = Mount::Views(views.collect());
-    posed
-}
-
 #[test]
 fn posed_quad_views_draw_what_the_head_fixed_foveated_rig_draws() {
     let head = foveated(128, 96);
-    let posed = as_posed(&head);
+    let posed = head.as_posed().unwrap();
     posed.validate("posed").unwrap();
     let (a, b) = (posed.resolve().unwrap(), head.resolve().unwrap());
     for (x, y) in a.displays[0].eyes.iter().zip(&b.displays[0].eyes) {
@@ -316,7 +295,7 @@ fn bad_foveated_views_are_clear_errors() {
         assert!(err.contains(want), "{err} lacks {want:?}");
         assert!(err.contains("hmd"), "{err} names the display");
     };
-    let mut outside = as_posed(&foveated(64, 64));
+    let mut outside = foveated(64, 64).as_posed().unwrap();
     if let Mount::Views(v) = &mut outside.displays[0].mount {
         v[2].fov.angle_left = -1.4;
     }
@@ -324,7 +303,7 @@ fn bad_foveated_views_are_clear_errors() {
         &outside,
         "views[2]: the inset is not inside its eye's outer view",
     );
-    let mut three = as_posed(&foveated(64, 64));
+    let mut three = foveated(64, 64).as_posed().unwrap();
     if let Mount::Views(v) = &mut three.displays[0].mount {
         v.pop();
     }

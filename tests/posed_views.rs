@@ -4,7 +4,7 @@
 
 mod support;
 
-use glam::{DAffine3, DMat4, DQuat};
+use glam::{DAffine3, DMat4};
 use rand::{Rng, SeedableRng};
 use rand_pcg::Pcg64Mcg;
 use stereocull::frustum::{Fov, View};
@@ -71,37 +71,6 @@ fn the_projection_from_angles_is_openxrs() {
     }
 }
 
-/// `rig`'s eyes as a runtime would hand them over: each eye's pose, its window as
-/// angles.
-fn as_posed(rig: &Rig) -> Rig {
-    let resolved = rig.resolve().unwrap();
-    let mut posed = rig.clone();
-    for (display, r) in posed.displays.iter_mut().zip(&resolved.displays) {
-        let views = r.eyes.iter().map(|e| {
-            let q = DQuat::from_mat3(&e.world_from_view.matrix3).as_quat();
-            let Fov {
-                left,
-                right,
-                up,
-                down,
-            } = e.fov;
-            let angle = |t: f32| (t as f64).atan() as f32;
-            PosedView {
-                position: e.world_from_view.translation.as_vec3().to_array(),
-                orientation: q.to_array(),
-                fov: FovAngles {
-                    angle_left: -angle(left),
-                    angle_right: angle(right),
-                    angle_up: angle(up),
-                    angle_down: -angle(down),
-                },
-            }
-        });
-        display.mount = Mount::Views(views.collect());
-    }
-    posed
-}
-
 /// The nearest f32 to `t` whose trip through an angle and back is exact, so that a
 /// rig built from it and its posed twin resolve to the same bits.
 fn round_trips(t: f32) -> f32 {
@@ -126,7 +95,7 @@ fn posed_views_draw_what_the_head_fixed_rig_draws() {
         up: round_trips(f.up),
         down: round_trips(f.down),
     };
-    let posed = as_posed(&head);
+    let posed = head.as_posed().unwrap();
     // Axis-aligned, eyes at f32-exact positions: the same eyes, display frustum and
     // apex to the bit, so the images below must be identical.
     assert_eq!(posed.resolve().unwrap(), head.resolve().unwrap());
@@ -159,7 +128,10 @@ fn turned_and_canted_posed_views_resolve_as_their_head_fixed_rig() {
         if let Mount::Head(panel) = &mut head.displays[0].mount {
             panel.cant_deg = rng.random_range(0.0..8.0);
         }
-        let (a, b) = (as_posed(&head).resolve().unwrap(), head.resolve().unwrap());
+        let (a, b) = (
+            head.as_posed().unwrap().resolve().unwrap(),
+            head.resolve().unwrap(),
+        );
         let (a, b) = (&a.displays[0], &b.displays[0]);
         for (x, y) in a.eyes.iter().zip(&b.eyes) {
             let (x, y) = (x.clip_from_world(), y.clip_from_world());
@@ -179,7 +151,7 @@ fn turned_and_canted_posed_views_resolve_as_their_head_fixed_rig() {
 
 #[test]
 fn posed_views_read_from_a_rig_file() {
-    let posed = as_posed(&Rig::preset("hmd").unwrap());
+    let posed = Rig::preset("hmd").unwrap().as_posed().unwrap();
     let text = serde_json::to_string_pretty(&posed).unwrap();
     assert!(
         text.contains("\"views\"") && text.contains("angle_left"),
@@ -205,7 +177,7 @@ fn posed_views_read_from_a_rig_file() {
 
 #[test]
 fn bad_posed_views_are_one_error_naming_the_display() {
-    let good = as_posed(&Rig::preset("hmd").unwrap());
+    let good = Rig::preset("hmd").unwrap().as_posed().unwrap();
     type Spoil = fn(&mut Vec<PosedView>);
     let cases: [(&str, Spoil); 7] = [
         ("zero length", |v| v[1].orientation = [0.0; 4]),
@@ -237,7 +209,7 @@ fn bad_posed_views_are_one_error_naming_the_display() {
 #[test]
 fn the_example_posed_rig_is_the_hmd_as_a_runtime_poses_it() {
     let path = std::path::Path::new(env!("CARGO_MANIFEST_DIR")).join("assets/rigs/hmd-posed.json");
-    let posed = as_posed(&Rig::preset("hmd").unwrap());
+    let posed = Rig::preset("hmd").unwrap().as_posed().unwrap();
     if std::env::var_os("STEREOCULL_RECORD").is_some() {
         std::fs::write(&path, serde_json::to_string_pretty(&posed).unwrap()).unwrap();
     }

@@ -5,7 +5,9 @@
 use glam::{DQuat, DVec3};
 use serde::{Deserialize, Serialize};
 
-use crate::frustum::Fov;
+use super::{Mount, Rig};
+use crate::error::Result;
+use crate::frustum::{Fov, View};
 
 /// One view: where its eye is, which way it looks, and the angles of its window.
 #[derive(Clone, Copy, Debug, PartialEq, Serialize, Deserialize)]
@@ -72,6 +74,23 @@ impl FovAngles {
 }
 
 impl PosedView {
+    /// A resolved eye as a runtime hands it over: its pose, its window as angles.
+    pub fn of(eye: &View) -> PosedView {
+        let angle = |t: f32| (t as f64).atan() as f32;
+        PosedView {
+            position: eye.world_from_view.translation.as_vec3().to_array(),
+            orientation: DQuat::from_mat3(&eye.world_from_view.matrix3)
+                .as_quat()
+                .to_array(),
+            fov: FovAngles {
+                angle_left: -angle(eye.fov.left),
+                angle_right: angle(eye.fov.right),
+                angle_up: angle(eye.fov.up),
+                angle_down: -angle(eye.fov.down),
+            },
+        }
+    }
+
     /// The eye's position in f64.
     pub fn position(&self) -> DVec3 {
         DVec3::from(self.position.map(f64::from))
@@ -81,6 +100,20 @@ impl PosedView {
     pub fn rotation(&self) -> DQuat {
         let [x, y, z, w] = self.orientation.map(f64::from);
         DQuat::from_xyzw(x, y, z, w).normalize()
+    }
+}
+
+impl Rig {
+    /// The rig with every display's eyes at the current pose handed over as a runtime
+    /// hands them (`Mount::Views`): the same views, to test or profile the posed path
+    /// against the rig that describes them.
+    pub fn as_posed(&self) -> Result<Rig> {
+        let resolved = self.resolve()?;
+        let mut posed = self.clone();
+        for (display, r) in posed.displays.iter_mut().zip(&resolved.displays) {
+            display.mount = Mount::Views(r.eyes.iter().map(PosedView::of).collect());
+        }
+        Ok(posed)
     }
 }
 
