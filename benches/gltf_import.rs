@@ -78,7 +78,7 @@ fn ktx2_decodes(rounds: usize) {
         let file = std::fs::read(dir.join(name)).expect("the test KTX2 files are there");
         let mut texels = 0;
         let time = median(rounds, || {
-            let image = stereocull::gltf_import::basisu::decode(&file).expect("decodes");
+            let image = stereocull::basisu::decode(&file).expect("decodes");
             texels = image.width() * image.height();
         });
         println!(

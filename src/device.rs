@@ -9,7 +9,7 @@ use crate::draw::DEPTH_FORMAT;
 use crate::error::{Error, Result};
 
 /// Optional features the pipeline uses when present, with what it does without them.
-pub const OPTIONAL_FEATURES: [(Features, &str, &str); 10] = [
+pub const OPTIONAL_FEATURES: [(Features, &str, &str); 11] = [
     (
         Features::MULTI_DRAW_INDIRECT_COUNT,
         "multi_draw_indirect_count",
@@ -54,6 +54,11 @@ pub const OPTIONAL_FEATURES: [(Features, &str, &str); 10] = [
         Features::PIPELINE_STATISTICS_QUERY,
         "pipeline_statistics_query",
         "no vertex-invocation counts",
+    ),
+    (
+        Features::TEXTURE_COMPRESSION_BC,
+        "texture_compression_bc",
+        "Basis Universal textures transcoded to RGBA8, four times the memory of BC7 (same image within the codec's error)",
     ),
     (
         Features::SUBGROUP,

@@ -26,6 +26,7 @@
 
 #![warn(missing_docs)]
 
+pub mod basisu;
 pub mod bins;
 mod buffers;
 /// The `stereocull` binary's commands (feature `cli`): not part of the library's API.

@@ -11,11 +11,13 @@
 use bytemuck::{Pod, Zeroable};
 use image::RgbaImage;
 use image::imageops::FilterType;
+use rayon::prelude::*;
 
+use crate::basisu::BasisTexture;
 use crate::bins::{check_override, mesh_material, vertex_material};
 use crate::buffers::init_buffer;
 use crate::error::{Error, Result};
-use crate::scene::{AlphaMode, Encoding, Material, Scene};
+use crate::scene::{AlphaMode, Encoding, Material, Scene, Texture};
 use crate::shaders::Windows;
 
 /// The largest layer side: bigger textures are scaled down to it.
@@ -235,37 +237,53 @@ pub struct GpuMaterials {
 /// One encoding's textures as one array texture.
 struct TextureArray {
     texture: wgpu::Texture,
-    /// Per layer, its mip chain, until uploaded.
-    pending: Vec<Vec<RgbaImage>>,
+    /// Per layer, its levels, until uploaded.
+    pending: Vec<Vec<Level>>,
+}
+
+/// One mip level of one layer: RGBA8 texels or BC7 blocks, rows top to bottom.
+struct Level {
+    bytes: Vec<u8>,
+    /// In texels; BC7's rounded up to whole blocks (the copy's physical size).
+    size: (u32, u32),
+    bytes_per_row: u32,
+}
+
+impl Level {
+    fn rgba(image: RgbaImage) -> Level {
+        Level {
+            size: image.dimensions(),
+            bytes_per_row: 4 * image.width(),
+            bytes: image.into_raw(),
+        }
+    }
 }
 
 impl TextureArray {
-    /// The array of `scene`'s textures of `encoding` (one white layer when it has none).
+    /// The array of `scene`'s textures of `encoding` (one white layer when it has
+    /// none): BC7 where [`bc7_layers`] can, else RGBA8.
     fn new(device: &wgpu::Device, scene: &Scene, encoding: Encoding) -> Result<TextureArray> {
-        let images: Vec<&RgbaImage> = (scene.textures.iter())
+        let textures: Vec<&Texture> = (scene.textures.iter())
             .filter(|t| t.encoding == encoding)
-            .map(|t| &t.image)
             .collect();
         let limits = device.limits();
-        let layers = images.len().max(1) as u32;
+        let layers = textures.len().max(1) as u32;
         if layers > limits.max_texture_array_layers {
             return Err(Error::Limits(format!(
                 "{layers} {encoding:?} textures; the device's texture arrays hold {}",
                 limits.max_texture_array_layers
             )));
         }
-        let size = layer_size(images.iter().copied(), limits.max_texture_dimension_2d);
-        let white = RgbaImage::from_pixel(1, 1, WHITE);
-        let pending: Vec<_> = match images.is_empty() {
-            true => vec![mip_chain(&white, size)],
-            false => images.iter().map(|image| mip_chain(image, size)).collect(),
+        let (size, pending, format) = match bc7_layers(device, &textures)? {
+            Some((size, pending)) => (size, pending, bc7_format(encoding)),
+            None => {
+                let (size, pending) = rgba_layers(&textures, limits.max_texture_dimension_2d);
+                (size, pending, rgba_format(encoding))
+            }
         };
-        let (label, format) = match encoding {
-            Encoding::Srgb => (
-                "stereocull.color_textures",
-                wgpu::TextureFormat::Rgba8UnormSrgb,
-            ),
-            Encoding::Linear => ("stereocull.data_textures", wgpu::TextureFormat::Rgba8Unorm),
+        let label = match encoding {
+            Encoding::Srgb => "stereocull.color_textures",
+            Encoding::Linear => "stereocull.data_textures",
         };
         let texture = device.create_texture(&wgpu::TextureDescriptor {
             label: Some(label),
@@ -295,7 +313,7 @@ impl TextureArray {
     fn upload(&mut self, queue: &wgpu::Queue) -> u64 {
         let mut bytes = 0;
         for (layer, levels) in std::mem::take(&mut self.pending).into_iter().enumerate() {
-            for (level, image) in levels.iter().enumerate() {
+            for (level, texels) in levels.iter().enumerate() {
                 queue.write_texture(
                     wgpu::TexelCopyTextureInfo {
                         texture: &self.texture,
@@ -307,23 +325,102 @@ impl TextureArray {
                         },
                         aspect: wgpu::TextureAspect::All,
                     },
-                    image.as_raw(),
+                    &texels.bytes,
                     wgpu::TexelCopyBufferLayout {
                         offset: 0,
-                        bytes_per_row: Some(4 * image.width()),
+                        bytes_per_row: Some(texels.bytes_per_row),
                         rows_per_image: None,
                     },
                     wgpu::Extent3d {
-                        width: image.width(),
-                        height: image.height(),
+                        width: texels.size.0,
+                        height: texels.size.1,
                         depth_or_array_layers: 1,
                     },
                 );
-                bytes += image.as_raw().len() as u64;
+                bytes += texels.bytes.len() as u64;
             }
         }
         bytes
     }
+}
+
+fn rgba_format(encoding: Encoding) -> wgpu::TextureFormat {
+    match encoding {
+        Encoding::Srgb => wgpu::TextureFormat::Rgba8UnormSrgb,
+        Encoding::Linear => wgpu::TextureFormat::Rgba8Unorm,
+    }
+}
+
+fn bc7_format(encoding: Encoding) -> wgpu::TextureFormat {
+    match encoding {
+        Encoding::Srgb => wgpu::TextureFormat::Bc7RgbaUnormSrgb,
+        Encoding::Linear => wgpu::TextureFormat::Bc7RgbaUnorm,
+    }
+}
+
+/// An array's size, and per layer its levels.
+type Layers = ((u32, u32), Vec<Vec<Level>>);
+
+/// Every texture resampled to the array's size, with its mip chain.
+fn rgba_layers(textures: &[&Texture], device_max: u32) -> Layers {
+    let size = layer_size(textures.iter().map(|t| &t.image), device_max);
+    let white = RgbaImage::from_pixel(1, 1, WHITE);
+    let images: Vec<&RgbaImage> = match textures.is_empty() {
+        true => vec![&white],
+        false => textures.iter().map(|t| &t.image).collect(),
+    };
+    let chain = |image: &RgbaImage| {
+        mip_chain(image, size)
+            .into_iter()
+            .map(Level::rgba)
+            .collect()
+    };
+    (size, images.into_iter().map(chain).collect())
+}
+
+/// Every texture's own levels as BC7 blocks, when the device samples BC and every
+/// texture is a Basis Universal one of one size in whole blocks: a Basis texture can be
+/// transcoded, not resampled, so a layer of another size (or a PNG beside it) sends
+/// the whole array down the RGBA8 road. Levels past the fewest any texture holds are
+/// dropped, so that every layer has the array's levels.
+fn bc7_layers(device: &wgpu::Device, textures: &[&Texture]) -> Result<Option<Layers>> {
+    let bc = device
+        .features()
+        .contains(wgpu::Features::TEXTURE_COMPRESSION_BC);
+    let basis: Option<Vec<&BasisTexture>> = textures.iter().map(|t| t.basis.as_deref()).collect();
+    let Some(basis) = basis.filter(|b| bc && !b.is_empty()) else {
+        return Ok(None);
+    };
+    let size = basis[0].size();
+    let fits = size.0.max(size.1) <= device.limits().max_texture_dimension_2d;
+    let whole = size.0 % 4 == 0 && size.1 % 4 == 0;
+    if !(fits && whole && basis.iter().all(|b| b.size() == size)) {
+        return Ok(None);
+    }
+    let levels = basis.iter().map(|b| b.levels()).min().unwrap_or(1);
+    let layers = (textures.par_iter().zip(&basis))
+        .map(|(texture, b)| {
+            (0..levels)
+                .map(|level| bc7_level(b, size, level))
+                .collect::<std::result::Result<Vec<_>, String>>()
+                .map_err(|e| Error::InvalidScene(format!("texture {:?}: {e}", texture.name)))
+        })
+        .collect::<Result<Vec<_>>>()?;
+    Ok(Some((size, layers)))
+}
+
+fn bc7_level(
+    basis: &BasisTexture,
+    size: (u32, u32),
+    level: u32,
+) -> std::result::Result<Level, String> {
+    let blocks = |side: u32| crate::basisu::blocks((side >> level).max(1));
+    let (x, y) = (blocks(size.0), blocks(size.1));
+    Ok(Level {
+        bytes: basis.bc7(level)?,
+        size: (4 * x, 4 * y),
+        bytes_per_row: crate::basisu::BC7_BLOCK * x,
+    })
 }
 
 impl GpuMaterials {
@@ -383,6 +480,12 @@ impl GpuMaterials {
     /// Writes the texels on first use; returns the bytes written (0 afterwards).
     pub fn upload(&mut self, queue: &wgpu::Queue) -> u64 {
         self.arrays.iter_mut().map(|a| a.upload(queue)).sum()
+    }
+
+    /// The formats of the color and the data array: RGBA8, or BC7 where every texture
+    /// of the encoding is a Basis Universal one the device keeps compressed.
+    pub fn formats(&self) -> [wgpu::TextureFormat; 2] {
+        self.arrays.each_ref().map(|a| a.texture.format())
     }
 }
 

@@ -326,6 +326,7 @@ pub fn texture(scene: &mut Scene) {
         name: "procedural tiles".into(),
         image,
         encoding: Default::default(),
+        basis: None,
     }];
     scene.materials = vec![Material {
         name: "tiled".into(),

@@ -5,7 +5,7 @@
 use std::path::PathBuf;
 
 use image::RgbaImage;
-use stereocull::gltf_import::basisu;
+use stereocull::basisu;
 
 mod support;
 
@@ -108,4 +108,32 @@ fn other_or_damaged_ktx2_files_are_errors() {
             }
         }
     }
+}
+
+/// Every level the file holds is kept: the KTX-Software files hold full chains (11
+/// levels from 1024 x 1024), each of which transcodes to BC7 blocks of its own size.
+#[test]
+fn every_level_is_kept_and_transcodes_to_bc7() {
+    for name in [
+        "ktx_document_basis.ktx2",
+        "ktx_document_uastc_rdo4_zstd5.ktx2",
+    ] {
+        let basis = basisu::BasisTexture::from_ktx2(&data(name)).unwrap();
+        assert_eq!((basis.size(), basis.levels()), ((1024, 1024), 11), "{name}");
+        for level in 0..basis.levels() {
+            let blocks = basisu::blocks((1024 >> level).max(1));
+            let bytes = basis.bc7(level).unwrap().len() as u32;
+            assert_eq!(
+                bytes,
+                blocks * blocks * basisu::BC7_BLOCK,
+                "{name} level {level}"
+            );
+        }
+        assert!(
+            basis.bc7(basis.levels()).is_err(),
+            "{name}: past the last level"
+        );
+    }
+    let one = basisu::BasisTexture::from_ktx2(&data("alpha_simple_basis.ktx2")).unwrap();
+    assert_eq!((one.size(), one.levels()), ((8, 8), 1));
 }

@@ -638,6 +638,7 @@ fn with_two_opaque_materials(mut scene: Scene, seed: u64) -> (Scene, u32) {
         name: "random".into(),
         image: RgbaImage::from_raw(4, 4, texels).unwrap(),
         encoding: stereocull::scene::Encoding::Srgb,
+        basis: None,
     });
     let a = scene.materials.len() as u32;
     scene.materials.push(Material {

@@ -64,6 +64,7 @@ fn quadrants(
         name: name.into(),
         image,
         encoding: Encoding::Linear,
+        basis: None,
     }
 }
 

@@ -1,5 +1,5 @@
 //! glTF materials: the metallic-roughness model's factors and textures (decoded with
-//! `image`, or from KTX2 by [`basisu`], from buffer views, data URIs or files; colors
+//! `image`, or from KTX2 by `crate::basisu`, from buffer views, data URIs or files; colors
 //! sRGB, data linear),
 //! `KHR_materials_unlit`, `KHR_materials_emissive_strength` and `KHR_texture_transform`
 //! (one per material), and the UVs the textures are read at.
@@ -11,7 +11,8 @@ use base64::engine::general_purpose::STANDARD as BASE64;
 use gltf::{Document, Semantic};
 use image::RgbaImage;
 
-use super::{Importer, Step, basisu};
+use super::{Importer, Step};
+use crate::basisu::{self, BasisTexture};
 use crate::scene::{AlphaMode, Encoding, Material, SecondUv, Shading, Texture};
 
 /// A material's texture slots: what it reads, and the set of coordinates and the
@@ -118,7 +119,7 @@ impl Importer<'_> {
         let pbr = material.pbr_metallic_roughness();
         let mut texture = |info: Option<gltf::Texture>, encoding| match info {
             Some(t) => {
-                let image = basisu::source(&t, self.document)?;
+                let image = texture_source(&t, self.document)?;
                 self.texture_id(image, encoding).map(Some)
             }
             None => Ok(None),
@@ -171,22 +172,23 @@ impl Importer<'_> {
         let name = image
             .name()
             .map_or_else(|| format!("image {}", image.index()), str::to_string);
-        let decoded = self
+        let (decoded, basis) = self
             .decode(&image)
             .map_err(|e| format!("image {} ({name}): {e}", image.index()))?;
         self.scene.textures.push(Texture {
             name,
             image: decoded,
             encoding,
+            basis: basis.map(std::sync::Arc::new),
         });
         let id = self.scene.textures.len() as u32 - 1;
         self.textures.insert((image.index(), encoding), id);
         Ok(id)
     }
 
-    /// The image's pixels as RGBA8 (PNG, JPEG, or KTX2 with Basis Universal texels),
-    /// from a buffer view, a data URI or a file.
-    fn decode(&self, image: &gltf::Image) -> Step<RgbaImage> {
+    /// The image's pixels as RGBA8 (PNG, JPEG, or KTX2 with Basis Universal texels,
+    /// then kept too), from a buffer view, a data URI or a file.
+    fn decode(&self, image: &gltf::Image) -> Step<(RgbaImage, Option<BasisTexture>)> {
         let owned;
         let bytes: &[u8] = match image.source() {
             gltf::image::Source::View { view, .. } => {
@@ -217,11 +219,40 @@ impl Importer<'_> {
             }
         };
         if basisu::is_ktx2(bytes) {
-            return basisu::decode(bytes);
+            let basis = BasisTexture::from_ktx2(bytes)?;
+            return Ok((basis.rgba()?, Some(basis)));
         }
         let decoded = image::load_from_memory(bytes).map_err(|e| e.to_string())?;
-        Ok(decoded.to_rgba8())
+        Ok((decoded.to_rgba8(), None))
     }
+}
+
+/// The texture's image: its `KHR_texture_basisu` source where it names one (the
+/// extension's own choice when both are given), else its core `source`.
+fn texture_source<'a>(
+    texture: &gltf::Texture<'a>,
+    document: &'a Document,
+) -> Step<gltf::Image<'a>> {
+    const BASISU: &str = "KHR_texture_basisu";
+    let basisu =
+        (texture.extension_value(BASISU)).map(|e| e.get("source").and_then(|s| s.as_u64()));
+    let index = match basisu {
+        Some(Some(i)) => Some(i as usize),
+        Some(None) => {
+            return Err(format!(
+                "textures[{}]: its {BASISU} names no image source",
+                texture.index()
+            ));
+        }
+        None => texture.source().map(|i| i.index()),
+    };
+    let index = index.ok_or_else(|| format!("textures[{}] has no image", texture.index()))?;
+    document.images().nth(index).ok_or_else(|| {
+        format!(
+            "textures[{}] names images[{index}], which does not exist",
+            texture.index()
+        )
+    })
 }
 
 /// The material's `KHR_texture_transform`: its base color texture's, else the first

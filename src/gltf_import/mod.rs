@@ -20,7 +20,6 @@ use crate::scene::{Animation, Instance, Scene, Vertex, both_windings};
 
 mod animations;
 mod attributes;
-pub mod basisu;
 mod buffers;
 pub mod extensions;
 mod lights;

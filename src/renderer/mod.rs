@@ -459,6 +459,12 @@ impl Renderer {
         Ok(stats)
     }
 
+    /// The formats of the color and the data texture array: RGBA8, or BC7 where every
+    /// texture of the encoding came as Basis Universal and the device samples BC.
+    pub fn texture_formats(&self) -> [wgpu::TextureFormat; 2] {
+        self.path.core().draw_scene.materials.formats()
+    }
+
     /// Color (`RENDER_ATTACHMENT | COPY_SRC`) and depth textures for every display, shaped
     /// as [`TargetViews`] describes for this renderer's mode.
     pub fn create_targets(&self, device: &wgpu::Device) -> Vec<DisplayTarget> {

@@ -141,6 +141,10 @@ pub struct Texture {
     pub image: image::RgbaImage,
     /// What the texels hold: colors (sRGB) or data (linear).
     pub encoding: Encoding,
+    /// The file's Basis Universal texels, every level, when it gave them (`image` then
+    /// holds the largest level transcoded): a device that samples BC7 keeps them
+    /// block-compressed. Shared, as scenes are cloned.
+    pub basis: Option<std::sync::Arc<crate::basisu::BasisTexture>>,
 }
 
 /// How a texture's bytes map to values: the GPU decodes sRGB colors before filtering,
