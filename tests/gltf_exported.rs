@@ -553,19 +553,12 @@ fn a_texture_on_the_second_set_reads_the_second_set() {
     }
     let gpu = support::gpu();
     let rig = facing_the_box();
-    let draw = |scene: &Scene| {
-        let options = stereocull::renderer::RendererOptions::default();
-        support::render(&gpu, scene, &rig, options)
-            .unwrap()
-            .remove(0)
-    };
+    let draw = |scene: &Scene| draw_with_formats(&gpu, scene, &rig).0;
     let reference = draw(&original);
     let tolerance = support::Tolerance::RECOMPILED;
     support::assert_images_match("second set", &draw(&two_sets), &reference, tolerance);
     let control = draw(&control);
-    let differ = (control.pixels().zip(reference.pixels()))
-        .filter(|(a, b)| (0..3).any(|c| a[c].abs_diff(b[c]) > 8))
-        .count();
+    let differ = pixels_apart(&control, &reference, 8);
     assert!(differ > 500, "the control differs at {differ} pixels only");
 }
 
@@ -623,12 +616,7 @@ fn a_basis_universal_texture_loads_and_draws() {
     as_png.textures[0].image = texels;
     let gpu = support::gpu_with(wgpu::Features::all() - wgpu::Features::TEXTURE_COMPRESSION_BC);
     let rig = facing_the_box();
-    let draw = |scene: &Scene| {
-        let options = stereocull::renderer::RendererOptions::default();
-        support::render(&gpu, scene, &rig, options)
-            .unwrap()
-            .remove(0)
-    };
+    let draw = |scene: &Scene| draw_with_formats(&gpu, scene, &rig).0;
     let reference = draw(&as_png);
     support::assert_images_match(
         "basisu",
@@ -637,10 +625,15 @@ fn a_basis_universal_texture_loads_and_draws() {
         support::Tolerance::EXACT,
     );
     let control = draw(&original);
-    let differ = (control.pixels().zip(reference.pixels()))
-        .filter(|(a, b)| (0..3).any(|c| a[c].abs_diff(b[c]) > 8))
-        .count();
+    let differ = pixels_apart(&control, &reference, 8);
     assert!(differ > 500, "the control differs at {differ} pixels only");
+}
+
+/// Pixels where a color channel of `a` and `b` differs by more than `levels`.
+fn pixels_apart(a: &image::RgbaImage, b: &image::RgbaImage, levels: u8) -> usize {
+    (a.pixels().zip(b.pixels()))
+        .filter(|(p, q)| (0..3).any(|c| p[c].abs_diff(q[c]) > levels))
+        .count()
 }
 
 /// The image of `scene` on `gpu`, its texture arrays' formats, and the bytes its first
@@ -703,9 +696,7 @@ fn basis_textures_stay_bc7_where_the_device_samples_bc() {
         );
         let tolerance = support::Tolerance { levels, share: 0.0 };
         support::assert_images_match(name, &compressed, &plain, tolerance);
-        let differ = (control.pixels().zip(plain.pixels()))
-            .filter(|(a, b)| (0..3).any(|c| a[c].abs_diff(b[c]) > 32))
-            .count();
+        let differ = pixels_apart(&control, &plain, 32);
         assert!(
             differ > 10_000,
             "the control differs at {differ} pixels only"
