@@ -36,6 +36,7 @@ pub mod cli;
 /// The old path of [`foveated_composite`], kept for one release.
 #[doc(hidden)]
 pub use foveated_composite as composite;
+pub mod compositor;
 pub mod contexts;
 pub mod crowd;
 pub mod cull;

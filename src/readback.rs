@@ -133,3 +133,67 @@ pub fn read_rgba8(
     }
     Ok(image)
 }
+
+/// Reads a single-sampled `Depth32Float` texture: width x height values per layer, rows
+/// from the top, the layers of an array texture side by side (as [`read_rgba8`] places
+/// them). Returns the width of the whole (layers x width) and the values.
+pub fn read_depth(
+    device: &wgpu::Device,
+    queue: &wgpu::Queue,
+    texture: &wgpu::Texture,
+) -> Result<(u32, Vec<f32>)> {
+    let (w, h, layers) = (
+        texture.width(),
+        texture.height(),
+        texture.depth_or_array_layers(),
+    );
+    let row = (4 * w).next_multiple_of(wgpu::COPY_BYTES_PER_ROW_ALIGNMENT);
+    let size = (row * h * layers) as u64;
+    let staging = device.create_buffer(&wgpu::BufferDescriptor {
+        label: Some("stereocull.readback_depth"),
+        size,
+        usage: wgpu::BufferUsages::MAP_READ | wgpu::BufferUsages::COPY_DST,
+        mapped_at_creation: false,
+    });
+    let mut encoder = device.create_command_encoder(&Default::default());
+    // A copy per layer: lavapipe copies a depth array's layers in one copy all into the
+    // first layer's place.
+    for layer in 0..layers {
+        encoder.copy_texture_to_buffer(
+            wgpu::TexelCopyTextureInfo {
+                texture,
+                mip_level: 0,
+                origin: wgpu::Origin3d {
+                    x: 0,
+                    y: 0,
+                    z: layer,
+                },
+                aspect: wgpu::TextureAspect::DepthOnly,
+            },
+            wgpu::TexelCopyBufferInfo {
+                buffer: &staging,
+                layout: wgpu::TexelCopyBufferLayout {
+                    offset: u64::from(row * h * layer),
+                    bytes_per_row: Some(row),
+                    rows_per_image: Some(h),
+                },
+            },
+            wgpu::Extent3d {
+                width: w,
+                height: h,
+                depth_or_array_layers: 1,
+            },
+        );
+    }
+    queue.submit([encoder.finish()]);
+    let padded = map(device, &staging, size)?;
+    let width = w * layers;
+    let mut values = vec![0.0; (width * h) as usize];
+    for (i, chunk) in padded.chunks(row as usize).enumerate() {
+        let (layer, y) = (i as u32 / h, i as u32 % h);
+        let start = (y * width + layer * w) as usize;
+        let texels: &[f32] = bytemuck::cast_slice(&chunk[..4 * w as usize]);
+        values[start..start + w as usize].copy_from_slice(texels);
+    }
+    Ok((width, values))
+}

@@ -425,6 +425,58 @@ fn render_draws_the_shared_gltf_samples_in_both_eyes() {
     }
 }
 
+/// `render --compositor-depth` writes each display's depth layer (4x MSAA resolved to
+/// the nearest sample) as raw f32 beside its contract: the file holds width x height
+/// values in [0, 1], the drawn pixels nearer than the far plane's 1.
+#[test]
+fn render_writes_the_compositor_depth_and_its_contract() {
+    let dir = tempfile::tempdir().unwrap();
+    let out = dir.path().to_str().unwrap();
+    let args = [
+        "render",
+        "--compositor-depth",
+        "--width",
+        "40",
+        "--height",
+        "32",
+        "--out",
+        out,
+    ];
+    let run = stereocull(&args);
+    assert!(
+        run.status.success(),
+        "{}",
+        String::from_utf8_lossy(&run.stderr)
+    );
+    let stats: Value =
+        serde_json::from_str(&std::fs::read_to_string(dir.path().join("stats.json")).unwrap())
+            .unwrap();
+    let depth = &stats["displays"][0]["depth"];
+    assert_eq!(depth["resolve"], "nearest sample");
+    assert_eq!(
+        (depth["min_depth"].as_f64(), depth["max_depth"].as_f64()),
+        (Some(0.0), Some(1.0))
+    );
+    assert_eq!(depth["reversed_z"], false);
+    assert_eq!(
+        depth["views"][1]["rect"],
+        serde_json::json!([40, 0, 40, 32])
+    );
+    assert_eq!(
+        (depth["width"].as_u64(), depth["height"].as_u64()),
+        (Some(80), Some(32))
+    );
+    let bytes = std::fs::read(depth["file"].as_str().unwrap()).unwrap();
+    let values: Vec<f32> = bytes
+        .chunks(4)
+        .map(|b| f32::from_le_bytes([b[0], b[1], b[2], b[3]]))
+        .collect();
+    assert_eq!(values.len(), 80 * 32);
+    assert!(values.iter().all(|v| (0.0..=1.0).contains(v)));
+    let drawn = values.iter().filter(|&&v| v < 1.0).count();
+    assert!(drawn > 200, "{drawn} drawn pixels");
+}
+
 /// One file of each kind exporters and optimizers write, from the importer's corpus
 /// seeds: each renders in both eyes. The lights-only seed loads but has nothing to
 /// draw, which `render` says in its one line. (The other seeds are small synthetic

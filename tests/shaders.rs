@@ -17,11 +17,12 @@ use stereocull::records::{
 use stereocull::records::{storage_bytes, uniform_bytes};
 use stereocull::scene::Vertex;
 use stereocull::shaders::{
-    Access, Binding, CANDIDATE_BINDINGS, COARSE_BINDINGS, CULL_BINDINGS, CullPass, DRAW_BINDINGS,
-    DrawKey, EditKind, FAR_COMPOSITE_BINDINGS, FOVEATED_COMPOSITE_BINDINGS, MATERIAL_BINDINGS,
-    POSE_BINDINGS, SCATTER_BINDINGS, SHADOW_MAP_BINDINGS, SKIN_BINDINGS, Window, Windows,
-    all_sources, far_composite_source, foveated_composite_source, pose_source, pyramid_bindings,
-    pyramid_source, scatter_source, shadow_cutout_source, shadow_source, skin_source,
+    Access, Binding, CANDIDATE_BINDINGS, COARSE_BINDINGS, CULL_BINDINGS, CullPass,
+    DEPTH_RESOLVE_BINDINGS, DRAW_BINDINGS, DrawKey, EditKind, FAR_COMPOSITE_BINDINGS,
+    FOVEATED_COMPOSITE_BINDINGS, MATERIAL_BINDINGS, POSE_BINDINGS, SCATTER_BINDINGS,
+    SHADOW_MAP_BINDINGS, SKIN_BINDINGS, Window, Windows, all_sources, depth_resolve_source,
+    far_composite_source, foveated_composite_source, pose_source, pyramid_bindings, pyramid_source,
+    scatter_source, shadow_cutout_source, shadow_source, skin_source,
 };
 
 fn parse(label: &str, source: &str) -> Module {
@@ -545,7 +546,7 @@ fn pipelines_and_their_lists() -> Vec<(String, String, Vec<Vec<Binding>>)> {
             )
         }),
     );
-    let others: [(&str, String, Vec<Vec<Binding>>); 6] = [
+    let others: [(&str, String, Vec<Vec<Binding>>); 7] = [
         ("shadow", shadow_source(whole), lists(&[&DRAW_BINDINGS])),
         (
             "shadow.cutout",
@@ -564,6 +565,11 @@ fn pipelines_and_their_lists() -> Vec<(String, String, Vec<Vec<Binding>>)> {
         ),
         ("skin", skin_source(), lists(&[&SKIN_BINDINGS])),
         ("pose", pose_source(), lists(&[&POSE_BINDINGS])),
+        (
+            "depth_resolve",
+            depth_resolve_source(),
+            lists(&[&DEPTH_RESOLVE_BINDINGS]),
+        ),
     ];
     out.extend(others.map(|(l, s, g)| (format!("stereocull.{l}"), s, g)));
     out.extend(

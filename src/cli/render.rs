@@ -40,6 +40,12 @@ pub struct RenderArgs {
     /// Default: 4 where the adapter has it for this mode, else 1.
     #[arg(long)]
     pub msaa: Option<u32>,
+    /// Also write each display's depth as an XR compositor's depth layer takes it:
+    /// `<display>-depth.f32` (little-endian f32, rows from the top, multiview's layers
+    /// side by side; under MSAA each pixel's nearest sample) and its contract (each
+    /// view's rectangle or layer, planes, depth range) in `stats.json`.
+    #[arg(long)]
+    pub compositor_depth: bool,
 }
 
 /// 4x MSAA (VR practice, and what lavapipe has) where the adapter renders the color
@@ -259,6 +265,35 @@ struct DisplayStats {
     /// Foveated displays: whether the gaze was moved to keep an inset inside its view.
     #[serde(skip_serializing_if = "Option::is_none")]
     gaze_clamped: Option<bool>,
+    /// With `--compositor-depth`: the depth file and its contract.
+    #[serde(skip_serializing_if = "Option::is_none")]
+    depth: Option<DepthStats>,
+}
+
+#[derive(Serialize)]
+struct DepthStats {
+    file: String,
+    /// Of the file: the layers side by side.
+    width: u32,
+    height: u32,
+    #[serde(flatten)]
+    layer: crate::compositor::DepthLayer,
+}
+
+/// Display `index`'s compositor depth written to `<name>-depth.f32` under `out`.
+fn write_depth(session: &Session, index: usize, out: &std::path::Path) -> Result<DepthStats> {
+    let (device, queue) = (&session.gpu.device, &session.gpu.queue);
+    let depth = &session.targets[index].depth;
+    let (width, values) = crate::compositor::read_layer(device, queue, depth)?;
+    let path = out.join(format!("{}-depth.f32", session.rig.displays[index].name));
+    let bytes: Vec<u8> = values.iter().flat_map(|v| v.to_le_bytes()).collect();
+    std::fs::write(&path, bytes).map_err(|e| Error::io(&path, e))?;
+    Ok(DepthStats {
+        file: path.display().to_string(),
+        width,
+        height: depth.height(),
+        layer: session.renderer.depth_layer(&session.rig, index)?,
+    })
 }
 
 /// Display `index`'s image as drawn and, for a foveated display, its composite (each
@@ -382,6 +417,10 @@ pub fn render(args: &RenderArgs) -> Result<()> {
             pixels: layout.pixels(),
             views_image: views_path.map(|p| p.display().to_string()),
             gaze_clamped,
+            depth: match args.compositor_depth {
+                true => Some(write_depth(&session, index, &args.out)?),
+                false => None,
+            },
         });
     }
     println!(

@@ -382,6 +382,24 @@ impl Renderer {
         self.shapes.get(index).map(|s| s.layout)
     }
 
+    /// Display `index`'s depth as an XR compositor's depth layer takes it: each view's
+    /// rectangle or layer of the target, its planes, and how MSAA is resolved
+    /// ([`crate::compositor`]); `rig` as the frame was drawn.
+    pub fn depth_layer(&self, rig: &Rig, index: usize) -> Result<crate::compositor::DepthLayer> {
+        let resolved = rig.resolve()?;
+        let (Some(shape), Some(display)) = (self.shapes.get(index), resolved.displays.get(index))
+        else {
+            return Err(Error::Unsupported(format!("no display {index}")));
+        };
+        let samples = self.options.sample_count;
+        Ok(crate::compositor::DepthLayer::new(
+            display,
+            &shape.layout,
+            shape.layered,
+            samples,
+        ))
+    }
+
     /// The options the renderer was made with.
     pub fn options(&self) -> &RendererOptions {
         &self.options

@@ -322,6 +322,17 @@ pub const FOVEATED_COMPOSITE_BINDINGS: [Binding; 2] = [
     ),
 ];
 
+/// The compositor's depth resolve (`wgsl/depth_resolve.wgsl`): one layer of a
+/// multisampled depth attachment.
+pub const DEPTH_RESOLVE_BINDINGS: [Binding; 1] = [texture(
+    "depth",
+    TextureKind {
+        multisampled: true,
+        ..TextureKind::d2(wgpu::TextureSampleType::Depth)
+    },
+    FRAGMENT,
+)];
+
 /// The frame's skinning pass (`wgsl/skin.wgsl`).
 pub const SKIN_BINDINGS: [Binding; 4] = [
     binding("rest", Access::StorageRead, "array<SkinVertex>", COMPUTE),

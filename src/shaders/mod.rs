@@ -67,9 +67,10 @@ mod windows;
 use crate::bins::{Bin, BinKind};
 use crate::scene::Shading;
 pub use binding_lists::{
-    CANDIDATE_BINDINGS, COARSE_BINDINGS, CULL_BINDINGS, DRAW_BINDINGS, FAR_COMPOSITE_BINDINGS,
-    FOVEATED_COMPOSITE_BINDINGS, LIGHT_CLUSTER_BINDINGS, MATERIAL_BINDINGS, MORPH_BINDINGS,
-    POSE_BINDINGS, SCATTER_BINDINGS, SHADOW_MAP_BINDINGS, SKIN_BINDINGS, pyramid_bindings,
+    CANDIDATE_BINDINGS, COARSE_BINDINGS, CULL_BINDINGS, DEPTH_RESOLVE_BINDINGS, DRAW_BINDINGS,
+    FAR_COMPOSITE_BINDINGS, FOVEATED_COMPOSITE_BINDINGS, LIGHT_CLUSTER_BINDINGS, MATERIAL_BINDINGS,
+    MORPH_BINDINGS, POSE_BINDINGS, SCATTER_BINDINGS, SHADOW_MAP_BINDINGS, SKIN_BINDINGS,
+    pyramid_bindings,
 };
 pub use bindings::{
     Access, Binding, Bound, TextureKind, bind_group, bind_group_layout, declarations,
@@ -378,6 +379,13 @@ pub fn foveated_composite_source() -> String {
     [EYE_HALVES, &bindings, body].concat()
 }
 
+/// The compositor's depth resolve (`wgsl/depth_resolve.wgsl`).
+pub fn depth_resolve_source() -> String {
+    let body = include_str!("../../wgsl/depth_resolve.wgsl");
+    let bindings = declarations(&DEPTH_RESOLVE_BINDINGS, 0, &Windows::WHOLE);
+    [&bindings, body].concat()
+}
+
 /// The frame's shadow pass: depth only, the light as the display's eye 0
 /// (`wgsl/shadow.wgsl` after the mono decode).
 pub fn shadow_source(windows: &Windows) -> String {
@@ -507,6 +515,10 @@ pub fn all_sources() -> Vec<(String, String)> {
                 (
                     "stereocull.foveated_composite".to_string(),
                     foveated_composite_source(),
+                ),
+                (
+                    "stereocull.depth_resolve".to_string(),
+                    depth_resolve_source(),
                 ),
                 ("stereocull.skin".to_string(), skin_source()),
                 ("stereocull.morph".to_string(), morph_source()),

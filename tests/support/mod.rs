@@ -384,13 +384,26 @@ pub fn on_plane(
     (x, y): (u32, u32),
     (eye_w, eye_h): (u32, u32),
 ) -> (Vec3, Vec3) {
+    let at = (x as f64 + 0.5, y as f64 + 0.5);
+    let (p, eye) = on_plane_at(rig, e, at, (eye_w, eye_h));
+    (p.as_vec3(), eye)
+}
+
+/// Where the point `(x, y)` (pixels from the top left corner of eye `e`'s view) of
+/// display 0 sees the plane z = 0, in f64, and that eye's position.
+pub fn on_plane_at(
+    rig: &Rig,
+    e: usize,
+    (x, y): (f64, f64),
+    (eye_w, eye_h): (u32, u32),
+) -> (DVec3, Vec3) {
     let view = rig.resolve().unwrap().displays[0].eyes[e];
     let world_from_clip = view.world_from_clip().as_dmat4();
     let ndc = |z: f64| {
         let p = world_from_clip
             * DVec4::new(
-                (x as f64 + 0.5) / eye_w as f64 * 2.0 - 1.0,
-                1.0 - (y as f64 + 0.5) / eye_h as f64 * 2.0,
+                x / eye_w as f64 * 2.0 - 1.0,
+                1.0 - y / eye_h as f64 * 2.0,
                 z,
                 1.0,
             );
@@ -398,8 +411,7 @@ pub fn on_plane(
     };
     let (a, b) = (ndc(0.25), ndc(0.75));
     let t = a.z / (a.z - b.z);
-    let p: DVec3 = a + (b - a) * t;
-    (p.as_vec3(), view.position())
+    (a + (b - a) * t, view.position())
 }
 
 /// Linear to 8-bit sRGB, as the target's format stores it.
