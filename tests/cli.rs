@@ -596,6 +596,61 @@ fn stress_reports_per_frame_and_summary_figures() {
     );
 }
 
+/// `stress --latch` latches each frame's pose at its submit: the summary says so and
+/// reports the pose's age at the submit either way (how the two compare is a figure,
+/// docs/performance.md, not a test). With the CPU cull it is the one-line error naming
+/// the GPU cull.
+#[test]
+fn stress_latches_the_pose_at_the_submit() {
+    let run = |latch: bool, cull: &str| {
+        let mut args = vec![
+            "stress",
+            "--scene",
+            "procedural:5000",
+            "--rig",
+            "cave",
+            "--frames",
+            "5",
+            "--width",
+            "16",
+            "--height",
+            "16",
+            "--occlusion",
+            "off",
+            "--cull",
+            cull,
+            "--json",
+        ];
+        if latch {
+            args.push("--latch");
+        }
+        stereocull(&args)
+    };
+    let summary = |latch: bool| {
+        let out = run(latch, "gpu");
+        assert!(
+            out.status.success(),
+            "{}",
+            String::from_utf8_lossy(&out.stderr)
+        );
+        let v: Value = serde_json::from_slice(&out.stdout).unwrap();
+        v["summary"].clone()
+    };
+    let (latched, sampled) = (summary(true), summary(false));
+    assert_eq!(
+        (latched["latch"].as_bool(), sampled["latch"].as_bool()),
+        (Some(true), Some(false))
+    );
+    let age = |s: &Value| s["pose_age_at_submit_ms_median"].as_f64().unwrap();
+    assert!(age(&latched) > 0.0 && age(&sampled) > 0.0);
+    let cpu = run(true, "cpu");
+    let err = String::from_utf8_lossy(&cpu.stderr);
+    assert!(
+        !cpu.status.success() && err.contains("GPU cull") && err.lines().count() == 1,
+        "{err}"
+    );
+}
+
 /// The soak run, shortened for CI (the README's runs 10,000 frames): with the viewer
 /// moving every frame, the live wgpu objects and the device allocations stay exactly
 /// constant, and process memory does not grow past allocator noise after warm-up (a

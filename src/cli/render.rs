@@ -84,6 +84,9 @@ pub struct FrameFigures {
     /// Of `cpu_ms`, the sync.
     pub sync_ms: f64,
     pub sync: SyncStats,
+    /// From sampling the pose the frame is drawn with (the frame's start, or the
+    /// latch's sample) to its submit call.
+    pub pose_age_ms: f64,
 }
 
 impl Session {
@@ -148,6 +151,17 @@ impl Session {
     /// Applies this frame's edits (if live), syncs them, writes the contexts for `time`
     /// (seconds), records and submits one frame.
     pub fn frame(&mut self, time: f32) -> Result<FrameFigures> {
+        self.frame_latched(time, None)
+    }
+
+    /// [`Session::frame`]; with `latch`, the frame's pose is sampled again once the
+    /// frame is recorded (`latch` moves the rig's viewer) and latched before the submit
+    /// ([`Renderer::latch`]).
+    pub fn frame_latched(
+        &mut self,
+        time: f32,
+        latch: Option<&dyn Fn(&mut Rig)>,
+    ) -> Result<FrameFigures> {
         let ms = |since: Instant| since.elapsed().as_secs_f64() * 1e3;
         let (mut edit_ms, mut sync_ms, mut sync) = (0.0, 0.0, SyncStats::default());
         let start = Instant::now();
@@ -166,14 +180,7 @@ impl Session {
             sync_ms = ms(sync_start);
         }
         self.frames += 1;
-        let mut stats = self.renderer.submit_frame_timed(
-            &self.gpu.device,
-            &self.gpu.queue,
-            &self.rig,
-            time,
-            &self.targets,
-            self.timer.as_mut(),
-        )?;
+        let (mut stats, pose_age_ms) = self.submit(time, start, latch)?;
         stats.bytes_uploaded += sync.bytes_uploaded;
         Ok(FrameFigures {
             stats,
@@ -181,7 +188,46 @@ impl Session {
             edit_ms,
             sync_ms,
             sync,
+            pose_age_ms,
         })
+    }
+
+    /// Prepares, records and submits the frame at the rig's pose, sampled at `sampled`;
+    /// with `latch`, samples the pose again once the frame is recorded (`latch` moves
+    /// the rig's viewer) and latches it. Returns the frame's figures and the pose's age
+    /// at the submit in milliseconds. (Culling on the CPU with occlusion the frame is
+    /// submitted in two halves: its age then runs to the end of the second.)
+    fn submit(
+        &mut self,
+        time: f32,
+        mut sampled: Instant,
+        latch: Option<&dyn Fn(&mut Rig)>,
+    ) -> Result<(FrameStats, f64)> {
+        let (device, queue) = (&self.gpu.device, &self.gpu.queue);
+        if self.renderer.reads_back() {
+            let timer = self.timer.as_mut();
+            let stats = (self.renderer).submit_frame_timed(
+                device,
+                queue,
+                &self.rig,
+                time,
+                &self.targets,
+                timer,
+            )?;
+            return Ok((stats, sampled.elapsed().as_secs_f64() * 1e3));
+        }
+        let mut stats = self.renderer.prepare(queue, &self.rig, time)?;
+        let mut encoder = device.create_command_encoder(&Default::default());
+        let views: Vec<_> = self.targets.iter().map(DisplayTarget::views).collect();
+        stats = stats + (self.renderer).encode(&mut encoder, &views, self.timer.as_mut())?;
+        if let Some(latch) = latch {
+            sampled = Instant::now();
+            latch(&mut self.rig);
+            stats.bytes_uploaded += self.renderer.latch(queue, &self.rig)?.bytes_uploaded;
+        }
+        let age = sampled.elapsed().as_secs_f64() * 1e3;
+        queue.submit([encoder.finish()]);
+        Ok((stats, age))
     }
 }
 

@@ -32,6 +32,10 @@ pub struct StressArgs {
     /// Print per-frame and summary figures as one JSON object instead of text.
     #[arg(long)]
     pub json: bool,
+    /// Latch each frame's pose at the submit (GPU cull): the pose is sampled from the
+    /// viewer's path again once the frame is recorded ([`crate::renderer::Renderer::latch`]).
+    #[arg(long)]
+    pub latch: bool,
 }
 
 #[derive(Serialize)]
@@ -53,6 +57,8 @@ struct FrameRecord {
     triangles_submitted: Option<u64>,
     /// Until the GPU finished the frame.
     frame_ms: f64,
+    /// From sampling the pose the frame is drawn with to its submit.
+    pose_age_ms: f64,
     /// The skinning pass's GPU milliseconds (timestamps; `None` without skins or them).
     skin_gpu_ms: Option<f64>,
     pose_gpu_ms: Option<f64>,
@@ -86,6 +92,10 @@ struct Summary {
     churn_percent: f64,
     frame_ms_median: f64,
     frame_ms_p95: f64,
+    /// Whether each frame's pose was latched at its submit (`--latch`), and the median
+    /// time from sampling the pose a frame is drawn with to its submit.
+    latch: bool,
+    pose_age_at_submit_ms_median: f64,
     visible_mean: Vec<f64>,
     /// Median over the frames of the sphere tests (GPU culling).
     sphere_tests_median: Option<f64>,
@@ -174,11 +184,15 @@ pub fn stress(args: &StressArgs) -> Result<()> {
     let every = (args.frames / 10).max(1);
     for frame in 0..args.frames {
         // Look around and sway, so that culling sees a different view every frame.
-        let phase = frame as f32 / args.frames.max(1) as f32 * std::f32::consts::TAU;
-        session.rig.viewer.yaw_deg = base.yaw_deg + 40.0 * phase.sin();
-        session.rig.viewer.position[0] = base.position[0] + 0.3 * (2.0 * phase).sin();
+        let sway = |rig: &mut crate::rig::Rig| {
+            let phase = frame as f32 / args.frames.max(1) as f32 * std::f32::consts::TAU;
+            rig.viewer.yaw_deg = base.yaw_deg + 40.0 * phase.sin();
+            rig.viewer.position[0] = base.position[0] + 0.3 * (2.0 * phase).sin();
+        };
+        sway(&mut session.rig);
         let start = Instant::now();
-        let figures = session.frame(frame as f32 * FRAME_SECONDS)?;
+        let latch = args.latch.then_some(&sway as &dyn Fn(&mut crate::rig::Rig));
+        let figures = session.frame_latched(frame as f32 * FRAME_SECONDS, latch)?;
         let (stats, cpu_ms) = (figures.stats, figures.cpu_ms);
         session.gpu.wait()?;
         let frame_ms = start.elapsed().as_secs_f64() * 1e3;
@@ -212,6 +226,7 @@ pub fn stress(args: &StressArgs) -> Result<()> {
             reloaded: figures.sync.reloaded,
             triangles_submitted,
             frame_ms,
+            pose_age_ms: figures.pose_age_ms,
             skin_gpu_ms,
             pose_gpu_ms,
             visible,
@@ -297,6 +312,8 @@ fn summarize(
         churn_percent: args.edits.churn,
         frame_ms_median: percentile(&frame, 0.5),
         frame_ms_p95: percentile(&frame, 0.95),
+        latch: args.latch,
+        pose_age_at_submit_ms_median: percentile(&of(|r| r.pose_age_ms), 0.5),
         visible_mean: (0..displays)
             .map(|d| records.iter().map(|r| r.visible[d] as f64).sum::<f64>() / n)
             .collect(),
@@ -356,6 +373,15 @@ fn print_summary(s: &Summary) {
     println!(
         "cpu (sync+prepare+encode+submit): median {:.3} ms, p95 {:.3} ms",
         s.cpu_ms_median, s.cpu_ms_p95
+    );
+    println!(
+        "pose age at submit: median {:.3} ms ({})",
+        s.pose_age_at_submit_ms_median,
+        if s.latch {
+            "latched"
+        } else {
+            "sampled before prepare"
+        }
     );
     if s.moving_percent > 0.0 || s.churn_percent > 0.0 {
         println!(

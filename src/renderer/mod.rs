@@ -262,6 +262,8 @@ pub struct Renderer {
     far_sizes: Vec<Option<(u32, u32)>>,
     /// What the last `encode` or `encode_culls` recorded, pass by pass.
     passes: Vec<PassRecord>,
+    /// The time the last `prepare` planned for: what a `latch` plans at again.
+    prepared: Option<f32>,
 }
 
 impl Renderer {
@@ -337,6 +339,7 @@ impl Renderer {
             coarse,
             far_sizes: plan.far_sizes(),
             passes: Vec::new(),
+            prepared: None,
         })
     }
 
@@ -454,6 +457,48 @@ impl Renderer {
     /// only poses may change. `time` (seconds on the caller's clock) goes into the frame
     /// context, from which the GPU animates instances.
     pub fn prepare(&mut self, queue: &wgpu::Queue, rig: &Rig, time: f32) -> Result<FrameStats> {
+        let mut stats = self.write_plan(queue, rig, time)?;
+        if let Some(morph) = &mut self.morph {
+            stats.bytes_uploaded += morph.prepare(queue, time);
+        }
+        // Texels go up with the first frame: `new` has no queue.
+        stats.bytes_uploaded += self.path.core_mut().draw_scene.materials.upload(queue);
+        self.prepared = Some(time);
+        Ok(stats)
+    }
+
+    /// Late latching: after [`Renderer::encode`] and before the submit, the frame's
+    /// pose replaced by `rig`'s (sampled as late as the caller can), at the time the
+    /// frame was prepared for. Every pass the frame recorded reads the pose from the
+    /// contexts and cull inputs that `prepare` writes (never from the recorded commands),
+    /// so this plans the frame again from `rig` and writes them again: the frame is the
+    /// one planned and drawn at `rig`, whatever the distance from the planned pose
+    /// (the levels of detail, the coarse cull's blocks, the far split, the foveated
+    /// insets, the lights' clusters and the shadow's fit are all chosen on the GPU from
+    /// what is written here, or written here). `rig` must have the renderer's displays,
+    /// as for `prepare`.
+    ///
+    /// Culling on the CPU cannot latch: its cull ran in `prepare`, from the planned
+    /// pose, and the frame's draws hold its results; that is [`Error::Unsupported`], as
+    /// is a latch before any `prepare`.
+    pub fn latch(&mut self, queue: &wgpu::Queue, rig: &Rig) -> Result<FrameStats> {
+        if self.options.cull == CullMode::Cpu {
+            return Err(Error::Unsupported(
+                "latching a pose needs the GPU cull: the CPU cull ran in prepare, from the planned pose, and the recorded draws hold its results".into(),
+            ));
+        }
+        let Some(time) = self.prepared else {
+            return Err(Error::Unsupported(
+                "latch comes after prepare and encode, before the submit".into(),
+            ));
+        };
+        self.write_plan(queue, rig, time)
+    }
+
+    /// Plans the frame from `rig` at `time` and writes what its passes read of the
+    /// pose: the frame context, the lights' views, each display's contexts and cull
+    /// inputs, the shadow's light.
+    fn write_plan(&mut self, queue: &wgpu::Queue, rig: &Rig, time: f32) -> Result<FrameStats> {
         let plan = self.plan(rig, time)?;
         let frame_bytes = write(queue, &self.frame, &uniform_bytes(&plan.frame));
         let light_bytes = self.lighting.prepare(queue, &plan);
@@ -468,12 +513,7 @@ impl Renderer {
             stats.bytes_uploaded += shadow.prepare(queue, &light, size, culler);
             stats.cpu_upload += start.elapsed();
         }
-        if let Some(morph) = &mut self.morph {
-            stats.bytes_uploaded += morph.prepare(queue, time);
-        }
-        // Texels go up with the first frame: `new` has no queue.
-        stats.bytes_uploaded +=
-            frame_bytes + light_bytes + self.path.core_mut().draw_scene.materials.upload(queue);
+        stats.bytes_uploaded += frame_bytes + light_bytes;
         Ok(stats)
     }
 
