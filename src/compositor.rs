@@ -19,6 +19,7 @@ use serde::Serialize;
 use crate::error::Result;
 use crate::readback::read_depth;
 use crate::rig::{ResolvedDisplay, ViewLayout};
+use crate::shaders::{ScreenTargets, depth_write, screen_pipeline};
 
 /// Depth at each view's near plane: OpenXR's `minDepth`.
 pub const MIN_DEPTH: f32 = 0.0;
@@ -125,38 +126,14 @@ impl DepthResolve {
         let list = &crate::shaders::DEPTH_RESOLVE_BINDINGS;
         let windows = &crate::shaders::Windows::WHOLE;
         let layout = crate::shaders::bind_group_layout(device, label, list, windows);
-        let module = device.create_shader_module(wgpu::ShaderModuleDescriptor {
-            label: Some(label),
-            source: wgpu::ShaderSource::Wgsl(crate::shaders::depth_resolve_source().into()),
-        });
-        let pipeline_layout = crate::shaders::pipeline_layout(device, label, &layout);
-        let pipeline = device.create_render_pipeline(&wgpu::RenderPipelineDescriptor {
-            label: Some(label),
-            layout: Some(&pipeline_layout),
-            vertex: wgpu::VertexState {
-                module: &module,
-                entry_point: Some("vs_main"),
-                compilation_options: Default::default(),
-                buffers: &[],
-            },
-            primitive: wgpu::PrimitiveState::default(),
-            depth_stencil: Some(wgpu::DepthStencilState {
-                format: DEPTH_FORMAT,
-                depth_write_enabled: Some(true),
-                depth_compare: Some(wgpu::CompareFunction::Always),
-                stencil: Default::default(),
-                bias: Default::default(),
-            }),
-            multisample: Default::default(),
-            fragment: Some(wgpu::FragmentState {
-                module: &module,
-                entry_point: Some("fs_main"),
-                compilation_options: Default::default(),
-                targets: &[],
-            }),
+        let source = crate::shaders::depth_resolve_source();
+        let targets = ScreenTargets {
+            color: None,
+            depth: Some(depth_write(DEPTH_FORMAT)),
+            samples: 1,
             multiview_mask: None,
-            cache: None,
-        });
+        };
+        let pipeline = screen_pipeline(device, label, (source, &layout), targets);
         DepthResolve { pipeline, layout }
     }
 

@@ -118,19 +118,26 @@ impl EyeContext {
     /// (0.5 and -+0.5 for double-wide stereo), so such draws land as a full-target draw
     /// with that viewport would.
     pub fn placed(self, viewport: [u32; 4], size: (u32, u32)) -> EyeContext {
-        let [x, y, w, h] = viewport.map(f64::from);
-        let (tw, th) = (size.0 as f64, size.1 as f64);
         EyeContext {
-            viewport: Vec4::new(x as f32, y as f32, w as f32, h as f32),
-            placement: Vec4::new(
-                (w / tw) as f32,
-                ((2.0 * x + w) / tw - 1.0) as f32,
-                (h / th) as f32,
-                (1.0 - (2.0 * y + h) / th) as f32,
-            ),
+            viewport: Vec4::from(viewport.map(|v| v as f32)),
+            placement: placement(viewport, size),
             ..self
         }
     }
+}
+
+/// The placement of `viewport` (`[x, y, width, height]` pixels) in a target of `size`
+/// pixels: a view's clip coordinates `(x, y, w)` land at `x * p.x + w * p.y`,
+/// `y * p.z + w * p.w` of the target's.
+pub fn placement(viewport: [u32; 4], size: (u32, u32)) -> Vec4 {
+    let [x, y, w, h] = viewport.map(f64::from);
+    let (tw, th) = (size.0 as f64, size.1 as f64);
+    Vec4::new(
+        (w / tw) as f32,
+        ((2.0 * x + w) / tw - 1.0) as f32,
+        (h / th) as f32,
+        (1.0 - (2.0 * y + h) / th) as f32,
+    )
 }
 
 /// A view that fills its target.

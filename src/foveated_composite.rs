@@ -107,32 +107,14 @@ impl FoveatedComposite {
     pub fn new(device: &wgpu::Device, format: wgpu::TextureFormat) -> FoveatedComposite {
         let label = "stereocull.foveated_composite";
         let layout = bind_group_layout(device);
-        let module = device.create_shader_module(wgpu::ShaderModuleDescriptor {
-            label: Some(label),
-            source: wgpu::ShaderSource::Wgsl(crate::shaders::foveated_composite_source().into()),
-        });
-        let pipeline_layout = crate::shaders::pipeline_layout(device, label, &layout);
-        let pipeline = device.create_render_pipeline(&wgpu::RenderPipelineDescriptor {
-            label: Some(label),
-            layout: Some(&pipeline_layout),
-            vertex: wgpu::VertexState {
-                module: &module,
-                entry_point: Some("vs_main"),
-                compilation_options: Default::default(),
-                buffers: &[],
-            },
-            primitive: wgpu::PrimitiveState::default(),
-            depth_stencil: None,
-            multisample: Default::default(),
-            fragment: Some(wgpu::FragmentState {
-                module: &module,
-                entry_point: Some("fs_main"),
-                compilation_options: Default::default(),
-                targets: &[Some(format.into())],
-            }),
+        let source = crate::shaders::foveated_composite_source();
+        let targets = crate::shaders::ScreenTargets {
+            color: Some(format.into()),
+            depth: None,
+            samples: 1,
             multiview_mask: None,
-            cache: None,
-        });
+        };
+        let pipeline = crate::shaders::screen_pipeline(device, label, (source, &layout), targets);
         FoveatedComposite { pipeline, layout }
     }
 

@@ -87,6 +87,61 @@ fn map(device: &wgpu::Device, staging: &wgpu::Buffer, size: u64) -> Result<Vec<u
     Ok(bytes)
 }
 
+/// Every layer of `texture` read back, one copy per layer (lavapipe copies a depth
+/// array's layers in one copy all into the first layer's place), `texel` bytes a texel
+/// of `aspect`: the bytes, rows padded to the copy alignment, layer after layer, and
+/// the padded row's length.
+fn read_layers(
+    device: &wgpu::Device,
+    queue: &wgpu::Queue,
+    texture: &wgpu::Texture,
+    (texel, aspect): (u32, wgpu::TextureAspect),
+) -> Result<(u32, Vec<u8>)> {
+    let (w, h, layers) = (
+        texture.width(),
+        texture.height(),
+        texture.depth_or_array_layers(),
+    );
+    let row = (texel * w).next_multiple_of(wgpu::COPY_BYTES_PER_ROW_ALIGNMENT);
+    let size = (row * h * layers) as u64;
+    let staging = device.create_buffer(&wgpu::BufferDescriptor {
+        label: Some("stereocull.readback_texture"),
+        size,
+        usage: wgpu::BufferUsages::MAP_READ | wgpu::BufferUsages::COPY_DST,
+        mapped_at_creation: false,
+    });
+    let mut encoder = device.create_command_encoder(&Default::default());
+    for layer in 0..layers {
+        encoder.copy_texture_to_buffer(
+            wgpu::TexelCopyTextureInfo {
+                texture,
+                mip_level: 0,
+                origin: wgpu::Origin3d {
+                    x: 0,
+                    y: 0,
+                    z: layer,
+                },
+                aspect,
+            },
+            wgpu::TexelCopyBufferInfo {
+                buffer: &staging,
+                layout: wgpu::TexelCopyBufferLayout {
+                    offset: u64::from(row * h * layer),
+                    bytes_per_row: Some(row),
+                    rows_per_image: Some(h),
+                },
+            },
+            wgpu::Extent3d {
+                width: w,
+                height: h,
+                depth_or_array_layers: 1,
+            },
+        );
+    }
+    queue.submit([encoder.finish()]);
+    Ok((row, map(device, &staging, size)?))
+}
+
 /// Reads an RGBA8 texture (bytes as stored, sRGB or not) into an image; the layers of
 /// an array texture are placed side by side, so a two-layer stereo target reads back
 /// like a double-wide one.
@@ -100,29 +155,7 @@ pub fn read_rgba8(
         texture.height(),
         texture.depth_or_array_layers(),
     );
-    let row = (4 * w).next_multiple_of(wgpu::COPY_BYTES_PER_ROW_ALIGNMENT);
-    let size = (row * h * layers) as u64;
-    let staging = device.create_buffer(&wgpu::BufferDescriptor {
-        label: Some("stereocull.readback_image"),
-        size,
-        usage: wgpu::BufferUsages::MAP_READ | wgpu::BufferUsages::COPY_DST,
-        mapped_at_creation: false,
-    });
-    let mut encoder = device.create_command_encoder(&Default::default());
-    encoder.copy_texture_to_buffer(
-        texture.as_image_copy(),
-        wgpu::TexelCopyBufferInfo {
-            buffer: &staging,
-            layout: wgpu::TexelCopyBufferLayout {
-                offset: 0,
-                bytes_per_row: Some(row),
-                rows_per_image: Some(h),
-            },
-        },
-        texture.size(),
-    );
-    queue.submit([encoder.finish()]);
-    let padded = map(device, &staging, size)?;
+    let (row, padded) = read_layers(device, queue, texture, (4, wgpu::TextureAspect::All))?;
     let mut image = image::RgbaImage::new(w * layers, h);
     for (i, chunk) in padded.chunks(row as usize).enumerate() {
         let (layer, y) = (i as u32 / h, i as u32 % h);
@@ -147,46 +180,7 @@ pub fn read_depth(
         texture.height(),
         texture.depth_or_array_layers(),
     );
-    let row = (4 * w).next_multiple_of(wgpu::COPY_BYTES_PER_ROW_ALIGNMENT);
-    let size = (row * h * layers) as u64;
-    let staging = device.create_buffer(&wgpu::BufferDescriptor {
-        label: Some("stereocull.readback_depth"),
-        size,
-        usage: wgpu::BufferUsages::MAP_READ | wgpu::BufferUsages::COPY_DST,
-        mapped_at_creation: false,
-    });
-    let mut encoder = device.create_command_encoder(&Default::default());
-    // A copy per layer: lavapipe copies a depth array's layers in one copy all into the
-    // first layer's place.
-    for layer in 0..layers {
-        encoder.copy_texture_to_buffer(
-            wgpu::TexelCopyTextureInfo {
-                texture,
-                mip_level: 0,
-                origin: wgpu::Origin3d {
-                    x: 0,
-                    y: 0,
-                    z: layer,
-                },
-                aspect: wgpu::TextureAspect::DepthOnly,
-            },
-            wgpu::TexelCopyBufferInfo {
-                buffer: &staging,
-                layout: wgpu::TexelCopyBufferLayout {
-                    offset: u64::from(row * h * layer),
-                    bytes_per_row: Some(row),
-                    rows_per_image: Some(h),
-                },
-            },
-            wgpu::Extent3d {
-                width: w,
-                height: h,
-                depth_or_array_layers: 1,
-            },
-        );
-    }
-    queue.submit([encoder.finish()]);
-    let padded = map(device, &staging, size)?;
+    let (row, padded) = read_layers(device, queue, texture, (4, wgpu::TextureAspect::DepthOnly))?;
     let width = w * layers;
     let mut values = vec![0.0; (width * h) as usize];
     for (i, chunk) in padded.chunks(row as usize).enumerate() {

@@ -477,6 +477,43 @@ fn render_writes_the_compositor_depth_and_its_contract() {
     assert!(drawn > 200, "{drawn} drawn pixels");
 }
 
+/// `render --visibility-mask on` reports the pixels the `hmd` preset's mask hides (its
+/// CPU twin's count) and the fragment invocations beside them; off, none are masked.
+#[test]
+fn render_reports_masked_pixels_and_fragments() {
+    let masked = |on: &str| {
+        let dir = tempfile::tempdir().unwrap();
+        let out = dir.path().to_str().unwrap();
+        let args = [
+            "render",
+            "--visibility-mask",
+            on,
+            "--msaa",
+            "1",
+            "--width",
+            "40",
+            "--height",
+            "32",
+            "--out",
+            out,
+        ];
+        let run = stereocull(&args);
+        assert!(
+            run.status.success(),
+            "{}",
+            String::from_utf8_lossy(&run.stderr)
+        );
+        let text = std::fs::read_to_string(dir.path().join("stats.json")).unwrap();
+        let stats: Value = serde_json::from_str(&text).unwrap();
+        assert!(stats["frame"].get("fragment_invocations").is_some());
+        stats["frame"]["masked_pixels"].as_u64().unwrap()
+    };
+    let mask = stereocull::rig::VisibilityMask::headset();
+    let expected: u64 = (0..2).map(|v| mask.hidden_pixels(v, (40, 32))).sum();
+    assert_eq!((masked("on"), masked("off")), (expected, 0));
+    assert!(expected > 0);
+}
+
 /// One file of each kind exporters and optimizers write, from the importer's corpus
 /// seeds: each renders in both eyes. The lights-only seed loads but has nothing to
 /// draw, which `render` says in its one line. (The other seeds are small synthetic

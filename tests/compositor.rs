@@ -4,31 +4,14 @@
 
 mod support;
 
-use glam::Vec3;
 use stereocull::compositor::{MAX_DEPTH, MIN_DEPTH, read_layer};
 use stereocull::renderer::{Renderer, RendererOptions, StereoMode};
 use stereocull::rig::Rig;
-use stereocull::scene::{Animation, Instance, Scene, Vertex};
+use stereocull::scene::Scene;
 
 /// The plane z = 0, 40 m a side: every pixel of the rig below sees it.
 fn ground() -> Scene {
-    let mut scene = Scene::default();
-    let corner = |x: f32, y: f32| Vertex::new(Vec3::new(x, y, 0.0), Vec3::Z);
-    let vertices = [
-        corner(-20.0, -20.0),
-        corner(20.0, -20.0),
-        corner(20.0, 20.0),
-        corner(-20.0, 20.0),
-    ];
-    let mesh = scene.add_mesh("plane", &vertices, &[0, 1, 2, 0, 2, 3]);
-    scene.instances.push(Instance {
-        world_from_local: glam::Affine3A::IDENTITY,
-        mesh,
-        color: glam::Vec4::ONE,
-        material: None,
-        animation: Animation::NONE,
-    });
-    scene
+    support::plane(20.0)
 }
 
 /// The hmd 0.6 m before the plane, turned so that it sees the plane at a slant: depth

@@ -9,7 +9,7 @@ use rand::{Rng, SeedableRng};
 use stereocull::lights::{DISPLAY_WORDS, Light, LightKind, MAX_LIGHTS, cluster_bits};
 use stereocull::pbr::{self, Pbr};
 use stereocull::renderer::{Renderer, RendererOptions};
-use stereocull::scene::{Animation, Instance, Scene, Vertex};
+use stereocull::scene::Scene;
 
 mod support;
 
@@ -117,22 +117,7 @@ fn gpu_clusters_equal_the_cpu_twins_on_every_preset() {
 
 /// The 2 m plane z = 0 facing +z, white and untextured, and `lights`.
 fn lit_plane(lights: Vec<Light>) -> Scene {
-    let mut scene = Scene::default();
-    let corner = |x: f32, y: f32| Vertex::new(Vec3::new(x, y, 0.0), Vec3::Z);
-    let vertices = [
-        corner(-1.0, -1.0),
-        corner(1.0, -1.0),
-        corner(1.0, 1.0),
-        corner(-1.0, 1.0),
-    ];
-    let mesh = scene.add_mesh("plane", &vertices, &[0, 1, 2, 0, 2, 3]);
-    scene.instances.push(Instance {
-        world_from_local: glam::Affine3A::IDENTITY,
-        mesh,
-        color: glam::Vec4::ONE,
-        material: None,
-        animation: Animation::NONE,
-    });
+    let mut scene = support::plane(1.0);
     scene.lights = lights;
     scene
 }

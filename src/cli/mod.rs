@@ -125,6 +125,12 @@ pub struct SceneArgs {
     /// Pixels the eyes' images of a far instance may differ by (sets the far distance).
     #[arg(long, default_value_t = crate::far_layer::FAR_THRESHOLD_PX)]
     pub far_threshold: f32,
+    /// The lens's hidden area (a rig display's `visibility_mask`; the `hmd` presets
+    /// have one) written to depth before the scene: no fragment is shaded there
+    /// (`instanced` and `multiview`; off by default, so that every mode draws the same
+    /// image).
+    #[arg(long, value_enum, default_value = "off")]
+    pub visibility_mask: Switch,
     /// Foveated displays: cull the insets' frustum too, so the inset pair draws only what
     /// it can show (one more cull and multi-draw per display).
     #[arg(long, value_enum, default_value = "off")]
@@ -186,6 +192,7 @@ impl SceneArgs {
             far_layer: self.far_layer.on(),
             far_threshold_px: self.far_threshold,
             inset_cull: self.inset_cull.on(),
+            visibility_mask: self.visibility_mask.on(),
             ..Default::default()
         }
     }

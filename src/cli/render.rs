@@ -374,6 +374,19 @@ fn display_images(
     Ok((drawn, Some(read_rgba8(device, queue, &output)?)))
 }
 
+/// The frame's figures, with the fragments it shaded (pipeline statistics, where the
+/// adapter counts them) and the pixels the visibility masks kept from being shaded.
+fn frame_json(
+    stats: &FrameStats,
+    queries: Option<&crate::profiling::FrameQueries>,
+    masked_pixels: u64,
+) -> serde_json::Value {
+    let mut frame = serde_json::json!(stats);
+    frame["fragment_invocations"] = serde_json::json!(queries.and_then(|q| q.fragment_invocations));
+    frame["masked_pixels"] = serde_json::json!(masked_pixels);
+    frame
+}
+
 fn save(image: &image::RgbaImage, path: &std::path::Path) -> Result<()> {
     image.save(path).map_err(|source| Error::Image {
         path: path.to_path_buf(),
@@ -497,7 +510,7 @@ pub fn render(args: &RenderArgs) -> Result<()> {
             "msaa": session.renderer.options().sample_count,
             "instances": session.scene.instances.len(),
             "gpu_bytes_per_instance": session.renderer.gpu_bytes_per_instance(),
-            "frame": stats,
+            "frame": frame_json(&stats, queries.as_ref(), session.renderer.masked_pixels()),
             "coarse_cull": session.renderer.coarse_cull(),
             "coarse_candidates": candidates,
             "shadows": session.renderer.options().shadows,

@@ -3,6 +3,7 @@
 //! render passes in `passes.rs`. The renderer decides what to draw
 //! (`renderer::indirect`, `renderer::classic`); this module knows how.
 
+pub mod mask;
 mod passes;
 mod pipelines;
 

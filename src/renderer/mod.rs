@@ -302,7 +302,7 @@ impl Renderer {
             slots,
             shadow_group: &shadow_map.bind_group,
         };
-        let path = Path::new(device, inputs)?;
+        let mut path = Path::new(device, inputs)?;
         let bound = (&frame, options.windows(device, slots));
         let FramePasses {
             skin,
@@ -310,7 +310,7 @@ impl Renderer {
             pose,
             shadow,
         } = path.frame_passes(device, (scene, &options), bound, |_| true)?;
-        let shapes = rig
+        let shapes: Vec<TargetShape> = rig
             .displays
             .iter()
             .map(|d| {
@@ -321,6 +321,12 @@ impl Renderer {
                 }
             })
             .collect();
+        if let (Path::Indirect(p), true) = (&mut path, options.visibility_mask) {
+            let displays: Vec<_> = (rig.displays.iter().zip(&shapes))
+                .map(|(d, s)| (d.visibility_mask.as_ref(), &s.layout, s.layered))
+                .collect();
+            p.masks = crate::draw::mask::display_masks(device, &displays, options.target_format());
+        }
         Ok(Renderer {
             options,
             frame,
@@ -401,6 +407,16 @@ impl Renderer {
             shape.layered,
             samples,
         ))
+    }
+
+    /// Pixels the displays' visibility masks keep from being shaded each frame (0 with
+    /// `RendererOptions::visibility_mask` off or no masks; the classic modes mask
+    /// nothing).
+    pub fn masked_pixels(&self) -> u64 {
+        match &self.path {
+            Path::Indirect(p) => p.masked_pixels(),
+            Path::Classic(_) => 0,
+        }
     }
 
     /// The options the renderer was made with.

@@ -198,6 +198,11 @@ pub struct RendererOptions {
     /// Distant instances drawn once per stereo display into a far layer both eyes share
     /// ([`crate::far_layer`]; the `instanced` mode).
     pub far_layer: bool,
+    /// Where a display carries the lens's hidden area ([`crate::rig::VisibilityMask`]),
+    /// it is written to depth before the scene so that no fragment is shaded there (the
+    /// `instanced` and `multiview` modes; the classic modes, there for comparison, do
+    /// not mask). Off by default, so that every mode draws the same image.
+    pub visibility_mask: bool,
     /// Pixels the eyes' images of a far instance may differ by: sets the far distance.
     pub far_threshold_px: f32,
     /// Foveated displays (`instanced`): cull the insets' frustum too, so that the inset
@@ -324,6 +329,7 @@ impl Default for RendererOptions {
             shadows: false,
             light: Light::default(),
             far_layer: false,
+            visibility_mask: false,
             far_threshold_px: FAR_THRESHOLD_PX,
             inset_cull: false,
             binding_limit: None,

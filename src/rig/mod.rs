@@ -14,11 +14,13 @@ use crate::error::{Error, Result};
 use crate::frustum::Fov;
 
 mod foveation;
+mod mask;
 mod posed;
 mod presets;
 mod resolve;
 
 pub use foveation::{Foveation, Gaze, ViewLayout};
+pub use mask::{MAX_MASK_TRIANGLES, MaskTriangle, VisibilityMask};
 pub use posed::{FovAngles, PosedView};
 pub use resolve::{ResolvedDisplay, ResolvedRig};
 
@@ -133,6 +135,9 @@ pub struct Display {
     /// Four views instead of two: an outer pair at a peripheral density and an inset
     /// per eye at the focus density (stereo displays only).
     pub foveation: Option<Foveation>,
+    /// The lens's hidden area per view, as the runtime gives it: written to depth
+    /// before the scene (`RendererOptions::visibility_mask`).
+    pub visibility_mask: Option<VisibilityMask>,
 }
 
 impl Display {
@@ -189,6 +194,8 @@ struct DisplayFile {
     views: Option<Vec<PosedView>>,
     #[serde(default, skip_serializing_if = "Option::is_none")]
     foveation: Option<Foveation>,
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    visibility_mask: Option<VisibilityMask>,
 }
 
 impl TryFrom<DisplayFile> for Display {
@@ -212,6 +219,7 @@ impl TryFrom<DisplayFile> for Display {
             resolution: f.resolution,
             mount,
             foveation: f.foveation,
+            visibility_mask: f.visibility_mask,
         })
     }
 }
@@ -231,6 +239,7 @@ impl From<Display> for DisplayFile {
             screen,
             views,
             foveation: d.foveation,
+            visibility_mask: d.visibility_mask,
         }
     }
 }
@@ -409,6 +418,9 @@ fn validate_display(d: &Display) -> std::result::Result<(), String> {
             return Err("foveation needs a stereo display (an inset per eye)".into());
         }
         f.check()?;
+    }
+    if let Some(mask) = &d.visibility_mask {
+        mask.check(d.views())?;
     }
     match &d.mount {
         Mount::Head(h) => validate_head(h),

@@ -1,5 +1,6 @@
 //! The rigs `Rig::preset` knows.
 
+use super::VisibilityMask;
 use super::{
     Display, Foveation, HeadFixed, Mount, Rig, Screen, Viewer, default_far, default_ipd,
     default_near,
@@ -36,6 +37,7 @@ pub(super) fn hmd() -> Rig {
                 pitch_deg: 0.0,
                 cant_deg: 0.0,
             }),
+            visibility_mask: Some(VisibilityMask::headset()),
         }],
     }
 }
@@ -48,6 +50,7 @@ pub(super) fn cave() -> Rig {
         stereo: true,
         resolution: [1024, 1024],
         foveation: None,
+        visibility_mask: None,
         mount: Mount::Screen(Screen {
             lower_left: ll,
             lower_right: lr,
@@ -97,6 +100,7 @@ pub(super) fn hmd_peripheral() -> Rig {
         stereo: false,
         resolution: [480, 800],
         foveation: None,
+        visibility_mask: None,
         mount: Mount::Head(HeadFixed {
             fov: Fov {
                 left: 0.58,

@@ -322,6 +322,15 @@ pub const FOVEATED_COMPOSITE_BINDINGS: [Binding; 2] = [
     ),
 ];
 
+/// The lens's hidden area written to depth (`wgsl/visibility_mask.wgsl`): each view's
+/// placed triangles.
+pub const VISIBILITY_MASK_BINDINGS: [Binding; 1] = [binding(
+    "mask",
+    Access::Uniform,
+    "MaskVertices",
+    wgpu::ShaderStages::VERTEX,
+)];
+
 /// The compositor's depth resolve (`wgsl/depth_resolve.wgsl`): one layer of a
 /// multisampled depth attachment.
 pub const DEPTH_RESOLVE_BINDINGS: [Binding; 1] = [texture(

@@ -70,12 +70,14 @@ pub use binding_lists::{
     CANDIDATE_BINDINGS, COARSE_BINDINGS, CULL_BINDINGS, DEPTH_RESOLVE_BINDINGS, DRAW_BINDINGS,
     FAR_COMPOSITE_BINDINGS, FOVEATED_COMPOSITE_BINDINGS, LIGHT_CLUSTER_BINDINGS, MATERIAL_BINDINGS,
     MORPH_BINDINGS, POSE_BINDINGS, SCATTER_BINDINGS, SHADOW_MAP_BINDINGS, SKIN_BINDINGS,
-    pyramid_bindings,
+    VISIBILITY_MASK_BINDINGS, pyramid_bindings,
 };
 pub use bindings::{
     Access, Binding, Bound, TextureKind, bind_group, bind_group_layout, declarations,
 };
-pub(crate) use bindings::{compute_pipeline, dispatch_size, pipeline_layout};
+pub(crate) use bindings::{
+    ScreenTargets, compute_pipeline, depth_write, dispatch_size, pipeline_layout, screen_pipeline,
+};
 pub use cull_passes::{
     CullPass, PYRAMID_LEVELS_PER_DISPATCH, PYRAMID_SIDE, Phase, pyramid_source, subgroup_tier,
 };
@@ -379,6 +381,32 @@ pub fn foveated_composite_source() -> String {
     [EYE_HALVES, &bindings, body].concat()
 }
 
+/// The most hidden triangles a view's visibility mask may have: the mask pass's buffer
+/// holds this many per view (`crate::rig::VisibilityMask`).
+pub const MAX_MASK_TRIANGLES: usize = 16;
+
+/// The lens's hidden area written to depth (`wgsl/visibility_mask.wgsl`): one view per
+/// instance side by side, or per `view_index` in `multiview`.
+pub fn visibility_mask_source(multiview: bool) -> String {
+    let per_view = 3 * MAX_MASK_TRIANGLES;
+    let header = format!(
+        "const MASK_VERTICES: u32 = {per_view}u;\nstruct MaskVertices {{ vertices: array<vec4<f32>, {}>, }}\n",
+        2 * per_view
+    );
+    let bindings = declarations(&VISIBILITY_MASK_BINDINGS, 0, &Windows::WHOLE);
+    let body = include_str!("../../wgsl/visibility_mask.wgsl");
+    let body = match multiview {
+        true => body
+            .replace(
+                "// MULTIVIEW_VIEW_INDEX",
+                "    @builtin(view_index) view: u32,",
+            )
+            .replace("VIEW *", "view *"),
+        false => body.replace("VIEW *", "instance *"),
+    };
+    [header, bindings, body].concat()
+}
+
 /// The compositor's depth resolve (`wgsl/depth_resolve.wgsl`).
 pub fn depth_resolve_source() -> String {
     let body = include_str!("../../wgsl/depth_resolve.wgsl");
@@ -519,6 +547,14 @@ pub fn all_sources() -> Vec<(String, String)> {
                 (
                     "stereocull.depth_resolve".to_string(),
                     depth_resolve_source(),
+                ),
+                (
+                    "stereocull.visibility_mask".to_string(),
+                    visibility_mask_source(false),
+                ),
+                (
+                    "stereocull.visibility_mask.multiview".to_string(),
+                    visibility_mask_source(true),
                 ),
                 ("stereocull.skin".to_string(), skin_source()),
                 ("stereocull.morph".to_string(), morph_source()),

@@ -376,6 +376,27 @@ pub fn with_random_bins(mut scene: Scene, seed: u64) -> Scene {
     scene
 }
 
+/// The plane z = 0 from -`half` to `half` in x and y, facing +z: one instance, untextured.
+pub fn plane(half: f32) -> Scene {
+    let mut scene = Scene::default();
+    let corner = |x: f32, y: f32| stereocull::scene::Vertex::new(Vec3::new(x, y, 0.0), Vec3::Z);
+    let vertices = [
+        corner(-half, -half),
+        corner(half, -half),
+        corner(half, half),
+        corner(-half, half),
+    ];
+    let mesh = scene.add_mesh("plane", &vertices, &[0, 1, 2, 0, 2, 3]);
+    scene.instances.push(Instance {
+        world_from_local: Affine3A::IDENTITY,
+        mesh,
+        color: Vec4::ONE,
+        material: None,
+        animation: Animation::NONE,
+    });
+    scene
+}
+
 /// Where the center of pixel (x, y) of eye `e` (its own half, `eye_w` x `eye_h`) of
 /// display 0 sees the plane z = 0, and that eye's position.
 pub fn on_plane(

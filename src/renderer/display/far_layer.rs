@@ -15,7 +15,8 @@ use crate::renderer::plan::{CullView, FramePlan};
 use crate::renderer::recorder::{PassRecord, Recorder};
 use crate::renderer::view::ViewPass;
 use crate::shaders::{
-    DrawKey, FAR_COMPOSITE_BINDINGS, Shaders, Windows, bind_group_layout, far_composite_source,
+    DrawKey, FAR_COMPOSITE_BINDINGS, ScreenTargets, Shaders, Windows, bind_group_layout,
+    far_composite_source, screen_pipeline,
 };
 
 /// What every far layer shares: the mono pipeline drawing into them (single-sampled),
@@ -223,41 +224,20 @@ fn composite_pipeline(
     format: TargetFormat,
 ) -> wgpu::RenderPipeline {
     let label = "stereocull.far_composite";
-    let module = device.create_shader_module(wgpu::ShaderModuleDescriptor {
-        label: Some(label),
-        source: wgpu::ShaderSource::Wgsl(far_composite_source().into()),
-    });
-    let pipeline_layout = crate::shaders::pipeline_layout(device, label, layout);
-    device.create_render_pipeline(&wgpu::RenderPipelineDescriptor {
-        label: Some(label),
-        layout: Some(&pipeline_layout),
-        vertex: wgpu::VertexState {
-            module: &module,
-            entry_point: Some("vs_main"),
-            compilation_options: Default::default(),
-            buffers: &[],
-        },
-        primitive: wgpu::PrimitiveState::default(),
-        depth_stencil: Some(wgpu::DepthStencilState {
-            format: format.depth,
-            depth_write_enabled: Some(true),
-            depth_compare: Some(wgpu::CompareFunction::LessEqual),
-            stencil: Default::default(),
-            bias: Default::default(),
-        }),
-        multisample: wgpu::MultisampleState {
-            count: format.samples,
-            ..Default::default()
-        },
-        fragment: Some(wgpu::FragmentState {
-            module: &module,
-            entry_point: Some("fs_main"),
-            compilation_options: Default::default(),
-            targets: &[Some(format.color.into())],
-        }),
+    let depth = wgpu::DepthStencilState {
+        format: format.depth,
+        depth_write_enabled: Some(true),
+        depth_compare: Some(wgpu::CompareFunction::LessEqual),
+        stencil: Default::default(),
+        bias: Default::default(),
+    };
+    let targets = ScreenTargets {
+        color: Some(format.color.into()),
+        depth: Some(depth),
+        samples: format.samples,
         multiview_mask: None,
-        cache: None,
-    })
+    };
+    screen_pipeline(device, label, (far_composite_source(), layout), targets)
 }
 
 /// The indirect path's far layers: what they share, each stereo display's own, and this

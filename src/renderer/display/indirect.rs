@@ -14,6 +14,7 @@ use super::occlusion::{
 use super::{PathCore, PathInputs};
 use crate::contexts::context_buffer;
 use crate::cull::gpu_buffers::{CullTargets, OcclusionRoom};
+use crate::draw::mask::{DisplayMask, MaskPipeline};
 use crate::draw::{
     BinPipelines, DrawFeatures, DrawScene, Drawer, Drawing, OwnPipeline, OwnPipelines,
 };
@@ -46,6 +47,9 @@ pub(in crate::renderer) struct IndirectPath {
     pub(super) displays: Vec<IndirectDisplay>,
     /// With the far layer: the stereo displays' far layers.
     pub(super) far: Option<Far>,
+    /// Per display with a visibility mask (and the option on): its mask pass, drawn
+    /// first in the display's clearing draw pass.
+    pub(in crate::renderer) masks: Vec<Option<(MaskPipeline, DisplayMask)>>,
 }
 
 impl IndirectPath {
@@ -123,7 +127,13 @@ impl IndirectPath {
             },
             displays,
             far,
+            masks: Vec::new(),
         })
+    }
+
+    /// Pixels the visibility masks cover in each frame, all displays together.
+    pub(in crate::renderer) fn masked_pixels(&self) -> u64 {
+        self.masks.iter().flatten().map(|(_, m)| m.pixels).sum()
     }
 
     /// Writes `plan`'s display contexts and the culler's results for every view: each
@@ -192,7 +202,12 @@ impl IndirectPath {
         let composite = self.displays[index].late.is_none();
         let mut open = rec.open(encoder, PassRecord::display("draw", index));
         let mut pass = begin_draw_pass(encoder, rec, (target, true, multiview), &mut open);
-        let draw_calls = self.draw_views(&mut pass, index, composite);
+        let mut draw_calls = 0;
+        if let Some((pipeline, mask)) = self.masks.get(index).and_then(Option::as_ref) {
+            pipeline.draw(&mut pass, mask);
+            draw_calls += 1;
+        }
+        draw_calls += self.draw_views(&mut pass, index, composite);
         rec.close_render(encoder, pass, open);
         let pyramids = match &self.displays[index].late {
             Some(late) => late.encode_cull(encoder, (&self.core.culler, target), rec),
