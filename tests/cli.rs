@@ -428,29 +428,23 @@ fn render_draws_the_shared_gltf_samples_in_both_eyes() {
 /// `render --compositor-depth` writes each display's depth layer (4x MSAA resolved to
 /// the nearest sample) as raw f32 beside its contract: the file holds width x height
 /// values in [0, 1], the drawn pixels nearer than the far plane's 1.
-#[test]
-fn render_writes_the_compositor_depth_and_its_contract() {
+/// `render` at 40 x 32 pixels per eye with `extra` arguments, into a new directory:
+/// the directory and its `stats.json`.
+fn render_stats(extra: &[&str]) -> (tempfile::TempDir, Value) {
     let dir = tempfile::tempdir().unwrap();
     let out = dir.path().to_str().unwrap();
-    let args = [
-        "render",
-        "--compositor-depth",
-        "--width",
-        "40",
-        "--height",
-        "32",
-        "--out",
-        out,
-    ];
-    let run = stereocull(&args);
-    assert!(
-        run.status.success(),
-        "{}",
-        String::from_utf8_lossy(&run.stderr)
-    );
-    let stats: Value =
-        serde_json::from_str(&std::fs::read_to_string(dir.path().join("stats.json")).unwrap())
-            .unwrap();
+    let args = ["render", "--width", "40", "--height", "32", "--out", out];
+    let run = stereocull(&[&args[..], extra].concat());
+    let stderr = String::from_utf8_lossy(&run.stderr);
+    assert!(run.status.success(), "{stderr}");
+    let text = std::fs::read_to_string(dir.path().join("stats.json")).unwrap();
+    let stats = serde_json::from_str(&text).unwrap();
+    (dir, stats)
+}
+
+#[test]
+fn render_writes_the_compositor_depth_and_its_contract() {
+    let (_dir, stats) = render_stats(&["--compositor-depth"]);
     let depth = &stats["displays"][0]["depth"];
     assert_eq!(depth["resolve"], "nearest sample");
     assert_eq!(
@@ -482,29 +476,7 @@ fn render_writes_the_compositor_depth_and_its_contract() {
 #[test]
 fn render_reports_masked_pixels_and_fragments() {
     let masked = |on: &str| {
-        let dir = tempfile::tempdir().unwrap();
-        let out = dir.path().to_str().unwrap();
-        let args = [
-            "render",
-            "--visibility-mask",
-            on,
-            "--msaa",
-            "1",
-            "--width",
-            "40",
-            "--height",
-            "32",
-            "--out",
-            out,
-        ];
-        let run = stereocull(&args);
-        assert!(
-            run.status.success(),
-            "{}",
-            String::from_utf8_lossy(&run.stderr)
-        );
-        let text = std::fs::read_to_string(dir.path().join("stats.json")).unwrap();
-        let stats: Value = serde_json::from_str(&text).unwrap();
+        let (_dir, stats) = render_stats(&["--visibility-mask", on, "--msaa", "1"]);
         assert!(stats["frame"].get("fragment_invocations").is_some());
         stats["frame"]["masked_pixels"].as_u64().unwrap()
     };
