@@ -184,7 +184,14 @@ fn module_files_form_no_circle() {
 
 /// The files of `renderer/` that extend `Renderer` itself (its methods, by the part of
 /// the embedding API they serve): they assemble the levels, so they may name them all.
-const RENDERER_API: [&str; 5] = ["sync", "encode", "diagnostics", "own_passes", "checks"];
+const RENDERER_API: [&str; 6] = [
+    "sync",
+    "prepare",
+    "encode",
+    "diagnostics",
+    "own_passes",
+    "checks",
+];
 
 /// The modules of `renderer/` below `renderer` itself, but the API's files.
 fn renderer_inner(files: &[(Vec<String>, String)]) -> Vec<&(Vec<String>, String)> {

@@ -9,6 +9,7 @@ mod profile;
 mod profile_measure;
 mod profile_report;
 mod render;
+mod session;
 mod stress;
 
 pub use cull::{DisplayDump, DrawDump, display_dump};

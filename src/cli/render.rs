@@ -6,21 +6,16 @@ use std::time::Instant;
 use clap::Parser;
 use serde::Serialize;
 
-use super::edits::{EditArgs, EditDriver, live_copy};
+use super::edits::EditArgs;
 use super::occlusion_report::occlusion_report;
+use super::session::{FrameFigures, Session};
 use super::{SceneArgs, write_json};
-use crate::device::{Gpu, list_counts};
 use crate::error::{Error, Result};
 use crate::foveated_composite::{CompositeParams, FoveatedComposite, composite_cpu};
-use crate::live::LiveScene;
 use crate::profiling::{FrameQueries, GpuTimer};
 use crate::readback::read_rgba8;
-use crate::renderer::{
-    CullMode, DisplayTarget, FrameStats, Level, PosingMode, Renderer, RendererOptions, StereoMode,
-    SyncStats,
-};
+use crate::renderer::{CullMode, FrameStats, Level, Renderer, StereoMode};
 use crate::rig::Rig;
-use crate::scene::Scene;
 
 #[derive(Parser)]
 pub struct RenderArgs {
@@ -46,189 +41,6 @@ pub struct RenderArgs {
     /// view's rectangle or layer, planes, depth range) in `stats.json`.
     #[arg(long)]
     pub compositor_depth: bool,
-}
-
-/// 4x MSAA (VR practice, and what lavapipe has) where the adapter renders the color
-/// format at 4 samples and, in multiview, has multisampled two-layer targets; else 1.
-pub fn default_msaa(gpu: &Gpu, mode: StereoMode, counts: &[u32]) -> u32 {
-    let layered = mode != StereoMode::Multiview
-        || gpu
-            .device
-            .features()
-            .contains(wgpu::Features::MULTISAMPLE_ARRAY);
-    if counts.contains(&4) && layered { 4 } else { 1 }
-}
-
-/// Everything a command needs to draw frames.
-pub struct Session {
-    pub gpu: Gpu,
-    pub rig: Rig,
-    pub scene: Scene,
-    pub renderer: Renderer,
-    pub targets: Vec<DisplayTarget>,
-    /// With `--moving` or `--churn`: the live scene and what edits it each frame.
-    pub live: Option<(LiveScene, EditDriver)>,
-    /// Where frames record GPU timings and pipeline statistics, if asked and available.
-    pub timer: Option<GpuTimer>,
-    frames: u32,
-}
-
-/// One frame's figures from [`Session::frame`].
-pub struct FrameFigures {
-    /// Recorded and uploaded by prepare + encode + submit (sync's bytes included).
-    pub stats: FrameStats,
-    /// posing + sync + prepare + encode + submit on the CPU: stereocull's cost.
-    pub cpu_ms: f64,
-    /// Applying the frame's edits to the live scene: the caller's work.
-    pub edit_ms: f64,
-    /// Of `cpu_ms`, the sync.
-    pub sync_ms: f64,
-    pub sync: SyncStats,
-    /// From sampling the pose the frame is drawn with (the frame's start, or the
-    /// latch's sample) to its submit call.
-    pub pose_age_ms: f64,
-}
-
-impl Session {
-    /// The scene as it stands: the live scene's after its edits, else the loaded one.
-    pub fn current_scene(&self) -> &Scene {
-        match &self.live {
-            Some((live, _)) => live.scene(),
-            None => &self.scene,
-        }
-    }
-
-    /// Loads the rig and scene (posed at `time` seconds, or with `--animation off`
-    /// stripped of its animations) and opens the device, then the renderer with `cull`,
-    /// `mode` and `msaa` samples per pixel (checked against the adapter's counts; `None`:
-    /// [`default_msaa`]). A scene with edits or animations is live: each
-    /// [`Session::frame`] poses it at the frame's time.
-    pub fn open(
-        args: &SceneArgs,
-        (cull, mode, msaa): (CullMode, StereoMode, Option<u32>),
-        edits: &EditArgs,
-        time: f32,
-    ) -> Result<Session> {
-        let rig = args.load_rig()?;
-        let mut scene = args.load_scene()?;
-        if !args.animation.on() {
-            scene.posing.clips.clear();
-            scene.morphs.stop();
-        }
-        scene.pose(time);
-        let gpu = Gpu::headless()?;
-        let mut options = RendererOptions {
-            cull,
-            mode,
-            posing: args.posing.resolve(cull),
-            ..args.options()
-        };
-        let counts = gpu.sample_counts(options.color_format);
-        let msaa = msaa.unwrap_or_else(|| default_msaa(&gpu, mode, &counts));
-        options.sample_count = msaa;
-        if !counts.contains(&msaa) {
-            return Err(Error::Unsupported(format!(
-                "--msaa {msaa}: this adapter renders {:?} at {} samples per pixel",
-                options.color_format,
-                list_counts(&counts)
-            )));
-        }
-        let live = live_copy(&scene, edits, options.posing)?;
-        let renderer = Renderer::new(&gpu.device, &scene, &rig, options)?;
-        let targets = renderer.create_targets(&gpu.device);
-        Ok(Session {
-            gpu,
-            rig,
-            scene,
-            renderer,
-            targets,
-            live,
-            timer: None,
-            frames: 0,
-        })
-    }
-
-    /// Applies this frame's edits (if live), syncs them, writes the contexts for `time`
-    /// (seconds), records and submits one frame.
-    pub fn frame(&mut self, time: f32) -> Result<FrameFigures> {
-        self.frame_latched(time, None)
-    }
-
-    /// [`Session::frame`]; with `latch`, the frame's pose is sampled again once the
-    /// frame is recorded (`latch` moves the rig's viewer) and latched before the submit
-    /// ([`Renderer::latch`]).
-    pub fn frame_latched(
-        &mut self,
-        time: f32,
-        latch: Option<&dyn Fn(&mut Rig)>,
-    ) -> Result<FrameFigures> {
-        let ms = |since: Instant| since.elapsed().as_secs_f64() * 1e3;
-        let (mut edit_ms, mut sync_ms, mut sync) = (0.0, 0.0, SyncStats::default());
-        let start = Instant::now();
-        if let Some((live, driver)) = &mut self.live {
-            // Posing is stereocull's frame-context work: counted in cpu_ms.
-            if self.renderer.options().posing == PosingMode::Cpu {
-                live.pose(time)?;
-            }
-            let edits = Instant::now();
-            driver.apply(live, self.frames)?;
-            edit_ms = ms(edits);
-            let sync_start = Instant::now();
-            sync = self
-                .renderer
-                .sync(&self.gpu.device, &self.gpu.queue, live)?;
-            sync_ms = ms(sync_start);
-        }
-        self.frames += 1;
-        let (mut stats, pose_age_ms) = self.submit(time, start, latch)?;
-        stats.bytes_uploaded += sync.bytes_uploaded;
-        Ok(FrameFigures {
-            stats,
-            cpu_ms: ms(start) - edit_ms,
-            edit_ms,
-            sync_ms,
-            sync,
-            pose_age_ms,
-        })
-    }
-
-    /// Prepares, records and submits the frame at the rig's pose, sampled at `sampled`;
-    /// with `latch`, samples the pose again once the frame is recorded (`latch` moves
-    /// the rig's viewer) and latches it. Returns the frame's figures and the pose's age
-    /// at the submit in milliseconds. (Culling on the CPU with occlusion the frame is
-    /// submitted in two halves: its age then runs to the end of the second.)
-    fn submit(
-        &mut self,
-        time: f32,
-        mut sampled: Instant,
-        latch: Option<&dyn Fn(&mut Rig)>,
-    ) -> Result<(FrameStats, f64)> {
-        let (device, queue) = (&self.gpu.device, &self.gpu.queue);
-        if self.renderer.reads_back() {
-            let timer = self.timer.as_mut();
-            let stats = (self.renderer).submit_frame_timed(
-                device,
-                queue,
-                &self.rig,
-                time,
-                &self.targets,
-                timer,
-            )?;
-            return Ok((stats, sampled.elapsed().as_secs_f64() * 1e3));
-        }
-        let mut stats = self.renderer.prepare(queue, &self.rig, time)?;
-        let mut encoder = device.create_command_encoder(&Default::default());
-        let views: Vec<_> = self.targets.iter().map(DisplayTarget::views).collect();
-        stats = stats + (self.renderer).encode(&mut encoder, &views, self.timer.as_mut())?;
-        if let Some(latch) = latch {
-            sampled = Instant::now();
-            latch(&mut self.rig);
-            stats.bytes_uploaded += self.renderer.latch(queue, &self.rig)?.bytes_uploaded;
-        }
-        let age = sampled.elapsed().as_secs_f64() * 1e3;
-        queue.submit([encoder.finish()]);
-        Ok((stats, age))
-    }
 }
 
 /// One pass of a frame as the reports list it ([`Renderer::passes`]).

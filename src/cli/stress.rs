@@ -8,7 +8,8 @@ use serde::Serialize;
 
 use super::edits::EditArgs;
 use super::occlusion_report::{OcclusionReport, occlusion_report};
-use super::render::{PassReport, Session, far_near, pass_reports, passes_per_level};
+use super::render::{PassReport, far_near, pass_reports, passes_per_level};
+use super::session::Session;
 use super::{FRAME_SECONDS, SceneArgs};
 use crate::error::Result;
 use crate::profiling::{GpuTimer, percentile};

@@ -95,66 +95,6 @@ pub(crate) fn pipeline_layout(
     })
 }
 
-/// What a pass without vertex buffers draws into: its one color target (or none),
-/// depth, samples per pixel and, in multiview, its layers.
-pub(crate) struct ScreenTargets {
-    pub color: Option<wgpu::ColorTargetState>,
-    pub depth: Option<wgpu::DepthStencilState>,
-    pub samples: u32,
-    pub multiview_mask: Option<std::num::NonZeroU32>,
-}
-
-/// Depth written whatever is there (`Always`): a pass that lays depth down.
-pub(crate) fn depth_write(format: wgpu::TextureFormat) -> wgpu::DepthStencilState {
-    wgpu::DepthStencilState {
-        format,
-        depth_write_enabled: Some(true),
-        depth_compare: Some(wgpu::CompareFunction::Always),
-        stencil: Default::default(),
-        bias: Default::default(),
-    }
-}
-
-/// A render pipeline of WGSL `source`'s `vs_main` (which makes its own positions: no
-/// vertex buffers) and `fs_main`, its one bind group laid out as `group`.
-pub(crate) fn screen_pipeline(
-    device: &wgpu::Device,
-    label: &str,
-    (source, group): (String, &wgpu::BindGroupLayout),
-    targets: ScreenTargets,
-) -> wgpu::RenderPipeline {
-    let module = device.create_shader_module(wgpu::ShaderModuleDescriptor {
-        label: Some(label),
-        source: wgpu::ShaderSource::Wgsl(source.into()),
-    });
-    let layout = pipeline_layout(device, label, group);
-    let color: Vec<_> = targets.color.into_iter().map(Some).collect();
-    device.create_render_pipeline(&wgpu::RenderPipelineDescriptor {
-        label: Some(label),
-        layout: Some(&layout),
-        vertex: wgpu::VertexState {
-            module: &module,
-            entry_point: Some("vs_main"),
-            compilation_options: Default::default(),
-            buffers: &[],
-        },
-        primitive: wgpu::PrimitiveState::default(),
-        depth_stencil: targets.depth,
-        multisample: wgpu::MultisampleState {
-            count: targets.samples,
-            ..Default::default()
-        },
-        fragment: Some(wgpu::FragmentState {
-            module: &module,
-            entry_point: Some("fs_main"),
-            compilation_options: Default::default(),
-            targets: &color,
-        }),
-        multiview_mask: targets.multiview_mask,
-        cache: None,
-    })
-}
-
 /// The compute pipeline of `entry` in WGSL `source`.
 pub(crate) fn compute_pipeline(
     device: &wgpu::Device,

@@ -62,6 +62,7 @@ mod binding_lists;
 mod bindings;
 mod cull_passes;
 mod hooks;
+mod screen;
 mod windows;
 
 use crate::bins::{Bin, BinKind};
@@ -75,13 +76,16 @@ pub use binding_lists::{
 pub use bindings::{
     Access, Binding, Bound, TextureKind, bind_group, bind_group_layout, declarations,
 };
-pub(crate) use bindings::{
-    ScreenTargets, compute_pipeline, depth_write, dispatch_size, pipeline_layout, screen_pipeline,
-};
+pub(crate) use bindings::{compute_pipeline, dispatch_size, pipeline_layout};
 pub use cull_passes::{
     CullPass, PYRAMID_LEVELS_PER_DISPATCH, PYRAMID_SIDE, Phase, pyramid_source, subgroup_tier,
 };
 pub use hooks::{Shaders, check_shading};
+pub use screen::{
+    MAX_MASK_TRIANGLES, depth_resolve_source, far_composite_source, foveated_composite_source,
+    visibility_mask_source,
+};
+pub(crate) use screen::{ScreenTargets, depth_write, screen_pipeline};
 pub use windows::{Window, Windowed, Windows};
 
 /// What a scatter's edits carry; each edit's first word is its key (a place, or a
@@ -363,55 +367,6 @@ fn constants() -> String {
          const BLOCK: u32 = {BLOCK}u;\nconst SPAN: u32 = {SPAN}u;\nconst BLOCK_GROWTH: f32 = {BLOCK_GROWTH:?};\n\
          const BLOCK_SLACK: f32 = {BLOCK_SLACK:?};\n"
     )
-}
-
-/// The far layer's composite into a stereo display (`wgsl/far_composite.wgsl`).
-pub fn far_composite_source() -> String {
-    let body = include_str!("../../wgsl/far_composite.wgsl");
-    let bindings = declarations(&FAR_COMPOSITE_BINDINGS, 0, &Windows::WHOLE);
-    [&constants(), CONTEXTS, &bindings, EYE_HALVES, body].concat()
-}
-
-const EYE_HALVES: &str = include_str!("../../wgsl/shared/eye_halves.wgsl");
-
-/// A foveated display's views composited per eye (`crate::foveated_composite`).
-pub fn foveated_composite_source() -> String {
-    let body = include_str!("../../wgsl/foveated_composite.wgsl");
-    let bindings = declarations(&FOVEATED_COMPOSITE_BINDINGS, 0, &Windows::WHOLE);
-    [EYE_HALVES, &bindings, body].concat()
-}
-
-/// The most hidden triangles a view's visibility mask may have: the mask pass's buffer
-/// holds this many per view (`crate::rig::VisibilityMask`).
-pub const MAX_MASK_TRIANGLES: usize = 16;
-
-/// The lens's hidden area written to depth (`wgsl/visibility_mask.wgsl`): one view per
-/// instance side by side, or per `view_index` in `multiview`.
-pub fn visibility_mask_source(multiview: bool) -> String {
-    let per_view = 3 * MAX_MASK_TRIANGLES;
-    let header = format!(
-        "const MASK_VERTICES: u32 = {per_view}u;\nstruct MaskVertices {{ vertices: array<vec4<f32>, {}>, }}\n",
-        2 * per_view
-    );
-    let bindings = declarations(&VISIBILITY_MASK_BINDINGS, 0, &Windows::WHOLE);
-    let body = include_str!("../../wgsl/visibility_mask.wgsl");
-    let body = match multiview {
-        true => body
-            .replace(
-                "// MULTIVIEW_VIEW_INDEX",
-                "    @builtin(view_index) view: u32,",
-            )
-            .replace("VIEW *", "view *"),
-        false => body.replace("VIEW *", "instance *"),
-    };
-    [header, bindings, body].concat()
-}
-
-/// The compositor's depth resolve (`wgsl/depth_resolve.wgsl`).
-pub fn depth_resolve_source() -> String {
-    let body = include_str!("../../wgsl/depth_resolve.wgsl");
-    let bindings = declarations(&DEPTH_RESOLVE_BINDINGS, 0, &Windows::WHOLE);
-    [&bindings, body].concat()
 }
 
 /// The frame's shadow pass: depth only, the light as the display's eye 0

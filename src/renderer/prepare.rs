@@ -1,0 +1,95 @@
+//! Writing a frame's inputs: its plan from the rig's pose and the time, written by
+//! `prepare` before the frame is recorded, and written again by `latch` from a later
+//! pose before it is submitted.
+
+use super::plan::{FramePlan, FrameStats};
+use super::{CullMode, Path, Renderer};
+use crate::buffers::write;
+use crate::error::{Error, Result};
+use crate::records::uniform_bytes;
+use crate::rig::Rig;
+
+impl Renderer {
+    /// What the frame at `time` for `rig`'s pose will do ([`FramePlan`]): what
+    /// [`Renderer::prepare`] writes, for inspection.
+    pub fn plan(&self, rig: &Rig, time: f32) -> Result<FramePlan> {
+        let same = rig.displays.len() == self.shapes.len()
+            && rig.displays.iter().zip(&self.shapes).all(|(d, s)| {
+                let same_layout = d.layout_in(s.layered) == s.layout;
+                d.views() == s.views() && (d.views() < 4 || same_layout)
+            });
+        if !same {
+            return Err(Error::rig(
+                "prepare",
+                "the rig's displays differ from the renderer's (in number or views, or a foveated display's layout: it has a gaze or none for the renderer's life)",
+            ));
+        }
+        let plan = FramePlan::new(rig, &self.options, self.coarse, time)?;
+        Ok(plan.with_far_sizes(&self.far_sizes))
+    }
+
+    /// Writes this frame's contexts (and, culling on the CPU, the cull results), all
+    /// from one plan of `rig`, which must have the displays the renderer was made with;
+    /// only poses may change. `time` (seconds on the caller's clock) goes into the frame
+    /// context, from which the GPU animates instances.
+    pub fn prepare(&mut self, queue: &wgpu::Queue, rig: &Rig, time: f32) -> Result<FrameStats> {
+        let mut stats = self.write_plan(queue, rig, time)?;
+        if let Some(morph) = &mut self.morph {
+            stats.bytes_uploaded += morph.prepare(queue, time);
+        }
+        // Texels go up with the first frame: `new` has no queue.
+        stats.bytes_uploaded += self.path.core_mut().draw_scene.materials.upload(queue);
+        self.prepared = Some(time);
+        Ok(stats)
+    }
+
+    /// Late latching: after [`Renderer::encode`] and before the submit, the frame's
+    /// pose replaced by `rig`'s (sampled as late as the caller can), at the time the
+    /// frame was prepared for. Every pass the frame recorded reads the pose from the
+    /// contexts and cull inputs that `prepare` writes (never from the recorded commands),
+    /// so this plans the frame again from `rig` and writes them again: the frame is the
+    /// one planned and drawn at `rig`, whatever the distance from the planned pose
+    /// (the levels of detail, the coarse cull's blocks, the far split, the foveated
+    /// insets, the lights' clusters and the shadow's fit are all chosen on the GPU from
+    /// what is written here, or written here). `rig` must have the renderer's displays,
+    /// as for `prepare`.
+    ///
+    /// Culling on the CPU cannot latch: its cull ran in `prepare`, from the planned
+    /// pose, and the frame's draws hold its results; that is [`Error::Unsupported`], as
+    /// is a latch before any `prepare`.
+    pub fn latch(&mut self, queue: &wgpu::Queue, rig: &Rig) -> Result<FrameStats> {
+        if self.options.cull == CullMode::Cpu {
+            return Err(Error::Unsupported(
+                "latching a pose needs the GPU cull: the CPU cull ran in prepare, from the planned pose, and the recorded draws hold its results".into(),
+            ));
+        }
+        let Some(time) = self.prepared else {
+            return Err(Error::Unsupported(
+                "latch comes after prepare and encode, before the submit".into(),
+            ));
+        };
+        self.write_plan(queue, rig, time)
+    }
+
+    /// Plans the frame from `rig` at `time` and writes what its passes read of the
+    /// pose: the frame context, the lights' views, each display's contexts and cull
+    /// inputs, the shadow's light.
+    fn write_plan(&mut self, queue: &wgpu::Queue, rig: &Rig, time: f32) -> Result<FrameStats> {
+        let plan = self.plan(rig, time)?;
+        let frame_bytes = write(queue, &self.frame, &uniform_bytes(&plan.frame));
+        let light_bytes = self.lighting.prepare(queue, &plan);
+        let light = plan.light_cull.as_ref().map(|_| plan.light);
+        let mut stats = match &mut self.path {
+            Path::Indirect(p) => p.prepare(queue, plan),
+            Path::Classic(p) => p.prepare(queue, &plan),
+        };
+        if let (Some(shadow), Some(light)) = (&self.shadow, light) {
+            let start = std::time::Instant::now();
+            let (size, culler) = (self.shadow_map.size, &self.path.core().culler);
+            stats.bytes_uploaded += shadow.prepare(queue, &light, size, culler);
+            stats.cpu_upload += start.elapsed();
+        }
+        stats.bytes_uploaded += frame_bytes + light_bytes;
+        Ok(stats)
+    }
+}

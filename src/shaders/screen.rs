@@ -1,0 +1,118 @@
+//! Passes drawn without vertex buffers (their vertex stage makes its own positions):
+//! the far layer's and the foveated composites, the compositor's depth resolve and the
+//! visibility mask. Their WGSL sources and the one pipeline shape they share.
+
+use super::bindings::{declarations, pipeline_layout};
+use super::{
+    CONTEXTS, DEPTH_RESOLVE_BINDINGS, FAR_COMPOSITE_BINDINGS, FOVEATED_COMPOSITE_BINDINGS,
+    VISIBILITY_MASK_BINDINGS, Windows, constants,
+};
+
+/// The far layer's composite into a stereo display (`wgsl/far_composite.wgsl`).
+pub fn far_composite_source() -> String {
+    let body = include_str!("../../wgsl/far_composite.wgsl");
+    let bindings = declarations(&FAR_COMPOSITE_BINDINGS, 0, &Windows::WHOLE);
+    [&constants(), CONTEXTS, &bindings, EYE_HALVES, body].concat()
+}
+
+const EYE_HALVES: &str = include_str!("../../wgsl/shared/eye_halves.wgsl");
+
+/// A foveated display's views composited per eye (`crate::foveated_composite`).
+pub fn foveated_composite_source() -> String {
+    let body = include_str!("../../wgsl/foveated_composite.wgsl");
+    let bindings = declarations(&FOVEATED_COMPOSITE_BINDINGS, 0, &Windows::WHOLE);
+    [EYE_HALVES, &bindings, body].concat()
+}
+
+/// The most hidden triangles a view's visibility mask may have: the mask pass's buffer
+/// holds this many per view (`crate::rig::VisibilityMask`).
+pub const MAX_MASK_TRIANGLES: usize = 16;
+
+/// The lens's hidden area written to depth (`wgsl/visibility_mask.wgsl`): one view per
+/// instance side by side, or per `view_index` in `multiview`.
+pub fn visibility_mask_source(multiview: bool) -> String {
+    let per_view = 3 * MAX_MASK_TRIANGLES;
+    let header = format!(
+        "const MASK_VERTICES: u32 = {per_view}u;\nstruct MaskVertices {{ vertices: array<vec4<f32>, {}>, }}\n",
+        2 * per_view
+    );
+    let bindings = declarations(&VISIBILITY_MASK_BINDINGS, 0, &Windows::WHOLE);
+    let body = include_str!("../../wgsl/visibility_mask.wgsl");
+    let body = match multiview {
+        true => body
+            .replace(
+                "// MULTIVIEW_VIEW_INDEX",
+                "    @builtin(view_index) view: u32,",
+            )
+            .replace("VIEW *", "view *"),
+        false => body.replace("VIEW *", "instance *"),
+    };
+    [header, bindings, body].concat()
+}
+
+/// The compositor's depth resolve (`wgsl/depth_resolve.wgsl`).
+pub fn depth_resolve_source() -> String {
+    let body = include_str!("../../wgsl/depth_resolve.wgsl");
+    let bindings = declarations(&DEPTH_RESOLVE_BINDINGS, 0, &Windows::WHOLE);
+    [&bindings, body].concat()
+}
+
+/// What a pass without vertex buffers draws into: its one color target (or none),
+/// depth, samples per pixel and, in multiview, its layers.
+pub(crate) struct ScreenTargets {
+    pub color: Option<wgpu::ColorTargetState>,
+    pub depth: Option<wgpu::DepthStencilState>,
+    pub samples: u32,
+    pub multiview_mask: Option<std::num::NonZeroU32>,
+}
+
+/// Depth written whatever is there (`Always`): a pass that lays depth down.
+pub(crate) fn depth_write(format: wgpu::TextureFormat) -> wgpu::DepthStencilState {
+    wgpu::DepthStencilState {
+        format,
+        depth_write_enabled: Some(true),
+        depth_compare: Some(wgpu::CompareFunction::Always),
+        stencil: Default::default(),
+        bias: Default::default(),
+    }
+}
+
+/// A render pipeline of WGSL `source`'s `vs_main` (which makes its own positions: no
+/// vertex buffers) and `fs_main`, its one bind group laid out as `group`.
+pub(crate) fn screen_pipeline(
+    device: &wgpu::Device,
+    label: &str,
+    (source, group): (String, &wgpu::BindGroupLayout),
+    targets: ScreenTargets,
+) -> wgpu::RenderPipeline {
+    let module = device.create_shader_module(wgpu::ShaderModuleDescriptor {
+        label: Some(label),
+        source: wgpu::ShaderSource::Wgsl(source.into()),
+    });
+    let layout = pipeline_layout(device, label, group);
+    let color: Vec<_> = targets.color.into_iter().map(Some).collect();
+    device.create_render_pipeline(&wgpu::RenderPipelineDescriptor {
+        label: Some(label),
+        layout: Some(&layout),
+        vertex: wgpu::VertexState {
+            module: &module,
+            entry_point: Some("vs_main"),
+            compilation_options: Default::default(),
+            buffers: &[],
+        },
+        primitive: wgpu::PrimitiveState::default(),
+        depth_stencil: targets.depth,
+        multisample: wgpu::MultisampleState {
+            count: targets.samples,
+            ..Default::default()
+        },
+        fragment: Some(wgpu::FragmentState {
+            module: &module,
+            entry_point: Some("fs_main"),
+            compilation_options: Default::default(),
+            targets: &color,
+        }),
+        multiview_mask: targets.multiview_mask,
+        cache: None,
+    })
+}
