@@ -550,9 +550,10 @@ fn render_draws_every_kind_of_exported_file() {
     }
 }
 
-/// `stress --json` at 16x16 pixels per eye, its report parsed.
-fn stress_json(scene: &str, rig: &str, frames: &str) -> Value {
-    let out = stereocull(&[
+/// `stress` of `frames` frames of `scene` on `rig` at 16x16 pixels per eye, occlusion
+/// off, its report as JSON: the arguments.
+fn stress_args<'a>(scene: &'a str, rig: &'a str, frames: &'a str) -> Vec<&'a str> {
+    vec![
         "stress",
         "--scene",
         scene,
@@ -567,7 +568,12 @@ fn stress_json(scene: &str, rig: &str, frames: &str) -> Value {
         "--occlusion",
         "off",
         "--json",
-    ]);
+    ]
+}
+
+/// [`stress_args`] run, its report parsed.
+fn stress_json(scene: &str, rig: &str, frames: &str) -> Value {
+    let out = stereocull(&stress_args(scene, rig, frames));
     assert!(
         out.status.success(),
         "{}",
@@ -612,24 +618,8 @@ fn stress_reports_per_frame_and_summary_figures() {
 #[test]
 fn stress_latches_the_pose_at_the_submit() {
     let run = |latch: bool, cull: &str| {
-        let mut args = vec![
-            "stress",
-            "--scene",
-            "procedural:5000",
-            "--rig",
-            "cave",
-            "--frames",
-            "5",
-            "--width",
-            "16",
-            "--height",
-            "16",
-            "--occlusion",
-            "off",
-            "--cull",
-            cull,
-            "--json",
-        ];
+        let mut args = stress_args("procedural:5000", "cave", "5");
+        args.extend(["--cull", cull]);
         if latch {
             args.push("--latch");
         }

@@ -84,6 +84,8 @@ fn a_latched_frame_is_the_frame_planned_at_the_latched_pose() {
             );
             let (at_b, culls_b) = frame(&gpu, &scene, (&planned, &latched, None), everything());
             assert_eq!(culls, culls_b, "{what}: culls");
+            // Exact on any CPU: one renderer's pipelines, the same culls (checked above),
+            // the same contexts; only when they were written differs.
             for (i, (a, b)) in images.iter().zip(&at_b).enumerate() {
                 let name = format!("latch-{preset}-{i}-{meters}");
                 support::assert_images_match(&name, a, b, support::Tolerance::EXACT);
