@@ -190,6 +190,9 @@ pub struct DisplayContext {
     /// cull also how far its composite may carry a far point from where the eye sees it
     /// ([`crate::far_layer::FarPlan::composite_reach_px`]).
     pub occlusion_margin_px: f32,
+    /// 1 where the cull also drops what the display's hidden area
+    /// ([`crate::cull::HiddenArea`], at `cull_slot`) hides in every masked view; else 0.
+    pub hidden: u32,
 }
 
 /// Pixels the projected bounds grow by on each side in the occlusion test, for the
@@ -228,6 +231,7 @@ impl DisplayContext {
             counts_at: at.counts,
             cull_slot: self.cull_slot,
             early: u32::from(early),
+            hidden: self.hidden,
             block: CoarseCull::around(self.planes),
         }
     }
@@ -263,6 +267,7 @@ impl DisplayContext {
             cull_slot: 0,
             views: eyes.len() as u32,
             occlusion_margin_px: BOUNDS_GROWTH_PX,
+            hidden: 0,
         }
     }
 
@@ -277,6 +282,8 @@ impl DisplayContext {
             first_eye: 2,
             planes: insets.frustum().planes,
             instances_per_object: 2,
+            // The insets are not masked.
+            hidden: 0,
             ..*self
         }
     }
@@ -326,6 +333,7 @@ impl DisplayContext {
             cull_slot: 0,
             views: 1,
             occlusion_margin_px: BOUNDS_GROWTH_PX,
+            hidden: 0,
         }
     }
 }

@@ -105,6 +105,8 @@ impl FarPlan {
             split_keep: far.split_keep,
             split_distance: far.split_distance,
             occlusion_margin_px: display.occlusion_margin_px + self.composite_reach_px(),
+            // Its composite may carry a far point across the mask's edge.
+            hidden: 0,
             ..*display
         }
     }
@@ -140,6 +142,7 @@ impl FarPlan {
             cull_slot,
             views: 1,
             occlusion_margin_px: crate::contexts::BOUNDS_GROWTH_PX,
+            hidden: 0,
         }
     }
 

@@ -114,6 +114,7 @@ impl LightView {
             planes: self.planes,
             instances_per_object: 1,
             split: None,
+            hidden: None,
             // The light's context has its one view at the origin.
             sort_origin: Vec3::ZERO,
         }

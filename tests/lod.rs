@@ -169,6 +169,7 @@ fn both_eyes_and_every_display_draw_an_instance_at_one_level() {
             planes: e.frustum().planes,
             instances_per_object: 1,
             split: None,
+            hidden: None,
             sort_origin: e.position(),
         })
         .collect();

@@ -1038,6 +1038,8 @@ fn cpu_culling_with_occlusion_matches_the_gpu_cull() {
             mode,
             sample_count: samples,
             far_layer,
+            // The hmd's lens mask culls in both phases.
+            visibility_mask: preset == "hmd",
             ..options(OcclusionMode::On)
         };
         let (late, occluded) = cpu_against_gpu(&gpu, (&scene, &rig), options, preset);

@@ -8,11 +8,12 @@
 mod support;
 
 use rand::{Rng, SeedableRng};
-use stereocull::cull::CullOutput;
 use stereocull::cull::rig::MAX_RIG_VIEWS;
+use stereocull::cull::{CullJob, CullOutput};
 use stereocull::device::Gpu;
 use stereocull::procedural;
-use stereocull::renderer::{CoarseMode, CullMode, Renderer, RendererOptions};
+use stereocull::records::CullLayout;
+use stereocull::renderer::{CoarseMode, CullMode, FramePlan, Renderer, RendererOptions};
 use stereocull::rig::Rig;
 use stereocull::scene::Scene;
 use support::{frustum_only, gpu};
@@ -62,6 +63,8 @@ fn options(cull: CullMode, rig_cull: bool, k: u64) -> RendererOptions {
         lod: k.is_multiple_of(2),
         far_layer: k % 3 != 1,
         inset_cull: k % 2 == 1,
+        // The head-mounted displays' lens masks cull too.
+        visibility_mask: k % 4 < 2,
         coarse_cull: CoarseMode::Off,
         ..frustum_only()
     }
@@ -75,10 +78,12 @@ fn scene(seed: u64) -> Scene {
 #[test]
 fn the_rig_cull_matches_the_cpu_and_each_views_own_cull_on_random_rigs() {
     let gpu = gpu();
+    let mut masked = 0;
     for displays in 1..=12 {
         let k = displays as u64;
         let rig = mixed_rig(displays, k);
         let scene = scene(k);
+        masked += dropped_by_masks(&scene, &rig, &options(CullMode::Gpu, true, k));
         let rig_cull = support::one_frame(&gpu, &scene, &rig, options(CullMode::Gpu, true, k));
         let own = support::one_frame(&gpu, &scene, &rig, options(CullMode::Gpu, false, k));
         let cpu = support::one_frame(&gpu, &scene, &rig, options(CullMode::Cpu, true, k));
@@ -96,6 +101,24 @@ fn the_rig_cull_matches_the_cpu_and_each_views_own_cull_on_random_rigs() {
             "{displays} displays: CPU culls"
         );
     }
+    assert!(masked > 0, "the lens masks dropped nothing");
+}
+
+/// Instances the displays' lens masks drop from their culls' frustums in `rig`'s plan.
+fn dropped_by_masks(scene: &Scene, rig: &Rig, options: &RendererOptions) -> usize {
+    let plan = FramePlan::new(rig, options, false, 0.0).unwrap();
+    let spheres = CullLayout::new(scene).spheres;
+    (plan.jobs().iter())
+        .map(|job| {
+            let frustum = CullJob {
+                hidden: None,
+                ..*job
+            };
+            (spheres.iter())
+                .filter(|&&s| frustum.keeps(s) && !job.keeps(s))
+                .count()
+        })
+        .sum()
 }
 
 /// The rig's cull skips a member's sphere tests for a span whose box fails the

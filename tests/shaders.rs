@@ -8,6 +8,7 @@ use naga::{Module, TypeInner};
 use stereocull::contexts::{DisplayContext, EyeContext, FrameContext};
 use stereocull::cull::CoarseCull;
 use stereocull::cull::gpu_buffers::CullParams;
+use stereocull::cull::hidden::{HiddenArea, HiddenRegion, HiddenView, MAX_HIDDEN_REGIONS};
 use stereocull::cull::rig::{MAX_RIG_VIEWS, RigCull, RigView};
 use stereocull::draw::VERTEX_ATTRIBUTES;
 use stereocull::materials::MaterialRecord;
@@ -333,6 +334,7 @@ fn contexts_match_wgsl() {
         cull_slot: 3,
         views: 4,
         occlusion_margin_px: 14.5,
+        hidden: 1,
     };
     let bytes = uniform_bytes(&d);
     check_uniform(
@@ -354,6 +356,7 @@ fn contexts_match_wgsl() {
             ("cull_slot", f32::from_bits(3)),
             ("views", f32::from_bits(4)),
             ("occlusion_margin_px", 14.5),
+            ("hidden", f32::from_bits(1)),
         ],
     );
     // Each eye sits one EyeContext span after the one before (the fourth, a foveated
@@ -463,6 +466,7 @@ fn rig_records_match_wgsl() {
         counts_at: 7,
         cull_slot: 8,
         early: 1,
+        hidden: 9,
         block: CoarseCull {
             planes: std::array::from_fn(|i| Vec4::splat(k + 20.0 + i as f32)),
             inflation: k + 30.0,
@@ -484,6 +488,7 @@ fn rig_records_match_wgsl() {
             ("counts_at", f32::from_bits(7)),
             ("cull_slot", f32::from_bits(8)),
             ("early", f32::from_bits(1)),
+            ("hidden", f32::from_bits(9)),
             ("block", 21.0),
         ],
     );
@@ -504,6 +509,42 @@ fn rig_records_match_wgsl() {
     let (_, span) = wgsl_struct(&module(), "RigView");
     assert_eq!(f32_at(&bytes, 2 * span + 5 * 16), 205.0);
     assert_eq!(f32_at(&bytes, (MAX_RIG_VIEWS as u32 - 1) * span), 0.0);
+}
+
+#[test]
+fn hidden_areas_match_wgsl() {
+    let region = |k: f32| HiddenRegion {
+        planes: std::array::from_fn(|i| Vec4::splat(k + i as f32)),
+    };
+    let view = |k: f32| HiddenView {
+        regions: std::array::from_fn(|r| region(k + 10.0 * r as f32)),
+        count: 7,
+    };
+    let area = HiddenArea {
+        views: [view(1.0), view(1000.0)],
+        count: 2,
+    };
+    let bytes = storage_bytes(&[area, area]);
+    let (_, span) = wgsl_struct(&module(), "HiddenArea");
+    assert_eq!(bytes.len(), 2 * span as usize, "HiddenArea stride");
+    check_uniform(
+        "HiddenArea",
+        &bytes[..span as usize],
+        &[("views", 1.0), ("count", f32::from_bits(2))],
+    );
+    let (_, view_span) = wgsl_struct(&module(), "HiddenView");
+    check_uniform(
+        "HiddenView",
+        &bytes[view_span as usize..2 * view_span as usize],
+        &[("regions", 1000.0), ("count", f32::from_bits(7))],
+    );
+    // Region 3's third plane: three regions of three vec4s, then two.
+    assert_eq!(f32_at(&bytes, (3 * 3 + 2) * 16), 33.0);
+    let last = (MAX_HIDDEN_REGIONS as u32 - 1) * 3 * 16;
+    assert_eq!(
+        f32_at(&bytes, last),
+        1.0 + 10.0 * (MAX_HIDDEN_REGIONS - 1) as f32
+    );
 }
 
 /// Every pipeline the crate builds, with its source and its bind groups' lists in

@@ -58,7 +58,9 @@ fn cull_rig(
         for (var i = 0u; i < tested; i++) {
             let s = spheres[i];
             let seen = view.early == 0u || drawn_by(view.cull_slot, first + i);
-            if (sphere_in_planes(view.planes, s) && in_split_of(view.split_keep, view.split_distance, view.position, s) && seen) {
+            let kept = sphere_in_planes(view.planes, s) && in_split_of(view.split_keep, view.split_distance, view.position, s) && seen;
+            // The hidden area last: its tests cost several frustums'.
+            if (kept && (view.hidden == 0u || !hidden_in_views(view.cull_slot, s))) {
                 if (((chosen >> i) & 1u) == 0u) {
                     levels |= lod_level(first + i, s) << (2u * i);
                     chosen |= 1u << i;
@@ -162,6 +164,9 @@ fn cull_entry(j: u32) -> u32 {
     }
     let s = spheres_at(k);
     if (!(sphere_in_planes(display.planes, s) && in_split(s))) {
+        return 0u;
+    }
+    if (display.hidden == 1u && hidden_in_views(display.cull_slot, s)) {
         return 0u;
     }
     return occlusion_entry(k, s, ENTRY_VISIBLE | (lod_level(k, s) << ENTRY_LEVEL_SHIFT));

@@ -112,6 +112,10 @@ pub struct ProfileArgs {
     /// Pixels the eyes' images of a far instance may differ by.
     #[arg(long, default_value_t = crate::far_layer::FAR_THRESHOLD_PX)]
     pub far_threshold: f32,
+    /// The lens's hidden area drawn and culled by (the rigs' masks; `instanced` and
+    /// `multiview`): two runs compare it.
+    #[arg(long, value_enum, default_value = "off")]
+    pub visibility_mask: Switch,
     /// The frame-level coarse cull, one configuration each (`on,off` compares them).
     #[arg(long, value_delimiter = ',', value_enum, default_value = "auto")]
     pub coarse_cull: Vec<CoarseMode>,
@@ -175,6 +179,7 @@ pub(super) fn measure(
         far_layer: far,
         far_threshold_px: args.far_threshold,
         inset_cull: inset,
+        visibility_mask: args.visibility_mask.on(),
         cull_floor: timer.is_some() && cull == CullMode::Gpu && !mode.per_instance(),
         occlusion,
         posing,

@@ -10,7 +10,7 @@ use rayon::prelude::*;
 use glam::{Vec3, Vec4};
 
 use super::coarse::{BLOCK, block_of};
-use super::{BinDraws, CoarseCull, CullJob, CullOutput, Split};
+use super::{BinDraws, CoarseCull, CullJob, CullOutput, HiddenArea, Split};
 /// Their old path, kept for one release: they are the frame's, not the CPU culler's.
 pub use super::{FrameCull, FrameLod};
 use crate::frustum::plane_distance;
@@ -61,6 +61,7 @@ pub fn cull_frame(layout: &CullLayout, displays: &[CullJob], frame: &FrameCull) 
         .map(|job| job.planes.map(|v| v.to_array()))
         .collect();
     let splits: Vec<Option<Split>> = displays.iter().map(|job| job.split).collect();
+    let hidden: Vec<Option<&HiddenArea>> = displays.iter().map(|j| j.hidden.as_ref()).collect();
     let blocks: Vec<CoarseCull> = match coarse {
         Some(_) => displays
             .iter()
@@ -71,6 +72,7 @@ pub fn cull_frame(layout: &CullLayout, displays: &[CullJob], frame: &FrameCull) 
     let tests = FrameTests {
         planes: &planes,
         splits: &splits,
+        hidden: &hidden,
         coarse: coarse.map(|frame| (frame, &blocks[..])),
     };
     // One mask per display, chunk-interleaved so each task writes one contiguous run.
@@ -138,12 +140,14 @@ fn position_levels(layout: &CullLayout, lod: &FrameLod) -> Vec<u8> {
         .collect()
 }
 
-/// What each sphere is tested against: every display's planes and far split, after
-/// its block's tests when the coarse cull runs (the frame's, then each display's).
+/// What each sphere is tested against: every display's planes, far split and hidden
+/// area, after its block's tests when the coarse cull runs (the frame's, then each
+/// display's).
 #[derive(Clone, Copy)]
 struct FrameTests<'a> {
     planes: &'a [[[f32; 4]; 6]],
     splits: &'a [Option<Split>],
+    hidden: &'a [Option<&'a HiddenArea>],
     coarse: Option<(&'a CoarseCull, &'a [CoarseCull])>,
 }
 
@@ -155,6 +159,7 @@ fn test_chunk(
     FrameTests {
         planes,
         splits,
+        hidden,
         coarse,
     }: FrameTests,
     start: usize,
@@ -177,6 +182,10 @@ fn test_chunk(
             let bits = if listed { test_group(p, cols) } else { 0 };
             let bits = match split {
                 Some(s) if bits != 0 => bits & split_group(s, cols),
+                _ => bits,
+            };
+            let bits = match hidden[d] {
+                Some(h) if bits != 0 => bits & !hidden_group(h, bits, cols),
                 _ => bits,
             };
             out[d * per + w] = bits;
@@ -213,6 +222,19 @@ fn split_group(split: &Split, [x, y, z, neg_r]: [&[f32]; 4]) -> u64 {
         bits |= (split.keeps(sphere) as u64) << i;
     }
     bits
+}
+
+/// Which of `bits` (spheres given as columns) `hidden` hides.
+fn hidden_group(hidden: &HiddenArea, bits: u64, [x, y, z, neg_r]: [&[f32]; 4]) -> u64 {
+    let mut hides = 0u64;
+    let mut rest = bits;
+    while rest != 0 {
+        let i = rest.trailing_zeros() as usize;
+        let sphere = Vec4::new(x[i], y[i], z[i], -neg_r[i]);
+        hides |= (hidden.hides(sphere) as u64) << i;
+        rest &= rest - 1;
+    }
+    hides
 }
 
 fn test_lanes(planes: &[[f32; 4]; 6], lanes: [&[f32; 64]; 4]) -> u64 {

@@ -247,6 +247,7 @@ impl GpuCuller {
             draws,
             counts,
             scene.occlusion.bound(),
+            scene.hidden.bound(),
             scene.spheres.bound(),
         ];
         let (label, layout) = ("stereocull.cull", &self.layout);

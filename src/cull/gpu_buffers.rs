@@ -4,9 +4,9 @@
 
 use crate::bins::{BinKind, MAX_BINS};
 use crate::buffers::{init_buffer, init_buffer_with_room, storage_buffer};
-use crate::cull::CullOutput;
 use crate::cull::coarse::{BLOCK, CoarseCull};
 use crate::cull::rig::{self, MAX_RIG_VIEWS, MemberAt, RigCull, RigView};
+use crate::cull::{CullOutput, HiddenArea};
 use crate::records::{CullLayout, DrawArgs};
 use crate::records::{storage_bytes, uniform_bytes};
 use crate::shaders::{SPAN, WORKGROUP_SIZE, dispatch_size};
@@ -100,6 +100,10 @@ pub struct CullScene {
     occlusion_layout: (u32, u32),
     /// Display slots with visibility words (0 without occlusion).
     visibility_slots: u32,
+    /// Per display slot its hidden area ([`HiddenArea`]; one unused record where no
+    /// display's cull drops by one), and how many slots are written each frame.
+    pub(super) hidden: wgpu::Buffer,
+    hidden_slots: u32,
 }
 
 /// What occlusion culling needs room for: how many displays keep visibility bits and
@@ -139,13 +143,14 @@ pub struct CullTargets {
 impl CullScene {
     /// Uploads `layout`, with room for `slots` instances (a live scene's capacity), for
     /// culling into `levels` levels of detail (1: LOD off), with room for the coarse
-    /// cull's lists of `coarse_slots` displays (0: no coarse cull), for occlusion, and
-    /// for the scratch of `rig_members` members of the rig cull (0: it does not run).
+    /// cull's lists of `coarse_slots` displays (0: no coarse cull), for occlusion, for
+    /// the scratch of `rig_members` members of the rig cull (0: it does not run) and
+    /// for the hidden areas of `hidden_slots` displays (0: no cull drops by one).
     pub fn new(
         device: &wgpu::Device,
         layout: &CullLayout,
         (slots, levels): (u32, u32),
-        (coarse_slots, occlusion, rig_members): (u32, OcclusionRoom, u32),
+        (coarse_slots, occlusion, rig_members, hidden_slots): (u32, OcclusionRoom, u32, u32),
     ) -> CullScene {
         let slots = slots
             .max(layout.positions.len() as u32)
@@ -277,7 +282,28 @@ impl CullScene {
             ),
             occlusion_layout,
             visibility_slots: occlusion.displays,
+            hidden: init_buffer(
+                device,
+                "stereocull.hidden",
+                &storage_bytes(&vec![HiddenArea::NONE; hidden_slots.max(1) as usize]),
+                wgpu::BufferUsages::STORAGE | wgpu::BufferUsages::COPY_DST,
+            ),
+            hidden_slots,
         }
+    }
+
+    /// Writes this frame's hidden areas, one per display slot (in order; `None` drops
+    /// nothing). Returns the bytes written; nothing where no display's cull drops by one.
+    pub fn write_hidden(&self, queue: &wgpu::Queue, areas: &[Option<HiddenArea>]) -> u64 {
+        if self.hidden_slots == 0 {
+            return 0;
+        }
+        let records: Vec<HiddenArea> = (areas.iter().take(self.hidden_slots as usize))
+            .map(|a| a.unwrap_or(HiddenArea::NONE))
+            .collect();
+        let bytes = storage_bytes(&records);
+        queue.write_buffer(&self.hidden, 0, &bytes);
+        bytes.len() as u64
     }
 
     /// Writes this frame's block tests, one per coarse slot (display, in order): the

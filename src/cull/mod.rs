@@ -15,9 +15,11 @@ pub mod coarse;
 pub mod cpu;
 pub mod gpu;
 pub mod gpu_buffers;
+pub mod hidden;
 pub mod rig;
 
 pub use coarse::CoarseCull;
+pub use hidden::HiddenArea;
 
 use glam::{Vec3, Vec4};
 
@@ -33,10 +35,23 @@ pub struct CullJob {
     pub instances_per_object: u32,
     /// With a far layer: which side of the display's far distance this cull keeps.
     pub split: Option<Split>,
+    /// With the visibility mask: the lens's hidden area, which drops what every masked
+    /// view hides ([`HiddenArea::hides`]).
+    pub hidden: Option<HiddenArea>,
     /// Where blended instances are sorted from, back to front: the midpoint of the
     /// display's two eyes (its one view's position for mono, far and light views;
     /// [`crate::contexts::DisplayContext::sort_origin`]).
     pub sort_origin: Vec3,
+}
+
+impl CullJob {
+    /// Whether the job keeps sphere `s`: its frustum, its split, then its hidden area,
+    /// as the GPU's `cull_entry` tests them.
+    pub fn keeps(&self, s: Vec4) -> bool {
+        crate::frustum::sphere_in_planes(&self.planes, s)
+            && self.split.is_none_or(|split| split.keeps(s))
+            && self.hidden.is_none_or(|h| !h.hides(s))
+    }
 }
 
 /// A display's far split ([`crate::far_layer`]): instances entirely beyond `distance`

@@ -48,6 +48,8 @@ pub struct RigView {
     /// 1 where it culls in the early occlusion phase: it keeps only what its display
     /// drew last frame (`Phase::Early`); else 0.
     pub early: u32,
+    /// 1 where its display's hidden area culls too ([`crate::cull::HiddenArea`]).
+    pub hidden: u32,
     /// Its planes grown for rounding ([`CoarseCull::around`]): the rig's cull skips
     /// the sphere tests of a span whose box fails it, as the coarse cull skips a block
     /// (a sphere the planes keep makes its box pass).
@@ -69,6 +71,7 @@ impl Default for RigView {
             counts_at: 0,
             cull_slot: 0,
             early: 0,
+            hidden: 0,
             block: CoarseCull::EVERYTHING,
         }
     }

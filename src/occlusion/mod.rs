@@ -22,7 +22,6 @@ use crate::contexts::{DisplayContext, EyeContext};
 use crate::cull::FrameLod;
 use crate::cull::cpu;
 use crate::cull::{CullJob, CullOutput};
-use crate::frustum::sphere_in_planes;
 use crate::records::CullLayout;
 use crate::shaders::SPAN;
 
@@ -310,7 +309,7 @@ pub fn cull_phases(
 pub fn cull_early(layout: &CullLayout, job: &CullJob, lod: &FrameLod, drawn: &[u32]) -> CullOutput {
     let span = SPAN as usize;
     let early = mask(layout, |k, s| {
-        in_view(job, s) && drawn[k / span] >> (k % span) & 1 == 1
+        job.keeps(s) && drawn[k / span] >> (k % span) & 1 == 1
     });
     cpu::cull_masked(
         layout,
@@ -341,7 +340,7 @@ pub fn cull_late(
         let mut bits = 0u32;
         for (i, &s) in spheres.iter().enumerate() {
             let k = first + i;
-            if !in_view(job, s) || occluded(s, display, pyramid) {
+            if !job.keeps(s) || occluded(s, display, pyramid) {
                 continue;
             }
             if drawn[k / span] >> (k % span) & 1 == 0 {
@@ -367,7 +366,7 @@ pub fn cull_tested(
     pyramid: (&[f32], PyramidShape),
 ) -> CullOutput {
     let kept = mask(layout, |_, s| {
-        in_view(job, s) && !occluded(s, context, pyramid)
+        job.keeps(s) && !occluded(s, context, pyramid)
     });
     let v = (job.instances_per_object, job.sort_origin);
     cpu::cull_masked(layout, &kept, lod, v)
@@ -385,10 +384,6 @@ fn mask(layout: &CullLayout, keep: impl Fn(usize, Vec4) -> bool) -> Vec<u64> {
 }
 
 /// Whether `job`'s frustum and split keep sphere `s`.
-fn in_view(job: &CullJob, s: Vec4) -> bool {
-    sphere_in_planes(&job.planes, s) && job.split.is_none_or(|split| split.keeps(s))
-}
-
 #[cfg(test)]
 mod tests {
     use super::*;

@@ -11,7 +11,7 @@ use super::options::StereoMode;
 use super::options::{RendererOptions, frame_lod};
 use crate::contexts::{DisplayContext, FrameContext};
 use crate::cull::FrameCull;
-use crate::cull::{CoarseCull, CullJob};
+use crate::cull::{CoarseCull, CullJob, HiddenArea};
 use crate::error::{Error, Result};
 use crate::far_layer::FarPlan;
 use crate::rig::{ResolvedRig, Rig};
@@ -140,6 +140,10 @@ pub struct FramePlan {
     pub insets: Vec<Option<DisplayContext>>,
     /// The inset culls (never coarse), one per display with an inset context.
     pub inset_culls: Vec<PlannedCull>,
+    /// Per display: with the visibility mask on the GPU-driven path, the lens's hidden
+    /// area its cull drops by (the display's own cull and its late phase; never its far
+    /// layer's or its insets').
+    pub hidden: Vec<Option<HiddenArea>>,
 }
 
 impl FramePlan {
@@ -179,8 +183,15 @@ impl FramePlan {
             false => vec![None; rig.displays.len()],
         };
         let inset_cull = options.inset_cull && options.mode == StereoMode::Instanced;
+        let hidden = hidden_areas(rig, &resolved, options, inset_cull);
         let displays = display_contexts(rig, &resolved, options.mode, &far, inset_cull);
-        let culls = culls(&resolved, options.mode, &displays, &far);
+        let displays: Vec<DisplayContext> = (displays.into_iter().zip(&hidden))
+            .map(|(c, h)| DisplayContext {
+                hidden: u32::from(h.is_some()),
+                ..c
+            })
+            .collect();
+        let culls = culls(&resolved, options.mode, (&displays, &hidden), &far);
         let insets: Vec<Option<DisplayContext>> = (displays.iter().zip(&resolved.displays))
             .map(|(context, r)| {
                 r.insets
@@ -207,6 +218,7 @@ impl FramePlan {
             light_cull,
             insets,
             inset_culls,
+            hidden,
         })
     }
 
@@ -257,6 +269,7 @@ fn inset_job(i: usize, context: &DisplayContext) -> PlannedCull {
             planes: context.planes,
             instances_per_object: context.instances_per_object,
             split: None,
+            hidden: None,
             sort_origin: context.sort_origin(),
         },
     }
@@ -300,13 +313,38 @@ fn display_contexts(
         .collect()
 }
 
+/// Each display's hidden area where its cull drops by it: the visibility mask on, a
+/// path that draws the mask (the GPU-driven one: the classic modes do not mask), a
+/// display with a mask, and at most the two masked views drawn by its cull (a
+/// foveated display's insets may reach into the mask's area unless they cull apart).
+fn hidden_areas(
+    rig: &Rig,
+    resolved: &ResolvedRig,
+    options: &RendererOptions,
+    inset_cull: bool,
+) -> Vec<Option<HiddenArea>> {
+    let masked = options.visibility_mask && !options.mode.per_instance();
+    (rig.displays.iter().zip(&resolved.displays))
+        .map(|(d, r)| {
+            let mask = d.visibility_mask.as_ref().filter(|_| masked)?;
+            if d.views() > 2 && !inset_cull {
+                return None;
+            }
+            let layered = options.mode == StereoMode::Multiview && d.stereo;
+            let [_, _, w, h] = d.layout_in(layered).viewports()[0];
+            HiddenArea::new(&r.eyes[..r.eyes.len().min(2)], &mask.views, (w, h))
+        })
+        .collect()
+}
+
 /// The culls the frame frustum holds: per display one against its display frustum (or,
 /// culling per eye, one per eye of a stereo display), each keeping its near side where
-/// it has a far plan; then one far cull per plan (the display frustum, drawn once).
+/// it has a far plan and dropping what its hidden area hides; then one far cull per
+/// plan (the display frustum, drawn once).
 fn culls(
     resolved: &ResolvedRig,
     mode: StereoMode,
-    contexts: &[DisplayContext],
+    (contexts, hidden): (&[DisplayContext], &[Option<HiddenArea>]),
     far: &[Option<FarPlan>],
 ) -> Vec<PlannedCull> {
     let mut culls = Vec::new();
@@ -320,6 +358,7 @@ fn culls(
                         planes: eye.frustum().planes,
                         instances_per_object: 1,
                         split,
+                        hidden: None,
                         // One order for both eyes, as the display draws it.
                         sort_origin: context.sort_origin(),
                     },
@@ -329,6 +368,7 @@ fn culls(
                 view: CullView::Display(i),
                 job: CullJob {
                     split,
+                    hidden: hidden[i],
                     sort_origin: context.sort_origin(),
                     ..r.cull_job(context.instances_per_object)
                 },
@@ -343,6 +383,7 @@ fn culls(
                 planes: plan.view.frustum().planes,
                 instances_per_object: 1,
                 split: Some(plan.split(true)),
+                hidden: None,
                 sort_origin: plan.view.position(),
             },
         })

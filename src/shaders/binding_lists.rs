@@ -57,7 +57,7 @@ const FILTERABLE: wgpu::TextureSampleType = wgpu::TextureSampleType::Float { fil
 /// Every cull pass's bindings: the frame context, per display its context and outputs,
 /// the scene data uploaded once, scratch shared by all displays, and the frame's coarse
 /// cull results.
-pub const CULL_BINDINGS: [Binding; 15] = [
+pub const CULL_BINDINGS: [Binding; 16] = [
     binding("frame", Access::Uniform, "FrameContext", COMPUTE),
     binding("display", Access::Uniform, "DisplayContext", COMPUTE),
     binding("params", Access::Uniform, "CullParams", COMPUTE),
@@ -92,6 +92,9 @@ pub const CULL_BINDINGS: [Binding; 15] = [
     // from params.pyramid_offset, the display's eyes' depth pyramids (src/occlusion.rs,
     // f32 bits), rebuilt per display. One binding: GL has 16 storage buffers a stage.
     binding("occlusion", Access::StorageReadWrite, "array<u32>", COMPUTE),
+    // Per display slot, the lens's hidden area as planes (src/cull/hidden.rs): what
+    // a display's cull drops where its `hidden` is 1.
+    binding("hidden", Access::StorageRead, "array<HiddenArea>", COMPUTE),
     // World bounding spheres in cull order.
     windowed(
         "spheres",

@@ -25,6 +25,10 @@ const _: () = assert!(WORKGROUP_SIZE * SPAN < 1 << 16);
 /// invocation: 16 keeps them in registers.
 pub const MAX_RIG_VIEWS: usize = 16;
 
+/// Regions of one view's hidden area ([`crate::cull::hidden`]): the window's outside
+/// (six flipped frustum planes) and the visibility mask's triangles.
+pub const MAX_HIDDEN_REGIONS: usize = 6 + MAX_MASK_TRIANGLES;
+
 /// Cull positions per block of the frame's coarse cull ([`crate::cull::coarse`]): the
 /// CPU culler's 64 lanes.
 pub const BLOCK: u32 = 64;
@@ -111,8 +115,10 @@ pub fn scatter_source(windows: &Windows, kind: EditKind) -> String {
     };
     let shared = include_str!("../../wgsl/shared/scatter.wgsl");
     let rig = MAX_RIG_VIEWS;
-    let span =
-        format!("const VISIBILITY_SPAN: u32 = {SPAN}u;\nconst MAX_RIG_VIEWS: u32 = {rig}u;\n");
+    let span = format!(
+        "const VISIBILITY_SPAN: u32 = {SPAN}u;\nconst MAX_RIG_VIEWS: u32 = {rig}u;\n{}",
+        hidden_constant()
+    );
     [&span, RECORDS, &bindings, shared, body].concat()
 }
 
@@ -365,8 +371,13 @@ fn constants() -> String {
         "\nconst WORKGROUP_SIZE: u32 = {WORKGROUP_SIZE}u;\nconst MAX_LODS: u32 = {lods}u;\n\
          const MAX_RIG_VIEWS: u32 = {rig}u;\n\
          const BLOCK: u32 = {BLOCK}u;\nconst SPAN: u32 = {SPAN}u;\nconst BLOCK_GROWTH: f32 = {BLOCK_GROWTH:?};\n\
-         const BLOCK_SLACK: f32 = {BLOCK_SLACK:?};\n"
+         const BLOCK_SLACK: f32 = {BLOCK_SLACK:?};\n{}",
+        hidden_constant()
     )
+}
+
+fn hidden_constant() -> String {
+    format!("const MAX_HIDDEN_REGIONS: u32 = {MAX_HIDDEN_REGIONS}u;\n")
 }
 
 /// The frame's shadow pass: depth only, the light as the display's eye 0

@@ -60,6 +60,9 @@ struct DisplayContext {
     // Pixels a sphere's projected bounds grow by each way in the occlusion test: 1 for
     // rounding, more in a far layer's cull (how far its composite carries a far point).
     occlusion_margin_px: f32,
+    // 1 where the cull also drops what the display's hidden area (`hidden` at
+    // cull_slot, src/cull/hidden.rs) hides in every masked view, else 0.
+    hidden: u32,
 }
 
 // Once per frame: the viewer (not any eye) and the time in seconds.

@@ -71,6 +71,33 @@ fn in_split_of(keep: u32, distance: f32, apex: vec3<f32>, s: vec4<f32>) -> bool 
     return (d2 >= reach * reach) == (keep == 2u);
 }
 
+// Whether display slot `slot`'s hidden area (src/cull/hidden.rs) hides sphere s in
+// every masked view: some region of each holds it whole. The CPU twin is
+// HiddenArea::hides: the plane arithmetic of sphere_in_planes, compared with the radius.
+fn hidden_in_views(slot: u32, s: vec4<f32>) -> bool {
+    let views = hidden[slot].count;
+    for (var v = 0u; v < views; v++) {
+        if (!hidden_in_view(slot, v, s)) {
+            return false;
+        }
+    }
+    return views > 0u;
+}
+
+fn hidden_in_view(slot: u32, v: u32, s: vec4<f32>) -> bool {
+    for (var r = 0u; r < hidden[slot].views[v].count; r++) {
+        var inside = true;
+        for (var i = 0u; i < 3u; i++) {
+            let p = hidden[slot].views[v].regions[r].planes[i];
+            inside = inside && p.x * s.x + p.y * s.y + p.z * s.z + p.w >= s.w;
+        }
+        if (inside) {
+            return true;
+        }
+    }
+    return false;
+}
+
 // The member of the rig cull whose scratch and outputs the functions below address
 // (RIG: the rig passes set it); 0 in a single view's passes, which write their own
 // outputs from their start.

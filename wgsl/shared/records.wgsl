@@ -120,9 +120,31 @@ struct RigView {
     // occlusion phase (keeping only what its display drew last frame), else 0.
     cull_slot: u32,
     early: u32,
+    // 1 where the display's hidden area (`hidden` at cull_slot) culls too, else 0.
+    hidden: u32,
     // Its planes grown for rounding, as the coarse cull tests a block against a
     // display: a span whose box fails it holds nothing the member keeps.
     block: CoarseTest,
+}
+
+// One region of a view's hidden area (src/cull/hidden.rs): a sphere is in it when it
+// is inside all three planes by its radius (unused planes pass every sphere).
+struct HiddenRegion {
+    planes: array<vec4<f32>, 3>,
+}
+
+// One view's hidden area: the window's outside (six flipped frustum planes), then the
+// visibility mask's triangles; the first `count` regions are in use.
+struct HiddenView {
+    regions: array<HiddenRegion, MAX_HIDDEN_REGIONS>,
+    count: u32,
+}
+
+// A display slot's hidden area: a sphere every one of the first `count` views hides
+// is dropped by the display's cull (0: none is).
+struct HiddenArea {
+    views: array<HiddenView, 2>,
+    count: u32,
 }
 
 // The views one set of rig dispatches culls: the first `members` of `views`.

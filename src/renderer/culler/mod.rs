@@ -79,6 +79,8 @@ pub(super) struct CullShape {
     pub occlusion: OcclusionRoom,
     /// With occlusion, whether far layers test against their displays' pyramids.
     pub tested: bool,
+    /// Display slots whose hidden areas the GPU cull reads (0: no cull drops by one).
+    pub hidden_slots: u32,
 }
 
 /// One view's cull outputs (per the cull contract) and, on the GPU, its bindings.
@@ -125,7 +127,12 @@ impl Culler {
                 };
                 let culler = GpuCuller::new(device, features, windows);
                 let rig_members = members.len() as u32;
-                let room = (shape.coarse_slots, shape.occlusion, rig_members);
+                let room = (
+                    shape.coarse_slots,
+                    shape.occlusion,
+                    rig_members,
+                    shape.hidden_slots,
+                );
                 let scene = CullScene::new(device, &layout, (shape.slots, shape.levels), room);
                 let scene = Box::new(scene);
                 let coarse = culler.coarse_bind_groups(device, &scene);
@@ -208,7 +215,7 @@ impl Culler {
         match &mut self.kind {
             Kind::Gpu { scene, .. } => {
                 let planes: Vec<_> = plan.resolved.displays.iter().map(|d| d.planes).collect();
-                scene.write_block_tests(queue, &planes)
+                scene.write_block_tests(queue, &planes) + scene.write_hidden(queue, &plan.hidden)
             }
             Kind::Cpu {
                 layout,

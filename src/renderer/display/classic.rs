@@ -94,6 +94,7 @@ impl ClassicPath {
             floor: false,
             occlusion: Default::default(),
             tested: false,
+            hidden_slots: 0,
         };
         let culler = Culler::new(device, options.cull, layout, shape, windows);
         let draw_scene = DrawScene::new(device, &drawer, (scene, shadow_group), slots)?;

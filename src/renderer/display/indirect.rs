@@ -89,6 +89,10 @@ impl IndirectPath {
             floor: options.cull_floor,
             occlusion,
             tested: options.far_layer && occlusion.displays > 0,
+            hidden_slots: match plan.hidden.iter().any(Option::is_some) {
+                true => plan.displays.len() as u32,
+                false => 0,
+            },
         };
         let kinds = layout.bins.kinds.clone();
         let mut culler = Culler::new(device, options.cull, layout, shape, windows);
