@@ -72,7 +72,7 @@ fn empty_meshes_are_skipped_and_draws_packed_at_the_front() {
 #[test]
 fn spheres_straddling_a_plane_are_visible_and_those_beyond_are_not() {
     let rig = hmd();
-    let job = rig.cull_jobs().unwrap()[0];
+    let job = rig.cull_jobs().unwrap().remove(0);
     let radius = 3f32.sqrt() * 0.5;
     // A point on the left plane, 4 m ahead.
     let left = job.planes[0];

@@ -63,7 +63,7 @@ proptest! {
         // point says anything.
         let s = scene.world_sphere(&scene.instances[0]);
         prop_assume!(s.xyz().as_dvec3().distance(p) <= s.w as f64);
-        let job = rig.cull_jobs().unwrap()[d];
+        let job = rig.cull_jobs().unwrap().remove(d);
         let out = cpu::cull(&CullLayout::new(&scene), &job);
         prop_assert_eq!(out.visible, vec![0], "display {} eye {} point {} sphere {}", d, e, p, s);
     }

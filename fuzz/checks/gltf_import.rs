@@ -72,7 +72,7 @@ pub fn gltf_import(data: &[u8]) {
     }
     let layout = CullLayout::new(&scene);
     let rig = Rig::preset("hmd").expect("the hmd preset");
-    let job = rig.cull_jobs().expect("the hmd display")[0];
+    let job = rig.cull_jobs().expect("the hmd display").remove(0);
     let out = cpu::cull(&layout, &job);
     assert!(out.visible.len() <= n && out.visible.iter().all(|&i| (i as usize) < n));
     assert_eq!(out.bins.len(), layout.bins.kinds.len());

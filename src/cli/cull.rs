@@ -159,7 +159,7 @@ fn cpu_cull(rig: &Rig, options: &RendererOptions, scene: &Scene) -> Result<Culls
     let plan = FramePlan::of(rig, resolved, options, coarse, 0.0)?;
     let layout = CullLayout::new(scene);
     let outputs = cpu::cull_frame(&layout, &plan.jobs(), &plan.cull);
-    let apart: Vec<_> = plan.inset_culls.iter().map(|c| c.job).collect();
+    let apart: Vec<_> = plan.inset_culls.iter().map(|c| c.job.clone()).collect();
     let insets = cpu::cull_many_lod(&layout, &apart, &plan.cull.lod);
     let n = rig.displays.len();
     let (mut near, mut far, mut inset) = (vec![None; n], vec![None; n], vec![None; n]);

@@ -61,7 +61,7 @@ pub fn cull_frame(layout: &CullLayout, displays: &[CullJob], frame: &FrameCull) 
         .map(|job| job.planes.map(|v| v.to_array()))
         .collect();
     let splits: Vec<Option<Split>> = displays.iter().map(|job| job.split).collect();
-    let hidden: Vec<Option<&HiddenArea>> = displays.iter().map(|j| j.hidden.as_ref()).collect();
+    let hidden: Vec<Option<&HiddenArea>> = displays.iter().map(|j| j.hidden.as_deref()).collect();
     let blocks: Vec<CoarseCull> = match coarse {
         Some(_) => displays
             .iter()

@@ -27,7 +27,7 @@ use crate::records::DrawArgs;
 
 /// One cull: a display's frustum planes and how many instances each visible object
 /// becomes in its draws.
-#[derive(Clone, Copy, Debug, PartialEq)]
+#[derive(Clone, Debug, PartialEq)]
 pub struct CullJob {
     /// Left, right, bottom, top, near, far; inside when `dot(n, p) + d >= 0`.
     pub planes: [Vec4; 6],
@@ -37,7 +37,7 @@ pub struct CullJob {
     pub split: Option<Split>,
     /// With the visibility mask: the lens's hidden area, which drops what every masked
     /// view hides ([`HiddenArea::hides`]).
-    pub hidden: Option<HiddenArea>,
+    pub hidden: Option<std::sync::Arc<HiddenArea>>,
     /// Where blended instances are sorted from, back to front: the midpoint of the
     /// display's two eyes (its one view's position for mono, far and light views;
     /// [`crate::contexts::DisplayContext::sort_origin`]).
@@ -50,7 +50,7 @@ impl CullJob {
     pub fn keeps(&self, s: Vec4) -> bool {
         crate::frustum::sphere_in_planes(&self.planes, s)
             && self.split.is_none_or(|split| split.keeps(s))
-            && self.hidden.is_none_or(|h| !h.hides(s))
+            && self.hidden.as_ref().is_none_or(|h| !h.hides(s))
     }
 }
 

@@ -5,6 +5,7 @@
 //! path and the CLI's CPU cull consume a plan and decide nothing again; a test can build
 //! one and inspect it without a device.
 
+use std::sync::Arc;
 use std::time::Duration;
 
 use super::options::StereoMode;
@@ -106,7 +107,7 @@ impl CullView {
 }
 
 /// One cull of the frame.
-#[derive(Clone, Copy, Debug, PartialEq)]
+#[derive(Clone, Debug, PartialEq)]
 pub struct PlannedCull {
     /// Whom the cull is for.
     pub view: CullView,
@@ -241,13 +242,13 @@ impl FramePlan {
 
     /// The jobs of [`FramePlan::culls`], in order: what the CPU culler takes.
     pub fn jobs(&self) -> Vec<CullJob> {
-        self.culls.iter().map(|c| c.job).collect()
+        self.culls.iter().map(|c| c.job.clone()).collect()
     }
 
     /// The job of [`FramePlan::culls`] for `view` (`None` if the frame frustum's culls
     /// have none).
     pub fn job(&self, view: CullView) -> Option<CullJob> {
-        self.culls.iter().find(|c| c.view == view).map(|c| c.job)
+        (self.culls.iter().find(|c| c.view == view)).map(|c| c.job.clone())
     }
 }
 
@@ -368,7 +369,7 @@ fn culls(
                 view: CullView::Display(i),
                 job: CullJob {
                     split,
-                    hidden: hidden[i],
+                    hidden: hidden[i].map(Arc::new),
                     sort_origin: context.sort_origin(),
                     ..r.cull_job(context.instances_per_object)
                 },

@@ -229,13 +229,13 @@ impl Culler {
                     _ => false,
                 };
                 let plain: Vec<_> = plan.culls.iter().filter(|c| !occludes(c.view)).collect();
-                let jobs: Vec<_> = plain.iter().map(|c| c.job).collect();
+                let jobs: Vec<_> = plain.iter().map(|c| c.job.clone()).collect();
                 let culled = cpu::cull_frame(layout, &jobs, &plan.cull);
                 *outputs = plain.iter().map(|c| c.view).zip(culled).collect();
                 // Outside the coarse cull: one more pass for the light and the insets.
                 let apart: Vec<_> = plan.light_cull.iter().chain(&plan.inset_culls).collect();
                 if !apart.is_empty() {
-                    let jobs: Vec<_> = apart.iter().map(|c| c.job).collect();
+                    let jobs: Vec<_> = apart.iter().map(|c| c.job.clone()).collect();
                     let out = cpu::cull_many_lod(layout, &jobs, &plan.cull.lod);
                     outputs.extend(apart.iter().map(|c| c.view).zip(out));
                 }
