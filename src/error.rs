@@ -134,6 +134,11 @@ pub enum Error {
     #[error("GPU readback failed: {0}")]
     Readback(String),
 
+    /// A frame's input in bytes ([`crate::frame_input::FrameInput::from_bytes`]) is not
+    /// one: cut short, of another version, or damaged.
+    #[error("frame input: {0}")]
+    FrameInput(String),
+
     /// The device was lost (driver reset, removal, or destroyed).
     #[error("the GPU device was lost: {0}")]
     DeviceLost(String),

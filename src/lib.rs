@@ -45,6 +45,7 @@ pub mod draw;
 pub mod error;
 pub mod far_layer;
 pub mod foveated_composite;
+pub mod frame_input;
 pub mod frustum;
 pub mod gltf_import;
 pub mod lights;

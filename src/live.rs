@@ -48,7 +48,7 @@ mod lights;
 pub use lights::LightHandle;
 
 /// A stable reference to one inserted instance.
-#[derive(Clone, Copy, Debug, PartialEq, Eq, Hash)]
+#[derive(Clone, Copy, Debug, PartialEq, Eq, Hash, serde::Serialize, serde::Deserialize)]
 pub struct Handle {
     slot: u32,
     generation: u32,

@@ -102,7 +102,7 @@ pub struct Lod {
 pub const MAX_LODS: usize = 4;
 
 /// One placed copy of a mesh: what culling tests and a draw draws.
-#[derive(Clone, Copy, Debug, PartialEq)]
+#[derive(Clone, Copy, Debug, PartialEq, serde::Serialize, serde::Deserialize)]
 pub struct Instance {
     /// Local to world.
     pub world_from_local: Affine3A,
@@ -130,7 +130,7 @@ impl Instance {
 /// the local origin) by `spin * t` radians, then is placed by `world_from_local`, then
 /// lifted along world +Y by `bob * sin(pi * t)` meters (a two-second period). Culling
 /// uses a sphere that holds every pose ([`Scene::world_sphere`]).
-#[derive(Clone, Copy, Debug, Default, PartialEq)]
+#[derive(Clone, Copy, Debug, Default, PartialEq, serde::Serialize, serde::Deserialize)]
 pub struct Animation {
     /// Radians per second about the local +Y axis.
     pub spin: f32,
