@@ -80,6 +80,11 @@ impl FrameInput {
         for edit in &self.edits {
             edit.apply(scene)?;
         }
+        self.apply_pose(rig)
+    }
+
+    /// Applies the pose and gaze alone to `rig` (a scene that does not change).
+    pub fn apply_pose(&self, rig: &mut Rig) -> Result<()> {
         rig.viewer = self.viewer;
         if let Some(gaze) = self.gaze {
             rig.set_gaze(gaze)

@@ -8,6 +8,7 @@ use rand::{Rng, SeedableRng};
 use rand_pcg::Pcg64Mcg;
 
 use crate::error::{Error, Result};
+use crate::frame_input::SceneEdit;
 use crate::live::{Handle, LiveScene};
 use crate::renderer::PosingMode;
 use crate::scene::Scene;
@@ -89,18 +90,29 @@ impl EditDriver {
 
     /// Frame `frame`'s edits: the movers step along their circles (radius 0.2 m, one turn
     /// in about six seconds at 90 fps), then the churned instances go and come back.
-    pub fn apply(&mut self, live: &mut LiveScene, frame: u32) -> Result<()> {
+    /// Returns them in order, as a cluster's head sends them.
+    pub fn apply(&mut self, live: &mut LiveScene, frame: u32) -> Result<Vec<SceneEdit>> {
+        let mut edits = Vec::with_capacity(self.moving.len() + 2 * self.churn);
         for (k, &(i, start)) in self.moving.iter().enumerate() {
             let phase = frame as f32 * 0.012 + k as f32;
             let offset = 0.2 * Vec3::new(phase.cos() - 1.0, 0.0, phase.sin());
             let moved = Affine3A::from_translation(offset) * start;
             live.set_transform(self.handles[i], moved)?;
+            edits.push(SceneEdit::Transform {
+                handle: self.handles[i],
+                world_from_local: moved,
+            });
         }
         for _ in 0..self.churn {
             let i = self.rng.random_range(0..self.handles.len());
             let instance = live.remove(self.handles[i])?;
+            edits.push(SceneEdit::Remove(self.handles[i]));
             self.handles[i] = live.insert(instance)?;
+            edits.push(SceneEdit::Insert {
+                handle: self.handles[i],
+                instance,
+            });
         }
-        Ok(())
+        Ok(edits)
     }
 }

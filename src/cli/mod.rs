@@ -1,6 +1,8 @@
 //! The `stereocull` command line.
 
 mod chart;
+#[cfg(feature = "cluster")]
+mod cluster;
 mod cull;
 mod diff;
 mod edits;
@@ -53,6 +55,10 @@ enum Command {
     Stress(stress::StressArgs),
     /// Compare every stereo mode and cull mode across instance counts: table, CSV, JSON, chart.
     Profile(profile::ProfileArgs),
+    /// Under `mpirun`: the rig's displays over MPI ranks, frame-locked (feature
+    /// `cluster`).
+    #[cfg(feature = "cluster")]
+    Cluster(cluster::ClusterArgs),
     /// Compare two images: how many pixels differ and by how much (e.g. LOD on and off).
     Diff(diff::DiffArgs),
 }
@@ -275,6 +281,8 @@ pub fn run() -> Result<()> {
         Some(Command::Stress(args)) => stress::stress(&args),
         Some(Command::Profile(args)) => profile::profile(&args),
         Some(Command::Diff(args)) => diff::diff(&args),
+        #[cfg(feature = "cluster")]
+        Some(Command::Cluster(args)) => cluster::cluster(&args),
     }
 }
 

@@ -156,7 +156,7 @@ fn write_depth(session: &Session, index: usize, out: &std::path::Path) -> Result
 
 /// Display `index`'s image as drawn and, for a foveated display, its composite (each
 /// eye's inset over its outer view, by the GPU composite).
-fn display_images(
+pub(super) fn display_images(
     session: &Session,
     index: usize,
 ) -> Result<(image::RgbaImage, Option<image::RgbaImage>)> {
@@ -199,7 +199,7 @@ fn frame_json(
     frame
 }
 
-fn save(image: &image::RgbaImage, path: &std::path::Path) -> Result<()> {
+pub(super) fn save(image: &image::RgbaImage, path: &std::path::Path) -> Result<()> {
     image.save(path).map_err(|source| Error::Image {
         path: path.to_path_buf(),
         source,

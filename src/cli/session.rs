@@ -8,6 +8,8 @@ use super::SceneArgs;
 use super::edits::{EditArgs, EditDriver, live_copy};
 use crate::device::{Gpu, list_counts};
 use crate::error::{Error, Result};
+#[cfg(feature = "cluster")]
+use crate::frame_input::FrameInput;
 use crate::live::LiveScene;
 use crate::profiling::GpuTimer;
 use crate::renderer::{
@@ -131,6 +133,38 @@ impl Session {
         time: f32,
         latch: Option<&dyn Fn(&mut Rig)>,
     ) -> Result<FrameFigures> {
+        let frame = self.frames;
+        let edit = |live: &mut LiveScene, driver: &mut EditDriver, _: &mut Rig| {
+            driver.apply(live, frame).map(drop)
+        };
+        self.frame_edited(time, latch, edit)
+    }
+
+    #[cfg(feature = "cluster")]
+    /// A frame as a cluster's head sent it: `input`'s edits made on the live scene, its
+    /// pose and gaze on the rig (no driver of this session's own), then drawn at its
+    /// time.
+    pub fn frame_from(&mut self, input: &FrameInput) -> Result<FrameFigures> {
+        if self.live.is_none() {
+            if !input.edits.is_empty() {
+                return Err(Error::Unsupported(
+                    "a frame input with edits for a scene opened without --moving or --churn"
+                        .into(),
+                ));
+            }
+            input.apply_pose(&mut self.rig)?;
+        }
+        let edit = |live: &mut LiveScene, _: &mut EditDriver, rig: &mut Rig| input.apply(live, rig);
+        self.frame_edited(input.time, None, edit)
+    }
+
+    /// One frame whose edits `edit` makes (on a live scene; none without one).
+    fn frame_edited(
+        &mut self,
+        time: f32,
+        latch: Option<&dyn Fn(&mut Rig)>,
+        edit: impl FnOnce(&mut LiveScene, &mut EditDriver, &mut Rig) -> Result<()>,
+    ) -> Result<FrameFigures> {
         let ms = |since: Instant| since.elapsed().as_secs_f64() * 1e3;
         let (mut edit_ms, mut sync_ms, mut sync) = (0.0, 0.0, SyncStats::default());
         let start = Instant::now();
@@ -140,7 +174,7 @@ impl Session {
                 live.pose(time)?;
             }
             let edits = Instant::now();
-            driver.apply(live, self.frames)?;
+            edit(live, driver, &mut self.rig)?;
             edit_ms = ms(edits);
             let sync_start = Instant::now();
             sync = self
