@@ -157,12 +157,27 @@ fn failing(programs: &[(u32, Vec<String>)]) -> (bool, String, Duration) {
     (done.status.success(), stderr, start.elapsed())
 }
 
+/// The processes whose command line runs `stereocull cluster` (`/proc`, as `pgrep`
+/// would, without needing it), with their environments.
+fn ranks() -> Vec<(String, Vec<u8>)> {
+    let Ok(entries) = std::fs::read_dir("/proc") else {
+        return Vec::new();
+    };
+    entries
+        .flatten()
+        .filter_map(|p| {
+            let cmdline = std::fs::read(p.path().join("cmdline")).ok()?;
+            let args: Vec<&[u8]> = cmdline.split(|&b| b == 0).collect();
+            let ours =
+                args.first()?.ends_with(b"stereocull") && args.get(1) == Some(&&b"cluster"[..]);
+            let environ = std::fs::read(p.path().join("environ")).ok()?;
+            ours.then(|| (p.file_name().to_string_lossy().into_owned(), environ))
+        })
+        .collect()
+}
+
 fn no_rank_left() -> bool {
-    let found = Command::new("pgrep")
-        .args(["-f", "stereocull cluster"])
-        .output()
-        .unwrap();
-    found.stdout.is_empty()
+    ranks().is_empty()
 }
 
 #[test]
@@ -206,14 +221,11 @@ fn a_killed_rank_ends_the_job() {
         .unwrap();
     // Rank 1's process, once the job runs.
     let rank_one = || {
-        std::fs::read_dir("/proc").ok()?.flatten().find_map(|p| {
-            let environ = std::fs::read(p.path().join("environ")).ok()?;
-            let cmdline = std::fs::read(p.path().join("cmdline")).ok()?;
-            let ours = String::from_utf8_lossy(&cmdline).contains("cluster");
+        ranks().into_iter().find_map(|(pid, environ)| {
             let one = environ
                 .split(|&b| b == 0)
                 .any(|v| v == b"OMPI_COMM_WORLD_RANK=1");
-            (ours && one).then(|| p.file_name().to_string_lossy().into_owned())
+            one.then_some(pid)
         })
     };
     let start = Instant::now();
