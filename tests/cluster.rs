@@ -1,9 +1,10 @@
 //! `stereocull cluster` under `mpirun` on this machine (feature `cluster`; CI runs it as
-//! its second command): every rank's images of every frame equal one process's, over 3
-//! and 6 ranks on `cave` and 2 on `hmd-peripheral`, with a walking viewer, moving and
-//! churned instances and an animated glTF; one frame equals `render`'s; and a rank that
-//! cannot start, loaded another scene, is killed or receives a damaged frame ends the
-//! job non-zero within seconds, naming itself, with no process left behind.
+//! its second command): every rank's images and cull dumps of every frame equal one
+//! process's, over 3 and 6 ranks on `cave` and 2 on `hmd-peripheral`, with a walking
+//! viewer, moving and churned instances and an animated glTF; one frame equals
+//! `render`'s; and a rank that cannot start, loaded another scene, is killed or receives
+//! a damaged frame ends the job non-zero within seconds, naming itself, with no process
+//! left behind.
 
 #![cfg(feature = "cluster")]
 
@@ -255,4 +256,51 @@ fn a_killed_rank_ends_the_job() {
     assert!(!status.success());
     std::thread::sleep(Duration::from_millis(500));
     assert!(no_rank_left(), "a rank outlived its job");
+}
+
+/// A rig file assigns displays to ranks: rank 0 draws the walls given it, and the images
+/// are still `render`'s; a rank past the job's is an error naming the display.
+#[test]
+fn a_rig_file_assigns_displays_to_ranks() {
+    let _job = one_job();
+    let root = tempfile::tempdir().unwrap();
+    let mut rig = stereocull::rig::Rig::preset("cave").unwrap();
+    for (d, rank) in rig.displays.iter_mut().zip([1, 1, 0, 0, 1]) {
+        d.rank = Some(rank);
+    }
+    let file = root.path().join("cave.json");
+    std::fs::write(&file, serde_json::to_string(&rig).unwrap()).unwrap();
+    let common = format!(
+        "--rig {} --scene procedural:2000 --width 48 --height 48",
+        file.display()
+    );
+    let out = root.path().join("cluster");
+    let done = run(&[(2, words(&format!("{common} --out {}", out.display())))]);
+    let stdout = String::from_utf8_lossy(&done.stdout);
+    assert!(
+        done.status.success(),
+        "{}",
+        String::from_utf8_lossy(&done.stderr)
+    );
+    assert!(stdout.contains("rank 0 draws right, floor"), "{stdout}");
+    let render = root.path().join("render");
+    let rendered = Command::new(BIN)
+        .env("LP_NUM_THREADS", "1")
+        .arg("render")
+        .args(words(&common))
+        .args(["--out", render.to_str().unwrap()])
+        .output()
+        .unwrap();
+    assert!(rendered.status.success());
+    for d in &rig.displays {
+        let file = format!("{}.png", d.name);
+        assert!(
+            std::fs::read(out.join(&file)).unwrap() == std::fs::read(render.join(&file)).unwrap()
+        );
+    }
+    let (ok, stderr, _) = failing(&[(1, words(&common))]);
+    assert!(
+        !ok && stderr.contains("display \"front\" is assigned to rank 1, the job has 1 ranks"),
+        "{stderr}"
+    );
 }

@@ -1,8 +1,8 @@
 //! `stereocull cluster`, under `mpirun`: a rig's displays over MPI ranks, frame-locked.
 //! Rank 0, the head, walks the viewer, makes the scene's edits (`--moving`, `--churn`)
 //! and broadcasts each frame's input ([`FrameInput`], as bytes); every rank applies it
-//! to its own copy of the scene and draws its displays (round robin over the ranks that
-//! draw), waits for its GPU, then for every other rank at a barrier (the swap lock), and
+//! to its own copy of the scene and draws its displays (a rig file's `rank` per
+//! display, else round robin over the ranks that draw), waits for its GPU, then for every other rank at a barrier (the swap lock), and
 //! then presents: writes its images, or counts the frame. Rank 0 gathers each rank's
 //! figures.
 //!
@@ -17,14 +17,15 @@ use std::time::Instant;
 use clap::Parser;
 use mpi::traits::{Communicator, CommunicatorCollectives, Root};
 
-use super::SceneArgs;
+use super::cull::display_dump;
 use super::edits::{EditArgs, EditDriver};
 use super::render::{display_images, save};
 use super::session::Session;
+use super::{SceneArgs, write_json};
 use crate::error::{Error, Result};
 use crate::frame_input::{FrameInput, scene_identity};
 use crate::live::LiveScene;
-use crate::renderer::{CullMode, StereoMode};
+use crate::renderer::{CullMode, StereoMode, instances_per_object};
 use crate::rig::Viewer;
 
 /// Seconds between frames (90 Hz).
@@ -145,6 +146,7 @@ pub fn cluster(args: &ClusterArgs) -> Result<()> {
             session.gpu.wait().unwrap_or_else(|e| fail("frame", &e));
         }
         let drawn = start.elapsed();
+        figures.arrivals.push(since_epoch_us());
         world.barrier();
         figures.push([received, drawn, start.elapsed() - drawn], bytes.len());
         let last = frame + 1 == args.frames;
@@ -199,15 +201,27 @@ impl Head {
     }
 }
 
-/// Opens rank `rank`'s part: its displays (round robin over the ranks that draw) and,
-/// on rank 0, the head.
+/// Opens rank `rank`'s part: its displays (those the rig file assigns it, then round
+/// robin over the ranks that draw) and, on rank 0, the head.
 fn open(args: &ClusterArgs, rank: u32, ranks: u32) -> Result<Node> {
     let rig = args.scene.load_rig()?;
+    if let Some(d) = rig
+        .displays
+        .iter()
+        .find(|d| d.rank.is_some_and(|r| r >= ranks))
+    {
+        let message = format!(
+            "display {:?} is assigned to rank {}, the job has {ranks} ranks",
+            d.name,
+            d.rank.unwrap_or_default()
+        );
+        return Err(Error::rig(&args.scene.rig, message));
+    }
     let drawing_from = u32::from(!args.head_draws.on() && ranks > 1);
+    let round_robin =
+        |i: usize| rank >= drawing_from && i as u32 % (ranks - drawing_from) == rank - drawing_from;
     let displays: Vec<String> = (rig.displays.iter().enumerate())
-        .filter(|&(i, _)| {
-            rank >= drawing_from && i as u32 % (ranks - drawing_from) == rank - drawing_from
-        })
+        .filter(|&(i, d)| d.rank.map_or_else(|| round_robin(i), |r| r == rank))
         .map(|(_, d)| d.name.clone())
         .collect();
     let session = match displays.is_empty() {
@@ -248,15 +262,27 @@ fn broadcast(world: &impl Communicator, bytes: Option<Vec<u8>>) -> Vec<u8> {
     buffer
 }
 
-/// Writes every display of `session`'s last frame into `dir` as `render` names them.
+/// Writes every display of `session`'s last frame into `dir` as `render` names them,
+/// and its cull buffers beside as `<display>.cull.json` (as `stereocull cull` dumps a
+/// display).
 fn present(session: &Session, dir: &std::path::Path) -> Result<()> {
     std::fs::create_dir_all(dir).map_err(|e| Error::io(dir, e))?;
+    let (device, queue) = (&session.gpu.device, &session.gpu.queue);
+    let options = session.renderer.options();
     for (index, display) in session.rig.displays.iter().enumerate() {
         let (drawn, composite) = display_images(session, index)?;
         save(
             &composite.unwrap_or(drawn),
             &dir.join(format!("{}.png", display.name)),
         )?;
+        let cull = session.renderer.diagnostics(device, queue).cull(index)?;
+        let views = match (options.inset_cull, display.views()) {
+            (true, 4) => 2,
+            (_, views) => views,
+        };
+        let per_object = instances_per_object(options.mode, views);
+        let dump = display_dump(&display.name, per_object, &cull, session.current_scene());
+        write_json(&dir.join(format!("{}.cull.json", display.name)), &dump)?;
     }
     Ok(())
 }
@@ -267,6 +293,9 @@ fn present(session: &Session, dir: &std::path::Path) -> Result<()> {
 struct Figures {
     ms: [Vec<f64>; 3],
     bytes: Vec<usize>,
+    /// When the rank reached each frame's swap lock: microseconds of the system clock
+    /// (one host's ranks share it; across machines it is as good as their clocks' sync).
+    arrivals: Vec<f64>,
 }
 
 impl Figures {
@@ -279,15 +308,26 @@ impl Figures {
 
     /// The medians of the three phases, then of the bytes.
     fn medians(&self) -> [f64; 4] {
-        let median = |v: &[f64]| {
-            let mut v = v.to_vec();
-            v.sort_by(f64::total_cmp);
-            v.get(v.len() / 2).copied().unwrap_or(0.0)
-        };
         let bytes: Vec<f64> = self.bytes.iter().map(|&b| b as f64).collect();
         let [a, b, c] = &self.ms;
-        [median(a), median(b), median(c), median(&bytes)]
+        [a, b, c, &bytes].map(|v| median_p95(v)[0])
     }
+}
+
+fn since_epoch_us() -> f64 {
+    let now = std::time::SystemTime::now().duration_since(std::time::UNIX_EPOCH);
+    now.map_or(0.0, |d| d.as_secs_f64() * 1e6)
+}
+
+/// The median and 95th percentile of `v`.
+fn median_p95(v: &[f64]) -> [f64; 2] {
+    let mut v = v.to_vec();
+    v.sort_by(f64::total_cmp);
+    let at = |q: f64| {
+        v.get(((v.len() as f64 - 1.0) * q).round() as usize)
+            .copied()
+    };
+    [at(0.5).unwrap_or(0.0), at(0.95).unwrap_or(0.0)]
 }
 
 /// Rank 0 prints one line per rank: its frames' medians of receiving the input,
@@ -297,11 +337,26 @@ fn report(world: &impl Communicator, node: &Node, figures: &Figures) {
     let root = world.process_at_rank(0);
     if world.rank() != 0 {
         root.gather_into(&mine[..]);
+        root.gather_into(&figures.arrivals[..]);
         return;
     }
-    let mut all = vec![[0.0f64; 4]; world.size() as usize];
+    let ranks = world.size() as usize;
+    let mut all = vec![[0.0f64; 4]; ranks];
     let flat: &mut [f64] = bytemuck::cast_slice_mut(&mut all[..]);
     root.gather_into_root(&mine[..], flat);
+    let frames = figures.arrivals.len();
+    let mut arrivals = vec![0.0f64; frames * ranks];
+    root.gather_into_root(&figures.arrivals[..], &mut arrivals[..]);
+    // Per frame, from the first rank's arrival to the last's.
+    let skew: Vec<f64> = (0..frames)
+        .map(|f| {
+            let at = (0..ranks).map(|r| arrivals[r * frames + f]);
+            let (low, high) = at.fold((f64::MAX, f64::MIN), |(l, h), t| (l.min(t), h.max(t)));
+            (high - low) / 1e3
+        })
+        .collect();
+    let [median, p95] = median_p95(&skew);
+    println!("swap-lock arrival skew: median {median:.3} ms, p95 {p95:.3} ms");
     for (r, [received, drawn, waited, bytes]) in all.iter().enumerate() {
         println!(
             "rank {r}: {} frames; medians: input {received:.3} ms ({bytes} bytes), draw {drawn:.2} ms, swap lock {waited:.3} ms",

@@ -138,6 +138,8 @@ pub struct Display {
     /// The lens's hidden area per view, as the runtime gives it: written to depth
     /// before the scene (`RendererOptions::visibility_mask`).
     pub visibility_mask: Option<VisibilityMask>,
+    /// The MPI rank that draws it under `stereocull cluster` (none: round robin).
+    pub rank: Option<u32>,
 }
 
 impl Display {
@@ -196,6 +198,8 @@ struct DisplayFile {
     foveation: Option<Foveation>,
     #[serde(default, skip_serializing_if = "Option::is_none")]
     visibility_mask: Option<VisibilityMask>,
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    rank: Option<u32>,
 }
 
 impl TryFrom<DisplayFile> for Display {
@@ -220,6 +224,7 @@ impl TryFrom<DisplayFile> for Display {
             mount,
             foveation: f.foveation,
             visibility_mask: f.visibility_mask,
+            rank: f.rank,
         })
     }
 }
@@ -240,6 +245,7 @@ impl From<Display> for DisplayFile {
             views,
             foveation: d.foveation,
             visibility_mask: d.visibility_mask,
+            rank: d.rank,
         }
     }
 }

@@ -38,6 +38,7 @@ pub(super) fn hmd() -> Rig {
                 cant_deg: 0.0,
             }),
             visibility_mask: Some(VisibilityMask::headset()),
+            rank: None,
         }],
     }
 }
@@ -51,6 +52,7 @@ pub(super) fn cave() -> Rig {
         resolution: [1024, 1024],
         foveation: None,
         visibility_mask: None,
+        rank: None,
         mount: Mount::Screen(Screen {
             lower_left: ll,
             lower_right: lr,
@@ -101,6 +103,7 @@ pub(super) fn hmd_peripheral() -> Rig {
         resolution: [480, 800],
         foveation: None,
         visibility_mask: None,
+        rank: None,
         mount: Mount::Head(HeadFixed {
             fov: Fov {
                 left: 0.58,
