@@ -91,9 +91,7 @@ pub fn cluster(args: &ClusterArgs) -> Result<()> {
     hello[1..].copy_from_slice(&identity);
     let mut all = vec![0u8; HELLO_BYTES * ranks as usize];
     world.all_gather_into(&hello[..], &mut all[..]);
-    if let Err(e) = &opened {
-        fail("cannot start", e);
-    }
+    let mut node = opened.unwrap_or_else(|e| fail("cannot start", &e));
     for (r, theirs) in all.chunks(HELLO_BYTES).enumerate() {
         if theirs[0] == 0 {
             // That rank names its own cause and aborts the job, this rank with it.
@@ -109,9 +107,6 @@ pub fn cluster(args: &ClusterArgs) -> Result<()> {
             fail("scene identity", &e);
         }
     }
-    let Ok(mut node) = opened else {
-        unreachable!("checked above")
-    };
     let mut figures = Figures::default();
     for frame in 0..args.frames {
         let input = match &mut node.head {
