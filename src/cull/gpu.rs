@@ -9,8 +9,9 @@
 //! display's passes run over its blocks' positions, dispatched indirectly from their
 //! count. The buffers they read and write are [`super::gpu_buffers`]'s.
 
-use crate::cull::gpu_buffers::{CullScene, CullTargets};
+use crate::cull::gpu_buffers::CullScene;
 use crate::cull::rig::{self, MAX_RIG_VIEWS, RigCull};
+use crate::cull::targets::CullTargets;
 use crate::shaders::Bound;
 use crate::shaders::Phase;
 use crate::shaders::{

@@ -17,6 +17,7 @@ pub mod gpu;
 pub mod gpu_buffers;
 pub mod hidden;
 pub mod rig;
+pub mod targets;
 
 pub use coarse::CoarseCull;
 pub use hidden::HiddenArea;

@@ -15,7 +15,7 @@ use pipelines::{pipeline, shadow_pipeline};
 
 use crate::bins::{Bin, BinKind, BinRange};
 use crate::buffers::{init_buffer, init_buffer_with_room};
-use crate::cull::gpu_buffers::{COUNTS_BIN_OFFSET, CullTargets};
+use crate::cull::targets::{COUNTS_BIN_OFFSET, CullTargets};
 use crate::error::Result;
 use crate::materials::{self, GpuMaterials};
 use crate::records::{DrawArgs, InstanceRecord, instance_records};

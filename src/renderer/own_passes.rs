@@ -5,7 +5,7 @@
 use super::plan::FrameStats;
 use super::recorder::Recorder;
 use super::{Path, Renderer};
-use crate::cull::gpu_buffers::CullTargets;
+use crate::cull::targets::CullTargets;
 use crate::draw::OwnPipeline;
 use crate::error::{Error, Result};
 use crate::profiling::GpuTimer;

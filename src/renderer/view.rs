@@ -9,7 +9,7 @@ use crate::bins::BinRange;
 use crate::buffers::write;
 use crate::contexts::DisplayContext;
 use crate::contexts::context_buffer;
-use crate::cull::gpu_buffers::CullTargets;
+use crate::cull::targets::CullTargets;
 use crate::draw::{BinPipelines, Drawer, Drawing};
 use crate::occlusion::Phase;
 use crate::records::uniform_bytes;

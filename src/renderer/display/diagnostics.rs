@@ -3,7 +3,7 @@
 //! phases, its far layer's and inset pair's), visible totals and occlusion counts.
 
 use super::indirect::IndirectPath;
-use crate::cull::gpu_buffers::{COUNTS_BYTES, CullTargets};
+use crate::cull::targets::{COUNTS_BYTES, CullTargets};
 use crate::cull::{BinDraws, CullOutput};
 use crate::error::Result;
 use crate::occlusion::PyramidShape;

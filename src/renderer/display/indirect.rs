@@ -13,7 +13,8 @@ use super::occlusion::{
 };
 use super::{PathCore, PathInputs};
 use crate::contexts::context_buffer;
-use crate::cull::gpu_buffers::{CullTargets, OcclusionRoom};
+use crate::cull::gpu_buffers::OcclusionRoom;
+use crate::cull::targets::CullTargets;
 use crate::draw::mask::{DisplayMask, MaskPipeline};
 use crate::draw::{
     BinPipelines, DrawFeatures, DrawScene, Drawer, Drawing, OwnPipeline, OwnPipelines,
