@@ -90,6 +90,8 @@ fn same_over(ranks: &[u32], args: &str, root: &Path) -> std::path::PathBuf {
         );
         let got = files(&dir);
         assert_eq!(got.len(), want.len(), "{n} ranks: images");
+        // Exact on any CPU: every rank runs the same binary's shaders on the same
+        // host's lavapipe, drawing the same draws from the same inputs.
         for (g, w) in got.iter().zip(&want) {
             assert!(
                 std::fs::read(g).unwrap() == std::fs::read(w).unwrap(),
