@@ -77,6 +77,7 @@ pub fn run(frames: u32) -> Result<image::RgbaImage> {
             color: &color_view,
             depth: &depth_view,
             resolve: None,
+            motion: None,
         };
         let stats = renderer.encode(&mut encoder, &[views], None)?;
         queue.submit([encoder.finish()]);

@@ -128,7 +128,7 @@ impl DepthResolve {
         let layout = crate::shaders::bind_group_layout(device, label, list, windows);
         let source = crate::shaders::depth_resolve_source();
         let targets = ScreenTargets {
-            color: None,
+            color: Vec::new(),
             depth: Some(depth_write(DEPTH_FORMAT)),
             samples: 1,
             multiview_mask: None,

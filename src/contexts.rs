@@ -40,6 +40,9 @@ pub struct FrameContext {
     pub light_direction: Vec3,
     /// 1 when the shadow map was drawn this frame, else 0.
     pub shadows: u32,
+    /// The previous frame's time: with motion vectors, the draw animates each
+    /// instance's previous position from it ([`crate::motion`]); else `time`.
+    pub previous_time: f32,
 }
 
 impl FrameContext {
@@ -65,6 +68,7 @@ impl FrameContext {
             light_from_world: light.clip_from_world,
             light_direction: light.direction,
             shadows: u32::from(shadows),
+            previous_time: time,
         }
     }
 }
@@ -86,6 +90,9 @@ pub struct EyeContext {
     pub clip_from_world: Mat4,
     /// Clip to world, composed in f64: how fragments find their world position.
     pub world_from_clip: Mat4,
+    /// The previous frame's `clip_from_world` of this view, with motion vectors
+    /// ([`crate::motion`]); else `clip_from_world`.
+    pub previous_clip_from_world: Mat4,
     /// The eye's center of projection, for specular.
     pub position: Vec3,
     /// Where this view lies in its display's target: x, y, width, height in pixels.
@@ -100,13 +107,15 @@ impl EyeContext {
     /// The eye context of view `v`.
     pub fn from_view(v: &View) -> EyeContext {
         let clip_from_view = v.clip_from_view();
+        let clip_from_world = v.clip_from_world();
         EyeContext {
             view_from_world: v.view_from_world(),
             world_from_view: v.world_from_view_f32(),
             clip_from_view,
             view_from_clip: clip_from_view.inverse(),
-            clip_from_world: v.clip_from_world(),
+            clip_from_world,
             world_from_clip: v.world_from_clip(),
+            previous_clip_from_world: clip_from_world,
             position: v.position(),
             viewport: Vec4::ZERO,
             placement: IDENTITY_PLACEMENT,
@@ -313,6 +322,7 @@ impl DisplayContext {
             view_from_clip: world_from_clip,
             clip_from_world,
             world_from_clip,
+            previous_clip_from_world: clip_from_world,
             position: Vec3::ZERO,
             viewport: Vec4::new(0.0, 0.0, size as f32, size as f32),
             placement: IDENTITY_PLACEMENT,

@@ -109,7 +109,7 @@ impl FoveatedComposite {
         let layout = bind_group_layout(device);
         let source = crate::shaders::foveated_composite_source();
         let targets = crate::shaders::ScreenTargets {
-            color: Some(format.into()),
+            color: vec![format.into()],
             depth: None,
             samples: 1,
             multiview_mask: None,

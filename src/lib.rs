@@ -52,6 +52,7 @@ pub mod lights;
 pub mod live;
 pub mod materials;
 pub mod morphing;
+pub mod motion;
 pub mod occlusion;
 pub mod pbr;
 pub mod places;

@@ -42,6 +42,7 @@ use glam::{Affine3A, Mat4, Vec4};
 use crate::bins::check_override;
 use crate::error::{Error, Result};
 use crate::places::Places;
+use crate::records::{InstanceRecord, instance_record};
 use crate::scene::{Instance, Scene, Vertex};
 
 mod lights;
@@ -189,6 +190,22 @@ impl LiveScene {
             generation: 0,
         };
         self.check(original).is_ok() && !self.driven.contains(&slot)
+    }
+
+    /// The record the GPU holds for `slot`: its instance's, with the slot's generation
+    /// (an insert into a reused slot is a newcomer to the motion vectors' draw).
+    pub fn instance_record(&self, slot: u32) -> InstanceRecord {
+        InstanceRecord {
+            generation: self.generations[slot as usize],
+            ..instance_record(&self.scene.instances[slot as usize])
+        }
+    }
+
+    /// Every slot's record, in slot order ([`LiveScene::instance_record`]).
+    pub fn instance_records(&self) -> Vec<InstanceRecord> {
+        (0..self.slot_count())
+            .map(|s| self.instance_record(s))
+            .collect()
     }
 
     /// Slots issued so far, occupied or vacant.

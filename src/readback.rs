@@ -167,6 +167,23 @@ pub fn read_rgba8(
     Ok(image)
 }
 
+/// Reads a motion target ([`crate::motion::MOTION_FORMAT`], single-sampled, one
+/// layer): each pixel's x and y, rows from the top.
+pub fn read_motion(
+    device: &wgpu::Device,
+    queue: &wgpu::Queue,
+    texture: &wgpu::Texture,
+) -> Result<Vec<[f32; 2]>> {
+    let (w, h) = (texture.width(), texture.height());
+    let (row, padded) = read_layers(device, queue, texture, (4, wgpu::TextureAspect::All))?;
+    let mut values = Vec::with_capacity((w * h) as usize);
+    for chunk in padded.chunks(row as usize).take(h as usize) {
+        let halves: &[half::f16] = bytemuck::cast_slice(&chunk[..4 * w as usize]);
+        values.extend(halves.chunks(2).map(|p| [p[0].to_f32(), p[1].to_f32()]));
+    }
+    Ok(values)
+}
+
 /// Reads a single-sampled `Depth32Float` texture: width x height values per layer, rows
 /// from the top, the layers of an array texture side by side (as [`read_rgba8`] places
 /// them). Returns the width of the whole (layers x width) and the values.

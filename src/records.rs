@@ -26,8 +26,12 @@ pub struct InstanceRecord {
     pub bob: f32,
     /// [`Instance::material`], or [`InstanceRecord::MESH_MATERIAL`]: the mesh's own.
     pub material: u32,
+    /// The slot's generation ([`crate::live::Handle`]; 0 outside a live scene): the
+    /// motion vectors' draw takes an instance whose previous record has another for a
+    /// newcomer, with no previous transform of its own.
+    pub generation: u32,
     /// Zeros (the record is 80 bytes).
-    pub unused: [u32; 3],
+    pub unused: [u32; 2],
 }
 
 impl InstanceRecord {
@@ -70,7 +74,7 @@ pub struct MoveEdit {
     pub radius: f32,
 }
 
-/// A rewritten instance record as the records scatter takes it (72 bytes): the slot,
+/// A rewritten instance record as the records scatter takes it (76 bytes): the slot,
 /// then [`InstanceRecord`]'s members (flat: WGSL would align a nested record to 16).
 #[repr(C)]
 #[derive(Clone, Copy, Debug, PartialEq, Pod, Zeroable)]
@@ -89,6 +93,8 @@ pub struct RecordEdit {
     pub bob: f32,
     /// [`InstanceRecord::material`].
     pub material: u32,
+    /// [`InstanceRecord::generation`].
+    pub generation: u32,
 }
 
 /// A place of the cull order and the slot now there ([`Places::VACANT`]: none), as the
@@ -113,6 +119,7 @@ impl RecordEdit {
             spin: record.spin,
             bob: record.bob,
             material: record.material,
+            generation: record.generation,
         }
     }
 }
@@ -351,12 +358,13 @@ pub fn lod_level(sphere: Vec4, viewer: glam::Vec3, lods: &[LodRecord], lod_scale
     level
 }
 
-/// Every instance's record, in slot order.
+/// Every instance's record, in slot order (generation 0: see
+/// [`crate::live::LiveScene::instance_records`]).
 pub fn instance_records(scene: &Scene) -> Vec<InstanceRecord> {
     scene.instances.iter().map(instance_record).collect()
 }
 
-/// The record the GPU reads for `inst`.
+/// The record the GPU reads for `inst` (generation 0).
 pub fn instance_record(inst: &Instance) -> InstanceRecord {
     InstanceRecord {
         world_from_local: crate::scene::affine_rows(&inst.world_from_local),
@@ -365,7 +373,8 @@ pub fn instance_record(inst: &Instance) -> InstanceRecord {
         spin: inst.animation.spin,
         bob: inst.animation.bob,
         material: inst.material.unwrap_or(InstanceRecord::MESH_MATERIAL),
-        unused: [0; 3],
+        generation: 0,
+        unused: [0; 2],
     }
 }
 

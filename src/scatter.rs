@@ -22,9 +22,9 @@ use wgpu::util::StagingBelt;
 use bytemuck::Pod;
 
 use crate::buffers::storage_buffer;
+use crate::live::LiveScene;
 use crate::places::Places;
-use crate::records::{EditHeader, MoveEdit, PlaceEdit, RecordEdit, instance_record};
-use crate::scene::Scene;
+use crate::records::{EditHeader, MoveEdit, PlaceEdit, RecordEdit};
 use crate::shaders::{
     EditKind, SCATTER_BINDINGS, Windows, bind_group, bind_group_layout, compute_pipeline,
     dispatch_size, pipeline_layout, scatter_source,
@@ -461,6 +461,6 @@ fn edits_buffer(device: &wgpu::Device, size: u64) -> wgpu::Buffer {
 
 /// The record edit of `slot`: the slot, then its whole instance record, as the
 /// records scatter reads them.
-pub fn record_edit(scene: &Scene, slot: u32) -> RecordEdit {
-    RecordEdit::new(slot, instance_record(&scene.instances[slot as usize]))
+pub fn record_edit(live: &LiveScene, slot: u32) -> RecordEdit {
+    RecordEdit::new(slot, live.instance_record(slot))
 }

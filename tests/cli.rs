@@ -425,9 +425,6 @@ fn render_draws_the_shared_gltf_samples_in_both_eyes() {
     }
 }
 
-/// `render --compositor-depth` writes each display's depth layer (4x MSAA resolved to
-/// the nearest sample) as raw f32 beside its contract: the file holds width x height
-/// values in [0, 1], the drawn pixels nearer than the far plane's 1.
 /// `render` at 40 x 32 pixels per eye with `extra` arguments, into a new directory:
 /// the directory and its `stats.json`.
 fn render_stats(extra: &[&str]) -> (tempfile::TempDir, Value) {
@@ -442,6 +439,9 @@ fn render_stats(extra: &[&str]) -> (tempfile::TempDir, Value) {
     (dir, stats)
 }
 
+/// `render --compositor-depth` writes each display's depth layer (4x MSAA resolved to
+/// the nearest sample) as raw f32 beside its contract: the file holds width x height
+/// values in [0, 1], the drawn pixels nearer than the far plane's 1.
 #[test]
 fn render_writes_the_compositor_depth_and_its_contract() {
     let (_dir, stats) = render_stats(&["--compositor-depth"]);
@@ -484,6 +484,48 @@ fn render_reports_masked_pixels_and_fragments() {
     let expected: u64 = (0..2).map(|v| mask.hidden_pixels(v, (40, 32))).sum();
     assert_eq!((masked("on"), masked("off")), (expected, 0));
     assert!(expected > 0);
+}
+
+/// `render --motion-vectors on` (4x MSAA, resolved) draws the previous frame at
+/// `--previous-yaw` first and writes each display's vectors, width x height x 2 f32:
+/// turned right since, the scene moves left, and the background holds zero. A mode
+/// that writes none says so in one line.
+#[test]
+fn render_writes_motion_vectors_from_the_previous_pose() {
+    let args = [
+        "--motion-vectors",
+        "on",
+        "--previous-yaw",
+        "3",
+        "--msaa",
+        "4",
+    ];
+    let (dir, stats) = render_stats(&args);
+    let motion = &stats["displays"][0]["motion"];
+    assert_eq!(
+        (motion["width"].as_u64(), motion["height"].as_u64()),
+        (Some(80), Some(32))
+    );
+    let bytes = std::fs::read(motion["file"].as_str().unwrap()).unwrap();
+    let values: Vec<f32> = bytes
+        .chunks(4)
+        .map(|b| f32::from_le_bytes([b[0], b[1], b[2], b[3]]))
+        .collect();
+    assert_eq!(values.len(), 80 * 32 * 2);
+    let leftward = values.chunks(2).filter(|v| v[0] < -0.2).count();
+    let rightward = values.chunks(2).filter(|v| v[0] > 0.2).count();
+    assert!(
+        leftward > 500 && rightward == 0,
+        "{leftward} left, {rightward} right"
+    );
+    assert!(values.chunks(2).any(|v| v == [0.0, 0.0]), "the background");
+    assert!(dir.path().join("hmd-motion.png").exists());
+
+    let out = stereocull(&["render", "--mode", "multiview", "--motion-vectors", "on"]);
+    let err = String::from_utf8_lossy(&out.stderr);
+    assert!(!out.status.success());
+    assert_eq!(err.lines().count(), 1, "{err}");
+    assert!(err.contains("motion vectors"), "{err}");
 }
 
 /// One file of each kind exporters and optimizers write, from the importer's corpus

@@ -783,6 +783,7 @@ fn a_depth_target_occlusion_cannot_read_is_an_error() {
         color: &color,
         depth: &depth,
         resolve: None,
+        motion: None,
     }];
     for (occlusion, fails) in [(OcclusionMode::On, true), (OcclusionMode::Off, false)] {
         let mut renderer = made(occlusion);

@@ -20,10 +20,11 @@ use stereocull::scene::Vertex;
 use stereocull::shaders::{
     Access, Binding, CANDIDATE_BINDINGS, COARSE_BINDINGS, CULL_BINDINGS, CullPass,
     DEPTH_RESOLVE_BINDINGS, DRAW_BINDINGS, DrawKey, EditKind, FAR_COMPOSITE_BINDINGS,
-    FOVEATED_COMPOSITE_BINDINGS, MATERIAL_BINDINGS, POSE_BINDINGS, SCATTER_BINDINGS,
-    SHADOW_MAP_BINDINGS, SKIN_BINDINGS, Window, Windows, all_sources, depth_resolve_source,
-    far_composite_source, foveated_composite_source, pose_source, pyramid_bindings, pyramid_source,
-    scatter_source, shadow_cutout_source, shadow_source, skin_source,
+    FOVEATED_COMPOSITE_BINDINGS, MATERIAL_BINDINGS, MOTION_BINDINGS, POSE_BINDINGS,
+    SCATTER_BINDINGS, SHADOW_MAP_BINDINGS, SKIN_BINDINGS, Window, Windows, all_sources,
+    depth_resolve_source, far_composite_source, foveated_composite_source, pose_source,
+    pyramid_bindings, pyramid_source, scatter_source, shadow_cutout_source, shadow_source,
+    skin_source,
 };
 
 fn parse(label: &str, source: &str) -> Module {
@@ -96,6 +97,7 @@ fn records_match_wgsl() {
             ("spin", offset_of!(InstanceRecord, spin)),
             ("bob", offset_of!(InstanceRecord, bob)),
             ("material", offset_of!(InstanceRecord, material)),
+            ("generation", offset_of!(InstanceRecord, generation)),
         ],
     );
     check(
@@ -171,7 +173,7 @@ fn records_match_wgsl() {
 }
 
 /// The scatter passes' edit records, each in the module of its kind, packed as the CPU
-/// writes them: 32, 8, 56 and 72 bytes.
+/// writes them: 32, 8, 56 and 76 bytes.
 #[test]
 fn edit_records_match_wgsl() {
     let check = |kind: EditKind, name: &str, size: usize, rust: &[(&str, usize)]| {
@@ -228,6 +230,7 @@ fn edit_records_match_wgsl() {
             ("spin", offset_of!(RecordEdit, spin)),
             ("bob", offset_of!(RecordEdit, bob)),
             ("material", offset_of!(RecordEdit, material)),
+            ("generation", offset_of!(RecordEdit, generation)),
         ],
     );
     // The byte counts the README and SyncStats quote.
@@ -236,7 +239,7 @@ fn edit_records_match_wgsl() {
         size_of::<MoveEdit>(),
         size_of::<RecordEdit>(),
     ];
-    assert_eq!(sizes, [8, 56, 72]);
+    assert_eq!(sizes, [8, 56, 76]);
     // Each kind's module lists its own records after the header.
     for (kind, record) in [
         (EditKind::Places, "PlaceEdit"),
@@ -276,9 +279,10 @@ fn eye(seed: f32) -> EyeContext {
         view_from_clip: distinct_mat(seed + 3.0),
         clip_from_world: distinct_mat(seed + 4.0),
         world_from_clip: distinct_mat(seed + 5.0),
-        position: Vec3::new(seed + 6.0, seed + 6.1, seed + 6.2),
-        viewport: Vec4::new(seed + 7.0, seed + 7.1, seed + 7.2, seed + 7.3),
-        placement: Vec4::new(seed + 8.0, seed + 8.1, seed + 8.2, seed + 8.3),
+        previous_clip_from_world: distinct_mat(seed + 6.0),
+        position: Vec3::new(seed + 7.0, seed + 7.1, seed + 7.2),
+        viewport: Vec4::new(seed + 8.0, seed + 8.1, seed + 8.2, seed + 8.3),
+        placement: Vec4::new(seed + 9.0, seed + 9.1, seed + 9.2, seed + 9.3),
     }
 }
 
@@ -313,9 +317,10 @@ fn contexts_match_wgsl() {
             ("view_from_clip", 13.0),
             ("clip_from_world", 14.0),
             ("world_from_clip", 15.0),
-            ("position", 16.0),
-            ("viewport", 17.0),
-            ("placement", 18.0),
+            ("previous_clip_from_world", 16.0),
+            ("position", 17.0),
+            ("viewport", 18.0),
+            ("placement", 19.0),
         ],
     );
     let d = DisplayContext {
@@ -380,6 +385,7 @@ fn contexts_match_wgsl() {
         light_from_world: Mat4::from_cols_array(&[8.0; 16]),
         light_direction: Vec3::splat(9.0),
         shadows: 10,
+        previous_time: 11.0,
     };
     let bytes = uniform_bytes(&f);
     check_uniform(
@@ -396,6 +402,7 @@ fn contexts_match_wgsl() {
             ("light_from_world", 8.0),
             ("light_direction", 9.0),
             ("shadows", f32::from_bits(10)),
+            ("previous_time", 11.0),
         ],
     );
     let (members, _) = wgsl_struct(&module(), "FrameContext");
@@ -573,9 +580,17 @@ fn pipelines_and_their_lists() -> Vec<(String, String, Vec<Vec<Binding>>)> {
             (label, source, groups)
         })
         .collect();
+    let motion = lists(&[
+        &DRAW_BINDINGS,
+        &MATERIAL_BINDINGS,
+        &SHADOW_MAP_BINDINGS,
+        &MOTION_BINDINGS,
+    ]);
     out.extend(
-        (DrawKey::ALL.iter().flat_map(|k| k.alpha_variants()))
-            .map(|k| (k.label(), k.source_with(None, whole), draw.clone())),
+        (DrawKey::ALL.iter().flat_map(|k| k.alpha_variants())).map(|k| {
+            let groups = if k.motion { &motion } else { &draw };
+            (k.label(), k.source_with(None, whole), groups.clone())
+        }),
     );
     out.extend(
         [EditKind::Places, EditKind::Moves, EditKind::Records].map(|kind| {

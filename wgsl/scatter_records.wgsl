@@ -13,5 +13,5 @@ fn scatter(@builtin(workgroup_id) wid: vec3<u32>, @builtin(local_invocation_inde
         return;
     }
     let e = edits.list[i];
-    instances_set(e.slot, InstanceRecord(edit_rows(e.rows), e.color, e.mesh, e.spin, e.bob, e.material));
+    instances_set(e.slot, InstanceRecord(edit_rows(e.rows), e.color, e.mesh, e.spin, e.bob, e.material, e.generation));
 }

@@ -6,6 +6,7 @@ mod cluster;
 mod cull;
 mod diff;
 mod edits;
+mod motion;
 mod occlusion_report;
 mod profile;
 mod profile_measure;
@@ -151,6 +152,10 @@ pub struct SceneArgs {
     /// the cull runs there). `render`, `stress`.
     #[arg(long, value_enum, default_value = "auto")]
     pub posing: PosingArg,
+    /// Each pixel's motion since the previous frame, written by the draw into a second
+    /// target (`instanced`, without the far layer or foveated displays).
+    #[arg(long, value_enum, default_value = "off")]
+    pub motion_vectors: Switch,
 }
 
 /// Where animations are posed, as the command line asks.
@@ -200,6 +205,7 @@ impl SceneArgs {
             far_threshold_px: self.far_threshold,
             inset_cull: self.inset_cull.on(),
             visibility_mask: self.visibility_mask.on(),
+            motion_vectors: self.motion_vectors.on(),
             ..Default::default()
         }
     }

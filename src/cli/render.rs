@@ -7,6 +7,7 @@ use clap::Parser;
 use serde::Serialize;
 
 use super::edits::EditArgs;
+use super::motion::{MotionStats, PreviousArgs, write_motion};
 use super::occlusion_report::occlusion_report;
 use super::session::{FrameFigures, Session};
 use super::{SceneArgs, write_json};
@@ -41,6 +42,9 @@ pub struct RenderArgs {
     /// view's rectangle or layer, planes, depth range) in `stats.json`.
     #[arg(long)]
     pub compositor_depth: bool,
+    /// With `--motion-vectors on`: the frame the motion is measured from (drawn first).
+    #[command(flatten)]
+    pub previous: PreviousArgs,
 }
 
 /// One pass of a frame as the reports list it ([`Renderer::passes`]).
@@ -126,6 +130,9 @@ struct DisplayStats {
     /// With `--compositor-depth`: the depth file and its contract.
     #[serde(skip_serializing_if = "Option::is_none")]
     depth: Option<DepthStats>,
+    /// With `--motion-vectors on`: the motion files.
+    #[serde(skip_serializing_if = "Option::is_none")]
+    motion: Option<MotionStats>,
 }
 
 #[derive(Serialize)]
@@ -222,6 +229,10 @@ pub fn render(args: &RenderArgs) -> Result<()> {
         session.frame(args.time)?;
         session.gpu.wait()?;
     }
+    let motion = session.renderer.options().motion_vectors;
+    if motion {
+        args.previous.draw(&mut session, args.time)?;
+    }
     session.timer = GpuTimer::new(&session.gpu.device, &session.gpu.queue, counted);
     let FrameFigures { stats, cpu_ms, .. } = session.frame(args.time)?;
     let start = Instant::now();
@@ -290,6 +301,10 @@ pub fn render(args: &RenderArgs) -> Result<()> {
             gaze_clamped,
             depth: match args.compositor_depth {
                 true => Some(write_depth(&session, index, &args.out)?),
+                false => None,
+            },
+            motion: match motion {
+                true => Some(write_motion(&session, index, &args.out)?),
                 false => None,
             },
         });

@@ -47,12 +47,20 @@ impl MaskPipeline {
             &Windows::WHOLE,
         );
         let source = crate::shaders::visibility_mask_source(multiview_mask.is_some());
+        // Every target of the pass, none written: the hidden area keeps the clear color
+        // and zero motion.
+        let untouched = |format| wgpu::ColorTargetState {
+            format,
+            blend: None,
+            write_mask: wgpu::ColorWrites::empty(),
+        };
+        let motion = format.motion.then_some(crate::motion::MOTION_FORMAT);
         let targets = ScreenTargets {
-            color: Some(wgpu::ColorTargetState {
-                format: format.color,
-                blend: None,
-                write_mask: wgpu::ColorWrites::empty(),
-            }),
+            color: [Some(format.color), motion]
+                .into_iter()
+                .flatten()
+                .map(untouched)
+                .collect(),
             depth: Some(depth_write(format.depth)),
             samples: format.samples,
             multiview_mask,

@@ -22,8 +22,8 @@ use crate::records::{DrawArgs, InstanceRecord, instance_records};
 use crate::scene::{Scene, Shading};
 use crate::shaders::Bound;
 use crate::shaders::{
-    DRAW_BINDINGS, DrawKey, SHADOW_MAP_BINDINGS, Shaders, Windows, bind_group, bind_group_layout,
-    shadow_cutout_source, shadow_source,
+    DRAW_BINDINGS, DrawKey, MOTION_BINDINGS, SHADOW_MAP_BINDINGS, Shaders, Windows, bind_group,
+    bind_group_layout, shadow_cutout_source, shadow_source,
 };
 
 /// What a view's draw draws with: the pipelines and the scene on the GPU.
@@ -48,6 +48,21 @@ pub struct DrawScene {
     pub materials: GpuMaterials,
     /// Group 2: the frame's shadow map (the renderer's).
     pub shadow_group: wgpu::BindGroup,
+    /// With motion vectors: the previous frame's records and vertices.
+    pub previous: Option<Previous>,
+}
+
+/// What the draw with motion vectors reads of the previous frame ([`crate::motion`]):
+/// copies of the instance records and, where passes rewrite them each frame (skins,
+/// morph targets), of the vertices, taken before the frame's scatter and posing.
+pub struct Previous {
+    /// The records as the previous frame drew them.
+    pub instances: wgpu::Buffer,
+    /// The vertices as the previous frame drew them; `None`: the scene's, which no
+    /// pass rewrites.
+    pub vertices: Option<wgpu::Buffer>,
+    /// Group 3 of the draw pipelines with motion vectors.
+    pub bind_group: wgpu::BindGroup,
 }
 
 impl DrawScene {
@@ -61,9 +76,13 @@ impl DrawScene {
     ) -> Result<DrawScene> {
         let init =
             |label: &str, contents: &[u8], usage| init_buffer(device, label, contents, usage);
+        let records = instance_records(scene);
+        let room = DrawScene::BYTES_PER_INSTANCE * slots as u64;
         Ok(DrawScene {
             materials: GpuMaterials::new(device, &drawer.materials_layout, scene)?,
             shadow_group: shadow_group.clone(),
+            previous: (drawer.motion.as_ref())
+                .map(|layout| Previous::new(device, (layout, &drawer.windows), scene, room)),
             vertices: init(
                 "stereocull.vertices",
                 bytemuck::cast_slice(&scene.vertices),
@@ -77,8 +96,8 @@ impl DrawScene {
             instances: init_buffer_with_room(
                 device,
                 "stereocull.instances",
-                bytemuck::cast_slice(&instance_records(scene)),
-                DrawScene::BYTES_PER_INSTANCE * slots as u64,
+                bytemuck::cast_slice(&records),
+                room,
                 // COPY_SRC: read back by diagnostics (`instance_records`).
                 wgpu::BufferUsages::STORAGE
                     | wgpu::BufferUsages::COPY_DST
@@ -99,6 +118,64 @@ impl DrawScene {
 
     /// GPU bytes per instance slot for drawing: its record.
     pub const BYTES_PER_INSTANCE: u64 = size_of::<InstanceRecord>() as u64;
+
+    /// With motion vectors, copies what the frame's passes are about to rewrite (the
+    /// records, and the vertices where skins or morph targets rewrite them) into
+    /// [`Previous`]: record first in a frame.
+    pub fn keep_previous(&self, encoder: &mut wgpu::CommandEncoder) {
+        let Some(previous) = &self.previous else {
+            return;
+        };
+        let size = self.instances.size();
+        encoder.copy_buffer_to_buffer(&self.instances, 0, &previous.instances, 0, size);
+        if let Some(vertices) = &previous.vertices {
+            encoder.copy_buffer_to_buffer(&self.vertices, 0, vertices, 0, vertices.size());
+        }
+    }
+}
+
+impl Previous {
+    /// Copies' buffers for `scene` with `room` bytes of records, holding the scene as
+    /// it stands (a first frame moves only with the head), bound as group 3.
+    fn new(
+        device: &wgpu::Device,
+        (layout, windows): (&wgpu::BindGroupLayout, &Windows),
+        scene: &Scene,
+        room: u64,
+    ) -> Previous {
+        let copy = wgpu::BufferUsages::COPY_DST;
+        let records = instance_records(scene);
+        let instances = init_buffer_with_room(
+            device,
+            "stereocull.previous_instances",
+            bytemuck::cast_slice(&records),
+            room,
+            wgpu::BufferUsages::STORAGE | copy,
+        );
+        let rewritten = !(scene.skins.is_empty() && scene.morphs.is_empty());
+        let vertices = rewritten.then(|| {
+            let bytes = bytemuck::cast_slice(&scene.vertices);
+            init_buffer(
+                device,
+                "stereocull.previous_vertices",
+                bytes,
+                wgpu::BufferUsages::VERTEX | copy,
+            )
+        });
+        let bind_group = bind_group(
+            device,
+            "stereocull.motion",
+            layout,
+            &MOTION_BINDINGS,
+            windows,
+            [instances.bound()],
+        );
+        Previous {
+            instances,
+            vertices,
+            bind_group,
+        }
+    }
 }
 
 /// How the draw call is issued, from the device's features.
@@ -134,6 +211,8 @@ pub struct Drawer {
     pub features: DrawFeatures,
     /// Samples per pixel of the target (cutouts use alpha to coverage above 1).
     samples: u32,
+    /// With motion vectors: group 3's layout (every built-in pipeline writes motion).
+    motion: Option<wgpu::BindGroupLayout>,
 }
 
 /// The frame's shadow pass pipelines (`wgsl/shadow.wgsl`, `wgsl/shadow_cutout.wgsl`).
@@ -172,9 +251,17 @@ impl Drawer {
             &SHADOW_MAP_BINDINGS,
             &windows,
         );
+        let motion = target
+            .motion
+            .then(|| bind_group_layout(device, "stereocull.motion", &MOTION_BINDINGS, &windows));
         let pipeline_layout = device.create_pipeline_layout(&wgpu::PipelineLayoutDescriptor {
             label: Some("stereocull.draw"),
-            bind_group_layouts: &[Some(&layout), Some(&materials_layout), Some(&shadow_layout)],
+            bind_group_layouts: &[
+                Some(&layout),
+                Some(&materials_layout),
+                Some(&shadow_layout),
+                motion.as_ref(),
+            ][..3 + usize::from(target.motion)],
             immediate_size: 0,
         });
         let built_in = kinds
@@ -184,7 +271,7 @@ impl Drawer {
             .flat_map(|&key| {
                 built_in
                     .clone()
-                    .map(move |&k| key.with_bin(k, target.samples))
+                    .map(move |&k| key.with_bin(k, target.samples).with_motion(target.motion))
             })
             .map(|key| {
                 let source = key.source_with(shaders.function(key.shading), &windows);
@@ -217,6 +304,7 @@ impl Drawer {
             windows,
             features: DrawFeatures::of(device),
             samples: target.samples,
+            motion,
         }
     }
 
@@ -252,11 +340,24 @@ impl Drawer {
     }
 
     /// Sets the geometry and the bindings of the built-in pipelines on `pass`: group
-    /// 0, the materials (group 1) and the shadow map (group 2).
+    /// 0, the materials (group 1), the shadow map (group 2) and, with motion vectors,
+    /// the previous frame (group 3 and the second vertex buffer).
     pub fn bind(pass: &mut wgpu::RenderPass, scene: &DrawScene, bind_group: &wgpu::BindGroup) {
         Drawer::bind_resources(pass, scene, bind_group);
+        Drawer::bind_built_in(pass, scene);
+        if let Some(previous) = &scene.previous {
+            let vertices = previous.vertices.as_ref().unwrap_or(&scene.vertices);
+            pass.set_vertex_buffer(1, vertices.slice(..));
+        }
+    }
+
+    /// The groups of the built-in pipelines from 1 on.
+    fn bind_built_in(pass: &mut wgpu::RenderPass, scene: &DrawScene) {
         pass.set_bind_group(1, &scene.materials.bind_group, &[]);
         pass.set_bind_group(2, &scene.shadow_group, &[]);
+        if let Some(previous) = &scene.previous {
+            pass.set_bind_group(3, &previous.bind_group, &[]);
+        }
     }
 
     /// The geometry and group 0 on `pass`, for whatever pipeline it has (an engine's
@@ -276,9 +377,13 @@ impl Drawer {
     pub fn bin_pipeline<'a>(&'a self, with: BinPipelines<'a>, kind: Bin) -> Option<BinDraw<'a>> {
         match (with, kind.shading) {
             (BinPipelines::Draw(_, own), Shading::Own(i)) => own.get(&i).map(BinDraw::Own),
-            (BinPipelines::Draw(key, _), _) => Some(BinDraw::BuiltIn(
-                &self.pipelines[&key.with_bin(kind, self.samples)],
-            )),
+            (BinPipelines::Draw(key, _), _) => {
+                let variant = key.with_bin(kind, self.samples);
+                let motion = self.motion.is_some();
+                Some(BinDraw::BuiltIn(
+                    &self.pipelines[&variant.with_motion(motion)],
+                ))
+            }
             (BinPipelines::Own, _) => Some(BinDraw::Keep),
             (BinPipelines::Shadow, _) => {
                 let shadow = self.shadow.as_ref()?;
@@ -311,8 +416,7 @@ impl Drawer {
                 Some(BinDraw::BuiltIn(pipeline)) => {
                     pass.set_pipeline(pipeline);
                     if std::mem::take(&mut groups_taken) {
-                        pass.set_bind_group(1, &scene.materials.bind_group, &[]);
-                        pass.set_bind_group(2, &scene.shadow_group, &[]);
+                        Drawer::bind_built_in(pass, scene);
                     }
                 }
                 Some(BinDraw::Own(own)) => {

@@ -20,6 +20,8 @@ pub struct Attachments<'a> {
     pub depth: &'a wgpu::TextureView,
     /// Where a multisampled `color` is resolved at the end of the pass.
     pub resolve: Option<&'a wgpu::TextureView>,
+    /// With motion vectors: the motion attachment and its resolve under MSAA.
+    pub motion: Option<(&'a wgpu::TextureView, Option<&'a wgpu::TextureView>)>,
 }
 
 /// Opens a render pass on `target`, clearing it or keeping what earlier passes drew
@@ -32,22 +34,31 @@ pub fn begin_pass<'e>(
     multiview_mask: Option<NonZeroU32>,
     timestamp_writes: Option<wgpu::RenderPassTimestampWrites>,
 ) -> wgpu::RenderPass<'e> {
-    let (color_load, depth_load) = if clear {
-        (wgpu::LoadOp::Clear(CLEAR_COLOR), wgpu::LoadOp::Clear(1.0))
+    let (color_load, depth_load, motion_load) = if clear {
+        let still = wgpu::Color::TRANSPARENT;
+        use wgpu::LoadOp::Clear;
+        (Clear(CLEAR_COLOR), Clear(1.0), Clear(still))
     } else {
-        (wgpu::LoadOp::Load, wgpu::LoadOp::Load)
+        (wgpu::LoadOp::Load, wgpu::LoadOp::Load, wgpu::LoadOp::Load)
     };
-    encoder.begin_render_pass(&wgpu::RenderPassDescriptor {
-        label: Some("stereocull.draw"),
-        color_attachments: &[Some(wgpu::RenderPassColorAttachment {
-            view: target.color,
+    let attachment = |view, resolve_target, load| {
+        Some(wgpu::RenderPassColorAttachment {
+            view,
             depth_slice: None,
-            resolve_target: target.resolve,
+            resolve_target,
             ops: wgpu::Operations {
-                load: color_load,
+                load,
                 store: wgpu::StoreOp::Store,
             },
-        })],
+        })
+    };
+    let color = attachment(target.color, target.resolve, color_load);
+    // Pixels no surface covers move by zero.
+    let motion = (target.motion).and_then(|(view, resolve)| attachment(view, resolve, motion_load));
+    let used = 1 + usize::from(motion.is_some());
+    encoder.begin_render_pass(&wgpu::RenderPassDescriptor {
+        label: Some("stereocull.draw"),
+        color_attachments: &[color, motion][..used],
         depth_stencil_attachment: Some(wgpu::RenderPassDepthStencilAttachment {
             view: target.depth,
             depth_ops: Some(wgpu::Operations {

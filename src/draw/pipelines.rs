@@ -18,12 +18,23 @@ pub struct TargetFormat {
     pub depth: wgpu::TextureFormat,
     /// Samples per pixel (1: no MSAA).
     pub samples: u32,
+    /// A second color attachment of [`crate::motion::MOTION_FORMAT`] takes each
+    /// pixel's motion.
+    pub motion: bool,
 }
 /// How the draw pipelines read a [`Vertex`]: `VertexInput` in
 /// `wgsl/shared/decode.wgsl` (`tests/shaders.rs` checks both sides).
 pub const VERTEX_ATTRIBUTES: [wgpu::VertexAttribute; 6] = wgpu::vertex_attr_array![
     0 => Float32x3, 1 => Float32x3, 2 => Float32x2, 3 => Uint32, 4 => Snorm8x4, 5 => Float32x2
 ];
+
+/// The previous frame's vertices as the draw pipelines with motion vectors read them:
+/// the position alone, as `previous_position` (`wgsl/draw_motion.wgsl`).
+pub const PREVIOUS_VERTEX_BUFFER: wgpu::VertexBufferLayout<'static> = wgpu::VertexBufferLayout {
+    array_stride: size_of::<Vertex>() as u64,
+    step_mode: wgpu::VertexStepMode::Vertex,
+    attributes: &wgpu::vertex_attr_array![6 => Float32x3],
+};
 
 /// The scene's vertex buffer as every pipeline drawing it reads it (an engine's own
 /// pipeline too).
@@ -96,6 +107,26 @@ pub(super) fn pipeline(
         label: Some(&label),
         source: wgpu::ShaderSource::Wgsl(source.into()),
     });
+    let buffers = [Some(VERTEX_BUFFER), Some(PREVIOUS_VERTEX_BUFFER)];
+    let blend = key.alpha == BinKind::Blend;
+    let targets = [
+        Some(wgpu::ColorTargetState {
+            format: target.color,
+            blend: blend.then_some(wgpu::BlendState::ALPHA_BLENDING),
+            write_mask: wgpu::ColorWrites::ALL,
+        }),
+        // Blended surfaces write no motion, as they write no depth: the pixel keeps
+        // the motion of what is seen through them.
+        Some(wgpu::ColorTargetState {
+            format: crate::motion::MOTION_FORMAT,
+            blend: None,
+            write_mask: match blend {
+                true => wgpu::ColorWrites::empty(),
+                false => wgpu::ColorWrites::ALL,
+            },
+        }),
+    ];
+    let used = 1 + usize::from(key.motion);
     device.create_render_pipeline(&wgpu::RenderPipelineDescriptor {
         label: Some(&label),
         layout: Some(layout),
@@ -103,7 +134,7 @@ pub(super) fn pipeline(
             module: &module,
             entry_point: Some("vs_main"),
             compilation_options: Default::default(),
-            buffers: &[Some(VERTEX_BUFFER)],
+            buffers: &buffers[..used],
         },
         primitive: wgpu::PrimitiveState {
             cull_mode: key.face_culling(),
@@ -126,11 +157,7 @@ pub(super) fn pipeline(
             module: &module,
             entry_point: Some("fs_main"),
             compilation_options: Default::default(),
-            targets: &[Some(wgpu::ColorTargetState {
-                format: target.color,
-                blend: (key.alpha == BinKind::Blend).then_some(wgpu::BlendState::ALPHA_BLENDING),
-                write_mask: wgpu::ColorWrites::ALL,
-            })],
+            targets: &targets[..used],
         }),
         multiview_mask: key.multiview_mask(),
         cache: None,

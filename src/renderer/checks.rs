@@ -44,8 +44,16 @@ fn check_sample_count(features: wgpu::Features, options: &RendererOptions) -> Re
 
 /// What the mode cannot draw of the rig: multiview draws a foveated display's four
 /// views as four layers, which the device must have (`max_multiview_views`, its
-/// `max_multiview_view_count`); every other mode draws any number of views.
+/// `max_multiview_view_count`); every other mode draws any number of views. Motion
+/// vectors take no foveated display.
 pub fn check_rig(rig: &Rig, options: &RendererOptions, max_multiview_views: u32) -> Result<()> {
+    let foveated = rig.displays.iter().find(|d| d.views() > 2);
+    if let (true, Some(d)) = (options.motion_vectors, foveated) {
+        return Err(Error::rig(
+            &d.name,
+            "motion vectors: a foveated display's composite would have to carry the insets' motion into the outer views, and does not",
+        ));
+    }
     let too_many = |d: &&crate::rig::Display| d.views() > max_multiview_views.max(2);
     let Some(d) = rig.displays.iter().find(too_many) else {
         return Ok(());
@@ -61,6 +69,28 @@ pub fn check_rig(rig: &Rig, options: &RendererOptions, max_multiview_views: u32)
             d.views()
         ),
     ))
+}
+
+/// Motion vectors are written by the instanced path's draw alone: say what else cannot.
+fn check_motion(options: &RendererOptions) -> Result<()> {
+    if !options.motion_vectors {
+        return Ok(());
+    }
+    let why = match (options.mode, options.far_layer) {
+        (StereoMode::Multiview, _) => {
+            "multiview: its draw carries a varying more, the previous clip position, and lavapipe (Mesa 22.3) misroutes clipped triangles of multiview pipelines as varyings grow (see wgsl/shared/draw_clip_distances.wgsl)"
+        }
+        (mode, _) if mode.per_instance() => {
+            "the classic modes, kept to compare submission costs against, draw the same image and no motion target"
+        }
+        (_, true) => {
+            "the far layer: its composite would have to carry each far pixel's motion into the display's target, and does not"
+        }
+        _ => return Ok(()),
+    };
+    Err(Error::Unsupported(format!(
+        "motion vectors are written by the instanced mode's draw; not with {why}"
+    )))
 }
 
 /// Materials drawn by a pipeline of the caller's own need the GPU-driven modes, whose
@@ -116,6 +146,7 @@ pub(super) fn check_device(
         ));
     }
     check_own_shading(scene, options)?;
+    check_motion(options)?;
     if options.posing == PosingMode::Gpu && options.cull != CullMode::Gpu {
         return Err(Error::Unsupported(
             "posing on the GPU writes the culling spheres on the GPU, which a CPU cull cannot read: use --posing cpu or --cull gpu".into(),

@@ -84,6 +84,14 @@ impl Renderer {
                 displays: self.shapes.len(),
             });
         }
+        let motion = self.options.motion_vectors;
+        if let Some(i) = targets.iter().position(|t| t.motion.is_some() != motion) {
+            return Err(Error::Unsupported(format!(
+                "display {i}'s target {} a motion attachment and the renderer was made {} motion vectors",
+                if motion { "lacks" } else { "has" },
+                if motion { "with" } else { "without" },
+            )));
+        }
         if let Some(p) = self.path.indirect() {
             p.check_depth(targets)?;
             (0..self.shapes.len()).try_for_each(|i| p.check_own_pipelines(i))?;
@@ -118,13 +126,15 @@ impl Renderer {
         Ok(stats)
     }
 
-    /// The frame level's passes, before any display's: the scatter of moved instances,
+    /// The frame level's passes, before any display's: with motion vectors the copy of
+    /// the previous frame's records and vertices, the scatter of moved instances,
     /// posing, morph targets, skinning, the coarse cull, the shadow pass.
     pub(super) fn encode_frame(
         &mut self,
         encoder: &mut wgpu::CommandEncoder,
         rec: &mut Recorder,
     ) -> FrameStats {
+        self.path.core().draw_scene.keep_previous(encoder);
         let (scattered, cpu_staging) = self.scatter.encode(encoder);
         if scattered > 0 {
             rec.log(PassRecord::frame("scatter"));

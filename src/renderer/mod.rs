@@ -81,6 +81,7 @@ use crate::buffers::uniform_buffer;
 use crate::contexts::FrameContext;
 use crate::draw::DrawScene;
 use crate::error::{Error, Result};
+use crate::motion::PreviousFrame;
 
 use crate::places::Places;
 use crate::records::CullLayout;
@@ -265,6 +266,10 @@ pub struct Renderer {
     passes: Vec<PassRecord>,
     /// The time the last `prepare` planned for: what a `latch` plans at again.
     prepared: Option<f32>,
+    /// With motion vectors: the frame this one's motion is measured from, and the frame
+    /// last written (prepared or latched), the next one's.
+    motion_from: Option<PreviousFrame>,
+    motion_last: Option<PreviousFrame>,
 }
 
 impl Renderer {
@@ -347,6 +352,8 @@ impl Renderer {
             far_sizes: plan.far_sizes(),
             passes: Vec::new(),
             prepared: None,
+            motion_from: None,
+            motion_last: None,
         })
     }
 

@@ -224,6 +224,10 @@ pub struct RendererOptions {
     pub occlusion: OcclusionMode,
     /// Where animations are posed ([`PosingMode`]).
     pub posing: PosingMode,
+    /// Each display's draw also writes each pixel's motion since the previous frame
+    /// into a second color target ([`crate::motion`]; `TargetViews::motion`): the
+    /// `instanced` mode, without the far layer or foveated displays.
+    pub motion_vectors: bool,
 }
 
 /// Screen-space error, in pixels, a level of detail may show.
@@ -309,6 +313,7 @@ impl RendererOptions {
             color: self.color_format,
             depth: self.depth_format,
             samples: self.sample_count,
+            motion: self.motion_vectors,
         }
     }
 }
@@ -336,6 +341,7 @@ impl Default for RendererOptions {
             cull_floor: false,
             occlusion: OcclusionMode::Auto,
             posing: PosingMode::Cpu,
+            motion_vectors: false,
         }
     }
 }

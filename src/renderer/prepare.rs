@@ -6,6 +6,7 @@ use super::plan::{FramePlan, FrameStats};
 use super::{CullMode, Path, Renderer};
 use crate::buffers::write;
 use crate::error::{Error, Result};
+use crate::motion::PreviousFrame;
 use crate::records::uniform_bytes;
 use crate::rig::Rig;
 
@@ -33,6 +34,9 @@ impl Renderer {
     /// only poses may change. `time` (seconds on the caller's clock) goes into the frame
     /// context, from which the GPU animates instances.
     pub fn prepare(&mut self, queue: &wgpu::Queue, rig: &Rig, time: f32) -> Result<FrameStats> {
+        if self.options.motion_vectors {
+            self.motion_from = self.motion_last.take();
+        }
         let mut stats = self.write_plan(queue, rig, time)?;
         if let Some(morph) = &mut self.morph {
             stats.bytes_uploaded += morph.prepare(queue, time);
@@ -74,8 +78,16 @@ impl Renderer {
     /// Plans the frame from `rig` at `time` and writes what its passes read of the
     /// pose: the frame context, the lights' views, each display's contexts and cull
     /// inputs, the shadow's light.
+    /// With motion vectors the contexts are measured from the previous frame, and this
+    /// plan is the next frame's previous.
     fn write_plan(&mut self, queue: &wgpu::Queue, rig: &Rig, time: f32) -> Result<FrameStats> {
-        let plan = self.plan(rig, time)?;
+        let mut plan = self.plan(rig, time)?;
+        if self.options.motion_vectors {
+            if let Some(previous) = &self.motion_from {
+                previous.carry_into(&mut plan);
+            }
+            self.motion_last = Some(PreviousFrame::of(&plan));
+        }
         let frame_bytes = write(queue, &self.frame, &uniform_bytes(&plan.frame));
         let light_bytes = self.lighting.prepare(queue, &plan);
         let light = plan.light_cull.as_ref().map(|_| plan.light);

@@ -7,7 +7,7 @@ use super::plan::FramePlan;
 use super::{Path, Renderer};
 use crate::error::Result;
 use crate::live::{Changes, LiveScene, MoveEdit, PlaceEdit};
-use crate::records::{CullLayout, InstanceRecord, RecordEdit, instance_records};
+use crate::records::{CullLayout, RecordEdit};
 use crate::scatter::{Scatters, record_edit};
 use crate::scene::Scene;
 
@@ -34,7 +34,7 @@ impl Renderer {
     /// Brings the GPU copy of `live` up to date with its changes since the last sync,
     /// paying for what changed: inserts and removes fill and vacate places of the cull
     /// order (8 bytes each), moved and inserted instances go up as scatter edits (56
-    /// bytes each), recolored and inserted ones as records (72 bytes), all applied by
+    /// bytes each), recolored and inserted ones as records (76 bytes), all applied by
     /// one compute pass in the next `encode`; a mesh out of vacant places lays the cull
     /// order out again (O(instances), with room); a scene that outgrew its buffers, or
     /// gained meshes, is uploaded again with room to grow by half. Call it before
@@ -83,21 +83,21 @@ impl Renderer {
         let (scene, places) = (live.scene(), live.places());
         let needed = (scene.instances.len() as u32).max(places.len());
         if changes.geometry || needed > self.slots {
-            return self.reallocate(device, live, needed);
+            return self.reallocate((device, queue), live, needed);
         }
         if changes.restructured {
             let layout = CullLayout::with_places(scene, places);
             // A blended bin's range has an entry per place of its meshes.
             let culler = &self.path.core().culler;
             if culler.bins() != layout.bin_ranges(self.options.lod_levels()) {
-                return self.reallocate(device, live, needed);
+                return self.reallocate((device, queue), live, needed);
             }
-            return Ok(self.reload(queue, scene, layout));
+            return Ok(self.reload(queue, live, layout));
         }
         for &slot in &changes.removed {
             self.scatter.moves.void(slot);
         }
-        let records = self.stage_records(device, scene, &changes.recolored);
+        let records = self.stage_records(device, live, &changes.recolored);
         let Changes { placed, moved, .. } = changes;
         let (mut stats, placed) = self.stage_places(device, placed);
         let (moved, moved_edits) = self.stage_moves(device, scene, moved);
@@ -110,7 +110,7 @@ impl Renderer {
     /// Uploads everything again into new buffers with room for half as much more.
     fn reallocate(
         &mut self,
-        device: &wgpu::Device,
+        (device, queue): (&wgpu::Device, &wgpu::Queue),
         live: &LiveScene,
         needed: u32,
     ) -> Result<SyncStats> {
@@ -137,7 +137,11 @@ impl Renderer {
         let passes = (self.path).frame_passes(device, made, (&self.frame, windows), posed)?;
         (self.skin, self.morph, self.pose, self.shadow) =
             (passes.skin, passes.morph, passes.pose, passes.shadow);
-        let bytes = (scene.instances.len() * size_of::<InstanceRecord>()) as u64;
+        // The new buffers hold generation 0; a reused slot's generation goes up too.
+        let records = live.instance_records();
+        let instances = &self.path.core().draw_scene.instances;
+        queue.write_buffer(instances, 0, bytemuck::cast_slice(&records));
+        let bytes = 2 * std::mem::size_of_val(&records[..]) as u64;
         Ok(SyncStats {
             bytes_uploaded: bytes,
             reloaded: true,
@@ -147,9 +151,9 @@ impl Renderer {
     }
 
     /// Writes the whole scene into the existing buffers: records, cull order, spheres.
-    fn reload(&mut self, queue: &wgpu::Queue, scene: &Scene, layout: CullLayout) -> SyncStats {
+    fn reload(&mut self, queue: &wgpu::Queue, live: &LiveScene, layout: CullLayout) -> SyncStats {
         self.scatter.reset();
-        let records = instance_records(scene);
+        let records = live.instance_records();
         let core = self.path.core_mut();
         queue.write_buffer(
             &core.draw_scene.instances,
@@ -212,13 +216,13 @@ impl Renderer {
 
     /// Stages the rewritten records (recolored and inserted instances); returns the
     /// bytes.
-    fn stage_records(&mut self, device: &wgpu::Device, scene: &Scene, recolored: &[u32]) -> u64 {
+    fn stage_records(&mut self, device: &wgpu::Device, live: &LiveScene, recolored: &[u32]) -> u64 {
         if recolored.is_empty() {
             return 0;
         }
         let records: Vec<RecordEdit> = recolored
             .iter()
-            .map(|&slot| record_edit(scene, slot))
+            .map(|&slot| record_edit(live, slot))
             .collect();
         let targets = self.path.scatter_targets();
         self.scatter.records.stage(device, records, targets).0

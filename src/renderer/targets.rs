@@ -2,6 +2,7 @@
 //! of the right shape for callers that have none.
 
 use crate::draw::{Attachments, TargetFormat};
+use crate::motion::MOTION_FORMAT;
 use crate::rig::ViewLayout;
 
 /// The views one display renders into: `2W x H` for stereo, `W x H` for mono, where
@@ -9,7 +10,9 @@ use crate::rig::ViewLayout;
 /// viewports side by side ([`crate::rig::Display::layout`]); in multiview a stereo display's views are
 /// `W x H` with two array layers (left, right). With MSAA, `color` and `depth` have the
 /// renderer's sample count and `resolve` is the single-sampled view that receives the
-/// image; without, `resolve` is `None`.
+/// image; without, `resolve` is `None`. With motion vectors, `motion` is the second
+/// color attachment ([`crate::motion::MOTION_FORMAT`], the same size and samples), with
+/// its own resolve under MSAA.
 #[derive(Clone, Copy)]
 pub struct TargetViews<'a> {
     /// The color attachment (multisampled under MSAA).
@@ -18,6 +21,9 @@ pub struct TargetViews<'a> {
     pub depth: &'a wgpu::TextureView,
     /// Under MSAA: the single-sampled view the image is resolved into.
     pub resolve: Option<&'a wgpu::TextureView>,
+    /// With motion vectors: the motion attachment, and under MSAA the view it is
+    /// resolved into.
+    pub motion: Option<(&'a wgpu::TextureView, Option<&'a wgpu::TextureView>)>,
 }
 
 impl<'a> TargetViews<'a> {
@@ -26,6 +32,7 @@ impl<'a> TargetViews<'a> {
             color: self.color,
             depth: self.depth,
             resolve: self.resolve,
+            motion: self.motion,
         }
     }
 }
@@ -41,21 +48,35 @@ pub struct DisplayTarget {
     depth_view: wgpu::TextureView,
     /// The multisampled color attachment, under MSAA.
     multisampled: Option<wgpu::TextureView>,
+    /// With motion vectors: each pixel's motion (single-sampled, `COPY_SRC`; the
+    /// resolve target under MSAA).
+    pub motion: Option<wgpu::Texture>,
+    /// Its view, and the multisampled attachment's under MSAA.
+    motion_views: Option<(wgpu::TextureView, Option<wgpu::TextureView>)>,
 }
 
 impl DisplayTarget {
     /// The views a frame renders into.
     pub fn views(&self) -> TargetViews<'_> {
+        let motion = self
+            .motion_views
+            .as_ref()
+            .map(|(view, samples)| match samples {
+                Some(samples) => (samples, Some(view)),
+                None => (view, None),
+            });
         match &self.multisampled {
             Some(samples) => TargetViews {
                 color: samples,
                 depth: &self.depth_view,
                 resolve: Some(&self.color_view),
+                motion,
             },
             None => TargetViews {
                 color: &self.color_view,
                 depth: &self.depth_view,
                 resolve: None,
+                motion,
             },
         }
     }
@@ -146,12 +167,30 @@ impl TargetShape {
                 ..Default::default()
             })
         };
+        // COPY_SRC: read back; TEXTURE_BINDING: a compositor samples it.
+        let motion = format.motion.then(|| {
+            let usage = wgpu::TextureUsages::COPY_SRC | wgpu::TextureUsages::TEXTURE_BINDING;
+            texture("stereocull.motion", MOTION_FORMAT, attachment | usage, 1)
+        });
+        let motion_views = motion.as_ref().map(|m| {
+            let samples = (format.samples > 1).then(|| {
+                texture(
+                    "stereocull.motion_msaa",
+                    MOTION_FORMAT,
+                    attachment,
+                    format.samples,
+                )
+            });
+            (view(m), samples.as_ref().map(view))
+        });
         DisplayTarget {
             color_view: view(&color),
             depth_view: view(&depth),
             multisampled: multisampled.as_ref().map(view),
             color,
             depth,
+            motion,
+            motion_views,
         }
     }
 }

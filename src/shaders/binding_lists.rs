@@ -182,6 +182,16 @@ pub const DRAW_BINDINGS: [Binding; 4] = [
     ),
 ];
 
+/// Group 3 of the draw pipelines with motion vectors (`wgsl/shared/motion.wgsl`): the
+/// instance records as the previous frame drew them.
+pub const MOTION_BINDINGS: [Binding; 1] = [windowed(
+    "previous_instances",
+    Access::StorageRead,
+    "array<InstanceRecord>",
+    wgpu::ShaderStages::VERTEX,
+    Windowed::Instances,
+)];
+
 /// The scatter pass's bindings (`wgsl/scatter_*.wgsl`): the frame's edits, and where
 /// they go.
 pub const SCATTER_BINDINGS: [Binding; 7] = [

@@ -3,9 +3,10 @@
 //! coverage, and the source each composes from the shared includes.
 
 use super::{
-    BASE_COLOR, DRAW, DRAW_CLIP_DISTANCES, DRAW_CLIP_RECT, DRAW_COMMON, DRAW_MULTIVIEW,
-    DRAW_NO_CLIP_DISTANCES, LIGHT_RECORDS, LIGHTS, MATERIAL_BINDINGS, PBR, SHADOW_MAP_BINDINGS,
-    Windows, declarations, decode_source_with, light_constants,
+    BASE_COLOR, DRAW, DRAW_CLIP_DISTANCES, DRAW_CLIP_RECT, DRAW_COMMON, DRAW_MOTION,
+    DRAW_MULTIVIEW, DRAW_NO_CLIP_DISTANCES, LIGHT_RECORDS, LIGHTS, MATERIAL_BINDINGS, MOTION,
+    MOTION_BINDINGS, PBR, SHADOW_MAP_BINDINGS, Windows, declarations, decode_source_with,
+    light_constants,
 };
 use crate::bins::{Bin, BinKind};
 use crate::scene::Shading;
@@ -34,13 +35,20 @@ pub struct DrawKey {
     pub coverage: bool,
     /// The material bin reads two sets of texture coordinates: a varying more.
     pub second_uv: bool,
+    /// Writes each pixel's motion into a second target ([`crate::motion`]): the
+    /// previous vertex as a second vertex buffer, the previous records as group 3, the
+    /// previous clip position a varying more.
+    pub motion: bool,
 }
 
 impl DrawKey {
     /// Every variant, for validation.
-    pub const ALL: [DrawKey; 9] = [
+    pub const ALL: [DrawKey; 12] = [
         DrawKey::new(2, true),
         DrawKey::new(2, false),
+        DrawKey::new(2, true).with_motion(true),
+        DrawKey::new(2, false).with_motion(true),
+        DrawKey::new(1, false).with_motion(true),
         DrawKey::new(4, true),
         DrawKey::new(4, false),
         DrawKey::placed(2, true),
@@ -61,6 +69,7 @@ impl DrawKey {
         shading: Shading::Lit,
         coverage: false,
         second_uv: false,
+        motion: false,
     };
 
     /// Multiview of a foveated display: four layers of one size, each view filling its
@@ -99,7 +108,13 @@ impl DrawKey {
             shading: Shading::Lit,
             coverage: false,
             second_uv: false,
+            motion: false,
         }
+    }
+
+    /// This variant with or without motion vectors.
+    pub const fn with_motion(self, motion: bool) -> DrawKey {
+        DrawKey { motion, ..self }
     }
 
     /// This variant for material bin `bin`, into a target of `samples` per pixel.
@@ -151,7 +166,8 @@ impl DrawKey {
             Shading::Own(i) => format!(".own{i}"),
         };
         let uvs = if self.second_uv { ".uv1" } else { "" };
-        format!("{}{alpha}{uvs}{shading}", self.base_label())
+        let motion = if self.motion { ".motion" } else { "" };
+        format!("{}{alpha}{uvs}{motion}{shading}", self.base_label())
     }
 
     fn base_label(self) -> String {
@@ -184,7 +200,11 @@ impl DrawKey {
             (true, false) => DRAW_CLIP_DISTANCES,
             (false, _) => DRAW_NO_CLIP_DISTANCES,
         };
-        let entry = if self.multiview { DRAW_MULTIVIEW } else { DRAW };
+        let entry = match (self.multiview, self.motion) {
+            (true, _) => DRAW_MULTIVIEW,
+            (false, true) => DRAW_MOTION,
+            (false, false) => DRAW,
+        };
         let alpha = format!(
             "const ALPHA_MODE: u32 = {}u;\nconst ALPHA_TO_COVERAGE: bool = {};\n",
             self.alpha.wgsl(),
@@ -200,9 +220,20 @@ impl DrawKey {
             true => ("@location(3) uv1: vec2<f32>,", SECOND_UV_ON),
             false => ("", SECOND_UV_OFF),
         };
-        // The second coordinates' varying, where the bin reads two sets, takes the
-        // marker's line in the vertex output and the fragment input.
-        let marked = |s: &str| s.replace("// SECOND_UV", location);
+        let (motion_location, motion) = match self.motion {
+            true => (
+                "@location(4) previous_clip: vec4<f32>,",
+                motion_source(windows),
+            ),
+            false => ("", String::new()),
+        };
+        // The second coordinates' and the previous clip position's varyings, where the
+        // variant has them, take their markers' lines in the vertex output and the
+        // fragment input.
+        let marked = |s: &str| {
+            s.replace("// SECOND_UV", location)
+                .replace("// MOTION", motion_location)
+        };
         [
             &marked(prelude),
             &decode_source_with(self.views, windows),
@@ -217,10 +248,16 @@ impl DrawKey {
             LIGHT_RECORDS,
             LIGHTS,
             &shading,
+            &motion,
             entry,
         ]
         .concat()
     }
+}
+
+/// Group 3 and the motion functions, for the variants with motion vectors.
+fn motion_source(windows: &Windows) -> String {
+    [&declarations(&MOTION_BINDINGS, 3, windows), MOTION].concat()
 }
 
 /// How the draw pipelines pass the second texture coordinates, in a bin that reads them.

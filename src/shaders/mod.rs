@@ -61,6 +61,8 @@ const BASE_COLOR: &str = include_str!("../../wgsl/shared/base_color.wgsl");
 const PBR: &str = include_str!("../../wgsl/shared/pbr.wgsl");
 const DRAW: &str = include_str!("../../wgsl/draw.wgsl");
 const DRAW_MULTIVIEW: &str = include_str!("../../wgsl/draw_multiview.wgsl");
+const DRAW_MOTION: &str = include_str!("../../wgsl/draw_motion.wgsl");
+const MOTION: &str = include_str!("../../wgsl/shared/motion.wgsl");
 
 mod binding_lists;
 mod bindings;
@@ -73,8 +75,8 @@ mod windows;
 pub use binding_lists::{
     CANDIDATE_BINDINGS, COARSE_BINDINGS, CULL_BINDINGS, DEPTH_RESOLVE_BINDINGS, DRAW_BINDINGS,
     FAR_COMPOSITE_BINDINGS, FOVEATED_COMPOSITE_BINDINGS, LIGHT_CLUSTER_BINDINGS, MATERIAL_BINDINGS,
-    MORPH_BINDINGS, POSE_BINDINGS, SCATTER_BINDINGS, SHADOW_MAP_BINDINGS, SKIN_BINDINGS,
-    VISIBILITY_MASK_BINDINGS, pyramid_bindings,
+    MORPH_BINDINGS, MOTION_BINDINGS, POSE_BINDINGS, SCATTER_BINDINGS, SHADOW_MAP_BINDINGS,
+    SKIN_BINDINGS, VISIBILITY_MASK_BINDINGS, pyramid_bindings,
 };
 pub use bindings::{
     Access, Binding, Bound, TextureKind, bind_group, bind_group_layout, declarations,

@@ -60,7 +60,7 @@ pub fn depth_resolve_source() -> String {
 /// What a pass without vertex buffers draws into: its one color target (or none),
 /// depth, samples per pixel and, in multiview, its layers.
 pub(crate) struct ScreenTargets {
-    pub color: Option<wgpu::ColorTargetState>,
+    pub color: Vec<wgpu::ColorTargetState>,
     pub depth: Option<wgpu::DepthStencilState>,
     pub samples: u32,
     pub multiview_mask: Option<std::num::NonZeroU32>,

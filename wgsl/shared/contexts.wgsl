@@ -16,6 +16,9 @@ struct EyeContext {
     clip_from_world: mat4x4<f32>,
     // Its inverse (f64 too): how fragments find their world position.
     world_from_clip: mat4x4<f32>,
+    // The previous frame's clip_from_world, with motion vectors (wgsl/shared/motion.wgsl);
+    // else clip_from_world.
+    previous_clip_from_world: mat4x4<f32>,
     // The eyeball: apex of this eye's frustum, used for specular.
     position: vec3<f32>,
     // Where this view lies in the display's target: x, y, width, height in pixels.
@@ -84,4 +87,6 @@ struct FrameContext {
     light_from_world: mat4x4<f32>,
     light_direction: vec3<f32>,
     shadows: u32,
+    // The previous frame's time, with motion vectors; else time.
+    previous_time: f32,
 }

@@ -54,6 +54,32 @@ fn decode_instance(instance_index: u32, views: u32) -> vec2<u32> {
     return vec2(instance_index, 0u);
 }
 
+// The instance's spin at `time`. Most instances do not animate: the branch spares
+// them a sin and cos per vertex.
+fn spin_at(inst: InstanceRecord, time: f32) -> mat3x3<f32> {
+    if (inst.spin != 0.0) {
+        return spin(inst.spin * time);
+    }
+    return mat3x3(vec3(1.0, 0.0, 0.0), vec3(0.0, 1.0, 0.0), vec3(0.0, 0.0, 1.0));
+}
+
+// Local position `spun` (already spun) placed in the world by the instance's
+// transform, and its bob at `time`.
+fn placed_at(inst: InstanceRecord, spun: vec3<f32>, time: f32) -> vec3<f32> {
+    let local = vec4(spun, 1.0);
+    let rows = inst.world_from_local;
+    var world = vec3(dot(rows[0], local), dot(rows[1], local), dot(rows[2], local));
+    if (inst.bob != 0.0) {
+        world.y += inst.bob * sin(PI * time);
+    }
+    return world;
+}
+
+// Local position `local` of the instance, animated at `time`, in the world.
+fn animated(inst: InstanceRecord, local: vec3<f32>, time: f32) -> vec3<f32> {
+    return placed_at(inst, spin_at(inst, time) * local, time);
+}
+
 struct Decoded {
     // The eye's clip position; in a double-wide target already in that eye's half.
     clip: vec4<f32>,
@@ -85,17 +111,9 @@ struct Decoded {
 fn decode(v: VertexInput, slot: u32, eye: u32, double_wide: bool) -> Decoded {
     let id = visible[slot];
     let inst = instances_at(id);
-    // Most instances do not animate: the branches spare them a sin and cos per vertex.
-    var spun = mat3x3(vec3(1.0, 0.0, 0.0), vec3(0.0, 1.0, 0.0), vec3(0.0, 0.0, 1.0));
-    if (inst.spin != 0.0) {
-        spun = spin(inst.spin * frame.time);
-    }
-    let local = vec4(spun * v.position, 1.0);
+    let spun = spin_at(inst, frame.time);
     let rows = inst.world_from_local;
-    var world = vec3(dot(rows[0], local), dot(rows[1], local), dot(rows[2], local));
-    if (inst.bob != 0.0) {
-        world.y += inst.bob * sin(PI * frame.time);
-    }
+    let world = placed_at(inst, spun * v.position, frame.time);
     let e = display.eye[eye];
     var clip = e.clip_from_world * vec4(world, 1.0);
     var seam = 1.0;

@@ -14,6 +14,7 @@ struct VertexOutput {
     @location(1) @interpolate(flat) ids: vec4<u32>,
     @location(2) tangent_v: vec4<f32>,
     // SECOND_UV
+    // MOTION
 }
 
 fn set_view_clip(out: ptr<function, VertexOutput>, d: Decoded) {

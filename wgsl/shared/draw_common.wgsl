@@ -26,6 +26,7 @@ struct FragmentInput {
     @location(1) @interpolate(flat) ids: vec4<u32>,
     @location(2) tangent_v: vec4<f32>,
     // SECOND_UV
+    // MOTION
 }
 
 // What a material sees of one fragment: a caller's `fn material(s: Surface) ->

@@ -16,6 +16,9 @@ struct InstanceRecord {
     // The instance's own material in place of its mesh's (same bin), or 0xffffffff:
     // the mesh's (the vertices'). WGSL pads the record to 80 bytes.
     material: u32,
+    // The slot's generation: a record whose previous frame's has another is a newcomer
+    // (wgsl/shared/motion.wgsl).
+    generation: u32,
 }
 
 struct MeshRecord {

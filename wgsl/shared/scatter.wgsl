@@ -42,6 +42,7 @@ struct RecordEdit {
     spin: f32,
     bob: f32,
     material: u32,
+    generation: u32,
 }
 
 // This invocation's edit; at or past the header's count when it has none.

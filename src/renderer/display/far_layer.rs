@@ -49,6 +49,7 @@ impl FarLayers {
         let single = TargetFormat {
             depth: DEPTH_FORMAT,
             samples: 1,
+            motion: false,
             ..format
         };
         let key = DrawKey::new(1, false);
@@ -232,7 +233,7 @@ fn composite_pipeline(
         bias: Default::default(),
     };
     let targets = ScreenTargets {
-        color: Some(format.color.into()),
+        color: vec![format.color.into()],
         depth: Some(depth),
         samples: format.samples,
         multiview_mask: None,
