@@ -30,8 +30,7 @@
 
 use glam::{DMat4, DVec2, DVec3, DVec4, Mat4, Vec4};
 
-use crate::contexts::{EyeContext, MAX_VIEWS};
-use crate::renderer::FramePlan;
+use crate::contexts::{DisplayContext, EyeContext, FrameContext, MAX_VIEWS};
 
 /// The motion target's format: two half floats, x then y, in pixels (11 significant
 /// bits: a 100-pixel motion to about 0.05 pixels).
@@ -48,21 +47,22 @@ pub struct PreviousFrame {
 }
 
 impl PreviousFrame {
-    /// The frame `plan` draws, as the next frame's previous.
-    pub fn of(plan: &FramePlan) -> PreviousFrame {
+    /// The frame of these contexts, as the next frame's previous
+    /// ([`crate::renderer::FramePlan::as_previous`]).
+    pub fn of(frame: &FrameContext, displays: &[DisplayContext]) -> PreviousFrame {
         PreviousFrame {
-            time: plan.frame.time,
-            views: (plan.displays.iter())
+            time: frame.time,
+            views: (displays.iter())
                 .map(|d| d.eye.map(|e| e.clip_from_world))
                 .collect(),
         }
     }
 
-    /// `plan`'s contexts measured from this frame: the previous time and matrices set
-    /// (a display this frame lacks keeps its own: no motion of the head).
-    pub fn carry_into(&self, plan: &mut FramePlan) {
-        plan.frame.previous_time = self.time;
-        for (display, views) in plan.displays.iter_mut().zip(&self.views) {
+    /// These contexts measured from this frame: the previous time and matrices set (a
+    /// display this frame lacks keeps its own: no motion of the head).
+    pub fn carry_into(&self, frame: &mut FrameContext, displays: &mut [DisplayContext]) {
+        frame.previous_time = self.time;
+        for (display, views) in displays.iter_mut().zip(&self.views) {
             for (eye, &previous) in display.eye.iter_mut().zip(views) {
                 eye.previous_clip_from_world = previous;
             }

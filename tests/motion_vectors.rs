@@ -84,9 +84,9 @@ impl Frames {
         let (device, queue) = (&self.gpu.device, &self.gpu.queue);
         let mut plan = self.renderer.plan(rig, time).unwrap();
         if let Some(previous) = &self.previous {
-            previous.carry_into(&mut plan);
+            plan.measure_from(previous);
         }
-        self.previous = Some(PreviousFrame::of(&plan));
+        self.previous = Some(plan.as_previous());
         let targets = &self.targets;
         (self.renderer)
             .submit_frame(device, queue, rig, time, targets)

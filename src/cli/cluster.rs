@@ -19,7 +19,8 @@ use mpi::traits::{Communicator, CommunicatorCollectives, Root};
 
 use super::cull::display_dump;
 use super::edits::{EditArgs, EditDriver};
-use super::render::{display_images, save};
+use super::render::display_images;
+use super::save;
 use super::session::Session;
 use super::{SceneArgs, write_json};
 use crate::error::{Error, Result};

@@ -192,6 +192,14 @@ impl Switch {
     }
 }
 
+/// Writes `image` to `path` (its extension names the format).
+pub(crate) fn save(image: &image::RgbaImage, path: &std::path::Path) -> Result<()> {
+    image.save(path).map_err(|source| Error::Image {
+        path: path.to_path_buf(),
+        source,
+    })
+}
+
 impl SceneArgs {
     /// The renderer options these arguments choose (LOD, coarse cull).
     pub fn options(&self) -> RendererOptions {

@@ -86,7 +86,7 @@ pub fn write_motion(session: &Session, index: usize, out: &Path) -> Result<Motio
         image::Rgba([level(mx), level(my), 128, 255])
     });
     let image = out.join(format!("{name}-motion.png"));
-    super::render::save(&picture, &image)?;
+    super::save(&picture, &image)?;
     Ok(MotionStats {
         file: file.display().to_string(),
         image: image.display().to_string(),

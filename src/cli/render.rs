@@ -10,7 +10,7 @@ use super::edits::EditArgs;
 use super::motion::{MotionStats, PreviousArgs, write_motion};
 use super::occlusion_report::occlusion_report;
 use super::session::{FrameFigures, Session};
-use super::{SceneArgs, write_json};
+use super::{SceneArgs, save, write_json};
 use crate::error::{Error, Result};
 use crate::foveated_composite::{CompositeParams, FoveatedComposite, composite_cpu};
 use crate::profiling::{FrameQueries, GpuTimer};
@@ -204,13 +204,6 @@ fn frame_json(
     frame["fragment_invocations"] = serde_json::json!(queries.and_then(|q| q.fragment_invocations));
     frame["masked_pixels"] = serde_json::json!(masked_pixels);
     frame
-}
-
-pub(super) fn save(image: &image::RgbaImage, path: &std::path::Path) -> Result<()> {
-    image.save(path).map_err(|source| Error::Image {
-        path: path.to_path_buf(),
-        source,
-    })
 }
 
 pub fn render(args: &RenderArgs) -> Result<()> {

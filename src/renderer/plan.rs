@@ -15,6 +15,7 @@ use crate::cull::FrameCull;
 use crate::cull::{CoarseCull, CullJob, HiddenArea};
 use crate::error::{Error, Result};
 use crate::far_layer::FarPlan;
+use crate::motion::PreviousFrame;
 use crate::rig::{ResolvedRig, Rig};
 use crate::shadow::LightView;
 
@@ -148,6 +149,16 @@ pub struct FramePlan {
 }
 
 impl FramePlan {
+    /// This frame as the next one's previous, for motion vectors.
+    pub fn as_previous(&self) -> PreviousFrame {
+        PreviousFrame::of(&self.frame, &self.displays)
+    }
+
+    /// This frame's contexts measured from `previous` (motion vectors).
+    pub fn measure_from(&mut self, previous: &PreviousFrame) {
+        previous.carry_into(&mut self.frame, &mut self.displays);
+    }
+
     /// The plan of the frame at `time` for `rig`'s pose under `options`; `coarse` is
     /// whether the renderer was built for the coarse cull ([`RendererOptions::coarse_for`],
     /// decided once: it sizes buffers).

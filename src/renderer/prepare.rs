@@ -6,7 +6,6 @@ use super::plan::{FramePlan, FrameStats};
 use super::{CullMode, Path, Renderer};
 use crate::buffers::write;
 use crate::error::{Error, Result};
-use crate::motion::PreviousFrame;
 use crate::records::uniform_bytes;
 use crate::rig::Rig;
 
@@ -84,9 +83,9 @@ impl Renderer {
         let mut plan = self.plan(rig, time)?;
         if self.options.motion_vectors {
             if let Some(previous) = &self.motion_from {
-                previous.carry_into(&mut plan);
+                plan.measure_from(previous);
             }
-            self.motion_last = Some(PreviousFrame::of(&plan));
+            self.motion_last = Some(plan.as_previous());
         }
         let frame_bytes = write(queue, &self.frame, &uniform_bytes(&plan.frame));
         let light_bytes = self.lighting.prepare(queue, &plan);
