@@ -1,4 +1,5 @@
-//! Buffer creation shared by the culling, drawing and material uploads.
+//! Buffer creation shared by the culling, drawing and material uploads, and where
+//! writes into them go ([`Upload`]).
 
 use wgpu::util::DeviceExt;
 
@@ -71,8 +72,22 @@ pub(crate) fn uniform_buffer<T: encase::ShaderType>(
     })
 }
 
+/// Where a frame's writes into buffers go: a `wgpu::Queue` writes each straight; the
+/// renderer gathers the pose's into one upload (`renderer::uploads`). Its method is
+/// the queue's, so that a queue is one.
+pub trait Upload {
+    /// Writes `data` at `offset` of `buffer` before the next submission's commands.
+    fn write_buffer(&self, buffer: &wgpu::Buffer, offset: u64, data: &[u8]);
+}
+
+impl Upload for wgpu::Queue {
+    fn write_buffer(&self, buffer: &wgpu::Buffer, offset: u64, data: &[u8]) {
+        wgpu::Queue::write_buffer(self, buffer, offset, data);
+    }
+}
+
 /// Writes `bytes` at the start of `buffer` (nothing for none); returns the bytes written.
-pub(crate) fn write(queue: &wgpu::Queue, buffer: &wgpu::Buffer, bytes: &[u8]) -> u64 {
+pub(crate) fn write(queue: &impl Upload, buffer: &wgpu::Buffer, bytes: &[u8]) -> u64 {
     if !bytes.is_empty() {
         queue.write_buffer(buffer, 0, bytes);
     }

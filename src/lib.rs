@@ -28,7 +28,7 @@
 
 pub mod basisu;
 pub mod bins;
-mod buffers;
+pub mod buffers;
 /// The `stereocull` binary's commands (feature `cli`): not part of the library's API.
 #[cfg(feature = "cli")]
 #[doc(hidden)]

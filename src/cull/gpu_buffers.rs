@@ -3,7 +3,7 @@
 //! outputs are [`crate::cull::targets`].
 
 use crate::bins::BinKind;
-use crate::buffers::{init_buffer, init_buffer_with_room, storage_buffer};
+use crate::buffers::{Upload, init_buffer, init_buffer_with_room, storage_buffer};
 use crate::cull::HiddenArea;
 use crate::cull::coarse::{BLOCK, CoarseCull};
 use crate::cull::rig::{self, MAX_RIG_VIEWS, RigCull, RigView};
@@ -263,7 +263,7 @@ impl CullScene {
 
     /// Writes this frame's hidden areas, one per display slot (in order; `None` drops
     /// nothing). Returns the bytes written; nothing where no display's cull drops by one.
-    pub fn write_hidden(&self, queue: &wgpu::Queue, areas: &[Option<HiddenArea>]) -> u64 {
+    pub fn write_hidden(&self, queue: &impl Upload, areas: &[Option<HiddenArea>]) -> u64 {
         if self.hidden_slots == 0 {
             return 0;
         }
@@ -278,7 +278,7 @@ impl CullScene {
     /// Writes this frame's block tests, one per coarse slot (display, in order): the
     /// display frustums' planes grown for rounding ([`CoarseCull::around`]). Returns the
     /// bytes written; nothing without the coarse cull.
-    pub fn write_block_tests(&self, queue: &wgpu::Queue, planes: &[[Vec4; 6]]) -> u64 {
+    pub fn write_block_tests(&self, queue: &impl Upload, planes: &[[Vec4; 6]]) -> u64 {
         if self.coarse_slots == 0 {
             return 0;
         }
@@ -289,7 +289,7 @@ impl CullScene {
     }
 
     /// Writes rig member `m`'s record for this frame; returns the bytes written.
-    pub fn write_rig_member(&self, queue: &wgpu::Queue, m: u32, record: &RigView) -> u64 {
+    pub fn write_rig_member(&self, queue: &impl Upload, m: u32, record: &RigView) -> u64 {
         let (group, index) = (m as usize / MAX_RIG_VIEWS, m as usize % MAX_RIG_VIEWS);
         let bytes = uniform_bytes(record);
         let at = group as u64 * self.rig_stride + (index * bytes.len()) as u64;

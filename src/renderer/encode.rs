@@ -126,7 +126,8 @@ impl Renderer {
         Ok(stats)
     }
 
-    /// The frame level's passes, before any display's: with motion vectors the copy of
+    /// The frame level's passes, before any display's: the pose's writes copied into
+    /// place ([`super::uploads`]), with motion vectors the copy of
     /// the previous frame's records and vertices, the scatter of moved instances,
     /// posing, morph targets, skinning, the coarse cull, the shadow pass.
     pub(super) fn encode_frame(
@@ -134,6 +135,7 @@ impl Renderer {
         encoder: &mut wgpu::CommandEncoder,
         rec: &mut Recorder,
     ) -> FrameStats {
+        self.uploads.record(encoder);
         self.path.core().draw_scene.keep_previous(encoder);
         let (scattered, cpu_staging) = self.scatter.encode(encoder);
         if scattered > 0 {

@@ -103,6 +103,7 @@ mod prepare;
 mod recorder;
 mod sync;
 mod targets;
+mod uploads;
 mod view;
 
 use checks::check_device;
@@ -128,6 +129,7 @@ pub use plan::{
 pub use recorder::{Level, PassRecord};
 pub use sync::SyncStats;
 pub use targets::{DisplayTarget, TargetShape, TargetViews};
+use uploads::Coalesced;
 
 /// The path chosen in [`Renderer::new`] (boxed: each holds its pipelines, and they
 /// differ in size by what the indirect path adds).
@@ -270,6 +272,8 @@ pub struct Renderer {
     /// last written (prepared or latched), the next one's.
     motion_from: Option<PreviousFrame>,
     motion_last: Option<PreviousFrame>,
+    /// What `prepare` and `latch` write of the pose, as one upload.
+    uploads: Coalesced,
 }
 
 impl Renderer {
@@ -354,6 +358,7 @@ impl Renderer {
             prepared: None,
             motion_from: None,
             motion_last: None,
+            uploads: Coalesced::new(device),
         })
     }
 

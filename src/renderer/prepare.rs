@@ -3,6 +3,7 @@
 //! pose before it is submitted.
 
 use super::plan::{FramePlan, FrameStats};
+use super::uploads::Writes;
 use super::{CullMode, Path, Renderer};
 use crate::buffers::write;
 use crate::error::{Error, Result};
@@ -36,7 +37,7 @@ impl Renderer {
         if self.options.motion_vectors {
             self.motion_from = self.motion_last.take();
         }
-        let mut stats = self.write_plan(queue, rig, time)?;
+        let mut stats = self.write_plan(queue, rig, time, true)?;
         if let Some(morph) = &mut self.morph {
             stats.bytes_uploaded += morph.prepare(queue, time);
         }
@@ -71,15 +72,23 @@ impl Renderer {
                 "latch comes after prepare and encode, before the submit".into(),
             ));
         };
-        self.write_plan(queue, rig, time)
+        self.write_plan(queue, rig, time, false)
     }
 
     /// Plans the frame from `rig` at `time` and writes what its passes read of the
     /// pose: the frame context, the lights' views, each display's contexts and cull
     /// inputs, the shadow's light.
     /// With motion vectors the contexts are measured from the previous frame, and this
-    /// plan is the next frame's previous.
-    fn write_plan(&mut self, queue: &wgpu::Queue, rig: &Rig, time: f32) -> Result<FrameStats> {
+    /// plan is the next frame's previous. The pose's writes go up as one
+    /// ([`super::uploads`]): placed anew when `fresh` (a prepare), else where the
+    /// recorded frame copies them from (a latch).
+    fn write_plan(
+        &mut self,
+        queue: &wgpu::Queue,
+        rig: &Rig,
+        time: f32,
+        fresh: bool,
+    ) -> Result<FrameStats> {
         let mut plan = self.plan(rig, time)?;
         if self.options.motion_vectors {
             if let Some(previous) = &self.motion_from {
@@ -87,19 +96,25 @@ impl Renderer {
             }
             self.motion_last = Some(plan.as_previous());
         }
-        let frame_bytes = write(queue, &self.frame, &uniform_bytes(&plan.frame));
-        let light_bytes = self.lighting.prepare(queue, &plan);
+        self.uploads.begin();
+        let to = Writes {
+            pose: &self.uploads,
+            queue,
+        };
+        let frame_bytes = write(to.pose, &self.frame, &uniform_bytes(&plan.frame));
+        let light_bytes = self.lighting.prepare(to.pose, &plan);
         let light = plan.light_cull.as_ref().map(|_| plan.light);
         let mut stats = match &mut self.path {
-            Path::Indirect(p) => p.prepare(queue, plan),
-            Path::Classic(p) => p.prepare(queue, &plan),
+            Path::Indirect(p) => p.prepare(to, plan),
+            Path::Classic(p) => p.prepare(to, &plan),
         };
         if let (Some(shadow), Some(light)) = (&self.shadow, light) {
             let start = std::time::Instant::now();
             let (size, culler) = (self.shadow_map.size, &self.path.core().culler);
-            stats.bytes_uploaded += shadow.prepare(queue, &light, size, culler);
+            stats.bytes_uploaded += shadow.prepare(to, &light, size, culler);
             stats.cpu_upload += start.elapsed();
         }
+        self.uploads.send(queue, fresh);
         stats.bytes_uploaded += frame_bytes + light_bytes;
         Ok(stats)
     }

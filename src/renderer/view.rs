@@ -6,6 +6,7 @@ use super::culler::{Culler, ViewCull};
 use super::plan::CullView;
 use super::recorder::{PassRecord, Recorder};
 use crate::bins::BinRange;
+use crate::buffers::Upload;
 use crate::buffers::write;
 use crate::contexts::DisplayContext;
 use crate::contexts::context_buffer;
@@ -13,6 +14,7 @@ use crate::cull::targets::CullTargets;
 use crate::draw::{BinPipelines, Drawer, Drawing};
 use crate::occlusion::Phase;
 use crate::records::uniform_bytes;
+use crate::renderer::uploads::Writes;
 
 /// The view's context, its cull and bindings.
 pub(super) struct ViewPass {
@@ -121,15 +123,10 @@ impl ViewPass {
 
     /// Writes this frame's `context` and the culler's result for the view (nothing on
     /// the GPU); returns the bytes written.
-    pub(super) fn prepare(
-        &self,
-        queue: &wgpu::Queue,
-        context: &DisplayContext,
-        culler: &Culler,
-    ) -> u64 {
-        let member = culler.write_member(queue, &self.cull, context);
-        write(queue, &self.context, &uniform_bytes(context))
-            + culler.upload(queue, &self.cull)
+    pub(super) fn prepare(&self, to: Writes, context: &DisplayContext, culler: &Culler) -> u64 {
+        let member = culler.write_member(to.pose, &self.cull, context);
+        write(to.pose, &self.context, &uniform_bytes(context))
+            + culler.upload(to.queue, &self.cull)
             + member
     }
 
@@ -137,7 +134,7 @@ impl ViewPass {
     /// ([`ViewPass::tested`]); returns the bytes written.
     pub(super) fn prepare_cull_context(
         &self,
-        queue: &wgpu::Queue,
+        queue: &impl Upload,
         context: &DisplayContext,
     ) -> u64 {
         match &self.cull_context {

@@ -17,6 +17,7 @@ use super::options::CullMode;
 use super::plan::{CullView, FramePlan};
 use super::recorder::{PassRecord, Recorder};
 use crate::bins::BinRange;
+use crate::buffers::Upload;
 use crate::contexts::DisplayContext;
 use crate::cull::CullOutput;
 use crate::cull::cpu;
@@ -212,7 +213,7 @@ impl Culler {
     /// This frame's culls as `plan` lists them: on the CPU, all of them (and the
     /// light's); on the GPU, the coarse cull's block tests, one per display. Returns the
     /// bytes written.
-    pub(super) fn prepare(&mut self, queue: &wgpu::Queue, plan: &FramePlan) -> u64 {
+    pub(super) fn prepare(&mut self, queue: &impl Upload, plan: &FramePlan) -> u64 {
         match &mut self.kind {
             Kind::Gpu { scene, .. } => {
                 let planes: Vec<_> = plan.resolved.displays.iter().map(|d| d.planes).collect();
@@ -273,7 +274,7 @@ impl Culler {
     /// by (nothing for another view); returns the bytes written.
     pub(super) fn write_member(
         &self,
-        queue: &wgpu::Queue,
+        queue: &impl Upload,
         view: &ViewCull,
         context: &DisplayContext,
     ) -> u64 {

@@ -19,6 +19,7 @@ use crate::renderer::options::StereoMode;
 use crate::renderer::plan::{CullView, FramePlan, FrameStats};
 use crate::renderer::recorder::{PassRecord, Recorder, begin_draw_pass};
 use crate::renderer::targets::TargetViews;
+use crate::renderer::uploads::Writes;
 use crate::shaders::Bound;
 use crate::shaders::DrawKey;
 
@@ -117,23 +118,21 @@ impl ClassicPath {
 
     /// Culls on the CPU (every display and eye of `plan` in one pass over the spheres),
     /// writes the contexts and uploads the visible lists the draws index.
-    pub(in crate::renderer) fn prepare(
-        &mut self,
-        queue: &wgpu::Queue,
-        plan: &FramePlan,
-    ) -> FrameStats {
+    pub(in crate::renderer) fn prepare(&mut self, to: Writes, plan: &FramePlan) -> FrameStats {
         let mut stats = FrameStats::default();
         let start = Instant::now();
-        stats.bytes_uploaded += self.core.culler.prepare(queue, plan);
+        stats.bytes_uploaded += self.core.culler.prepare(to.pose, plan);
         stats.cpu_cull = start.elapsed();
         let start = Instant::now();
         for (i, (state, ctx)) in self.displays.iter().zip(&plan.displays).enumerate() {
-            stats.bytes_uploaded += write(queue, &state.context, &uniform_bytes(ctx));
+            stats.bytes_uploaded += write(to.pose, &state.context, &uniform_bytes(ctx));
             for (e, eye) in state.eyes.iter().enumerate() {
-                stats.bytes_uploaded += write(queue, &eye.context, &uniform_bytes(&ctx.for_eye(e)));
+                let context = uniform_bytes(&ctx.for_eye(e));
+                stats.bytes_uploaded += write(to.pose, &eye.context, &context);
             }
             for (out, buffer) in self.visible_lists(i) {
-                stats.bytes_uploaded += write(queue, buffer, bytemuck::cast_slice(&out.visible));
+                let visible = bytemuck::cast_slice(&out.visible);
+                stats.bytes_uploaded += write(to.queue, buffer, visible);
             }
         }
         stats.cpu_upload = start.elapsed();

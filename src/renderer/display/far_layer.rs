@@ -13,6 +13,7 @@ use crate::occlusion::Phase;
 use crate::renderer::culler::Culler;
 use crate::renderer::plan::{CullView, FramePlan};
 use crate::renderer::recorder::{PassRecord, Recorder};
+use crate::renderer::uploads::Writes;
 use crate::renderer::view::ViewPass;
 use crate::shaders::{
     DrawKey, FAR_COMPOSITE_BINDINGS, ScreenTargets, Shaders, Windows, bind_group_layout,
@@ -185,13 +186,13 @@ impl FarDisplay {
     /// `display`'s), and the culler's far cull. Returns the bytes written.
     pub(super) fn prepare(
         &self,
-        queue: &wgpu::Queue,
+        to: Writes,
         (plan, display): (&FarPlan, &DisplayContext),
         culler: &Culler,
     ) -> u64 {
         let slot = self.index as u32;
-        self.view.prepare(queue, &plan.context(slot), culler)
-            + (self.view).prepare_cull_context(queue, &plan.tested_context(display))
+        self.view.prepare(to, &plan.context(slot), culler)
+            + (self.view).prepare_cull_context(to.pose, &plan.tested_context(display))
     }
 }
 
@@ -284,16 +285,11 @@ impl Far {
 
     /// Writes every far layer's context for `plan` and the culler's far culls. Returns
     /// the bytes written.
-    pub(super) fn prepare(
-        &mut self,
-        queue: &wgpu::Queue,
-        plan: &FramePlan,
-        culler: &Culler,
-    ) -> u64 {
+    pub(super) fn prepare(&mut self, to: Writes, plan: &FramePlan, culler: &Culler) -> u64 {
         self.distances = plan.far.iter().map(|p| p.map(|p| p.distance)).collect();
         (self.displays.iter().zip(&plan.far).zip(&plan.displays))
             .filter_map(|((far, plan), display)| Some((far.as_ref()?, plan.as_ref()?, display)))
-            .map(|(far, plan, display)| far.prepare(queue, (plan, display), culler))
+            .map(|(far, plan, display)| far.prepare(to, (plan, display), culler))
             .sum()
     }
 }

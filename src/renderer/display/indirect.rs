@@ -26,6 +26,7 @@ use crate::renderer::options::StereoMode;
 use crate::renderer::plan::{CullView, FramePlan, FrameStats};
 use crate::renderer::recorder::{PassRecord, Recorder, begin_draw_pass};
 use crate::renderer::targets::TargetViews;
+use crate::renderer::uploads::Writes;
 use crate::renderer::view::ViewPass;
 use crate::scene::Shading;
 use crate::shaders::DrawKey;
@@ -144,24 +145,20 @@ impl IndirectPath {
     /// Writes `plan`'s display contexts and the culler's results for every view: each
     /// display's, each far layer's, the light's. Culling on the CPU with occlusion, the
     /// plan is kept for the frame's late culls.
-    pub(in crate::renderer) fn prepare(
-        &mut self,
-        queue: &wgpu::Queue,
-        plan: FramePlan,
-    ) -> FrameStats {
+    pub(in crate::renderer) fn prepare(&mut self, to: Writes, plan: FramePlan) -> FrameStats {
         let mut stats = FrameStats::default();
         let start = Instant::now();
-        stats.bytes_uploaded += self.core.culler.prepare(queue, &plan);
+        stats.bytes_uploaded += self.core.culler.prepare(to.pose, &plan);
         stats.cpu_cull = start.elapsed();
         let start = Instant::now();
         for ((state, ctx), inset) in self.displays.iter().zip(&plan.displays).zip(&plan.insets) {
-            stats.bytes_uploaded += state.view.prepare(queue, ctx, &self.core.culler);
+            stats.bytes_uploaded += state.view.prepare(to, ctx, &self.core.culler);
             if let (Some(view), Some(inset)) = (&state.inset, inset) {
-                stats.bytes_uploaded += view.prepare(queue, inset, &self.core.culler);
+                stats.bytes_uploaded += view.prepare(to, inset, &self.core.culler);
             }
         }
         if let Some(far) = &mut self.far {
-            stats.bytes_uploaded += far.prepare(queue, &plan, &self.core.culler);
+            stats.bytes_uploaded += far.prepare(to, &plan, &self.core.culler);
         }
         stats.cpu_upload = start.elapsed();
         self.core.culler.keep_for_late(plan);

@@ -4,6 +4,7 @@
 //! both eyes at once, before any display draws. Without lights the buffers stay (group
 //! 2 binds them) and nothing is recorded: the fragment stage sees a count of 0.
 
+use crate::buffers::Upload;
 use crate::buffers::init_buffer;
 use crate::error::{Error, Result};
 use crate::lights::{
@@ -123,7 +124,7 @@ impl Lighting {
     /// Writes the count, the slices' depths, the lights where they changed and each
     /// display's combined frustum (`plan`'s); returns the bytes. Nothing while there
     /// are no lights (the count stays 0).
-    pub(in crate::renderer) fn prepare(&mut self, queue: &wgpu::Queue, plan: &FramePlan) -> u64 {
+    pub(in crate::renderer) fn prepare(&mut self, queue: &impl Upload, plan: &FramePlan) -> u64 {
         if let Some((posing, lights)) = &mut self.posed {
             let worlds = posing.node_worlds(plan.frame.time);
             crate::posing::place_lights(&posing.lights, &worlds, lights);
@@ -173,7 +174,7 @@ impl Lighting {
     }
 }
 
-fn write(queue: &wgpu::Queue, buffer: &wgpu::Buffer, word: u64, words: &[u32]) -> u64 {
+fn write(queue: &impl Upload, buffer: &wgpu::Buffer, word: u64, words: &[u32]) -> u64 {
     let bytes: &[u8] = bytemuck::cast_slice(words);
     queue.write_buffer(buffer, 4 * word, bytes);
     bytes.len() as u64

@@ -7,6 +7,7 @@ use crate::draw::{BinPipelines, Drawing, cleared_depth};
 use crate::renderer::culler::Culler;
 use crate::renderer::plan::CullView;
 use crate::renderer::recorder::{PassRecord, Recorder};
+use crate::renderer::uploads::Writes;
 use crate::renderer::view::ViewPass;
 use crate::shaders::{SHADOW_MAP_BINDINGS, Windows, bind_group_layout};
 use crate::shadow::{LightView, SHADOW_FORMAT};
@@ -32,13 +33,13 @@ impl ShadowPass {
     /// bytes written.
     pub(in crate::renderer) fn prepare(
         &self,
-        queue: &wgpu::Queue,
+        to: Writes,
         view: &LightView,
         size: u32,
         culler: &Culler,
     ) -> u64 {
         let context = DisplayContext::light(view, size);
-        self.view.prepare(queue, &context, culler)
+        self.view.prepare(to, &context, culler)
     }
 
     /// Records the light's cull (on the GPU) and the shadow pass, timed as

@@ -1,0 +1,148 @@
+//! The frame's pose as one upload: what `prepare` and `latch` write of the pose (the
+//! frame and display contexts, the cull's members, block tests and hidden areas, the
+//! lights' views) is gathered into one staging buffer, written with one call, and
+//! copied into place by commands `encode` records before any pass. wgpu stages every
+//! `write_buffer` call on its own (a dozen for a five-wall CAVE); one call is what
+//! makes a latch cheap. The CPU culls' results are not the pose's: they go straight.
+
+use std::cell::RefCell;
+
+use crate::buffers::Upload;
+
+/// Where a frame's writes go: the pose's coalesced, the CPU culls' results straight.
+#[derive(Clone, Copy)]
+pub(super) struct Writes<'a> {
+    /// The pose's writes.
+    pub pose: &'a Coalesced,
+    /// Everything else.
+    pub queue: &'a wgpu::Queue,
+}
+
+/// One write into place: `size` bytes from `from` in the staging buffer to `at` in `to`.
+#[derive(Clone, Debug, PartialEq)]
+struct Entry {
+    to: wgpu::Buffer,
+    at: u64,
+    from: u64,
+    size: u64,
+}
+
+impl Entry {
+    /// The same destination and size: a latch's write that an encode's copy carries.
+    fn lands_as(&self, other: &Entry) -> bool {
+        (&self.to, self.at, self.size) == (&other.to, other.at, other.size)
+    }
+}
+
+/// The gathered writes, the staging buffer and what it holds.
+pub(super) struct Coalesced {
+    device: wgpu::Device,
+    gathered: RefCell<(Vec<u8>, Vec<Entry>)>,
+    staging: Option<wgpu::Buffer>,
+    /// The entries the staging buffer holds, in its order.
+    placed: Vec<Entry>,
+    /// Whether an encode recorded copies of `placed` since they were placed.
+    recorded: bool,
+}
+
+impl Upload for Coalesced {
+    fn write_buffer(&self, buffer: &wgpu::Buffer, offset: u64, data: &[u8]) {
+        let (bytes, entries) = &mut *self.gathered.borrow_mut();
+        entries.push(Entry {
+            to: buffer.clone(),
+            at: offset,
+            from: bytes.len() as u64,
+            size: data.len() as u64,
+        });
+        bytes.extend_from_slice(data);
+    }
+}
+
+impl Coalesced {
+    pub(super) fn new(device: &wgpu::Device) -> Coalesced {
+        Coalesced {
+            device: device.clone(),
+            gathered: RefCell::default(),
+            staging: None,
+            placed: Vec::new(),
+            recorded: false,
+        }
+    }
+
+    /// Forgets what was gathered: a plan's writes come next.
+    pub(super) fn begin(&self) {
+        let (bytes, entries) = &mut *self.gathered.borrow_mut();
+        bytes.clear();
+        entries.clear();
+    }
+
+    /// Sends what was gathered. A `latch` (not `fresh`) after an encode recorded its
+    /// copies writes each write where its copy reads from, in one call when the writes
+    /// are those the copies carry (the latch of the frame prepared); a write no copy
+    /// carries goes straight. Otherwise (a prepare) the writes are placed anew, for the
+    /// next encode to copy.
+    pub(super) fn send(&mut self, queue: &wgpu::Queue, fresh: bool) {
+        let (bytes, entries) = std::mem::take(self.gathered.get_mut());
+        match (&self.staging, self.recorded && !fresh) {
+            (Some(staging), true) => self.resend(queue, staging, (&bytes, &entries)),
+            _ => self.place(queue, &bytes, &entries),
+        }
+        *self.gathered.get_mut() = (bytes, entries);
+    }
+
+    fn resend(
+        &self,
+        queue: &wgpu::Queue,
+        staging: &wgpu::Buffer,
+        (bytes, entries): (&[u8], &[Entry]),
+    ) {
+        let same = entries.len() == self.placed.len()
+            && entries.iter().zip(&self.placed).all(|(e, p)| e.lands_as(p));
+        if same {
+            if !bytes.is_empty() {
+                queue.write_buffer(staging, 0, bytes);
+            }
+            return;
+        }
+        for e in entries {
+            let data = &bytes[e.from as usize..(e.from + e.size) as usize];
+            match self.placed.iter().find(|p| p.lands_as(e)) {
+                Some(p) => queue.write_buffer(staging, p.from, data),
+                None => queue.write_buffer(&e.to, e.at, data),
+            }
+        }
+    }
+
+    /// Writes `bytes` into the staging buffer (grown to hold them) for the next encode.
+    fn place(&mut self, queue: &wgpu::Queue, bytes: &[u8], entries: &[Entry]) {
+        self.placed = entries.to_vec();
+        self.recorded = false;
+        if bytes.is_empty() {
+            return;
+        }
+        let size = bytes.len() as u64;
+        if self.staging.as_ref().is_none_or(|s| s.size() < size) {
+            self.staging = Some(self.device.create_buffer(&wgpu::BufferDescriptor {
+                label: Some("stereocull.pose_staging"),
+                size: size.next_power_of_two(),
+                usage: wgpu::BufferUsages::COPY_SRC | wgpu::BufferUsages::COPY_DST,
+                mapped_at_creation: false,
+            }));
+        }
+        if let Some(staging) = &self.staging {
+            queue.write_buffer(staging, 0, bytes);
+        }
+    }
+
+    /// Records the copies of the placed writes into place: first in a frame, before
+    /// any pass reads them.
+    pub(super) fn record(&mut self, encoder: &mut wgpu::CommandEncoder) {
+        let Some(staging) = &self.staging else {
+            return;
+        };
+        for e in &self.placed {
+            encoder.copy_buffer_to_buffer(staging, e.from, &e.to, e.at, e.size);
+        }
+        self.recorded = true;
+    }
+}
