@@ -14,7 +14,7 @@ pub use pipelines::{DEPTH_FORMAT, TargetFormat, VERTEX_ATTRIBUTES, VERTEX_BUFFER
 use pipelines::{pipeline, shadow_pipeline};
 
 use crate::bins::{Bin, BinKind, BinRange};
-use crate::buffers::{init_buffer, init_buffer_with_room};
+use crate::buffers::{init_buffer, init_buffer_with_room, storage_buffer};
 use crate::cull::targets::{COUNTS_BIN_OFFSET, CullTargets};
 use crate::error::Result;
 use crate::materials::{self, GpuMaterials};
@@ -76,44 +76,54 @@ impl DrawScene {
     ) -> Result<DrawScene> {
         let init =
             |label: &str, contents: &[u8], usage| init_buffer(device, label, contents, usage);
-        let records = instance_records(scene);
-        let room = DrawScene::BYTES_PER_INSTANCE * slots as u64;
+        let vertices = init(
+            "stereocull.vertices",
+            bytemuck::cast_slice(&scene.vertices),
+            DrawScene::vertex_usage(scene),
+        );
+        let instances = init_buffer_with_room(
+            device,
+            "stereocull.instances",
+            bytemuck::cast_slice(&instance_records(scene)),
+            DrawScene::BYTES_PER_INSTANCE * slots as u64,
+            // COPY_SRC: read back by diagnostics (`instance_records`), copied to
+            // `Previous` with motion vectors.
+            wgpu::BufferUsages::STORAGE
+                | wgpu::BufferUsages::COPY_DST
+                | wgpu::BufferUsages::COPY_SRC,
+        );
+        let rewritten = DrawScene::rewrites_vertices(scene);
+        let previous = (drawer.motion.as_ref()).map(|layout| {
+            let copied = (&instances, rewritten.then_some(&vertices));
+            Previous::new(device, (layout, &drawer.windows), copied)
+        });
         Ok(DrawScene {
             materials: GpuMaterials::new(device, &drawer.materials_layout, scene)?,
             shadow_group: shadow_group.clone(),
-            previous: (drawer.motion.as_ref())
-                .map(|layout| Previous::new(device, (layout, &drawer.windows), scene, room)),
-            vertices: init(
-                "stereocull.vertices",
-                bytemuck::cast_slice(&scene.vertices),
-                DrawScene::vertex_usage(scene),
-            ),
+            previous,
+            vertices,
             indices: init(
                 "stereocull.indices",
                 bytemuck::cast_slice(&scene.indices),
                 wgpu::BufferUsages::INDEX,
             ),
-            instances: init_buffer_with_room(
-                device,
-                "stereocull.instances",
-                bytemuck::cast_slice(&records),
-                room,
-                // COPY_SRC: read back by diagnostics (`instance_records`).
-                wgpu::BufferUsages::STORAGE
-                    | wgpu::BufferUsages::COPY_DST
-                    | wgpu::BufferUsages::COPY_SRC,
-            ),
+            instances,
         })
     }
 
     /// The vertex buffer's uses: drawn, read back, and written by the skinning and morph
     /// passes when the scene has skins or morph targets.
     fn vertex_usage(scene: &Scene) -> wgpu::BufferUsages {
-        let skinned = match scene.skins.is_empty() && scene.morphs.is_empty() {
-            true => wgpu::BufferUsages::empty(),
-            false => wgpu::BufferUsages::STORAGE,
+        let skinned = match DrawScene::rewrites_vertices(scene) {
+            true => wgpu::BufferUsages::STORAGE,
+            false => wgpu::BufferUsages::empty(),
         };
         wgpu::BufferUsages::VERTEX | wgpu::BufferUsages::COPY_SRC | skinned
+    }
+
+    /// Whether frame passes rewrite the vertices (skins, morph targets).
+    fn rewrites_vertices(scene: &Scene) -> bool {
+        !(scene.skins.is_empty() && scene.morphs.is_empty())
     }
 
     /// GPU bytes per instance slot for drawing: its record.
@@ -135,31 +145,28 @@ impl DrawScene {
 }
 
 impl Previous {
-    /// Copies' buffers for `scene` with `room` bytes of records, holding the scene as
-    /// it stands (a first frame moves only with the head), bound as group 3.
+    /// Buffers the size of `instances` and, where passes rewrite them, of `vertices`,
+    /// bound as group 3. Their contents come from the first encode's copy, before any
+    /// pass reads them.
     fn new(
         device: &wgpu::Device,
         (layout, windows): (&wgpu::BindGroupLayout, &Windows),
-        scene: &Scene,
-        room: u64,
+        (instances, vertices): (&wgpu::Buffer, Option<&wgpu::Buffer>),
     ) -> Previous {
         let copy = wgpu::BufferUsages::COPY_DST;
-        let records = instance_records(scene);
-        let instances = init_buffer_with_room(
-            device,
+        let like = |source: &wgpu::Buffer, label, usage| {
+            storage_buffer(device, label, source.size(), usage | copy)
+        };
+        let instances = like(
+            instances,
             "stereocull.previous_instances",
-            bytemuck::cast_slice(&records),
-            room,
-            wgpu::BufferUsages::STORAGE | copy,
+            wgpu::BufferUsages::STORAGE,
         );
-        let rewritten = !(scene.skins.is_empty() && scene.morphs.is_empty());
-        let vertices = rewritten.then(|| {
-            let bytes = bytemuck::cast_slice(&scene.vertices);
-            init_buffer(
-                device,
+        let vertices = vertices.map(|v| {
+            like(
+                v,
                 "stereocull.previous_vertices",
-                bytes,
-                wgpu::BufferUsages::VERTEX | copy,
+                wgpu::BufferUsages::VERTEX,
             )
         });
         let bind_group = bind_group(
