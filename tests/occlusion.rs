@@ -290,6 +290,11 @@ impl Default for Counted {
             culled: 0,
             late: 0,
             frames: 0,
+            // Exact on any CPU: with occlusion on and off the same compiled pipelines
+            // write every fragment bit for bit; occlusion only drops hidden draws and
+            // splits the rest into two phases, and with back faces culled each pixel's
+            // nearest surface wins in either order (a bit-equal depth tie of two front
+            // faces would be needed for the order to show, see the edits test).
             tolerance: Tolerance::EXACT,
         }
     }
