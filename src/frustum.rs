@@ -222,13 +222,23 @@ pub fn enclosing_view(orientation: DQuat, origin: DVec3, frusta: &[[DVec3; 8]]) 
     let local: Vec<[DVec3; 8]> = frusta.iter().map(|c| c.map(|p| to_basis * p)).collect();
     let fov = widest_fov(&local)?;
     let [left, right, up, down] = fov.tangents();
-    let corners = || local.iter().flatten().copied();
-    let reach =
-        |f: &dyn Fn(DVec3) -> f64| corners().map(f).fold(f64::MIN, f64::max) + ENCLOSING_SLACK;
-    let c_right = reach(&|p| p.x + right * p.z);
-    let c_left = reach(&|p| -p.x + left * p.z);
-    let c_up = reach(&|p| p.y + up * p.z);
-    let c_down = reach(&|p| -p.y + down * p.z);
+    // One pass over the corners for the four side reaches and the depth range.
+    let mut reach = [f64::MIN; 4];
+    let (mut z_nearest, mut z_farthest) = (f64::MIN, f64::MAX);
+    for p in local.iter().flatten() {
+        let sides = [
+            p.x + right * p.z,
+            -p.x + left * p.z,
+            p.y + up * p.z,
+            -p.y + down * p.z,
+        ];
+        for (r, s) in reach.iter_mut().zip(sides) {
+            *r = r.max(s);
+        }
+        z_nearest = z_nearest.max(p.z);
+        z_farthest = z_farthest.min(p.z);
+    }
+    let [c_right, c_left, c_up, c_down] = reach.map(|r| r + ENCLOSING_SLACK);
     let apex_z = f64::max(
         (c_right + c_left) / (left + right),
         (c_up + c_down) / (up + down),
@@ -236,8 +246,6 @@ pub fn enclosing_view(orientation: DQuat, origin: DVec3, frusta: &[[DVec3; 8]]) 
     // Any x in [c_right - r z, l z - c_left] works; the middle keeps slack on both sides.
     let apex_x = 0.5 * ((c_right - right * apex_z) + (left * apex_z - c_left));
     let apex_y = 0.5 * ((c_up - up * apex_z) + (down * apex_z - c_down));
-    let z_nearest = corners().map(|p| p.z).fold(f64::MIN, f64::max);
-    let z_farthest = corners().map(|p| p.z).fold(f64::MAX, f64::min);
     let near = round_down(apex_z - z_nearest);
     let far = round_up(apex_z - z_farthest + ENCLOSING_SLACK);
     if !(near > 0.0 && far > near && apex_z.is_finite()) {

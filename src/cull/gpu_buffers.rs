@@ -12,6 +12,7 @@ use crate::records::{storage_bytes, uniform_bytes};
 use crate::shaders::{SPAN, WORKGROUP_SIZE, dispatch_size};
 use encase::ShaderType;
 use glam::Vec4;
+use std::sync::Arc;
 
 /// The uniform the cull passes read besides the display context (`CullParams` in
 /// `wgsl/shared/records.wgsl`); encase lays it out as WGSL does.
@@ -263,12 +264,12 @@ impl CullScene {
 
     /// Writes this frame's hidden areas, one per display slot (in order; `None` drops
     /// nothing). Returns the bytes written; nothing where no display's cull drops by one.
-    pub fn write_hidden(&self, queue: &impl Upload, areas: &[Option<HiddenArea>]) -> u64 {
+    pub fn write_hidden(&self, queue: &impl Upload, areas: &[Option<Arc<HiddenArea>>]) -> u64 {
         if self.hidden_slots == 0 {
             return 0;
         }
         let records: Vec<HiddenArea> = (areas.iter().take(self.hidden_slots as usize))
-            .map(|a| a.unwrap_or(HiddenArea::NONE))
+            .map(|a| a.as_deref().copied().unwrap_or(HiddenArea::NONE))
             .collect();
         let bytes = storage_bytes(&records);
         queue.write_buffer(&self.hidden, 0, &bytes);

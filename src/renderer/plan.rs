@@ -145,7 +145,7 @@ pub struct FramePlan {
     /// Per display: with the visibility mask on the GPU-driven path, the lens's hidden
     /// area its cull drops by (the display's own cull and its late phase; never its far
     /// layer's or its insets').
-    pub hidden: Vec<Option<HiddenArea>>,
+    pub hidden: Vec<Option<Arc<HiddenArea>>>,
 }
 
 impl FramePlan {
@@ -196,13 +196,7 @@ impl FramePlan {
         };
         let inset_cull = options.inset_cull && options.mode == StereoMode::Instanced;
         let hidden = hidden_areas(rig, &resolved, options, inset_cull);
-        let displays = display_contexts(rig, &resolved, options.mode, &far, inset_cull);
-        let displays: Vec<DisplayContext> = (displays.into_iter().zip(&hidden))
-            .map(|(c, h)| DisplayContext {
-                hidden: u32::from(h.is_some()),
-                ..c
-            })
-            .collect();
+        let displays = display_contexts(rig, &resolved, options.mode, (&far, &hidden), inset_cull);
         let culls = culls(&resolved, options.mode, (&displays, &hidden), &far);
         let insets: Vec<Option<DisplayContext>> = (displays.iter().zip(&resolved.displays))
             .map(|(context, r)| {
@@ -287,42 +281,34 @@ fn inset_job(i: usize, context: &DisplayContext) -> PlannedCull {
     }
 }
 
-/// Each display's context; a display with a far plan keeps its near instances only, and
-/// with `inset_cull` a foveated display's own cull draws its outer pair only.
+/// Each display's context; a display with a far plan keeps its near instances only, one
+/// with a hidden area culls by it, and with `inset_cull` a foveated display's own cull
+/// draws its outer pair only. (Contexts are large: each is built once, in place.)
 fn display_contexts(
     rig: &Rig,
     resolved: &ResolvedRig,
     mode: StereoMode,
-    far: &[Option<FarPlan>],
+    (far, hidden): (&[Option<FarPlan>], &[Option<Arc<HiddenArea>>]),
     inset_cull: bool,
 ) -> Vec<DisplayContext> {
-    rig.displays
-        .iter()
-        .zip(&resolved.displays)
-        .zip(far)
-        .enumerate()
-        .map(|(i, ((d, r), far))| {
-            let views = if inset_cull {
-                d.views().min(2)
-            } else {
-                d.views()
-            };
-            let per_object = instances_per_object(mode, views);
-            let layered = mode == StereoMode::Multiview && d.stereo;
-            let context = DisplayContext {
-                cull_slot: i as u32,
-                ..DisplayContext::new(r, &d.layout_in(layered), per_object)
-            };
-            match far {
-                Some(plan) => DisplayContext {
-                    split_keep: 1,
-                    split_distance: plan.distance,
-                    ..context
-                },
-                None => context,
-            }
-        })
-        .collect()
+    let mut contexts = Vec::with_capacity(rig.displays.len());
+    for (i, (d, r)) in rig.displays.iter().zip(&resolved.displays).enumerate() {
+        let views = match inset_cull {
+            true => d.views().min(2),
+            false => d.views(),
+        };
+        let layered = mode == StereoMode::Multiview && d.stereo;
+        let per_object = instances_per_object(mode, views);
+        let mut context = DisplayContext::new(r, &d.layout_in(layered), per_object);
+        context.cull_slot = i as u32;
+        context.hidden = u32::from(hidden[i].is_some());
+        if let Some(plan) = &far[i] {
+            context.split_keep = 1;
+            context.split_distance = plan.distance;
+        }
+        contexts.push(context);
+    }
+    contexts
 }
 
 /// Each display's hidden area where its cull drops by it: the visibility mask on, a
@@ -334,7 +320,7 @@ fn hidden_areas(
     resolved: &ResolvedRig,
     options: &RendererOptions,
     inset_cull: bool,
-) -> Vec<Option<HiddenArea>> {
+) -> Vec<Option<Arc<HiddenArea>>> {
     let masked = options.visibility_mask && !options.mode.per_instance();
     (rig.displays.iter().zip(&resolved.displays))
         .map(|(d, r)| {
@@ -344,7 +330,7 @@ fn hidden_areas(
             }
             let layered = options.mode == StereoMode::Multiview && d.stereo;
             let [_, _, w, h] = d.layout_in(layered).viewports()[0];
-            HiddenArea::new(&r.eyes[..r.eyes.len().min(2)], &mask.views, (w, h))
+            HiddenArea::new(&r.eyes[..r.eyes.len().min(2)], &mask.views, (w, h)).map(Arc::new)
         })
         .collect()
 }
@@ -356,7 +342,7 @@ fn hidden_areas(
 fn culls(
     resolved: &ResolvedRig,
     mode: StereoMode,
-    (contexts, hidden): (&[DisplayContext], &[Option<HiddenArea>]),
+    (contexts, hidden): (&[DisplayContext], &[Option<Arc<HiddenArea>>]),
     far: &[Option<FarPlan>],
 ) -> Vec<PlannedCull> {
     let mut culls = Vec::new();
@@ -380,7 +366,7 @@ fn culls(
                 view: CullView::Display(i),
                 job: CullJob {
                     split,
-                    hidden: hidden[i].map(Arc::new),
+                    hidden: hidden[i].clone(),
                     sort_origin: context.sort_origin(),
                     ..r.cull_job(context.instances_per_object)
                 },
