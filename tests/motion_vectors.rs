@@ -255,6 +255,13 @@ fn moved_spinning_and_new_instances_move_as_they_did() {
         (from_stale - still).length() > 5.0,
         "the cases differ: {from_stale}"
     );
+
+    // A frame without edits after them: the moved instance and the newcomer stand
+    // still (the copy of the records is taken only when they change, so this fails if
+    // the previous records were left from before the moves).
+    let after = frames.draw(&view, 0.65);
+    let counts = matches(&after, &[STILL, &rigid(spun_at(0.6), spun_at(0.65))]);
+    assert!(counts[0] > 200 && counts[1] > 100, "{counts:?}");
 }
 
 /// glTF node animation posed on the GPU: each posed instance moves from its pose at the

@@ -116,6 +116,10 @@ pub struct ProfileArgs {
     /// `multiview`): two runs compare it.
     #[arg(long, value_enum, default_value = "off")]
     pub visibility_mask: Switch,
+    /// Each display's draw also writes motion vectors (`instanced`, without the far
+    /// layer or foveation): two runs compare it.
+    #[arg(long, value_enum, default_value = "off")]
+    pub motion_vectors: Switch,
     /// The frame-level coarse cull, one configuration each (`on,off` compares them).
     #[arg(long, value_delimiter = ',', value_enum, default_value = "auto")]
     pub coarse_cull: Vec<CoarseMode>,
@@ -180,6 +184,7 @@ pub(super) fn measure(
         far_threshold_px: args.far_threshold,
         inset_cull: inset,
         visibility_mask: args.visibility_mask.on(),
+        motion_vectors: args.motion_vectors.on(),
         cull_floor: timer.is_some() && cull == CullMode::Gpu && !mode.per_instance(),
         occlusion,
         posing,

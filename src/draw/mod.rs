@@ -63,6 +63,17 @@ pub struct Previous {
     pub vertices: Option<wgpu::Buffer>,
     /// Group 3 of the draw pipelines with motion vectors.
     pub bind_group: wgpu::BindGroup,
+    /// Whether the records, and the vertices, changed since they were last copied:
+    /// a frame that rewrites neither needs no copy (the copies already hold what it
+    /// draws), which spares a static scene a copy of every record per frame.
+    stale: Stale,
+}
+
+/// What [`Previous`] must copy again before the next frame's passes.
+#[derive(Clone, Copy, Debug)]
+struct Stale {
+    records: bool,
+    vertices: bool,
 }
 
 impl DrawScene {
@@ -131,15 +142,31 @@ impl DrawScene {
 
     /// With motion vectors, copies what the frame's passes are about to rewrite (the
     /// records, and the vertices where skins or morph targets rewrite them) into
-    /// [`Previous`]: record first in a frame.
-    pub fn keep_previous(&self, encoder: &mut wgpu::CommandEncoder) {
-        let Some(previous) = &self.previous else {
+    /// [`Previous`], where they changed since the last copy: record first in a frame,
+    /// and submit what follows (a copy left unsubmitted is taken as done).
+    pub fn keep_previous(&mut self, encoder: &mut wgpu::CommandEncoder) {
+        let Some(previous) = &mut self.previous else {
             return;
         };
-        let size = self.instances.size();
-        encoder.copy_buffer_to_buffer(&self.instances, 0, &previous.instances, 0, size);
-        if let Some(vertices) = &previous.vertices {
+        if previous.stale.records {
+            let size = self.instances.size();
+            encoder.copy_buffer_to_buffer(&self.instances, 0, &previous.instances, 0, size);
+        }
+        if let (Some(vertices), true) = (&previous.vertices, previous.stale.vertices) {
             encoder.copy_buffer_to_buffer(&self.vertices, 0, vertices, 0, vertices.size());
+        }
+        previous.stale = Stale {
+            records: false,
+            vertices: false,
+        };
+    }
+
+    /// Marks the records (a scatter, posing, a reload) and the vertices (skinning,
+    /// morph targets) as rewritten since [`DrawScene::keep_previous`] last copied them.
+    pub fn rewritten(&mut self, records: bool, vertices: bool) {
+        if let Some(previous) = &mut self.previous {
+            previous.stale.records |= records;
+            previous.stale.vertices |= vertices;
         }
     }
 }
@@ -181,6 +208,10 @@ impl Previous {
             instances,
             vertices,
             bind_group,
+            stale: Stale {
+                records: true,
+                vertices: true,
+            },
         }
     }
 }

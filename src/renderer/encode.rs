@@ -136,7 +136,7 @@ impl Renderer {
         rec: &mut Recorder,
     ) -> FrameStats {
         self.uploads.record(encoder);
-        self.path.core().draw_scene.keep_previous(encoder);
+        self.path.core_mut().draw_scene.keep_previous(encoder);
         let (scattered, cpu_staging) = self.scatter.encode(encoder);
         if scattered > 0 {
             rec.log(PassRecord::frame("scatter"));
@@ -154,6 +154,7 @@ impl Renderer {
             Some(skin) => skin.encode(encoder, rec),
             None => 0,
         };
+        (self.path.core_mut().draw_scene).rewritten(scattered + posed > 0, skinned + morphed > 0);
         let coarse = match &self.path {
             Path::Indirect(p) => p.encode_frame(encoder, rec),
             Path::Classic(_) => 0,

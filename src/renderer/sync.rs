@@ -160,6 +160,7 @@ impl Renderer {
             0,
             bytemuck::cast_slice(&records),
         );
+        core.draw_scene.rewritten(true, false);
         let layout_bytes = core.culler.reload(queue, layout);
         SyncStats {
             bytes_uploaded: std::mem::size_of_val(&records[..]) as u64 + layout_bytes,
