@@ -657,10 +657,21 @@ fn a_mesh_added_to_a_live_scene_syncs_before_and_after_its_instances() {
     for &h in live.handles().iter().step_by(9) {
         live.remove(h).unwrap();
     }
+    // One freed slot taken again: its generation goes up.
+    live.insert(random_instance(&mut rng, 0)).unwrap();
     let shape = stereocull::shapes::cuboid(Vec3::splat(0.3));
     let mesh = live.add_mesh("late box", &shape.vertices, &shape.indices);
     let synced = renderer.sync(&gpu.device, &gpu.queue, &mut live).unwrap();
     assert!(synced.reallocated, "{synced:?}");
+    // The new buffers start from the live scene's records, generations included.
+    let want = live.instance_records();
+    assert!(want.iter().any(|r| r.generation > 0));
+    let on_gpu = (renderer.diagnostics(&gpu.device, &gpu.queue))
+        .instance_records()
+        .unwrap();
+    let bytes =
+        |r: &[stereocull::records::InstanceRecord]| bytemuck::cast_slice::<_, u8>(r).to_vec();
+    assert_eq!(bytes(&on_gpu[..want.len()]), bytes(&want));
     frame_matches_reference(&gpu, &mut renderer, &live, &rig);
     for _ in 0..500 {
         live.insert(random_instance(&mut rng, mesh)).unwrap();

@@ -18,7 +18,7 @@ use crate::buffers::{init_buffer, init_buffer_with_room, storage_buffer};
 use crate::cull::targets::{COUNTS_BIN_OFFSET, CullTargets};
 use crate::error::Result;
 use crate::materials::{self, GpuMaterials};
-use crate::records::{DrawArgs, InstanceRecord, instance_records};
+use crate::records::{DrawArgs, InstanceRecord};
 use crate::scene::{Scene, Shading};
 use crate::shaders::Bound;
 use crate::shaders::{
@@ -77,12 +77,13 @@ struct Stale {
 }
 
 impl DrawScene {
-    /// Uploads `scene` with room for `slots` instance records. Fails when the scene's
-    /// materials do not fit together or exceed the device.
+    /// Uploads `scene`, its instances as `records` (one per slot in use), with room for
+    /// `slots` instance records. Fails when the scene's materials do not fit together
+    /// or exceed the device.
     pub fn new(
         device: &wgpu::Device,
         drawer: &Drawer,
-        (scene, shadow_group): (&Scene, &wgpu::BindGroup),
+        (scene, records, shadow_group): (&Scene, &[InstanceRecord], &wgpu::BindGroup),
         slots: u32,
     ) -> Result<DrawScene> {
         let init =
@@ -95,7 +96,7 @@ impl DrawScene {
         let instances = init_buffer_with_room(
             device,
             "stereocull.instances",
-            bytemuck::cast_slice(&instance_records(scene)),
+            bytemuck::cast_slice(records),
             DrawScene::BYTES_PER_INSTANCE * slots as u64,
             // COPY_SRC: read back by diagnostics (`instance_records`), copied to
             // `Previous` with motion vectors.

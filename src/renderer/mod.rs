@@ -84,7 +84,7 @@ use crate::error::{Error, Result};
 use crate::motion::PreviousFrame;
 
 use crate::places::Places;
-use crate::records::CullLayout;
+use crate::records::{CullLayout, instance_records};
 use crate::rig::Rig;
 use crate::scatter::{ScatterTargets, Scatters};
 use crate::scene::Scene;
@@ -303,8 +303,10 @@ impl Renderer {
         }
         let lit = (&lighting.lights, &lighting.views, &lighting.clusters);
         let shadow_map = ShadowMap::new(device, options.shadow_size().unwrap_or(1), lit);
+        let records = instance_records(scene);
         let inputs = PathInputs {
             scene,
+            records: &records,
             layout: CullLayout::with_places(scene, &places),
             plan: &plan,
             frame: &frame,

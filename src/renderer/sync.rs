@@ -83,14 +83,14 @@ impl Renderer {
         let (scene, places) = (live.scene(), live.places());
         let needed = (scene.instances.len() as u32).max(places.len());
         if changes.geometry || needed > self.slots {
-            return self.reallocate((device, queue), live, needed);
+            return self.reallocate(device, live, needed);
         }
         if changes.restructured {
             let layout = CullLayout::with_places(scene, places);
             // A blended bin's range has an entry per place of its meshes.
             let culler = &self.path.core().culler;
             if culler.bins() != layout.bin_ranges(self.options.lod_levels()) {
-                return self.reallocate((device, queue), live, needed);
+                return self.reallocate(device, live, needed);
             }
             return Ok(self.reload(queue, live, layout));
         }
@@ -110,7 +110,7 @@ impl Renderer {
     /// Uploads everything again into new buffers with room for half as much more.
     fn reallocate(
         &mut self,
-        (device, queue): (&wgpu::Device, &wgpu::Queue),
+        device: &wgpu::Device,
         live: &LiveScene,
         needed: u32,
     ) -> Result<SyncStats> {
@@ -118,8 +118,11 @@ impl Renderer {
         check_device(device, scene, &self.options)?;
         let room = needed + needed / 2;
         let plan = FramePlan::new(&self.rig, &self.options, self.coarse, 0.0)?;
+        // The records with their slots' generations (a reused slot's went up).
+        let records = live.instance_records();
         let inputs = PathInputs {
             scene,
+            records: &records,
             layout: CullLayout::with_places(scene, places),
             plan: &plan,
             frame: &self.frame,
@@ -137,11 +140,7 @@ impl Renderer {
         let passes = (self.path).frame_passes(device, made, (&self.frame, windows), posed)?;
         (self.skin, self.morph, self.pose, self.shadow) =
             (passes.skin, passes.morph, passes.pose, passes.shadow);
-        // The new buffers hold generation 0; a reused slot's generation goes up too.
-        let records = live.instance_records();
-        let instances = &self.path.core().draw_scene.instances;
-        queue.write_buffer(instances, 0, bytemuck::cast_slice(&records));
-        let bytes = 2 * std::mem::size_of_val(&records[..]) as u64;
+        let bytes = std::mem::size_of_val(&records[..]) as u64;
         Ok(SyncStats {
             bytes_uploaded: bytes,
             reloaded: true,

@@ -67,6 +67,7 @@ impl ClassicPath {
     ) -> Result<ClassicPath> {
         let PathInputs {
             scene,
+            records,
             layout,
             plan,
             frame,
@@ -98,7 +99,7 @@ impl ClassicPath {
             hidden_slots: 0,
         };
         let culler = Culler::new(device, options.cull, layout, shape, windows);
-        let draw_scene = DrawScene::new(device, &drawer, (scene, shadow_group), slots)?;
+        let draw_scene = DrawScene::new(device, &drawer, (scene, records, shadow_group), slots)?;
         let drawing = Drawing {
             drawer: &drawer,
             scene: &draw_scene,

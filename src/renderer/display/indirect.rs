@@ -63,6 +63,7 @@ impl IndirectPath {
     ) -> Result<IndirectPath> {
         let PathInputs {
             scene,
+            records,
             layout,
             plan,
             frame,
@@ -110,7 +111,7 @@ impl IndirectPath {
             options.shadow_size(),
             windows,
         );
-        let draw_scene = DrawScene::new(device, &drawer, (scene, shadow_group), slots)?;
+        let draw_scene = DrawScene::new(device, &drawer, (scene, records, shadow_group), slots)?;
         let drawing = Drawing {
             drawer: &drawer,
             scene: &draw_scene,

@@ -11,7 +11,7 @@ pub(in crate::renderer) mod indirect;
 pub(in crate::renderer) mod occlusion;
 
 use crate::draw::{DrawScene, Drawer, Drawing};
-use crate::records::CullLayout;
+use crate::records::{CullLayout, InstanceRecord};
 use crate::renderer::culler::Culler;
 use crate::renderer::options::RendererOptions;
 use crate::renderer::plan::FramePlan;
@@ -20,6 +20,9 @@ use crate::scene::Scene;
 /// The scene, its cull layout, the frame plan of the rig as made, and the options.
 pub(in crate::renderer) struct PathInputs<'a> {
     pub(in crate::renderer) scene: &'a Scene,
+    /// The instance records the draw starts from: the scene's, or a live scene's (with
+    /// its slots' generations) when a sync reallocates.
+    pub(in crate::renderer) records: &'a [InstanceRecord],
     /// The scene's instances at their places of the cull order.
     pub(in crate::renderer) layout: CullLayout,
     /// The rig as made: its displays, coarse cull and far layer sizes.
