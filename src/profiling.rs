@@ -19,11 +19,22 @@ pub struct GpuTimer {
     /// Vertex-shader invocations and clipper primitives per draw pass, where the
     /// device has `PIPELINE_STATISTICS_QUERY`.
     statistics: Option<Statistics>,
+    /// Samples that passed the depth test in the display draws (occlusion queries).
+    samples: Counts,
     /// The last frame read, as wgpu-profiler's scope tree (for traces).
     last: Vec<GpuTimerQueryResult>,
 }
 
 struct Statistics {
+    queries: wgpu::QuerySet,
+    resolved: wgpu::Buffer,
+    capacity: u32,
+    used: u32,
+}
+
+/// Occlusion queries: one per display draw pass, each from its first scene draw (after
+/// the lens's mask) to its end.
+struct Counts {
     queries: wgpu::QuerySet,
     resolved: wgpu::Buffer,
     capacity: u32,
@@ -47,6 +58,11 @@ pub struct FrameQueries {
     /// Fragment-shader invocations: the pixels (samples, under per-sample shading)
     /// shaded, which a foveated display's smaller views cut.
     pub fragment_invocations: Option<u64>,
+    /// Samples of the display draws that passed the depth test (occlusion queries,
+    /// from each pass's first scene draw, so the lens's mask is not counted): what a
+    /// GPU that tests depth before shading shades of opaque surfaces, where lavapipe's
+    /// `fragment_invocations` count before its depth test.
+    pub samples_passed: u64,
 }
 
 /// The statistics gathered; query results list them in bit order.
@@ -93,6 +109,21 @@ impl GpuTimer {
             profiler,
             period: queue.get_timestamp_period(),
             statistics,
+            samples: Counts {
+                queries: device.create_query_set(&wgpu::QuerySetDescriptor {
+                    label: Some("stereocull.samples_passed"),
+                    ty: wgpu::QueryType::Occlusion,
+                    count: passes,
+                }),
+                resolved: device.create_buffer(&wgpu::BufferDescriptor {
+                    label: Some("stereocull.samples_passed"),
+                    size: 8 * passes as u64,
+                    usage: wgpu::BufferUsages::QUERY_RESOLVE | wgpu::BufferUsages::COPY_SRC,
+                    mapped_at_creation: false,
+                }),
+                capacity: passes,
+                used: 0,
+            },
             last: Vec::new(),
         })
     }
@@ -142,10 +173,40 @@ impl GpuTimer {
         }
     }
 
+    /// The occlusion query set a draw pass's descriptor names, for
+    /// [`GpuTimer::begin_samples`] in that pass.
+    pub fn sample_queries(&self) -> &wgpu::QuerySet {
+        &self.samples.queries
+    }
+
+    /// Starts counting the samples that pass the depth test in `pass` (begun with
+    /// [`GpuTimer::sample_queries`]); returns whether it did (then
+    /// [`GpuTimer::end_samples`] must follow in the same pass).
+    pub fn begin_samples(&mut self, pass: &mut wgpu::RenderPass) -> bool {
+        let s = &mut self.samples;
+        if s.used == s.capacity {
+            return false;
+        }
+        pass.begin_occlusion_query(s.used);
+        s.used += 1;
+        true
+    }
+
+    /// Ends the count [`GpuTimer::begin_samples`] began in `pass`, if it did.
+    pub fn end_samples(pass: &mut wgpu::RenderPass, begun: bool) {
+        if begun {
+            pass.end_occlusion_query();
+        }
+    }
+
     /// Records the resolve of this frame's queries; call once, after the last pass.
     pub fn resolve(&mut self, encoder: &mut wgpu::CommandEncoder) {
         self.profiler.resolve_queries(encoder);
         if let Some(s) = self.statistics.as_ref().filter(|s| s.used > 0) {
+            encoder.resolve_query_set(&s.queries, 0..s.used, &s.resolved, 0);
+        }
+        let s = &self.samples;
+        if s.used > 0 {
             encoder.resolve_query_set(&s.queries, 0..s.used, &s.resolved, 0);
         }
     }
@@ -185,6 +246,12 @@ impl GpuTimer {
             frame.triangles_submitted = sum(1);
             frame.clipper_primitives = sum(2);
             frame.fragment_invocations = sum(3);
+            s.used = 0;
+        }
+        let s = &mut self.samples;
+        if s.used > 0 {
+            let counts: Vec<u64> = read_pod(device, queue, &s.resolved, 8 * s.used as u64)?;
+            frame.samples_passed = counts.iter().sum();
             s.used = 0;
         }
         Ok(frame)

@@ -475,15 +475,34 @@ fn render_writes_the_compositor_depth_and_its_contract() {
 /// CPU twin's count) and the fragment invocations beside them; off, none are masked.
 #[test]
 fn render_reports_masked_pixels_and_fragments() {
-    let masked = |on: &str| {
+    let frame = |on: &str| {
         let (_dir, stats) = render_stats(&["--visibility-mask", on, "--msaa", "1"]);
-        assert!(stats["frame"].get("fragment_invocations").is_some());
-        stats["frame"]["masked_pixels"].as_u64().unwrap()
+        let frame = &stats["frame"];
+        let count = |key: &str| frame[key].as_u64();
+        (
+            count("masked_pixels").unwrap(),
+            count("fragment_invocations"),
+            count("samples_passed"),
+        )
     };
     let mask = stereocull::rig::VisibilityMask::headset();
     let expected: u64 = (0..2).map(|v| mask.hidden_pixels(v, (40, 32))).sum();
-    assert_eq!((masked("on"), masked("off")), (expected, 0));
+    let (on, off) = (frame("on"), frame("off"));
+    assert_eq!((on.0, off.0), (expected, 0));
     assert!(expected > 0);
+    // The samples passing depth: the scene's, not the mask's; fewer with the mask (the
+    // scene covers some of the hidden area), and never more than the fragments shaded
+    // (one sample a fragment without MSAA).
+    let (Some(passed_on), Some(passed_off)) = (on.2, off.2) else {
+        panic!("samples_passed is reported: {on:?} {off:?}");
+    };
+    assert!(
+        0 < passed_on && passed_on < passed_off,
+        "{passed_on} {passed_off}"
+    );
+    if let (Some(shaded_on), Some(shaded_off)) = (on.1, off.1) {
+        assert!(passed_on <= shaded_on && passed_off <= shaded_off);
+    }
 }
 
 /// `render --motion-vectors on` (4x MSAA, resolved) draws the previous frame at

@@ -277,6 +277,7 @@ pub(super) fn measure(
                 .push(q.passes.iter().map(|(_, v)| v).sum::<f64>() - of("cull_floor"));
             samples.statistics = q.vertex_invocations.zip(q.clipper_primitives);
             samples.fragments = q.fragment_invocations;
+            samples.passed = Some(q.samples_passed);
             samples.triangles = q.triangles_submitted;
         }
         if let Some(t) = timer.as_deref() {
@@ -336,6 +337,7 @@ pub(super) fn measure(
         vertex_invocations: samples.statistics.map(|s| s.0),
         clipper_primitives: samples.statistics.map(|s| s.1),
         fragment_invocations: samples.fragments,
+        samples_passed: samples.passed,
         target_pixels: rig.displays.iter().map(|d| d.layout().pixels()).sum(),
         indirect_validation: gpu.indirect_validation(),
         moving_percent: edits.moving,
@@ -363,6 +365,7 @@ pub(super) fn measure(
 #[derive(Default)]
 struct Samples {
     fragments: Option<u64>,
+    passed: Option<u64>,
     cpu: Vec<f64>,
     sync: Vec<f64>,
     triangles: Option<u64>,

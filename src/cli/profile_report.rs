@@ -61,6 +61,9 @@ pub struct Row {
     pub clipper_primitives: Option<u64>,
     /// Fragment-shader invocations of the draw passes (last frame): pixels shaded.
     pub fragment_invocations: Option<u64>,
+    /// Samples of the display draws that passed the depth test (last frame; occlusion
+    /// queries): what a GPU testing depth before shading shades. `None` untimed.
+    pub samples_passed: Option<u64>,
     /// Pixels of every display's views together (target memory scales with it).
     pub target_pixels: u64,
     pub indirect_validation: bool,

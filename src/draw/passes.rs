@@ -32,7 +32,10 @@ pub fn begin_pass<'e>(
     target: Attachments,
     clear: bool,
     multiview_mask: Option<NonZeroU32>,
-    timestamp_writes: Option<wgpu::RenderPassTimestampWrites>,
+    (timestamp_writes, occlusion_query_set): (
+        Option<wgpu::RenderPassTimestampWrites>,
+        Option<&wgpu::QuerySet>,
+    ),
 ) -> wgpu::RenderPass<'e> {
     let (color_load, depth_load, motion_load) = if clear {
         let still = wgpu::Color::TRANSPARENT;
@@ -68,7 +71,7 @@ pub fn begin_pass<'e>(
             stencil_ops: None,
         }),
         timestamp_writes,
-        occlusion_query_set: None,
+        occlusion_query_set,
         multiview_mask,
     })
 }

@@ -84,6 +84,8 @@ pub(super) struct Recorder<'a> {
 pub(super) struct OpenPass {
     scope: Option<GpuProfilerQuery>,
     what: PassRecord,
+    /// Whether it counts the samples passing depth ([`Recorder::count_samples`]).
+    samples: bool,
 }
 
 impl OpenPass {
@@ -138,7 +140,11 @@ impl<'a> Recorder<'a> {
             (Some(t), Some(parent)) => Some(t.pass(what.name, parent, encoder)),
             _ => None,
         };
-        OpenPass { scope, what }
+        OpenPass {
+            scope,
+            what,
+            samples: false,
+        }
     }
 
     /// One compute pass, opened as `what`, for a frame pass or a display's.
@@ -193,6 +199,13 @@ impl<'a> Recorder<'a> {
             .and_then(|t| t.begin_statistics(pass));
     }
 
+    /// Counts the samples passing the depth test in draw pass `pass` of `open` (begun
+    /// by [`begin_draw_pass`]), when timing, from here to [`Recorder::close_render`]:
+    /// called before the scene's draws, after the lens's mask.
+    pub(super) fn count_samples(&mut self, pass: &mut wgpu::RenderPass, open: &mut OpenPass) {
+        open.samples = (self.timer.as_deref_mut()).is_some_and(|t| t.begin_samples(pass));
+    }
+
     /// Ends render pass `pass` of `open`: its statistics and scope closed, the pass
     /// logged.
     pub(super) fn close_render(
@@ -201,6 +214,7 @@ impl<'a> Recorder<'a> {
         mut pass: wgpu::RenderPass<'static>,
         open: OpenPass,
     ) {
+        GpuTimer::end_samples(&mut pass, open.samples);
         GpuTimer::end_statistics(&mut pass, open.what.statistics.is_some());
         drop(pass);
         self.close(encoder, open);
@@ -241,9 +255,18 @@ pub(super) fn begin_draw_pass(
     (target, clear, multiview_mask): (&TargetViews, bool, Option<std::num::NonZeroU32>),
     open: &mut OpenPass,
 ) -> wgpu::RenderPass<'static> {
-    let writes = open.render_writes();
-    let mut pass =
-        begin_pass(encoder, target.attachments(), clear, multiview_mask, writes).forget_lifetime();
+    let queries = (
+        open.render_writes(),
+        rec.timer.as_deref().map(GpuTimer::sample_queries),
+    );
+    let mut pass = begin_pass(
+        encoder,
+        target.attachments(),
+        clear,
+        multiview_mask,
+        queries,
+    )
+    .forget_lifetime();
     rec.count(&mut pass, open);
     pass
 }

@@ -176,6 +176,7 @@ impl ClassicPath {
                 .map(|e| {
                     let mut open = rec.open(encoder, PassRecord::eye("draw", index, e));
                     let mut pass = begin_draw_pass(encoder, rec, (target, e == 0, None), &mut open);
+                    rec.count_samples(&mut pass, &mut open);
                     let calls = self.draw_eye(&mut pass, index, e);
                     rec.close_render(encoder, pass, open);
                     calls
@@ -184,6 +185,7 @@ impl ClassicPath {
             _ => {
                 let mut open = rec.open(encoder, PassRecord::display("draw", index));
                 let mut pass = begin_draw_pass(encoder, rec, (target, true, None), &mut open);
+                rec.count_samples(&mut pass, &mut open);
                 let calls = self.draw(&mut pass, index);
                 rec.close_render(encoder, pass, open);
                 calls

@@ -210,6 +210,8 @@ impl IndirectPath {
             pipeline.draw(&mut pass, mask);
             draw_calls += 1;
         }
+        // The mask's own samples are not the scene's.
+        rec.count_samples(&mut pass, &mut open);
         draw_calls += self.draw_views(&mut pass, index, composite);
         rec.close_render(encoder, pass, open);
         let pyramids = match &self.displays[index].late {

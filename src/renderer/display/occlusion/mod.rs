@@ -165,6 +165,7 @@ impl LatePhase {
         let mut open = rec.open(encoder, PassRecord::display("late_draw", self.index));
         let mask = self.key.multiview_mask();
         let mut pass = begin_draw_pass(encoder, rec, (target, false, mask), &mut open);
+        rec.count_samples(&mut pass, &mut open);
         let composite = far.map_or(0, |(far, layer)| far.layers.composite(&mut pass, layer));
         let with = BinPipelines::Draw(self.key, own);
         let calls = composite + self.view.draw(&mut pass, drawing, with);
