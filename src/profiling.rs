@@ -61,8 +61,9 @@ pub struct FrameQueries {
     /// Samples of the display draws that passed the depth test (occlusion queries,
     /// from each pass's first scene draw, so the lens's mask is not counted): what a
     /// GPU that tests depth before shading shades of opaque surfaces, where lavapipe's
-    /// `fragment_invocations` count before its depth test.
-    pub samples_passed: u64,
+    /// `fragment_invocations` count before its depth test. Multiview passes are not
+    /// counted; `None` when no pass was.
+    pub samples_passed: Option<u64>,
 }
 
 /// The statistics gathered; query results list them in bit order.
@@ -251,7 +252,7 @@ impl GpuTimer {
         let s = &mut self.samples;
         if s.used > 0 {
             let counts: Vec<u64> = read_pod(device, queue, &s.resolved, 8 * s.used as u64)?;
-            frame.samples_passed = counts.iter().sum();
+            frame.samples_passed = Some(counts.iter().sum());
             s.used = 0;
         }
         Ok(frame)

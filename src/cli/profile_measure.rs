@@ -277,7 +277,7 @@ pub(super) fn measure(
                 .push(q.passes.iter().map(|(_, v)| v).sum::<f64>() - of("cull_floor"));
             samples.statistics = q.vertex_invocations.zip(q.clipper_primitives);
             samples.fragments = q.fragment_invocations;
-            samples.passed = Some(q.samples_passed);
+            samples.passed = q.samples_passed;
             samples.triangles = q.triangles_submitted;
         }
         if let Some(t) = timer.as_deref() {

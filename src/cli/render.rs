@@ -202,7 +202,7 @@ fn frame_json(
 ) -> serde_json::Value {
     let mut frame = serde_json::json!(stats);
     frame["fragment_invocations"] = serde_json::json!(queries.and_then(|q| q.fragment_invocations));
-    frame["samples_passed"] = serde_json::json!(queries.map(|q| q.samples_passed));
+    frame["samples_passed"] = serde_json::json!(queries.and_then(|q| q.samples_passed));
     frame["masked_pixels"] = serde_json::json!(masked_pixels);
     frame
 }

@@ -86,6 +86,9 @@ pub(super) struct OpenPass {
     what: PassRecord,
     /// Whether it counts the samples passing depth ([`Recorder::count_samples`]).
     samples: bool,
+    /// A multiview draw pass: a query there spans one index per view, which the
+    /// timer's sets do not reserve, so it counts no samples.
+    multiview: bool,
 }
 
 impl OpenPass {
@@ -144,6 +147,7 @@ impl<'a> Recorder<'a> {
             scope,
             what,
             samples: false,
+            multiview: false,
         }
     }
 
@@ -201,9 +205,11 @@ impl<'a> Recorder<'a> {
 
     /// Counts the samples passing the depth test in draw pass `pass` of `open` (begun
     /// by [`begin_draw_pass`]), when timing, from here to [`Recorder::close_render`]:
-    /// called before the scene's draws, after the lens's mask.
+    /// called before the scene's draws, after the lens's mask. Multiview passes are
+    /// not counted.
     pub(super) fn count_samples(&mut self, pass: &mut wgpu::RenderPass, open: &mut OpenPass) {
-        open.samples = (self.timer.as_deref_mut()).is_some_and(|t| t.begin_samples(pass));
+        let timer = self.timer.as_deref_mut().filter(|_| !open.multiview);
+        open.samples = timer.is_some_and(|t| t.begin_samples(pass));
     }
 
     /// Ends render pass `pass` of `open`: its statistics and scope closed, the pass
@@ -255,6 +261,7 @@ pub(super) fn begin_draw_pass(
     (target, clear, multiview_mask): (&TargetViews, bool, Option<std::num::NonZeroU32>),
     open: &mut OpenPass,
 ) -> wgpu::RenderPass<'static> {
+    open.multiview = multiview_mask.is_some();
     let queries = (
         open.render_writes(),
         rec.timer.as_deref().map(GpuTimer::sample_queries),
