@@ -18,27 +18,78 @@ pub struct GpuTimer {
     period: f32,
     /// Vertex-shader invocations and clipper primitives per draw pass, where the
     /// device has `PIPELINE_STATISTICS_QUERY`.
-    statistics: Option<Statistics>,
-    /// Samples that passed the depth test in the display draws (occlusion queries).
-    samples: Counts,
+    statistics: Option<Queries>,
+    /// Samples that passed the depth test in the display draws (occlusion queries),
+    /// one per display draw pass, each from its first scene draw (after the lens's
+    /// mask) to its end.
+    samples: Queries,
     /// The last frame read, as wgpu-profiler's scope tree (for traces).
     last: Vec<GpuTimerQueryResult>,
 }
 
-struct Statistics {
+/// One kind of query, one per draw pass of a frame, and the buffer they resolve into.
+struct Queries {
     queries: wgpu::QuerySet,
     resolved: wgpu::Buffer,
+    /// Counts each query writes.
+    values: usize,
     capacity: u32,
     used: u32,
 }
 
-/// Occlusion queries: one per display draw pass, each from its first scene draw (after
-/// the lens's mask) to its end.
-struct Counts {
-    queries: wgpu::QuerySet,
-    resolved: wgpu::Buffer,
-    capacity: u32,
-    used: u32,
+impl Queries {
+    fn new(
+        device: &wgpu::Device,
+        label: &str,
+        (ty, values): (wgpu::QueryType, usize),
+        passes: u32,
+    ) -> Queries {
+        Queries {
+            queries: device.create_query_set(&wgpu::QuerySetDescriptor {
+                label: Some(label),
+                ty,
+                count: passes,
+            }),
+            resolved: device.create_buffer(&wgpu::BufferDescriptor {
+                label: Some(label),
+                size: (8 * values) as u64 * passes as u64,
+                usage: wgpu::BufferUsages::QUERY_RESOLVE | wgpu::BufferUsages::COPY_SRC,
+                mapped_at_creation: false,
+            }),
+            values,
+            capacity: passes,
+            used: 0,
+        }
+    }
+
+    /// The next query's index, if the frame has room for one more.
+    fn take(&mut self) -> Option<u32> {
+        (self.used < self.capacity).then(|| {
+            self.used += 1;
+            self.used - 1
+        })
+    }
+
+    fn resolve(&self, encoder: &mut wgpu::CommandEncoder) {
+        if self.used > 0 {
+            encoder.resolve_query_set(&self.queries, 0..self.used, &self.resolved, 0);
+        }
+    }
+
+    /// The frame's counts, `values` per query in order (none when no query ran);
+    /// resets for the next frame.
+    fn read(&mut self, device: &wgpu::Device, queue: &wgpu::Queue) -> Result<Vec<u64>> {
+        let used = std::mem::take(&mut self.used);
+        match used {
+            0 => Ok(Vec::new()),
+            n => read_pod(
+                device,
+                queue,
+                &self.resolved,
+                (8 * self.values) as u64 * n as u64,
+            ),
+        }
+    }
 }
 
 /// What the GPU reported for one frame.
@@ -91,40 +142,19 @@ impl GpuTimer {
         let statistics = device
             .features()
             .contains(wgpu::Features::PIPELINE_STATISTICS_QUERY)
-            .then(|| Statistics {
-                queries: device.create_query_set(&wgpu::QuerySetDescriptor {
-                    label: Some("stereocull.pipeline_statistics"),
-                    ty: wgpu::QueryType::PipelineStatistics(STATISTICS),
-                    count: passes,
-                }),
-                resolved: device.create_buffer(&wgpu::BufferDescriptor {
-                    label: Some("stereocull.pipeline_statistics"),
-                    size: (8 * STATISTICS_PER_QUERY) as u64 * passes as u64,
-                    usage: wgpu::BufferUsages::QUERY_RESOLVE | wgpu::BufferUsages::COPY_SRC,
-                    mapped_at_creation: false,
-                }),
-                capacity: passes,
-                used: 0,
+            .then(|| {
+                let kind = (
+                    wgpu::QueryType::PipelineStatistics(STATISTICS),
+                    STATISTICS_PER_QUERY,
+                );
+                Queries::new(device, "stereocull.pipeline_statistics", kind, passes)
             });
+        let occlusion = (wgpu::QueryType::Occlusion, 1);
         Some(GpuTimer {
             profiler,
             period: queue.get_timestamp_period(),
             statistics,
-            samples: Counts {
-                queries: device.create_query_set(&wgpu::QuerySetDescriptor {
-                    label: Some("stereocull.samples_passed"),
-                    ty: wgpu::QueryType::Occlusion,
-                    count: passes,
-                }),
-                resolved: device.create_buffer(&wgpu::BufferDescriptor {
-                    label: Some("stereocull.samples_passed"),
-                    size: 8 * passes as u64,
-                    usage: wgpu::BufferUsages::QUERY_RESOLVE | wgpu::BufferUsages::COPY_SRC,
-                    mapped_at_creation: false,
-                }),
-                capacity: passes,
-                used: 0,
-            },
+            samples: Queries::new(device, "stereocull.samples_passed", occlusion, passes),
             last: Vec::new(),
         })
     }
@@ -157,14 +187,10 @@ impl GpuTimer {
     /// the query's index in the frame when it did (then [`GpuTimer::end_statistics`]
     /// must follow in the same pass).
     pub fn begin_statistics(&mut self, pass: &mut wgpu::RenderPass) -> Option<u32> {
-        match self.statistics.as_mut() {
-            Some(s) if s.used < s.capacity => {
-                pass.begin_pipeline_statistics_query(&s.queries, s.used);
-                s.used += 1;
-                Some(s.used - 1)
-            }
-            _ => None,
-        }
+        let s = self.statistics.as_mut()?;
+        let index = s.take()?;
+        pass.begin_pipeline_statistics_query(&s.queries, index);
+        Some(index)
     }
 
     /// Ends the statistics query [`GpuTimer::begin_statistics`] began in `pass`, if it did.
@@ -184,13 +210,11 @@ impl GpuTimer {
     /// [`GpuTimer::sample_queries`]); returns whether it did (then
     /// [`GpuTimer::end_samples`] must follow in the same pass).
     pub fn begin_samples(&mut self, pass: &mut wgpu::RenderPass) -> bool {
-        let s = &mut self.samples;
-        if s.used == s.capacity {
-            return false;
+        let index = self.samples.take();
+        if let Some(index) = index {
+            pass.begin_occlusion_query(index);
         }
-        pass.begin_occlusion_query(s.used);
-        s.used += 1;
-        true
+        index.is_some()
     }
 
     /// Ends the count [`GpuTimer::begin_samples`] began in `pass`, if it did.
@@ -203,13 +227,10 @@ impl GpuTimer {
     /// Records the resolve of this frame's queries; call once, after the last pass.
     pub fn resolve(&mut self, encoder: &mut wgpu::CommandEncoder) {
         self.profiler.resolve_queries(encoder);
-        if let Some(s) = self.statistics.as_ref().filter(|s| s.used > 0) {
-            encoder.resolve_query_set(&s.queries, 0..s.used, &s.resolved, 0);
+        if let Some(s) = &self.statistics {
+            s.resolve(encoder);
         }
-        let s = &self.samples;
-        if s.used > 0 {
-            encoder.resolve_query_set(&s.queries, 0..s.used, &s.resolved, 0);
-        }
+        self.samples.resolve(encoder);
     }
 
     /// The submitted frame's pass times (summed by label) and statistics; resets for the
@@ -228,15 +249,7 @@ impl GpuTimer {
         let mut frame = FrameQueries::default();
         sum_passes(&self.last, &mut frame.passes);
         if let Some(s) = self.statistics.as_mut() {
-            let counts: Vec<u64> = match s.used {
-                0 => Vec::new(),
-                n => read_pod(
-                    device,
-                    queue,
-                    &s.resolved,
-                    (8 * STATISTICS_PER_QUERY) as u64 * n as u64,
-                )?,
-            };
+            let counts = s.read(device, queue)?;
             let sum = |k: usize| Some(counts.iter().skip(k).step_by(STATISTICS_PER_QUERY).sum());
             frame.vertex_invocations = sum(0);
             frame.vertex_invocations_per_query = counts
@@ -247,14 +260,9 @@ impl GpuTimer {
             frame.triangles_submitted = sum(1);
             frame.clipper_primitives = sum(2);
             frame.fragment_invocations = sum(3);
-            s.used = 0;
         }
-        let s = &mut self.samples;
-        if s.used > 0 {
-            let counts: Vec<u64> = read_pod(device, queue, &s.resolved, 8 * s.used as u64)?;
-            frame.samples_passed = Some(counts.iter().sum());
-            s.used = 0;
-        }
+        let passed = self.samples.read(device, queue)?;
+        frame.samples_passed = (!passed.is_empty()).then(|| passed.iter().sum());
         Ok(frame)
     }
 
