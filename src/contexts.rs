@@ -7,7 +7,7 @@ use encase::ShaderType;
 use glam::{Mat4, Vec2, Vec3, Vec4};
 
 use crate::cull::CoarseCull;
-use crate::cull::rig::{MemberAt, RigView};
+use crate::cull::rig::{MemberAt, RigOcclusion, RigView};
 use crate::frustum::View;
 use crate::rig::{ResolvedDisplay, ViewLayout, Viewer};
 use crate::shadow::LightView;
@@ -242,6 +242,18 @@ impl DisplayContext {
             early: u32::from(early),
             hidden: self.hidden,
             block: CoarseCull::around(self.planes),
+        }
+    }
+
+    /// What this display's late cull tests against its pyramids, for a rig member in
+    /// the late phase: what [`crate::occlusion`]'s test reads from the context.
+    pub fn rig_occlusion(&self) -> RigOcclusion {
+        RigOcclusion {
+            view_from_world: [0, 1].map(|e| self.eye[e].view_from_world),
+            clip_from_view: [0, 1].map(|e| self.eye[e].clip_from_view),
+            resolution: self.resolution,
+            margin_px: self.occlusion_margin_px,
+            views: self.views,
         }
     }
 

@@ -1130,13 +1130,17 @@ fn render_reports_the_passes_of_each_level() {
             .map(|p| p["name"].as_str().unwrap())
             .collect()
     };
+    // Every display's pyramids in one set of dispatches, after every early draw.
     assert_eq!(
         at("frame"),
-        ["coarse_cull", "shadow_cull", "shadow"],
+        ["coarse_cull", "shadow_cull", "shadow", "pyramid"],
         "{stats}"
     );
-    let occluded = ["cull", "draw", "pyramid", "late_cull", "late_draw"];
-    assert_eq!(at("display"), occluded.repeat(5), "{stats}");
+    // Every display's early half, then (over the coarse cull's blocks) its own late
+    // cull, then every display's late draw.
+    let halves = [["cull", "draw"].repeat(5), ["late_cull"].repeat(5)];
+    let occluded = [halves.concat(), ["late_draw"].repeat(5)].concat();
+    assert_eq!(at("display"), occluded, "{stats}");
     let reports = stats["occlusion"].as_array().unwrap();
     assert_eq!(reports.len(), 5, "{stats}");
     for r in reports {
@@ -1146,7 +1150,7 @@ fn render_reports_the_passes_of_each_level() {
     }
     assert!(stats["occlusion_bytes"]["per_display"].as_u64().unwrap() > 0);
     assert!(at("eye").is_empty());
-    assert_eq!(stats["passes_per_level"]["frame"], 3);
+    assert_eq!(stats["passes_per_level"]["frame"], 4);
     assert_eq!(stats["coarse_cull"], true);
     assert_eq!(stats["shadows"], true);
     for p in passes
@@ -1199,17 +1203,14 @@ fn render_culls_the_far_layer_against_the_pyramids() {
         .filter(|p| p["level"] == "display")
         .map(|p| p["name"].as_str().unwrap())
         .collect();
-    // The early cull is the frame's rig cull's.
-    let order = [
-        "draw",
-        "pyramid",
-        "late_cull",
-        "far_cull",
-        "far_layer",
-        "late_draw",
-    ];
+    // The early and late culls are the frame's rig cull's, the pyramids a frame pass.
+    let order = ["draw", "far_cull", "far_layer", "late_draw"];
     assert_eq!(passes, order, "{stats}");
-    assert_eq!(stats["passes"][0]["name"], "rig_cull", "{stats}");
+    let all: Vec<&str> = (stats["passes"].as_array().unwrap().iter())
+        .map(|p| p["name"].as_str().unwrap())
+        .collect();
+    let frame = ["rig_cull", "draw", "pyramid", "rig_late_cull", "far_cull"];
+    assert_eq!(all[..5], frame, "{stats}");
     let report = &stats["occlusion"][0];
     let n = |k: &str| report[k].as_u64().unwrap();
     assert!(

@@ -422,7 +422,7 @@ fn gpu_phases_match_the_cpu_twin() {
             session.frame(&gpu, pose);
             let diagnostics = session.renderer.diagnostics(&gpu.device, &gpu.queue);
             let (shape, seen) = diagnostics.visibility(0).unwrap().unwrap();
-            let pyramid = diagnostics.pyramid().unwrap().unwrap();
+            let pyramid = diagnostics.pyramid(0).unwrap().unwrap();
             let plan = session.renderer.plan(pose, 0.0).unwrap();
             let job = (&plan.culls[0].job, &plan.displays[0]);
             let twin =
@@ -490,7 +490,7 @@ fn pyramids_match_the_cpu_reduction() {
             eyes: 2,
         };
         let diagnostics = session.renderer.diagnostics(&gpu.device, &gpu.queue);
-        let pyramid = diagnostics.pyramid().unwrap().unwrap();
+        let pyramid = diagnostics.pyramid(0).unwrap().unwrap();
         assert!(depth.iter().any(|&d| d < 1.0), "{w}x{h}: nothing drawn");
         if rooms {
             let top = |eye: u32| pyramid[((eye + 1) * shape.eye_len() - 1) as usize];
@@ -498,6 +498,62 @@ fn pyramids_match_the_cpu_reduction() {
         }
         assert_eq!(pyramid, occlusion::reduce(&depth, 2 * w, shape), "{w}x{h}");
     }
+}
+
+/// Every display's pyramids, reduced together in sets of displays of different sizes
+/// (ten CAVE walls: two sets of depth targets, each dispatch as wide as its set's
+/// largest eye), equal the CPU reduction of each display's own depth.
+#[test]
+fn every_displays_pyramids_match_the_cpu_reduction() {
+    let gpu = gpu();
+    let sizes: [[u32; 2]; 10] = [
+        [37, 23],
+        [150, 77],
+        [64, 9],
+        [1, 5],
+        [133, 140],
+        [20, 31],
+        [40, 40],
+        [9, 64],
+        [77, 150],
+        [5, 1],
+    ];
+    let mut rig = Rig::preset("cave").unwrap();
+    let walls = rig.displays.clone();
+    rig.displays = (sizes.iter().enumerate())
+        .map(|(k, &size)| {
+            let mut d = walls[k % walls.len()].clone();
+            d.name = format!("wall{k}");
+            d.resolution = size;
+            d
+        })
+        .collect();
+    let scene = procedural::rooms(300, 21);
+    let mut session = Session::new(&gpu, &scene, &rig, options(OcclusionMode::On));
+    // The pyramids are of the early depth: by the third frame every wall draws all it
+    // shows early, so its depth target holds that depth.
+    for _ in 0..3 {
+        session.frame(&gpu, &rig);
+    }
+    let diagnostics = session.renderer.diagnostics(&gpu.device, &gpu.queue);
+    let mut drawn = 0;
+    for (i, &[w, h]) in sizes.iter().enumerate() {
+        let depth = read_depth(&gpu, &session.targets[i].depth);
+        drawn += usize::from(depth.iter().any(|&d| d < 1.0));
+        let shape = PyramidShape {
+            eye: glam::UVec2::new(w, h),
+            eyes: 2,
+        };
+        let pyramid = diagnostics
+            .pyramid(i)
+            .unwrap()
+            .expect("every wall occludes");
+        let want = occlusion::reduce(&depth, 2 * w, shape);
+        let (_, late) = session.phases(&gpu, i);
+        assert!(late.visible.is_empty(), "wall {i} drew late");
+        assert_eq!(pyramid, want, "wall {i}: {w}x{h}");
+    }
+    assert!(drawn >= 5, "{drawn} walls drew something");
 }
 
 /// A wall half a meter ahead ends straight ahead of the viewer; a small cube 8 m ahead
@@ -554,7 +610,7 @@ fn what_one_eye_sees_around_an_edge_is_drawn() {
     // One eye's test would drop it: the left eye alone finds it hidden.
     let diagnostics = session.renderer.diagnostics(&gpu.device, &gpu.queue);
     let (shape, _) = diagnostics.visibility(0).unwrap().unwrap();
-    let pyramid = diagnostics.pyramid().unwrap().unwrap();
+    let pyramid = diagnostics.pyramid(0).unwrap().unwrap();
     let plan = session.renderer.plan(&rig, 0.0).unwrap();
     let sphere = CullLayout::new(&scene(0.0)).spheres[1];
     let eyes = &plan.displays[0].eye;
@@ -984,7 +1040,7 @@ fn occlusion_culls_far_instances_hidden_by_near_ones() {
             let diagnostics = on.renderer.diagnostics(&gpu.device, &gpu.queue);
             let tested = diagnostics.far_cull(0).unwrap().expect("a far layer");
             let (shape, _) = diagnostics.visibility(0).unwrap().unwrap();
-            let pyramid = diagnostics.pyramid().unwrap().unwrap();
+            let pyramid = diagnostics.pyramid(0).unwrap().unwrap();
             let plan = on.renderer.plan(&pose, 0.0).unwrap();
             let job = plan.job(CullView::Far(0)).unwrap();
             let context = plan.far[0].unwrap().tested_context(&plan.displays[0]);
@@ -1057,8 +1113,14 @@ fn cpu_culling_with_occlusion_matches_the_gpu_cull() {
     let random = support::presets_and_random_rigs(3);
     for (k, rig) in random[random.len() - 3..].iter().enumerate() {
         let scene = rooms_and_props(10 + k as u64);
-        let what = format!("random rig {k}");
-        let (_, occluded) = cpu_against_gpu(&gpu, (&scene, rig), options(OcclusionMode::On), &what);
+        // Every late phase in the rig's one set of dispatches, or (rig 1) each in
+        // its own.
+        let options = RendererOptions {
+            rig_cull: k != 1,
+            ..options(OcclusionMode::On)
+        };
+        let what = format!("random rig {k}, rig cull {}", options.rig_cull);
+        let (_, occluded) = cpu_against_gpu(&gpu, (&scene, rig), options, &what);
         assert!(occluded > 0, "{what}");
     }
 }

@@ -13,9 +13,12 @@ use stereocull::cull::{CullJob, CullOutput};
 use stereocull::device::Gpu;
 use stereocull::procedural;
 use stereocull::records::CullLayout;
-use stereocull::renderer::{CoarseMode, CullMode, FramePlan, Renderer, RendererOptions};
+use stereocull::renderer::{
+    CoarseMode, CullMode, FramePlan, OcclusionMode, Renderer, RendererOptions,
+};
 use stereocull::rig::Rig;
 use stereocull::scene::Scene;
+use stereocull::shaders::PYRAMID_SET_DEPTHS;
 use support::{frustum_only, gpu};
 
 /// `displays` displays drawn at random (fixed `seed`) from every preset's (a CAVE's
@@ -183,6 +186,54 @@ fn the_frames_dispatches_do_not_grow_with_the_displays() {
         );
         assert_eq!(stats.dispatch_levels.display, 0, "{displays} displays");
         assert_eq!(stats.dispatches, want);
+    }
+}
+
+/// With occlusion, the late phases are a second part of the rig cull, and every
+/// display's pyramids are one set of dispatches per [`PYRAMID_SET_DEPTHS`] displays
+/// (one dispatch each at 32 x 32: five levels): the frame's dispatches are the
+/// formula's for the first part's views, the pyramids' and the formula's for the late
+/// phases, recorded after every display's early draw; none at the display level.
+#[test]
+fn the_late_culls_and_pyramids_are_one_set_of_dispatches() {
+    let gpu = gpu();
+    for displays in [1, 5, 12, 20] {
+        let rig = mixed_rig(displays, 60 + displays as u64);
+        let options = RendererOptions {
+            occlusion: OcclusionMode::On,
+            coarse_cull: CoarseMode::Off,
+            ..Default::default()
+        };
+        let mut renderer = Renderer::new(&gpu.device, &scene(5), &rig, options).unwrap();
+        let targets = renderer.create_targets(&gpu.device);
+        let mut stats = Default::default();
+        // The second frame's early phases keep what the first drew.
+        for _ in 0..2 {
+            stats = renderer
+                .submit_frame(&gpu.device, &gpu.queue, &rig, 0.0, &targets)
+                .unwrap();
+        }
+        let d = renderer.diagnostics(&gpu.device, &gpu.queue);
+        let late = (0..displays).filter(|&i| d.late_cull(i).unwrap().is_some());
+        let late = late.count();
+        assert!(late > 0, "{displays} displays: none occludes");
+        let what = format!("{displays} displays, {late} late");
+        let pyramids = late.div_ceil(PYRAMID_SET_DEPTHS) as u32;
+        let frame = formula(displays, true) + pyramids + formula(late, true);
+        assert_eq!(stats.dispatch_levels.frame, frame, "{what}");
+        assert_eq!(stats.dispatch_levels.display, 0, "{what}");
+        let names: Vec<_> = renderer.passes().iter().map(|p| p.name).collect();
+        let first = |name: &str| names.iter().position(|n| *n == name).unwrap();
+        let last = |name: &str| names.iter().rposition(|n| *n == name).unwrap();
+        assert!(last("draw") < first("pyramid"), "{what}: {names:?}");
+        assert!(
+            first("pyramid") < first("rig_late_cull"),
+            "{what}: {names:?}"
+        );
+        assert!(
+            first("rig_late_cull") < first("late_draw"),
+            "{what}: {names:?}"
+        );
     }
 }
 

@@ -3,15 +3,16 @@
 
 use std::mem::{offset_of, size_of};
 
-use glam::{Mat4, Vec2, Vec3, Vec4};
+use glam::{Mat4, UVec2, Vec2, Vec3, Vec4};
 use naga::{Module, TypeInner};
 use stereocull::contexts::{DisplayContext, EyeContext, FrameContext};
 use stereocull::cull::CoarseCull;
 use stereocull::cull::gpu_buffers::CullParams;
 use stereocull::cull::hidden::{HiddenArea, HiddenRegion, HiddenView, MAX_HIDDEN_REGIONS};
-use stereocull::cull::rig::{MAX_RIG_VIEWS, RigCull, RigView};
+use stereocull::cull::rig::{MAX_RIG_VIEWS, RigCull, RigOcclusion, RigView};
 use stereocull::draw::VERTEX_ATTRIBUTES;
 use stereocull::materials::MaterialRecord;
+use stereocull::occlusion::pyramid::{PyramidSet, PyramidSlice};
 use stereocull::records::{
     DrawArgs, EditHeader, InstanceRecord, LodRecord, MeshRecord, MoveEdit, PlaceEdit, RecordEdit,
 };
@@ -434,6 +435,7 @@ fn contexts_match_wgsl() {
         lod_levels: 4,
         visibility_words: 9,
         pyramid_offset: 128,
+        pyramid_stride: 29,
         bin_count: 11,
         first_blend_bin: 13,
         blend_first: 17,
@@ -450,6 +452,7 @@ fn contexts_match_wgsl() {
             ("lod_levels", f32::from_bits(4)),
             ("visibility_words", f32::from_bits(9)),
             ("pyramid_offset", f32::from_bits(128)),
+            ("pyramid_stride", f32::from_bits(29)),
             ("bin_count", f32::from_bits(11)),
             ("first_blend_bin", f32::from_bits(13)),
             ("blend_first", f32::from_bits(17)),
@@ -507,15 +510,54 @@ fn rig_records_match_wgsl() {
     // Three members of MAX_RIG_VIEWS: the third's planes a whole RigView after the
     // second's, the count after every record.
     let views: Vec<RigView> = (0..3).map(|k| view(100.0 * k as f32)).collect();
-    let bytes = uniform_bytes(&RigCull::new(&views));
+    let test = |k: f32| RigOcclusion {
+        view_from_world: [Mat4::from_cols_array(&[k; 16]), Mat4::IDENTITY],
+        clip_from_view: [Mat4::IDENTITY, Mat4::from_cols_array(&[k + 1.0; 16])],
+        resolution: Vec2::new(k + 2.0, k + 3.0),
+        margin_px: k + 4.0,
+        views: 2,
+    };
+    check_uniform(
+        "RigOcclusion",
+        &uniform_bytes(&test(1.0)),
+        &[
+            ("view_from_world", 1.0),
+            ("clip_from_view", 1.0),
+            ("resolution", 3.0),
+            ("margin_px", 5.0),
+            ("views", f32::from_bits(2)),
+        ],
+    );
+    let mut set = RigCull::new(&views);
+    set.occlusion[2] = test(700.0);
+    let bytes = uniform_bytes(&set);
     check_uniform(
         "RigCull",
         &bytes,
-        &[("views", 0.0), ("members", f32::from_bits(3))],
+        &[
+            ("views", 0.0),
+            ("occlusion", 1.0),
+            ("members", f32::from_bits(3)),
+        ],
     );
     let (_, span) = wgsl_struct(&module(), "RigView");
     assert_eq!(f32_at(&bytes, 2 * span + 5 * 16), 205.0);
     assert_eq!(f32_at(&bytes, (MAX_RIG_VIEWS as u32 - 1) * span), 0.0);
+    // Where a member's record and test are written: naga's offsets.
+    let (set_members, _) = wgsl_struct(&module(), "RigCull");
+    let (tests, test_span) = wgsl_struct(&module(), "RigOcclusion");
+    let occlusion = set_members
+        .iter()
+        .find(|(m, _)| m == "occlusion")
+        .unwrap()
+        .1;
+    let margin = tests.iter().find(|(m, _)| m == "margin_px").unwrap().1;
+    let (view_at, test_at) = RigCull::offsets(2);
+    assert_eq!(
+        (view_at, test_at),
+        ((2 * span) as u64, (occlusion + 2 * test_span) as u64)
+    );
+    assert_eq!(f32_at(&bytes, test_at as u32 + margin), 704.0);
 }
 
 #[test]
@@ -959,4 +1001,32 @@ fn pose_records_match_wgsl() {
             ("bounds", offset_of!(SkinJointRecord, bounds)),
         ],
     );
+}
+
+#[test]
+fn pyramid_sets_match_wgsl() {
+    let module = parse("pyramid", &pyramid_source(1, false));
+    let slice = |k: u32| PyramidSlice {
+        origin: UVec2::new(k, k + 1),
+        size: UVec2::new(k + 2, k + 3),
+        base: k + 4,
+        eye: k + 5,
+        depth: k + 6,
+    };
+    let slices: Vec<PyramidSlice> = (0..3).map(|k| slice(10 * k + 1)).collect();
+    let bytes = uniform_bytes(&PyramidSet::new(&slices));
+    let (set, set_span) = wgsl_struct(&module, "PyramidSet");
+    assert_eq!(bytes.len(), set_span as usize, "PyramidSet size");
+    let (fields, span) = wgsl_struct(&module, "PyramidSlice");
+    let offset =
+        |members: &[(String, u32)], name: &str| members.iter().find(|(m, _)| m == name).unwrap().1;
+    let u32_at = |o: u32| u32::from_le_bytes(bytes[o as usize..o as usize + 4].try_into().unwrap());
+    // The third slice (k = 21), a whole stride after the second.
+    let third = offset(&set, "slices") + 2 * span;
+    let read: Vec<u32> = ["origin", "size", "base", "eye", "depth"]
+        .iter()
+        .map(|f| u32_at(third + offset(&fields, f)))
+        .collect();
+    assert_eq!(read, [21, 23, 25, 26, 27]);
+    assert_eq!(u32_at(offset(&set, "count")), 3);
 }

@@ -31,7 +31,9 @@ fn cull(
 // member's record is loaded once per span (on lavapipe a load at a member's index is a
 // gather per lane), and its sphere tests skipped for a span whose box fails its block
 // test (the coarse cull's guarantee, per span: a sphere the member keeps makes the
-// span's box pass).
+// span's box pass). Built in the late occlusion phase (OCCLUSION 2) it culls every
+// member's late phase: what its display did not draw last frame unless its pyramids
+// hide it, recording what they do not hide, as each display's own late cull does.
 @compute @workgroup_size(WORKGROUP_SIZE)
 fn cull_rig(
     @builtin(workgroup_id) wid: vec3<u32>,
@@ -51,16 +53,30 @@ fn cull_rig(
     var masks: array<u32, MAX_RIG_VIEWS>;
     for (var b = 0u; b < rig.members; b++) {
         let view = rig.views[b];
+        // Read by the late phase alone (OCCLUSION 2), its one use compiled out of the
+        // others.
+        let late = rig.occlusion[b];
+        let base = pyramid_base(view.cull_slot);
         // A loop, not a branch: a SIMD CPU adapter (lavapipe) runs both sides of a
         // branch under a mask, but leaves a loop once no lane has an iteration left.
         let tested = select(0u, count, block_test(view.block, bound.sphere, bound.extent));
         var mask = 0u;
+        // The late phase: which of the span's positions the pyramids do not hide.
+        var unhidden = 0u;
         for (var i = 0u; i < tested; i++) {
             let s = spheres[i];
-            let seen = view.early == 0u || drawn_by(view.cull_slot, first + i);
-            let kept = sphere_in_planes(view.planes, s) && in_split_of(view.split_keep, view.split_distance, view.position, s) && seen;
-            // The hidden area last: its tests cost several frustums'.
-            if (kept && (view.hidden == 0u || !hidden_in_views(view.cull_slot, s))) {
+            var kept: bool;
+            if (OCCLUSION == 2u) {
+                // The display's own late cull (cull_entry, occlusion_entry), in order.
+                let shown = sphere_in_planes(view.planes, s) && in_split_of(view.split_keep, view.split_distance, view.position, s) && (view.hidden == 0u || !hidden_in_views(view.cull_slot, s)) && !occluded_for(s, late, base);
+                unhidden |= select(0u, 1u << i, shown && !blended(first + i));
+                kept = shown && !drawn_by(view.cull_slot, first + i);
+            } else {
+                let seen = view.early == 0u || drawn_by(view.cull_slot, first + i);
+                // The hidden area last: its tests cost several frustums'.
+                kept = sphere_in_planes(view.planes, s) && in_split_of(view.split_keep, view.split_distance, view.position, s) && seen && (view.hidden == 0u || !hidden_in_views(view.cull_slot, s));
+            }
+            if (kept) {
                 if (((chosen >> i) & 1u) == 0u) {
                     levels |= lod_level(first + i, s) << (2u * i);
                     chosen |= 1u << i;
@@ -71,6 +87,10 @@ fn cull_rig(
         masks[b] = mask;
         if (count > 0u) {
             entries[rig_mask_index(b, span)] = mask;
+            // The span's word, which this invocation alone writes (as cull_span does).
+            if (OCCLUSION == 2u) {
+                occlusion[view.cull_slot * params.visibility_words + span] = unhidden;
+            }
         }
     }
     if (count > 0u) {

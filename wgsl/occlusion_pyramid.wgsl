@@ -1,22 +1,44 @@
-// Each eye's depth pyramid of a display (src/occlusion/mod.rs is the CPU twin; its
-// module documentation says what a texel holds), six levels per dispatch:
-// `reduce_depth` reads the eye's viewport of the display's depth target into levels
+// Every eye's depth pyramid of a set of displays (src/occlusion/mod.rs is the CPU
+// twin; its module documentation says what a texel holds), six levels per dispatch:
+// `reduce_depth` reads each eye's viewport of its display's depth target into levels
 // 0 to 5; `reduce_level` level `level.index` - 1 into level `level.index` and the five
-// after it. The z of the dispatch is the eye: no reduction crosses the seam.
+// after it. The z of the dispatch is the slice (a display's eye: eyes.slices), so no
+// reduction crosses an eye's seam or a display's edge; the x and y cover the set's
+// largest eye, and a workgroup past its own eye's level returns at once.
 // Each dispatch costs the CPU a flush of its bindings and a barrier in wgpu, more
 // than its GPU work at these sizes, so a dispatch does as many levels as one
 // workgroup's tile allows: a 16 x 16 workgroup owns a 32 x 32 tile of its first level
-// (each invocation a 2 x 2 block of it) and reduces it to one texel.
-// Composed after occlusion.wgsl's layout helpers, the contexts, the constants
-// LEVELS_PER_DISPATCH (6: 32 x 32 texels of the first level down to 1 x 1) and SIDE
-// (16, invocations per workgroup side), and the bindings of pyramid_bindings
-// (src/shaders/bindings.rs: the display's context, each dispatch's level, the
-// pyramids, the depth target), the depth read by depth_texel(pixel, eye)
-// (src/shaders/cull_passes.rs: a layer per eye in multiview; under MSAA every sample,
-// the farthest kept).
+// (each invocation a 2 x 2 block of it) and reduces it to one texel; and one set of
+// dispatches reduces up to SET_DEPTHS displays' depth targets.
+// Composed after pyramid.wgsl's layout helpers, the constants LEVELS_PER_DISPATCH (6:
+// 32 x 32 texels of the first level down to 1 x 1), SIDE (16, invocations per
+// workgroup side) and SET_DEPTHS, and the bindings of pyramid_bindings
+// (src/shaders/binding_lists.rs: the set, each dispatch's level, the pyramids, the
+// set's depth targets), the depth read by depth_texel(pixel, slice)
+// (src/shaders/cull_passes.rs: its display's target, a layer per eye in multiview;
+// under MSAA every sample, the farthest kept).
 
 struct PyramidLevel {
     index: u32,
+}
+
+// One eye of a display in the set (PyramidSlice in src/occlusion/pyramid.rs): where
+// its view starts in its display's depth target (side by side; 0 for a layer), its
+// pixels, where its display's pyramids start in `pyramid` (words), which eye it is
+// (its pyramid's place, and its layer in multiview) and which of the set's depth
+// targets it reads.
+struct PyramidSlice {
+    origin: vec2<u32>,
+    size: vec2<u32>,
+    base: u32,
+    eye: u32,
+    depth: u32,
+}
+
+// The set's eyes: the first `count` of `slices`.
+struct PyramidSet {
+    slices: array<PyramidSlice, MAX_SLICES>,
+    count: u32,
 }
 
 // Texels of the level being reduced within the workgroup, one per invocation.
@@ -27,7 +49,7 @@ fn reduce_depth(
     @builtin(local_invocation_id) local: vec3<u32>,
     @builtin(workgroup_id) group: vec3<u32>,
 ) {
-    reduce(0u, group.z, local.xy, group.xy);
+    reduce(0u, eyes.slices[group.z], local.xy, group.xy);
 }
 
 // Levels `level.index` (a multiple of LEVELS_PER_DISPATCH) on, from the one before.
@@ -36,25 +58,24 @@ fn reduce_level(
     @builtin(local_invocation_id) local: vec3<u32>,
     @builtin(workgroup_id) group: vec3<u32>,
 ) {
-    reduce(level.index, group.z, local.xy, group.xy);
+    reduce(level.index, eyes.slices[group.z], local.xy, group.xy);
 }
 
-// Texel `p` of level `l` of eye `e` from what it covers one level finer (the depth
+// Texel `p` of level `l` of slice `s` from what it covers one level finer (the depth
 // target's pixels for level 0): the farthest of 2 x 2, clamped at that level's edge.
-fn texel(l: u32, p: vec2<u32>, e: u32, levels: u32) -> f32 {
+fn texel(l: u32, p: vec2<u32>, s: PyramidSlice, levels: u32) -> f32 {
     let at = 2u * p;
     if (l == 0u) {
-        let origin = eye_origin(e);
-        let last = eye_size() - 1u;
+        let last = s.size - 1u;
         return farthest4(
-            depth_texel(origin + min(at, last), e),
-            depth_texel(origin + min(at + vec2(1u, 0u), last), e),
-            depth_texel(origin + min(at + vec2(0u, 1u), last), e),
-            depth_texel(origin + min(at + vec2(1u, 1u), last), e),
+            depth_texel(s.origin + min(at, last), s),
+            depth_texel(s.origin + min(at + vec2(1u, 0u), last), s),
+            depth_texel(s.origin + min(at + vec2(0u, 1u), last), s),
+            depth_texel(s.origin + min(at + vec2(1u, 1u), last), s),
         );
     }
-    let src = level_size(l - 1u);
-    let base = level_offset(e, l - 1u, levels);
+    let src = level_size(s.size, l - 1u);
+    let base = s.base + level_offset(s.size, s.eye, l - 1u, levels);
     let a = min(at, src - 1u);
     let b = min(at + 1u, src - 1u);
     return farthest4(
@@ -69,17 +90,22 @@ fn texel(l: u32, p: vec2<u32>, e: u32, levels: u32) -> f32 {
 // level's edge are reduced too, and never written: reduced from clamped reads of
 // texels that exist, each is the farthest of a part of what the edge texel beside it
 // covers, so reading it beside that texel (where the reference reads the edge twice)
-// changes nothing.
-fn reduce(first: u32, e: u32, local: vec2<u32>, group: vec2<u32>) {
-    let levels = pyramid_levels();
-    let size = level_size(first);
-    let base = level_offset(e, first, levels);
+// changes nothing. A workgroup whose tile lies past its slice's level (the slice is
+// smaller than the set's largest) or whose slice has no level `first` writes nothing.
+fn reduce(first: u32, s: PyramidSlice, local: vec2<u32>, group: vec2<u32>) {
+    let eye = s.size;
+    let levels = pyramid_levels(eye);
+    let size = level_size(eye, first);
+    if (first >= levels || any(group * (2u * SIDE) >= size)) {
+        return;
+    }
+    let base = s.base + level_offset(eye, s.eye, first, levels);
     // This invocation's 2 x 2 block of level `first`.
     let p = group * (2u * SIDE) + 2u * local;
     var d = 0.0;
     for (var k = 0u; k < 4u; k++) {
         let q = p + vec2(k & 1u, k >> 1u);
-        let t = texel(first, q, e, levels);
+        let t = texel(first, q, s, levels);
         if (all(q < size)) {
             pyramid[base + q.y * size.x + q.x] = t;
         }
@@ -88,10 +114,10 @@ fn reduce(first: u32, e: u32, local: vec2<u32>, group: vec2<u32>) {
     var span = SIDE;
     for (var n = 1u; n < LEVELS_PER_DISPATCH && first + n < levels; n++) {
         let l = first + n;
-        let here = level_size(l);
+        let here = level_size(eye, l);
         let at = group * span + local;
         if (all(local < vec2(span)) && all(at < here)) {
-            pyramid[level_offset(e, l, levels) + at.y * here.x + at.x] = d;
+            pyramid[s.base + level_offset(eye, s.eye, l, levels) + at.y * here.x + at.x] = d;
         }
         workgroupBarrier();
         tile[local.y * SIDE + local.x] = d;

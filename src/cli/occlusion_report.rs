@@ -23,10 +23,9 @@ pub struct OcclusionReport {
     pub late: u32,
     /// Kept by the frustum, drawn in neither phase.
     pub occluded: u32,
-    /// For the last display with occlusion (whose pyramids the displays' shared buffer
-    /// still holds): instances the either-eye rule keeps that a test of the left eye
-    /// alone, or of the right eye alone, would drop (what naive stereo occlusion would
-    /// get wrong).
+    /// For a stereo display: instances the either-eye rule keeps that a test of the
+    /// left eye alone, or of the right eye alone, would drop (what naive stereo
+    /// occlusion would get wrong).
     pub one_eye_drops: Option<[u32; 2]>,
     /// With the far layer: the far instances its frustum keeps, and of those how many
     /// the display's pyramids hide (not drawn into the far layer).
@@ -57,19 +56,14 @@ pub fn occlusion_report(
         at.map(|k| &culled[k])
     };
     let frustum = |i: usize| kept_by(CullView::Display(i));
-    let last = counts.iter().rposition(Option::is_some);
     let mut reports = Vec::new();
     for (i, count) in counts.iter().enumerate() {
         let (Some(count), Some(kept)) = (count, frustum(i)) else {
             reports.push(None);
             continue;
         };
-        let drops = match (
-            Some(i) == last,
-            diagnostics.visibility(i)?,
-            diagnostics.pyramid()?,
-        ) {
-            (true, Some((shape, _)), Some(pyramid)) => {
+        let drops = match (diagnostics.visibility(i)?, diagnostics.pyramid(i)?) {
+            (Some((shape, _)), Some(pyramid)) => {
                 let display = &plan.displays[i];
                 let hidden = |id: u32, e: u32| {
                     let s = layout.spheres[layout.positions[id as usize] as usize];

@@ -10,7 +10,7 @@
 //! count. The buffers they read and write are [`super::gpu_buffers`]'s.
 
 use crate::cull::gpu_buffers::CullScene;
-use crate::cull::rig::{self, MAX_RIG_VIEWS, RigCull};
+use crate::cull::rig::RigCull;
 use crate::cull::targets::CullTargets;
 use crate::shaders::Bound;
 use crate::shaders::Phase;
@@ -40,6 +40,8 @@ pub struct GpuCuller {
     /// With the rig cull: its passes in dispatch order (the blend pass last, with
     /// blended bins).
     rig: Vec<wgpu::ComputePipeline>,
+    /// With occlusion, the rig's cull pass for its late members.
+    rig_late: Option<wgpu::ComputePipeline>,
 }
 
 /// What a [`GpuCuller`] is built for besides the display passes.
@@ -149,6 +151,14 @@ impl GpuCuller {
         let rig_passes = CullPass::RIG
             .into_iter()
             .chain(blend.then_some(CullPass::RigBlend));
+        // With occlusion the late members' cull: the rig's cull pass in the late phase
+        // (the other rig passes read no phase).
+        let rig_late = (rig && occlusion).then(|| {
+            let pass = CullPass::RigCull;
+            let source = pass.phased_source(false, Phase::Late, &windows);
+            let label = Phase::Late.label(&pass.label(false));
+            compute_pipeline(device, &label, &display_layout, source, pass.entry_point())
+        });
         let rig = match rig {
             true => build(&rig_passes.collect::<Vec<_>>(), false, &display_layout),
             false => Vec::new(),
@@ -188,6 +198,7 @@ impl GpuCuller {
             phases,
             blend,
             rig,
+            rig_late,
         }
     }
 
@@ -214,7 +225,7 @@ impl GpuCuller {
         targets: &CullTargets,
     ) -> Vec<wgpu::BindGroup> {
         let whole = [&targets.visible, &targets.draws, &targets.counts];
-        (0..rig::groups(scene.rig_members))
+        (0..scene.rig_sets.groups())
             .map(|g| self.group(device, scene, (contexts, g), whole.map(|b| b.bound())))
             .collect()
     }
@@ -386,19 +397,23 @@ impl GpuCuller {
         }
     }
 
-    /// Records the rig cull: one set of dispatches per group of members (`groups`,
-    /// [`GpuCuller::rig_bind_groups`]). Returns the dispatches.
+    /// Records the rig cull's first part (`late` false: its frustum and early members)
+    /// or its late members: one set of dispatches per group of them (`groups`, every
+    /// group's, [`GpuCuller::rig_bind_groups`]). Returns the dispatches.
     pub fn encode_rig(
         &self,
         pass: &mut wgpu::ComputePass,
         scene: &CullScene,
-        groups: &[wgpu::BindGroup],
+        (groups, late): (&[wgpu::BindGroup], bool),
     ) -> u32 {
+        let sets = scene.rig_sets;
+        let part = match late {
+            false => 0..sets.first_groups(),
+            true => sets.first_groups()..sets.groups(),
+        };
         let mut dispatches = 0;
-        let members = scene.rig_members;
-        for (g, group) in groups.iter().enumerate() {
-            let in_group = (members - g as u32 * MAX_RIG_VIEWS as u32).min(MAX_RIG_VIEWS as u32);
-            pass.set_bind_group(0, group, &[]);
+        for g in part {
+            pass.set_bind_group(0, &groups[g as usize], &[]);
             let rig_passes = [
                 CullPass::RigCull,
                 CullPass::RigDraws,
@@ -406,11 +421,14 @@ impl GpuCuller {
                 CullPass::RigBlend,
             ];
             for (pipeline, kind) in self.rig.iter().zip(rig_passes) {
-                pass.set_pipeline(pipeline);
+                match (kind, &self.rig_late) {
+                    (CullPass::RigCull, Some(phased)) if late => pass.set_pipeline(phased),
+                    _ => pass.set_pipeline(pipeline),
+                }
                 let (x, y) = match kind {
                     CullPass::RigCull => scene.groups.spans,
                     CullPass::RigCompact => scene.groups.positions,
-                    _ => (1, in_group),
+                    _ => (1, sets.members_in(g)),
                 };
                 pass.dispatch_workgroups(x, y, 1);
                 dispatches += 1;

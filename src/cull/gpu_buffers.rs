@@ -6,7 +6,7 @@ use crate::bins::BinKind;
 use crate::buffers::{Upload, init_buffer, init_buffer_with_room, storage_buffer};
 use crate::cull::HiddenArea;
 use crate::cull::coarse::{BLOCK, CoarseCull};
-use crate::cull::rig::{self, MAX_RIG_VIEWS, RigCull, RigView};
+use crate::cull::rig::{MAX_RIG_VIEWS, RigCull, RigOcclusion, RigSets, RigView};
 use crate::records::CullLayout;
 use crate::records::{storage_bytes, uniform_bytes};
 use crate::shaders::{SPAN, WORKGROUP_SIZE, dispatch_size};
@@ -31,6 +31,8 @@ pub struct CullParams {
     pub visibility_words: u32,
     /// Where the depth pyramids start in the occlusion buffer, in words.
     pub pyramid_offset: u32,
+    /// Words from one display slot's pyramids to the next's.
+    pub pyramid_stride: u32,
     /// Material bins ([`crate::bins::Bins`]): each has its own range of the draws.
     pub bin_count: u32,
     /// The first blended bin ([`crate::bins::Bins::first_blend_bin`]): blended
@@ -73,8 +75,8 @@ pub struct CullScene {
     /// one: every cull pass binds it), [`CullScene::rig_stride`] bytes apart.
     pub(super) rig: wgpu::Buffer,
     pub(super) rig_stride: u64,
-    /// The rig cull's members (0: it does not run).
-    pub(super) rig_members: u32,
+    /// The rig cull's members (none: it does not run).
+    pub(super) rig_sets: RigSets,
     /// The coarse cull's slots (displays; 0 without it) and its buffers per slot.
     pub(super) coarse_slots: u32,
     pub(super) block_marks: wgpu::Buffer,
@@ -88,10 +90,10 @@ pub struct CullScene {
     /// spans, then the compact pass's over positions), written by the coarse passes.
     pub(super) coarse_args: wgpu::Buffer,
     /// Occlusion: per display slot, a word of bits per span of places (what the display
-    /// drew last frame), then the display's depth pyramids
-    /// ([`crate::occlusion::PyramidShape`]), which every display rebuilds in turn.
+    /// drew last frame), then per display slot its depth pyramids
+    /// ([`crate::occlusion::PyramidShape`]), all built before any late cull reads them.
     pub(super) occlusion: wgpu::Buffer,
-    occlusion_layout: (u32, u32),
+    occlusion_layout: (u32, u32, u32),
     /// Display slots with visibility words (0 without occlusion).
     visibility_slots: u32,
     /// Per display slot its hidden area ([`HiddenArea`]; one unused record where no
@@ -101,12 +103,13 @@ pub struct CullScene {
 }
 
 /// What occlusion culling needs room for: how many displays keep visibility bits and
-/// the most texels of any display's pyramids (both 0 without occlusion).
+/// pyramids (a region each, of the most texels of any display's pyramids; both 0
+/// without occlusion).
 #[derive(Clone, Copy, Debug, Default, PartialEq, Eq)]
 pub struct OcclusionRoom {
     /// Display slots with bits.
     pub displays: u32,
-    /// Texels of the largest display's pyramids.
+    /// Texels of the largest display's pyramids: every slot's region holds as many.
     pub pyramid_texels: u32,
 }
 
@@ -114,13 +117,13 @@ impl CullScene {
     /// Uploads `layout`, with room for `slots` instances (a live scene's capacity), for
     /// culling into `levels` levels of detail (1: LOD off), with room for the coarse
     /// cull's lists of `coarse_slots` displays (0: no coarse cull), for occlusion, for
-    /// the scratch of `rig_members` members of the rig cull (0: it does not run) and
+    /// the scratch of the rig cull's members `rig_sets` (none: it does not run) and
     /// for the hidden areas of `hidden_slots` displays (0: no cull drops by one).
     pub fn new(
         device: &wgpu::Device,
         layout: &CullLayout,
         (slots, levels): (u32, u32),
-        (coarse_slots, occlusion, rig_members, hidden_slots): (u32, OcclusionRoom, u32, u32),
+        (coarse_slots, occlusion, rig_sets, hidden_slots): (u32, OcclusionRoom, RigSets, u32),
     ) -> CullScene {
         let slots = slots
             .max(layout.positions.len() as u32)
@@ -131,7 +134,8 @@ impl CullScene {
         // aligned.
         let align = device.limits().min_storage_buffer_offset_alignment / 4;
         let pyramid_offset = (occlusion.displays * words).next_multiple_of(align);
-        let occlusion_layout = (words, pyramid_offset);
+        let pyramid_stride = occlusion.pyramid_texels.next_multiple_of(align);
+        let occlusion_layout = (words, pyramid_offset, pyramid_stride);
         // The display passes may run past the last instance to the end of its block.
         let positions = slots.next_multiple_of(BLOCK);
         let (spans, scan_groups) = span_shape(positions);
@@ -143,7 +147,8 @@ impl CullScene {
             members: member_strides,
         };
         let (params, groups) = cull_params(layout, room);
-        let scratch_members = rig_members.clamp(1, MAX_RIG_VIEWS as u32) as u64;
+        let scratch_members =
+            (rig_sets.first.max(rig_sets.late)).clamp(1, MAX_RIG_VIEWS as u32) as u64;
         let rig_stride = (RigCull::min_size().get())
             .next_multiple_of(device.limits().min_uniform_buffer_offset_alignment as u64);
         let room = |label: &str, contents: &[u8], per_slot: u64| {
@@ -211,11 +216,11 @@ impl CullScene {
             rig: init_buffer(
                 device,
                 "stereocull.rig",
-                &rig_groups(rig_members, rig_stride),
+                &rig_groups(rig_sets, rig_stride),
                 wgpu::BufferUsages::UNIFORM | wgpu::BufferUsages::COPY_DST,
             ),
             rig_stride,
-            rig_members,
+            rig_sets,
             coarse_slots,
             block_marks: storage_buffer(device, "stereocull.block_marks", block_bytes, scratch),
             block_list: storage_buffer(device, "stereocull.block_list", block_bytes, scratch),
@@ -246,7 +251,7 @@ impl CullScene {
             occlusion: storage_buffer(
                 device,
                 "stereocull.occlusion",
-                4 * (pyramid_offset + occlusion.pyramid_texels).max(1) as u64,
+                4 * (pyramid_offset + occlusion.displays * pyramid_stride).max(1) as u64,
                 // A reload clears the visibility words from the queue.
                 scratch | wgpu::BufferUsages::COPY_SRC | wgpu::BufferUsages::COPY_DST,
             ),
@@ -289,13 +294,24 @@ impl CullScene {
         bytes.len() as u64
     }
 
-    /// Writes rig member `m`'s record for this frame; returns the bytes written.
-    pub fn write_rig_member(&self, queue: &impl Upload, m: u32, record: &RigView) -> u64 {
-        let (group, index) = (m as usize / MAX_RIG_VIEWS, m as usize % MAX_RIG_VIEWS);
+    /// Writes rig member `m`'s record for this frame, and a late member's occlusion
+    /// test; returns the bytes written.
+    pub fn write_rig_member(
+        &self,
+        queue: &impl Upload,
+        m: u32,
+        (record, test): (&RigView, Option<&RigOcclusion>),
+    ) -> u64 {
+        let (group, index) = self.rig_sets.place(m);
+        let base = group as u64 * self.rig_stride;
+        let (view_at, test_at) = RigCull::offsets(index as usize);
         let bytes = uniform_bytes(record);
-        let at = group as u64 * self.rig_stride + (index * bytes.len()) as u64;
-        queue.write_buffer(&self.rig, at, &bytes);
-        bytes.len() as u64
+        queue.write_buffer(&self.rig, base + view_at, &bytes);
+        let tested = test.map(uniform_bytes).unwrap_or_default();
+        if !tested.is_empty() {
+            queue.write_buffer(&self.rig, base + test_at, &tested);
+        }
+        (bytes.len() + tested.len()) as u64
     }
 
     /// Writes a new `layout` (instances inserted or removed) into the buffers, which must
@@ -373,7 +389,8 @@ impl CullScene {
     pub const BYTES_PER_INSTANCE: u64 = 16 + 4 + 4 + 4 + 4;
 
     /// The occlusion buffer: per display slot [`CullScene::visibility_words`] words of
-    /// visibility bits, then from [`CullScene::pyramid_offset`] the depth pyramids.
+    /// visibility bits, then per display slot its depth pyramids
+    /// ([`CullScene::pyramid_offset`]).
     pub fn occlusion(&self) -> &wgpu::Buffer {
         &self.occlusion
     }
@@ -383,23 +400,29 @@ impl CullScene {
         self.occlusion_layout.0
     }
 
-    /// Where the pyramids start in [`CullScene::occlusion`], in bytes (aligned for a
-    /// storage binding).
-    pub fn pyramid_offset(&self) -> u64 {
-        4 * self.occlusion_layout.1 as u64
+    /// Bytes of every display slot's pyramids.
+    pub fn pyramid_bytes(&self) -> u64 {
+        let (_, _, stride) = self.occlusion_layout;
+        4 * self.visibility_slots as u64 * stride as u64
+    }
+
+    /// Where display slot `slot`'s pyramids start in [`CullScene::occlusion`], in bytes
+    /// (aligned for a storage binding).
+    pub fn pyramid_offset(&self, slot: usize) -> u64 {
+        let (_, first, stride) = self.occlusion_layout;
+        4 * (first as u64 + slot as u64 * stride as u64)
     }
 }
 
-/// The rig cull's groups of `members` members, `stride` bytes apart (at least one):
-/// each its member count, its records written each frame
-/// ([`CullScene::write_rig_member`]).
-fn rig_groups(members: u32, stride: u64) -> Vec<u8> {
-    let groups = rig::groups(members).max(1);
-    let views = vec![RigView::default(); members as usize];
+/// The rig cull's groups of `sets`, `stride` bytes apart (at least one): each its
+/// member count, its records written each frame ([`CullScene::write_rig_member`]).
+fn rig_groups(sets: RigSets, stride: u64) -> Vec<u8> {
+    let groups = sets.groups().max(1);
     let mut bytes = vec![0; (stride * groups as u64) as usize];
-    for (g, group) in views.chunks(MAX_RIG_VIEWS).enumerate() {
-        let set = uniform_bytes(&RigCull::new(group));
-        let at = g * stride as usize;
+    for g in 0..sets.groups() {
+        let views = vec![RigView::default(); sets.members_in(g) as usize];
+        let set = uniform_bytes(&RigCull::new(&views));
+        let at = (g as u64 * stride) as usize;
         bytes[at..at + set.len()].copy_from_slice(&set);
     }
     bytes
@@ -431,7 +454,7 @@ pub(super) struct Grids {
 struct Room {
     max_groups: u32,
     levels: u32,
-    occlusion: (u32, u32),
+    occlusion: (u32, u32, u32),
     members: (u32, u32),
 }
 
@@ -439,7 +462,7 @@ fn cull_params(layout: &CullLayout, room: Room) -> (CullParams, Grids) {
     let Room {
         max_groups,
         levels,
-        occlusion: (visibility_words, pyramid_offset),
+        occlusion: (visibility_words, pyramid_offset, pyramid_stride),
         members: (position_room, member_sums),
     } = room;
     let n = layout.spheres.len() as u32;
@@ -455,6 +478,7 @@ fn cull_params(layout: &CullLayout, room: Room) -> (CullParams, Grids) {
         lod_levels: levels,
         visibility_words,
         pyramid_offset,
+        pyramid_stride,
         bin_count: layout.bins.kinds.len() as u32,
         first_blend_bin: layout.bins.first_blend_bin(),
         blend_first: (layout.bin_ranges(levels).iter())

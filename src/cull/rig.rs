@@ -13,7 +13,7 @@
 //! culls in groups of that many members, one set of dispatches each.
 
 use encase::ShaderType;
-use glam::{Vec3, Vec4};
+use glam::{Mat4, Vec2, Vec3, Vec4};
 
 use crate::cull::coarse::CoarseCull;
 
@@ -77,6 +77,24 @@ impl Default for RigView {
     }
 }
 
+/// What a member in the late occlusion phase tests against its display's pyramids
+/// (`RigOcclusion` in `wgsl/shared/records.wgsl`): what its display's own late cull
+/// reads from its context ([`crate::contexts::DisplayContext::rig_occlusion`]). The
+/// pyramids are its display slot's region of the occlusion buffer.
+#[derive(Clone, Copy, Debug, Default, PartialEq, ShaderType)]
+pub struct RigOcclusion {
+    /// Its first two views' `view_from_world`.
+    pub view_from_world: [Mat4; 2],
+    /// Its first two views' `clip_from_view`.
+    pub clip_from_view: [Mat4; 2],
+    /// One view's pixels.
+    pub resolution: Vec2,
+    /// How far projected bounds grow each way, in pixels.
+    pub margin_px: f32,
+    /// Its display's views: the first two (at most) are tested.
+    pub views: u32,
+}
+
 /// Where a member's outputs start in the shared targets, in elements (words, draws,
 /// words). [`crate::contexts::DisplayContext::rig_view`] makes a member's record.
 #[derive(Clone, Copy, Debug, Default, PartialEq, Eq)]
@@ -90,11 +108,13 @@ pub struct MemberAt {
 }
 
 /// One set of rig dispatches' members (`RigCull` in `wgsl/shared/records.wgsl`): the
-/// first `members` of `views`.
+/// first `members` of `views`, and in the late phase their `occlusion` tests.
 #[derive(Clone, Copy, Debug, PartialEq, ShaderType)]
 pub struct RigCull {
     /// The members, then unused records.
     pub views: [RigView; MAX_RIG_VIEWS],
+    /// In the late phase, each member's occlusion test (else unused).
+    pub occlusion: [RigOcclusion; MAX_RIG_VIEWS],
     /// How many of `views` are members.
     pub members: u32,
 }
@@ -107,12 +127,96 @@ impl RigCull {
         all[..members].copy_from_slice(&views[..members]);
         RigCull {
             views: all,
+            occlusion: [RigOcclusion::default(); MAX_RIG_VIEWS],
             members: members as u32,
         }
+    }
+
+    /// Where member `index`'s record and occlusion test lie in a set's uniform, in
+    /// bytes: the arrays' strides are their records' sizes (WGSL rounds a uniform
+    /// array's stride up to 16, and both records' sizes are multiples of 16:
+    /// `tests/shaders.rs` holds this to naga's layout).
+    pub fn offsets(index: usize) -> (u64, u64) {
+        let view = RigView::min_size().get();
+        let test = RigOcclusion::min_size().get();
+        let index = index as u64;
+        (index * view, MAX_RIG_VIEWS as u64 * view + index * test)
     }
 }
 
 /// Sets of rig dispatches for `members` members: groups of [`MAX_RIG_VIEWS`].
 pub fn groups(members: u32) -> u32 {
     members.div_ceil(MAX_RIG_VIEWS as u32)
+}
+
+/// The rig cull's members as the frame runs them: `first`, the frustum and early
+/// members, culled at the frame level, then `late`, the displays' late occlusion
+/// phases, culled once every display's early draw and pyramids are recorded. Each part
+/// fills groups of its own (one set of dispatches each): a late member never shares a
+/// set with the others, which run before its pyramids exist.
+#[derive(Clone, Copy, Debug, Default, PartialEq, Eq)]
+pub struct RigSets {
+    /// Members culled at the frame level (member indices `0..first`).
+    pub first: u32,
+    /// Late members (member indices from `first` on).
+    pub late: u32,
+}
+
+impl RigSets {
+    /// Every member.
+    pub fn members(self) -> u32 {
+        self.first + self.late
+    }
+
+    /// The first part's groups (the late part's start there).
+    pub fn first_groups(self) -> u32 {
+        groups(self.first)
+    }
+
+    /// Every group.
+    pub fn groups(self) -> u32 {
+        groups(self.first) + groups(self.late)
+    }
+
+    /// Member `m`'s group and its index within it.
+    pub fn place(self, m: u32) -> (u32, u32) {
+        let max = MAX_RIG_VIEWS as u32;
+        let (before, m) = match m < self.first {
+            true => (0, m),
+            false => (self.first_groups(), m - self.first),
+        };
+        (before + m / max, m % max)
+    }
+
+    /// How many members group `g` holds.
+    pub fn members_in(self, g: u32) -> u32 {
+        let max = MAX_RIG_VIEWS as u32;
+        let (part, g) = match g < self.first_groups() {
+            true => (self.first, g),
+            false => (self.late, g - self.first_groups()),
+        };
+        part.saturating_sub(g * max).min(max)
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    #[test]
+    fn late_members_start_a_group_of_their_own() {
+        let max = MAX_RIG_VIEWS as u32;
+        let sets = RigSets {
+            first: max + 3,
+            late: 5,
+        };
+        assert_eq!(sets.groups(), 3);
+        assert_eq!(sets.place(max + 2), (1, 2));
+        assert_eq!(sets.place(max + 3), (2, 0));
+        assert_eq!(sets.place(max + 7), (2, 4));
+        let held: Vec<u32> = (0..3).map(|g| sets.members_in(g)).collect();
+        assert_eq!(held, [max, 3, 5]);
+        let late_only = RigSets { first: 0, late: 2 };
+        assert_eq!((late_only.groups(), late_only.place(1)), (1, (0, 1)));
+    }
 }

@@ -1,14 +1,60 @@
-//! The depth pyramids of a display on the GPU (`wgsl/occlusion_pyramid.wgsl`): one
-//! dispatch from the display's depth target into each eye's levels 0 to 5, then one
-//! per six levels, each eye in its own z slice so that no reduction crosses the seam. The CPU
-//! twin is [`crate::occlusion::reduce`].
+//! The depth pyramids of a set of displays on the GPU (`wgsl/occlusion_pyramid.wgsl`):
+//! one dispatch from the displays' depth targets into each eye's levels 0 to 5, then
+//! one per six levels, each eye of each display in its own z slice so that no
+//! reduction crosses a seam or a display's edge. Up to [`PYRAMID_SET_DEPTHS`] displays
+//! a set. The CPU twin is [`crate::occlusion::reduce`].
+
+use encase::ShaderType;
+use glam::UVec2;
 
 use super::PyramidShape;
 use crate::buffers::init_buffer;
+use crate::records::uniform_bytes;
 use crate::shaders::{
-    PYRAMID_LEVELS_PER_DISPATCH, PYRAMID_SIDE, Windows, compute_pipeline, pyramid_bindings,
-    pyramid_source,
+    PYRAMID_LEVELS_PER_DISPATCH, PYRAMID_SET_DEPTHS, PYRAMID_SET_SLICES, PYRAMID_SIDE, Windows,
+    compute_pipeline, pyramid_bindings, pyramid_source,
 };
+
+/// One eye of a display in a pyramid set (`PyramidSlice` in
+/// `wgsl/occlusion_pyramid.wgsl`).
+#[derive(Clone, Copy, Debug, Default, PartialEq, Eq, ShaderType)]
+pub struct PyramidSlice {
+    /// Where its view starts in its display's depth target, in pixels (side by side;
+    /// zero for a layer).
+    pub origin: UVec2,
+    /// Its view's pixels.
+    pub size: UVec2,
+    /// Where its display's pyramids start in the pyramids' buffer, in words.
+    pub base: u32,
+    /// Which eye it is: its pyramid's place among its display's, and its layer in
+    /// multiview.
+    pub eye: u32,
+    /// Which of the set's depth targets it reads.
+    pub depth: u32,
+}
+
+/// One set's eyes (`PyramidSet` in `wgsl/occlusion_pyramid.wgsl`): the first `count`
+/// of `slices`.
+#[derive(Clone, Copy, Debug, PartialEq, ShaderType)]
+pub struct PyramidSet {
+    /// The set's eyes, then unused slices.
+    pub slices: [PyramidSlice; PYRAMID_SET_SLICES],
+    /// How many of `slices` are the set's.
+    pub count: u32,
+}
+
+impl PyramidSet {
+    /// `slices` (at most [`PYRAMID_SET_SLICES`]; the rest are dropped) as one set.
+    pub fn new(slices: &[PyramidSlice]) -> PyramidSet {
+        let count = slices.len().min(PYRAMID_SET_SLICES);
+        let mut all = [PyramidSlice::default(); PYRAMID_SET_SLICES];
+        all[..count].copy_from_slice(&slices[..count]);
+        PyramidSet {
+            slices: all,
+            count: count as u32,
+        }
+    }
+}
 
 /// The pyramid passes for depth targets of one sample count and layering (cloned
 /// handles share them).
@@ -28,7 +74,7 @@ const MAX_LEVELS: u32 = 24;
 const TILE: u32 = 2 * PYRAMID_SIDE;
 
 impl PyramidPass {
-    /// The passes over a depth target of `samples` samples per pixel, `layered` (a
+    /// The passes over depth targets of `samples` samples per pixel, `layered` (a
     /// layer per eye: multiview) or not.
     pub fn new(device: &wgpu::Device, samples: u32, layered: bool) -> PyramidPass {
         let layout = bind_group_layout(device, samples, layered);
@@ -68,56 +114,87 @@ impl PyramidPass {
         }
     }
 
-    /// The bindings of one display: its context (resolution and viewports), where its
-    /// pyramids go and its depth target.
+    /// The uniform of a set of `slices`, written once: a set's displays keep their
+    /// shapes, viewports and regions.
+    pub fn set_buffer(device: &wgpu::Device, slices: &[PyramidSlice]) -> wgpu::Buffer {
+        let bytes = uniform_bytes(&PyramidSet::new(slices));
+        init_buffer(
+            device,
+            "stereocull.pyramid_set",
+            &bytes,
+            wgpu::BufferUsages::UNIFORM,
+        )
+    }
+
+    /// The bindings of one set: its slices (`set`, [`PyramidPass::set_buffer`]), the
+    /// buffer every display's pyramids are in (whole: the slices say where), and its
+    /// displays' depth targets in slice order (at most [`PYRAMID_SET_DEPTHS`]; the
+    /// bindings past them repeat the first, and no slice reads them).
     pub fn bind_group(
         &self,
         device: &wgpu::Device,
-        context: &wgpu::Buffer,
-        pyramid: wgpu::BufferBinding,
-        depth: &wgpu::TextureView,
+        (set, pyramids): (&wgpu::Buffer, &wgpu::Buffer),
+        depths: &[&wgpu::TextureView],
     ) -> wgpu::BindGroup {
         let level = wgpu::BufferBinding {
             buffer: &self.levels,
             offset: 0,
             size: std::num::NonZeroU64::new(4),
         };
+        let fixed = [
+            set.as_entire_binding(),
+            wgpu::BindingResource::Buffer(level),
+            pyramids.as_entire_binding(),
+        ];
+        let textures = (0..PYRAMID_SET_DEPTHS).map(|k| {
+            let view = depths.get(k).or(depths.first()).copied();
+            wgpu::BindingResource::TextureView(view.expect("a set has a depth target"))
+        });
+        let entries: Vec<_> = (fixed.into_iter().chain(textures).enumerate())
+            .map(|(binding, resource)| wgpu::BindGroupEntry {
+                binding: binding as u32,
+                resource,
+            })
+            .collect();
         device.create_bind_group(&wgpu::BindGroupDescriptor {
             label: Some("stereocull.occlusion_pyramid"),
             layout: &self.layout,
-            entries: &[
-                entry(0, context.as_entire_binding()),
-                entry(1, wgpu::BindingResource::Buffer(level)),
-                entry(2, wgpu::BindingResource::Buffer(pyramid)),
-                entry(3, wgpu::BindingResource::TextureView(depth)),
-            ],
+            entries: &entries,
         })
     }
 
-    /// Records the pyramids of `shape` with `group`, six levels per dispatch; returns
-    /// the dispatches.
+    /// Records the pyramids of a set's `slices` with `group`, six levels per dispatch,
+    /// each dispatch as wide as the set's largest eye at its first level; returns the
+    /// dispatches.
     pub fn encode(
         &self,
         pass: &mut wgpu::ComputePass,
         group: &wgpu::BindGroup,
-        shape: PyramidShape,
+        slices: &[PyramidSlice],
     ) -> u32 {
-        let levels = shape.levels().min(MAX_LEVELS);
+        let shapes: Vec<PyramidShape> = (slices.iter())
+            .map(|s| PyramidShape {
+                eye: s.size,
+                eyes: 1,
+            })
+            .collect();
+        let levels = shapes.iter().map(PyramidShape::levels).max().unwrap_or(0);
+        let levels = levels.min(MAX_LEVELS);
         for l in (0..levels).step_by(PYRAMID_LEVELS_PER_DISPATCH as usize) {
-            let size = shape.level_size(l);
+            let size = (shapes.iter())
+                .filter(|s| s.levels() > l)
+                .map(|s| s.level_size(l))
+                .fold(UVec2::ZERO, UVec2::max);
             pass.set_pipeline(match l {
                 0 => &self.reduce_depth,
                 _ => &self.reduce_level,
             });
             pass.set_bind_group(0, group, &[l * self.stride]);
-            pass.dispatch_workgroups(size.x.div_ceil(TILE), size.y.div_ceil(TILE), shape.eyes);
+            let (x, y) = (size.x.div_ceil(TILE), size.y.div_ceil(TILE));
+            pass.dispatch_workgroups(x, y, slices.len() as u32);
         }
         levels.div_ceil(PYRAMID_LEVELS_PER_DISPATCH)
     }
-}
-
-fn entry(binding: u32, resource: wgpu::BindingResource<'_>) -> wgpu::BindGroupEntry<'_> {
-    wgpu::BindGroupEntry { binding, resource }
 }
 
 fn bind_group_layout(device: &wgpu::Device, samples: u32, layered: bool) -> wgpu::BindGroupLayout {

@@ -144,14 +144,18 @@ impl Diagnostics<'_> {
         Ok(words.map(|words| (shape, words)))
     }
 
-    /// The depth pyramids the last display with occlusion built in the last frame (the
-    /// displays share one buffer), read back; `None` without occlusion.
-    pub fn pyramid(&self) -> Result<Option<Vec<f32>>> {
+    /// The depth pyramids display `index` built in the last frame, read back; `None`
+    /// for a display without occlusion.
+    pub fn pyramid(&self, index: usize) -> Result<Option<Vec<f32>>> {
         let Some(p) = self.renderer.path.indirect() else {
             return Ok(None);
         };
-        let last = p.pyramid_shapes().into_iter().flatten().last();
-        p.core.culler.read_pyramid(self.device, self.queue, last)
+        let Some(shape) = p.pyramid_shapes().get(index).copied().flatten() else {
+            return Ok(None);
+        };
+        p.core
+            .culler
+            .read_pyramid(self.device, self.queue, (index, shape))
     }
 
     /// The last frame's far/near split per display (`None` for displays without a far

@@ -2,6 +2,7 @@
 //! display's (whole, or in two halves around a submission where the CPU culler needs the
 //! pyramids), and the headless conveniences that prepare, record and submit.
 
+use super::display::indirect::IndirectPath;
 use super::plan::FrameStats;
 use super::recorder::Recorder;
 use super::{DisplayTarget, PassRecord, Path, Renderer, TargetViews};
@@ -107,23 +108,79 @@ impl Renderer {
             _ => self.encode_frame(encoder, &mut rec),
         };
         stats.dispatch_levels.frame = stats.dispatches;
+        // A whole frame is its two halves: every display's early half, then every
+        // display's rest, so that one set of dispatches culls every late phase between.
+        let halves = match part {
+            Part::Whole => &[Part::Early, Part::Rest][..],
+            Part::Early => &[Part::Early],
+            Part::Rest => &[Part::Rest],
+        };
+        for &half in halves {
+            stats = stats + self.encode_half(encoder, targets, &mut rec, half);
+        }
+        self.passes = rec.finish(encoder, part != Part::Early);
+        Ok(stats)
+    }
+
+    /// Records every display's `half` of the frame (`Early` or `Rest`); after the
+    /// early halves, the rig cull's late members.
+    fn encode_half(
+        &self,
+        encoder: &mut wgpu::CommandEncoder,
+        targets: &[TargetViews],
+        rec: &mut Recorder,
+        half: Part,
+    ) -> FrameStats {
+        let mut stats = FrameStats::default();
         for (i, target) in targets.iter().enumerate() {
+            // No scope (timestamps) for a display with no late half.
+            let rest = matches!(&self.path, Path::Indirect(p) if p.has_late(i));
+            if half == Part::Rest && !rest {
+                continue;
+            }
             rec.enter(encoder, &self.names[i]);
             let at = (i, target);
-            let recorded = match (&self.path, part) {
-                (Path::Indirect(p), Part::Whole) => p.encode_display(encoder, at, &mut rec),
-                (Path::Indirect(p), Part::Early) => p.encode_early(encoder, at, &mut rec),
-                (Path::Indirect(p), Part::Rest) => p.encode_rest(encoder, at, &mut rec),
+            let recorded = match (&self.path, half) {
+                (Path::Indirect(p), Part::Rest) => p.encode_rest(encoder, at, rec),
+                (Path::Indirect(p), _) => p.encode_early(encoder, at, rec),
                 (Path::Classic(_), Part::Rest) => FrameStats::default(),
-                (Path::Classic(p), _) => p.encode_display(encoder, at, &mut rec),
+                (Path::Classic(p), _) => p.encode_display(encoder, at, rec),
             };
             stats.draw_calls += recorded.draw_calls;
             stats.dispatches += recorded.dispatches;
             stats.dispatch_levels.display += recorded.dispatches;
             rec.leave(encoder);
         }
-        self.passes = rec.finish(encoder, part != Part::Early);
-        Ok(stats)
+        if let (Path::Indirect(p), Part::Early) = (&self.path, half) {
+            stats = stats + self.encode_late_culls(p, encoder, targets, rec);
+        }
+        stats
+    }
+
+    /// With occlusion, after every display's early half: every display's pyramids,
+    /// then the late culls (the rig cull's late members in one set of dispatches, or
+    /// each display's own). The pyramids and the rig's late culls count at the frame
+    /// level: one set of dispatches serves every display.
+    fn encode_late_culls(
+        &self,
+        p: &IndirectPath,
+        encoder: &mut wgpu::CommandEncoder,
+        targets: &[TargetViews],
+        rec: &mut Recorder,
+    ) -> FrameStats {
+        let mut stats = FrameStats::default();
+        let frame = p.encode_pyramids(encoder, targets, rec);
+        for i in (0..targets.len()).filter(|&i| p.culls_late_apart(i)) {
+            rec.enter(encoder, &self.names[i]);
+            let own = p.encode_late_cull(encoder, i, rec);
+            stats.dispatches += own;
+            stats.dispatch_levels.display += own;
+            rec.leave(encoder);
+        }
+        let frame = frame + p.encode_late_rig(encoder, rec);
+        stats.dispatches += frame;
+        stats.dispatch_levels.frame += frame;
+        stats
     }
 
     /// The frame level's passes, before any display's: the pose's writes copied into

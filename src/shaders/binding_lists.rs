@@ -4,6 +4,7 @@
 //! WGSL declarations and its layout (`bindings.rs`), so the two cannot disagree.
 
 use super::bindings::{Access, Binding, TextureKind};
+use super::cull_passes::PYRAMID_SET_DEPTHS;
 use super::windows::Windowed;
 
 const fn binding(
@@ -89,8 +90,9 @@ pub const CULL_BINDINGS: [Binding; 16] = [
     binding("counts", Access::StorageReadWrite, "array<u32>", COMPUTE),
     // Occlusion (wgsl/shared/occlusion.wgsl): per display slot, a word per span of
     // places whose low SPAN bits say which places that display drew last frame; then,
-    // from params.pyramid_offset, the display's eyes' depth pyramids (src/occlusion.rs,
-    // f32 bits), rebuilt per display. One binding: GL has 16 storage buffers a stage.
+    // per display slot from params.pyramid_offset, params.pyramid_stride words apart,
+    // its eyes' depth pyramids (src/occlusion.rs, f32 bits). One binding: GL has 16
+    // storage buffers a stage.
     binding("occlusion", Access::StorageReadWrite, "array<u32>", COMPUTE),
     // Per display slot, the lens's hidden area as planes (src/cull/hidden.rs): what
     // a display's cull drops where its `hidden` is 1.
@@ -415,11 +417,11 @@ pub const POSE_BINDINGS: [Binding; 12] = [
     binding("params", Access::Uniform, "PoseParams", COMPUTE),
 ];
 
-/// The occlusion pyramids' pass (`wgsl/occlusion_pyramid.wgsl`) over a depth target of
-/// `samples` per pixel, its eyes side by side or (`layered`) a layer each: the
-/// display's context, each dispatch's level record (a dynamic offset), the pyramids,
-/// the depth.
-pub fn pyramid_bindings(samples: u32, layered: bool) -> [Binding; 4] {
+/// The occlusion pyramids' pass (`wgsl/occlusion_pyramid.wgsl`) over a set of depth
+/// targets of `samples` per pixel, their eyes side by side or (`layered`) a layer
+/// each: the set's slices, each dispatch's level record (a dynamic offset), the
+/// pyramids (every display's region), the [`PYRAMID_SET_DEPTHS`] depth targets.
+pub fn pyramid_bindings(samples: u32, layered: bool) -> [Binding; 3 + PYRAMID_SET_DEPTHS] {
     let depth = TextureKind {
         dimension: match layered {
             true => wgpu::TextureViewDimension::D2Array,
@@ -428,10 +430,16 @@ pub fn pyramid_bindings(samples: u32, layered: bool) -> [Binding; 4] {
         multisampled: samples > 1,
         ..TextureKind::d2(wgpu::TextureSampleType::Depth)
     };
-    [
-        binding("display", Access::Uniform, "DisplayContext", COMPUTE),
+    const DEPTHS: [&str; PYRAMID_SET_DEPTHS] = [
+        "depth0", "depth1", "depth2", "depth3", "depth4", "depth5", "depth6", "depth7",
+    ];
+    let fixed = [
+        binding("eyes", Access::Uniform, "PyramidSet", COMPUTE),
         binding("level", Access::UniformDynamic, "PyramidLevel", COMPUTE),
         binding("pyramid", Access::StorageReadWrite, "array<f32>", COMPUTE),
-        texture("depth", depth, COMPUTE),
-    ]
+    ];
+    std::array::from_fn(|i| match i.checked_sub(fixed.len()) {
+        None => fixed[i],
+        Some(k) => texture(DEPTHS[k], depth, COMPUTE),
+    })
 }

@@ -266,32 +266,44 @@ pub const PYRAMID_LEVELS_PER_DISPATCH: u32 = 6;
 /// Invocations per side of a pyramid workgroup: 2^(levels per dispatch - 2).
 pub const PYRAMID_SIDE: u32 = 1 << (PYRAMID_LEVELS_PER_DISPATCH - 2);
 
-/// The depth pyramid's passes (`wgsl/occlusion_pyramid.wgsl`) over a depth target of
-/// `samples` samples per pixel, `layered` (multiview: a layer per eye) or not (the eyes
-/// side by side); its bindings are [`super::pyramid_bindings`]. WebGPU has no
-/// multisampled array textures, so a layered target has one sample.
+/// Depth targets one set of pyramid dispatches reads (`wgsl/occlusion_pyramid.wgsl`):
+/// a binding each (WebGPU has no array of textures without an optional feature, and
+/// stages have 16 sampled textures at least). A rig of more displays with occlusion
+/// reduces its pyramids in sets of this many.
+pub const PYRAMID_SET_DEPTHS: usize = 8;
+/// Eyes one set of pyramid dispatches reduces: two per display.
+pub const PYRAMID_SET_SLICES: usize = 2 * PYRAMID_SET_DEPTHS;
+
+/// The depth pyramid's passes (`wgsl/occlusion_pyramid.wgsl`) over a set of depth
+/// targets of `samples` samples per pixel, `layered` (multiview: a layer per eye) or
+/// not (the eyes side by side); its bindings are [`super::pyramid_bindings`]. WebGPU
+/// has no multisampled array textures, so a layered target has one sample.
 pub fn pyramid_source(samples: u32, layered: bool) -> String {
-    // A layer per eye starts at its layer's corner (the viewports say where the views
-    // are read back side by side); side by side, an eye starts at its viewport's.
-    let origin = match layered {
-        true => "vec2(0u)",
-        false => "vec2<u32>(display.eye[e].viewport.xy)",
-    };
     let read = match (samples, layered) {
-        (_, true) => "return textureLoad(depth, p, e, 0);",
-        (1, false) => "return textureLoad(depth, p, 0);",
-        _ => {
-            "var d = 0.0;\n    for (var i = 0; i < SAMPLES; i++) {\n        d = max(d, textureLoad(depth, p, i));\n    }\n    return d;"
-        }
+        (_, true) => "textureLoad(depth{k}, p, s.eye, 0)".to_string(),
+        (1, false) => "textureLoad(depth{k}, p, 0)".to_string(),
+        _ => "farthest_sample(depth{k}, p)".to_string(),
+    };
+    let cases: String = (0..PYRAMID_SET_DEPTHS)
+        .map(|k| {
+            let load = read.replace("{k}", &k.to_string());
+            format!("        case {k}u: {{\n            return {load};\n        }}\n")
+        })
+        .collect();
+    // Under MSAA each depth binding's samples, the farthest kept.
+    let farthest = match (samples, layered) {
+        (1, _) | (_, true) => String::new(),
+        _ => "fn farthest_sample(depth: texture_depth_multisampled_2d, p: vec2<u32>) -> f32 {\n    var d = 0.0;\n    for (var i = 0; i < SAMPLES; i++) {\n        d = max(d, textureLoad(depth, p, i));\n    }\n    return d;\n}\n".to_string(),
     };
     let bindings = format!(
         "const SAMPLES: i32 = {samples};\n\
          const LEVELS_PER_DISPATCH: u32 = {PYRAMID_LEVELS_PER_DISPATCH}u;\n\
          const SIDE: u32 = {PYRAMID_SIDE}u;\n\
-         fn depth_texel(p: vec2<u32>, e: u32) -> f32 {{\n    {read}\n}}\n\
-         fn eye_origin(e: u32) -> vec2<u32> {{\n    return {origin};\n}}\n"
+         const MAX_SLICES: u32 = {PYRAMID_SET_SLICES}u;\n\
+         {farthest}\
+         fn depth_texel(p: vec2<u32>, s: PyramidSlice) -> f32 {{\n    switch s.depth {{\n{cases}        default: {{\n            return 1.0;\n        }}\n    }}\n}}\n"
     );
     let declared = declarations(&pyramid_bindings(samples, layered), 0, &Windows::WHOLE);
     let body = include_str!("../../wgsl/occlusion_pyramid.wgsl");
-    [CONTEXTS, &declared, &bindings, PYRAMID, body].concat()
+    [&declared, PYRAMID, body, &bindings].concat()
 }

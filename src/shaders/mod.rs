@@ -83,7 +83,8 @@ pub use bindings::{
 };
 pub(crate) use bindings::{compute_pipeline, dispatch_size, pipeline_layout};
 pub use cull_passes::{
-    CullPass, PYRAMID_LEVELS_PER_DISPATCH, PYRAMID_SIDE, Phase, pyramid_source, subgroup_tier,
+    CullPass, PYRAMID_LEVELS_PER_DISPATCH, PYRAMID_SET_DEPTHS, PYRAMID_SET_SLICES, PYRAMID_SIDE,
+    Phase, pyramid_source, subgroup_tier,
 };
 pub use draw_key::DrawKey;
 pub use hooks::{Shaders, check_shading};

@@ -4,8 +4,9 @@
 // draw and the depth pyramids do not hide; record what they do not hide, blended
 // instances aside) or 3 (tested: a far layer's cull keeps what the pyramids do not
 // hide, and records nothing).
-// Composed after pyramid.wgsl, whose layout the pyramids have in `occlusion` from
-// params.pyramid_offset on (depths as bits: non-negative floats order as their bits).
+// Composed after pyramid.wgsl, whose layout the pyramids have in `occlusion`, each
+// display slot's in its own region from pyramid_base(slot) on (depths as bits:
+// non-negative floats order as their bits).
 
 const ENTRY_SEEN: u32 = 0x40000000u;
 const DEPTH_SLACK: f32 = 1.0 / 262144.0;
@@ -39,16 +40,45 @@ fn occlusion_entry(k: u32, s: vec4<f32>, kept: u32) -> u32 {
     if (occluded(s)) {
         return 0u;
     }
-    // Blended instances are never marked: always drawn late, after every opaque
-    // surface the display draws, so that they blend over all of it.
-    let blended = meshes[mesh_of[k]].bin >= params.first_blend_bin;
-    return select(kept, 0u, drawn) | select(ENTRY_SEEN, 0u, blended);
+    return select(kept, 0u, drawn) | select(ENTRY_SEEN, 0u, blended(k));
+}
+
+// Blended instances are never marked drawn: always drawn late, after every opaque
+// surface the display draws, so that they blend over all of it.
+fn blended(k: u32) -> bool {
+    return meshes[mesh_of[k]].bin >= params.first_blend_bin;
+}
+
+// Where display slot `slot`'s pyramids start in `occlusion`.
+fn pyramid_base(slot: u32) -> u32 {
+    return params.pyramid_offset + slot * params.pyramid_stride;
+}
+
+// A display's pyramids as a view's test reads them: where they start, one view's
+// pixels, and how far projected bounds grow each way.
+struct Pyramids {
+    base: u32,
+    size: vec2<u32>,
+    margin_px: f32,
 }
 
 // Hidden from every eye of the display: the stereo rule.
 fn occluded(s: vec4<f32>) -> bool {
+    let at = Pyramids(pyramid_base(display.cull_slot), vec2<u32>(display.resolution), display.occlusion_margin_px);
     for (var e = 0u; e < min(display.views, 2u); e++) {
-        if (!occluded_in_eye(s, e)) {
+        if (!occluded_in_eye(s, (display.eye[e]).view_from_world, (display.eye[e]).clip_from_view, e, at)) {
+            return false;
+        }
+    }
+    return true;
+}
+
+// `occluded` for the rig's member in the late phase whose test is `o` and whose
+// display slot's pyramids start at `base`.
+fn occluded_for(s: vec4<f32>, o: RigOcclusion, base: u32) -> bool {
+    let at = Pyramids(base, vec2<u32>(o.resolution), o.margin_px);
+    for (var e = 0u; e < min(o.views, 2u); e++) {
+        if (!occluded_in_eye(s, o.view_from_world[e], o.clip_from_view[e], e, at)) {
             return false;
         }
     }
@@ -56,7 +86,7 @@ fn occluded(s: vec4<f32>) -> bool {
 }
 
 fn pyramid_texel(i: u32) -> f32 {
-    return bitcast<f32>(occlusion[params.pyramid_offset + i]);
+    return bitcast<f32>(occlusion[i]);
 }
 
 fn view_center(s: vec4<f32>, m: mat4x4<f32>) -> vec3<f32> {
@@ -105,9 +135,9 @@ fn pyramid_level(lo: vec2<u32>, hi: vec2<u32>, levels: u32) -> u32 {
     return l;
 }
 
-fn occluded_in_eye(s: vec4<f32>, e: u32) -> bool {
-    let view = display.eye[e].view_from_world;
-    let clip = display.eye[e].clip_from_view;
+// Whether eye e (of `view` and `clip`) of a display whose pyramids are `at` sees s
+// behind them.
+fn occluded_in_eye(s: vec4<f32>, view: mat4x4<f32>, clip: mat4x4<f32>, e: u32, at: Pyramids) -> bool {
     let c = view_center(s, view);
     let r = grown_radius(s, view, c);
     let near = -c.z - r;
@@ -124,13 +154,12 @@ fn occluded_in_eye(s: vec4<f32>, e: u32) -> bool {
     let y0 = clip[1].y * ys.x - clip[2].y;
     let x1 = clip[0].x * xs.y - clip[2].x;
     let y1 = clip[1].y * ys.y - clip[2].y;
-    let size = eye_size();
-    let w = f32(size.x);
-    let h = f32(size.y);
-    let px0 = (x0 * 0.5 + 0.5) * w - display.occlusion_margin_px;
-    let px1 = (x1 * 0.5 + 0.5) * w + display.occlusion_margin_px;
-    let py0 = (0.5 - y1 * 0.5) * h - display.occlusion_margin_px;
-    let py1 = (0.5 - y0 * 0.5) * h + display.occlusion_margin_px;
+    let w = f32(at.size.x);
+    let h = f32(at.size.y);
+    let px0 = (x0 * 0.5 + 0.5) * w - at.margin_px;
+    let px1 = (x1 * 0.5 + 0.5) * w + at.margin_px;
+    let py0 = (0.5 - y1 * 0.5) * h - at.margin_px;
+    let py1 = (0.5 - y0 * 0.5) * h + at.margin_px;
     if (px1 < 0.0 || py1 < 0.0 || px0 >= w || py0 >= h) {
         return true;
     }
@@ -138,12 +167,12 @@ fn occluded_in_eye(s: vec4<f32>, e: u32) -> bool {
     let last = vec2(w - 1.0, h - 1.0);
     let lo = vec2<u32>(clamp(vec2(px0, py0), vec2(0.0), last));
     let hi = vec2<u32>(clamp(vec2(px1, py1), vec2(0.0), last));
-    let levels = pyramid_levels();
+    let levels = pyramid_levels(at.size);
     let l = pyramid_level(lo, hi, levels);
     let a = lo >> vec2(l + 1u);
     let b = hi >> vec2(l + 1u);
-    let base = level_offset(e, l, levels);
-    let width = level_size(l).x;
+    let base = at.base + level_offset(at.size, e, l, levels);
+    let width = level_size(at.size, l).x;
     let farthest = farthest4(
         pyramid_texel(base + a.y * width + a.x),
         pyramid_texel(base + a.y * width + b.x),

@@ -1,36 +1,32 @@
 // The layout of a display's depth pyramids in `pyramid` (PyramidShape in
 // src/occlusion.rs): per eye its levels finest first, level l ceil(size / 2^(l+1))
 // texels, each the farthest depth of the pixels it covers; `size` is one eye's view
-// (display.resolution).
+// in pixels (its display's resolution).
 
-fn eye_size() -> vec2<u32> {
-    return vec2<u32>(display.resolution);
-}
-
-fn level_size(l: u32) -> vec2<u32> {
+fn level_size(size: vec2<u32>, l: u32) -> vec2<u32> {
     let shift = l + 1u;
     let half = (1u << shift) - 1u;
-    return (eye_size() + vec2(half)) >> vec2(shift);
+    return (size + vec2(half)) >> vec2(shift);
 }
 
-fn pyramid_levels() -> u32 {
+fn pyramid_levels(size: vec2<u32>) -> u32 {
     var l = 0u;
-    while (any(level_size(l) != vec2(1u))) {
+    while (any(level_size(size, l) != vec2(1u))) {
         l++;
     }
     return l + 1u;
 }
 
 // Where level l of eye e starts.
-fn level_offset(e: u32, l: u32, levels: u32) -> u32 {
+fn level_offset(size: vec2<u32>, e: u32, l: u32, levels: u32) -> u32 {
     var eye_len = 0u;
     var before = 0u;
     for (var k = 0u; k < levels; k++) {
-        let size = level_size(k);
+        let here = level_size(size, k);
         if (k == l) {
             before = eye_len;
         }
-        eye_len += size.x * size.y;
+        eye_len += here.x * here.y;
     }
     return e * eye_len + before;
 }
@@ -38,4 +34,3 @@ fn level_offset(e: u32, l: u32, levels: u32) -> u32 {
 fn farthest4(a: f32, b: f32, c: f32, d: f32) -> f32 {
     return max(max(a, b), max(c, d));
 }
-

@@ -86,10 +86,12 @@ struct CullParams {
     max_groups: u32,
     // Levels of detail in use: 1 (LOD off) or MAX_LODS.
     lod_levels: u32,
-    // Occlusion: words of visibility bits per display slot, and where the pyramids
-    // start in `occlusion`.
+    // Occlusion: words of visibility bits per display slot, where the pyramids start
+    // in `occlusion`, and the words between two display slots' pyramids (each slot
+    // has its own region, so that every display's are built before any late cull).
     visibility_words: u32,
     pyramid_offset: u32,
+    pyramid_stride: u32,
     // Material bins: each has its own range of the draws and word of the counts;
     // the first blended bin (0xffffffff: none; the later ones are blended too), whose
     // instances occlusion never marks drawn.
@@ -150,9 +152,23 @@ struct HiddenArea {
     count: u32,
 }
 
-// The views one set of rig dispatches culls: the first `members` of `views`.
+// What a member in the late occlusion phase tests against its display's pyramids
+// (src/cull/rig.rs, RigOcclusion): its first two views' matrices (eye[0..2] of its
+// context), one view's pixels, the margin and the display's views.
+struct RigOcclusion {
+    view_from_world: array<mat4x4<f32>, 2>,
+    clip_from_view: array<mat4x4<f32>, 2>,
+    resolution: vec2<f32>,
+    margin_px: f32,
+    views: u32,
+}
+
+// The views one set of rig dispatches culls: the first `members` of `views`; in the
+// late phase each member's occlusion test in `occlusion` (apart from `views`, which
+// the other phases load per member per span and never need it).
 struct RigCull {
     views: array<RigView, MAX_RIG_VIEWS>,
+    occlusion: array<RigOcclusion, MAX_RIG_VIEWS>,
     members: u32,
 }
 

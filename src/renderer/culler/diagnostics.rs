@@ -83,7 +83,8 @@ impl Culler {
                 if let (Some(coarse), false) = (coarse, groups.is_empty()) {
                     culler.encode_frame(pass, scene, [group, &coarse.args]);
                 }
-                culler.encode_rig(pass, scene, rig);
+                culler.encode_rig(pass, scene, (rig, false));
+                culler.encode_rig(pass, scene, (rig, true));
                 for (v, group) in groups.iter().filter(|(v, _)| v.member.is_none()) {
                     encode_view(pass, v, group);
                 }

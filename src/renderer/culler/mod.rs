@@ -23,6 +23,7 @@ use crate::cull::CullOutput;
 use crate::cull::cpu;
 use crate::cull::gpu::{CoarseGroups, CullerFeatures, GpuCuller};
 use crate::cull::gpu_buffers::{CullScene, OcclusionRoom};
+use crate::cull::rig::RigSets;
 use crate::cull::targets::CullTargets;
 use crate::error::Result;
 use crate::occlusion::{Phase, cull_early};
@@ -71,8 +72,9 @@ enum Kind {
 /// the floor kernel ([`super::RendererOptions::cull_floor`]).
 #[derive(Clone, Debug)]
 pub(super) struct CullShape {
-    /// The views the rig cull culls together (GPU culling; empty: none), each in
-    /// [`Phase::Frustum`].
+    /// The views the rig cull culls together (GPU culling; empty: none): those of its
+    /// first part (frustum and early phases), then its late members
+    /// ([`CullView::Late`]).
     pub rig: Vec<CullView>,
     pub slots: u32,
     pub levels: u32,
@@ -128,18 +130,23 @@ impl Culler {
                     rig: !members.is_empty(),
                 };
                 let culler = GpuCuller::new(device, features, windows);
-                let rig_members = members.len() as u32;
+                let late = members.iter().filter(|m| matches!(m, CullView::Late(_)));
+                let late = late.count() as u32;
+                let sets = RigSets {
+                    first: members.len() as u32 - late,
+                    late,
+                };
                 let room = (
                     shape.coarse_slots,
                     shape.occlusion,
-                    rig_members,
+                    sets,
                     shape.hidden_slots,
                 );
                 let scene = CullScene::new(device, &layout, (shape.slots, shape.levels), room);
                 let scene = Box::new(scene);
                 let coarse = culler.coarse_bind_groups(device, &scene);
                 let draws = bins.iter().map(|r| r.capacity).sum();
-                let rig = match rig_members {
+                let rig = match sets.members() {
                     0 => Vec::new(),
                     n => CullTargets::bank(device, shape.slots, draws, n),
                 };
@@ -179,7 +186,7 @@ impl Culler {
         contexts: [&wgpu::Buffer; 2],
     ) -> ViewCull {
         let member = (self.members.iter().position(|m| *m == view))
-            .filter(|_| matches!(phase, Phase::Frustum | Phase::Early));
+            .filter(|_| matches!(phase, Phase::Frustum | Phase::Early | Phase::Late));
         let (targets, bind_group) = match &self.kind {
             Kind::Gpu {
                 culler,
@@ -282,7 +289,8 @@ impl Culler {
             (Kind::Gpu { scene, .. }, Some(m)) => {
                 let early = view.phase == Phase::Early;
                 let record = context.rig_view(view.targets.member_at(), early);
-                scene.write_rig_member(queue, m, &record)
+                let late = (view.phase == Phase::Late).then(|| context.rig_occlusion());
+                scene.write_rig_member(queue, m, (&record, late.as_ref()))
             }
             _ => 0,
         }
@@ -332,11 +340,44 @@ impl Culler {
         }
         if !rig.is_empty() {
             let (mut pass, open) = rec.compute_pass(encoder, PassRecord::frame("rig_cull"));
-            dispatches += culler.encode_rig(&mut pass, scene, rig);
+            dispatches += culler.encode_rig(&mut pass, scene, (rig, false));
             rec.close_compute(encoder, pass, open);
         }
         rec.leave(encoder);
         dispatches
+    }
+
+    /// Records the rig cull's late members (GPU culling with occlusion and the rig
+    /// cull), timed as `rig_late_cull` inside a `frame` scope: after every display's
+    /// early draw and pyramids. Returns the dispatches.
+    pub(super) fn encode_late_rig(
+        &self,
+        encoder: &mut wgpu::CommandEncoder,
+        rec: &mut Recorder,
+    ) -> u32 {
+        let Kind::Gpu {
+            culler,
+            scene,
+            rig_groups,
+            ..
+        } = &self.kind
+        else {
+            return 0;
+        };
+        let rig = rig_groups.get().map_or(&[][..], Vec::as_slice);
+        if !self.members.iter().any(|m| matches!(m, CullView::Late(_))) || rig.is_empty() {
+            return 0;
+        }
+        let (mut pass, open) = rec.frame_pass(encoder, "rig_late_cull");
+        let dispatches = culler.encode_rig(&mut pass, scene, (rig, true));
+        rec.close_frame_pass(encoder, pass, open);
+        dispatches
+    }
+
+    /// Whether [`Culler::encode`] records passes for `view` in its own phase: culling
+    /// on the GPU, where the rig cull does not take it.
+    pub(super) fn records(&self, view: &ViewCull) -> bool {
+        matches!(self.kind, Kind::Gpu { .. }) && view.bind_group.is_some() && view.member.is_none()
     }
 
     /// Records `view`'s cull on the GPU (over its display's blocks with the coarse

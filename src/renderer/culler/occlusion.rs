@@ -22,9 +22,8 @@ pub(in crate::renderer) type ReadPyramids = Vec<Option<(Vec<f32>, PyramidShape)>
 pub(in crate::renderer) type LateViews<'a> = (Option<&'a ViewCull>, Option<&'a ViewCull>);
 
 /// Culling on the CPU with occlusion: every occluding display's pyramids in one buffer,
-/// each at its own offset (the GPU culler's share one region: its late cull follows
-/// each display's pyramids in the same submission; here all are built before any is
-/// read), and the plan of the frame whose late culls they serve.
+/// each at its own offset (as the GPU culler keeps them in its occlusion buffer), read
+/// back once all are built, and the plan of the frame whose late culls they serve.
 pub(super) struct LateReadback {
     buffer: wgpu::Buffer,
     /// Per display: where its pyramids start (bytes) and their shape.
@@ -112,7 +111,7 @@ impl Culler {
     /// reads them: the buffer and the offset (bytes).
     pub(in crate::renderer) fn pyramid_texels(&self, i: usize) -> Option<(&wgpu::Buffer, u64)> {
         match &self.kind {
-            Kind::Gpu { scene, .. } => Some((scene.occlusion(), scene.pyramid_offset())),
+            Kind::Gpu { scene, .. } => Some((scene.occlusion(), scene.pyramid_offset(i))),
             Kind::Cpu { late, .. } => {
                 let l = late.as_ref()?;
                 let (at, _) = (*l.regions.get(i)?)?;
@@ -143,35 +142,34 @@ impl Culler {
         }
     }
 
-    /// The pyramids of the last display with occlusion (of `shape`) as the last frame
-    /// built them, read back (`None` without occlusion).
+    /// Display `i`'s pyramids (of `shape`) as the last frame built them, read back.
     pub(in crate::renderer) fn read_pyramid(
         &self,
         device: &wgpu::Device,
         queue: &wgpu::Queue,
-        shape: Option<PyramidShape>,
+        (i, shape): (usize, PyramidShape),
     ) -> Result<Option<Vec<f32>>> {
-        match (&self.kind, shape) {
-            (Kind::Cpu { late: Some(l), .. }, _) => {
+        match &self.kind {
+            Kind::Cpu { late: Some(l), .. } => {
                 let read = l.read(device, queue)?;
-                Ok(read.into_iter().flatten().last().map(|(texels, _)| texels))
+                Ok(read.into_iter().nth(i).flatten().map(|(texels, _)| texels))
             }
-            (Kind::Gpu { scene, .. }, Some(shape)) => {
-                let offset = scene.pyramid_offset();
+            Kind::Gpu { scene, .. } => {
+                let offset = scene.pyramid_offset(i);
                 let bytes = offset + 4 * shape.len() as u64;
                 let all: Vec<f32> = read_pod(device, queue, scene.occlusion(), bytes)?;
                 Ok(Some(all[offset as usize / 4..].to_vec()))
             }
-            _ => Ok(None),
+            Kind::Cpu { late: None, .. } => Ok(None),
         }
     }
 
     /// GPU bytes occlusion adds to the culler: per display, its visibility words (on
-    /// the GPU; the CPU keeps its own), and once the pyramids' room, `shared` where the
-    /// displays share one region (the GPU culler's), else the read-back buffer's.
-    pub(in crate::renderer) fn occlusion_bytes(&self, shared: u64) -> (u64, u64) {
+    /// the GPU; the CPU keeps its own), and once the pyramids' room (the occlusion
+    /// buffer's regions, or the read-back buffer).
+    pub(in crate::renderer) fn occlusion_bytes(&self) -> (u64, u64) {
         match &self.kind {
-            Kind::Gpu { scene, .. } => (4 * scene.visibility_words() as u64, shared),
+            Kind::Gpu { scene, .. } => (4 * scene.visibility_words() as u64, scene.pyramid_bytes()),
             Kind::Cpu { late, .. } => (0, late.as_ref().map_or(0, |l| l.buffer.size())),
         }
     }

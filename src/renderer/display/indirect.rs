@@ -9,7 +9,7 @@ use std::time::Instant;
 
 use super::far_layer::{Far, FarDisplay, FarLayers};
 use super::occlusion::{
-    LatePhase, OcclusionBytes, Pyramids, check_depth, occlusion_bytes, pyramid_shapes,
+    LatePhase, OcclusionBytes, PyramidSets, check_depth, occlusion_bytes, pyramid_shapes,
 };
 use super::{PathCore, PathInputs};
 use crate::contexts::context_buffer;
@@ -49,6 +49,8 @@ pub(in crate::renderer) struct IndirectPath {
     pub(super) displays: Vec<IndirectDisplay>,
     /// With the far layer: the stereo displays' far layers.
     pub(super) far: Option<Far>,
+    /// With occlusion: every display's pyramids, in sets of displays.
+    pyramids: PyramidSets,
     /// Per display with a visibility mask (and the option on): its mask pass, drawn
     /// first in the display's clearing draw pass.
     pub(in crate::renderer) masks: Vec<Option<(MaskPipeline, DisplayMask)>>,
@@ -116,9 +118,9 @@ impl IndirectPath {
             drawer: &drawer,
             scene: &draw_scene,
         };
-        let pyramids = (occlusion.displays > 0).then(|| Pyramids::new(device, options));
-        let shaped = (&keys[..], plan, &shapes[..], pyramids.as_ref());
+        let shaped = (&keys[..], plan, &shapes[..]);
         let displays = indirect_displays(device, shaped, drawing, frame, &culler);
+        let pyramids = PyramidSets::new(device, options, shaped, &culler);
         let far = options.far_layer.then(|| {
             let layers = FarLayers::new(device, (target, &kinds), shaders, windows);
             let contexts: Vec<&wgpu::Buffer> = displays.iter().map(|d| d.view.context()).collect();
@@ -134,6 +136,7 @@ impl IndirectPath {
             },
             displays,
             far,
+            pyramids,
             masks: Vec::new(),
         })
     }
@@ -152,10 +155,15 @@ impl IndirectPath {
         stats.bytes_uploaded += self.core.culler.prepare(to.pose, &plan);
         stats.cpu_cull = start.elapsed();
         let start = Instant::now();
+        let culler = &self.core.culler;
         for ((state, ctx), inset) in self.displays.iter().zip(&plan.displays).zip(&plan.insets) {
-            stats.bytes_uploaded += state.view.prepare(to, ctx, &self.core.culler);
+            stats.bytes_uploaded += state.view.prepare(to, ctx, culler);
+            // The late phase shares the early one's context; a rig member has a record.
+            if let Some(late) = &state.late {
+                stats.bytes_uploaded += culler.write_member(to.pose, late.view.view_cull(), ctx);
+            }
             if let (Some(view), Some(inset)) = (&state.inset, inset) {
-                stats.bytes_uploaded += view.prepare(to, inset, &self.core.culler);
+                stats.bytes_uploaded += view.prepare(to, inset, culler);
             }
         }
         if let Some(far) = &mut self.far {
@@ -164,6 +172,17 @@ impl IndirectPath {
         stats.cpu_upload = start.elapsed();
         self.core.culler.keep_for_late(plan);
         stats
+    }
+
+    /// With occlusion and the rig cull, every display's late cull in one set of
+    /// dispatches, after every display's early draw and pyramids. Returns the
+    /// dispatches.
+    pub(in crate::renderer) fn encode_late_rig(
+        &self,
+        encoder: &mut wgpu::CommandEncoder,
+        rec: &mut Recorder,
+    ) -> u32 {
+        self.core.culler.encode_late_rig(encoder, rec)
     }
 
     /// The path's frame-level pass: the coarse cull (when it runs, on the GPU).
@@ -177,22 +196,12 @@ impl IndirectPath {
         self.core.culler.encode_frame(encoder, any, rec)
     }
 
-    /// Display `index`: its cull dispatches (GPU culling), then one pass with one draw
-    /// call, inside its display's scope; with occlusion both halves of its two phases.
-    pub(in crate::renderer) fn encode_display(
-        &self,
-        encoder: &mut wgpu::CommandEncoder,
-        at: (usize, &TargetViews),
-        rec: &mut Recorder,
-    ) -> FrameStats {
-        let early = self.encode_early(encoder, at, rec);
-        early + self.encode_rest(encoder, at, rec)
-    }
-
-    /// Display `index` up to what its late phase needs: its cull, its draw (with
-    /// occlusion the early one) and its pyramids (and, culling on the GPU, its late
-    /// cull). Culling on the CPU with occlusion the frame stops here until
-    /// [`IndirectPath::cull_late`] has the pyramids.
+    /// Display `index` up to what its late phase needs: its cull and its draw (with
+    /// occlusion the early one). With occlusion, once every display's is recorded,
+    /// [`IndirectPath::encode_pyramids`] reduces every display's depth, and the late
+    /// culls follow ([`IndirectPath::encode_late_rig`], or each display's own). Culling
+    /// on the CPU with occlusion the frame stops after the pyramids until
+    /// [`IndirectPath::cull_late`] has them.
     pub(in crate::renderer) fn encode_early(
         &self,
         encoder: &mut wgpu::CommandEncoder,
@@ -214,14 +223,43 @@ impl IndirectPath {
         rec.count_samples(&mut pass, &mut open);
         draw_calls += self.draw_views(&mut pass, index, composite);
         rec.close_render(encoder, pass, open);
-        let pyramids = match &self.displays[index].late {
-            Some(late) => late.encode_cull(encoder, (&self.core.culler, target), rec),
-            None => FrameStats::default(),
-        };
         FrameStats {
             draw_calls: culled.draw_calls + draw_calls,
-            dispatches: culled.dispatches + pyramids.dispatches,
             ..culled
+        }
+    }
+
+    /// With occlusion, after every display's [`IndirectPath::encode_early`]: every
+    /// display's pyramids of its early depth (in `targets`), in sets of displays.
+    /// Returns the dispatches.
+    pub(in crate::renderer) fn encode_pyramids(
+        &self,
+        encoder: &mut wgpu::CommandEncoder,
+        targets: &[TargetViews],
+        rec: &mut Recorder,
+    ) -> u32 {
+        (self.pyramids).encode(encoder, (&self.core.culler, targets), rec)
+    }
+
+    /// Whether display `index`'s late cull takes dispatches of its own (GPU culling
+    /// with occlusion, where the rig cull does not take it).
+    pub(in crate::renderer) fn culls_late_apart(&self, index: usize) -> bool {
+        let late = self.displays[index].late.as_ref();
+        late.is_some_and(|l| self.core.culler.records(l.view.view_cull()))
+    }
+
+    /// Display `index`'s late cull in its own dispatches (see
+    /// [`IndirectPath::culls_late_apart`]), after every display's pyramids. Returns
+    /// the dispatches.
+    pub(in crate::renderer) fn encode_late_cull(
+        &self,
+        encoder: &mut wgpu::CommandEncoder,
+        index: usize,
+        rec: &mut Recorder,
+    ) -> u32 {
+        match &self.displays[index].late {
+            Some(late) => late.encode_cull(encoder, &self.core.culler, rec),
+            None => 0,
         }
     }
 
@@ -242,6 +280,11 @@ impl IndirectPath {
         let with = (self.core.drawing(), &state.own, self.far_layer(index));
         stats.draw_calls += late.encode_draw(encoder, with, target, rec);
         stats
+    }
+
+    /// Whether display `index` has a late half ([`IndirectPath::encode_rest`]).
+    pub(in crate::renderer) fn has_late(&self, index: usize) -> bool {
+        self.displays[index].late.is_some()
     }
 
     /// Display `index`'s far layer, with what every far layer shares (`None` without).
@@ -411,12 +454,7 @@ impl IndirectPath {
 /// `plan` culls the display's insets.
 fn indirect_displays(
     device: &wgpu::Device,
-    (keys, plan, shapes, pyramids): (
-        &[DrawKey],
-        &FramePlan,
-        &[Option<PyramidShape>],
-        Option<&Pyramids>,
-    ),
+    (keys, plan, shapes): (&[DrawKey], &FramePlan, &[Option<PyramidShape>]),
     drawing: Drawing,
     frame: &wgpu::Buffer,
     culler: &Culler,
@@ -425,16 +463,13 @@ fn indirect_displays(
     let phased = |v, context| ViewPass::phased(device, drawing, frame, culler, v, context);
     (keys.iter().enumerate().zip(shapes))
         .map(|((i, &key), shape)| {
-            let (display, late) = match (shape, pyramids) {
-                (Some(shape), Some(pyramids)) => {
+            let (display, late) = match shape {
+                Some(shape) => {
                     let early =
                         phased((CullView::Display(i), Phase::Early), context_buffer(device));
                     let context = early.context().clone();
                     let late = phased((CullView::Late(i), Phase::Late), context);
-                    (
-                        early,
-                        Some(LatePhase::new((i, key), late, *shape, pyramids)),
-                    )
+                    (early, Some(LatePhase::new((i, key), late, *shape)))
                 }
                 _ => (view(CullView::Display(i)), None),
             };
@@ -453,13 +488,18 @@ fn indirect_displays(
 /// instance (not over the coarse cull's blocks) by its frustum alone or in the early
 /// occlusion phase: each display (with occlusion, `shapes[i]`, its early phase), its
 /// far layer (where it is not tested against its display's pyramids), and each inset
-/// pair. The light's cull stays apart: it runs in the frame's shadow pass, before the
-/// displays' culls, and its box is no display's. A late phase waits for its display's
-/// early draw and pyramids, and so does a far layer tested against them.
+/// pair; then the displays' late phases, culled together once every display's early
+/// draw and pyramids are recorded. The light's cull stays apart: it runs in the
+/// frame's shadow pass, before the displays' culls, and its box is no display's. A far
+/// layer tested against its display's pyramids stays apart too: its frustum is its
+/// own (a far split), and it is culled and drawn in its display's late half.
 fn rig_members(plan: &FramePlan, shapes: &[Option<PyramidShape>], coarse: bool) -> Vec<CullView> {
     if coarse {
         return Vec::new();
     }
+    let late = (shapes.iter().enumerate())
+        .filter(|(_, shape)| shape.is_some())
+        .map(|(i, _)| CullView::Late(i));
     let displays = (0..shapes.len()).map(CullView::Display);
     let far = (plan.far.iter().zip(shapes).enumerate())
         .filter(|(_, (far, shape))| far.is_some() && shape.is_none())
@@ -467,7 +507,7 @@ fn rig_members(plan: &FramePlan, shapes: &[Option<PyramidShape>], coarse: bool) 
     let insets = (plan.insets.iter().enumerate())
         .filter(|(_, inset)| inset.is_some())
         .map(|(i, _)| CullView::Inset(i));
-    displays.chain(far).chain(insets).collect()
+    displays.chain(far).chain(insets).chain(late).collect()
 }
 
 /// Each display's pipeline variant: multiview for stereo in `multiview`, else one, two

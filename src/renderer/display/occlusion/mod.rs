@@ -1,8 +1,10 @@
-//! Occlusion's passes on the GPU-driven path (`indirect.rs`): after a display's early
-//! draw, its depth pyramids, its late cull and its late draw; which displays cull by
-//! occlusion, and what it costs in GPU memory. The technique is [`crate::occlusion`]'s;
-//! where the late cull reads the pyramids, and culling on the CPU its late phase
-//! between the frame's halves, is the culler's (`culler/occlusion.rs`).
+//! Occlusion's passes on the GPU-driven path (`indirect.rs`): after every display's
+//! early draw, every display's depth pyramids in sets of displays (`PyramidSets`),
+//! then each display's late cull (the rig cull's late members, or its own dispatches)
+//! and its late draw; which displays cull by occlusion, and what it costs in GPU
+//! memory. The technique is [`crate::occlusion`]'s; where the late cull reads the
+//! pyramids, and culling on the CPU its late phase between the frame's halves, is the
+//! culler's (`culler/occlusion.rs`).
 
 use std::sync::Mutex;
 
@@ -10,101 +12,184 @@ use super::far_layer::{Far, FarDisplay};
 use crate::draw::{BinPipelines, Drawing, OwnPipelines};
 use crate::error::Result;
 use crate::occlusion::PyramidShape;
-use crate::occlusion::pyramid::PyramidPass;
+use crate::occlusion::pyramid::{PyramidPass, PyramidSlice};
 use crate::renderer::culler::Culler;
 use crate::renderer::options::RendererOptions;
-use crate::renderer::options::StereoMode;
-use crate::renderer::plan::{FramePlan, FrameStats};
+use crate::renderer::plan::FramePlan;
 use crate::renderer::recorder::{PassRecord, Recorder, begin_draw_pass};
 use crate::renderer::targets::TargetViews;
 use crate::renderer::view::ViewPass;
-use crate::shaders::DrawKey;
+use crate::shaders::{DrawKey, PYRAMID_SET_DEPTHS};
 
-/// Display `index`'s late occlusion phase, with what it is recorded with: its cull and
-/// draw (whose context is the display's, which the pyramids read too), its pipeline
-/// variant, the pyramid pass for its depth target and the shape of its pyramids, and
-/// their bind group for the depth target it was last made for (a caller usually renders
-/// into the same targets every frame: no bind group per frame then).
+/// Display `index`'s late occlusion phase: its cull and draw (whose context is the
+/// display's), its pipeline variant and the shape of its pyramids.
 pub(in crate::renderer) struct LatePhase {
     pub(in crate::renderer::display) view: ViewPass,
     pub(in crate::renderer::display) shape: PyramidShape,
     index: usize,
     key: DrawKey,
-    pyramid: PyramidPass,
-    device: wgpu::Device,
-    bound: Mutex<Option<(wgpu::TextureView, wgpu::BindGroup)>>,
 }
 
 impl LatePhase {
     /// Display `index`'s late phase, drawn with pipeline variant `key` and culled and
-    /// drawn by `view` (whose context is the display's), its pyramids `shape` reduced
-    /// by the pass of `pyramids` its variant's target needs.
+    /// drawn by `view` (whose context is the display's), its pyramids `shape`.
     pub(in crate::renderer::display) fn new(
         (index, key): (usize, DrawKey),
         view: ViewPass,
         shape: PyramidShape,
-        pyramids: &Pyramids,
     ) -> LatePhase {
-        let pyramid = match (key.multiview, &pyramids.layered) {
-            (true, Some(layered)) => layered,
-            _ => &pyramids.side_by_side,
-        };
         LatePhase {
             view,
             shape,
             index,
             key,
-            pyramid: pyramid.clone(),
-            device: pyramids.device.clone(),
-            bound: Mutex::new(None),
+        }
+    }
+}
+
+/// Every display's pyramids, in sets of up to [`PYRAMID_SET_DEPTHS`] displays whose
+/// depth targets one pass reads (side by side, or a layer per eye): one set of
+/// dispatches each.
+pub(in crate::renderer::display) struct PyramidSets {
+    sets: Vec<PyramidSetPass>,
+    device: wgpu::Device,
+}
+
+/// One set: its pass, its slices (and their uniform), its displays in depth-binding
+/// order, and its bind group for the depth targets it was last made for (a caller
+/// usually renders into the same targets every frame: no bind group per frame then).
+struct PyramidSetPass {
+    pass: PyramidPass,
+    set: wgpu::Buffer,
+    slices: Vec<PyramidSlice>,
+    displays: Vec<usize>,
+    bound: Mutex<Option<(Vec<wgpu::TextureView>, wgpu::BindGroup)>>,
+}
+
+impl PyramidSets {
+    /// The sets of the displays with a pyramid shape (`shapes`), drawn with pipeline
+    /// variants `keys` into targets laid out as `plan`'s contexts say, into their
+    /// regions of `culler`'s pyramids.
+    pub(in crate::renderer::display) fn new(
+        device: &wgpu::Device,
+        options: &RendererOptions,
+        (keys, plan, shapes): (&[DrawKey], &FramePlan, &[Option<PyramidShape>]),
+        culler: &Culler,
+    ) -> PyramidSets {
+        let samples = options.sample_count;
+        let layered = |i: usize| keys[i].multiview && samples == 1;
+        let mut sets = Vec::new();
+        for variant in [false, true] {
+            let displays: Vec<usize> = (0..shapes.len())
+                .filter(|&i| shapes[i].is_some() && layered(i) == variant)
+                .collect();
+            if displays.is_empty() {
+                continue;
+            }
+            let pass = PyramidPass::new(device, if variant { 1 } else { samples }, variant);
+            for chunk in displays.chunks(PYRAMID_SET_DEPTHS) {
+                let slices = set_slices(chunk, (plan, shapes, variant), culler);
+                sets.push(PyramidSetPass {
+                    pass: pass.clone(),
+                    set: PyramidPass::set_buffer(device, &slices),
+                    slices,
+                    displays: chunk.to_vec(),
+                    bound: Mutex::new(None),
+                });
+            }
+        }
+        PyramidSets {
+            sets,
+            device: device.clone(),
         }
     }
 
-    /// The pyramids' bind group for `depth`: the last one if made for it, else one
-    /// `make` makes (and kept).
+    /// Records every set's pyramids of the early depth in `targets` (one per
+    /// display), where `culler` reads them, as one frame-level pass `pyramid`.
+    /// Returns the dispatches.
+    pub(in crate::renderer::display) fn encode(
+        &self,
+        encoder: &mut wgpu::CommandEncoder,
+        (culler, targets): (&Culler, &[TargetViews]),
+        rec: &mut Recorder,
+    ) -> u32 {
+        if self.sets.is_empty() {
+            return 0;
+        }
+        let (mut pass, open) = rec.frame_pass(encoder, "pyramid");
+        let mut dispatches = 0;
+        for set in &self.sets {
+            let Some((pyramids, _)) = culler.pyramid_texels(set.displays[0]) else {
+                continue;
+            };
+            let depths: Vec<wgpu::TextureView> = set
+                .displays
+                .iter()
+                .map(|&i| targets[i].depth.clone())
+                .collect();
+            let group = set.bind_group(depths, |views| {
+                let views: Vec<&wgpu::TextureView> = views.iter().collect();
+                let buffers = (&set.set, pyramids);
+                set.pass.bind_group(&self.device, buffers, &views)
+            });
+            dispatches += set.pass.encode(&mut pass, &group, &set.slices);
+        }
+        rec.close_frame_pass(encoder, pass, open);
+        dispatches
+    }
+}
+
+impl PyramidSetPass {
+    /// The bind group for `depths`: the last one if made for them, else one `make`
+    /// makes (and kept).
     fn bind_group(
         &self,
-        depth: &wgpu::TextureView,
-        make: impl FnOnce(&wgpu::TextureView) -> wgpu::BindGroup,
+        depths: Vec<wgpu::TextureView>,
+        make: impl FnOnce(&[wgpu::TextureView]) -> wgpu::BindGroup,
     ) -> wgpu::BindGroup {
         let mut bound = self
             .bound
             .lock()
             .unwrap_or_else(|poisoned| poisoned.into_inner());
         match &*bound {
-            Some((view, group)) if view == depth => group.clone(),
+            Some((views, group)) if *views == depths => group.clone(),
             _ => {
-                let group = make(depth);
-                *bound = Some((depth.clone(), group.clone()));
+                let group = make(&depths);
+                *bound = Some((depths, group.clone()));
                 group
             }
         }
     }
 }
 
-/// The depth pyramids' passes (over side-by-side eyes, and over a layer per eye for
-/// multiview), and the device that binds each frame's depth target to them.
-pub(in crate::renderer::display) struct Pyramids {
-    side_by_side: PyramidPass,
-    layered: Option<PyramidPass>,
-    device: wgpu::Device,
-}
-
-impl Pyramids {
-    /// The passes `options` need: a layered variant in single-sampled multiview.
-    pub(in crate::renderer::display) fn new(
-        device: &wgpu::Device,
-        options: &RendererOptions,
-    ) -> Pyramids {
-        let samples = options.sample_count;
-        let layered = (options.mode == StereoMode::Multiview && samples == 1)
-            .then(|| PyramidPass::new(device, 1, true));
-        Pyramids {
-            side_by_side: PyramidPass::new(device, samples, false),
-            layered,
-            device: device.clone(),
+/// The slices of a set of `displays` (in depth-binding order): each eye's viewport
+/// (its display's context's, or a layer's corner when `layered`), its pixels, and its
+/// display's region of `culler`'s pyramids.
+fn set_slices(
+    displays: &[usize],
+    (plan, shapes, layered): (&FramePlan, &[Option<PyramidShape>], bool),
+    culler: &Culler,
+) -> Vec<PyramidSlice> {
+    let mut slices = Vec::new();
+    for (depth, &i) in displays.iter().enumerate() {
+        let (Some(shape), Some((_, at))) = (shapes[i], culler.pyramid_texels(i)) else {
+            continue;
+        };
+        for eye in 0..shape.eyes {
+            let viewport = plan.displays[i].eye[eye as usize].viewport;
+            slices.push(PyramidSlice {
+                origin: match layered {
+                    true => glam::UVec2::ZERO,
+                    false => glam::UVec2::new(viewport.x as u32, viewport.y as u32),
+                },
+                size: shape.eye,
+                base: (at / 4) as u32,
+                eye,
+                depth: depth as u32,
+            });
         }
     }
+    slices
 }
 
 /// GPU memory occlusion culling adds.
@@ -114,42 +199,23 @@ pub struct OcclusionBytes {
     /// late phase's cull outputs (a visible list with room for every instance, the
     /// draws, the counts).
     pub per_display: u64,
-    /// Once: the depth pyramids of the largest display's eyes, which displays share
-    /// (culling on the CPU, every display's, read back together).
+    /// Once: every display's depth pyramids, each in its own region (on the GPU every
+    /// display slot's region is the largest display's size), so that all are built
+    /// before the late culls read them (culling on the CPU, read back together).
     pub pyramids: u64,
 }
 
 impl LatePhase {
-    /// The display's second phase after its early draw, up to its draw: the pyramids of
-    /// the early depth (in `target`), reduced where `culler` reads them, and the late
-    /// cull.
+    /// The display's late cull in its own dispatches (culling on the GPU, where the
+    /// rig cull does not take it), after every display's pyramids.
     pub(in crate::renderer::display) fn encode_cull(
         &self,
         encoder: &mut wgpu::CommandEncoder,
-        (culler, target): (&Culler, &TargetViews),
+        culler: &Culler,
         rec: &mut Recorder,
-    ) -> FrameStats {
-        let Some((buffer, offset)) = culler.pyramid_texels(self.index) else {
-            return FrameStats::default();
-        };
-        let group = self.bind_group(target.depth, |depth| {
-            let texels = wgpu::BufferBinding {
-                buffer,
-                offset,
-                size: std::num::NonZeroU64::new(4 * self.shape.len() as u64),
-            };
-            (self.pyramid).bind_group(&self.device, self.view.context(), texels, depth)
-        });
-        let (mut pass, open) =
-            rec.compute_pass(encoder, PassRecord::display("pyramid", self.index));
-        let mut dispatches = self.pyramid.encode(&mut pass, &group, self.shape);
-        rec.close_compute(encoder, pass, open);
+    ) -> u32 {
         let what = PassRecord::display("late_cull", self.index);
-        dispatches += (self.view).encode_cull(encoder, culler, rec, what);
-        FrameStats {
-            dispatches,
-            ..FrameStats::default()
-        }
+        self.view.encode_cull(encoder, culler, rec, what)
     }
 
     /// The late draw into `target`: a pass that keeps what the early one drew, opening
@@ -196,10 +262,9 @@ pub(in crate::renderer::display) fn occlusion_bytes<'a>(
     late: impl Iterator<Item = &'a LatePhase> + Clone,
     culler: &Culler,
 ) -> Option<OcclusionBytes> {
-    let shared = 4 * late.clone().map(|l| l.shape.len() as u64).max()?;
     let targets = late.clone().next()?.view.cull();
     let outputs = targets.visible.size() + targets.draws.size() + targets.counts.size();
-    let (words, pyramids) = culler.occlusion_bytes(shared);
+    let (words, pyramids) = culler.occlusion_bytes();
     Some(OcclusionBytes {
         per_display: words + outputs,
         pyramids,
