@@ -279,29 +279,31 @@ pub const PYRAMID_SET_SLICES: usize = 2 * PYRAMID_SET_DEPTHS;
 /// not (the eyes side by side); its bindings are [`super::pyramid_bindings`]. WebGPU
 /// has no multisampled array textures, so a layered target has one sample.
 pub fn pyramid_source(samples: u32, layered: bool) -> String {
-    let read = match (samples, layered) {
-        (_, true) => "textureLoad(depth{k}, p, s.eye, 0)".to_string(),
-        (1, false) => "textureLoad(depth{k}, p, 0)".to_string(),
-        _ => "farthest_sample(depth{k}, p)".to_string(),
+    let (target, read) = match (samples, layered) {
+        (_, true) => ("texture_depth_2d_array", "textureLoad(depth, p, s.eye, 0)"),
+        (1, false) => ("texture_depth_2d", "textureLoad(depth, p, 0)"),
+        // Every sample, the farthest kept.
+        _ => ("texture_depth_multisampled_2d", "farthest_sample(depth, p)"),
     };
+    // The slice's binding, chosen once per invocation (for its 16 pixels), not per
+    // pixel: lavapipe runs a switch's every case under a mask, eight bindings' loads
+    // where one would do (a loop of at most one turn per binding measured no better).
     let cases: String = (0..PYRAMID_SET_DEPTHS)
         .map(|k| {
-            let load = read.replace("{k}", &k.to_string());
-            format!("        case {k}u: {{\n            return {load};\n        }}\n")
+            format!(
+                "        case {k}u: {{\n            return block_texels(depth{k}, at, s);\n        }}\n"
+            )
         })
         .collect();
-    // Under MSAA each depth binding's samples, the farthest kept.
-    let farthest = match (samples, layered) {
-        (1, _) | (_, true) => String::new(),
-        _ => "fn farthest_sample(depth: texture_depth_multisampled_2d, p: vec2<u32>) -> f32 {\n    var d = 0.0;\n    for (var i = 0; i < SAMPLES; i++) {\n        d = max(d, textureLoad(depth, p, i));\n    }\n    return d;\n}\n".to_string(),
-    };
     let bindings = format!(
         "const SAMPLES: i32 = {samples};\n\
          const LEVELS_PER_DISPATCH: u32 = {PYRAMID_LEVELS_PER_DISPATCH}u;\n\
          const SIDE: u32 = {PYRAMID_SIDE}u;\n\
          const MAX_SLICES: u32 = {PYRAMID_SET_SLICES}u;\n\
-         {farthest}\
-         fn depth_texel(p: vec2<u32>, s: PyramidSlice) -> f32 {{\n    switch s.depth {{\n{cases}        default: {{\n            return 1.0;\n        }}\n    }}\n}}\n"
+         alias DepthTarget = {target};\n\
+         fn read_depth(depth: DepthTarget, p: vec2<u32>, s: PyramidSlice) -> f32 {{\n    return {read};\n}}\n\
+         fn depth_texels(at: vec2<u32>, s: PyramidSlice) -> vec4<f32> {{\n    \
+         switch s.depth {{\n{cases}        default: {{\n            return vec4(1.0);\n        }}\n    }}\n}}\n"
     );
     let declared = declarations(&pyramid_bindings(samples, layered), 0, &Windows::WHOLE);
     let body = include_str!("../../wgsl/occlusion_pyramid.wgsl");
