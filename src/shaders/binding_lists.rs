@@ -4,7 +4,6 @@
 //! WGSL declarations and its layout (`bindings.rs`), so the two cannot disagree.
 
 use super::bindings::{Access, Binding, TextureKind};
-use super::cull_passes::PYRAMID_SET_DEPTHS;
 use super::windows::Windowed;
 
 const fn binding(
@@ -416,6 +415,14 @@ pub const POSE_BINDINGS: [Binding; 12] = [
     binding("edits", Access::StorageReadWrite, "Edits", COMPUTE),
     binding("params", Access::Uniform, "PoseParams", COMPUTE),
 ];
+
+/// Depth targets one set of pyramid dispatches reads (`wgsl/occlusion_pyramid.wgsl`):
+/// a binding each (WebGPU has no array of textures without an optional feature, and
+/// stages have 16 sampled textures at least). A rig of more displays with occlusion
+/// reduces its pyramids in sets of this many.
+pub const PYRAMID_SET_DEPTHS: usize = 8;
+/// Eyes one set of pyramid dispatches reduces: two per display.
+pub const PYRAMID_SET_SLICES: usize = 2 * PYRAMID_SET_DEPTHS;
 
 /// The occlusion pyramids' pass (`wgsl/occlusion_pyramid.wgsl`) over a set of depth
 /// targets of `samples` per pixel, their eyes side by side or (`layered`) a layer

@@ -3,7 +3,7 @@
 //! the occlusion pyramids' passes. Composed from the includes and constants of
 //! [`super`] and the binding lists of `bindings.rs`.
 
-use super::binding_lists::pyramid_bindings;
+use super::binding_lists::{PYRAMID_SET_DEPTHS, PYRAMID_SET_SLICES, pyramid_bindings};
 use super::bindings::declarations;
 use super::{
     CANDIDATE_BINDINGS, COARSE_BINDINGS, CONTEXTS, CULL_BINDINGS, CULL_MATH, CULL_SUBGROUPS,
@@ -265,14 +265,6 @@ pub fn subgroup_tier(device: &wgpu::Device) -> bool {
 pub const PYRAMID_LEVELS_PER_DISPATCH: u32 = 6;
 /// Invocations per side of a pyramid workgroup: 2^(levels per dispatch - 2).
 pub const PYRAMID_SIDE: u32 = 1 << (PYRAMID_LEVELS_PER_DISPATCH - 2);
-
-/// Depth targets one set of pyramid dispatches reads (`wgsl/occlusion_pyramid.wgsl`):
-/// a binding each (WebGPU has no array of textures without an optional feature, and
-/// stages have 16 sampled textures at least). A rig of more displays with occlusion
-/// reduces its pyramids in sets of this many.
-pub const PYRAMID_SET_DEPTHS: usize = 8;
-/// Eyes one set of pyramid dispatches reduces: two per display.
-pub const PYRAMID_SET_SLICES: usize = 2 * PYRAMID_SET_DEPTHS;
 
 /// The depth pyramid's passes (`wgsl/occlusion_pyramid.wgsl`) over a set of depth
 /// targets of `samples` samples per pixel, `layered` (multiview: a layer per eye) or

@@ -75,16 +75,16 @@ mod windows;
 pub use binding_lists::{
     CANDIDATE_BINDINGS, COARSE_BINDINGS, CULL_BINDINGS, DEPTH_RESOLVE_BINDINGS, DRAW_BINDINGS,
     FAR_COMPOSITE_BINDINGS, FOVEATED_COMPOSITE_BINDINGS, LIGHT_CLUSTER_BINDINGS, MATERIAL_BINDINGS,
-    MORPH_BINDINGS, MOTION_BINDINGS, POSE_BINDINGS, SCATTER_BINDINGS, SHADOW_MAP_BINDINGS,
-    SKIN_BINDINGS, VISIBILITY_MASK_BINDINGS, pyramid_bindings,
+    MORPH_BINDINGS, MOTION_BINDINGS, POSE_BINDINGS, PYRAMID_SET_DEPTHS, PYRAMID_SET_SLICES,
+    SCATTER_BINDINGS, SHADOW_MAP_BINDINGS, SKIN_BINDINGS, VISIBILITY_MASK_BINDINGS,
+    pyramid_bindings,
 };
 pub use bindings::{
     Access, Binding, Bound, TextureKind, bind_group, bind_group_layout, declarations,
 };
 pub(crate) use bindings::{compute_pipeline, dispatch_size, pipeline_layout};
 pub use cull_passes::{
-    CullPass, PYRAMID_LEVELS_PER_DISPATCH, PYRAMID_SET_DEPTHS, PYRAMID_SET_SLICES, PYRAMID_SIDE,
-    Phase, pyramid_source, subgroup_tier,
+    CullPass, PYRAMID_LEVELS_PER_DISPATCH, PYRAMID_SIDE, Phase, pyramid_source, subgroup_tier,
 };
 pub use draw_key::DrawKey;
 pub use hooks::{Shaders, check_shading};

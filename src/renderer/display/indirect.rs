@@ -8,9 +8,7 @@
 use std::time::Instant;
 
 use super::far_layer::{Far, FarDisplay, FarLayers};
-use super::occlusion::{
-    LatePhase, OcclusionBytes, PyramidSets, check_depth, occlusion_bytes, pyramid_shapes,
-};
+use super::occlusion::{LatePhase, PyramidSets, pyramid_shapes};
 use super::{PathCore, PathInputs};
 use crate::contexts::context_buffer;
 use crate::cull::gpu_buffers::OcclusionRoom;
@@ -38,7 +36,7 @@ pub(super) struct IndirectDisplay {
     pub(super) view: ViewPass,
     key: DrawKey,
     /// Pipelines of the caller's own for its [`crate::scene::Shading::Own`] bins.
-    own: OwnPipelines,
+    pub(super) own: OwnPipelines,
     pub(super) inset: Option<ViewPass>,
     /// With occlusion: the late phase (`view` is then the early one).
     pub(super) late: Option<LatePhase>,
@@ -50,7 +48,7 @@ pub(in crate::renderer) struct IndirectPath {
     /// With the far layer: the stereo displays' far layers.
     pub(super) far: Option<Far>,
     /// With occlusion: every display's pyramids, in sets of displays.
-    pyramids: PyramidSets,
+    pub(super) pyramids: PyramidSets,
     /// Per display with a visibility mask (and the option on): its mask pass, drawn
     /// first in the display's clearing draw pass.
     pub(in crate::renderer) masks: Vec<Option<(MaskPipeline, DisplayMask)>>,
@@ -174,17 +172,6 @@ impl IndirectPath {
         stats
     }
 
-    /// With occlusion and the rig cull, every display's late cull in one set of
-    /// dispatches, after every display's early draw and pyramids. Returns the
-    /// dispatches.
-    pub(in crate::renderer) fn encode_late_rig(
-        &self,
-        encoder: &mut wgpu::CommandEncoder,
-        rec: &mut Recorder,
-    ) -> u32 {
-        self.core.culler.encode_late_rig(encoder, rec)
-    }
-
     /// The path's frame-level pass: the coarse cull (when it runs, on the GPU).
     /// Returns the dispatches.
     pub(in crate::renderer) fn encode_frame(
@@ -229,72 +216,14 @@ impl IndirectPath {
         }
     }
 
-    /// With occlusion, after every display's [`IndirectPath::encode_early`]: every
-    /// display's pyramids of its early depth (in `targets`), in sets of displays.
-    /// Returns the dispatches.
-    pub(in crate::renderer) fn encode_pyramids(
-        &self,
-        encoder: &mut wgpu::CommandEncoder,
-        targets: &[TargetViews],
-        rec: &mut Recorder,
-    ) -> u32 {
-        (self.pyramids).encode(encoder, (&self.core.culler, targets), rec)
-    }
-
-    /// Whether display `index`'s late cull takes dispatches of its own (GPU culling
-    /// with occlusion, where the rig cull does not take it).
-    pub(in crate::renderer) fn culls_late_apart(&self, index: usize) -> bool {
-        let late = self.displays[index].late.as_ref();
-        late.is_some_and(|l| self.core.culler.records(l.view.view_cull()))
-    }
-
-    /// Display `index`'s late cull in its own dispatches (see
-    /// [`IndirectPath::culls_late_apart`]), after every display's pyramids. Returns
-    /// the dispatches.
-    pub(in crate::renderer) fn encode_late_cull(
-        &self,
-        encoder: &mut wgpu::CommandEncoder,
-        index: usize,
-        rec: &mut Recorder,
-    ) -> u32 {
-        match &self.displays[index].late {
-            Some(late) => late.encode_cull(encoder, &self.core.culler, rec),
-            None => 0,
-        }
-    }
-
-    /// With occlusion, the rest of display `index`'s late phase after
-    /// [`IndirectPath::encode_early`]: with a far layer its cull against the pyramids
-    /// and its pass, then the late draw (opening with the far composite).
-    pub(in crate::renderer) fn encode_rest(
-        &self,
-        encoder: &mut wgpu::CommandEncoder,
-        (index, target): (usize, &TargetViews),
-        rec: &mut Recorder,
-    ) -> FrameStats {
-        let state = &self.displays[index];
-        let Some(late) = &state.late else {
-            return FrameStats::default();
-        };
-        let mut stats = self.encode_far(encoder, (index, Phase::Tested), rec);
-        let with = (self.core.drawing(), &state.own, self.far_layer(index));
-        stats.draw_calls += late.encode_draw(encoder, with, target, rec);
-        stats
-    }
-
-    /// Whether display `index` has a late half ([`IndirectPath::encode_rest`]).
-    pub(in crate::renderer) fn has_late(&self, index: usize) -> bool {
-        self.displays[index].late.is_some()
-    }
-
     /// Display `index`'s far layer, with what every far layer shares (`None` without).
-    fn far_layer(&self, index: usize) -> Option<(&Far, &FarDisplay)> {
+    pub(super) fn far_layer(&self, index: usize) -> Option<(&Far, &FarDisplay)> {
         let far = self.far.as_ref()?;
         Some((far, far.displays[index].as_ref()?))
     }
 
     /// With a far layer, display `index`'s far cull in `phase` and far layer pass.
-    fn encode_far(
+    pub(super) fn encode_far(
         &self,
         encoder: &mut wgpu::CommandEncoder,
         (index, phase): (usize, Phase),
@@ -310,35 +239,6 @@ impl IndirectPath {
             draw_calls,
             ..FrameStats::default()
         }
-    }
-
-    /// Culling on the CPU with occlusion, after the frame's early half was submitted:
-    /// each display's late phase and far layer culled against its pyramids, read back
-    /// ([`Culler::cull_late`]).
-    pub(in crate::renderer) fn cull_late(
-        &mut self,
-        device: &wgpu::Device,
-        queue: &wgpu::Queue,
-    ) -> Result<FrameStats> {
-        let far = |i: usize| self.far.as_ref()?.displays[i].as_ref();
-        let views: Vec<_> = (self.displays.iter().enumerate())
-            .map(|(i, d)| {
-                let late = d.late.as_ref().map(|l| l.view.view_cull());
-                (late, far(i).map(|layer| layer.view.view_cull()))
-            })
-            .collect();
-        self.core.culler.cull_late((device, queue), &views)
-    }
-
-    /// Whether each display with occlusion can read its depth target into its pyramids.
-    pub(in crate::renderer) fn check_depth(&self, targets: &[TargetViews]) -> Result<()> {
-        check_depth(self.displays.iter().map(|d| d.late.as_ref()), targets)
-    }
-
-    /// See [`crate::renderer::Renderer::occlusion_bytes`].
-    pub(in crate::renderer) fn occlusion_bytes(&self) -> Option<OcclusionBytes> {
-        let late = self.displays.iter().filter_map(|d| d.late.as_ref());
-        occlusion_bytes(late, &self.core.culler)
     }
 
     /// Display `index`'s cull (on the GPU; the culler's upload wrote a CPU cull) and,

@@ -6,6 +6,8 @@
 //! pyramids, and culling on the CPU its late phase between the frame's halves, is the
 //! culler's (`culler/occlusion.rs`).
 
+mod late_half;
+
 use std::sync::Mutex;
 
 use super::far_layer::{Far, FarDisplay};
