@@ -22,10 +22,10 @@ use stereocull::shaders::{
     Access, Binding, CANDIDATE_BINDINGS, COARSE_BINDINGS, CULL_BINDINGS, CullPass,
     DEPTH_RESOLVE_BINDINGS, DRAW_BINDINGS, DrawKey, EditKind, FAR_COMPOSITE_BINDINGS,
     FOVEATED_COMPOSITE_BINDINGS, MATERIAL_BINDINGS, MOTION_BINDINGS, POSE_BINDINGS,
-    SCATTER_BINDINGS, SHADOW_MAP_BINDINGS, SKIN_BINDINGS, Window, Windows, all_sources,
-    depth_resolve_source, far_composite_source, foveated_composite_source, pose_source,
-    pyramid_bindings, pyramid_source, scatter_source, shadow_cutout_source, shadow_source,
-    skin_source,
+    PYRAMID_SET_DEPTHS, SCATTER_BINDINGS, SHADOW_MAP_BINDINGS, SKIN_BINDINGS, Window, Windows,
+    all_sources, depth_resolve_source, far_composite_source, foveated_composite_source,
+    pose_source, pyramid_bindings, pyramid_source, scatter_source, shadow_cutout_source,
+    shadow_source, skin_source,
 };
 
 fn parse(label: &str, source: &str) -> Module {
@@ -671,11 +671,15 @@ fn pipelines_and_their_lists() -> Vec<(String, String, Vec<Vec<Binding>>)> {
     ];
     out.extend(others.map(|(l, s, g)| (format!("stereocull.{l}"), s, g)));
     out.extend(
-        [(1, false), (4, false), (1, true)].map(|(samples, layered)| {
-            let label = format!("stereocull.occlusion_pyramid.x{samples}.{layered}");
-            let list = pyramid_bindings(samples, layered).to_vec();
-            (label, pyramid_source(samples, layered), vec![list])
-        }),
+        [(1, false), (4, false), (1, true)]
+            .into_iter()
+            .flat_map(|v| [1, PYRAMID_SET_DEPTHS].map(|depths| (v, depths)))
+            .map(|((samples, layered), depths)| {
+                let label = format!("stereocull.occlusion_pyramid.x{samples}.{layered}.{depths}");
+                let list = pyramid_bindings(samples, layered, depths);
+                let source = pyramid_source(samples, layered, depths);
+                (label, source, vec![list])
+            }),
     );
     out
 }
@@ -1005,7 +1009,7 @@ fn pose_records_match_wgsl() {
 
 #[test]
 fn pyramid_sets_match_wgsl() {
-    let module = parse("pyramid", &pyramid_source(1, false));
+    let module = parse("pyramid", &pyramid_source(1, false, PYRAMID_SET_DEPTHS));
     let slice = |k: u32| PyramidSlice {
         origin: UVec2::new(k, k + 1),
         size: UVec2::new(k + 2, k + 3),

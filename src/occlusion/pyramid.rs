@@ -1,7 +1,7 @@
 //! The depth pyramids of a set of displays on the GPU (`wgsl/occlusion_pyramid.wgsl`):
 //! one dispatch from the displays' depth targets into each eye's levels 0 to 5, then
 //! one per six levels, each eye of each display in its own z slice so that no
-//! reduction crosses a seam or a display's edge. Up to [`PYRAMID_SET_DEPTHS`] displays
+//! reduction crosses a seam or a display's edge. Up to [`crate::shaders::PYRAMID_SET_DEPTHS`] displays
 //! a set. The CPU twin is [`crate::occlusion::reduce`].
 
 use encase::ShaderType;
@@ -11,8 +11,8 @@ use super::PyramidShape;
 use crate::buffers::init_buffer;
 use crate::records::uniform_bytes;
 use crate::shaders::{
-    PYRAMID_LEVELS_PER_DISPATCH, PYRAMID_SET_DEPTHS, PYRAMID_SET_SLICES, PYRAMID_SIDE, Windows,
-    compute_pipeline, pyramid_bindings, pyramid_source,
+    PYRAMID_LEVELS_PER_DISPATCH, PYRAMID_SET_SLICES, PYRAMID_SIDE, Windows, compute_pipeline,
+    pyramid_bindings, pyramid_source,
 };
 
 /// One eye of a display in a pyramid set (`PyramidSlice` in
@@ -56,9 +56,7 @@ impl PyramidSet {
     }
 }
 
-/// The pyramid passes for depth targets of one sample count and layering (cloned
-/// handles share them).
-#[derive(Clone)]
+/// The pyramid passes for a set of depth targets of one sample count and layering.
 pub struct PyramidPass {
     layout: wgpu::BindGroupLayout,
     reduce_depth: wgpu::ComputePipeline,
@@ -74,10 +72,12 @@ const MAX_LEVELS: u32 = 24;
 const TILE: u32 = 2 * PYRAMID_SIDE;
 
 impl PyramidPass {
-    /// The passes over depth targets of `samples` samples per pixel, `layered` (a
-    /// layer per eye: multiview) or not.
-    pub fn new(device: &wgpu::Device, samples: u32, layered: bool) -> PyramidPass {
-        let layout = bind_group_layout(device, samples, layered);
+    /// The passes over `depths` depth targets (1 to [`crate::shaders::PYRAMID_SET_DEPTHS`]) of
+    /// `samples` samples per pixel, `layered` (a layer per eye: multiview) or not.
+    pub fn new(device: &wgpu::Device, samples: u32, layered: bool, depths: usize) -> PyramidPass {
+        let list = pyramid_bindings(samples, layered, depths);
+        let label = "stereocull.occlusion_pyramid";
+        let layout = crate::shaders::bind_group_layout(device, label, &list, &Windows::WHOLE);
         let pipeline_layout = device.create_pipeline_layout(&wgpu::PipelineLayoutDescriptor {
             label: Some("stereocull.occlusion_pyramid"),
             bind_group_layouts: &[Some(&layout)],
@@ -89,7 +89,7 @@ impl PyramidPass {
                 device,
                 &label,
                 &pipeline_layout,
-                pyramid_source(samples, layered),
+                pyramid_source(samples, layered, depths),
                 entry,
             )
         };
@@ -128,8 +128,7 @@ impl PyramidPass {
 
     /// The bindings of one set: its slices (`set`, [`PyramidPass::set_buffer`]), the
     /// buffer every display's pyramids are in (whole: the slices say where), and its
-    /// displays' depth targets in slice order (at most [`PYRAMID_SET_DEPTHS`]; the
-    /// bindings past them repeat the first, and no slice reads them).
+    /// displays' depth targets in slice order, as many as the pass was made for.
     pub fn bind_group(
         &self,
         device: &wgpu::Device,
@@ -146,10 +145,9 @@ impl PyramidPass {
             wgpu::BindingResource::Buffer(level),
             pyramids.as_entire_binding(),
         ];
-        let textures = (0..PYRAMID_SET_DEPTHS).map(|k| {
-            let view = depths.get(k).or(depths.first()).copied();
-            wgpu::BindingResource::TextureView(view.expect("a set has a depth target"))
-        });
+        let textures = depths
+            .iter()
+            .map(|view| wgpu::BindingResource::TextureView(view));
         let entries: Vec<_> = (fixed.into_iter().chain(textures).enumerate())
             .map(|(binding, resource)| wgpu::BindGroupEntry {
                 binding: binding as u32,
@@ -195,10 +193,4 @@ impl PyramidPass {
         }
         levels.div_ceil(PYRAMID_LEVELS_PER_DISPATCH)
     }
-}
-
-fn bind_group_layout(device: &wgpu::Device, samples: u32, layered: bool) -> wgpu::BindGroupLayout {
-    let list = pyramid_bindings(samples, layered);
-    let label = "stereocull.occlusion_pyramid";
-    crate::shaders::bind_group_layout(device, label, &list, &Windows::WHOLE)
 }

@@ -427,8 +427,9 @@ pub const PYRAMID_SET_SLICES: usize = 2 * PYRAMID_SET_DEPTHS;
 /// The occlusion pyramids' pass (`wgsl/occlusion_pyramid.wgsl`) over a set of depth
 /// targets of `samples` per pixel, their eyes side by side or (`layered`) a layer
 /// each: the set's slices, each dispatch's level record (a dynamic offset), the
-/// pyramids (every display's region), the [`PYRAMID_SET_DEPTHS`] depth targets.
-pub fn pyramid_bindings(samples: u32, layered: bool) -> [Binding; 3 + PYRAMID_SET_DEPTHS] {
+/// pyramids (every display's region), its `depths` depth targets (1 to
+/// [`PYRAMID_SET_DEPTHS`]).
+pub fn pyramid_bindings(samples: u32, layered: bool, depths: usize) -> Vec<Binding> {
     let depth = TextureKind {
         dimension: match layered {
             true => wgpu::TextureViewDimension::D2Array,
@@ -445,8 +446,9 @@ pub fn pyramid_bindings(samples: u32, layered: bool) -> [Binding; 3 + PYRAMID_SE
         binding("level", Access::UniformDynamic, "PyramidLevel", COMPUTE),
         binding("pyramid", Access::StorageReadWrite, "array<f32>", COMPUTE),
     ];
-    std::array::from_fn(|i| match i.checked_sub(fixed.len()) {
-        None => fixed[i],
-        Some(k) => texture(DEPTHS[k], depth, COMPUTE),
-    })
+    let depths = depths.clamp(1, PYRAMID_SET_DEPTHS);
+    let textures = DEPTHS[..depths]
+        .iter()
+        .map(|name| texture(name, depth, COMPUTE));
+    fixed.into_iter().chain(textures).collect()
 }

@@ -311,10 +311,14 @@ pub fn all_sources() -> Vec<(String, String)> {
                 ),
                 ("stereocull.pose".to_string(), pose_source()),
             ];
-            let pyramids = [(1, false), (4, false), (1, true)].map(|(samples, layered)| {
-                let label = format!("stereocull.occlusion_pyramid.x{samples}.{layered}");
-                (label, pyramid_source(samples, layered))
-            });
+            let pyramids = [(1, false), (4, false), (1, true)]
+                .into_iter()
+                .flat_map(|v| [1, PYRAMID_SET_DEPTHS].map(|depths| (v, depths)))
+                .map(|((samples, layered), depths)| {
+                    let label =
+                        format!("stereocull.occlusion_pyramid.x{samples}.{layered}.{depths}");
+                    (label, pyramid_source(samples, layered, depths))
+                });
             cull.chain(occlusion)
                 .chain(draw)
                 .chain(others)

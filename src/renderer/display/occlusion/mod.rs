@@ -88,11 +88,11 @@ impl PyramidSets {
             if displays.is_empty() {
                 continue;
             }
-            let pass = PyramidPass::new(device, if variant { 1 } else { samples }, variant);
+            let samples = if variant { 1 } else { samples };
             for chunk in displays.chunks(PYRAMID_SET_DEPTHS) {
                 let slices = set_slices(chunk, (plan, shapes, variant), culler);
                 sets.push(PyramidSetPass {
-                    pass: pass.clone(),
+                    pass: PyramidPass::new(device, samples, variant, chunk.len()),
                     set: PyramidPass::set_buffer(device, &slices),
                     slices,
                     displays: chunk.to_vec(),
