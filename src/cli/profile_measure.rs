@@ -270,9 +270,8 @@ pub(super) fn measure(
             samples.gpu_cull.push(of("cull") + of("rig_cull"));
             samples.gpu_draw.push(of("draw"));
             samples.gpu_pyramid.push(of("pyramid"));
-            samples
-                .gpu_late
-                .push(of("late_cull") + of("rig_late_cull") + of("late_draw"));
+            let late = of("late_cull") + of("rig_late_cull") + of("late_draw");
+            samples.gpu_late.push(late);
             // The floor kernel is the yardstick, not part of the frame.
             samples
                 .gpu

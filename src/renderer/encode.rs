@@ -123,7 +123,7 @@ impl Renderer {
     }
 
     /// Records every display's `half` of the frame (`Early` or `Rest`); after the
-    /// early halves, the rig cull's late members.
+    /// early halves, every display's pyramids and late culls.
     fn encode_half(
         &self,
         encoder: &mut wgpu::CommandEncoder,
