@@ -65,16 +65,17 @@ fn cull_rig(
         var unhidden = 0u;
         for (var i = 0u; i < tested; i++) {
             let s = spheres[i];
+            let framed = sphere_in_planes(view.planes, s) && in_split_of(view.split_keep, view.split_distance, view.position, s);
             var kept: bool;
             if (OCCLUSION == 2u) {
                 // The display's own late cull (cull_entry, occlusion_entry), in order.
-                let shown = sphere_in_planes(view.planes, s) && in_split_of(view.split_keep, view.split_distance, view.position, s) && (view.hidden == 0u || !hidden_in_views(view.cull_slot, s)) && !occluded_for(s, late, base);
+                let shown = framed && (view.hidden == 0u || !hidden_in_views(view.cull_slot, s)) && !occluded_for(s, late, base);
                 unhidden |= select(0u, 1u << i, shown && !blended(first + i));
                 kept = shown && !drawn_by(view.cull_slot, first + i);
             } else {
                 let seen = view.early == 0u || drawn_by(view.cull_slot, first + i);
                 // The hidden area last: its tests cost several frustums'.
-                kept = sphere_in_planes(view.planes, s) && in_split_of(view.split_keep, view.split_distance, view.position, s) && seen && (view.hidden == 0u || !hidden_in_views(view.cull_slot, s));
+                kept = framed && seen && (view.hidden == 0u || !hidden_in_views(view.cull_slot, s));
             }
             if (kept) {
                 if (((chosen >> i) & 1u) == 0u) {

@@ -62,19 +62,17 @@ struct Pyramids {
     margin_px: f32,
 }
 
-// Hidden from every eye of the display: the stereo rule.
+// Hidden from every eye of the display: the stereo rule, with the test its context
+// holds (as DisplayContext::rig_occlusion makes it for a rig member).
 fn occluded(s: vec4<f32>) -> bool {
-    let at = Pyramids(pyramid_base(display.cull_slot), vec2<u32>(display.resolution), display.occlusion_margin_px);
-    for (var e = 0u; e < min(display.views, 2u); e++) {
-        if (!occluded_in_eye(s, (display.eye[e]).view_from_world, (display.eye[e]).clip_from_view, e, at)) {
-            return false;
-        }
-    }
-    return true;
+    let views = array(display.eye[0].view_from_world, display.eye[1].view_from_world);
+    let clips = array(display.eye[0].clip_from_view, display.eye[1].clip_from_view);
+    let test = RigOcclusion(views, clips, display.resolution, display.occlusion_margin_px, display.views);
+    return occluded_for(s, test, pyramid_base(display.cull_slot));
 }
 
-// `occluded` for the rig's member in the late phase whose test is `o` and whose
-// display slot's pyramids start at `base`.
+// Hidden from every eye (of the first two) of a display whose test is `o` and whose
+// slot's pyramids start at `base`: the stereo rule.
 fn occluded_for(s: vec4<f32>, o: RigOcclusion, base: u32) -> bool {
     let at = Pyramids(base, vec2<u32>(o.resolution), o.margin_px);
     for (var e = 0u; e < min(o.views, 2u); e++) {
