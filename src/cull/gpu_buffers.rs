@@ -307,11 +307,13 @@ impl CullScene {
         let (view_at, test_at) = RigCull::offsets(index as usize);
         let bytes = uniform_bytes(record);
         queue.write_buffer(&self.rig, base + view_at, &bytes);
-        let tested = test.map(uniform_bytes).unwrap_or_default();
-        if !tested.is_empty() {
-            queue.write_buffer(&self.rig, base + test_at, &tested);
+        let mut written = bytes.len();
+        if let Some(test) = test {
+            let bytes = uniform_bytes(test);
+            queue.write_buffer(&self.rig, base + test_at, &bytes);
+            written += bytes.len();
         }
-        (bytes.len() + tested.len()) as u64
+        written as u64
     }
 
     /// Writes a new `layout` (instances inserted or removed) into the buffers, which must
@@ -398,6 +400,11 @@ impl CullScene {
     /// Words of visibility bits per display slot.
     pub fn visibility_words(&self) -> u32 {
         self.occlusion_layout.0
+    }
+
+    /// The rig cull's members, as the frame runs them.
+    pub fn rig_sets(&self) -> RigSets {
+        self.rig_sets
     }
 
     /// Bytes of every display slot's pyramids.

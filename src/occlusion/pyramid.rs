@@ -161,15 +161,29 @@ impl PyramidPass {
         })
     }
 
-    /// Records the pyramids of a set's `slices` with `group`, six levels per dispatch,
-    /// each dispatch as wide as the set's largest eye at its first level; returns the
-    /// dispatches.
+    /// Records a set's pyramids with `group`: its `dispatches`
+    /// ([`PyramidPass::dispatches`]); returns how many.
     pub fn encode(
         &self,
         pass: &mut wgpu::ComputePass,
         group: &wgpu::BindGroup,
-        slices: &[PyramidSlice],
+        dispatches: &[PyramidDispatch],
     ) -> u32 {
+        for d in dispatches {
+            pass.set_pipeline(match d.first {
+                0 => &self.reduce_depth,
+                _ => &self.reduce_level,
+            });
+            pass.set_bind_group(0, group, &[d.first * self.stride]);
+            let [x, y, z] = d.workgroups;
+            pass.dispatch_workgroups(x, y, z);
+        }
+        dispatches.len() as u32
+    }
+
+    /// The dispatches of a set of `slices`, six levels each: each as wide as the set's
+    /// largest eye at its first level (a set's slices are fixed, so once per set).
+    pub fn dispatches(slices: &[PyramidSlice]) -> Vec<PyramidDispatch> {
         let shapes: Vec<PyramidShape> = (slices.iter())
             .map(|s| PyramidShape {
                 eye: s.size,
@@ -177,20 +191,28 @@ impl PyramidPass {
             })
             .collect();
         let levels = shapes.iter().map(PyramidShape::levels).max().unwrap_or(0);
-        let levels = levels.min(MAX_LEVELS);
-        for l in (0..levels).step_by(PYRAMID_LEVELS_PER_DISPATCH as usize) {
-            let size = (shapes.iter())
-                .filter(|s| s.levels() > l)
-                .map(|s| s.level_size(l))
-                .fold(UVec2::ZERO, UVec2::max);
-            pass.set_pipeline(match l {
-                0 => &self.reduce_depth,
-                _ => &self.reduce_level,
-            });
-            pass.set_bind_group(0, group, &[l * self.stride]);
-            let (x, y) = (size.x.div_ceil(TILE), size.y.div_ceil(TILE));
-            pass.dispatch_workgroups(x, y, slices.len() as u32);
-        }
-        levels.div_ceil(PYRAMID_LEVELS_PER_DISPATCH)
+        (0..levels.min(MAX_LEVELS))
+            .step_by(PYRAMID_LEVELS_PER_DISPATCH as usize)
+            .map(|first| {
+                let size = (shapes.iter())
+                    .filter(|s| s.levels() > first)
+                    .map(|s| s.level_size(first))
+                    .fold(UVec2::ZERO, UVec2::max);
+                let (x, y) = (size.x.div_ceil(TILE), size.y.div_ceil(TILE));
+                PyramidDispatch {
+                    first,
+                    workgroups: [x, y, slices.len() as u32],
+                }
+            })
+            .collect()
     }
+}
+
+/// One dispatch of a set's pyramids: the first level it writes and its workgroups.
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+pub struct PyramidDispatch {
+    /// The first level it writes (a multiple of six; 0 reads the depth targets).
+    pub first: u32,
+    /// Its workgroups: x and y over the set's largest eye, z a slice each.
+    pub workgroups: [u32; 3],
 }

@@ -133,7 +133,8 @@ impl Renderer {
     ) -> FrameStats {
         let mut stats = FrameStats::default();
         for (i, target) in targets.iter().enumerate() {
-            // No scope (timestamps) for a display with no late half.
+            // No scope (timestamps) for a display with no late half (the classic
+            // modes' displays have none).
             let rest = matches!(&self.path, Path::Indirect(p) if p.has_late(i));
             if half == Part::Rest && !rest {
                 continue;
@@ -143,7 +144,6 @@ impl Renderer {
             let recorded = match (&self.path, half) {
                 (Path::Indirect(p), Part::Rest) => p.encode_rest(encoder, at, rec),
                 (Path::Indirect(p), _) => p.encode_early(encoder, at, rec),
-                (Path::Classic(_), Part::Rest) => FrameStats::default(),
                 (Path::Classic(p), _) => p.encode_display(encoder, at, rec),
             };
             stats.draw_calls += recorded.draw_calls;

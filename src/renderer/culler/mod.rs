@@ -366,7 +366,7 @@ impl Culler {
             return 0;
         };
         let rig = rig_groups.get().map_or(&[][..], Vec::as_slice);
-        if !self.members.iter().any(|m| matches!(m, CullView::Late(_))) || rig.is_empty() {
+        if scene.rig_sets().late == 0 || rig.is_empty() {
             return 0;
         }
         let (mut pass, open) = rec.frame_pass(encoder, "rig_late_cull");

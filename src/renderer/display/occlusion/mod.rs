@@ -14,7 +14,7 @@ use super::far_layer::{Far, FarDisplay};
 use crate::draw::{BinPipelines, Drawing, OwnPipelines};
 use crate::error::Result;
 use crate::occlusion::PyramidShape;
-use crate::occlusion::pyramid::{PyramidPass, PyramidSlice};
+use crate::occlusion::pyramid::{PyramidDispatch, PyramidPass, PyramidSlice};
 use crate::renderer::culler::Culler;
 use crate::renderer::options::RendererOptions;
 use crate::renderer::plan::FramePlan;
@@ -57,13 +57,13 @@ pub(in crate::renderer::display) struct PyramidSets {
     device: wgpu::Device,
 }
 
-/// One set: its pass, its slices (and their uniform), its displays in depth-binding
-/// order, and its bind group for the depth targets it was last made for (a caller
+/// One set: its pass, its slices' uniform and dispatches, its displays in
+/// depth-binding order, and its bind group for the depth targets it was last made for (a caller
 /// usually renders into the same targets every frame: no bind group per frame then).
 struct PyramidSetPass {
     pass: PyramidPass,
     set: wgpu::Buffer,
-    slices: Vec<PyramidSlice>,
+    dispatches: Vec<PyramidDispatch>,
     displays: Vec<usize>,
     bound: Mutex<Option<(Vec<wgpu::TextureView>, wgpu::BindGroup)>>,
 }
@@ -94,7 +94,7 @@ impl PyramidSets {
                 sets.push(PyramidSetPass {
                     pass: PyramidPass::new(device, samples, variant, chunk.len()),
                     set: PyramidPass::set_buffer(device, &slices),
-                    slices,
+                    dispatches: PyramidPass::dispatches(&slices),
                     displays: chunk.to_vec(),
                     bound: Mutex::new(None),
                 });
@@ -124,17 +124,13 @@ impl PyramidSets {
             let Some((pyramids, _)) = culler.pyramid_texels(set.displays[0]) else {
                 continue;
             };
-            let depths: Vec<wgpu::TextureView> = set
-                .displays
-                .iter()
-                .map(|&i| targets[i].depth.clone())
-                .collect();
-            let group = set.bind_group(depths, |views| {
-                let views: Vec<&wgpu::TextureView> = views.iter().collect();
-                let buffers = (&set.set, pyramids);
-                set.pass.bind_group(&self.device, buffers, &views)
+            let depths: Vec<&wgpu::TextureView> =
+                set.displays.iter().map(|&i| targets[i].depth).collect();
+            let group = set.bind_group(&depths, |views| {
+                set.pass
+                    .bind_group(&self.device, (&set.set, pyramids), views)
             });
-            dispatches += set.pass.encode(&mut pass, &group, &set.slices);
+            dispatches += set.pass.encode(&mut pass, &group, &set.dispatches);
         }
         rec.close_frame_pass(encoder, pass, open);
         dispatches
@@ -146,18 +142,19 @@ impl PyramidSetPass {
     /// makes (and kept).
     fn bind_group(
         &self,
-        depths: Vec<wgpu::TextureView>,
-        make: impl FnOnce(&[wgpu::TextureView]) -> wgpu::BindGroup,
+        depths: &[&wgpu::TextureView],
+        make: impl FnOnce(&[&wgpu::TextureView]) -> wgpu::BindGroup,
     ) -> wgpu::BindGroup {
         let mut bound = self
             .bound
             .lock()
             .unwrap_or_else(|poisoned| poisoned.into_inner());
         match &*bound {
-            Some((views, group)) if *views == depths => group.clone(),
+            Some((views, group)) if views.iter().eq(depths.iter().copied()) => group.clone(),
             _ => {
-                let group = make(&depths);
-                *bound = Some((depths, group.clone()));
+                let group = make(depths);
+                let views = depths.iter().map(|&v| v.clone()).collect();
+                *bound = Some((views, group.clone()));
                 group
             }
         }
