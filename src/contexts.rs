@@ -95,6 +95,10 @@ pub struct EyeContext {
     pub previous_clip_from_world: Mat4,
     /// The eye's center of projection, for specular.
     pub position: Vec3,
+    /// Seconds this view's frame lies after the frame context's `time`: a two-frame
+    /// submission's second frame draws its views at `time + time_ahead`
+    /// ([`crate::renderer::RendererOptions::frames_per_submit`]); else 0.
+    pub time_ahead: f32,
     /// Where this view lies in its display's target: x, y, width, height in pixels.
     pub viewport: Vec4,
     /// How the view's clip space is placed into its viewport of a shared target (the
@@ -117,6 +121,7 @@ impl EyeContext {
             world_from_clip: v.world_from_clip(),
             previous_clip_from_world: clip_from_world,
             position: v.position(),
+            time_ahead: 0.0,
             viewport: Vec4::ZERO,
             placement: IDENTITY_PLACEMENT,
         }
@@ -336,6 +341,7 @@ impl DisplayContext {
             world_from_clip,
             previous_clip_from_world: clip_from_world,
             position: Vec3::ZERO,
+            time_ahead: 0.0,
             viewport: Vec4::new(0.0, 0.0, size as f32, size as f32),
             placement: IDENTITY_PLACEMENT,
         };

@@ -282,6 +282,7 @@ fn eye(seed: f32) -> EyeContext {
         world_from_clip: distinct_mat(seed + 5.0),
         previous_clip_from_world: distinct_mat(seed + 6.0),
         position: Vec3::new(seed + 7.0, seed + 7.1, seed + 7.2),
+        time_ahead: seed + 7.5,
         viewport: Vec4::new(seed + 8.0, seed + 8.1, seed + 8.2, seed + 8.3),
         placement: Vec4::new(seed + 9.0, seed + 9.1, seed + 9.2, seed + 9.3),
     }
@@ -320,6 +321,7 @@ fn contexts_match_wgsl() {
             ("world_from_clip", 15.0),
             ("previous_clip_from_world", 16.0),
             ("position", 17.0),
+            ("time_ahead", 17.5),
             ("viewport", 18.0),
             ("placement", 19.0),
         ],

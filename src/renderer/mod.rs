@@ -96,6 +96,7 @@ mod diagnostics;
 mod display;
 mod encode;
 mod frame;
+pub mod frames;
 mod options;
 mod own_passes;
 mod plan;
@@ -120,8 +121,8 @@ use frame::pose::{self, PosePass};
 use frame::shadow::{ShadowMap, ShadowPass};
 use frame::skin::SkinPass;
 pub use options::{
-    CoarseMode, CullMode, LOD_PIXELS, OcclusionMode, PosingMode, RendererOptions, StereoMode,
-    frame_lod,
+    CoarseMode, CullMode, DEFAULT_DT, LOD_PIXELS, OcclusionMode, PosingMode, RendererOptions,
+    StereoMode, frame_lod,
 };
 pub use plan::{
     CullView, DispatchLevels, FramePlan, FrameStats, PlannedCull, instances_per_object,
@@ -287,6 +288,7 @@ impl Renderer {
     ) -> Result<Renderer> {
         check_device(device, scene, &options)?;
         check_rig(rig, &options, device.limits().max_multiview_view_count)?;
+        frames::check(scene, rig, &options)?;
         let resolved = rig.resolve()?;
         let coarse = options.coarse_for(&resolved, Some(device));
         let plan = FramePlan::of(rig, resolved, &options, coarse, 0.0)?;
@@ -328,7 +330,7 @@ impl Renderer {
             .map(|d| {
                 let layered = options.mode == StereoMode::Multiview && d.stereo;
                 TargetShape {
-                    layout: d.layout_in(layered),
+                    layout: frames::layout(d, layered, options.frames_per_submit),
                     layered,
                 }
             })

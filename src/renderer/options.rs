@@ -228,7 +228,17 @@ pub struct RendererOptions {
     /// into a second color target ([`crate::motion`]; `TargetViews::motion`): the
     /// `instanced` mode, without the far layer or foveated displays.
     pub motion_vectors: bool,
+    /// Frames drawn per submission: 1, or 2 for the talk's "dt multiview"
+    /// ([`super::frames`]): each display draws its eyes at the frame's time and `dt`
+    /// later as one set of views (left and right, now and next) in one target, from one
+    /// cull and one multi-draw (`instanced`).
+    pub frames_per_submit: u32,
+    /// Seconds between a submission's two frames (one display period).
+    pub dt: f32,
 }
+
+/// One period of a 90 Hz display: the default distance between a submission's frames.
+pub const DEFAULT_DT: f32 = 1.0 / 90.0;
 
 /// Screen-space error, in pixels, a level of detail may show.
 pub const LOD_PIXELS: f32 = 1.0;
@@ -304,7 +314,7 @@ impl RendererOptions {
             StereoMode::Multiview => self.sample_count == 1,
             _ => false,
         };
-        asked && mode && views <= 2
+        asked && mode && views <= 2 && self.frames_per_submit == 1
     }
 
     /// The attachments the draw pipelines are built for.
@@ -342,6 +352,8 @@ impl Default for RendererOptions {
             occlusion: OcclusionMode::Auto,
             posing: PosingMode::Cpu,
             motion_vectors: false,
+            frames_per_submit: 1,
+            dt: DEFAULT_DT,
         }
     }
 }

@@ -8,6 +8,7 @@
 use std::sync::Arc;
 use std::time::Duration;
 
+use super::frames;
 use super::options::StereoMode;
 use super::options::{RendererOptions, frame_lod};
 use crate::contexts::{DisplayContext, FrameContext};
@@ -166,7 +167,8 @@ impl FramePlan {
         FramePlan::of(rig, rig.resolve()?, options, coarse, time)
     }
 
-    /// [`FramePlan::new`] for a rig already resolved.
+    /// [`FramePlan::new`] for a rig already resolved. With two frames per submission
+    /// ([`RendererOptions::frames_per_submit`]) the second is the same pose `dt` later.
     pub fn of(
         rig: &Rig,
         resolved: ResolvedRig,
@@ -174,9 +176,41 @@ impl FramePlan {
         coarse: bool,
         time: f32,
     ) -> Result<FramePlan> {
+        if options.frames_per_submit == 2 {
+            let pair = frames::pair(&resolved, &resolved)?;
+            return FramePlan::build(rig, pair, options, coarse, [time, time + options.dt]);
+        }
+        FramePlan::build(rig, resolved, options, coarse, [time; 2])
+    }
+
+    /// The plan of a submission of two frames ([`RendererOptions::frames_per_submit`]
+    /// 2): `now`'s rig at its time, then `next`'s (the viewer's pose a tracker predicts
+    /// for the next display period) at its own, as one set of views per display. What
+    /// the frame context holds of the viewer (the levels of detail, the coarse cull's
+    /// frame frustum, the light's fit) is planned from both, from `now`'s viewer.
+    pub fn pair(
+        now: (&Rig, f32),
+        next: (&Rig, f32),
+        options: &RendererOptions,
+        coarse: bool,
+    ) -> Result<FramePlan> {
+        let pair = frames::pair(&now.0.resolve()?, &next.0.resolve()?)?;
+        FramePlan::build(now.0, pair, options, coarse, [now.1, next.1])
+    }
+
+    /// The plan from a resolved rig whose displays hold one frame's views (`times[0]`),
+    /// or two frames' ([`frames::pair`]; the second at `times[1]`).
+    fn build(
+        rig: &Rig,
+        resolved: ResolvedRig,
+        options: &RendererOptions,
+        coarse: bool,
+        times: [f32; 2],
+    ) -> Result<FramePlan> {
         if resolved.displays.len() != rig.displays.len() {
             return Err(Error::rig("plan", "the resolved rig's displays differ"));
         }
+        let time = times[0];
         let cull = FrameCull {
             lod: frame_lod(rig, &resolved, options.lod_levels()),
             coarse: coarse.then(|| resolved.coarse_cull(options.mode.culls_per_eye())),
@@ -196,7 +230,8 @@ impl FramePlan {
         };
         let inset_cull = options.inset_cull && options.mode == StereoMode::Instanced;
         let hidden = hidden_areas(rig, &resolved, options, inset_cull);
-        let displays = display_contexts(rig, &resolved, options.mode, (&far, &hidden), inset_cull);
+        let mut displays = display_contexts(rig, &resolved, options, (&far, &hidden), inset_cull);
+        frames::time_views(&mut displays, rig, times[1] - times[0]);
         let culls = culls(&resolved, options.mode, (&displays, &hidden), &far);
         let insets: Vec<Option<DisplayContext>> = (displays.iter().zip(&resolved.displays))
             .map(|(context, r)| {
@@ -287,19 +322,21 @@ fn inset_job(i: usize, context: &DisplayContext) -> PlannedCull {
 fn display_contexts(
     rig: &Rig,
     resolved: &ResolvedRig,
-    mode: StereoMode,
+    options: &RendererOptions,
     (far, hidden): (&[Option<FarPlan>], &[Option<Arc<HiddenArea>>]),
     inset_cull: bool,
 ) -> Vec<DisplayContext> {
+    let (mode, frames) = (options.mode, options.frames_per_submit);
     let mut contexts = Vec::with_capacity(rig.displays.len());
     for (i, (d, r)) in rig.displays.iter().zip(&resolved.displays).enumerate() {
         let views = match inset_cull {
             true => d.views().min(2),
-            false => d.views(),
+            false => d.views() * frames,
         };
         let layered = mode == StereoMode::Multiview && d.stereo;
         let per_object = instances_per_object(mode, views);
-        let mut context = DisplayContext::new(r, &d.layout_in(layered), per_object);
+        let layout = frames::layout(d, layered, frames);
+        let mut context = DisplayContext::new(r, &layout, per_object);
         context.cull_slot = i as u32;
         context.hidden = u32::from(hidden[i].is_some());
         if let Some(plan) = &far[i] {

@@ -2,6 +2,7 @@
 //! `prepare` before the frame is recorded, and written again by `latch` from a later
 //! pose before it is submitted.
 
+use super::frames;
 use super::plan::{FramePlan, FrameStats};
 use super::uploads::Writes;
 use super::{CullMode, Path, Renderer};
@@ -14,30 +15,79 @@ impl Renderer {
     /// What the frame at `time` for `rig`'s pose will do ([`FramePlan`]): what
     /// [`Renderer::prepare`] writes, for inspection.
     pub fn plan(&self, rig: &Rig, time: f32) -> Result<FramePlan> {
-        let same = rig.displays.len() == self.shapes.len()
-            && rig.displays.iter().zip(&self.shapes).all(|(d, s)| {
-                let same_layout = d.layout_in(s.layered) == s.layout;
-                d.views() == s.views() && (d.views() < 4 || same_layout)
-            });
-        if !same {
-            return Err(Error::rig(
-                "prepare",
-                "the rig's displays differ from the renderer's (in number or views, or a foveated display's layout: it has a gaze or none for the renderer's life)",
-            ));
-        }
+        self.check_shapes(rig)?;
         let plan = FramePlan::new(rig, &self.options, self.coarse, time)?;
         Ok(plan.with_far_sizes(&self.far_sizes))
+    }
+
+    /// What a submission of two frames ([`super::RendererOptions::frames_per_submit`]
+    /// 2) will do: `now`'s rig at its time, then `next`'s at its own
+    /// ([`FramePlan::pair`]). Both rigs must have the renderer's displays.
+    pub fn plan_pair(&self, now: (&Rig, f32), next: (&Rig, f32)) -> Result<FramePlan> {
+        if self.options.frames_per_submit != 2 {
+            return Err(Error::Unsupported(
+                "a pair of frames needs a renderer made for two frames per submission".into(),
+            ));
+        }
+        self.check_shapes(now.0)?;
+        self.check_shapes(next.0)?;
+        let plan = FramePlan::pair(now, next, &self.options, self.coarse)?;
+        Ok(plan.with_far_sizes(&self.far_sizes))
+    }
+
+    fn check_shapes(&self, rig: &Rig) -> Result<()> {
+        let frames = self.options.frames_per_submit;
+        let same = rig.displays.len() == self.shapes.len()
+            && rig.displays.iter().zip(&self.shapes).all(|(d, s)| {
+                let same_layout = frames::layout(d, s.layered, frames) == s.layout;
+                d.views() * frames == s.views() && (d.views() < 4 || same_layout)
+            });
+        match same {
+            true => Ok(()),
+            false => Err(Error::rig(
+                "prepare",
+                "the rig's displays differ from the renderer's (in number or views, or a foveated display's layout: it has a gaze or none for the renderer's life)",
+            )),
+        }
     }
 
     /// Writes this frame's contexts (and, culling on the CPU, the cull results), all
     /// from one plan of `rig`, which must have the displays the renderer was made with;
     /// only poses may change. `time` (seconds on the caller's clock) goes into the frame
     /// context, from which the GPU animates instances.
+    ///
+    /// A renderer made for two frames per submission draws the second at the same pose,
+    /// `RendererOptions::dt` later: [`Renderer::prepare_pair`] takes its own pose.
     pub fn prepare(&mut self, queue: &wgpu::Queue, rig: &Rig, time: f32) -> Result<FrameStats> {
+        let plan = self.plan(rig, time)?;
+        self.prepare_plan(queue, plan, time)
+    }
+
+    /// [`Renderer::prepare`] for a submission of two frames
+    /// ([`super::RendererOptions::frames_per_submit`] 2): `now`'s rig and time, then the
+    /// next frame's, whose pose the caller's tracker predicts. The frames are drawn
+    /// into each display's target side by side (the first frame's views, then the
+    /// second's: [`Renderer::layout`]), each to be shown on its own vsync.
+    pub fn prepare_pair(
+        &mut self,
+        queue: &wgpu::Queue,
+        now: (&Rig, f32),
+        next: (&Rig, f32),
+    ) -> Result<FrameStats> {
+        let plan = self.plan_pair(now, next)?;
+        self.prepare_plan(queue, plan, now.1)
+    }
+
+    fn prepare_plan(
+        &mut self,
+        queue: &wgpu::Queue,
+        plan: FramePlan,
+        time: f32,
+    ) -> Result<FrameStats> {
         if self.options.motion_vectors {
             self.motion_from = self.motion_last.take();
         }
-        let mut stats = self.write_plan(queue, rig, time, true)?;
+        let mut stats = self.write_plan(queue, plan, true);
         if let Some(morph) = &mut self.morph {
             stats.bytes_uploaded += morph.prepare(queue, time);
         }
@@ -62,6 +112,11 @@ impl Renderer {
     /// pose, and the frame's draws hold its results; that is [`Error::Unsupported`], as
     /// is a latch before any `prepare`.
     pub fn latch(&mut self, queue: &wgpu::Queue, rig: &Rig) -> Result<FrameStats> {
+        if self.options.frames_per_submit != 1 {
+            return Err(Error::Unsupported(
+                "latching a pose takes one frame per submission: the second frame's pose is a prediction already".into(),
+            ));
+        }
         if self.options.cull == CullMode::Cpu {
             return Err(Error::Unsupported(
                 "latching a pose needs the GPU cull: the CPU cull ran in prepare, from the planned pose, and the recorded draws hold its results".into(),
@@ -72,7 +127,8 @@ impl Renderer {
                 "latch comes after prepare and encode, before the submit".into(),
             ));
         };
-        self.write_plan(queue, rig, time, false)
+        let plan = self.plan(rig, time)?;
+        Ok(self.write_plan(queue, plan, false))
     }
 
     /// Plans the frame from `rig` at `time` and writes what its passes read of the
@@ -82,14 +138,7 @@ impl Renderer {
     /// plan is the next frame's previous. The pose's writes go up as one
     /// ([`super::uploads`]): placed anew when `fresh` (a prepare), else where the
     /// recorded frame copies them from (a latch).
-    fn write_plan(
-        &mut self,
-        queue: &wgpu::Queue,
-        rig: &Rig,
-        time: f32,
-        fresh: bool,
-    ) -> Result<FrameStats> {
-        let mut plan = self.plan(rig, time)?;
+    fn write_plan(&mut self, queue: &wgpu::Queue, mut plan: FramePlan, fresh: bool) -> FrameStats {
         if self.options.motion_vectors {
             if let Some(previous) = &self.motion_from {
                 plan.measure_from(previous);
@@ -116,6 +165,6 @@ impl Renderer {
         }
         self.uploads.send(queue, fresh);
         stats.bytes_uploaded += frame_bytes + light_bytes;
-        Ok(stats)
+        stats
     }
 }

@@ -186,6 +186,29 @@ impl ResolvedRig {
         CoarseCull::holding(frame.frustum().planes, &views).unwrap_or(CoarseCull::EVERYTHING)
     }
 
+    /// This frame and `next` as one set of views per display, for a submission of two
+    /// frames ([`crate::renderer::RendererOptions::frames_per_submit`]): each display's
+    /// eyes, then the next frame's, and a display frustum holding all of them, oriented
+    /// and placed as this frame's. The frame frustum is this frame's viewer's. `None`
+    /// where no one frustum holds a display's eyes at both poses (they span 180 degrees
+    /// or more), or the rigs' displays differ in number.
+    pub fn followed_by(&self, next: &ResolvedRig) -> Option<ResolvedRig> {
+        let pair = |(a, b): (&ResolvedDisplay, &ResolvedDisplay)| a.followed_by(b);
+        let same = |a: &[ResolvedDisplay], b: &[ResolvedDisplay]| a.len() == b.len();
+        if !same(&self.displays, &next.displays) || !same(&self.frame_only, &next.frame_only) {
+            return None;
+        }
+        Some(ResolvedRig {
+            displays: (self.displays.iter().zip(&next.displays))
+                .map(pair)
+                .collect::<Option<_>>()?,
+            frame_only: (self.frame_only.iter().zip(&next.frame_only))
+                .map(pair)
+                .collect::<Option<_>>()?,
+            ..*self
+        })
+    }
+
     /// [`expected_tests`] for this frame's displays.
     pub fn expected_coarse_tests(&self) -> f64 {
         let views: Vec<View> = self.displays.iter().map(|d| d.combined).collect();
@@ -213,6 +236,23 @@ pub struct ResolvedDisplay {
 }
 
 impl ResolvedDisplay {
+    /// This display's eyes then `next`'s, in a display frustum built as this one's
+    /// (from its apex, in its orientation) that holds all of them.
+    fn followed_by(&self, next: &ResolvedDisplay) -> Option<ResolvedDisplay> {
+        let eyes: Vec<View> = self.eyes.iter().chain(&next.eyes).copied().collect();
+        let basis = self.combined.world_from_view;
+        let origin = basis.translation;
+        let corners: Vec<_> = eyes.iter().map(|e| e.corners_from(origin)).collect();
+        let combined = enclosing_view(DQuat::from_mat3(&basis.matrix3), origin, &corners)?;
+        Some(ResolvedDisplay {
+            eyes,
+            combined,
+            planes: combined.frustum().planes,
+            gaze_clamped: self.gaze_clamped || next.gaze_clamped,
+            insets: None,
+        })
+    }
+
     /// Culling against the display frustum, each visible object drawn
     /// `instances_per_object` times.
     pub fn cull_job(&self, instances_per_object: u32) -> CullJob {

@@ -21,6 +21,9 @@ struct EyeContext {
     previous_clip_from_world: mat4x4<f32>,
     // The eyeball: apex of this eye's frustum, used for specular.
     position: vec3<f32>,
+    // Seconds this view's frame lies after frame.time: the second frame's views of a
+    // two-frame submission (RendererOptions::frames_per_submit); else 0.
+    time_ahead: f32,
     // Where this view lies in the display's target: x, y, width, height in pixels.
     viewport: vec4<f32>,
     // The view's clip space placed into its viewport of a shared target (one draw for

@@ -105,16 +105,18 @@ struct Decoded {
     uv1: vec2<f32>,
 }
 
-// Visible slot `slot` for view `eye`, animated by the frame's time; `double_wide`
+// Visible slot `slot` for view `eye`, animated at its frame's time; `double_wide`
 // places the view's clip space into its viewport of the shared target (for stereo,
 // that eye's half of a 2W-wide target).
 fn decode(v: VertexInput, slot: u32, eye: u32, double_wide: bool) -> Decoded {
     let id = visible[slot];
     let inst = instances_at(id);
-    let spun = spin_at(inst, frame.time);
-    let rows = inst.world_from_local;
-    let world = placed_at(inst, spun * v.position, frame.time);
     let e = display.eye[eye];
+    // The view's own frame: a two-frame submission's second frame lies ahead.
+    let time = frame.time + e.time_ahead;
+    let spun = spin_at(inst, time);
+    let rows = inst.world_from_local;
+    let world = placed_at(inst, spun * v.position, time);
     var clip = e.clip_from_world * vec4(world, 1.0);
     var seam = 1.0;
     let edges = vec4(clip.w + clip.x, clip.w - clip.x, clip.w + clip.y, clip.w - clip.y);
