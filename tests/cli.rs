@@ -1679,3 +1679,64 @@ fn profile_plays_the_crowd_in_every_mode() {
         "{poses} pose passes, {gpu_posed} rows"
     );
 }
+
+/// `--frames-per-submit 2`: `render` writes each display's second frame beside its
+/// first (the same viewer, `--dt` later), each a display's stereo image; `stress` walks
+/// the viewer through both and reports the CPU per displayed frame.
+#[test]
+fn two_frames_per_submission_write_the_next_frame_and_its_cpu_share() {
+    let (dir, stats) = render_stats(&["--rig", "cave", "--frames-per-submit", "2", "--msaa", "1"]);
+    assert_eq!(stats["frames_per_submit"].as_u64(), Some(2));
+    for d in stats["displays"].as_array().unwrap() {
+        let name = d["name"].as_str().unwrap();
+        let next = dir.path().join(format!("{name}-next.png"));
+        assert_eq!(d["next_image"].as_str(), next.to_str(), "{name}");
+        let (first, second) = (
+            image::open(dir.path().join(format!("{name}.png"))),
+            image::open(&next),
+        );
+        let (first, second) = (first.unwrap().to_rgba8(), second.unwrap().to_rgba8());
+        assert_eq!(first.dimensions(), (80, 32), "{name}: one frame's two eyes");
+        assert_eq!(second.dimensions(), first.dimensions(), "{name}");
+    }
+    let mut args = stress_args("procedural:5000", "hmd", "3");
+    args.extend(["--frames-per-submit", "2"]);
+    let out = stereocull(&args);
+    assert!(
+        out.status.success(),
+        "{}",
+        String::from_utf8_lossy(&out.stderr)
+    );
+    let v: Value = serde_json::from_slice(&out.stdout).unwrap();
+    let s = &v["summary"];
+    assert_eq!(s["frames_per_submit"].as_u64(), Some(2));
+    let (per_submit, per_frame) = (
+        s["cpu_ms_median"].as_f64().unwrap(),
+        s["cpu_ms_per_displayed_frame_median"].as_f64().unwrap(),
+    );
+    assert!(
+        per_frame > 0.0 && (per_frame * 2.0 - per_submit).abs() < 1e-9,
+        "{s}"
+    );
+    // The classic modes submit each frame on its own: one line, not a frame.
+    let out = stereocull(&[
+        "render",
+        "--mode",
+        "multi-pass",
+        "--cull",
+        "cpu",
+        "--frames-per-submit",
+        "2",
+        "--width",
+        "16",
+        "--height",
+        "16",
+        "--out",
+        dir.path().to_str().unwrap(),
+    ]);
+    let stderr = String::from_utf8_lossy(&out.stderr);
+    assert!(
+        !out.status.success() && stderr.lines().count() == 1 && stderr.contains("one at a time"),
+        "{stderr}"
+    );
+}

@@ -9,6 +9,7 @@ mod edits;
 mod motion;
 mod occlusion_report;
 mod profile;
+mod profile_args;
 mod profile_measure;
 mod profile_report;
 mod render;
@@ -156,6 +157,15 @@ pub struct SceneArgs {
     /// target (`instanced`, without the far layer or foveated displays).
     #[arg(long, value_enum, default_value = "off")]
     pub motion_vectors: Switch,
+    /// Frames per submission: 2 draws each display's eyes at the frame's time and
+    /// `--dt` later as one set of views in one pass, from one cull (`instanced`; the
+    /// multiview talk's "dt multiview"). `render` writes the second as
+    /// `<display>-next.png`.
+    #[arg(long, default_value_t = 1, value_parser = clap::value_parser!(u32).range(1..=2))]
+    pub frames_per_submit: u32,
+    /// Seconds between a submission's two frames (default: one 90 Hz period).
+    #[arg(long, default_value_t = crate::renderer::DEFAULT_DT)]
+    pub dt: f32,
 }
 
 /// Where animations are posed, as the command line asks.
@@ -214,6 +224,8 @@ impl SceneArgs {
             inset_cull: self.inset_cull.on(),
             visibility_mask: self.visibility_mask.on(),
             motion_vectors: self.motion_vectors.on(),
+            frames_per_submit: self.frames_per_submit,
+            dt: self.dt,
             ..Default::default()
         }
     }

@@ -9,7 +9,7 @@ use indicatif::ProgressBar;
 use super::FRAME_SECONDS;
 use super::edits::{EditArgs, live_copy};
 use super::occlusion_report::occlusion_report;
-use super::profile::ProfileArgs;
+use super::profile_args::ProfileArgs;
 use super::profile_report::{CullOverFloor, Row};
 use super::render::{PassReport, pass_reports};
 use crate::device::Gpu;
@@ -38,6 +38,8 @@ pub(super) struct Config<'a> {
     pub(super) edits: EditArgs,
     /// Percent of the meshes glazed ([`crate::procedural::glaze`]): the scene's.
     pub(super) glass: f64,
+    /// Frames per submission.
+    pub(super) frames: u32,
 }
 
 pub(super) fn measure(
@@ -56,6 +58,7 @@ pub(super) fn measure(
         posing,
         edits,
         glass,
+        frames,
     }: &Config,
     args: &ProfileArgs,
     mut timer: Option<&mut GpuTimer>,
@@ -77,6 +80,8 @@ pub(super) fn measure(
         cull_floor: timer.is_some() && cull == CullMode::Gpu && !mode.per_instance(),
         occlusion,
         posing,
+        frames_per_submit: frames,
+        dt: args.dt,
         ..Default::default()
     };
     let mut renderer = Renderer::new(&gpu.device, scene, rig, options)?;
@@ -200,6 +205,8 @@ pub(super) fn measure(
         rig: spec.to_string(),
         instances: scene.instances.len() as u32,
         cpu_ms_median: med(&samples.cpu),
+        frames_per_submit: frames,
+        cpu_ms_per_displayed_frame: med(&samples.cpu) / f64::from(frames),
         cpu_ms_p95: percentile(&samples.cpu, 0.95),
         gpu_ms_median: gpu_med(&samples.gpu),
         gpu_ms_p95: (!samples.gpu.is_empty()).then(|| percentile(&samples.gpu, 0.95)),

@@ -19,6 +19,10 @@ pub struct Row {
     pub instances: u32,
     /// prepare + encode + submit.
     pub cpu_ms_median: f64,
+    /// Frames each submission draws (2: dt multiview).
+    pub frames_per_submit: u32,
+    /// `cpu_ms_median` over the frames each submission shows.
+    pub cpu_ms_per_displayed_frame: f64,
     pub cpu_ms_p95: f64,
     /// Sum of the timed passes; `None` without timestamp queries.
     pub gpu_ms_median: Option<f64>,
@@ -469,4 +473,27 @@ pub(super) fn write_csv(path: &std::path::Path, rows: &[Row]) -> Result<()> {
         );
     }
     std::fs::write(path, text).map_err(|e| Error::io(path, e))
+}
+
+/// With two frames per submission: each such row's CPU per displayed frame against the
+/// row of one frame per submission that is otherwise the same (same order of rows).
+pub(super) fn print_frames(rows: &[Row]) {
+    let key = |r: &Row| (r.rig.clone(), r.mode, r.cull, r.instances, r.occlusion);
+    for r in rows.iter().filter(|r| r.frames_per_submit == 2) {
+        let single = rows
+            .iter()
+            .find(|s| s.frames_per_submit == 1 && key(s) == key(r));
+        let ratio = single.map(|s| r.cpu_ms_per_displayed_frame / s.cpu_ms_median.max(1e-9));
+        println!(
+            "{} {} {:?} {}: two frames per submission, CPU per displayed frame {:.3} ms{}",
+            r.rig,
+            r.mode.name(),
+            r.cull,
+            r.instances,
+            r.cpu_ms_per_displayed_frame,
+            ratio.map_or(String::new(), |x| format!(
+                ", {x:.3} of one frame per submission"
+            )),
+        );
+    }
 }

@@ -124,6 +124,10 @@ struct DisplayStats {
     /// composite of each eye's inset over its outer view.
     #[serde(skip_serializing_if = "Option::is_none")]
     views_image: Option<String>,
+    /// With two frames per submission: the second frame (`<name>-next.png`, drawn
+    /// `--dt` seconds after `image`).
+    #[serde(skip_serializing_if = "Option::is_none")]
+    next_image: Option<String>,
     /// Foveated displays: whether the gaze was moved to keep an inset inside its view.
     #[serde(skip_serializing_if = "Option::is_none")]
     gaze_clamped: Option<bool>,
@@ -207,6 +211,20 @@ fn frame_json(
     frame
 }
 
+/// A display's image of `frames` frames (their views side by side, each frame's after
+/// the one before) as the first frame's image and the second's.
+fn frames_apart(
+    drawn: image::RgbaImage,
+    frames: u32,
+) -> (image::RgbaImage, Option<image::RgbaImage>) {
+    if frames == 1 {
+        return (drawn, None);
+    }
+    let (w, h) = (drawn.width() / frames, drawn.height());
+    let crop = |x| image::imageops::crop_imm(&drawn, x, 0, w, h).to_image();
+    (crop(0), Some(crop(w)))
+}
+
 pub fn render(args: &RenderArgs) -> Result<()> {
     let edits = EditArgs::default();
     let how = (args.cull, args.mode, args.msaa);
@@ -254,6 +272,7 @@ pub fn render(args: &RenderArgs) -> Result<()> {
         .diagnostics(&session.gpu.device, &session.gpu.queue)
         .candidates()?;
     let resolved = session.rig.resolve()?;
+    let frames = session.renderer.options().frames_per_submit;
     let mut displays = Vec::new();
     for (index, (display, visible)) in session.rig.displays.iter().zip(visible).enumerate() {
         let path = args.out.join(format!("{}.png", display.name));
@@ -264,8 +283,14 @@ pub fn render(args: &RenderArgs) -> Result<()> {
         if let Some(views_path) = &views_path {
             save(&drawn, views_path)?;
         }
-        let image = composite.unwrap_or(drawn);
+        let (image, next) = frames_apart(composite.unwrap_or(drawn), frames);
         save(&image, &path)?;
+        let next_path = next
+            .map(|next| {
+                let next_path = args.out.join(format!("{}-next.png", display.name));
+                save(&next, &next_path).map(|()| next_path.display().to_string())
+            })
+            .transpose()?;
         let gaze_clamped = (display.views() == 4).then(|| resolved.displays[index].gaze_clamped);
         if gaze_clamped == Some(true) {
             eprintln!(
@@ -292,6 +317,7 @@ pub fn render(args: &RenderArgs) -> Result<()> {
             viewports: layout.viewports().to_vec(),
             pixels: layout.pixels(),
             views_image: views_path.map(|p| p.display().to_string()),
+            next_image: next_path,
             gaze_clamped,
             depth: match args.compositor_depth {
                 true => Some(write_depth(&session, index, &args.out)?),
@@ -329,6 +355,8 @@ pub fn render(args: &RenderArgs) -> Result<()> {
             "cull": args.cull,
             "mode": args.mode,
             "msaa": session.renderer.options().sample_count,
+            "frames_per_submit": frames,
+            "dt": session.renderer.options().dt,
             "instances": session.scene.instances.len(),
             "gpu_bytes_per_instance": session.renderer.gpu_bytes_per_instance(),
             "frame": frame_json(&stats, queries.as_ref(), session.renderer.masked_pixels()),

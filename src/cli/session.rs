@@ -41,6 +41,8 @@ pub struct Session {
     pub live: Option<(LiveScene, EditDriver)>,
     /// Where frames record GPU timings and pipeline statistics, if asked and available.
     pub timer: Option<GpuTimer>,
+    /// With two frames per submission: the second frame's pose (`None`: the first's).
+    pub next_rig: Option<Rig>,
     frames: u32,
 }
 
@@ -115,6 +117,7 @@ impl Session {
             targets,
             live,
             timer: None,
+            next_rig: None,
             frames: 0,
         })
     }
@@ -219,7 +222,17 @@ impl Session {
             )?;
             return Ok((stats, sampled.elapsed().as_secs_f64() * 1e3));
         }
-        let mut stats = self.renderer.prepare(queue, &self.rig, time)?;
+        let options = self.renderer.options();
+        let mut stats = match options.frames_per_submit {
+            2 => {
+                let next = (
+                    self.next_rig.as_ref().unwrap_or(&self.rig),
+                    time + options.dt,
+                );
+                (self.renderer).prepare_pair(queue, (&self.rig, time), next)?
+            }
+            _ => self.renderer.prepare(queue, &self.rig, time)?,
+        };
         let mut encoder = device.create_command_encoder(&Default::default());
         let views: Vec<_> = self.targets.iter().map(DisplayTarget::views).collect();
         stats = stats + (self.renderer).encode(&mut encoder, &views, self.timer.as_mut())?;
