@@ -236,14 +236,17 @@ pub struct ResolvedDisplay {
 }
 
 impl ResolvedDisplay {
-    /// This display's eyes then `next`'s, in a display frustum built as this one's
-    /// (from its apex, in its orientation) that holds all of them.
+    /// This display's eyes then `next`'s, in a display frustum that holds all of them,
+    /// oriented halfway between the two frames' display frusta (so that a turn widens
+    /// it on both sides alike, not twice on one) and built from the midpoint of their
+    /// apexes.
     fn followed_by(&self, next: &ResolvedDisplay) -> Option<ResolvedDisplay> {
         let eyes: Vec<View> = self.eyes.iter().chain(&next.eyes).copied().collect();
-        let basis = self.combined.world_from_view;
-        let origin = basis.translation;
+        let (a, b) = (self.combined.world_from_view, next.combined.world_from_view);
+        let (qa, qb) = (DQuat::from_mat3(&a.matrix3), DQuat::from_mat3(&b.matrix3));
+        let origin = (a.translation + b.translation) * 0.5;
         let corners: Vec<_> = eyes.iter().map(|e| e.corners_from(origin)).collect();
-        let combined = enclosing_view(DQuat::from_mat3(&basis.matrix3), origin, &corners)?;
+        let combined = enclosing_view(qa.slerp(qb, 0.5), origin, &corners)?;
         Some(ResolvedDisplay {
             eyes,
             combined,
