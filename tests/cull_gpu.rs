@@ -27,16 +27,7 @@ fn compare(gpu: &Gpu, scene: &Scene, rig: &Rig, what: &str) -> Vec<usize> {
                 .diagnostics(&gpu.device, &gpu.queue)
                 .cull(d)
                 .unwrap();
-            assert_eq!(
-                got.draw_count, want.draw_count,
-                "{what} display {d}: draw_count"
-            );
-            assert_eq!(got.draws, want.draws, "{what} display {d}: draws");
-            assert_eq!(got.bins, want.bins, "{what} display {d}: bins");
-            assert!(
-                got.visible == want.visible,
-                "{what} display {d}: visible lists differ"
-            );
+            support::assert_same_cull(&format!("{what} display {d}"), &got, &want);
             want.visible.len()
         })
         .collect()

@@ -194,6 +194,11 @@ impl FramePlan {
         options: &RendererOptions,
         coarse: bool,
     ) -> Result<FramePlan> {
+        if options.frames_per_submit != 2 {
+            return Err(Error::Unsupported(
+                "a pair of frames is planned for two frames per submission".into(),
+            ));
+        }
         let pair = frames::pair(&now.0.resolve()?, &next.0.resolve()?)?;
         FramePlan::build(now.0, pair, options, coarse, [now.1, next.1])
     }

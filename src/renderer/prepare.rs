@@ -24,11 +24,6 @@ impl Renderer {
     /// 2) will do: `now`'s rig at its time, then `next`'s at its own
     /// ([`FramePlan::pair`]). Both rigs must have the renderer's displays.
     pub fn plan_pair(&self, now: (&Rig, f32), next: (&Rig, f32)) -> Result<FramePlan> {
-        if self.options.frames_per_submit != 2 {
-            return Err(Error::Unsupported(
-                "a pair of frames needs a renderer made for two frames per submission".into(),
-            ));
-        }
         self.check_shapes(now.0)?;
         self.check_shapes(next.0)?;
         let plan = FramePlan::pair(now, next, &self.options, self.coarse)?;

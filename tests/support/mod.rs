@@ -123,6 +123,14 @@ pub fn read_culls(gpu: &Gpu, renderer: &Renderer, rig: &Rig) -> Vec<CullOutput> 
         .collect()
 }
 
+/// Asserts that a cull's buffers read back are the reference's, byte for byte.
+pub fn assert_same_cull(what: &str, got: &CullOutput, want: &CullOutput) {
+    assert_eq!(got.draw_count, want.draw_count, "{what}: draw_count");
+    assert_eq!(got.draws, want.draws, "{what}: draws");
+    assert_eq!(got.bins, want.bins, "{what}: bins");
+    assert!(got.visible == want.visible, "{what}: visible lists differ");
+}
+
 /// One frame of `scene` seen by `rig` at time 0, every display read back.
 pub fn render(
     gpu: &Gpu,
