@@ -308,6 +308,7 @@ fn summarize(
 ) -> Summary {
     let of = |f: fn(&FrameRecord) -> f64| records.iter().map(f).collect::<Vec<f64>>();
     let cpu = of(|r| r.cpu_ms);
+    let cpu_ms_median = percentile(&cpu, 0.5);
     let frame: Vec<f64> = records.iter().map(|r| r.frame_ms).collect();
     let displays = session.rig.displays.len();
     let per_submit = session.renderer.options().frames_per_submit;
@@ -326,8 +327,8 @@ fn summarize(
         coarse_cull: session.renderer.coarse_cull(),
         frames: args.frames,
         frames_per_submit: per_submit,
-        cpu_ms_median: percentile(&cpu, 0.5),
-        cpu_ms_per_displayed_frame_median: percentile(&cpu, 0.5) / per_submit as f64,
+        cpu_ms_median,
+        cpu_ms_per_displayed_frame_median: cpu_ms_median / per_submit as f64,
         cpu_ms_p95: percentile(&cpu, 0.95),
         sync_ms_median: percentile(&of(|r| r.sync_ms), 0.5),
         staging_ms_median: percentile(&of(|r| r.staging_ms), 0.5),
