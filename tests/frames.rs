@@ -198,6 +198,50 @@ fn the_gpu_and_cpu_culls_of_a_pair_are_the_same_bytes() {
     }
 }
 
+/// The lens's hidden area masks each frame's eyes alike: each frame of a pair is the
+/// frame drawn alone with the mask (its corners keep the clear color), and the pair's
+/// cull, which drops what all four views' masks hide, is the CPU twin's to the byte.
+#[test]
+fn the_lens_mask_masks_both_frames_and_culls_what_all_four_views_hide() {
+    let gpu = gpu();
+    let scene = animated_scene();
+    let now = sized("hmd", 96, 80);
+    let next = moved(&now);
+    let masked = |cull, frames| RendererOptions {
+        visibility_mask: true,
+        ..options(cull, frames)
+    };
+    for cull in [CullMode::Gpu, CullMode::Cpu] {
+        let (renderer, pair) = render_pair(&gpu, &scene, (&now, &next), masked(cull, 2), 0.5);
+        let first = support::render_at(&gpu, &scene, &now, masked(cull, 1), 0.5).unwrap();
+        let second = support::render_at(&gpu, &scene, &next, masked(cull, 1), 0.5 + DT).unwrap();
+        assert_images_match("frames-mask-now", &pair[0].0, &first[0], PLACED);
+        assert_images_match("frames-mask-next", &pair[0].1, &second[0], PLACED);
+        let alone = Renderer::new(&gpu.device, &scene, &now, masked(cull, 1)).unwrap();
+        assert_eq!(renderer.masked_pixels(), 2 * alone.masked_pixels());
+        let plan =
+            FramePlan::pair((&now, 0.5), (&next, 0.5 + DT), &masked(cull, 2), false).unwrap();
+        let area = plan.hidden[0].as_ref().expect("the pair's hidden area");
+        assert_eq!(
+            area.count, 4,
+            "every view of both frames must hide a dropped sphere"
+        );
+        let want = cpu::cull_many(&CullLayout::new(&scene), &plan.jobs());
+        let unmasked = cpu::cull_many(
+            &CullLayout::new(&scene),
+            &FramePlan::pair((&now, 0.5), (&next, 0.5 + DT), &options(cull, 2), false)
+                .unwrap()
+                .jobs(),
+        );
+        assert!(
+            want[0].visible.len() < unmasked[0].visible.len(),
+            "the mask culls nothing here"
+        );
+        let got = support::read_culls(&gpu, &renderer, &now);
+        support::assert_same_cull(&format!("masked pair, {cull:?} cull"), &got[0], &want[0]);
+    }
+}
+
 /// The pair's display frustum holds every eye of both frames, and only the second
 /// frame's views lie ahead in time.
 #[test]
@@ -267,12 +311,6 @@ fn what_cannot_join_two_frames_is_refused_with_its_reason() {
         &hmd,
         with(|o| o.motion_vectors = true),
         "motion vectors",
-    );
-    refused(
-        &scene,
-        &hmd,
-        with(|o| o.visibility_mask = true),
-        "lens mask",
     );
     refused(&scene, &hmd, with(|o| o.frames_per_submit = 3), "1 or 2");
     refused(&scene, &hmd, with(|o| o.dt = 0.0), "positive");

@@ -571,9 +571,10 @@ fn hidden_areas_match_wgsl() {
         regions: std::array::from_fn(|r| region(k + 10.0 * r as f32)),
         count: 7,
     };
+    // Four views: a stereo pair, or two frames' pairs in one submission.
     let area = HiddenArea {
-        views: [view(1.0), view(1000.0)],
-        count: 2,
+        views: [view(1.0), view(1000.0), view(2000.0), view(3000.0)],
+        count: 4,
     };
     let bytes = storage_bytes(&[area, area]);
     let (_, span) = wgsl_struct(&module(), "HiddenArea");
@@ -581,13 +582,18 @@ fn hidden_areas_match_wgsl() {
     check_uniform(
         "HiddenArea",
         &bytes[..span as usize],
-        &[("views", 1.0), ("count", f32::from_bits(2))],
+        &[("views", 1.0), ("count", f32::from_bits(4))],
     );
     let (_, view_span) = wgsl_struct(&module(), "HiddenView");
     check_uniform(
         "HiddenView",
         &bytes[view_span as usize..2 * view_span as usize],
         &[("regions", 1000.0), ("count", f32::from_bits(7))],
+    );
+    check_uniform(
+        "HiddenView",
+        &bytes[3 * view_span as usize..4 * view_span as usize],
+        &[("regions", 3000.0), ("count", f32::from_bits(7))],
     );
     // Region 3's third plane: three regions of three vec4s, then two.
     assert_eq!(f32_at(&bytes, (3 * 3 + 2) * 16), 33.0);

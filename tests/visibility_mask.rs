@@ -126,7 +126,7 @@ fn hmd_area(size: (u32, u32)) -> (Rig, Vec<View>, VisibilityMask, HiddenArea) {
 /// `area` with view `v` alone.
 fn one_view(area: &HiddenArea, v: usize) -> HiddenArea {
     HiddenArea {
-        views: [area.views[v]; 2],
+        views: [area.views[v]; stereocull::cull::hidden::MAX_HIDDEN_VIEWS],
         count: 1,
     }
 }

@@ -23,7 +23,7 @@ use glam::{DVec2, DVec3, Vec4};
 
 use crate::frustum::{ROUNDING_SLACK, View, plane_distance};
 
-pub use crate::shaders::MAX_HIDDEN_REGIONS;
+pub use crate::shaders::{MAX_HIDDEN_REGIONS, MAX_HIDDEN_VIEWS};
 
 /// Pixels the hidden triangles' inner edges move inward (more than a rasterizer's
 /// snapping of the mask's edges).
@@ -59,8 +59,9 @@ pub struct HiddenView {
 /// drop it.
 #[derive(Clone, Copy, Debug, PartialEq, ShaderType)]
 pub struct HiddenArea {
-    /// The masked views: left and right, or a mono display's one.
-    pub views: [HiddenView; 2],
+    /// The masked views: left and right, or a mono display's one; with two frames per
+    /// submission, each frame's.
+    pub views: [HiddenView; MAX_HIDDEN_VIEWS],
     /// How many of `views` are in use (0: the cull drops nothing by it).
     pub count: u32,
 }
@@ -68,15 +69,16 @@ pub struct HiddenArea {
 impl HiddenArea {
     /// Drops nothing: what a display slot without a mask cull holds.
     pub const NONE: HiddenArea = HiddenArea {
-        views: [HiddenView::EMPTY; 2],
+        views: [HiddenView::EMPTY; MAX_HIDDEN_VIEWS],
         count: 0,
     };
 
     /// The hidden area of `eyes` (a display's masked views, `size` pixels each) under
     /// a visibility mask's `views` ([`crate::rig::VisibilityMask::views`]: each view's
-    /// hidden triangles); `None` when the mask has no view for them.
+    /// hidden triangles, in the order of `eyes`); `None` when the mask has no view for
+    /// them.
     pub fn new(eyes: &[View], views: &[Vec<MaskTriangle>], size: (u32, u32)) -> Option<HiddenArea> {
-        let count = eyes.len().min(views.len()).min(2);
+        let count = eyes.len().min(views.len()).min(MAX_HIDDEN_VIEWS);
         if count == 0 {
             return None;
         }

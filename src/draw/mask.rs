@@ -9,6 +9,7 @@ use glam::Vec4;
 
 use super::TargetFormat;
 use crate::rig::{MAX_MASK_TRIANGLES, ViewLayout, VisibilityMask};
+use crate::shaders::MAX_HIDDEN_VIEWS;
 use crate::shaders::{
     ScreenTargets, VISIBILITY_MASK_BINDINGS, Windows, depth_write, screen_pipeline,
 };
@@ -92,7 +93,11 @@ impl MaskPipeline {
                 resource: buffer.as_entire_binding(),
             }],
         });
-        let views = mask.views.len().min(layout.views as usize).min(2);
+        let views = mask
+            .views
+            .len()
+            .min(layout.views as usize)
+            .min(MAX_HIDDEN_VIEWS);
         let size = |v: usize| (layout.viewports[v][2], layout.viewports[v][3]);
         DisplayMask {
             bind_group,
@@ -128,17 +133,14 @@ pub fn display_masks(
         .collect()
 }
 
-/// The mask buffer: per outer view (two slots), its triangles' corners as clip
+/// The mask buffer: per masked view ([`MAX_HIDDEN_VIEWS`] slots: a foveated display's
+/// outer pair, or two frames' eyes), its triangles' corners as clip
 /// coordinates placed into the view's viewport (side by side) or as they are (each
 /// view its layer), `w` = 1; unused corners `w` = 0, outside every clip volume.
 pub fn placed_vertices(mask: &VisibilityMask, layout: &ViewLayout, layered: bool) -> Vec<Vec4> {
-    let mut vertices = vec![Vec4::ZERO; 2 * PER_VIEW];
-    for (v, triangles) in mask
-        .views
-        .iter()
-        .take(layout.views.min(2) as usize)
-        .enumerate()
-    {
+    let mut vertices = vec![Vec4::ZERO; MAX_HIDDEN_VIEWS * PER_VIEW];
+    let masked = (layout.views as usize).min(MAX_HIDDEN_VIEWS);
+    for (v, triangles) in mask.views.iter().take(masked).enumerate() {
         let p = match layered {
             true => Vec4::new(1.0, 0.0, 1.0, 0.0),
             false => crate::contexts::placement(layout.viewports[v], layout.size),

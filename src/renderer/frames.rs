@@ -12,7 +12,7 @@
 use crate::contexts::DisplayContext;
 use crate::error::{Error, Result};
 use crate::renderer::options::{OcclusionMode, RendererOptions, StereoMode};
-use crate::rig::{Display, ResolvedRig, Rig, ViewLayout};
+use crate::rig::{Display, ResolvedRig, Rig, ViewLayout, VisibilityMask};
 use crate::scene::Scene;
 
 /// Where display `d`'s views lie in its target for `frames` frames per submission:
@@ -27,6 +27,18 @@ pub fn layout(d: &Display, layered: bool, frames: u32) -> ViewLayout {
         .map(|&[_, _, w, h]| (w, h))
         .collect();
     ViewLayout::side_by_side(&sizes.repeat(frames as usize))
+}
+
+/// A display of `views` views' visibility mask as its views are masked: its outer
+/// views' triangles (a foveated display's insets lie inside them), once per frame of
+/// a submission (each frame's eyes are masked alike).
+pub fn masked(mask: &VisibilityMask, views: u32, frames: u32) -> VisibilityMask {
+    let outer = mask.views.len().min(views.min(2) as usize);
+    VisibilityMask {
+        views: (0..frames)
+            .flat_map(|_| mask.views[..outer].iter().cloned())
+            .collect(),
+    }
 }
 
 /// The two frames' views as one resolved rig ([`ResolvedRig::followed_by`]).
@@ -95,9 +107,6 @@ fn unjoined_option(options: &RendererOptions) -> Option<&'static str> {
         }
         o if o.motion_vectors => {
             "motion vectors measure each frame from the one before, and the second frame's is in the same target: not built yet"
-        }
-        o if o.visibility_mask => {
-            "the lens mask is drawn per eye, and the second frame's eyes would need it drawn again in their own viewports: not built yet"
         }
         _ => return None,
     })

@@ -336,8 +336,18 @@ impl Renderer {
             })
             .collect();
         if let (Path::Indirect(p), true) = (&mut path, options.visibility_mask) {
-            let displays: Vec<_> = (rig.displays.iter().zip(&shapes))
-                .map(|(d, s)| (d.visibility_mask.as_ref(), &s.layout, s.layered))
+            let frames = options.frames_per_submit;
+            let masks: Vec<Option<_>> = (rig.displays.iter())
+                .map(|d| {
+                    Some(frames::masked(
+                        d.visibility_mask.as_ref()?,
+                        d.views(),
+                        frames,
+                    ))
+                })
+                .collect();
+            let displays: Vec<_> = (masks.iter().zip(&shapes))
+                .map(|(m, s)| (m.as_ref(), &s.layout, s.layered))
                 .collect();
             p.masks = crate::draw::mask::display_masks(device, &displays, options.target_format());
         }

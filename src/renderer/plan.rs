@@ -372,7 +372,12 @@ fn hidden_areas(
             }
             let layered = options.mode == StereoMode::Multiview && d.stereo;
             let [_, _, w, h] = d.layout_in(layered).viewports()[0];
-            HiddenArea::new(&r.eyes[..r.eyes.len().min(2)], &mask.views, (w, h)).map(Arc::new)
+            // A foveated display's insets lie inside its outer pair; two frames' views
+            // are each frame's eyes, masked alike.
+            let frames = options.frames_per_submit;
+            let eyes = &r.eyes[..r.eyes.len().min(2 * frames as usize)];
+            let mask = frames::masked(mask, d.views(), frames);
+            HiddenArea::new(eyes, &mask.views, (w, h)).map(Arc::new)
         })
         .collect()
 }

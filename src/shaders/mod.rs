@@ -29,6 +29,10 @@ pub const MAX_RIG_VIEWS: usize = 16;
 /// (six flipped frustum planes) and the visibility mask's triangles.
 pub const MAX_HIDDEN_REGIONS: usize = 6 + MAX_MASK_TRIANGLES;
 
+/// Views a display's hidden area holds ([`crate::cull::hidden`]): a stereo pair, or two
+/// frames' pairs in one submission ([`crate::renderer::frames`]).
+pub const MAX_HIDDEN_VIEWS: usize = 4;
+
 /// Cull positions per block of the frame's coarse cull ([`crate::cull::coarse`]): the
 /// CPU culler's 64 lanes.
 pub const BLOCK: u32 = 64;
@@ -158,7 +162,9 @@ fn constants() -> String {
 }
 
 fn hidden_constant() -> String {
-    format!("const MAX_HIDDEN_REGIONS: u32 = {MAX_HIDDEN_REGIONS}u;\n")
+    format!(
+        "const MAX_HIDDEN_REGIONS: u32 = {MAX_HIDDEN_REGIONS}u;\nconst MAX_HIDDEN_VIEWS: u32 = {MAX_HIDDEN_VIEWS}u;\n"
+    )
 }
 
 /// The frame's shadow pass: depth only, the light as the display's eye 0

@@ -34,7 +34,7 @@ pub fn visibility_mask_source(multiview: bool) -> String {
     let per_view = 3 * MAX_MASK_TRIANGLES;
     let header = format!(
         "const MASK_VERTICES: u32 = {per_view}u;\nstruct MaskVertices {{ vertices: array<vec4<f32>, {}>, }}\n",
-        2 * per_view
+        super::MAX_HIDDEN_VIEWS * per_view
     );
     let bindings = declarations(&VISIBILITY_MASK_BINDINGS, 0, &Windows::WHOLE);
     let body = include_str!("../../wgsl/visibility_mask.wgsl");

@@ -148,7 +148,7 @@ struct HiddenView {
 // A display slot's hidden area: a sphere every one of the first `count` views hides
 // is dropped by the display's cull (0: none is).
 struct HiddenArea {
-    views: array<HiddenView, 2>,
+    views: array<HiddenView, MAX_HIDDEN_VIEWS>,
     count: u32,
 }
 
