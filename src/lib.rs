@@ -48,6 +48,7 @@ pub mod foveated_composite;
 pub mod frame_input;
 pub mod frustum;
 pub mod gltf_import;
+pub mod keep;
 pub mod lights;
 pub mod live;
 pub mod materials;

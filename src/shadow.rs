@@ -115,6 +115,7 @@ impl LightView {
             instances_per_object: 1,
             split: None,
             hidden: None,
+            tiles: None,
             // The light's context has its one view at the origin.
             sort_origin: Vec3::ZERO,
         }

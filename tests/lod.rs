@@ -170,6 +170,7 @@ fn both_eyes_and_every_display_draw_an_instance_at_one_level() {
             instances_per_object: 1,
             split: None,
             hidden: None,
+            tiles: None,
             sort_origin: e.position(),
         })
         .collect();

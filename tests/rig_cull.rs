@@ -124,6 +124,7 @@ fn dropped_by_masks(scene: &Scene, rig: &Rig, options: &RendererOptions) -> usiz
         .map(|job| {
             let frustum = CullJob {
                 hidden: None,
+                tiles: None,
                 ..*job
             };
             (spheres.iter())

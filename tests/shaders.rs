@@ -21,11 +21,11 @@ use stereocull::scene::Vertex;
 use stereocull::shaders::{
     Access, Binding, CANDIDATE_BINDINGS, COARSE_BINDINGS, CULL_BINDINGS, CullPass,
     DEPTH_RESOLVE_BINDINGS, DRAW_BINDINGS, DrawKey, EditKind, FAR_COMPOSITE_BINDINGS,
-    FOVEATED_COMPOSITE_BINDINGS, MATERIAL_BINDINGS, MOTION_BINDINGS, POSE_BINDINGS,
-    PYRAMID_SET_DEPTHS, SCATTER_BINDINGS, SHADOW_MAP_BINDINGS, SKIN_BINDINGS, Window, Windows,
-    all_sources, depth_resolve_source, far_composite_source, foveated_composite_source,
-    pose_source, pyramid_bindings, pyramid_source, scatter_source, shadow_cutout_source,
-    shadow_source, skin_source,
+    FOVEATED_COMPOSITE_BINDINGS, KEEP_TILES_BINDINGS, MATERIAL_BINDINGS, MOTION_BINDINGS,
+    POSE_BINDINGS, PYRAMID_SET_DEPTHS, SCATTER_BINDINGS, SHADOW_MAP_BINDINGS, SKIN_BINDINGS,
+    Window, Windows, all_sources, depth_resolve_source, far_composite_source,
+    foveated_composite_source, keep_tiles_source, pose_source, pyramid_bindings, pyramid_source,
+    scatter_source, shadow_cutout_source, shadow_source, skin_source,
 };
 
 fn parse(label: &str, source: &str) -> Module {
@@ -438,6 +438,8 @@ fn contexts_match_wgsl() {
         visibility_words: 9,
         pyramid_offset: 128,
         pyramid_stride: 29,
+        tile_offset: 31,
+        tile_stride: 37,
         bin_count: 11,
         first_blend_bin: 13,
         blend_first: 17,
@@ -455,6 +457,8 @@ fn contexts_match_wgsl() {
             ("visibility_words", f32::from_bits(9)),
             ("pyramid_offset", f32::from_bits(128)),
             ("pyramid_stride", f32::from_bits(29)),
+            ("tile_offset", f32::from_bits(31)),
+            ("tile_stride", f32::from_bits(37)),
             ("bin_count", f32::from_bits(11)),
             ("first_blend_bin", f32::from_bits(13)),
             ("blend_first", f32::from_bits(17)),
@@ -652,7 +656,7 @@ fn pipelines_and_their_lists() -> Vec<(String, String, Vec<Vec<Binding>>)> {
             )
         }),
     );
-    let others: [(&str, String, Vec<Vec<Binding>>); 7] = [
+    let others: [(&str, String, Vec<Vec<Binding>>); 8] = [
         ("shadow", shadow_source(whole), lists(&[&DRAW_BINDINGS])),
         (
             "shadow.cutout",
@@ -670,6 +674,11 @@ fn pipelines_and_their_lists() -> Vec<(String, String, Vec<Vec<Binding>>)> {
             lists(&[&FOVEATED_COMPOSITE_BINDINGS]),
         ),
         ("skin", skin_source(), lists(&[&SKIN_BINDINGS])),
+        (
+            "keep_tiles",
+            keep_tiles_source(wgpu::TextureFormat::Rgba8UnormSrgb, wgpu::Color::BLACK),
+            lists(&[&KEEP_TILES_BINDINGS]),
+        ),
         ("pose", pose_source(), lists(&[&POSE_BINDINGS])),
         (
             "depth_resolve",

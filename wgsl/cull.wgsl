@@ -53,8 +53,8 @@ fn cull_rig(
     var masks: array<u32, MAX_RIG_VIEWS>;
     for (var b = 0u; b < rig.members; b++) {
         let view = rig.views[b];
-        // Read by the late phase alone (OCCLUSION 2), its one use compiled out of the
-        // others.
+        // The member's eyes: what the late phase (OCCLUSION 2) tests the pyramids with,
+        // and a kept frame its changed tiles.
         let late = rig.occlusion[b];
         let base = pyramid_base(view.cull_slot);
         // A loop, not a branch: a SIMD CPU adapter (lavapipe) runs both sides of a
@@ -69,13 +69,15 @@ fn cull_rig(
             var kept: bool;
             if (OCCLUSION == 2u) {
                 // The display's own late cull (cull_entry, occlusion_entry), in order.
-                let shown = framed && (view.hidden == 0u || !hidden_in_views(view.cull_slot, s)) && !occluded_for(s, late, base);
+                let shown = framed && ((view.hidden & CULL_HIDDEN) == 0u || !hidden_in_views(view.cull_slot, s)) && !occluded_for(s, late, base);
                 unhidden |= select(0u, 1u << i, shown && !blended(first + i));
                 kept = shown && !drawn_by(view.cull_slot, first + i);
             } else {
                 let seen = view.early == 0u || drawn_by(view.cull_slot, first + i);
-                // The hidden area last: its tests cost several frustums'.
-                kept = framed && seen && (view.hidden == 0u || !hidden_in_views(view.cull_slot, s));
+                // The hidden area and the tiles last: their tests cost several frustums'.
+                let unhidden = (view.hidden & CULL_HIDDEN) == 0u || !hidden_in_views(view.cull_slot, s);
+                let touched = (view.hidden & CULL_TILES) == 0u || touches_changed_tiles(view.cull_slot, late.view_from_world, late.clip_from_view, late.resolution, late.views, s);
+                kept = framed && seen && unhidden && touched;
             }
             if (kept) {
                 if (((chosen >> i) & 1u) == 0u) {
@@ -187,7 +189,10 @@ fn cull_entry(j: u32) -> u32 {
     if (!(sphere_in_planes(display.planes, s) && in_split(s))) {
         return 0u;
     }
-    if (display.hidden == 1u && hidden_in_views(display.cull_slot, s)) {
+    if ((display.hidden & CULL_HIDDEN) != 0u && hidden_in_views(display.cull_slot, s)) {
+        return 0u;
+    }
+    if ((display.hidden & CULL_TILES) != 0u && !touched_in_display(s)) {
         return 0u;
     }
     return occlusion_entry(k, s, ENTRY_VISIBLE | (lod_level(k, s) << ENTRY_LEVEL_SHIFT));

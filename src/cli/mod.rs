@@ -166,6 +166,10 @@ pub struct SceneArgs {
     /// Seconds between a submission's two frames (default: one 90 Hz period).
     #[arg(long, default_value_t = crate::renderer::DEFAULT_DT)]
     pub dt: f32,
+    /// Keep unchanged pixels: a frame at the last frame's pose redraws only the tiles
+    /// something changed (`on` refuses what never can; `auto` draws such frames whole).
+    #[arg(long, value_enum, default_value = "off")]
+    pub keep_unchanged: crate::keep::KeepUnchanged,
 }
 
 /// Where animations are posed, as the command line asks.
@@ -226,6 +230,7 @@ impl SceneArgs {
             motion_vectors: self.motion_vectors.on(),
             frames_per_submit: self.frames_per_submit,
             dt: self.dt,
+            keep_unchanged: self.keep_unchanged,
             ..Default::default()
         }
     }

@@ -38,6 +38,10 @@ pub struct StressArgs {
     /// viewer's path again once the frame is recorded ([`crate::renderer::Renderer::latch`]).
     #[arg(long)]
     pub latch: bool,
+    /// Hold the head still (no walk): with `--keep-unchanged`, frames redraw only what
+    /// the edits and animations change.
+    #[arg(long)]
+    pub still: bool,
 }
 
 #[derive(Serialize)]
@@ -57,6 +61,11 @@ struct FrameRecord {
     /// Primitives reaching the clipper in the draw passes (pipeline statistics; `None`
     /// where the adapter has none).
     triangles_submitted: Option<u64>,
+    /// Fragment-shader invocations in the frame (pipeline statistics).
+    fragment_invocations: Option<u64>,
+    /// Keeping unchanged pixels: the tiles redrawn, or why the frame was drawn whole.
+    tiles_changed: u32,
+    whole_redraw: Option<crate::keep::WholeRedraw>,
     /// Until the GPU finished the frame.
     frame_ms: f64,
     /// From sampling the pose the frame is drawn with to its submit.
@@ -117,6 +126,14 @@ struct Summary {
     bytes_uploaded_per_frame: u64,
     /// Median over the frames of the triangles submitted (pipeline statistics).
     triangles_submitted_median: Option<f64>,
+    /// Median over the frames of the fragment-shader invocations.
+    fragment_invocations_median: Option<f64>,
+    /// Keeping unchanged pixels (`--keep-unchanged`, `--still`): the median tiles
+    /// redrawn, and the frames drawn whole.
+    keep_unchanged: crate::keep::KeepUnchanged,
+    still: bool,
+    tiles_changed_median: f64,
+    whole_redraws: usize,
     gpu_bytes_per_instance: u64,
     /// Vertices the skinning pass poses per frame (once for every display and eye), and
     /// the GPU bytes each takes in the pass's rest buffer (its posed copy is the scene's
@@ -198,6 +215,9 @@ pub fn stress(args: &StressArgs) -> Result<()> {
     let shown = (args.frames * per_submit).max(1) as f32;
     // Look around and sway, so that culling sees a different view every frame.
     let walk = |rig: &mut crate::rig::Rig, shown_frame: u32| {
+        if args.still {
+            return;
+        }
         let phase = shown_frame as f32 / shown * std::f32::consts::TAU;
         rig.viewer.yaw_deg = base.yaw_deg + 40.0 * phase.sin();
         rig.viewer.position[0] = base.position[0] + 0.3 * (2.0 * phase).sin();
@@ -246,6 +266,9 @@ pub fn stress(args: &StressArgs) -> Result<()> {
             moved: figures.sync.moved,
             reloaded: figures.sync.reloaded,
             triangles_submitted,
+            fragment_invocations: queries.as_ref().and_then(|q| q.fragment_invocations),
+            tiles_changed: stats.tiles_changed,
+            whole_redraw: stats.whole_redraw,
             frame_ms,
             pose_age_ms: figures.pose_age_ms,
             skin_gpu_ms,
@@ -347,6 +370,11 @@ fn summarize(
         dispatches_per_level: last.map_or(DispatchLevels::default(), |r| r.dispatch_levels),
         bytes_uploaded_per_frame: last.map_or(0, |r| r.bytes_uploaded),
         triangles_submitted_median: median_of(records, |r| r.triangles_submitted),
+        fragment_invocations_median: median_of(records, |r| r.fragment_invocations),
+        keep_unchanged: session.renderer.options().keep_unchanged,
+        still: args.still,
+        tiles_changed_median: percentile(&of(|r| r.tiles_changed as f64), 0.5),
+        whole_redraws: records.iter().filter(|r| r.whole_redraw.is_some()).count(),
         sphere_tests_median: median_of(records, |r| r.sphere_tests),
         shadows: session.renderer.options().shadows,
         passes_per_level: passes_per_level(last.map_or(&[], |r| &r.passes[..])),
@@ -449,6 +477,17 @@ fn print_summary(s: &Summary) {
         show(s.sphere_tests_median),
         s.gpu_bytes_per_instance
     );
+    if s.keep_unchanged != crate::keep::KeepUnchanged::Off {
+        println!(
+            "kept pixels ({:?}{}): median {} tiles redrawn, {} of {} frames drawn whole, {} fragment invocations (median)",
+            s.keep_unchanged,
+            if s.still { ", head still" } else { "" },
+            s.tiles_changed_median,
+            s.whole_redraws,
+            s.frames,
+            show(s.fragment_invocations_median),
+        );
+    }
     if let Some(bytes) = &s.occlusion_bytes {
         println!(
             "occlusion: {} GPU bytes per display, {} for the shared pyramids",

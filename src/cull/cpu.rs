@@ -13,6 +13,7 @@ use super::coarse::{BLOCK, block_of};
 use super::{BinDraws, CoarseCull, CullJob, CullOutput, HiddenArea, Split};
 /// Their old path, kept for one release: they are the frame's, not the CPU culler's.
 pub use super::{FrameCull, FrameLod};
+use crate::cull::tiles::TileMask;
 use crate::frustum::plane_distance;
 use crate::records::{CullLayout, DrawArgs, lod_level};
 use crate::scene::MAX_LODS;
@@ -62,6 +63,7 @@ pub fn cull_frame(layout: &CullLayout, displays: &[CullJob], frame: &FrameCull) 
         .collect();
     let splits: Vec<Option<Split>> = displays.iter().map(|job| job.split).collect();
     let hidden: Vec<Option<&HiddenArea>> = displays.iter().map(|j| j.hidden.as_deref()).collect();
+    let tiles: Vec<Option<&TileMask>> = displays.iter().map(|j| j.tiles.as_deref()).collect();
     let blocks: Vec<CoarseCull> = match coarse {
         Some(_) => displays
             .iter()
@@ -73,6 +75,7 @@ pub fn cull_frame(layout: &CullLayout, displays: &[CullJob], frame: &FrameCull) 
         planes: &planes,
         splits: &splits,
         hidden: &hidden,
+        tiles: &tiles,
         coarse: coarse.map(|frame| (frame, &blocks[..])),
     };
     // One mask per display, chunk-interleaved so each task writes one contiguous run.
@@ -148,6 +151,7 @@ struct FrameTests<'a> {
     planes: &'a [[[f32; 4]; 6]],
     splits: &'a [Option<Split>],
     hidden: &'a [Option<&'a HiddenArea>],
+    tiles: &'a [Option<&'a TileMask>],
     coarse: Option<(&'a CoarseCull, &'a [CoarseCull])>,
 }
 
@@ -160,6 +164,7 @@ fn test_chunk(
         planes,
         splits,
         hidden,
+        tiles,
         coarse,
     }: FrameTests,
     start: usize,
@@ -186,6 +191,10 @@ fn test_chunk(
             };
             let bits = match hidden[d] {
                 Some(h) if bits != 0 => bits & !hidden_group(h, bits, cols),
+                _ => bits,
+            };
+            let bits = match tiles[d] {
+                Some(t) if bits != 0 => bits & group_where(bits, cols, |s| t.touches(s)),
                 _ => bits,
             };
             out[d * per + w] = bits;
@@ -225,16 +234,21 @@ fn split_group(split: &Split, [x, y, z, neg_r]: [&[f32]; 4]) -> u64 {
 }
 
 /// Which of `bits` (spheres given as columns) `hidden` hides.
-fn hidden_group(hidden: &HiddenArea, bits: u64, [x, y, z, neg_r]: [&[f32]; 4]) -> u64 {
-    let mut hides = 0u64;
+fn hidden_group(hidden: &HiddenArea, bits: u64, cols: [&[f32]; 4]) -> u64 {
+    group_where(bits, cols, |s| hidden.hides(s))
+}
+
+/// Which of `bits` (spheres given as columns) pass `test`.
+fn group_where(bits: u64, [x, y, z, neg_r]: [&[f32]; 4], test: impl Fn(Vec4) -> bool) -> u64 {
+    let mut passed = 0u64;
     let mut rest = bits;
     while rest != 0 {
         let i = rest.trailing_zeros() as usize;
         let sphere = Vec4::new(x[i], y[i], z[i], -neg_r[i]);
-        hides |= (hidden.hides(sphere) as u64) << i;
+        passed |= (test(sphere) as u64) << i;
         rest &= rest - 1;
     }
-    hides
+    passed
 }
 
 fn test_lanes(planes: &[[f32; 4]; 6], lanes: [&[f32; 64]; 4]) -> u64 {

@@ -33,6 +33,11 @@ pub struct CullParams {
     pub pyramid_offset: u32,
     /// Words from one display slot's pyramids to the next's.
     pub pyramid_stride: u32,
+    /// Where the changed tiles' bits start in the occlusion buffer, in words
+    /// ([`crate::keep`]).
+    pub tile_offset: u32,
+    /// Words from one display slot's tiles to the next's.
+    pub tile_stride: u32,
     /// Material bins ([`crate::bins::Bins`]): each has its own range of the draws.
     pub bin_count: u32,
     /// The first blended bin ([`crate::bins::Bins::first_blend_bin`]): blended
@@ -94,6 +99,8 @@ pub struct CullScene {
     /// ([`crate::occlusion::PyramidShape`]), all built before any late cull reads them.
     pub(super) occlusion: wgpu::Buffer,
     occlusion_layout: (u32, u32, u32),
+    /// Where the changed tiles start in `occlusion` and the words per display slot.
+    tile_layout: (u32, u32),
     /// Display slots with visibility words (0 without occlusion).
     visibility_slots: u32,
     /// Per display slot its hidden area ([`HiddenArea`]; one unused record where no
@@ -111,6 +118,9 @@ pub struct OcclusionRoom {
     pub displays: u32,
     /// Texels of the largest display's pyramids: every slot's region holds as many.
     pub pyramid_texels: u32,
+    /// Keeping unchanged pixels: display slots with changed tiles and the words of the
+    /// largest one's tiles (zeros without).
+    pub tiles: (u32, u32),
 }
 
 impl CullScene {
@@ -136,6 +146,8 @@ impl CullScene {
         let pyramid_offset = (occlusion.displays * words).next_multiple_of(align);
         let pyramid_stride = occlusion.pyramid_texels.next_multiple_of(align);
         let occlusion_layout = (words, pyramid_offset, pyramid_stride);
+        let tile_offset = pyramid_offset + occlusion.displays * pyramid_stride;
+        let tile_layout = (tile_offset, occlusion.tiles.1);
         // The display passes may run past the last instance to the end of its block.
         let positions = slots.next_multiple_of(BLOCK);
         let (spans, scan_groups) = span_shape(positions);
@@ -144,6 +156,7 @@ impl CullScene {
             max_groups,
             levels,
             occlusion: occlusion_layout,
+            tiles: tile_layout,
             members: member_strides,
         };
         let (params, groups) = cull_params(layout, room);
@@ -251,11 +264,12 @@ impl CullScene {
             occlusion: storage_buffer(
                 device,
                 "stereocull.occlusion",
-                4 * (pyramid_offset + occlusion.displays * pyramid_stride).max(1) as u64,
+                4 * (tile_offset + occlusion.tiles.0 * occlusion.tiles.1).max(1) as u64,
                 // A reload clears the visibility words from the queue.
                 scratch | wgpu::BufferUsages::COPY_SRC | wgpu::BufferUsages::COPY_DST,
             ),
             occlusion_layout,
+            tile_layout,
             visibility_slots: occlusion.displays,
             hidden: init_buffer(
                 device,
@@ -265,6 +279,16 @@ impl CullScene {
             ),
             hidden_slots,
         }
+    }
+
+    /// Writes display slot `slot`'s changed tiles for this frame (keeping unchanged
+    /// pixels); returns the bytes written.
+    pub fn write_tiles(&self, queue: &impl Upload, slot: u32, words: &[u32]) -> u64 {
+        let (offset, stride) = self.tile_layout;
+        let words = &words[..words.len().min(stride as usize)];
+        let at = 4 * (offset + slot * stride) as u64;
+        queue.write_buffer(&self.occlusion, at, bytemuck::cast_slice(words));
+        4 * words.len() as u64
     }
 
     /// Writes this frame's hidden areas, one per display slot (in order; `None` drops
@@ -323,6 +347,7 @@ impl CullScene {
             max_groups: self.max_groups,
             levels: self.levels,
             occlusion: self.occlusion_layout,
+            tiles: self.tile_layout,
             members: self.member_strides,
         };
         let (params, groups) = cull_params(layout, room);
@@ -462,6 +487,7 @@ struct Room {
     max_groups: u32,
     levels: u32,
     occlusion: (u32, u32, u32),
+    tiles: (u32, u32),
     members: (u32, u32),
 }
 
@@ -470,6 +496,7 @@ fn cull_params(layout: &CullLayout, room: Room) -> (CullParams, Grids) {
         max_groups,
         levels,
         occlusion: (visibility_words, pyramid_offset, pyramid_stride),
+        tiles: (tile_offset, tile_stride),
         members: (position_room, member_sums),
     } = room;
     let n = layout.spheres.len() as u32;
@@ -486,6 +513,8 @@ fn cull_params(layout: &CullLayout, room: Room) -> (CullParams, Grids) {
         visibility_words,
         pyramid_offset,
         pyramid_stride,
+        tile_offset,
+        tile_stride,
         bin_count: layout.bins.kinds.len() as u32,
         first_blend_bin: layout.bins.first_blend_bin(),
         blend_first: (layout.bin_ranges(levels).iter())

@@ -18,6 +18,7 @@ pub mod gpu_buffers;
 pub mod hidden;
 pub mod rig;
 pub mod targets;
+pub mod tiles;
 
 pub use coarse::CoarseCull;
 pub use hidden::HiddenArea;
@@ -39,6 +40,9 @@ pub struct CullJob {
     /// With the visibility mask: the lens's hidden area, which drops what every masked
     /// view hides ([`HiddenArea::hides`]).
     pub hidden: Option<std::sync::Arc<HiddenArea>>,
+    /// Keeping unchanged pixels: the display's changed tiles, which a kept sphere must
+    /// touch ([`crate::cull::tiles::TileMask::touches`]).
+    pub tiles: Option<std::sync::Arc<crate::cull::tiles::TileMask>>,
     /// Where blended instances are sorted from, back to front: the midpoint of the
     /// display's two eyes (its one view's position for mono, far and light views;
     /// [`crate::contexts::DisplayContext::sort_origin`]).
@@ -52,6 +56,7 @@ impl CullJob {
         crate::frustum::sphere_in_planes(&self.planes, s)
             && self.split.is_none_or(|split| split.keeps(s))
             && self.hidden.as_ref().is_none_or(|h| !h.hides(s))
+            && self.tiles.as_ref().is_none_or(|t| t.touches(s))
     }
 }
 

@@ -22,6 +22,7 @@ use crate::contexts::{DisplayContext, EyeContext};
 use crate::cull::FrameLod;
 use crate::cull::cpu;
 use crate::cull::{CullJob, CullOutput};
+use crate::frustum::{depth_at, grown_radius, tangent_slopes, view_center};
 use crate::records::CullLayout;
 use crate::shaders::SPAN;
 
@@ -130,12 +131,7 @@ fn farthest4(d: [f32; 4]) -> f32 {
 }
 
 pub use crate::contexts::BOUNDS_GROWTH_PX;
-/// How much a sphere's radius grows per unit of the magnitudes its view-space center is
-/// summed from (see `grown_radius`): each coordinate of the center is three products
-/// and three sums of a rotation's rows, rounded at most six times by 2^-24 of those
-/// magnitudes (2^-21.4 in all), plus the rotation's own rounding; the distance error
-/// stays under 2^-20 of them, and this is four times that.
-pub const DEPTH_SLACK: f32 = 1.0 / 262144.0;
+pub use crate::frustum::DEPTH_SLACK;
 /// How far (in depth-buffer units) the sphere's nearest depth must lie beyond the
 /// farthest occluder depth: covers the rasterizer's depth interpolation.
 pub const DEPTH_MARGIN: f32 = 1.0 / 1048576.0;
@@ -206,31 +202,6 @@ pub fn pyramid_level(lo: UVec2, hi: UVec2, levels: u32) -> u32 {
     l
 }
 
-/// View-space center of `s`: products summed left to right, as the WGSL writes them.
-fn view_center(s: Vec4, m: &Mat4) -> [f32; 3] {
-    let row = |i: usize| m.x_axis[i] * s.x + m.y_axis[i] * s.y + m.z_axis[i] * s.z + m.w_axis[i];
-    [row(0), row(1), row(2)]
-}
-
-/// The radius of `s`, grown by [`DEPTH_SLACK`] of every magnitude its view-space
-/// center `c` was summed from (the world center, the view's translation, the result, the
-/// radius): the f32 rounding of `c`, centimeters at a million meters from the origin.
-/// Summed left to right, as the WGSL does.
-fn grown_radius(s: Vec4, m: &Mat4, c: [f32; 3]) -> f32 {
-    let t = m.w_axis;
-    let magnitude = c[0].abs()
-        + c[1].abs()
-        + c[2].abs()
-        + s.x.abs()
-        + s.y.abs()
-        + s.z.abs()
-        + t.x.abs()
-        + t.y.abs()
-        + t.z.abs()
-        + s.w;
-    s.w + magnitude * DEPTH_SLACK
-}
-
 /// The sphere's projected bounds in normalized device coordinates (min x, min y, max x,
 /// max y), or `None` where it reaches the near plane (then it is never occluded).
 fn project(s: Vec4, view: &Mat4, clip: &Mat4) -> Option<Vec4> {
@@ -252,18 +223,9 @@ fn project(s: Vec4, view: &Mat4, clip: &Mat4) -> Option<Vec4> {
     ))
 }
 
-/// The slopes (`a / z`) of the two tangents from the eye to the circle of radius `r`
-/// about `(a, z)`, least first; `z > r`.
-fn tangent_slopes(a: f32, z: f32, r: f32) -> (f32, f32) {
-    let t = (a * a + z * z - r * r).sqrt();
-    let lo = (a * t - z * r) / (z * t + a * r);
-    let hi = (a * t + z * r) / (z * t - a * r);
-    (lo, hi)
-}
-
 /// Depth-buffer value at view distance `d` (positive), or `None` for `d <= 0`.
 fn near_depth(d: f32, clip: &Mat4) -> Option<f32> {
-    (d > 0.0).then(|| (clip.z_axis.z * -d + clip.w_axis.z) / d)
+    (d > 0.0).then(|| depth_at(d, clip))
 }
 
 /// The depth-buffer value of the sphere's nearest point (pulled nearer for rounding).

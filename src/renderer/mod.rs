@@ -81,6 +81,8 @@ use crate::buffers::uniform_buffer;
 use crate::contexts::FrameContext;
 use crate::draw::DrawScene;
 use crate::error::{Error, Result};
+use crate::keep::Keeper;
+pub use crate::keep::{KeepUnchanged, WholeRedraw};
 use crate::motion::PreviousFrame;
 
 use crate::places::Places;
@@ -97,6 +99,7 @@ mod display;
 mod encode;
 mod frame;
 pub mod frames;
+mod keeping;
 mod options;
 mod own_passes;
 mod plan;
@@ -275,6 +278,10 @@ pub struct Renderer {
     motion_last: Option<PreviousFrame>,
     /// What `prepare` and `latch` write of the pose, as one upload.
     uploads: Coalesced,
+    /// What changed since the last frame, to keep the pixels nothing changed.
+    keeper: Keeper,
+    /// Whether the frame last prepared keeps pixels (a latch would move them all).
+    keeps: bool,
 }
 
 impl Renderer {
@@ -289,6 +296,13 @@ impl Renderer {
         check_device(device, scene, &options)?;
         check_rig(rig, &options, device.limits().max_multiview_view_count)?;
         frames::check(scene, rig, &options)?;
+        let never = keeping::never(scene, rig.displays.iter().map(|d| d.views()), &options);
+        if let (KeepUnchanged::On, Some(why)) = (options.keep_unchanged, never) {
+            return Err(Error::Unsupported(format!(
+                "keeping unchanged pixels: {why} (--keep-unchanged auto draws such frames whole)"
+            )));
+        }
+        let keeper = Keeper::new(scene, options.keep_unchanged, never, options.shadows);
         let resolved = rig.resolve()?;
         let coarse = options.coarse_for(&resolved, Some(device));
         let plan = FramePlan::of(rig, resolved, &options, coarse, 0.0)?;
@@ -373,6 +387,8 @@ impl Renderer {
             motion_from: None,
             motion_last: None,
             uploads: Coalesced::new(device),
+            keeper,
+            keeps: false,
         })
     }
 

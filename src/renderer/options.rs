@@ -2,6 +2,7 @@
 //! runs, ...), and the level-of-detail choice those options and a rig make for each
 //! frame.
 
+use crate::keep::KeepUnchanged;
 use std::sync::Arc;
 
 use crate::cull::FrameLod;
@@ -235,6 +236,10 @@ pub struct RendererOptions {
     pub frames_per_submit: u32,
     /// Seconds between a submission's two frames (one display period).
     pub dt: f32,
+    /// Whether a frame whose pose, rig and options are the last frame's redraws only
+    /// the tiles that something changed ([`crate::keep`]); `auto` turns occlusion's
+    /// `auto` off (its phases need every instance tested each frame).
+    pub keep_unchanged: KeepUnchanged,
 }
 
 /// One period of a 90 Hz display: the default distance between a submission's frames.
@@ -305,7 +310,11 @@ impl RendererOptions {
     pub fn occludes(&self, views: usize, (pixels, triangles): (u64, u64)) -> bool {
         let asked = match self.occlusion {
             OcclusionMode::On => true,
-            OcclusionMode::Auto => self.cull == CullMode::Gpu && triangles >= pixels,
+            OcclusionMode::Auto => {
+                self.cull == CullMode::Gpu
+                    && triangles >= pixels
+                    && self.keep_unchanged == KeepUnchanged::Off
+            }
             OcclusionMode::Off => false,
         };
         // Multiview's layered depth has one sample (no multisampled array textures).
@@ -354,6 +363,7 @@ impl Default for RendererOptions {
             motion_vectors: false,
             frames_per_submit: 1,
             dt: DEFAULT_DT,
+            keep_unchanged: KeepUnchanged::Off,
         }
     }
 }

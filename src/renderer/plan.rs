@@ -13,9 +13,11 @@ use super::options::StereoMode;
 use super::options::{RendererOptions, frame_lod};
 use crate::contexts::{DisplayContext, FrameContext};
 use crate::cull::FrameCull;
+use crate::cull::tiles::TileMask;
 use crate::cull::{CoarseCull, CullJob, HiddenArea};
 use crate::error::{Error, Result};
 use crate::far_layer::FarPlan;
+use crate::keep::WholeRedraw;
 use crate::motion::PreviousFrame;
 use crate::rig::{ResolvedRig, Rig};
 use crate::shadow::LightView;
@@ -43,6 +45,11 @@ pub struct FrameStats {
     /// edits).
     #[serde(skip)]
     pub cpu_staging: Duration,
+    /// Keeping unchanged pixels: the tiles the displays redrew (0 in a frame drawn
+    /// whole).
+    pub tiles_changed: u32,
+    /// Why the frame was drawn whole (`None`: it kept what did not change).
+    pub whole_redraw: Option<WholeRedraw>,
 }
 
 /// A frame's compute dispatches by the level that records them.
@@ -70,6 +77,8 @@ impl std::ops::Add for FrameStats {
             cpu_cull: self.cpu_cull + other.cpu_cull,
             cpu_upload: self.cpu_upload + other.cpu_upload,
             cpu_staging: self.cpu_staging + other.cpu_staging,
+            tiles_changed: self.tiles_changed + other.tiles_changed,
+            whole_redraw: self.whole_redraw.or(other.whole_redraw),
         }
     }
 }
@@ -147,6 +156,10 @@ pub struct FramePlan {
     /// area its cull drops by (the display's own cull and its late phase; never its far
     /// layer's or its insets').
     pub hidden: Vec<Option<Arc<HiddenArea>>>,
+    /// Per display: keeping unchanged pixels, its changed tiles, which its cull keeps
+    /// only what touches and its draw pass alone redraws ([`crate::keep`]); `None`:
+    /// drawn whole. The renderer sets them ([`crate::renderer::Renderer::prepare`]).
+    pub tiles: Vec<Option<Arc<TileMask>>>,
 }
 
 impl FramePlan {
@@ -265,6 +278,7 @@ impl FramePlan {
             insets,
             inset_culls,
             hidden,
+            tiles: vec![None; rig.displays.len()],
         })
     }
 
@@ -316,6 +330,7 @@ fn inset_job(i: usize, context: &DisplayContext) -> PlannedCull {
             instances_per_object: context.instances_per_object,
             split: None,
             hidden: None,
+            tiles: None,
             sort_origin: context.sort_origin(),
         },
     }
@@ -404,6 +419,7 @@ fn culls(
                         instances_per_object: 1,
                         split,
                         hidden: None,
+                        tiles: None,
                         // One order for both eyes, as the display draws it.
                         sort_origin: context.sort_origin(),
                     },
@@ -414,6 +430,7 @@ fn culls(
                 job: CullJob {
                     split,
                     hidden: hidden[i].clone(),
+                    tiles: None,
                     sort_origin: context.sort_origin(),
                     ..r.cull_job(context.instances_per_object)
                 },
@@ -429,6 +446,7 @@ fn culls(
                 instances_per_object: 1,
                 split: Some(plan.split(true)),
                 hidden: None,
+                tiles: None,
                 sort_origin: plan.view.position(),
             },
         })

@@ -3,6 +3,7 @@
 //! pose before it is submitted.
 
 use super::frames;
+use super::keeping;
 use super::plan::{FramePlan, FrameStats};
 use super::uploads::Writes;
 use super::{CullMode, Path, Renderer};
@@ -55,7 +56,7 @@ impl Renderer {
     /// `RendererOptions::dt` later: [`Renderer::prepare_pair`] takes its own pose.
     pub fn prepare(&mut self, queue: &wgpu::Queue, rig: &Rig, time: f32) -> Result<FrameStats> {
         let plan = self.plan(rig, time)?;
-        self.prepare_plan(queue, plan, time)
+        self.prepare_plan(queue, plan, (rig, time))
     }
 
     /// [`Renderer::prepare`] for a submission of two frames
@@ -70,19 +71,26 @@ impl Renderer {
         next: (&Rig, f32),
     ) -> Result<FrameStats> {
         let plan = self.plan_pair(now, next)?;
-        self.prepare_plan(queue, plan, now.1)
+        self.prepare_plan(queue, plan, now)
     }
 
     fn prepare_plan(
         &mut self,
         queue: &wgpu::Queue,
-        plan: FramePlan,
-        time: f32,
+        mut plan: FramePlan,
+        (rig, time): (&Rig, f32),
     ) -> Result<FrameStats> {
         if self.options.motion_vectors {
             self.motion_from = self.motion_last.take();
         }
+        let (tiles_changed, whole_redraw) = match self.keeper.frame(rig, time) {
+            Ok(spheres) => (keeping::keep(&mut plan, &spheres), None),
+            Err(why) => (0, Some(why)),
+        };
+        self.keeps = whole_redraw.is_none();
         let mut stats = self.write_plan(queue, plan, true);
+        stats.tiles_changed = tiles_changed;
+        stats.whole_redraw = whole_redraw;
         if let Some(morph) = &mut self.morph {
             stats.bytes_uploaded += morph.prepare(queue, time);
         }
@@ -122,6 +130,13 @@ impl Renderer {
                 "latch comes after prepare and encode, before the submit".into(),
             ));
         };
+        if self.keeps {
+            return Err(Error::Unsupported(
+                "this frame keeps the last frame's pixels, which a new pose would move: latch frames with keep_unchanged off".into(),
+            ));
+        }
+        // The frame is drawn at `rig`, not at the pose the keeper compares the next with.
+        self.keeper.forget();
         let plan = self.plan(rig, time)?;
         Ok(self.write_plan(queue, plan, false))
     }

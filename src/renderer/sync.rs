@@ -48,6 +48,7 @@ impl Renderer {
         let mut changes = live.take_changes();
         if changes.lights {
             self.lighting.set(&live.lights())?;
+            self.keeper.lights_changed();
         }
         let joints = std::mem::take(&mut changes.joints);
         let driven = std::mem::take(&mut changes.driven);
@@ -82,6 +83,14 @@ impl Renderer {
     ) -> Result<SyncStats> {
         let (scene, places) = (live.scene(), live.places());
         let needed = (scene.instances.len() as u32).max(places.len());
+        let occupied = |slot| live.occupied(slot);
+        if changes.geometry || needed > self.slots || changes.restructured {
+            self.keeper.reload(scene, occupied);
+        } else {
+            let moved = changes.moved.iter().map(|m| m.slot);
+            let slots = (changes.removed.iter().chain(&changes.recolored).copied()).chain(moved);
+            self.keeper.changed(scene, slots, occupied);
+        }
         if changes.geometry || needed > self.slots {
             return self.reallocate(device, live, needed);
         }

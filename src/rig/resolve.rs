@@ -265,6 +265,7 @@ impl ResolvedDisplay {
             instances_per_object,
             split: None,
             hidden: None,
+            tiles: None,
             // As DisplayContext::sort_origin, from the same f32 positions.
             sort_origin: match self.eyes.len() >= 2 {
                 true => (eye(0) + eye(1)) * 0.5,

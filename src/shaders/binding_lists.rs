@@ -345,6 +345,15 @@ pub const VISIBILITY_MASK_BINDINGS: [Binding; 1] = [binding(
     wgpu::ShaderStages::VERTEX,
 )];
 
+/// A kept frame's changed tiles cleared (`wgsl/keep_tiles.wgsl`): their triangles'
+/// corners, placed in the target.
+pub const KEEP_TILES_BINDINGS: [Binding; 1] = [binding(
+    "corners",
+    Access::StorageRead,
+    "array<vec2<f32>>",
+    wgpu::ShaderStages::VERTEX,
+)];
+
 /// The compositor's depth resolve (`wgsl/depth_resolve.wgsl`): one layer of a
 /// multisampled depth attachment.
 pub const DEPTH_RESOLVE_BINDINGS: [Binding; 1] = [texture(

@@ -6,7 +6,7 @@
 use super::binding_lists::{PYRAMID_SET_DEPTHS, PYRAMID_SET_SLICES, pyramid_bindings};
 use super::bindings::declarations;
 use super::{
-    CANDIDATE_BINDINGS, COARSE_BINDINGS, CONTEXTS, CULL_BINDINGS, CULL_MATH, CULL_SUBGROUPS,
+    CANDIDATE_BINDINGS, COARSE_BINDINGS, CONTEXTS, CULL_BINDINGS, CULL_MATH, CULL_SUBGROUPS, KEEP,
     OCCLUSION, PYRAMID, RECORDS, WORKGROUP_SIZE, Windows, constants,
 };
 
@@ -208,6 +208,7 @@ impl CullPass {
             over,
             PYRAMID,
             OCCLUSION,
+            KEEP,
             body,
         ]
         .concat()

@@ -29,6 +29,13 @@ pub const MAX_RIG_VIEWS: usize = 16;
 /// (six flipped frustum planes) and the visibility mask's triangles.
 pub const MAX_HIDDEN_REGIONS: usize = 6 + MAX_MASK_TRIANGLES;
 
+/// Pixels on a side of the tiles a kept frame redraws ([`crate::cull::tiles`]).
+pub const TILE: u32 = 16;
+
+/// Pixels a sphere's projected bounds grow by each way in the tiles' test, for the
+/// rounding of the projection (as occlusion's, `crate::contexts::BOUNDS_GROWTH_PX`).
+pub const TILE_MARGIN_PX: f32 = 1.0;
+
 /// Views a display's hidden area holds ([`crate::cull::hidden`]): a stereo pair, or two
 /// frames' pairs in one submission ([`crate::renderer::frames`]).
 pub const MAX_HIDDEN_VIEWS: usize = 4;
@@ -52,6 +59,7 @@ const RECORDS: &str = include_str!("../../wgsl/shared/records.wgsl");
 const CULL_MATH: &str = include_str!("../../wgsl/shared/cull_math.wgsl");
 const PYRAMID: &str = include_str!("../../wgsl/shared/pyramid.wgsl");
 const OCCLUSION: &str = include_str!("../../wgsl/shared/occlusion.wgsl");
+const KEEP: &str = include_str!("../../wgsl/shared/keep.wgsl");
 const CULL_SUBGROUPS: &str = concat!(
     include_str!("../../wgsl/cull.wgsl"),
     include_str!("../../wgsl/cull_subgroups.wgsl")
@@ -78,10 +86,10 @@ mod windows;
 
 pub use binding_lists::{
     CANDIDATE_BINDINGS, COARSE_BINDINGS, CULL_BINDINGS, DEPTH_RESOLVE_BINDINGS, DRAW_BINDINGS,
-    FAR_COMPOSITE_BINDINGS, FOVEATED_COMPOSITE_BINDINGS, LIGHT_CLUSTER_BINDINGS, MATERIAL_BINDINGS,
-    MORPH_BINDINGS, MOTION_BINDINGS, POSE_BINDINGS, PYRAMID_SET_DEPTHS, PYRAMID_SET_SLICES,
-    SCATTER_BINDINGS, SHADOW_MAP_BINDINGS, SKIN_BINDINGS, VISIBILITY_MASK_BINDINGS,
-    pyramid_bindings,
+    FAR_COMPOSITE_BINDINGS, FOVEATED_COMPOSITE_BINDINGS, KEEP_TILES_BINDINGS,
+    LIGHT_CLUSTER_BINDINGS, MATERIAL_BINDINGS, MORPH_BINDINGS, MOTION_BINDINGS, POSE_BINDINGS,
+    PYRAMID_SET_DEPTHS, PYRAMID_SET_SLICES, SCATTER_BINDINGS, SHADOW_MAP_BINDINGS, SKIN_BINDINGS,
+    VISIBILITY_MASK_BINDINGS, pyramid_bindings,
 };
 pub use bindings::{
     Access, Binding, Bound, TextureKind, bind_group, bind_group_layout, declarations,
@@ -94,7 +102,7 @@ pub use draw_key::DrawKey;
 pub use hooks::{Shaders, check_shading};
 pub use screen::{
     MAX_MASK_TRIANGLES, depth_resolve_source, far_composite_source, foveated_composite_source,
-    visibility_mask_source,
+    keep_tiles_source, visibility_mask_source,
 };
 pub(crate) use screen::{ScreenTargets, depth_write, screen_pipeline};
 pub use windows::{Window, Windowed, Windows};
@@ -162,6 +170,13 @@ fn constants() -> String {
 }
 
 fn hidden_constant() -> String {
+    format!(
+        "const TILE: u32 = {TILE}u;\nconst TILE_MARGIN_PX: f32 = {TILE_MARGIN_PX:?};\n{}",
+        hidden_views()
+    )
+}
+
+fn hidden_views() -> String {
     format!(
         "const MAX_HIDDEN_REGIONS: u32 = {MAX_HIDDEN_REGIONS}u;\nconst MAX_HIDDEN_VIEWS: u32 = {MAX_HIDDEN_VIEWS}u;\n"
     )
@@ -310,6 +325,10 @@ pub fn all_sources() -> Vec<(String, String)> {
                     visibility_mask_source(true),
                 ),
                 ("stereocull.skin".to_string(), skin_source()),
+                (
+                    "stereocull.keep_tiles".to_string(),
+                    keep_tiles_source(wgpu::TextureFormat::Rgba8UnormSrgb, wgpu::Color::BLACK),
+                ),
                 ("stereocull.morph".to_string(), morph_source()),
                 (
                     "stereocull.light_clusters".to_string(),

@@ -5,7 +5,7 @@
 use super::bindings::{declarations, pipeline_layout};
 use super::{
     CONTEXTS, DEPTH_RESOLVE_BINDINGS, FAR_COMPOSITE_BINDINGS, FOVEATED_COMPOSITE_BINDINGS,
-    VISIBILITY_MASK_BINDINGS, Windows, constants,
+    KEEP_TILES_BINDINGS, VISIBILITY_MASK_BINDINGS, Windows, constants,
 };
 
 /// The far layer's composite into a stereo display (`wgsl/far_composite.wgsl`).
@@ -48,6 +48,41 @@ pub fn visibility_mask_source(multiview: bool) -> String {
         false => body.replace("VIEW *", "instance *"),
     };
     [header, bindings, body].concat()
+}
+
+/// A kept frame's changed tiles cleared (`wgsl/keep_tiles.wgsl`) in a target of
+/// `format`, to the value a pass's clear to `clear` stores there.
+pub fn keep_tiles_source(format: wgpu::TextureFormat, clear: wgpu::Color) -> String {
+    let [r, g, b, a] = stored_clear(format, clear);
+    let clear = format!("const CLEAR_COLOR: vec4<f32> = vec4<f32>({r:?}, {g:?}, {b:?}, {a:?});\n");
+    let bindings = declarations(&KEEP_TILES_BINDINGS, 0, &Windows::WHOLE);
+    let body = include_str!("../../wgsl/keep_tiles.wgsl");
+    [clear, bindings, body.to_string()].concat()
+}
+
+/// Clear color `c` as a fragment must write it to store what a clear stores: in
+/// an 8-bit target, the stored level's own value, which any encoding rounds back to that
+/// level (the clear color itself lies between levels, and a clear and a fragment may
+/// round it by different code: llvmpipe's differ by a level in sRGB).
+fn stored_clear(format: wgpu::TextureFormat, c: wgpu::Color) -> [f32; 4] {
+    let linear = [c.r, c.g, c.b, c.a];
+    let level = |v: f64| (v.clamp(0.0, 1.0) * 255.0).round() / 255.0;
+    let srgb = |v: f64| match v <= 0.0031308 {
+        true => 12.92 * v,
+        false => 1.055 * v.powf(1.0 / 2.4) - 0.055,
+    };
+    let linear_of = |s: f64| match s <= 0.04045 {
+        true => s / 12.92,
+        false => ((s + 0.055) / 1.055).powf(2.4),
+    };
+    use wgpu::TextureFormat::*;
+    let stored = |i: usize, v: f64| match format {
+        // Alpha is stored linearly in sRGB formats.
+        Rgba8UnormSrgb | Bgra8UnormSrgb if i < 3 => linear_of(level(srgb(v))),
+        Rgba8UnormSrgb | Bgra8UnormSrgb | Rgba8Unorm | Bgra8Unorm => level(v),
+        _ => v,
+    };
+    std::array::from_fn(|i| stored(i, linear[i]) as f32)
 }
 
 /// The compositor's depth resolve (`wgsl/depth_resolve.wgsl`).

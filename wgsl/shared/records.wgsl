@@ -92,6 +92,10 @@ struct CullParams {
     visibility_words: u32,
     pyramid_offset: u32,
     pyramid_stride: u32,
+    // Keeping unchanged pixels: where the changed tiles' bits start in `occlusion`, and
+    // the words from one display slot's to the next's (wgsl/shared/keep.wgsl).
+    tile_offset: u32,
+    tile_stride: u32,
     // Material bins: each has its own range of the draws and word of the counts;
     // the first blended bin (0xffffffff: none; the later ones are blended too), whose
     // instances occlusion never marks drawn.

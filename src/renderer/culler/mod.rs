@@ -219,13 +219,20 @@ impl Culler {
     }
 
     /// This frame's culls as `plan` lists them: on the CPU, all of them (and the
-    /// light's); on the GPU, the coarse cull's block tests, one per display. Returns the
-    /// bytes written.
+    /// light's); on the GPU, the coarse cull's block tests, one per display, and the
+    /// displays' hidden areas and changed tiles. Returns the bytes written.
     pub(super) fn prepare(&mut self, queue: &impl Upload, plan: &FramePlan) -> u64 {
         match &mut self.kind {
             Kind::Gpu { scene, .. } => {
                 let planes: Vec<_> = plan.resolved.displays.iter().map(|d| d.planes).collect();
-                scene.write_block_tests(queue, &planes) + scene.write_hidden(queue, &plan.hidden)
+                let tiles = (plan.tiles.iter().zip(&plan.displays))
+                    .filter_map(|(t, d)| {
+                        Some(scene.write_tiles(queue, d.cull_slot, &t.as_ref()?.words))
+                    })
+                    .sum::<u64>();
+                scene.write_block_tests(queue, &planes)
+                    + scene.write_hidden(queue, &plan.hidden)
+                    + tiles
             }
             Kind::Cpu {
                 layout,
@@ -290,7 +297,9 @@ impl Culler {
             (Kind::Gpu { scene, .. }, Some(m)) => {
                 let early = view.phase == Phase::Early;
                 let record = context.rig_view(view.targets.member_at(), early);
-                let late = (view.phase == Phase::Late).then(|| context.rig_occlusion());
+                // The late phase tests its pyramids with its eyes, a kept frame its tiles.
+                let tiles = context.hidden & crate::cull::tiles::CULL_TILES != 0;
+                let late = (view.phase == Phase::Late || tiles).then(|| context.rig_occlusion());
                 scene.write_rig_member(queue, m, (&record, late.as_ref()))
             }
             _ => 0,

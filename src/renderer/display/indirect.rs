@@ -13,13 +13,16 @@ use super::{PathCore, PathInputs};
 use crate::contexts::context_buffer;
 use crate::cull::gpu_buffers::OcclusionRoom;
 use crate::cull::targets::CullTargets;
+use crate::draw::keep_tiles::KeepTiles;
 use crate::draw::mask::{DisplayMask, MaskPipeline};
 use crate::draw::{
     BinPipelines, DrawFeatures, DrawScene, Drawer, Drawing, OwnPipeline, OwnPipelines,
 };
 use crate::error::{Error, Result};
+use crate::keep::KeepUnchanged;
 use crate::occlusion::{Phase, PyramidShape};
 use crate::renderer::culler::{CullShape, Culler};
+use crate::renderer::keeping;
 use crate::renderer::options::StereoMode;
 use crate::renderer::plan::{CullView, FramePlan, FrameStats};
 use crate::renderer::recorder::{PassRecord, Recorder, begin_draw_pass};
@@ -52,6 +55,10 @@ pub(in crate::renderer) struct IndirectPath {
     /// Per display with a visibility mask (and the option on): its mask pass, drawn
     /// first in the display's clearing draw pass.
     pub(in crate::renderer) masks: Vec<Option<(MaskPipeline, DisplayMask)>>,
+    /// Keeping unchanged pixels where frames may: the pass that clears changed tiles.
+    keep: Option<KeepTiles>,
+    /// Per display: whether this frame keeps its unchanged pixels.
+    kept: Vec<bool>,
 }
 
 impl IndirectPath {
@@ -77,9 +84,18 @@ impl IndirectPath {
             None => 0,
         };
         let shapes = pyramid_shapes(plan, options, scene.triangles());
+        let views = plan.displays.iter().map(|c| c.views);
+        let keeps = options.keep_unchanged != KeepUnchanged::Off
+            && keeping::never(scene, views, options).is_none();
+        let tiles = keeps.then(|| keeping::tiles(plan));
+        let most_tiles = tiles.iter().flatten().max().copied().unwrap_or(0);
         let occlusion = OcclusionRoom {
             displays: plan.displays.len() as u32 * u32::from(shapes.iter().any(Option::is_some)),
             pyramid_texels: shapes.iter().flatten().map(|s| s.len()).max().unwrap_or(0),
+            tiles: match keeps {
+                true => (plan.displays.len() as u32, most_tiles.div_ceil(32)),
+                false => (0, 0),
+            },
         };
         let shape = CullShape {
             rig: match options.rig_cull {
@@ -103,6 +119,7 @@ impl IndirectPath {
         let keys = draw_keys(device, plan, options.mode);
         let shaders = options.shaders();
         let target = options.target_format();
+        let keep = tiles.map(|tiles| KeepTiles::new(device, target, &tiles));
         let drawer = Drawer::new(
             device,
             target,
@@ -136,6 +153,8 @@ impl IndirectPath {
             far,
             pyramids,
             masks: Vec::new(),
+            keep,
+            kept: vec![false; plan.displays.len()],
         })
     }
 
@@ -166,6 +185,13 @@ impl IndirectPath {
         }
         if let Some(far) = &mut self.far {
             stats.bytes_uploaded += far.prepare(to, &plan, &self.core.culler);
+        }
+        for (i, tiles) in plan.tiles.iter().enumerate() {
+            self.kept[i] = false;
+            if let (Some(keep), Some(tiles)) = (&mut self.keep, tiles) {
+                stats.bytes_uploaded += keep.write(to.queue, i, tiles);
+                self.kept[i] = true;
+            }
         }
         stats.cpu_upload = start.elapsed();
         self.core.culler.keep_for_late(plan);
@@ -200,8 +226,12 @@ impl IndirectPath {
         // With occlusion the far layer is drawn and composited in the late phase.
         let composite = self.displays[index].late.is_none();
         let mut open = rec.open(encoder, PassRecord::display("draw", index));
-        let mut pass = begin_draw_pass(encoder, rec, (target, true, multiview), &mut open);
-        let mut draw_calls = 0;
+        let kept = self.kept[index];
+        let mut pass = begin_draw_pass(encoder, rec, (target, !kept, multiview), &mut open);
+        let mut draw_calls = match (&self.keep, kept) {
+            (Some(keep), true) => keep.draw(&mut pass, index),
+            _ => 0,
+        };
         if let Some((pipeline, mask)) = self.masks.get(index).and_then(Option::as_ref) {
             pipeline.draw(&mut pass, mask);
             draw_calls += 1;

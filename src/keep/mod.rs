@@ -1,0 +1,218 @@
+//! Unchanged pixels kept: the multiview talk's "only pixels with moving objects change".
+//! When the viewer's pose, the rig and the time's effect on the scene leave most of a
+//! frame as the last one drew it, a display redraws only the [`crate::cull::tiles::TILE`]-pixel tiles
+//! that something changed: a moved, inserted, removed, re-materialed or animated
+//! instance marks the tiles its bounds cover before and after, in each eye
+//! ([`crate::cull::tiles::TileMask`]); the cull keeps only instances that touch a marked tile; the
+//! draw pass keeps last frame's color and depth, clears the marked tiles and redraws
+//! them. Everything else stays as it was, so the frame is the one a full redraw makes.
+//!
+//! Whatever can change pixels away from the object, or every pixel, redraws the frame
+//! whole, and [`WholeRedraw`] says why.
+
+use std::collections::BTreeSet;
+
+use glam::Vec4;
+
+use crate::rig::Rig;
+use crate::scene::Scene;
+
+/// Whether frames keep unchanged pixels (`--keep-unchanged`). A kept frame draws over
+/// what the last frame left in its targets: pass the same targets every frame.
+#[derive(Clone, Copy, Debug, Default, PartialEq, Eq, Hash, serde::Serialize)]
+#[cfg_attr(feature = "cli", derive(clap::ValueEnum))]
+#[serde(rename_all = "lowercase")]
+pub enum KeepUnchanged {
+    /// Never: every frame is drawn whole.
+    #[default]
+    Off,
+    /// Wherever the frame allows; a renderer whose options or scene never allow it
+    /// is refused ([`crate::renderer::Renderer::new`]).
+    On,
+    /// Wherever the frame allows; otherwise whole, with the reason in the frame's stats.
+    Auto,
+}
+
+/// Why a frame was drawn whole.
+#[derive(Clone, Copy, Debug, PartialEq, Eq, serde::Serialize)]
+#[serde(rename_all = "snake_case")]
+pub enum WholeRedraw {
+    /// `--keep-unchanged off`.
+    Off,
+    /// No earlier frame to keep.
+    FirstFrame,
+    /// The viewer's pose or the rig changed: every pixel moves.
+    Pose,
+    /// The scene was laid out again or grew, or a light changed (it lights every
+    /// pixel it reaches).
+    Scene,
+    /// With shadows, an instance changed: its shadow falls away from it.
+    Shadows,
+    /// A blended instance is drawn over the pixels it covers, kept or not; redrawn over
+    /// kept pixels it would blend twice, and its sort order follows the viewer.
+    Blended,
+    /// A mode, option or content the tiles do not serve, as said.
+    Unsupported(&'static str),
+}
+
+/// What a renderer tracks between frames to keep their unchanged pixels.
+pub struct Keeper {
+    mode: KeepUnchanged,
+    /// Why no frame may keep pixels, whatever changes.
+    never: Option<&'static str>,
+    /// The rig and time the last frame was drawn at.
+    last: Option<(Rig, f32)>,
+    /// Each slot's world sphere as last drawn (`None`: vacant).
+    spheres: Vec<Option<Vec4>>,
+    /// Slots whose instance spins or bobs: its pixels change with the time.
+    animated: BTreeSet<u32>,
+    /// Spheres whose tiles changed since the last frame: each changed instance's before
+    /// and after.
+    changed: Vec<Vec4>,
+    /// A change since the last frame that redraws whole.
+    forced: Option<WholeRedraw>,
+    /// Per mesh, whether its instances are blended.
+    blended_meshes: Vec<bool>,
+    /// Whether an instance drawn since the last reload is blended.
+    blended: bool,
+    shadows: bool,
+}
+
+impl Keeper {
+    /// The keeper of a renderer made for `scene`, whose frames `never` keep pixels for
+    /// that reason where given.
+    pub fn new(
+        scene: &Scene,
+        mode: KeepUnchanged,
+        never: Option<&'static str>,
+        shadows: bool,
+    ) -> Keeper {
+        let mut keeper = Keeper {
+            mode,
+            never,
+            last: None,
+            spheres: Vec::new(),
+            animated: BTreeSet::new(),
+            changed: Vec::new(),
+            forced: None,
+            blended_meshes: Vec::new(),
+            blended: false,
+            shadows,
+        };
+        keeper.reload(scene, |_| true);
+        keeper
+    }
+
+    /// Takes `scene` whole (made, laid out again, reallocated): the next frame is drawn
+    /// whole. `occupied(slot)`: whether the slot holds an instance.
+    pub fn reload(&mut self, scene: &Scene, occupied: impl Fn(u32) -> bool) {
+        if self.mode == KeepUnchanged::Off {
+            return;
+        }
+        let slots = 0..scene.instances.len() as u32;
+        self.spheres = (slots.clone())
+            .map(|s| occupied(s).then(|| scene.world_sphere(&scene.instances[s as usize])))
+            .collect();
+        self.animated = (slots.filter(|&s| occupied(s)))
+            .filter(|&s| animates(scene, s))
+            .collect();
+        let bins = crate::bins::Bins::of(scene);
+        let first = bins.first_blend_bin();
+        self.blended_meshes = bins.of_mesh.iter().map(|&b| b >= first).collect();
+        self.blended =
+            (0..scene.instances.len() as u32).any(|s| occupied(s) && self.is_blended(scene, s));
+        self.forced = Some(WholeRedraw::Scene);
+    }
+
+    /// The instances in `slots` changed (moved, inserted, removed, re-materialed):
+    /// their tiles before and after change. `occupied(slot)`: whether the slot holds
+    /// an instance now.
+    pub fn changed(
+        &mut self,
+        scene: &Scene,
+        slots: impl IntoIterator<Item = u32>,
+        occupied: impl Fn(u32) -> bool,
+    ) {
+        if self.mode == KeepUnchanged::Off {
+            return;
+        }
+        for slot in slots {
+            let s = slot as usize;
+            if s >= scene.instances.len() {
+                continue;
+            }
+            if s >= self.spheres.len() {
+                self.spheres.resize(s + 1, None);
+            }
+            self.changed.extend(self.spheres[s]);
+            let now = occupied(slot).then(|| scene.world_sphere(&scene.instances[s]));
+            self.changed.extend(now);
+            self.spheres[s] = now;
+            self.blended |= now.is_some() && self.is_blended(scene, slot);
+            match now.is_some() && animates(scene, slot) {
+                true => self.animated.insert(slot),
+                false => self.animated.remove(&slot),
+            };
+            if self.shadows {
+                self.forced.get_or_insert(WholeRedraw::Shadows);
+            }
+        }
+    }
+
+    /// The lights changed: they light pixels far from any changed instance.
+    pub fn lights_changed(&mut self) {
+        self.forced.get_or_insert(WholeRedraw::Scene);
+    }
+
+    /// The frame at `rig`'s pose and `time`: either the spheres whose tiles it redraws,
+    /// or why it redraws whole. Either way it becomes the last frame.
+    pub fn frame(&mut self, rig: &Rig, time: f32) -> Result<Vec<Vec4>, WholeRedraw> {
+        let changed = std::mem::take(&mut self.changed);
+        let forced = self.forced.take();
+        let last = self.last.replace((rig.clone(), time));
+        if self.mode == KeepUnchanged::Off {
+            return Err(WholeRedraw::Off);
+        }
+        if let Some(why) = self.never {
+            return Err(WholeRedraw::Unsupported(why));
+        }
+        let Some((last_rig, last_time)) = last else {
+            return Err(WholeRedraw::FirstFrame);
+        };
+        if last_rig != *rig {
+            return Err(WholeRedraw::Pose);
+        }
+        if let Some(why) = forced {
+            return Err(why);
+        }
+        if self.blended {
+            return Err(WholeRedraw::Blended);
+        }
+        let mut spheres = changed;
+        if time != last_time {
+            if self.shadows && !self.animated.is_empty() {
+                return Err(WholeRedraw::Shadows);
+            }
+            let animated = self.animated.iter();
+            spheres.extend(animated.filter_map(|&s| self.spheres[s as usize]));
+        }
+        Ok(spheres)
+    }
+
+    fn is_blended(&self, scene: &Scene, slot: u32) -> bool {
+        let mesh = scene.instances[slot as usize].mesh as usize;
+        self.blended_meshes.get(mesh).copied().unwrap_or(false)
+    }
+
+    /// Forgets the last frame: the next one is drawn whole (its pose was replaced after
+    /// it was planned, or it was not drawn).
+    pub fn forget(&mut self) {
+        self.last = None;
+    }
+}
+
+/// Whether the instance in `slot` spins or bobs.
+fn animates(scene: &Scene, slot: u32) -> bool {
+    let a = scene.instances[slot as usize].animation;
+    a.spin != 0.0 || a.bob != 0.0
+}

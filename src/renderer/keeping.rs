@@ -1,0 +1,96 @@
+//! Keeping unchanged pixels ([`crate::keep`]) in a renderer: which renderers never can,
+//! and a kept frame's changed tiles, one mask per display, set into its plan.
+
+use std::sync::Arc;
+
+use glam::{UVec2, Vec4};
+
+use super::options::{OcclusionMode, PosingMode, RendererOptions, StereoMode};
+use super::plan::{CullView, FramePlan};
+use crate::contexts::DisplayContext;
+use crate::cull::tiles::{self, CULL_TILES, TileEye, TileMask};
+use crate::frustum::sphere_in_planes;
+use crate::scene::Scene;
+
+/// Why no frame of a renderer made with `options` for `scene`, whose displays have
+/// `views` views each, may keep pixels; `None` where frames may.
+pub fn never(
+    scene: &Scene,
+    mut views: impl Iterator<Item = u32>,
+    options: &RendererOptions,
+) -> Option<&'static str> {
+    Some(match options {
+        o if o.mode != StereoMode::Instanced => {
+            "the tiles serve the instanced mode's one draw pass per display"
+        }
+        o if o.frames_per_submit != 1 => "two frames per submission draw two times' pixels",
+        o if o.far_layer => "the far layer is composited over every pixel",
+        o if o.motion_vectors => "kept pixels would keep last frame's motion",
+        o if o.occlusion == OcclusionMode::On => {
+            "occlusion's phases need every instance tested each frame"
+        }
+        _ if views.any(|v| v > 2) => {
+            "a foveated display's insets are composited over its outer views"
+        }
+        _ if !scene.skins.is_empty() || !scene.morphs.is_empty() => {
+            "skins and morph targets move vertices that no instance's change marks"
+        }
+        o if o.posing == PosingMode::Gpu && !scene.posing.clips.is_empty() => {
+            "posing on the GPU moves instances the CPU never sees change: pose on the CPU"
+        }
+        _ => return None,
+    })
+}
+
+/// Display `context`'s view size and eyes, side by side in its target.
+fn eyes(context: &DisplayContext) -> (UVec2, Vec<TileEye>) {
+    let size = context.resolution.as_uvec2();
+    let eyes = (0..context.views.min(2))
+        .map(|e| TileEye {
+            view_from_world: context.eye[e as usize].view_from_world,
+            clip_from_view: context.eye[e as usize].clip_from_view,
+            x: e * size.x,
+        })
+        .collect();
+    (size, eyes)
+}
+
+/// Tiles per display in `plan`.
+pub fn tiles(plan: &FramePlan) -> Vec<u32> {
+    (plan.displays.iter())
+        .map(|c| {
+            let g = tiles::grid(c.resolution.as_uvec2(), c.views.min(2));
+            g.x * g.y
+        })
+        .collect()
+}
+
+/// Keeps `plan`'s frame: each display's tiles that `spheres` (the changed instances'
+/// bounds, before and after) cover, set into its plan, its cull and its context.
+/// Returns the tiles changed.
+pub fn keep(plan: &mut FramePlan, spheres: &[Vec4]) -> u32 {
+    let mut changed = 0;
+    for (i, context) in plan.displays.iter_mut().enumerate() {
+        let (size, eyes) = eyes(context);
+        let mut mask = TileMask::new(eyes, size);
+        // What the display frustum does not hold no eye of the display sees.
+        let seen = spheres
+            .iter()
+            .filter(|&&s| sphere_in_planes(&context.planes, s));
+        for &s in seen {
+            mask.mark(s);
+        }
+        changed += mask.count();
+        context.hidden |= CULL_TILES;
+        let mask = Arc::new(mask);
+        for cull in plan
+            .culls
+            .iter_mut()
+            .filter(|c| c.view == CullView::Display(i))
+        {
+            cull.job.tiles = Some(mask.clone());
+        }
+        plan.tiles[i] = Some(mask);
+    }
+    changed
+}

@@ -1,0 +1,287 @@
+//! Unchanged pixels kept ([`stereocull::keep`]): over frames that hold the head still
+//! and then move it, with instances moving, inserted, removed, recolored and animated,
+//! every frame a renderer keeping unchanged pixels draws equals the frame one drawing
+//! whole draws; GPU and CPU culls agree; a tile whose only instance left is redrawn.
+//!
+//! Exact comparisons: a kept pixel is the last frame's, which the full redraw draws
+//! again from the same inputs; a redrawn tile is drawn by the same pipelines from the
+//! same draws (a subset, in the same order), so each of its pixels sees the same
+//! fragments in the same order and llvmpipe, deterministic, writes the same bytes.
+
+mod support;
+
+use glam::{Vec3, Vec4};
+use image::RgbaImage;
+use rand::{Rng, SeedableRng};
+use rand_pcg::Pcg64Mcg;
+use stereocull::device::Gpu;
+use stereocull::error::Error;
+use stereocull::live::LiveScene;
+use stereocull::readback::read_rgba8;
+use stereocull::renderer::{
+    CullMode, DisplayTarget, FrameStats, KeepUnchanged, OcclusionMode, Renderer, RendererOptions,
+    WholeRedraw,
+};
+use stereocull::rig::Rig;
+use stereocull::scene::{Animation, Instance, Scene};
+use stereocull::scene_spec;
+use support::{Tolerance, assert_images_match, gpu, sized};
+
+fn options(cull: CullMode, keep: KeepUnchanged) -> RendererOptions {
+    RendererOptions {
+        cull,
+        occlusion: OcclusionMode::Off,
+        keep_unchanged: keep,
+        ..Default::default()
+    }
+}
+
+/// A renderer, its targets and its live scene, drawn frame after frame.
+struct Run {
+    renderer: Renderer,
+    targets: Vec<DisplayTarget>,
+    live: LiveScene,
+}
+
+impl Run {
+    fn new(gpu: &Gpu, scene: &Scene, rig: &Rig, options: RendererOptions) -> Run {
+        let renderer = Renderer::new(&gpu.device, scene, rig, options).unwrap();
+        let targets = renderer.create_targets(&gpu.device);
+        Run {
+            renderer,
+            targets,
+            live: LiveScene::new(scene.clone()),
+        }
+    }
+
+    /// Syncs the live scene's edits and draws the frame; its stats and images.
+    fn frame(&mut self, gpu: &Gpu, rig: &Rig, time: f32) -> (FrameStats, Vec<RgbaImage>) {
+        (self.renderer)
+            .sync(&gpu.device, &gpu.queue, &mut self.live)
+            .unwrap();
+        let stats = (self.renderer)
+            .submit_frame(&gpu.device, &gpu.queue, rig, time, &self.targets)
+            .unwrap();
+        let images = (self.targets.iter())
+            .map(|t| read_rgba8(&gpu.device, &gpu.queue, &t.color).unwrap())
+            .collect();
+        (stats, images)
+    }
+}
+
+/// A procedural scene, every 300th instance spinning or bobbing.
+fn scene() -> Scene {
+    let mut scene = scene_spec::load("procedural:3000:4").unwrap();
+    let mut rng = Pcg64Mcg::seed_from_u64(7);
+    for instance in scene.instances.iter_mut().step_by(300) {
+        instance.animation = Animation {
+            spin: rng.random_range(0.5..3.0),
+            bob: rng.random_range(0.0..0.2),
+        };
+    }
+    scene
+}
+
+/// Frame `frame`'s edits, the same in every run (a fixed seed per frame): a third of 1 % of the
+/// instances moved, some recolored, and some removed (odd frames) and inserted again
+/// elsewhere (even frames: `removed` holds them in between).
+fn edit(live: &mut LiveScene, frame: u64, removed: &mut Vec<Instance>) {
+    let mut rng = Pcg64Mcg::seed_from_u64(100 + frame);
+    let handles = live.handles();
+    let n = handles.len();
+    for _ in 0..n / 300 {
+        let h = handles[rng.random_range(0..n)];
+        let mut moved = live.get(h).unwrap().world_from_local;
+        moved.translation += glam::Vec3A::new(rng.random_range(-0.3..0.3), 0.0, 0.2);
+        live.set_transform(h, moved).unwrap();
+    }
+    for _ in 0..3 {
+        let h = handles[rng.random_range(0..n)];
+        let color = Vec4::new(rng.random(), rng.random(), rng.random(), 1.0);
+        live.set_color(h, color).unwrap();
+    }
+    // Inserted where removed instances left their meshes' places: no layout again.
+    match frame % 2 {
+        1 => {
+            for _ in 0..4 {
+                // A handle drawn twice is already gone.
+                if let Ok(instance) = live.remove(handles[rng.random_range(0..n)]) {
+                    removed.push(instance);
+                }
+            }
+        }
+        _ => {
+            for mut instance in removed.drain(..) {
+                instance.world_from_local.translation += glam::Vec3A::new(0.0, 0.5, 0.0);
+                live.insert(instance).unwrap();
+            }
+        }
+    }
+}
+
+#[test]
+fn every_kept_frame_is_the_frame_drawn_whole() {
+    let gpu = gpu();
+    let scene = scene();
+    let still = sized("hmd", 192, 160);
+    let mut turned = still.clone();
+    turned.viewer.yaw_deg += 3.0;
+    // Still, then two frames turning, then still at the new pose.
+    let rigs = [
+        &still, &still, &still, &still, &turned, &still, &still, &still,
+    ];
+    for cull in [CullMode::Gpu, CullMode::Cpu] {
+        let mut kept = Run::new(&gpu, &scene, &still, options(cull, KeepUnchanged::On));
+        let mut whole = Run::new(&gpu, &scene, &still, options(cull, KeepUnchanged::Off));
+        let mut kept_frames = 0;
+        let mut removed = [Vec::new(), Vec::new()];
+        for (f, rig) in rigs.iter().enumerate() {
+            let time = 0.5 + f as f32 / 90.0;
+            if f > 0 {
+                edit(&mut kept.live, f as u64, &mut removed[0]);
+                edit(&mut whole.live, f as u64, &mut removed[1]);
+            }
+            let (stats, got) = kept.frame(&gpu, rig, time);
+            let (_, want) = whole.frame(&gpu, rig, time);
+            let name = format!("keep-{cull:?}-{f}");
+            assert_images_match(&name, &got[0], &want[0], Tolerance::EXACT);
+            let expected = match f {
+                0 => Some(WholeRedraw::FirstFrame),
+                4 | 5 => Some(WholeRedraw::Pose),
+                _ => None,
+            };
+            assert_eq!(stats.whole_redraw, expected, "{name}");
+            if expected.is_none() {
+                kept_frames += 1;
+                let tiles = (192 * 2 / 16) * (160 / 16);
+                assert!(
+                    stats.tiles_changed > 0 && stats.tiles_changed < tiles,
+                    "{name}: {} of {tiles} tiles changed",
+                    stats.tiles_changed
+                );
+            }
+        }
+        assert_eq!(kept_frames, 5);
+    }
+}
+
+/// The GPU cull and the CPU cull of a kept frame keep the same instances: those that
+/// touch a changed tile.
+#[test]
+fn the_gpu_and_cpu_culls_of_a_kept_frame_are_the_same_bytes() {
+    let gpu = gpu();
+    let scene = scene();
+    for preset in ["hmd", "cave"] {
+        let rig = sized(preset, 192, 160);
+        let mut runs = [CullMode::Gpu, CullMode::Cpu]
+            .map(|c| Run::new(&gpu, &scene, &rig, options(c, KeepUnchanged::On)));
+        let mut removed = [Vec::new(), Vec::new()];
+        for f in 0..3 {
+            for (run, removed) in runs.iter_mut().zip(&mut removed) {
+                if f > 0 {
+                    edit(&mut run.live, f, removed);
+                }
+                let (stats, _) = run.frame(&gpu, &rig, 1.0 + f as f32 / 90.0);
+                assert_eq!(stats.whole_redraw.is_none(), f > 0, "{preset} frame {f}");
+            }
+        }
+        let [on_gpu, on_cpu] = runs.map(|r| support::read_culls(&gpu, &r.renderer, &rig));
+        let mut whole = Run::new(
+            &gpu,
+            &scene,
+            &rig,
+            options(CullMode::Gpu, KeepUnchanged::Off),
+        );
+        whole.frame(&gpu, &rig, 1.0);
+        let whole = support::read_culls(&gpu, &whole.renderer, &rig);
+        for (d, (got, want)) in on_gpu.iter().zip(&on_cpu).enumerate() {
+            support::assert_same_cull(&format!("{preset} display {d}"), got, want);
+            assert!(
+                got.visible.len() < whole[d].visible.len(),
+                "{preset} display {d}: the kept frame's cull kept {} of {}",
+                got.visible.len(),
+                whole[d].visible.len()
+            );
+        }
+    }
+}
+
+/// An instance removed from a tile nothing else covers leaves the clear color there: a
+/// keeper that forgot the instance's bounds before the change would keep it drawn.
+#[test]
+fn a_removed_instance_alone_in_its_tiles_is_cleared() {
+    let gpu = gpu();
+    let at = |x: f32| (Vec3::new(x, 1.6, -6.0), 0);
+    let scene = support::cubes(&[at(-2.5), at(0.0), at(2.5)], 1);
+    let rig = sized("hmd", 96, 80);
+    let mut kept = Run::new(
+        &gpu,
+        &scene,
+        &rig,
+        options(CullMode::Gpu, KeepUnchanged::On),
+    );
+    let mut whole = Run::new(
+        &gpu,
+        &scene,
+        &rig,
+        options(CullMode::Gpu, KeepUnchanged::Off),
+    );
+    let (_, before) = kept.frame(&gpu, &rig, 0.0);
+    for run in [&mut kept, &mut whole] {
+        let alone = run.live.handles()[2];
+        run.live.remove(alone).unwrap();
+    }
+    let (stats, got) = kept.frame(&gpu, &rig, 0.0);
+    let (_, want) = whole.frame(&gpu, &rig, 0.0);
+    assert_eq!(stats.whole_redraw, None);
+    assert_images_match("keep-removed", &got[0], &want[0], Tolerance::EXACT);
+    assert_ne!(before[0], got[0], "the removed cube was drawn and is gone");
+}
+
+/// What never keeps is refused with `on` and drawn whole with `auto`, with its reason.
+#[test]
+fn what_cannot_keep_is_refused_or_drawn_whole_with_its_reason() {
+    let gpu = gpu();
+    let scene = scene_spec::load("procedural:200:4").unwrap();
+    let hmd = sized("hmd", 32, 32);
+    let with = |keep| RendererOptions {
+        motion_vectors: true,
+        ..options(CullMode::Gpu, keep)
+    };
+    match Renderer::new(&gpu.device, &scene, &hmd, with(KeepUnchanged::On)) {
+        Err(Error::Unsupported(m)) => assert!(m.contains("motion"), "{m}"),
+        other => panic!("not refused: {:?}", other.err()),
+    }
+    let auto = Run::new(&gpu, &scene, &hmd, with(KeepUnchanged::Auto));
+    let mut auto = auto;
+    for _ in 0..2 {
+        let stats = (auto.renderer)
+            .submit_frame(&gpu.device, &gpu.queue, &hmd, 0.0, &auto.targets)
+            .unwrap();
+        assert!(
+            matches!(stats.whole_redraw, Some(WholeRedraw::Unsupported(m)) if m.contains("motion")),
+            "{:?}",
+            stats.whole_redraw
+        );
+    }
+    // A light that changes lights pixels far from any instance.
+    let mut run = Run::new(
+        &gpu,
+        &scene,
+        &hmd,
+        options(CullMode::Gpu, KeepUnchanged::On),
+    );
+    run.frame(&gpu, &hmd, 0.0);
+    let lit = stereocull::lights::Light::point(Vec3::new(0.0, 3.0, -4.0), Vec3::ONE, 10.0, None);
+    run.live.insert_light(lit).unwrap();
+    let (stats, _) = run.frame(&gpu, &hmd, 0.0);
+    assert_eq!(stats.whole_redraw, Some(WholeRedraw::Scene));
+    let (stats, _) = run.frame(&gpu, &hmd, 0.0);
+    assert_eq!(stats.whole_redraw, None);
+    // A latch would move every kept pixel.
+    run.renderer.prepare(&gpu.queue, &hmd, 0.0).unwrap();
+    assert!(matches!(
+        run.renderer.latch(&gpu.queue, &hmd),
+        Err(Error::Unsupported(_))
+    ));
+}
