@@ -126,9 +126,10 @@ fn every_kept_frame_is_the_frame_drawn_whole() {
     let still = sized("hmd", 192, 160);
     let mut turned = still.clone();
     turned.viewer.yaw_deg += 3.0;
-    // Still, then two frames turning, then still at the new pose.
+    // Still, then a turn and back, then still again: the two frames after the turn
+    // are drawn whole while the bounds the turn did not track are taken again.
     let rigs = [
-        &still, &still, &still, &still, &turned, &still, &still, &still,
+        &still, &still, &still, &still, &turned, &still, &still, &still, &still, &still,
     ];
     for cull in [CullMode::Gpu, CullMode::Cpu] {
         let mut kept = Run::new(&gpu, &scene, &still, options(cull, KeepUnchanged::On));
@@ -148,6 +149,7 @@ fn every_kept_frame_is_the_frame_drawn_whole() {
             let expected = match f {
                 0 => Some(WholeRedraw::FirstFrame),
                 4 | 5 => Some(WholeRedraw::Pose),
+                6 | 7 => Some(WholeRedraw::Settling),
                 _ => None,
             };
             assert_eq!(stats.whole_redraw, expected, "{name}");

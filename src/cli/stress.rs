@@ -6,6 +6,8 @@ use clap::Args;
 use indicatif::{ProgressBar, ProgressStyle};
 use serde::Serialize;
 
+mod report;
+
 use super::edits::EditArgs;
 use super::occlusion_report::{OcclusionReport, occlusion_report};
 use super::render::{PassReport, far_near, pass_reports, passes_per_level};
@@ -61,8 +63,10 @@ struct FrameRecord {
     /// Primitives reaching the clipper in the draw passes (pipeline statistics; `None`
     /// where the adapter has none).
     triangles_submitted: Option<u64>,
-    /// Fragment-shader invocations in the frame (pipeline statistics).
+    /// Fragment-shader invocations in the frame (pipeline statistics; lavapipe counts
+    /// them before its depth test), and the display draws' samples that passed it.
     fragment_invocations: Option<u64>,
+    samples_passed: Option<u64>,
     /// Keeping unchanged pixels: the tiles redrawn, or why the frame was drawn whole.
     tiles_changed: u32,
     whole_redraw: Option<crate::keep::WholeRedraw>,
@@ -126,8 +130,10 @@ struct Summary {
     bytes_uploaded_per_frame: u64,
     /// Median over the frames of the triangles submitted (pipeline statistics).
     triangles_submitted_median: Option<f64>,
-    /// Median over the frames of the fragment-shader invocations.
+    /// Median over the frames of the fragment-shader invocations and of the samples
+    /// that passed the depth test.
     fragment_invocations_median: Option<f64>,
+    samples_passed_median: Option<f64>,
     /// Keeping unchanged pixels (`--keep-unchanged`, `--still`): the median tiles
     /// redrawn, and the frames drawn whole.
     keep_unchanged: crate::keep::KeepUnchanged,
@@ -267,6 +273,7 @@ pub fn stress(args: &StressArgs) -> Result<()> {
             reloaded: figures.sync.reloaded,
             triangles_submitted,
             fragment_invocations: queries.as_ref().and_then(|q| q.fragment_invocations),
+            samples_passed: queries.as_ref().and_then(|q| q.samples_passed),
             tiles_changed: stats.tiles_changed,
             whole_redraw: stats.whole_redraw,
             frame_ms,
@@ -317,7 +324,7 @@ pub fn stress(args: &StressArgs) -> Result<()> {
         let all = serde_json::json!({ "frames": records, "summary": summary });
         println!("{all}");
     } else {
-        print_summary(&summary);
+        report::print_summary(&summary);
     }
     Ok(())
 }
@@ -371,6 +378,7 @@ fn summarize(
         bytes_uploaded_per_frame: last.map_or(0, |r| r.bytes_uploaded),
         triangles_submitted_median: median_of(records, |r| r.triangles_submitted),
         fragment_invocations_median: median_of(records, |r| r.fragment_invocations),
+        samples_passed_median: median_of(records, |r| r.samples_passed),
         keep_unchanged: session.renderer.options().keep_unchanged,
         still: args.still,
         tiles_changed_median: percentile(&of(|r| r.tiles_changed as f64), 0.5),
@@ -412,92 +420,4 @@ fn resident_kib() -> Option<u64> {
     let status = std::fs::read_to_string("/proc/self/status").ok()?;
     let line = status.lines().find(|l| l.starts_with("VmRSS:"))?;
     line.split_whitespace().nth(1)?.parse().ok()
-}
-
-fn print_summary(s: &Summary) {
-    println!("adapter: {}", s.adapter);
-    println!(
-        "{} instances, {} frames, cull {:?}, coarse cull {}",
-        s.instances,
-        s.frames,
-        s.cull,
-        if s.coarse_cull { "on" } else { "off" }
-    );
-    println!(
-        "cpu (sync+prepare+encode+submit): median {:.3} ms, p95 {:.3} ms; per displayed frame {:.3} ms ({} per submission)",
-        s.cpu_ms_median, s.cpu_ms_p95, s.cpu_ms_per_displayed_frame_median, s.frames_per_submit
-    );
-    println!(
-        "pose age at submit: median {:.3} ms ({})",
-        s.pose_age_at_submit_ms_median,
-        if s.latch {
-            "latched"
-        } else {
-            "sampled before prepare"
-        }
-    );
-    if s.moving_percent > 0.0 || s.churn_percent > 0.0 {
-        println!(
-            "edits ({} % moving, {} % churn): making them {:.3} ms, sync {:.3} ms, staging {:.3} ms (medians)",
-            s.moving_percent,
-            s.churn_percent,
-            s.edit_ms_median,
-            s.sync_ms_median,
-            s.staging_ms_median
-        );
-    }
-    println!(
-        "frame (until GPU done):      median {:.2} ms, p95 {:.2} ms",
-        s.frame_ms_median, s.frame_ms_p95
-    );
-    for (name, v) in s.displays.iter().zip(&s.visible_mean) {
-        println!("  {name:>18}: {v:.0} visible on average");
-    }
-    if let (Some(first), Some(last)) = (s.memory.first(), s.memory.last()) {
-        let show = |v: Option<u64>| v.map_or("n/a".to_string(), |v| v.to_string());
-        println!(
-            "memory after frame {} / {}: RSS {} / {} KiB, wgpu objects {} / {}, GPU allocations {} / {} bytes",
-            first.frame,
-            last.frame,
-            show(first.rss_kib),
-            show(last.rss_kib),
-            show(first.wgpu_objects.map(|v| v as u64)),
-            show(last.wgpu_objects.map(|v| v as u64)),
-            show(first.gpu_allocated_bytes),
-            show(last.gpu_allocated_bytes),
-        );
-    }
-    let show = |v: Option<f64>| v.map_or("n/a".into(), |t| format!("{t:.0}"));
-    println!(
-        "per frame: {} draw calls, {} dispatches, {} bytes uploaded, {} triangles submitted, {} sphere tests; GPU memory {} bytes per instance",
-        s.draw_calls_per_frame,
-        s.dispatches_per_frame,
-        s.bytes_uploaded_per_frame,
-        show(s.triangles_submitted_median),
-        show(s.sphere_tests_median),
-        s.gpu_bytes_per_instance
-    );
-    if s.keep_unchanged != crate::keep::KeepUnchanged::Off {
-        println!(
-            "kept pixels ({:?}{}): median {} tiles redrawn, {} of {} frames drawn whole, {} fragment invocations (median)",
-            s.keep_unchanged,
-            if s.still { ", head still" } else { "" },
-            s.tiles_changed_median,
-            s.whole_redraws,
-            s.frames,
-            show(s.fragment_invocations_median),
-        );
-    }
-    if let Some(bytes) = &s.occlusion_bytes {
-        println!(
-            "occlusion: {} GPU bytes per display, {} for the shared pyramids",
-            bytes.per_display, bytes.pyramids
-        );
-    }
-    for r in s.occlusion.iter().flatten() {
-        println!(
-            "{}: last frame {} in the frustum, {} drawn early, {} late, {} occluded",
-            r.display, r.frustum, r.early, r.late, r.occluded
-        );
-    }
 }

@@ -10,8 +10,6 @@
 //! Whatever can change pixels away from the object, or every pixel, redraws the frame
 //! whole, and [`WholeRedraw`] says why.
 
-use std::collections::BTreeSet;
-
 use glam::Vec4;
 
 use crate::rig::Rig;
@@ -43,6 +41,9 @@ pub enum WholeRedraw {
     FirstFrame,
     /// The viewer's pose or the rig changed: every pixel moves.
     Pose,
+    /// The head just stopped: instances changed while it moved, untracked (tracking
+    /// costs every moving frame), so their bounds are taken again at the next sync.
+    Settling,
     /// The scene was laid out again or grew, or a light changed (it lights every
     /// pixel it reaches).
     Scene,
@@ -64,13 +65,22 @@ pub struct Keeper {
     last: Option<(Rig, f32)>,
     /// Each slot's world sphere as last drawn (`None`: vacant).
     spheres: Vec<Option<Vec4>>,
-    /// Slots whose instance spins or bobs: its pixels change with the time.
-    animated: BTreeSet<u32>,
+    /// Per slot, whether its instance spins or bobs (its pixels change with the time),
+    /// and those slots in order; rebuilt from the flags when one changes (rarely: moves
+    /// keep an instance's animation).
+    animates: Vec<bool>,
+    animated: Vec<u32>,
+    animated_stale: bool,
     /// Spheres whose tiles changed since the last frame: each changed instance's before
     /// and after.
     changed: Vec<Vec4>,
     /// A change since the last frame that redraws whole.
     forced: Option<WholeRedraw>,
+    /// The head moves: changes are not tracked ([`WholeRedraw::Settling`]); `missed`:
+    /// some came; `rebuild`: the next sync takes every bound again.
+    paused: bool,
+    missed: bool,
+    rebuild: bool,
     /// Per mesh, whether its instances are blended.
     blended_meshes: Vec<bool>,
     /// Whether an instance drawn since the last reload is blended.
@@ -92,9 +102,14 @@ impl Keeper {
             never,
             last: None,
             spheres: Vec::new(),
-            animated: BTreeSet::new(),
+            animates: Vec::new(),
+            animated: Vec::new(),
+            animated_stale: false,
             changed: Vec::new(),
             forced: None,
+            paused: false,
+            missed: false,
+            rebuild: false,
             blended_meshes: Vec::new(),
             blended: false,
             shadows,
@@ -106,22 +121,26 @@ impl Keeper {
     /// Takes `scene` whole (made, laid out again, reallocated): the next frame is drawn
     /// whole. `occupied(slot)`: whether the slot holds an instance.
     pub fn reload(&mut self, scene: &Scene, occupied: impl Fn(u32) -> bool) {
-        if self.mode == KeepUnchanged::Off {
+        self.reload_for(scene, occupied, WholeRedraw::Scene);
+    }
+
+    fn reload_for(&mut self, scene: &Scene, occupied: impl Fn(u32) -> bool, why: WholeRedraw) {
+        if !self.tracks() {
             return;
         }
+        (self.paused, self.missed, self.rebuild) = (false, false, false);
         let slots = 0..scene.instances.len() as u32;
         self.spheres = (slots.clone())
             .map(|s| occupied(s).then(|| scene.world_sphere(&scene.instances[s as usize])))
             .collect();
-        self.animated = (slots.filter(|&s| occupied(s)))
-            .filter(|&s| animates(scene, s))
-            .collect();
+        self.animates = slots.map(|s| occupied(s) && animates(scene, s)).collect();
+        self.animated_stale = true;
         let bins = crate::bins::Bins::of(scene);
         let first = bins.first_blend_bin();
         self.blended_meshes = bins.of_mesh.iter().map(|&b| b >= first).collect();
         self.blended =
             (0..scene.instances.len() as u32).any(|s| occupied(s) && self.is_blended(scene, s));
-        self.forced = Some(WholeRedraw::Scene);
+        self.forced = Some(why);
     }
 
     /// The instances in `slots` changed (moved, inserted, removed, re-materialed):
@@ -133,7 +152,14 @@ impl Keeper {
         slots: impl IntoIterator<Item = u32>,
         occupied: impl Fn(u32) -> bool,
     ) {
-        if self.mode == KeepUnchanged::Off {
+        if !self.tracks() {
+            return;
+        }
+        if self.rebuild {
+            return self.reload_for(scene, occupied, WholeRedraw::Settling);
+        }
+        if self.paused {
+            self.missed = true;
             return;
         }
         for slot in slots {
@@ -143,16 +169,18 @@ impl Keeper {
             }
             if s >= self.spheres.len() {
                 self.spheres.resize(s + 1, None);
+                self.animates.resize(s + 1, false);
             }
             self.changed.extend(self.spheres[s]);
             let now = occupied(slot).then(|| scene.world_sphere(&scene.instances[s]));
             self.changed.extend(now);
             self.spheres[s] = now;
             self.blended |= now.is_some() && self.is_blended(scene, slot);
-            match now.is_some() && animates(scene, slot) {
-                true => self.animated.insert(slot),
-                false => self.animated.remove(&slot),
-            };
+            let animated = now.is_some() && animates(scene, slot);
+            if self.animates[s] != animated {
+                self.animates[s] = animated;
+                self.animated_stale = true;
+            }
             if self.shadows {
                 self.forced.get_or_insert(WholeRedraw::Shadows);
             }
@@ -180,7 +208,17 @@ impl Keeper {
             return Err(WholeRedraw::FirstFrame);
         };
         if last_rig != *rig {
+            self.paused = true;
             return Err(WholeRedraw::Pose);
+        }
+        if self.paused {
+            match self.missed || self.rebuild {
+                true => {
+                    self.rebuild = true;
+                    return Err(WholeRedraw::Settling);
+                }
+                false => self.paused = false,
+            }
         }
         if let Some(why) = forced {
             return Err(why);
@@ -190,6 +228,11 @@ impl Keeper {
         }
         let mut spheres = changed;
         if time != last_time {
+            if self.animated_stale {
+                let flags = self.animates.iter().enumerate();
+                self.animated = flags.filter(|(_, a)| **a).map(|(s, _)| s as u32).collect();
+                self.animated_stale = false;
+            }
             if self.shadows && !self.animated.is_empty() {
                 return Err(WholeRedraw::Shadows);
             }
@@ -197,6 +240,11 @@ impl Keeper {
             spheres.extend(animated.filter_map(|&s| self.spheres[s as usize]));
         }
         Ok(spheres)
+    }
+
+    /// Whether changes are tracked: frames may keep pixels.
+    fn tracks(&self) -> bool {
+        self.mode != KeepUnchanged::Off && self.never.is_none()
     }
 
     fn is_blended(&self, scene: &Scene, slot: u32) -> bool {
