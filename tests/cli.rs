@@ -1740,3 +1740,36 @@ fn two_frames_per_submission_write_the_next_frame_and_its_cpu_share() {
         "{stderr}"
     );
 }
+
+/// `stress --still --keep-unchanged on` redraws only the changed tiles after its first
+/// frame and reports them; what never keeps is refused with one line.
+#[test]
+fn a_still_head_keeps_unchanged_pixels_and_stress_reports_the_tiles() {
+    let mut args = stress_args("procedural:2000", "hmd", "4");
+    args.extend(["--still", "--moving", "1", "--keep-unchanged", "on"]);
+    let out = stereocull(&args);
+    assert!(
+        out.status.success(),
+        "{}",
+        String::from_utf8_lossy(&out.stderr)
+    );
+    let v: Value = serde_json::from_slice(&out.stdout).unwrap();
+    let frames = v["frames"].as_array().unwrap();
+    assert_eq!(frames[0]["whole_redraw"].as_str(), Some("first_frame"));
+    assert!(
+        frames[1..].iter().all(|f| f["whole_redraw"].is_null()),
+        "{v}"
+    );
+    let s = &v["summary"];
+    assert_eq!(s["whole_redraws"].as_u64(), Some(1));
+    assert!(s["tiles_changed_median"].as_f64().unwrap() > 0.0, "{s}");
+    assert!(s.get("fragment_invocations_median").is_some(), "{s}");
+    let mut args = stress_args("procedural:200", "hmd", "2");
+    args.extend(["--keep-unchanged", "on", "--motion-vectors", "on"]);
+    let out = stereocull(&args);
+    let stderr = String::from_utf8_lossy(&out.stderr);
+    assert!(
+        !out.status.success() && stderr.lines().count() == 1 && stderr.contains("motion"),
+        "{stderr}"
+    );
+}
