@@ -210,34 +210,35 @@ fn the_gpu_and_cpu_culls_of_a_kept_frame_are_the_same_bytes() {
 
 /// An instance removed from a tile nothing else covers leaves the clear color there: a
 /// keeper that forgot the instance's bounds before the change would keep it drawn.
+/// With MSAA too: the tiles' clear covers every sample, the resolve the whole target.
 #[test]
 fn a_removed_instance_alone_in_its_tiles_is_cleared() {
     let gpu = gpu();
     let at = |x: f32| (Vec3::new(x, 1.6, -6.0), 0);
     let scene = support::cubes(&[at(-2.5), at(0.0), at(2.5)], 1);
     let rig = sized("hmd", 96, 80);
-    let mut kept = Run::new(
-        &gpu,
-        &scene,
-        &rig,
-        options(CullMode::Gpu, KeepUnchanged::On),
-    );
-    let mut whole = Run::new(
-        &gpu,
-        &scene,
-        &rig,
-        options(CullMode::Gpu, KeepUnchanged::Off),
-    );
-    let (_, before) = kept.frame(&gpu, &rig, 0.0);
-    for run in [&mut kept, &mut whole] {
-        let alone = run.live.handles()[2];
-        run.live.remove(alone).unwrap();
+    for samples in [1, 4] {
+        let options = |keep| RendererOptions {
+            sample_count: samples,
+            ..options(CullMode::Gpu, keep)
+        };
+        let mut kept = Run::new(&gpu, &scene, &rig, options(KeepUnchanged::On));
+        let mut whole = Run::new(&gpu, &scene, &rig, options(KeepUnchanged::Off));
+        let (_, before) = kept.frame(&gpu, &rig, 0.0);
+        for run in [&mut kept, &mut whole] {
+            let alone = run.live.handles()[2];
+            run.live.remove(alone).unwrap();
+        }
+        let (stats, got) = kept.frame(&gpu, &rig, 0.0);
+        let (_, want) = whole.frame(&gpu, &rig, 0.0);
+        assert_eq!(stats.whole_redraw, None);
+        let name = format!("keep-removed-x{samples}");
+        assert_images_match(&name, &got[0], &want[0], Tolerance::EXACT);
+        assert_ne!(
+            before[0], got[0],
+            "{name}: the removed cube was drawn and is gone"
+        );
     }
-    let (stats, got) = kept.frame(&gpu, &rig, 0.0);
-    let (_, want) = whole.frame(&gpu, &rig, 0.0);
-    assert_eq!(stats.whole_redraw, None);
-    assert_images_match("keep-removed", &got[0], &want[0], Tolerance::EXACT);
-    assert_ne!(before[0], got[0], "the removed cube was drawn and is gone");
 }
 
 /// What never keeps is refused with `on` and drawn whole with `auto`, with its reason.
@@ -266,7 +267,8 @@ fn what_cannot_keep_is_refused_or_drawn_whole_with_its_reason() {
             stats.whole_redraw
         );
     }
-    // A light that changes lights pixels far from any instance.
+    // A light that changes lights pixels far from any instance, through a sync or
+    // set directly.
     let mut run = Run::new(
         &gpu,
         &scene,
@@ -280,6 +282,9 @@ fn what_cannot_keep_is_refused_or_drawn_whole_with_its_reason() {
     assert_eq!(stats.whole_redraw, Some(WholeRedraw::Scene));
     let (stats, _) = run.frame(&gpu, &hmd, 0.0);
     assert_eq!(stats.whole_redraw, None);
+    run.renderer.set_lights(&[lit]).unwrap();
+    let (stats, _) = run.frame(&gpu, &hmd, 0.0);
+    assert_eq!(stats.whole_redraw, Some(WholeRedraw::Scene));
     // A latch would move every kept pixel.
     run.renderer.prepare(&gpu.queue, &hmd, 0.0).unwrap();
     assert!(matches!(

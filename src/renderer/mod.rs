@@ -396,6 +396,7 @@ impl Renderer {
     /// follow): an engine moves, adds and removes lights so. More than
     /// [`crate::lights::MAX_LIGHTS`], or a light that is not valid, is an error.
     pub fn set_lights(&mut self, lights: &[crate::lights::Light]) -> Result<()> {
+        self.keeper.lights_changed();
         self.lighting.set(lights)
     }
 
