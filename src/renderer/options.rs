@@ -237,8 +237,8 @@ pub struct RendererOptions {
     /// Seconds between a submission's two frames (one display period).
     pub dt: f32,
     /// Whether a frame whose pose, rig and options are the last frame's redraws only
-    /// the tiles that something changed ([`crate::keep`]); `auto` turns occlusion's
-    /// `auto` off (its phases need every instance tested each frame).
+    /// the tiles that something changed ([`crate::keep`]); `on` and `auto` turn
+    /// occlusion's `auto` off (its phases need every instance tested each frame).
     pub keep_unchanged: KeepUnchanged,
 }
 
