@@ -420,6 +420,11 @@ impl LiveScene {
         mesh
     }
 
+    /// The changes the next [`LiveScene::take_changes`] takes, left in place.
+    pub fn pending_changes(&self) -> &Changes {
+        &self.changes
+    }
+
     /// The changes since the last call, which forgets them.
     pub fn take_changes(&mut self) -> Changes {
         self.epoch = self.epoch.wrapping_add(1);

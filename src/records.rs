@@ -55,8 +55,12 @@ pub struct EditHeader {
     pub visibility_words: u32,
     /// With occlusion, the display slots that have visibility words; else zero.
     pub visibility_slots: u32,
+    /// 1 for a submission's second frame (moves only): each moved sphere keeps its
+    /// center and takes the edit's radius, which the CPU grew to hold the sphere of
+    /// both frames ([`crate::renderer`]'s `pair_spheres`); 0: the edit's sphere.
+    pub grow: u32,
     /// Zeros (the header is 32 bytes).
-    pub unused: [u32; 3],
+    pub unused: [u32; 2],
 }
 
 /// A moved instance as the moves scatter takes it (56 bytes): the slot

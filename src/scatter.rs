@@ -91,6 +91,14 @@ impl Scatters {
         }
     }
 
+    /// The scatters of a submission's second frame: its moves grow each sphere to hold
+    /// both frames' poses ([`EditHeader::grow`]).
+    pub fn second_frame(device: &wgpu::Device, windows: Windows) -> Scatters {
+        let mut scatters = Scatters::new(device, windows);
+        scatters.moves.grow = true;
+        scatters
+    }
+
     /// Stages place edits. They change only the GPU culler's cull order: without its
     /// buffers (`targets.spheres` is `None`: the CPU culler took the edits into its
     /// layout) nothing is staged. Returns the bytes and a cleared list, as
@@ -158,6 +166,8 @@ pub struct Scatter<E: Edit> {
     index: Vec<u32>,
     indexed: bool,
     spheres_too: bool,
+    /// Moves of a submission's second frame ([`EditHeader::grow`]).
+    grow: bool,
     visibility: (u32, u32),
     max_groups: u32,
 }
@@ -194,6 +204,7 @@ impl<E: Edit> Scatter<E> {
             index: Vec::new(),
             indexed: false,
             spheres_too: false,
+            grow: false,
             visibility: (0, 0),
             max_groups: device.limits().max_compute_workgroups_per_dimension,
         }
@@ -342,7 +353,8 @@ impl<E: Edit> Scatter<E> {
             groups_x: self.groups().0,
             visibility_words: self.visibility.0,
             visibility_slots: self.visibility.1,
-            unused: [0; 3],
+            grow: u32::from(self.grow),
+            unused: [0; 2],
         }
     }
 
@@ -409,7 +421,8 @@ impl GpuMoves {
             groups_x: groups.0,
             visibility_words: targets.visibility.0,
             visibility_slots: targets.visibility.1,
-            unused: [0; 3],
+            grow: 0,
+            unused: [0; 2],
         };
         let mut contents = bytemuck::bytes_of(&header).to_vec();
         contents.resize(contents.len() + count as usize * size_of::<MoveEdit>(), 0);

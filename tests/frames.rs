@@ -321,9 +321,6 @@ fn what_cannot_join_two_frames_is_refused_with_its_reason() {
     };
     refused(&scene, &hmd, classic, "one at a time");
     refused(&scene, &sized("hmd-foveated", 32, 32), two.clone(), "eight");
-    let skinned =
-        scene_spec::load(support::gltf_sample("SimpleSkin", "gltf").to_str().unwrap()).unwrap();
-    refused(&skinned, &hmd, two.clone(), "second frame");
     // A renderer of one frame per submission takes no pair.
     let mut one = Renderer::new(&gpu.device, &scene, &hmd, options(CullMode::Gpu, 1)).unwrap();
     let pair = one.prepare_pair(&gpu.queue, (&hmd, 0.0), (&hmd, DT));

@@ -197,6 +197,7 @@ fn edit_records_match_wgsl() {
             ("groups_x", offset_of!(EditHeader, groups_x)),
             ("visibility_words", offset_of!(EditHeader, visibility_words)),
             ("visibility_slots", offset_of!(EditHeader, visibility_slots)),
+            ("grow", offset_of!(EditHeader, grow)),
             ("unused", offset_of!(EditHeader, unused)),
         ],
     );
@@ -642,7 +643,11 @@ fn pipelines_and_their_lists() -> Vec<(String, String, Vec<Vec<Binding>>)> {
     ]);
     out.extend(
         (DrawKey::ALL.iter().flat_map(|k| k.alpha_variants())).map(|k| {
-            let groups = if k.motion { &motion } else { &draw };
+            let groups = if k.motion || k.first_pose {
+                &motion
+            } else {
+                &draw
+            };
             (k.label(), k.source_with(None, whole), groups.clone())
         }),
     );

@@ -183,8 +183,10 @@ fn module_files_form_no_circle() {
 }
 
 /// The files of `renderer/` that extend `Renderer` itself (its methods, by the part of
-/// the embedding API they serve): they assemble the levels, so they may name them all.
-const RENDERER_API: [&str; 6] = [
+/// the embedding API they serve), and `path`, the path it assembles: they assemble the
+/// levels, so they may name them all.
+const RENDERER_API: [&str; 7] = [
+    "path",
     "sync",
     "prepare",
     "encode",

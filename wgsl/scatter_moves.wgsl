@@ -30,6 +30,10 @@ fn scatter(@builtin(workgroup_id) wid: vec3<u32>, @builtin(local_invocation_inde
             let m = rows[r];
             center[r] = m.x * l.x + m.y * l.y + m.z * l.z + m.w;
         }
-        spheres_set(positions[edit.slot], vec4(center, edit.radius));
+        let at = positions[edit.slot];
+        // A second frame's move: the first frame's center, with a radius that holds
+        // both poses (computed on the CPU, as is every radius).
+        let kept = spheres_at(at).xyz;
+        spheres_set(at, vec4(select(center, kept, edits.header.grow != 0u), edit.radius));
     }
 }

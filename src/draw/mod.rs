@@ -69,8 +69,12 @@ pub struct Drawer {
     pub features: DrawFeatures,
     /// Samples per pixel of the target (cutouts use alpha to coverage above 1).
     samples: u32,
-    /// With motion vectors: group 3's layout (every built-in pipeline writes motion).
-    motion: Option<wgpu::BindGroupLayout>,
+    /// With motion vectors (every built-in pipeline writes motion), or two frames per
+    /// submission (the first frame's views read the first pose): group 3's layout, the
+    /// earlier records ([`DrawScene::previous`]).
+    earlier: Option<wgpu::BindGroupLayout>,
+    /// Which of the two reads group 3.
+    target: TargetFormat,
 }
 
 /// The frame's shadow pass pipelines (`wgsl/shadow.wgsl`, `wgsl/shadow_cutout.wgsl`).
@@ -109,8 +113,8 @@ impl Drawer {
             &SHADOW_MAP_BINDINGS,
             &windows,
         );
-        let motion = target
-            .motion
+        let grouped = target.motion || target.first_pose;
+        let earlier = grouped
             .then(|| bind_group_layout(device, "stereocull.motion", &MOTION_BINDINGS, &windows));
         let pipeline_layout = device.create_pipeline_layout(&wgpu::PipelineLayoutDescriptor {
             label: Some("stereocull.draw"),
@@ -118,8 +122,8 @@ impl Drawer {
                 Some(&layout),
                 Some(&materials_layout),
                 Some(&shadow_layout),
-                motion.as_ref(),
-            ][..3 + usize::from(target.motion)],
+                earlier.as_ref(),
+            ][..3 + usize::from(grouped)],
             immediate_size: 0,
         });
         let built_in = kinds
@@ -129,7 +133,7 @@ impl Drawer {
             .flat_map(|&key| {
                 built_in
                     .clone()
-                    .map(move |&k| key.with_bin(k, target.samples).with_motion(target.motion))
+                    .map(move |&k| Drawer::variant(key.with_bin(k, target.samples), target))
             })
             .map(|key| {
                 let source = key.source_with(shaders.function(key.shading), &windows);
@@ -162,8 +166,14 @@ impl Drawer {
             windows,
             features: DrawFeatures::of(device),
             samples: target.samples,
-            motion,
+            earlier,
+            target,
         }
+    }
+
+    /// `key` as drawn into `target`: with motion vectors, or the first pose.
+    fn variant(key: DrawKey, target: TargetFormat) -> DrawKey {
+        (key.with_motion(target.motion)).with_first_pose(target.first_pose && !target.motion)
     }
 
     /// The variant for `views` views per instance on this device.
@@ -236,11 +246,8 @@ impl Drawer {
         match (with, kind.shading) {
             (BinPipelines::Draw(_, own), Shading::Own(i)) => own.get(&i).map(BinDraw::Own),
             (BinPipelines::Draw(key, _), _) => {
-                let variant = key.with_bin(kind, self.samples);
-                let motion = self.motion.is_some();
-                Some(BinDraw::BuiltIn(
-                    &self.pipelines[&variant.with_motion(motion)],
-                ))
+                let variant = Drawer::variant(key.with_bin(kind, self.samples), self.target);
+                Some(BinDraw::BuiltIn(&self.pipelines[&variant]))
             }
             (BinPipelines::Own, _) => Some(BinDraw::Keep),
             (BinPipelines::Shadow, _) => {

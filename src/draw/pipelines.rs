@@ -21,6 +21,9 @@ pub struct TargetFormat {
     /// A second color attachment of [`crate::motion::MOTION_FORMAT`] takes each
     /// pixel's motion.
     pub motion: bool,
+    /// Two frames per submission: the first frame's views read the first pose
+    /// ([`DrawKey::first_pose`]).
+    pub first_pose: bool,
 }
 /// How the draw pipelines read a [`Vertex`]: `VertexInput` in
 /// `wgsl/shared/decode.wgsl` (`tests/shaders.rs` checks both sides).
@@ -34,6 +37,31 @@ pub const PREVIOUS_VERTEX_BUFFER: wgpu::VertexBufferLayout<'static> = wgpu::Vert
     array_stride: size_of::<Vertex>() as u64,
     step_mode: wgpu::VertexStepMode::Vertex,
     attributes: &wgpu::vertex_attr_array![6 => Float32x3],
+};
+
+/// The first frame's vertices as the first-pose pipelines read them
+/// (`wgsl/draw_first_pose.wgsl`): what skins and morph targets rewrite, at the offsets
+/// of [`VERTEX_ATTRIBUTES`]' position, normal and tangent.
+pub const FIRST_POSE_VERTEX_BUFFER: wgpu::VertexBufferLayout<'static> = wgpu::VertexBufferLayout {
+    array_stride: size_of::<Vertex>() as u64,
+    step_mode: wgpu::VertexStepMode::Vertex,
+    attributes: &[
+        wgpu::VertexAttribute {
+            format: wgpu::VertexFormat::Float32x3,
+            offset: std::mem::offset_of!(Vertex, position) as u64,
+            shader_location: 6,
+        },
+        wgpu::VertexAttribute {
+            format: wgpu::VertexFormat::Float32x3,
+            offset: std::mem::offset_of!(Vertex, normal) as u64,
+            shader_location: 7,
+        },
+        wgpu::VertexAttribute {
+            format: wgpu::VertexFormat::Snorm8x4,
+            offset: std::mem::offset_of!(Vertex, tangent) as u64,
+            shader_location: 8,
+        },
+    ],
 };
 
 /// The scene's vertex buffer as every pipeline drawing it reads it (an engine's own
@@ -107,7 +135,11 @@ pub(super) fn pipeline(
         label: Some(&label),
         source: wgpu::ShaderSource::Wgsl(source.into()),
     });
-    let buffers = [Some(VERTEX_BUFFER), Some(PREVIOUS_VERTEX_BUFFER)];
+    let earlier = match key.first_pose {
+        true => FIRST_POSE_VERTEX_BUFFER,
+        false => PREVIOUS_VERTEX_BUFFER,
+    };
+    let buffers = [Some(VERTEX_BUFFER), Some(earlier)];
     let blend = key.alpha == BinKind::Blend;
     let targets = [
         Some(wgpu::ColorTargetState {
@@ -134,7 +166,7 @@ pub(super) fn pipeline(
             module: &module,
             entry_point: Some("vs_main"),
             compilation_options: Default::default(),
-            buffers: &buffers[..used],
+            buffers: &buffers[..1 + usize::from(key.motion || key.first_pose)],
         },
         primitive: wgpu::PrimitiveState {
             cull_mode: key.face_culling(),

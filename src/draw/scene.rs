@@ -73,13 +73,13 @@ impl DrawScene {
             bytemuck::cast_slice(records),
             DrawScene::BYTES_PER_INSTANCE * slots as u64,
             // COPY_SRC: read back by diagnostics (`instance_records`), copied to
-            // `Previous` with motion vectors.
+            // `Previous` with motion vectors or two frames per submission.
             wgpu::BufferUsages::STORAGE
                 | wgpu::BufferUsages::COPY_DST
                 | wgpu::BufferUsages::COPY_SRC,
         );
         let rewritten = DrawScene::rewrites_vertices(scene);
-        let previous = (drawer.motion.as_ref()).map(|layout| {
+        let previous = (drawer.earlier.as_ref()).map(|layout| {
             let copied = (&instances, rewritten.then_some(&vertices));
             Previous::new(device, (layout, &drawer.windows), copied)
         });

@@ -184,34 +184,27 @@ impl Renderer {
     }
 
     /// The frame level's passes, before any display's: the pose's writes copied into
-    /// place ([`super::uploads`]), with motion vectors the copy of
-    /// the previous frame's records and vertices, the scatter of moved instances,
-    /// posing, morph targets, skinning, the coarse cull, the shadow pass.
+    /// place ([`super::uploads`]), with motion vectors the copy of the previous frame's
+    /// records and vertices, the frame's pose (the scatter of moved instances, posing,
+    /// morph targets, skinning), with two frames per submission the second frame's
+    /// pose after a copy of the first's ([`super::second_frame`]), then the coarse
+    /// cull and the shadow pass.
     pub(super) fn encode_frame(
         &mut self,
         encoder: &mut wgpu::CommandEncoder,
         rec: &mut Recorder,
     ) -> FrameStats {
         self.uploads.record(encoder);
-        self.path.core_mut().draw_scene.keep_previous(encoder);
-        let (scattered, cpu_staging) = self.scatter.encode(encoder);
-        if scattered > 0 {
-            rec.log(PassRecord::frame("scatter"));
+        let pairs = self.second.is_some();
+        if !pairs {
+            self.path.core_mut().draw_scene.keep_previous(encoder);
         }
-        let posed = match &self.pose {
-            Some(pose) => pose.encode(encoder, rec),
-            None => 0,
-        };
-        let morphed = match &self.morph {
-            Some(morph) => morph.encode(encoder, rec),
-            None => 0,
-        };
-        let clustered = self.lighting.encode(encoder, rec);
-        let skinned = match &self.skin {
-            Some(skin) => skin.encode(encoder, rec),
-            None => 0,
-        };
-        (self.path.core_mut().draw_scene).rewritten(scattered + posed > 0, skinned + morphed > 0);
+        let (mut posing, mut cpu_staging) = self.encode_pose(encoder, rec, false);
+        if pairs {
+            self.path.core_mut().draw_scene.keep_previous(encoder);
+            let (second, staging) = self.encode_pose(encoder, rec, true);
+            (posing, cpu_staging) = (posing + second, cpu_staging + staging);
+        }
         let coarse = match &self.path {
             Path::Indirect(p) => p.encode_frame(encoder, rec),
             Path::Classic(_) => 0,
@@ -229,11 +222,51 @@ impl Renderer {
             None => (0, 0),
         };
         FrameStats {
-            dispatches: scattered + posed + morphed + skinned + clustered + coarse + shadowed,
+            dispatches: posing + coarse + shadowed,
             draw_calls,
             cpu_staging,
             ..Default::default()
         }
+    }
+
+    /// A frame's pose: its edits scattered, its animations posed on the GPU, its morph
+    /// targets and skins, the lights' clusters; for the `second` frame of a submission,
+    /// its own edits, morph weights and joint matrices (the rest serves both frames).
+    /// Returns the dispatches and the CPU time of staging the edits.
+    fn encode_pose(
+        &mut self,
+        encoder: &mut wgpu::CommandEncoder,
+        rec: &mut Recorder,
+        second: bool,
+    ) -> (u32, std::time::Duration) {
+        let (scattered, cpu_staging) = match (&mut self.second, second) {
+            (Some(frame), true) => frame.scatter.encode(encoder),
+            _ => self.scatter.encode(encoder),
+        };
+        if scattered > 0 {
+            rec.log(PassRecord::frame("scatter"));
+        }
+        let posed = match (&self.pose, second) {
+            (Some(pose), false) => pose.encode(encoder, rec),
+            _ => 0,
+        };
+        let morphed = match (&self.morph, second) {
+            (Some(morph), false) => morph.encode(encoder, rec),
+            (Some(morph), true) => morph.encode_next(encoder, rec),
+            (None, _) => 0,
+        };
+        let clustered = match second {
+            false => self.lighting.encode(encoder, rec),
+            true => 0,
+        };
+        let skinned = match (&mut self.skin, second) {
+            (Some(skin), false) => skin.encode(encoder, rec),
+            (Some(skin), true) => skin.encode_next(encoder, rec),
+            (None, _) => 0,
+        };
+        (self.path.core_mut().draw_scene).rewritten(scattered + posed > 0, skinned + morphed > 0);
+        let dispatches = scattered + posed + morphed + clustered + skinned;
+        (dispatches, cpu_staging)
     }
 
     /// The passes the last `encode` (or `encode_culls`) recorded, in order, each with its

@@ -11,7 +11,7 @@
 
 use crate::contexts::DisplayContext;
 use crate::error::{Error, Result};
-use crate::renderer::options::{OcclusionMode, RendererOptions, StereoMode};
+use crate::renderer::options::{OcclusionMode, PosingMode, RendererOptions, StereoMode};
 use crate::rig::{Display, ResolvedRig, Rig, ViewLayout, VisibilityMask};
 use crate::scene::Scene;
 
@@ -66,8 +66,8 @@ pub(super) fn time_views(contexts: &mut [DisplayContext], rig: &Rig, ahead: f32)
 }
 
 /// What two frames per submission cannot draw: it takes the `instanced` mode's one
-/// multi-draw, a scene whose animations the draw poses from the time alone (instance
-/// spin and bob), and none of the features whose state belongs to a single frame.
+/// multi-draw, content posed on the CPU for each frame (or by the draw, from the time),
+/// and none of the features whose state belongs to a single frame.
 pub(super) fn check(scene: &Scene, rig: &Rig, options: &RendererOptions) -> Result<()> {
     match options.frames_per_submit {
         1 => return Ok(()),
@@ -84,7 +84,7 @@ pub(super) fn check(scene: &Scene, rig: &Rig, options: &RendererOptions) -> Resu
             options.dt
         )));
     }
-    let why = unjoined_option(options).or_else(|| unjoined_content(scene, rig));
+    let why = unjoined_option(options).or_else(|| unjoined_content(scene, rig, options));
     match why {
         Some(why) => Err(Error::Unsupported(format!(
             "two frames per submission: {why}"
@@ -112,18 +112,30 @@ fn unjoined_option(options: &RendererOptions) -> Option<&'static str> {
     })
 }
 
-/// The rig and scene content whose second frame would need more than the time.
-fn unjoined_content(scene: &Scene, rig: &Rig) -> Option<&'static str> {
+/// The rig and scene content whose second frame cannot be drawn so: a foveated
+/// display's views, and posed content ([`super::second_frame`]) where the pose or the
+/// shadow is one per submission.
+fn unjoined_content(scene: &Scene, rig: &Rig, options: &RendererOptions) -> Option<&'static str> {
     if rig.displays.iter().any(|d| d.views() > 2) {
         return Some(
             "a foveated display's four views would make eight, and a display context holds four",
         );
     }
     let posed = !scene.posing.clips.is_empty() || !scene.skins.is_empty();
-    if posed || !scene.morphs.is_empty() {
+    if !posed && scene.morphs.is_empty() {
+        return None;
+    }
+    if !scene.posing.lights.is_empty() {
         return Some(
-            "node animations, skins and morph targets are posed once per frame by a pass of their own, which does not yet pose the second frame",
+            "lights on animated nodes light both frames of a submission as one set: posed once per submission",
         );
     }
-    None
+    if options.posing == PosingMode::Gpu {
+        return Some(
+            "posing on the GPU poses one time per submission (its pass does not yet pose the second frame): use --posing cpu, which poses each frame in its own sync",
+        );
+    }
+    options.shadows.then_some(
+        "the shadow map is drawn once per submission, at the second frame's pose of node animations, skins and morph targets: use --shadows off",
+    )
 }

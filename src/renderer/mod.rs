@@ -88,9 +88,8 @@ use crate::motion::PreviousFrame;
 use crate::places::Places;
 use crate::records::{CullLayout, instance_records};
 use crate::rig::Rig;
-use crate::scatter::{ScatterTargets, Scatters};
+use crate::scatter::Scatters;
 use crate::scene::Scene;
-use crate::shaders::Windows;
 
 mod checks;
 mod culler;
@@ -102,9 +101,11 @@ pub mod frames;
 mod keeping;
 mod options;
 mod own_passes;
+mod path;
 mod plan;
 mod prepare;
 mod recorder;
+mod second_frame;
 mod sync;
 mod targets;
 mod uploads;
@@ -114,124 +115,27 @@ use checks::check_device;
 pub use checks::check_rig;
 pub use culler::WallCulls;
 pub use diagnostics::{Diagnostics, FarSplit, OcclusionCounts};
-use display::classic::ClassicPath;
-use display::indirect::IndirectPath;
+use display::PathInputs;
 pub use display::occlusion::OcclusionBytes;
-use display::{PathCore, PathInputs};
 use frame::lights::Lighting;
 use frame::morph::MorphPass;
-use frame::pose::{self, PosePass};
+use frame::pose::PosePass;
 use frame::shadow::{ShadowMap, ShadowPass};
 use frame::skin::SkinPass;
 pub use options::{
     CoarseMode, CullMode, DEFAULT_DT, LOD_PIXELS, OcclusionMode, PosingMode, RendererOptions,
     StereoMode, frame_lod,
 };
+use path::{FramePasses, Path};
 pub use plan::{
     CullView, DispatchLevels, FramePlan, FrameStats, PlannedCull, instances_per_object,
 };
 pub use recorder::{Level, PassRecord};
+use second_frame::SecondFrame;
+pub use second_frame::grown;
 pub use sync::SyncStats;
 pub use targets::{DisplayTarget, TargetShape, TargetViews};
 use uploads::Coalesced;
-
-/// The path chosen in [`Renderer::new`] (boxed: each holds its pipelines, and they
-/// differ in size by what the indirect path adds).
-enum Path {
-    Indirect(Box<IndirectPath>),
-    Classic(Box<ClassicPath>),
-}
-
-impl Path {
-    /// The path `inputs.options` choose, for the displays (and coarse cull) of
-    /// `inputs.plan`.
-    fn new(device: &wgpu::Device, inputs: PathInputs) -> Result<Path> {
-        let scope = device.push_error_scope(wgpu::ErrorFilter::Validation);
-        let path = match inputs.options.mode.per_instance() {
-            false => IndirectPath::new(device, inputs).map(|p| Path::Indirect(Box::new(p))),
-            true => ClassicPath::new(device, inputs).map(|p| Path::Classic(Box::new(p))),
-        };
-        // Popped before returning any error, so the caller's device keeps its scopes.
-        if let Some(e) = pollster::block_on(scope.pop()) {
-            return Err(Error::Wgpu(e));
-        }
-        path
-    }
-
-    /// The GPU-driven path, if it is the one.
-    fn indirect(&self) -> Option<&IndirectPath> {
-        match self {
-            Path::Indirect(p) => Some(p),
-            Path::Classic(_) => None,
-        }
-    }
-
-    /// The path's culler, pipelines and scene.
-    fn core(&self) -> &PathCore {
-        match self {
-            Path::Indirect(p) => &p.core,
-            Path::Classic(p) => &p.core,
-        }
-    }
-
-    fn core_mut(&mut self) -> &mut PathCore {
-        match self {
-            Path::Indirect(p) => &mut p.core,
-            Path::Classic(p) => &mut p.core,
-        }
-    }
-
-    /// Where the scatter passes (and the pose pass) write edits.
-    fn scatter_targets(&self) -> ScatterTargets<'_> {
-        let core = self.core();
-        let (spheres, visibility) = core.culler.scatter_targets();
-        ScatterTargets {
-            instances: &core.draw_scene.instances,
-            spheres,
-            visibility,
-        }
-    }
-
-    /// The frame level's passes over this path's scene and culler, bound to `frame` and
-    /// in `windows`: skinning (with skins), posing on the GPU (with animations;
-    /// `posed(slot)`: whether it poses the instance in `slot`) and the shadow pass (with
-    /// shadows).
-    fn frame_passes(
-        &self,
-        device: &wgpu::Device,
-        (scene, options): (&Scene, &RendererOptions),
-        (frame, windows): (&wgpu::Buffer, Windows),
-        posed: impl Fn(u32) -> bool,
-    ) -> Result<FramePasses> {
-        let core = self.core();
-        let skin = SkinPass::new(device, &scene.skins, &core.draw_scene.vertices);
-        let targets = (&core.draw_scene.vertices, skin.as_ref().map(SkinPass::rest));
-        let morph = MorphPass::new(device, &scene.morphs, targets);
-        let gpu = pose::GpuParts {
-            frame,
-            skin: skin.as_ref(),
-            windows,
-            scatter: self.scatter_targets(),
-        };
-        let pose = pose::build(device, scene, options, gpu, posed)?;
-        let shadow =
-            (options.shadows).then(|| ShadowPass::new(device, core.drawing(), frame, &core.culler));
-        Ok(FramePasses {
-            skin,
-            morph,
-            pose,
-            shadow,
-        })
-    }
-}
-
-/// The frame level's passes a renderer records (each where its scene needs it).
-struct FramePasses {
-    skin: Option<SkinPass>,
-    morph: Option<MorphPass>,
-    pose: Option<PosePass>,
-    shadow: Option<ShadowPass>,
-}
 
 /// The scene submission backend: one per scene and rig shape, see the module docs for the
 /// calls in order.
@@ -246,6 +150,8 @@ pub struct Renderer {
     names: Vec<String>,
     /// Moved instances, staged by `sync`, dispatched by the next `encode`.
     scatter: Scatters,
+    /// Two frames per submission: the second frame's own edits (`sync_next`).
+    second: Option<SecondFrame>,
     /// With skins: the frame's skinning pass.
     skin: Option<SkinPass>,
     /// With morph targets: the frame's morph pass.
@@ -365,6 +271,8 @@ impl Renderer {
                 .collect();
             p.masks = crate::draw::mask::display_masks(device, &displays, options.target_format());
         }
+        let second = (options.frames_per_submit == 2)
+            .then(|| SecondFrame::new(device, options.windows(device, slots), scene));
         Ok(Renderer {
             options,
             frame,
@@ -372,6 +280,7 @@ impl Renderer {
             shapes,
             names: rig.displays.iter().map(|d| d.name.clone()).collect(),
             scatter,
+            second,
             skin,
             morph,
             pose,

@@ -333,6 +333,7 @@ impl RendererOptions {
             depth: self.depth_format,
             samples: self.sample_count,
             motion: self.motion_vectors,
+            first_pose: self.frames_per_submit == 2,
         }
     }
 }

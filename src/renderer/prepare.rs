@@ -56,7 +56,8 @@ impl Renderer {
     /// `RendererOptions::dt` later: [`Renderer::prepare_pair`] takes its own pose.
     pub fn prepare(&mut self, queue: &wgpu::Queue, rig: &Rig, time: f32) -> Result<FrameStats> {
         let plan = self.plan(rig, time)?;
-        self.prepare_plan(queue, plan, (rig, time))
+        let next = time + self.options.dt;
+        self.prepare_plan(queue, plan, (rig, time), next)
     }
 
     /// [`Renderer::prepare`] for a submission of two frames
@@ -71,7 +72,7 @@ impl Renderer {
         next: (&Rig, f32),
     ) -> Result<FrameStats> {
         let plan = self.plan_pair(now, next)?;
-        self.prepare_plan(queue, plan, now)
+        self.prepare_plan(queue, plan, now, next.1)
     }
 
     fn prepare_plan(
@@ -79,6 +80,7 @@ impl Renderer {
         queue: &wgpu::Queue,
         mut plan: FramePlan,
         (rig, time): (&Rig, f32),
+        next_time: f32,
     ) -> Result<FrameStats> {
         if self.options.motion_vectors {
             self.motion_from = self.motion_last.take();
@@ -93,6 +95,9 @@ impl Renderer {
         stats.whole_redraw = whole_redraw;
         if let Some(morph) = &mut self.morph {
             stats.bytes_uploaded += morph.prepare(queue, time);
+            if self.second.is_some() {
+                stats.bytes_uploaded += morph.prepare_next(queue, next_time);
+            }
         }
         // Texels go up with the first frame: `new` has no queue.
         stats.bytes_uploaded += self.path.core_mut().draw_scene.materials.upload(queue);

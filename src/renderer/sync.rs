@@ -4,8 +4,9 @@
 use super::checks::check_device;
 use super::display::PathInputs;
 use super::plan::FramePlan;
+use super::second_frame::{self, SecondFrame};
 use super::{Path, Renderer};
-use crate::error::Result;
+use crate::error::{Error, Result};
 use crate::live::{Changes, LiveScene, MoveEdit, PlaceEdit};
 use crate::records::{CullLayout, RecordEdit};
 use crate::scatter::{Scatters, record_edit};
@@ -91,6 +92,9 @@ impl Renderer {
             let slots = (changes.removed.iter().chain(&changes.recolored).copied()).chain(moved);
             self.keeper.changed(scene, slots, occupied);
         }
+        if let Some(second) = &mut self.second {
+            second.moved(scene, &changes.moved);
+        }
         if changes.geometry || needed > self.slots {
             return self.reallocate(device, live, needed);
         }
@@ -144,6 +148,9 @@ impl Renderer {
         // The bindings may now need more windows.
         let windows = self.options.windows(device, room);
         self.scatter = Scatters::new(device, windows);
+        if self.second.is_some() {
+            self.second = Some(SecondFrame::new(device, windows, scene));
+        }
         let made = (scene, &self.options);
         let posed = |s| live.animates(s);
         let passes = (self.path).frame_passes(device, made, (&self.frame, windows), posed)?;
@@ -161,6 +168,9 @@ impl Renderer {
     /// Writes the whole scene into the existing buffers: records, cull order, spheres.
     fn reload(&mut self, queue: &wgpu::Queue, live: &LiveScene, layout: CullLayout) -> SyncStats {
         self.scatter.reset();
+        if let Some(second) = &mut self.second {
+            second.reload(live.scene());
+        }
         let records = live.instance_records();
         let core = self.path.core_mut();
         queue.write_buffer(
@@ -235,5 +245,68 @@ impl Renderer {
             .collect();
         let targets = self.path.scatter_targets();
         self.scatter.records.stage(device, records, targets).0
+    }
+}
+
+impl Renderer {
+    /// The second frame's own changes in a submission of two frames
+    /// ([`super::RendererOptions::frames_per_submit`] 2): after [`Renderer::sync`] took
+    /// the first frame's, the caller poses `live` at the second frame's time (with
+    /// [`LiveScene::pose`]) and moves or recolors instances for it alone; this takes
+    /// those changes, which the second frame draws and the first does not (see
+    /// [`super::second_frame`]). Call it before `prepare_pair`.
+    ///
+    /// Inserts, removes, new meshes and light changes belong to both frames (one cull
+    /// order, one set of lights): they are [`Error::Unsupported`] here and leave `live`'s
+    /// changes untaken. So is a renderer of one frame per submission.
+    pub fn sync_next(
+        &mut self,
+        device: &wgpu::Device,
+        queue: &wgpu::Queue,
+        live: &mut LiveScene,
+    ) -> Result<SyncStats> {
+        let why = match &self.second {
+            None => Some("it takes a renderer of two frames per submission"),
+            Some(_) => second_frame::unjoined(live.pending_changes()),
+        };
+        let (Some(second), None) = (&mut self.second, why) else {
+            let why = why.unwrap_or_default();
+            return Err(Error::Unsupported(format!(
+                "the second frame's sync: {why}"
+            )));
+        };
+        let Changes {
+            mut moved,
+            recolored,
+            joints,
+            ..
+        } = live.take_changes();
+        let scene = live.scene();
+        let grown = second.grow(scene, &mut moved);
+        self.path.core_mut().culler.grown(&grown);
+        let records = (recolored.iter())
+            .map(|&slot| record_edit(live, slot))
+            .collect();
+        let targets = || self.path.scatter_targets();
+        let mut stats = SyncStats {
+            moved: moved.len() as u32,
+            ..SyncStats::default()
+        };
+        let mut spare = Vec::new();
+        if !moved.is_empty() {
+            let bytes;
+            (bytes, spare) = second.scatter.moves.stage(device, moved, targets());
+            stats.bytes_uploaded += bytes;
+        }
+        if !recolored.is_empty() {
+            stats.bytes_uploaded += second.scatter.records.stage(device, records, targets()).0;
+        }
+        if let Some(skin) = &mut self.skin {
+            for range in joints {
+                stats.bytes_uploaded += skin.upload_next(queue, &scene.skins, range);
+            }
+        }
+        live.recycle(Vec::new(), spare);
+        Ok(stats)
     }
 }

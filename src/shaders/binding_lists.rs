@@ -184,12 +184,14 @@ pub const DRAW_BINDINGS: [Binding; 4] = [
 ];
 
 /// Group 3 of the draw pipelines with motion vectors (`wgsl/shared/motion.wgsl`): the
-/// instance records as the previous frame drew them.
+/// instance records as the previous frame drew them; of the first-pose pipelines
+/// (`wgsl/draw_first_pose.wgsl`), as the first frame of two draws them (its fragments
+/// read their color).
 pub const MOTION_BINDINGS: [Binding; 1] = [windowed(
     "previous_instances",
     Access::StorageRead,
     "array<InstanceRecord>",
-    wgpu::ShaderStages::VERTEX,
+    wgpu::ShaderStages::VERTEX_FRAGMENT,
     Windowed::Instances,
 )];
 

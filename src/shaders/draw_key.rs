@@ -3,9 +3,9 @@
 //! coverage, and the source each composes from the shared includes.
 
 use super::{
-    BASE_COLOR, DRAW, DRAW_CLIP_DISTANCES, DRAW_CLIP_RECT, DRAW_COMMON, DRAW_MOTION,
-    DRAW_MULTIVIEW, DRAW_NO_CLIP_DISTANCES, LIGHT_RECORDS, LIGHTS, MATERIAL_BINDINGS, MOTION,
-    MOTION_BINDINGS, PBR, SHADOW_MAP_BINDINGS, Windows, declarations, decode_source_with,
+    BASE_COLOR, DRAW, DRAW_CLIP_DISTANCES, DRAW_CLIP_RECT, DRAW_COMMON, DRAW_FIRST_POSE,
+    DRAW_MOTION, DRAW_MULTIVIEW, DRAW_NO_CLIP_DISTANCES, LIGHT_RECORDS, LIGHTS, MATERIAL_BINDINGS,
+    MOTION, MOTION_BINDINGS, PBR, SHADOW_MAP_BINDINGS, Windows, declarations, decode_source_with,
     light_constants,
 };
 use crate::bins::{Bin, BinKind};
@@ -39,11 +39,15 @@ pub struct DrawKey {
     /// previous vertex as a second vertex buffer, the previous records as group 3, the
     /// previous clip position a varying more.
     pub motion: bool,
+    /// Two frames per submission whose second frame is posed apart: the first frame's
+    /// views read the first pose's records (group 3) and vertices (a second vertex
+    /// buffer), copied before the second frame's edits and posing.
+    pub first_pose: bool,
 }
 
 impl DrawKey {
     /// Every variant, for validation.
-    pub const ALL: [DrawKey; 12] = [
+    pub const ALL: [DrawKey; 14] = [
         DrawKey::new(2, true),
         DrawKey::new(2, false),
         DrawKey::new(2, true).with_motion(true),
@@ -51,6 +55,8 @@ impl DrawKey {
         DrawKey::new(1, false).with_motion(true),
         DrawKey::new(4, true),
         DrawKey::new(4, false),
+        DrawKey::new(4, true).with_first_pose(true),
+        DrawKey::new(2, false).with_first_pose(true),
         DrawKey::placed(2, true),
         DrawKey::placed(2, false),
         DrawKey::new(1, false),
@@ -70,6 +76,7 @@ impl DrawKey {
         coverage: false,
         second_uv: false,
         motion: false,
+        first_pose: false,
     };
 
     /// Multiview of a foveated display: four layers of one size, each view filling its
@@ -109,12 +116,18 @@ impl DrawKey {
             coverage: false,
             second_uv: false,
             motion: false,
+            first_pose: false,
         }
     }
 
     /// This variant with or without motion vectors.
     pub const fn with_motion(self, motion: bool) -> DrawKey {
         DrawKey { motion, ..self }
+    }
+
+    /// This variant with or without the first pose of a two-frame submission.
+    pub const fn with_first_pose(self, first_pose: bool) -> DrawKey {
+        DrawKey { first_pose, ..self }
     }
 
     /// This variant for material bin `bin`, into a target of `samples` per pixel.
@@ -167,7 +180,8 @@ impl DrawKey {
         };
         let uvs = if self.second_uv { ".uv1" } else { "" };
         let motion = if self.motion { ".motion" } else { "" };
-        format!("{}{alpha}{uvs}{motion}{shading}", self.base_label())
+        let first = if self.first_pose { ".first_pose" } else { "" };
+        format!("{}{alpha}{uvs}{motion}{first}{shading}", self.base_label())
     }
 
     fn base_label(self) -> String {
@@ -200,10 +214,11 @@ impl DrawKey {
             (true, false) => DRAW_CLIP_DISTANCES,
             (false, _) => DRAW_NO_CLIP_DISTANCES,
         };
-        let entry = match (self.multiview, self.motion) {
-            (true, _) => DRAW_MULTIVIEW,
-            (false, true) => DRAW_MOTION,
-            (false, false) => DRAW,
+        let entry = match (self.multiview, self.motion, self.first_pose) {
+            (true, _, _) => DRAW_MULTIVIEW,
+            (false, true, _) => DRAW_MOTION,
+            (false, false, true) => DRAW_FIRST_POSE,
+            (false, false, false) => DRAW,
         };
         let alpha = format!(
             "const ALPHA_MODE: u32 = {}u;\nconst ALPHA_TO_COVERAGE: bool = {};\n",
@@ -220,12 +235,13 @@ impl DrawKey {
             true => ("@location(3) uv1: vec2<f32>,", SECOND_UV_ON),
             false => ("", SECOND_UV_OFF),
         };
-        let (motion_location, motion) = match self.motion {
-            true => (
+        let (motion_location, motion) = match (self.motion, self.first_pose) {
+            (true, _) => (
                 "@location(4) previous_clip: vec4<f32>,",
                 motion_source(windows),
             ),
-            false => ("", String::new()),
+            (false, true) => ("", first_pose_source(windows)),
+            (false, false) => ("", LIVE_COLOR.into()),
         };
         // The second coordinates' and the previous clip position's varyings, where the
         // variant has them, take their markers' lines in the vertex output and the
@@ -257,8 +273,34 @@ impl DrawKey {
 
 /// Group 3 and the motion functions, for the variants with motion vectors.
 fn motion_source(windows: &Windows) -> String {
-    [&declarations(&MOTION_BINDINGS, 3, windows), MOTION].concat()
+    [
+        &declarations(&MOTION_BINDINGS, 3, windows),
+        MOTION,
+        LIVE_COLOR,
+    ]
+    .concat()
 }
+
+/// Group 3 (the first frame's records) and the instance color of the first frame's
+/// views from them, for the first-pose variants.
+fn first_pose_source(windows: &Windows) -> String {
+    [
+        &declarations(&MOTION_BINDINGS, 3, windows),
+        FIRST_POSE_COLOR,
+    ]
+    .concat()
+}
+
+/// The color of instance `id` as the fragment of view `eye` shades it: its record's.
+const LIVE_COLOR: &str = "fn instance_color(id: u32, eye: u32) -> vec4<f32> {\n\
+    return unpack4x8unorm(instances_at(id).color);\n}\n";
+/// ... and where the first frame's views read a copy of the records: the second
+/// frame's own recolors do not reach the first.
+const FIRST_POSE_COLOR: &str = "fn instance_color(id: u32, eye: u32) -> vec4<f32> {\n\
+    if (display.eye[eye].time_ahead > 0.0) {\n\
+        return unpack4x8unorm(instances_at(id).color);\n\
+    }\n\
+    return unpack4x8unorm(previous_instances_at(id).color);\n}\n";
 
 /// How the draw pipelines pass the second texture coordinates, in a bin that reads them.
 const SECOND_UV_ON: &str = "const SECOND_UV: bool = true;\n\

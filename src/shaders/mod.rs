@@ -74,6 +74,7 @@ const PBR: &str = include_str!("../../wgsl/shared/pbr.wgsl");
 const DRAW: &str = include_str!("../../wgsl/draw.wgsl");
 const DRAW_MULTIVIEW: &str = include_str!("../../wgsl/draw_multiview.wgsl");
 const DRAW_MOTION: &str = include_str!("../../wgsl/draw_motion.wgsl");
+const DRAW_FIRST_POSE: &str = include_str!("../../wgsl/draw_first_pose.wgsl");
 const MOTION: &str = include_str!("../../wgsl/shared/motion.wgsl");
 
 mod binding_lists;

@@ -110,7 +110,12 @@ struct Decoded {
 // that eye's half of a 2W-wide target).
 fn decode(v: VertexInput, slot: u32, eye: u32, double_wide: bool) -> Decoded {
     let id = visible[slot];
-    let inst = instances_at(id);
+    return decode_record(v, id, instances_at(id), eye, double_wide);
+}
+
+// decode of instance `id` as record `inst` holds it (a two-frame submission's first
+// frame reads a copy of the records: wgsl/draw_first_pose.wgsl).
+fn decode_record(v: VertexInput, id: u32, inst: InstanceRecord, eye: u32, double_wide: bool) -> Decoded {
     let e = display.eye[eye];
     // The view's own frame: a two-frame submission's second frame lies ahead.
     let time = frame.time + e.time_ahead;

@@ -6,7 +6,10 @@
 // position from the depth buffer's coordinates.
 
 fn vertex(v: VertexInput, slot: u32, eye: u32, double_wide: bool) -> VertexOutput {
-    let d = decode(v, slot, eye, double_wide);
+    return vertex_of(decode(v, slot, eye, double_wide), double_wide);
+}
+
+fn vertex_of(d: Decoded, double_wide: bool) -> VertexOutput {
     var out: VertexOutput;
     if (double_wide) {
         set_view_clip(&out, d);
@@ -94,7 +97,7 @@ fn fragment(in: FragmentInput, eye: u32, viewport: vec4<f32>) -> vec4<f32> {
     if (DISCARD_OUTSIDE_VIEWPORT && (any(p < viewport.xy) || any(p >= viewport.xy + viewport.zw))) {
         discard;
     }
-    let color = unpack4x8unorm(instances_at(in.ids.y).color);
+    let color = instance_color(in.ids.y, eye);
     let world = world_position(in.position, eye, viewport);
     let uv = vec2(in.normal_u.w, in.tangent_v.w);
     // Handedness is the provoking vertex's: constant across a triangle in practice

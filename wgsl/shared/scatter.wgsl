@@ -20,7 +20,10 @@ struct EditHeader {
     // Occlusion: visibility words per display slot and the slots (zeros without).
     visibility_words: u32,
     visibility_slots: u32,
-    unused: array<u32, 3>,
+    // 1: a submission's second frame; a moved sphere keeps its center and takes the
+    // edit's radius, grown on the CPU to hold both frames' spheres.
+    grow: u32,
+    unused: array<u32, 2>,
 }
 
 struct PlaceEdit {

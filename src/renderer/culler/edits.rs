@@ -84,4 +84,14 @@ impl Culler {
             }
         }
     }
+
+    /// A second frame's moved spheres, grown to hold both frames' poses, into the CPU
+    /// culler's layout, as the moves scatter writes the GPU's in its grow mode.
+    pub(in crate::renderer) fn grown(&mut self, grown: &[(u32, glam::Vec4)]) {
+        if let Kind::Cpu { layout, .. } = &mut self.kind {
+            for &(slot, sphere) in grown {
+                layout.set_sphere(layout.positions[slot as usize], sphere);
+            }
+        }
+    }
 }

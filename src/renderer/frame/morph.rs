@@ -17,6 +17,9 @@ pub(in crate::renderer) struct MorphPass {
     /// The weights (their defaults and channels; no vertices), sampled each frame.
     morphs: Morphs,
     weights: wgpu::Buffer,
+    /// A two-frame submission's second frame's weights, copied over `weights` between
+    /// the frames (a queue write would land before the first frame's dispatch).
+    next_weights: wgpu::Buffer,
     vertices: u32,
     dispatch: (u32, u32),
 }
@@ -50,6 +53,12 @@ impl MorphPass {
             "stereocull.morph_weights",
             bytemuck::cast_slice(&morphs.weights),
             storage | wgpu::BufferUsages::COPY_DST,
+        );
+        let next_weights = crate::buffers::storage_buffer(
+            device,
+            "stereocull.next_morph_weights",
+            weights.size(),
+            wgpu::BufferUsages::COPY_SRC | wgpu::BufferUsages::COPY_DST,
         );
         // No skin: a word stands in for the skins' rest, which nothing then writes.
         let stand_in = buffer("stereocull.morph_no_skin", &[0; 4], storage);
@@ -103,6 +112,7 @@ impl MorphPass {
             bind_group,
             morphs: weights_only,
             weights,
+            next_weights,
             vertices,
             dispatch,
         })
@@ -123,6 +133,26 @@ impl MorphPass {
         let bytes: &[u8] = bytemuck::cast_slice(&self.morphs.weights);
         queue.write_buffer(&self.weights, 0, bytes);
         bytes.len() as u64
+    }
+
+    /// [`MorphPass::prepare`] for a two-frame submission's second frame, at its
+    /// `time`: the weights go to [`MorphPass::encode_next`]'s copy.
+    pub(in crate::renderer) fn prepare_next(&mut self, queue: &wgpu::Queue, time: f32) -> u64 {
+        self.morphs.set_time(time);
+        let bytes: &[u8] = bytemuck::cast_slice(&self.morphs.weights);
+        queue.write_buffer(&self.next_weights, 0, bytes);
+        bytes.len() as u64
+    }
+
+    /// A two-frame submission's second morph dispatch, after its weights' copy.
+    pub(in crate::renderer) fn encode_next(
+        &self,
+        encoder: &mut wgpu::CommandEncoder,
+        rec: &mut Recorder,
+    ) -> u32 {
+        let size = self.weights.size();
+        encoder.copy_buffer_to_buffer(&self.next_weights, 0, &self.weights, 0, size);
+        self.encode(encoder, rec)
     }
 
     /// Records the frame's one morph dispatch, logged as the frame pass `morph`.

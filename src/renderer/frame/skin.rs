@@ -17,6 +17,11 @@ pub(in crate::renderer) struct SkinPass {
     bind_group: wgpu::BindGroup,
     rest: wgpu::Buffer,
     joints: wgpu::Buffer,
+    /// A two-frame submission's second frame's joint matrices where its own sync
+    /// wrote them ([`SkinPass::upload_next`]): copied over `joints` between the frames
+    /// (a queue write would land before the first frame's dispatch).
+    next: wgpu::Buffer,
+    next_ranges: Vec<Range<u32>>,
     vertices: u32,
     dispatch: (u32, u32),
 }
@@ -45,6 +50,12 @@ impl SkinPass {
             "stereocull.joint_matrices",
             bytemuck::cast_slice(&skins.joint_matrices),
             // COPY_SRC: read back by diagnostics (`joint_matrices`).
+            storage | wgpu::BufferUsages::COPY_DST | wgpu::BufferUsages::COPY_SRC,
+        );
+        let next = crate::buffers::storage_buffer(
+            device,
+            "stereocull.next_joint_matrices",
+            joints.size(),
             storage | wgpu::BufferUsages::COPY_DST | wgpu::BufferUsages::COPY_SRC,
         );
         let vertices = skins.vertices.len() as u32;
@@ -90,6 +101,8 @@ impl SkinPass {
             bind_group,
             rest,
             joints,
+            next,
+            next_ranges: Vec::new(),
             vertices,
             dispatch,
         })
@@ -107,6 +120,38 @@ impl SkinPass {
         let offset = range.start as u64 * size_of::<JointMatrix>() as u64;
         queue.write_buffer(&self.joints, offset, bytes);
         bytes.len() as u64
+    }
+
+    /// [`SkinPass::upload`] for a two-frame submission's second frame: its matrices
+    /// in `range` replace the first frame's before its dispatch
+    /// ([`SkinPass::encode_next`]).
+    pub(in crate::renderer) fn upload_next(
+        &mut self,
+        queue: &wgpu::Queue,
+        skins: &Skins,
+        range: Range<u32>,
+    ) -> u64 {
+        let matrices = &skins.joint_matrices[range.start as usize..range.end as usize];
+        let bytes: &[u8] = bytemuck::cast_slice(matrices);
+        let offset = range.start as u64 * size_of::<JointMatrix>() as u64;
+        queue.write_buffer(&self.next, offset, bytes);
+        self.next_ranges.push(range);
+        bytes.len() as u64
+    }
+
+    /// A two-frame submission's second skinning: the second frame's matrices copied
+    /// into place, then the dispatch.
+    pub(in crate::renderer) fn encode_next(
+        &mut self,
+        encoder: &mut wgpu::CommandEncoder,
+        rec: &mut Recorder,
+    ) -> u32 {
+        let size = size_of::<JointMatrix>() as u64;
+        for range in self.next_ranges.drain(..) {
+            let (at, bytes) = (range.start as u64 * size, range.len() as u64 * size);
+            encoder.copy_buffer_to_buffer(&self.next, at, &self.joints, at, bytes);
+        }
+        self.encode(encoder, rec)
     }
 
     /// Records the frame's one skinning dispatch, logged as the frame pass `skin`.
