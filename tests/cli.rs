@@ -1699,6 +1699,42 @@ fn two_frames_per_submission_write_the_next_frame_and_its_cpu_share() {
         assert_eq!(first.dimensions(), (80, 32), "{name}: one frame's two eyes");
         assert_eq!(second.dimensions(), first.dimensions(), "{name}");
     }
+    // A node animation is posed for each frame (`--posing auto` poses pairs on the
+    // CPU): the box turns between the two images.
+    let animated = support::gltf_sample("BoxAnimated", "glb");
+    let out_dir = dir.path().join("animated");
+    let out = stereocull(&[
+        "render",
+        "--scene",
+        animated.to_str().unwrap(),
+        "--viewer",
+        "0,1,6",
+        "--time",
+        "0.5",
+        "--dt",
+        "0.3",
+        "--frames-per-submit",
+        "2",
+        "--width",
+        "48",
+        "--height",
+        "48",
+        "--out",
+        out_dir.to_str().unwrap(),
+    ]);
+    assert!(
+        out.status.success(),
+        "{}",
+        String::from_utf8_lossy(&out.stderr)
+    );
+    let read = |f: &str| image::open(out_dir.join(f)).unwrap().to_rgba8();
+    let (now, next) = (read("hmd.png"), read("hmd-next.png"));
+    let turned = now
+        .pixels()
+        .zip(next.pixels())
+        .filter(|(a, b)| a != b)
+        .count();
+    assert!(turned > 20, "the box barely moved: {turned} pixels");
     let mut args = stress_args("procedural:5000", "hmd", "3");
     args.extend(["--frames-per-submit", "2"]);
     let out = stereocull(&args);

@@ -19,20 +19,7 @@ use stereocull::renderer::{
 use stereocull::rig::Rig;
 use stereocull::scene::{Animation, Scene};
 use stereocull::scene_spec;
-use support::{Tolerance, assert_images_match, gpu, sized};
-
-/// Each frame's views fill a quarter of a four-view target instead of half of a
-/// double-wide one, so the draw places their clip positions by other constants
-/// (`x * 0.25 - 0.75 w` against `x * 0.5 - 0.5 w` for the left eye) and clips them by
-/// four planes instead of one: the same triangles, but a clip position's last bit can
-/// differ, flipping the coverage of a pixel that an edge passes within a rounding step
-/// of its center (and its neighbour's depth test with it). Colors are computed from the
-/// same pixel and depth, so only edge pixels differ: at most 0.3 % of them, as for the
-/// foveated views' outer pair (`tests/foveated.rs`, the same placement).
-const PLACED: Tolerance = Tolerance {
-    levels: 0,
-    share: 0.003,
-};
+use support::{PLACED, assert_images_match, gpu, sized};
 
 /// Seconds between the frames: long enough that spinning instances visibly turn.
 const DT: f32 = 0.25;

@@ -18,17 +18,7 @@ use stereocull::renderer::{CullMode, OcclusionMode, Renderer, RendererOptions, g
 use stereocull::rig::Rig;
 use stereocull::scene::Scene;
 use stereocull::scene_spec;
-use support::{Tolerance, assert_images_match, gpu, sized};
-
-/// Each frame's views fill a quarter of the pair's target instead of half of a
-/// double-wide one: the placement's rounding (`tests/frames.rs` says why) can flip an
-/// edge pixel. The pair's first frame is skinned and posed by the same passes from the
-/// same joint matrices and records as the frame drawn alone (copied, not recomputed),
-/// so nothing else differs.
-const PLACED: Tolerance = Tolerance {
-    levels: 0,
-    share: 0.003,
-};
+use support::{PLACED, assert_images_match, gpu, sized};
 
 const DT: f32 = 0.2;
 

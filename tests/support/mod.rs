@@ -158,6 +158,23 @@ pub fn render_at(
         .collect()
 }
 
+/// A two-frame submission's frame against the frame drawn alone.
+/// Each frame's views fill a quarter of a four-view target instead of half of a
+/// double-wide one, so the draw places their clip positions by other constants
+/// (`x * 0.25 - 0.75 w` against `x * 0.5 - 0.5 w` for the left eye) and clips them by
+/// four planes instead of one: the same triangles, but a clip position's last bit can
+/// differ, flipping the coverage of a pixel that an edge passes within a rounding step
+/// of its center (and its neighbour's depth test with it). Colors are computed from the
+/// same pixel and depth, so only edge pixels differ: at most 0.3 % of them, as for the
+/// foveated views' outer pair (`tests/foveated.rs`, the same placement).
+/// Content posed apart (`tests/frames_posed.rs`) is posed and skinned by the same
+/// passes from the same joint matrices and records (copied, not recomputed): nothing
+/// else differs.
+pub const PLACED: Tolerance = Tolerance {
+    levels: 0,
+    share: 0.003,
+};
+
 /// How far two images may differ: a pixel differs when a channel differs by more
 /// than `levels`; at most `share` of the pixels may differ.
 #[derive(Clone, Copy, Debug)]

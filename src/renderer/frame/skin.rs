@@ -115,11 +115,7 @@ impl SkinPass {
         skins: &Skins,
         range: Range<u32>,
     ) -> u64 {
-        let matrices = &skins.joint_matrices[range.start as usize..range.end as usize];
-        let bytes: &[u8] = bytemuck::cast_slice(matrices);
-        let offset = range.start as u64 * size_of::<JointMatrix>() as u64;
-        queue.write_buffer(&self.joints, offset, bytes);
-        bytes.len() as u64
+        write_matrices(queue, &self.joints, skins, range)
     }
 
     /// [`SkinPass::upload`] for a two-frame submission's second frame: its matrices
@@ -131,12 +127,8 @@ impl SkinPass {
         skins: &Skins,
         range: Range<u32>,
     ) -> u64 {
-        let matrices = &skins.joint_matrices[range.start as usize..range.end as usize];
-        let bytes: &[u8] = bytemuck::cast_slice(matrices);
-        let offset = range.start as u64 * size_of::<JointMatrix>() as u64;
-        queue.write_buffer(&self.next, offset, bytes);
-        self.next_ranges.push(range);
-        bytes.len() as u64
+        self.next_ranges.push(range.clone());
+        write_matrices(queue, &self.next, skins, range)
     }
 
     /// A two-frame submission's second skinning: the second frame's matrices copied
@@ -178,4 +170,19 @@ impl SkinPass {
     pub(in crate::renderer) fn vertices(&self) -> u32 {
         self.vertices
     }
+}
+
+/// Writes `skins`' joint matrices in `range` into `buffer` at their place; returns the
+/// bytes.
+fn write_matrices(
+    queue: &wgpu::Queue,
+    buffer: &wgpu::Buffer,
+    skins: &Skins,
+    range: Range<u32>,
+) -> u64 {
+    let matrices = &skins.joint_matrices[range.start as usize..range.end as usize];
+    let bytes: &[u8] = bytemuck::cast_slice(matrices);
+    let offset = range.start as u64 * size_of::<JointMatrix>() as u64;
+    queue.write_buffer(buffer, offset, bytes);
+    bytes.len() as u64
 }
