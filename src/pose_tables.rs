@@ -105,6 +105,24 @@ pub struct PoseTargetRecord {
     pub unused: [u32; 2],
 }
 
+/// The pose pass's uniform (`PoseParams`, 20 bytes): the dispatches' rows and counts,
+/// and how far ahead of the frame context's time it poses.
+#[repr(C)]
+#[derive(Clone, Copy, Debug, PartialEq, Pod, Zeroable)]
+pub struct PoseParamsRecord {
+    /// Invocations per row of the node dispatches (x workgroups times [`POSE_GROUP`]).
+    pub node_row: u32,
+    /// ... and of the target dispatches.
+    pub target_row: u32,
+    /// The nodes (the buffers may be longer).
+    pub nodes: u32,
+    /// The targets.
+    pub targets: u32,
+    /// Seconds after the frame context's time: 0, or a two-frame submission's `dt` for
+    /// its second frame's pose.
+    pub ahead: f32,
+}
+
 /// One joint of a skin (`SkinJoint`, 80 bytes).
 #[repr(C)]
 #[derive(Clone, Copy, Debug, PartialEq, Pod, Zeroable)]

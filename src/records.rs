@@ -55,13 +55,30 @@ pub struct EditHeader {
     pub visibility_words: u32,
     /// With occlusion, the display slots that have visibility words; else zero.
     pub visibility_slots: u32,
-    /// 1 for a submission's second frame (moves only): each moved sphere keeps its
-    /// center and takes the edit's radius, which the CPU grew to hold the sphere of
-    /// both frames ([`crate::renderer`]'s `pair_spheres`); 0: the edit's sphere.
+    /// How a moved sphere is written (moves only): [`EditHeader::EXACT`] the edit's;
+    /// for a two-frame submission's second frame, grown to hold both frames' spheres
+    /// about the first frame's center, by the radius the CPU computed
+    /// ([`EditHeader::GROWN_GIVEN`], edits from the CPU) or by one measured here
+    /// ([`EditHeader::GROWN_MEASURED`], the pose pass's).
     pub grow: u32,
     /// Zeros (the header is 32 bytes).
     pub unused: [u32; 2],
 }
+
+impl EditHeader {
+    /// Each moved sphere is the edit's.
+    pub const EXACT: u32 = 0;
+    /// Grown about the sphere's center to the edit's radius (the CPU's).
+    pub const GROWN_GIVEN: u32 = 1;
+    /// Grown about the sphere's center to hold the edit's sphere, measured on the GPU.
+    pub const GROWN_MEASURED: u32 = 2;
+}
+
+/// Relative margin of a grown radius over its computed reach
+/// ([`crate::renderer::grown`], `wgsl/scatter_moves.wgsl`): the distance between the
+/// centers is rounded (a few ulps; this is 8), and the grown sphere must hold the second
+/// frame's sphere whatever the rounding.
+pub const GROWN_SLACK: f32 = 1e-6;
 
 /// A moved instance as the moves scatter takes it (56 bytes): the slot
 /// ([`Places::VACANT`]: void, its instance removed after an earlier sync staged it), the

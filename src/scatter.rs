@@ -95,7 +95,7 @@ impl Scatters {
     /// both frames' poses ([`EditHeader::grow`]).
     pub fn second_frame(device: &wgpu::Device, windows: Windows) -> Scatters {
         let mut scatters = Scatters::new(device, windows);
-        scatters.moves.grow = true;
+        scatters.moves.grow = EditHeader::GROWN_GIVEN;
         scatters
     }
 
@@ -166,8 +166,8 @@ pub struct Scatter<E: Edit> {
     index: Vec<u32>,
     indexed: bool,
     spheres_too: bool,
-    /// Moves of a submission's second frame ([`EditHeader::grow`]).
-    grow: bool,
+    /// How moved spheres are written ([`EditHeader::grow`]).
+    grow: u32,
     visibility: (u32, u32),
     max_groups: u32,
 }
@@ -175,6 +175,7 @@ pub struct Scatter<E: Edit> {
 /// Where the edits go: the instance records, and the spheres in cull order with each
 /// slot's cull position, each place's slot and each mesh's local bounds (the GPU
 /// culler's, or `None` when culling on the CPU).
+#[derive(Clone, Copy)]
 pub struct ScatterTargets<'a> {
     pub instances: &'a wgpu::Buffer,
     /// The spheres, positions, order, mesh bounds and occlusion words.
@@ -204,7 +205,7 @@ impl<E: Edit> Scatter<E> {
             index: Vec::new(),
             indexed: false,
             spheres_too: false,
-            grow: false,
+            grow: EditHeader::EXACT,
             visibility: (0, 0),
             max_groups: device.limits().max_compute_workgroups_per_dimension,
         }
@@ -353,7 +354,7 @@ impl<E: Edit> Scatter<E> {
             groups_x: self.groups().0,
             visibility_words: self.visibility.0,
             visibility_slots: self.visibility.1,
-            grow: u32::from(self.grow),
+            grow: self.grow,
             unused: [0; 2],
         }
     }
@@ -401,10 +402,11 @@ pub struct GpuMoves {
 }
 
 impl GpuMoves {
-    /// The scatter of `count` GPU-written moves into `targets`, bound in `windows`.
+    /// The scatter of `count` GPU-written moves into `targets`, bound in `windows`,
+    /// their spheres written as `grow` says ([`EditHeader::grow`]).
     pub fn new(
         device: &wgpu::Device,
-        windows: Windows,
+        (windows, grow): (Windows, u32),
         count: u32,
         targets: ScatterTargets,
     ) -> GpuMoves {
@@ -421,7 +423,7 @@ impl GpuMoves {
             groups_x: groups.0,
             visibility_words: targets.visibility.0,
             visibility_slots: targets.visibility.1,
-            grow: 0,
+            grow,
             unused: [0; 2],
         };
         let mut contents = bytemuck::bytes_of(&header).to_vec();

@@ -1699,8 +1699,7 @@ fn two_frames_per_submission_write_the_next_frame_and_its_cpu_share() {
         assert_eq!(first.dimensions(), (80, 32), "{name}: one frame's two eyes");
         assert_eq!(second.dimensions(), first.dimensions(), "{name}");
     }
-    // A node animation is posed for each frame (`--posing auto` poses pairs on the
-    // CPU): the box turns between the two images.
+    // A node animation is posed for each frame: the box turns between the two images.
     let animated = support::gltf_sample("BoxAnimated", "glb");
     let out_dir = dir.path().join("animated");
     let out = stereocull(&[

@@ -14,7 +14,7 @@ use stereocull::device::Gpu;
 use stereocull::error::Error;
 use stereocull::live::LiveScene;
 use stereocull::readback::read_rgba8;
-use stereocull::renderer::{CullMode, OcclusionMode, Renderer, RendererOptions, grown};
+use stereocull::renderer::{CullMode, OcclusionMode, PosingMode, Renderer, RendererOptions, grown};
 use stereocull::rig::Rig;
 use stereocull::scene::Scene;
 use stereocull::scene_spec;
@@ -122,6 +122,100 @@ fn posed_content_is_drawn_at_each_frames_time() {
                     "{label}: the frames alone barely differ"
                 );
             }
+        }
+    }
+}
+
+/// Morph targets are morphed for each frame at its time: the grid of
+/// `support::morph`, its weights played by a linear and a cubic animation, GPU and CPU
+/// culls, against each frame drawn alone.
+#[test]
+fn morph_targets_are_morphed_at_each_frames_time() {
+    let gpu = gpu();
+    let dir = tempfile::tempdir().unwrap();
+    let path = dir.path().join("morph.glb");
+    std::fs::write(&path, support::morph::morph_file()).unwrap();
+    let scene = load(path.to_str().unwrap());
+    let mut rig = sized("hmd", 96, 80);
+    rig.viewer.position = [0.0, 0.5, 2.2];
+    for cull in [CullMode::Gpu, CullMode::Cpu] {
+        let mut live = LiveScene::new(scene.clone());
+        let mut renderer =
+            Renderer::new(&gpu.device, live.scene(), &rig, options(cull, 2)).unwrap();
+        let pair = render_pair(&gpu, &mut renderer, &mut live, (&rig, 0.9), &|_| {});
+        let morphs = (renderer.passes().iter()).filter(|p| p.name == "morph");
+        assert_eq!(morphs.count(), 2, "one morph pass per frame");
+        let first = alone(&gpu, &scene, &rig, cull, 0.9);
+        let second = alone(&gpu, &scene, &rig, cull, 0.9 + DT);
+        let label = format!("morph-{cull:?}");
+        assert_images_match(&format!("{label}-now"), &pair[0].0, &first[0], PLACED);
+        assert_images_match(&format!("{label}-next"), &pair[0].1, &second[0], PLACED);
+        let apart = (first[0].pixels().zip(second[0].pixels())).filter(|(p, q)| p != q);
+        assert!(apart.count() > 20, "{label}: the weights barely moved");
+    }
+}
+
+/// Posed on the GPU, the pose pass poses the second frame `dt` ahead: each frame of the
+/// pair equals the GPU-posed frame drawn alone at its time (BoxAnimated on `hmd`, a
+/// crowd on `hmd` and `cave`), and every posed sphere holds both frames' poses.
+#[test]
+fn the_pose_pass_poses_each_frame_at_its_time() {
+    let gpu = gpu();
+    let posing = |frames| RendererOptions {
+        posing: PosingMode::Gpu,
+        ..options(CullMode::Gpu, frames)
+    };
+    let scenes = [
+        ("box", sample("BoxAnimated", "glb"), [0.0, 1.0, 6.0], "hmd"),
+        ("crowd", load("crowd:40:4"), [0.0, 1.6, 0.0], "hmd"),
+        ("crowd", load("crowd:40:4"), [0.0, 1.6, 0.0], "cave"),
+    ];
+    let mut rng = Pcg64Mcg::seed_from_u64(46);
+    for (name, scene, viewer, preset) in scenes {
+        let mut rig = sized(preset, 96, 80);
+        rig.viewer.position = viewer;
+        let time = rng.random_range(0.2..2.0);
+        let mut renderer = Renderer::new(&gpu.device, &scene, &rig, posing(2)).unwrap();
+        let targets = renderer.create_targets(&gpu.device);
+        renderer
+            .prepare_pair(&gpu.queue, (&rig, time), (&rig, time + DT))
+            .unwrap();
+        let mut encoder = gpu.device.create_command_encoder(&Default::default());
+        let views: Vec<_> = targets.iter().map(|t| t.views()).collect();
+        renderer.encode(&mut encoder, &views, None).unwrap();
+        gpu.queue.submit([encoder.finish()]);
+        let alone = |t| support::render_at(&gpu, &scene, &rig, posing(1), t).unwrap();
+        let (first, second) = (alone(time), alone(time + DT));
+        for (d, target) in targets.iter().enumerate() {
+            let both = read_rgba8(&gpu.device, &gpu.queue, &target.color).unwrap();
+            let (w, h) = (both.width() / 2, both.height());
+            let half = |x| imageops::crop_imm(&both, x, 0, w, h).to_image();
+            let label = format!("gpu-posed-{name}-{preset}-{d}");
+            assert_images_match(&format!("{label}-now"), &half(0), &first[d], PLACED);
+            assert_images_match(&format!("{label}-next"), &half(w), &second[d], PLACED);
+            let apart = (first[d].pixels().zip(second[d].pixels())).filter(|(p, q)| p != q);
+            assert!(
+                d > 0 || apart.count() > 20,
+                "{label}: the frames barely differ"
+            );
+        }
+        // Each posed sphere holds the first pose's sphere and the second's.
+        let spheres = |t: f32| {
+            let mut posed = scene.clone();
+            posed.pose(t);
+            (posed.instances.iter())
+                .map(|i| posed.world_sphere(i))
+                .collect::<Vec<_>>()
+        };
+        let (at_first, at_second) = (spheres(time), spheres(time + DT));
+        let read = renderer.diagnostics(&gpu.device, &gpu.queue).spheres();
+        for (k, s) in read.unwrap().unwrap().iter().enumerate() {
+            let s = Vec4::from(*s);
+            let holds = |o: Vec4| s.truncate().distance(o.truncate()) + o.w <= s.w * 1.0001;
+            assert!(
+                holds(at_first[k]) && holds(at_second[k]),
+                "{name} {preset}: instance {k}'s sphere {s} misses a pose"
+            );
         }
     }
 }
@@ -283,11 +377,6 @@ fn what_the_second_frame_cannot_change_alone_is_refused() {
         Err(e) => panic!("{why}: {e}"),
         Ok(_) => panic!("{why}: not refused"),
     };
-    let gpu_posing = RendererOptions {
-        posing: stereocull::renderer::PosingMode::Gpu,
-        ..options(CullMode::Gpu, 2)
-    };
-    refused(gpu_posing, "--posing cpu");
     let shadows = RendererOptions {
         shadows: true,
         ..options(CullMode::Gpu, 2)

@@ -957,7 +957,7 @@ fn skin_records_match_wgsl() {
 #[test]
 fn pose_records_match_wgsl() {
     use stereocull::pose_tables::{
-        PoseChannelRecord, PoseNodeRecord, PoseTargetRecord, SkinJointRecord,
+        PoseChannelRecord, PoseNodeRecord, PoseParamsRecord, PoseTargetRecord, SkinJointRecord,
     };
     let module = parse("pose", &stereocull::shaders::pose_source());
     let check = |name: &str, size: usize, rust: &[(&str, usize)]| {
@@ -980,6 +980,17 @@ fn pose_records_match_wgsl() {
             ("translation", offset_of!(PoseNodeRecord, translation)),
             ("rotation", offset_of!(PoseNodeRecord, rotation)),
             ("scale", offset_of!(PoseNodeRecord, scale)),
+        ],
+    );
+    check(
+        "PoseParams",
+        size_of::<PoseParamsRecord>(),
+        &[
+            ("node_row", offset_of!(PoseParamsRecord, node_row)),
+            ("target_row", offset_of!(PoseParamsRecord, target_row)),
+            ("nodes", offset_of!(PoseParamsRecord, nodes)),
+            ("targets", offset_of!(PoseParamsRecord, targets)),
+            ("ahead", offset_of!(PoseParamsRecord, ahead)),
         ],
     );
     check(

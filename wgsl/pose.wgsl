@@ -74,13 +74,16 @@ struct PoseParams {
     // The counts (the buffers may be longer).
     nodes: u32,
     targets: u32,
+    // Seconds after the frame's time: a two-frame submission's second pose is dt ahead.
+    ahead: f32,
 }
 
 
-// Clip time: the frame's time at the clip's pace and phase, looped over its duration
-// (Clip::looped: rem_euclid).
+// Clip time: the pose's time (the frame's, or the second frame's of two) at the clip's
+// pace and phase, looped over its duration (Clip::looped: rem_euclid). The sum is the
+// second frame's time to the bit: the CPU adds the same two f32.
 fn clip_time(c: PoseChannel) -> f32 {
-    let t = frame.time * c.speed + c.offset;
+    let t = (frame.time + params.ahead) * c.speed + c.offset;
     if (c.duration <= 0.0) {
         return 0.0;
     }

@@ -31,9 +31,26 @@ fn scatter(@builtin(workgroup_id) wid: vec3<u32>, @builtin(local_invocation_inde
             center[r] = m.x * l.x + m.y * l.y + m.z * l.z + m.w;
         }
         let at = positions[edit.slot];
-        // A second frame's move: the first frame's center, with a radius that holds
-        // both poses (computed on the CPU, as is every radius).
-        let kept = spheres_at(at).xyz;
-        spheres_set(at, vec4(select(center, kept, edits.header.grow != 0u), edit.radius));
+        spheres_set(at, written(spheres_at(at), center, edit.radius));
+    }
+}
+
+// The sphere a move writes over `was`: its own (center, radius), or for a two-frame
+// submission's second frame one about the first frame's center that holds both
+// frames' spheres (src/renderer/second_frame.rs). Edits from the CPU bring that
+// radius (GROWN_GIVEN: the CPU culler takes the same bytes); the pose pass's are grown
+// here (GROWN_MEASURED: posing on the GPU has no CPU twin), as renderer::grown does.
+fn written(was: vec4<f32>, center: vec3<f32>, radius: f32) -> vec4<f32> {
+    switch edits.header.grow {
+        case GROWN_GIVEN: {
+            return vec4(was.xyz, radius);
+        }
+        case GROWN_MEASURED: {
+            let reach = distance(was.xyz, center) + radius;
+            return vec4(was.xyz, max(was.w, reach * (1.0 + GROWN_SLACK)));
+        }
+        default: {
+            return vec4(center, radius);
+        }
     }
 }

@@ -232,7 +232,7 @@ fn open(args: &ClusterArgs, rank: u32, ranks: u32) -> Result<Node> {
     let head = match rank {
         0 => {
             let scene = args.scene.load_scene()?;
-            let posing = (args.scene.posing).resolve(args.cull, args.scene.frames_per_submit);
+            let posing = args.scene.posing.resolve(args.cull);
             let live = super::edits::live_copy(&scene, &args.edits, posing)?;
             Some(Head {
                 live,

@@ -184,11 +184,10 @@ pub enum PosingArg {
 }
 
 impl PosingArg {
-    /// The renderer's posing for a cull on `cull` and `frames` per submission (`auto`
-    /// poses two frames on the CPU: the pose pass poses one time per submission).
-    pub fn resolve(self, cull: CullMode, frames: u32) -> PosingMode {
-        match (self, cull, frames) {
-            (PosingArg::Gpu, _, _) | (PosingArg::Auto, CullMode::Gpu, 1) => PosingMode::Gpu,
+    /// The renderer's posing for a cull on `cull`.
+    pub fn resolve(self, cull: CullMode) -> PosingMode {
+        match (self, cull) {
+            (PosingArg::Gpu, _) | (PosingArg::Auto, CullMode::Gpu) => PosingMode::Gpu,
             _ => PosingMode::Cpu,
         }
     }

@@ -125,7 +125,7 @@ pub fn profile(args: &ProfileArgs) -> Result<()> {
                     );
                     continue;
                 }
-                let posing = posing.resolve(cull, frames);
+                let posing = posing.resolve(cull);
                 if posing == PosingMode::Gpu && cull == CullMode::Cpu {
                     println!(
                         "skipped {} with a CPU cull: posing on the GPU needs the GPU cull",

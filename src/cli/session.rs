@@ -93,7 +93,7 @@ impl Session {
         let mut options = RendererOptions {
             cull,
             mode,
-            posing: args.posing.resolve(cull, args.frames_per_submit),
+            posing: args.posing.resolve(cull),
             ..args.options()
         };
         let counts = gpu.sample_counts(options.color_format);

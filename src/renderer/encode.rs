@@ -248,7 +248,8 @@ impl Renderer {
         }
         let posed = match (&self.pose, second) {
             (Some(pose), false) => pose.encode(encoder, rec),
-            _ => 0,
+            (Some(pose), true) => pose.encode_next(encoder, rec),
+            (None, _) => 0,
         };
         let morphed = match (&self.morph, second) {
             (Some(morph), false) => morph.encode(encoder, rec),

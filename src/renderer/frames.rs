@@ -11,7 +11,7 @@
 
 use crate::contexts::DisplayContext;
 use crate::error::{Error, Result};
-use crate::renderer::options::{OcclusionMode, PosingMode, RendererOptions, StereoMode};
+use crate::renderer::options::{OcclusionMode, RendererOptions, StereoMode};
 use crate::rig::{Display, ResolvedRig, Rig, ViewLayout, VisibilityMask};
 use crate::scene::Scene;
 
@@ -113,8 +113,8 @@ fn unjoined_option(options: &RendererOptions) -> Option<&'static str> {
 }
 
 /// The rig and scene content whose second frame cannot be drawn so: a foveated
-/// display's views, and posed content ([`super::second_frame`]) where the pose or the
-/// shadow is one per submission.
+/// display's views, and posed content ([`super::second_frame`]) where the lights or the
+/// shadow are one per submission.
 fn unjoined_content(scene: &Scene, rig: &Rig, options: &RendererOptions) -> Option<&'static str> {
     if rig.displays.iter().any(|d| d.views() > 2) {
         return Some(
@@ -128,11 +128,6 @@ fn unjoined_content(scene: &Scene, rig: &Rig, options: &RendererOptions) -> Opti
     if !scene.posing.lights.is_empty() {
         return Some(
             "lights on animated nodes light both frames of a submission as one set: posed once per submission",
-        );
-    }
-    if options.posing == PosingMode::Gpu {
-        return Some(
-            "posing on the GPU poses one time per submission (its pass does not yet pose the second frame): use --posing cpu, which poses each frame in its own sync",
         );
     }
     options.shadows.then_some(

@@ -24,14 +24,10 @@
 use glam::Vec4;
 
 use crate::live::{Changes, MoveEdit};
+use crate::records::GROWN_SLACK;
 use crate::scatter::Scatters;
 use crate::scene::Scene;
 use crate::shaders::Windows;
-
-/// Relative margin of a grown radius over its computed reach: the distance between
-/// the centers is rounded (a few ulps; this is 8), and the grown sphere must hold the
-/// second frame's sphere whatever the rounding.
-const GROWN_SLACK: f32 = 1e-6;
 
 /// What a renderer of two frames per submission keeps for its second frame.
 pub(super) struct SecondFrame {

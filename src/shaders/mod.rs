@@ -123,6 +123,7 @@ pub enum EditKind {
 /// The scatter pass's source for `kind`'s edits: one module per kind, each
 /// declaring its own `Edits`.
 pub fn scatter_source(windows: &Windows, kind: EditKind) -> String {
+    use crate::records::EditHeader;
     let bindings = declarations(&SCATTER_BINDINGS, 0, windows);
     let body = match kind {
         EditKind::Places => include_str!("../../wgsl/scatter_places.wgsl"),
@@ -131,8 +132,14 @@ pub fn scatter_source(windows: &Windows, kind: EditKind) -> String {
     };
     let shared = include_str!("../../wgsl/shared/scatter.wgsl");
     let rig = MAX_RIG_VIEWS;
+    let grow = format!(
+        "const GROWN_GIVEN: u32 = {}u;\nconst GROWN_MEASURED: u32 = {}u;\nconst GROWN_SLACK: f32 = {:?};\n",
+        EditHeader::GROWN_GIVEN,
+        EditHeader::GROWN_MEASURED,
+        crate::records::GROWN_SLACK,
+    );
     let span = format!(
-        "const VISIBILITY_SPAN: u32 = {SPAN}u;\nconst MAX_RIG_VIEWS: u32 = {rig}u;\n{}",
+        "const VISIBILITY_SPAN: u32 = {SPAN}u;\nconst MAX_RIG_VIEWS: u32 = {rig}u;\n{grow}{}",
         hidden_constant()
     );
     [&span, RECORDS, &bindings, shared, body].concat()

@@ -7,6 +7,7 @@
 
 pub mod glb;
 pub mod ktx2;
+pub mod morph;
 pub mod room;
 
 use std::path::PathBuf;

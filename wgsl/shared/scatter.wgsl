@@ -20,8 +20,7 @@ struct EditHeader {
     // Occlusion: visibility words per display slot and the slots (zeros without).
     visibility_words: u32,
     visibility_slots: u32,
-    // 1: a submission's second frame; a moved sphere keeps its center and takes the
-    // edit's radius, grown on the CPU to hold both frames' spheres.
+    // How a moved sphere is written (scatter_moves.wgsl's `written`).
     grow: u32,
     unused: array<u32, 2>,
 }

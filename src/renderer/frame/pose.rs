@@ -12,7 +12,8 @@ use crate::scene::Scene;
 use std::collections::HashMap;
 
 use crate::places::Places;
-use crate::pose_tables::{POSE_GROUP, PoseTables, PoseTargetRecord};
+use crate::pose_tables::{POSE_GROUP, PoseParamsRecord, PoseTables, PoseTargetRecord};
+use crate::records::EditHeader;
 use crate::scatter::{GpuMoves, ScatterTargets};
 use crate::shaders::{
     POSE_BINDINGS, Windows, bind_group, bind_group_layout, dispatch_size, pipeline_layout,
@@ -22,21 +23,32 @@ use crate::shaders::{
 /// The pass's pipelines, tables and bindings.
 pub(in crate::renderer) struct PosePass {
     pipelines: [wgpu::ComputePipeline; 3],
-    /// One group for its three entry points (`POSE_BINDINGS`).
-    bind_group: wgpu::BindGroup,
+    /// The frame's pose: one group for its three entry points (`POSE_BINDINGS`), and
+    /// the scatter of its moves.
+    first: PoseAt,
+    /// A two-frame submission's second pose, `dt` ahead: the same tables, its own
+    /// parameters and moves, which grow each sphere to hold both poses.
+    second: Option<PoseAt>,
     dispatches: [(u32, u32); 3],
-    moves: GpuMoves,
     /// Each posed slot's target (to void a removed instance's).
     targets_of: HashMap<u32, u32>,
     targets: wgpu::Buffer,
     gpu_bytes: u64,
 }
 
-/// Where the pass writes: the skins' joint matrices and the scatter's targets.
+/// One pose's bindings and the scatter of its moves.
+struct PoseAt {
+    bind_group: wgpu::BindGroup,
+    moves: GpuMoves,
+}
+
+/// Where the pass writes: the skins' joint matrices and the scatter's targets; and,
+/// for two frames per submission, the second frame's `dt`.
 pub(in crate::renderer) struct PoseOutputs<'a> {
     pub joint_matrices: &'a wgpu::Buffer,
     pub scatter: ScatterTargets<'a>,
     pub windows: Windows,
+    pub second_ahead: Option<f32>,
 }
 
 impl PosePass {
@@ -70,40 +82,51 @@ impl PosePass {
         let (node_count, target_count) = (tables.nodes.len() as u32, tables.targets.len() as u32);
         let node_groups = dispatch_size(node_count.div_ceil(POSE_GROUP), max);
         let target_groups = dispatch_size(target_count.div_ceil(POSE_GROUP), max);
-        let params = [
-            node_groups.0 * POSE_GROUP,
-            target_groups.0 * POSE_GROUP,
-            node_count,
-            target_count,
-        ];
-        let params = init_buffer(
-            device,
-            "stereocull.pose_params",
-            cast(&params),
-            wgpu::BufferUsages::UNIFORM,
-        );
-        let moves = GpuMoves::new(device, outputs.windows, target_count, outputs.scatter);
+        let params = PoseParamsRecord {
+            node_row: node_groups.0 * POSE_GROUP,
+            target_row: target_groups.0 * POSE_GROUP,
+            nodes: node_count,
+            targets: target_count,
+            ahead: 0.0,
+        };
         let module = device.create_shader_module(wgpu::ShaderModuleDescriptor {
             label: Some("stereocull.pose"),
             source: wgpu::ShaderSource::Wgsl(pose_source().into()),
         });
-        let buffers = [
-            frame,
-            &nodes,
-            &channels,
-            &times,
-            &values,
-            &locals,
-            &worlds,
-            &targets,
-            &joints,
-            outputs.joint_matrices,
-            moves.edits(),
-            &params,
-        ];
         let (label, whole) = ("stereocull.pose", &Windows::WHOLE);
         let layout = bind_group_layout(device, label, &POSE_BINDINGS, whole);
-        let bind_group = bind_group(device, label, &layout, &POSE_BINDINGS, whole, buffers);
+        let at = |ahead: f32, grow: u32| {
+            let params = init_buffer(
+                device,
+                "stereocull.pose_params",
+                bytemuck::bytes_of(&PoseParamsRecord { ahead, ..params }),
+                wgpu::BufferUsages::UNIFORM,
+            );
+            let moves = GpuMoves::new(
+                device,
+                (outputs.windows, grow),
+                target_count,
+                outputs.scatter,
+            );
+            let all = [
+                frame,
+                &nodes,
+                &channels,
+                &times,
+                &values,
+                &locals,
+                &worlds,
+                &targets,
+                &joints,
+                outputs.joint_matrices,
+                moves.edits(),
+                &params,
+            ];
+            let bind_group = bind_group(device, label, &layout, &POSE_BINDINGS, whole, all);
+            PoseAt { bind_group, moves }
+        };
+        let first = at(0.0, EditHeader::EXACT);
+        let second = (outputs.second_ahead).map(|dt| at(dt, EditHeader::GROWN_MEASURED));
         let pipeline_layout = pipeline_layout(device, label, &layout);
         let pipelines = ["locals_main", "worlds_main", "targets_main"].map(|entry| {
             device.create_compute_pipeline(&wgpu::ComputePipelineDescriptor {
@@ -117,9 +140,9 @@ impl PosePass {
         });
         PosePass {
             pipelines,
-            bind_group,
+            first,
+            second,
             dispatches: [node_groups, node_groups, target_groups],
-            moves,
             targets_of: (tables.targets.iter().enumerate())
                 .filter(|(_, t)| t.slot != Places::VACANT)
                 .map(|(k, t)| (t.slot, k as u32))
@@ -148,14 +171,36 @@ impl PosePass {
         encoder: &mut wgpu::CommandEncoder,
         rec: &mut Recorder,
     ) -> u32 {
+        self.encode_at(&self.first, encoder, rec)
+    }
+
+    /// Records a two-frame submission's second pose, `dt` ahead (none for a pass made
+    /// without one); returns its dispatches.
+    pub(in crate::renderer) fn encode_next(
+        &self,
+        encoder: &mut wgpu::CommandEncoder,
+        rec: &mut Recorder,
+    ) -> u32 {
+        match &self.second {
+            Some(second) => self.encode_at(second, encoder, rec),
+            None => 0,
+        }
+    }
+
+    fn encode_at(
+        &self,
+        at: &PoseAt,
+        encoder: &mut wgpu::CommandEncoder,
+        rec: &mut Recorder,
+    ) -> u32 {
         let (mut pass, open) = rec.frame_pass(encoder, "pose");
         for k in 0..3 {
             pass.set_pipeline(&self.pipelines[k]);
-            pass.set_bind_group(0, &self.bind_group, &[]);
+            pass.set_bind_group(0, &at.bind_group, &[]);
             let (x, y) = self.dispatches[k];
             pass.dispatch_workgroups(x, y, 1);
         }
-        self.moves.encode(&mut pass);
+        at.moves.encode(&mut pass);
         rec.close_frame_pass(encoder, pass, open);
         4
     }
@@ -204,6 +249,7 @@ pub(in crate::renderer) fn build(
         joint_matrices,
         scatter: gpu.scatter,
         windows: gpu.windows,
+        second_ahead: (options.frames_per_submit == 2).then_some(options.dt),
     };
     Ok(Some(PosePass::new(device, &tables, gpu.frame, outputs)))
 }
