@@ -1776,6 +1776,65 @@ fn two_frames_per_submission_write_the_next_frame_and_its_cpu_share() {
     );
 }
 
+/// `profile --keep-unchanged off,on`: its viewer holds still, so the `on` rows redraw
+/// only the tiles their moved instances changed after the first (warm-up) frame, and
+/// the comparison against the `off` rows is printed; a mode that never keeps is
+/// skipped with its reason.
+#[test]
+fn profile_compares_keeping_unchanged_pixels_with_drawing_whole() {
+    let dir = tempfile::tempdir().unwrap();
+    let out = stereocull(&[
+        "profile",
+        "--instances",
+        "2000",
+        "--rig",
+        "hmd",
+        "--modes",
+        "instanced,multi-pass",
+        "--cull",
+        "cpu",
+        "--moving",
+        "1",
+        "--keep-unchanged",
+        "off,on",
+        "--frames",
+        "3",
+        "--warmup",
+        "1",
+        "--width",
+        "64",
+        "--height",
+        "64",
+        "--out",
+        dir.path().to_str().unwrap(),
+    ]);
+    let text = String::from_utf8_lossy(&out.stdout);
+    assert!(
+        out.status.success(),
+        "{}",
+        String::from_utf8_lossy(&out.stderr)
+    );
+    assert!(text.contains("unchanged pixels kept"), "{text}");
+    assert!(
+        text.contains("skipped multi-pass with --keep-unchanged on"),
+        "{text}"
+    );
+    let rows: Value =
+        serde_json::from_slice(&std::fs::read(dir.path().join("profile.json")).unwrap()).unwrap();
+    let rows = rows.as_array().unwrap();
+    assert_eq!(rows.len(), 3, "instanced off and on, multi-pass off");
+    for r in rows {
+        let tiles = r["tiles_changed_median"].as_f64().unwrap();
+        match r["keep_unchanged"].as_str().unwrap() {
+            "on" => {
+                assert_eq!(r["whole_redraws"], 0, "every timed frame keeps: {r}");
+                assert!(tiles > 0.0 && tiles <= 32.0, "two eyes of 4 x 4 tiles: {r}");
+            }
+            _ => assert_eq!(tiles, 0.0, "{r}"),
+        }
+    }
+}
+
 /// `stress --still --keep-unchanged on` redraws only the changed tiles after its first
 /// frame and reports them; what never keeps is refused with one line.
 #[test]

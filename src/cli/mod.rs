@@ -11,6 +11,7 @@ mod occlusion_report;
 mod profile;
 mod profile_args;
 mod profile_measure;
+mod profile_ratios;
 mod profile_report;
 mod render;
 mod session;

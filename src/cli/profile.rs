@@ -6,13 +6,14 @@ use indicatif::{ProgressBar, ProgressStyle};
 use super::edits::EditArgs;
 pub use super::profile_args::ProfileArgs;
 use super::profile_measure::{Config, measure};
+use super::profile_ratios::{print_frames, print_keep};
 use super::profile_report::{
-    price_edits, price_occlusion, print_frames, print_glass, print_occlusion, print_table,
-    write_csv,
+    price_edits, price_occlusion, print_glass, print_occlusion, print_table, write_csv,
 };
 use super::{chart, write_json};
 use crate::device::{Gpu, list_counts};
 use crate::error::{Error, Result};
+use crate::keep::KeepUnchanged;
 use crate::procedural;
 use crate::profiling::{GpuTimer, write_trace};
 use crate::renderer::{CullMode, PosingMode, RendererOptions, StereoMode};
@@ -61,7 +62,8 @@ pub fn profile(args: &ProfileArgs) -> Result<()> {
         * args.inset_cull.len()
         * args.occlusion.len()
         * args.posing.len()
-        * args.frames_per_submit.len();
+        * args.frames_per_submit.len()
+        * args.keep_unchanged.len();
     let total = (rigs.len() * args.instances.len() * configs.len() * variants) as u64
         * (args.frames + args.warmup) as u64;
     let bar = ProgressBar::new(total);
@@ -94,10 +96,14 @@ pub fn profile(args: &ProfileArgs) -> Result<()> {
                 .flat_map(|v| args.occlusion.iter().map(move |o| (v, *o)))
                 .flat_map(|v| args.posing.iter().map(move |p| (v, *p)))
                 .flat_map(|v| args.frames_per_submit.iter().map(move |f| (v, *f)))
+                .flat_map(|v| args.keep_unchanged.iter().map(move |k| (v, *k)))
                 .collect();
             for (
                 &(mode, cull),
-                &(((((moving, (coarse, rig_cull), far), inset), occlusion), posing), frames),
+                &(
+                    (((((moving, (coarse, rig_cull), far), inset), occlusion), posing), frames),
+                    keep,
+                ),
             ) in configs
                 .iter()
                 .flat_map(|c| variants.iter().map(move |v| (c, v)))
@@ -150,8 +156,15 @@ pub fn profile(args: &ProfileArgs) -> Result<()> {
                     },
                     glass,
                     frames,
+                    keep,
                 };
-                rows.push(measure(&gpu, &scene, &config, args, timer.as_mut(), &bar)?);
+                match measure(&gpu, &scene, &config, args, timer.as_mut(), &bar) {
+                    // What can never keep pixels is refused with `on`: said, not run.
+                    Err(Error::Unsupported(why)) if keep == KeepUnchanged::On => {
+                        println!("skipped {} with --keep-unchanged on: {why}", mode.name());
+                    }
+                    row => rows.push(row?),
+                }
             }
         }
     }
@@ -162,6 +175,7 @@ pub fn profile(args: &ProfileArgs) -> Result<()> {
     print_occlusion(&rows);
     print_glass(&rows);
     print_frames(&rows);
+    print_keep(&rows);
     std::fs::create_dir_all(&args.out).map_err(|e| Error::io(&args.out, e))?;
     write_csv(&args.out.join("profile.csv"), &rows)?;
     write_json(&args.out.join("profile.json"), &rows)?;

@@ -79,6 +79,11 @@ pub struct ProfileArgs {
     /// Seconds between a submission's two frames.
     #[arg(long, default_value_t = crate::renderer::DEFAULT_DT)]
     pub dt: f32,
+    /// Keeping unchanged pixels, one configuration each (`off,on` compares them): the
+    /// profile's viewer holds still, so each frame after the first redraws only the
+    /// tiles its moved instances (`--moving`) changed. What never keeps is skipped.
+    #[arg(long, value_delimiter = ',', value_enum, default_value = "off")]
+    pub keep_unchanged: Vec<crate::keep::KeepUnchanged>,
     /// Levels of detail chosen on the GPU from the viewer's position.
     #[arg(long, value_enum, default_value = "off")]
     pub lod: Switch,

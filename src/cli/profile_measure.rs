@@ -40,6 +40,8 @@ pub(super) struct Config<'a> {
     pub(super) glass: f64,
     /// Frames per submission.
     pub(super) frames: u32,
+    /// Keeping unchanged pixels.
+    pub(super) keep: crate::keep::KeepUnchanged,
 }
 
 pub(super) fn measure(
@@ -59,6 +61,7 @@ pub(super) fn measure(
         edits,
         glass,
         frames,
+        keep,
     }: &Config,
     args: &ProfileArgs,
     mut timer: Option<&mut GpuTimer>,
@@ -82,6 +85,7 @@ pub(super) fn measure(
         posing,
         frames_per_submit: frames,
         dt: args.dt,
+        keep_unchanged: keep,
         ..Default::default()
     };
     let mut renderer = Renderer::new(&gpu.device, scene, rig, options)?;
@@ -102,7 +106,14 @@ pub(super) fn measure(
                 if posing == PosingMode::Cpu {
                     live.pose(time)?;
                 }
-                renderer.sync(&gpu.device, &gpu.queue, live)?
+                let mut synced = renderer.sync(&gpu.device, &gpu.queue, live)?;
+                // A pair's second frame posed at its own time, in a sync of its own.
+                if posing == PosingMode::Cpu && frames == 2 {
+                    live.pose(time + args.dt)?;
+                    let next = renderer.sync_next(&gpu.device, &gpu.queue, live)?;
+                    synced.bytes_uploaded += next.bytes_uploaded;
+                }
+                synced
             }
             None => SyncStats::default(),
         };
@@ -151,6 +162,8 @@ pub(super) fn measure(
             .push(recorded.cpu_staging.as_secs_f64() * 1e3);
         samples.copy.extend(copied);
         samples.moved = synced.moved;
+        samples.tiles.push(f64::from(prepared.tiles_changed));
+        samples.whole += u32::from(prepared.whole_redraw.is_some());
         samples.submit.push(ms(submit_start, end));
         samples.passes = pass_reports(&renderer, rig, queries.as_ref());
         if let Some(q) = queries {
@@ -206,6 +219,9 @@ pub(super) fn measure(
         instances: scene.instances.len() as u32,
         cpu_ms_median: med(&samples.cpu),
         frames_per_submit: frames,
+        keep_unchanged: keep,
+        tiles_changed_median: med(&samples.tiles),
+        whole_redraws: samples.whole,
         cpu_ms_per_displayed_frame: med(&samples.cpu) / f64::from(frames),
         cpu_ms_p95: percentile(&samples.cpu, 0.95),
         gpu_ms_median: gpu_med(&samples.gpu),
@@ -274,6 +290,10 @@ struct Samples {
     copy: Vec<f64>,
     /// Instances the last frame synced as moves.
     moved: u32,
+    /// Per frame, the tiles kept frames redrew (0 drawn whole), and the frames drawn
+    /// whole under keeping.
+    tiles: Vec<f64>,
+    whole: u32,
     submit: Vec<f64>,
     gpu: Vec<f64>,
     gpu_cull: Vec<f64>,

@@ -23,6 +23,12 @@ pub struct Row {
     pub frames_per_submit: u32,
     /// `cpu_ms_median` over the frames each submission shows.
     pub cpu_ms_per_displayed_frame: f64,
+    /// Keeping unchanged pixels (`--keep-unchanged`).
+    pub keep_unchanged: crate::keep::KeepUnchanged,
+    /// Of the timed frames, the median tiles a kept frame redrew (0 for a frame drawn
+    /// whole), and the frames drawn whole.
+    pub tiles_changed_median: f64,
+    pub whole_redraws: u32,
     pub cpu_ms_p95: f64,
     /// Sum of the timed passes; `None` without timestamp queries.
     pub gpu_ms_median: Option<f64>,
@@ -151,6 +157,7 @@ pub fn price_occlusion(rows: &mut [Row]) {
     let key = |r: &Row| {
         let (a, b) = (r.moving_percent.to_bits(), r.churn_percent.to_bits());
         let flags = (r.coarse_cull, r.far_layer, r.inset_cull, r.rig_cull);
+        let apart = (r.keep_unchanged, r.frames_per_submit);
         let glass = r.glass_percent.to_bits();
         (
             r.mode,
@@ -158,6 +165,7 @@ pub fn price_occlusion(rows: &mut [Row]) {
             r.rig.clone(),
             r.instances,
             flags,
+            apart,
             a,
             b,
             glass,
@@ -244,6 +252,7 @@ pub fn price_edits(rows: &mut [Row]) {
             a.churn_percent,
             a.occlusion,
             a.glass_percent,
+            (a.keep_unchanged, a.frames_per_submit),
         ) == (
             b.mode,
             b.cull,
@@ -256,6 +265,7 @@ pub fn price_edits(rows: &mut [Row]) {
             b.churn_percent,
             b.occlusion,
             b.glass_percent,
+            (b.keep_unchanged, b.frames_per_submit),
         )
     };
     let costs: Vec<Option<EditCost>> = rows
@@ -473,27 +483,4 @@ pub(super) fn write_csv(path: &std::path::Path, rows: &[Row]) -> Result<()> {
         );
     }
     std::fs::write(path, text).map_err(|e| Error::io(path, e))
-}
-
-/// With two frames per submission: each such row's CPU per displayed frame against the
-/// row of one frame per submission that is otherwise the same (same order of rows).
-pub(super) fn print_frames(rows: &[Row]) {
-    let key = |r: &Row| (r.rig.clone(), r.mode, r.cull, r.instances, r.occlusion);
-    for r in rows.iter().filter(|r| r.frames_per_submit == 2) {
-        let single = rows
-            .iter()
-            .find(|s| s.frames_per_submit == 1 && key(s) == key(r));
-        let ratio = single.map(|s| r.cpu_ms_per_displayed_frame / s.cpu_ms_median.max(1e-9));
-        println!(
-            "{} {} {:?} {}: two frames per submission, CPU per displayed frame {:.3} ms{}",
-            r.rig,
-            r.mode.name(),
-            r.cull,
-            r.instances,
-            r.cpu_ms_per_displayed_frame,
-            ratio.map_or(String::new(), |x| format!(
-                ", {x:.3} of one frame per submission"
-            )),
-        );
-    }
 }
