@@ -16,7 +16,7 @@ use stereocull::live::LiveScene;
 use stereocull::readback::read_rgba8;
 use stereocull::renderer::{CullMode, OcclusionMode, PosingMode, Renderer, RendererOptions, grown};
 use stereocull::rig::Rig;
-use stereocull::scene::Scene;
+use stereocull::scene::{Instance, Scene};
 use stereocull::scene_spec;
 use support::{PLACED, assert_images_match, gpu, sized};
 
@@ -318,6 +318,83 @@ fn the_gpu_and_cpu_culls_of_a_posed_pair_are_the_same_bytes() {
     }
 }
 
+/// Instances inserted and removed for the second frame alone: the first frame draws
+/// the scene before them, the second after, and the removes reach the cull order at
+/// the next sync (the next pair's first frame no longer draws them). GPU and CPU culls
+/// are the same bytes throughout.
+#[test]
+fn the_second_frames_inserts_and_removes_reach_it_alone() {
+    let gpu = gpu();
+    let scene = load("procedural:600:6");
+    let rig = sized("hmd", 96, 80);
+    let mut rng = Pcg64Mcg::seed_from_u64(47);
+    let mut picks: Vec<usize> = (0..scene.instances.len()).collect();
+    for k in 0..40 {
+        picks.swap(k, rng.random_range(k..scene.instances.len()));
+    }
+    let (gone, copied) = (&picks[..20], &picks[20..40]);
+    // The inserts first: a remove's place would be the next insert's.
+    let edit_second = |live: &mut LiveScene| {
+        let handles = live.handles();
+        // Copies of other instances, raised: new places of their meshes.
+        for &slot in copied {
+            let mut copy = live.scene().instances[slot];
+            copy.world_from_local =
+                Affine3A::from_translation(Vec3::new(0.2, 0.5, 0.0)) * copy.world_from_local;
+            live.insert(copy).unwrap();
+        }
+        for &slot in gone {
+            live.remove(handles[slot]).unwrap();
+        }
+    };
+    // The scene each frame draws alone (vacant slots dropped).
+    let drawn = |live: &LiveScene| {
+        let mut s = live.scene().clone();
+        s.instances.retain(|i| i.mesh != Instance::VACANT_MESH);
+        s
+    };
+    let mut culls = Vec::new();
+    for cull in [CullMode::Gpu, CullMode::Cpu] {
+        // Room for the inserts: the scene with a vacant place per mesh and more slots.
+        let mut live = LiveScene::new(scene.clone());
+        let spares: Vec<_> = (copied.iter())
+            .map(|&s| live.scene().instances[s])
+            .collect();
+        let extra: Vec<_> = spares.iter().map(|&i| live.insert(i).unwrap()).collect();
+        let mut renderer =
+            Renderer::new(&gpu.device, live.scene(), &rig, options(cull, 2)).unwrap();
+        for h in extra {
+            live.remove(h).unwrap();
+        }
+        let before = drawn(&live);
+        let pair = render_pair(&gpu, &mut renderer, &mut live, (&rig, 0.0), &edit_second);
+        let after = drawn(&live);
+        let first = alone(&gpu, &before, &rig, cull, 0.0);
+        let second = alone(&gpu, &after, &rig, cull, DT);
+        let label = format!("second-inserts-{cull:?}");
+        assert_images_match(&format!("{label}-now"), &pair[0].0, &first[0], PLACED);
+        assert_images_match(&format!("{label}-next"), &pair[0].1, &second[0], PLACED);
+        let apart = (first[0].pixels().zip(second[0].pixels())).filter(|(p, q)| p != q);
+        assert!(apart.count() > 100, "{label}: the edits changed little");
+        culls.push(support::read_culls(&gpu, &renderer, &rig));
+        // The next pair: the removes have reached the cull order.
+        let next = render_pair(&gpu, &mut renderer, &mut live, (&rig, 2.0 * DT), &|_| {});
+        let want = alone(&gpu, &after, &rig, cull, 2.0 * DT);
+        assert_images_match(&format!("{label}-later"), &next[0].0, &want[0], PLACED);
+        let later = support::read_culls(&gpu, &renderer, &rig);
+        let kept = (gone.iter()).filter(|&&s| later[0].visible.contains(&(s as u32)));
+        assert_eq!(
+            kept.count(),
+            0,
+            "{label}: removed instances left in the cull"
+        );
+        culls.push(later);
+    }
+    for (k, (got, want)) in culls[..2].iter().zip(&culls[2..]).enumerate() {
+        support::assert_same_cull(&format!("pair {k}"), &got[0], &want[0]);
+    }
+}
+
 /// A second frame's move grows the sphere the one cull tests: about the first frame's
 /// center, just large enough to hold the second frame's sphere too.
 #[test]
@@ -354,16 +431,25 @@ fn what_the_second_frame_cannot_change_alone_is_refused() {
     let mut renderer =
         Renderer::new(device, live.scene(), &rig, options(CullMode::Gpu, 2)).unwrap();
     renderer.sync(device, queue, &mut live).unwrap();
-    let handle = live.handles()[3];
-    live.remove(handle).unwrap();
+    // A remove, and an insert into the place it emptied: the first frame still draws
+    // the removed instance there.
+    let removed = live.remove(live.handles()[3]).unwrap();
+    live.insert(removed).unwrap();
     match renderer.sync_next(device, queue, &mut live) {
-        Err(Error::Unsupported(m)) => assert!(m.contains("cull order"), "{m}"),
-        other => panic!("a remove in the second frame: {other:?}"),
+        Err(Error::Unsupported(m)) => assert!(m.contains("a remove emptied"), "{m}"),
+        other => panic!("a place emptied and filled in the second frame: {other:?}"),
     }
     assert!(
         !live.pending_changes().removed.is_empty(),
         "the refused changes stay for the next sync"
     );
+    renderer.sync(device, queue, &mut live).unwrap();
+    // Past the renderer's room (every place taken: the order is laid out again).
+    live.insert(removed).unwrap();
+    match renderer.sync_next(device, queue, &mut live) {
+        Err(Error::Unsupported(m)) => assert!(m.contains("out again"), "{m}"),
+        other => panic!("an insert past the room in the second frame: {other:?}"),
+    }
     let mut one = Renderer::new(device, live.scene(), &rig, options(CullMode::Gpu, 1)).unwrap();
     assert!(matches!(
         one.sync_next(device, queue, &mut live),

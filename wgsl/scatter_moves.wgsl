@@ -40,7 +40,12 @@ fn scatter(@builtin(workgroup_id) wid: vec3<u32>, @builtin(local_invocation_inde
 // frames' spheres (src/renderer/second_frame.rs). Edits from the CPU bring that
 // radius (GROWN_GIVEN: the CPU culler takes the same bytes); the pose pass's are grown
 // here (GROWN_MEASURED: posing on the GPU has no CPU twin), as renderer::grown does.
+// A place filled this frame (its sphere vacant, radius -inf) has no first frame's
+// sphere: its own is written.
 fn written(was: vec4<f32>, center: vec3<f32>, radius: f32) -> vec4<f32> {
+    if (was.w < 0.0) {
+        return vec4(center, radius);
+    }
     switch edits.header.grow {
         case GROWN_GIVEN: {
             return vec4(was.xyz, radius);

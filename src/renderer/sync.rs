@@ -9,7 +9,7 @@ use super::{Path, Renderer};
 use crate::error::{Error, Result};
 use crate::live::{Changes, LiveScene, MoveEdit, PlaceEdit};
 use crate::records::{CullLayout, RecordEdit};
-use crate::scatter::{Scatters, record_edit};
+use crate::scatter::{ScatterTargets, Scatters, record_edit};
 use crate::scene::Scene;
 
 /// What [`Renderer::sync`] did.
@@ -47,6 +47,9 @@ impl Renderer {
         live: &mut LiveScene,
     ) -> Result<SyncStats> {
         let mut changes = live.take_changes();
+        if let Some(second) = &mut self.second {
+            second.take_deferred().apply_to(&mut changes);
+        }
         if changes.lights {
             self.lighting.set(&live.lights())?;
             self.keeper.lights_changed();
@@ -256,9 +259,12 @@ impl Renderer {
     /// those changes, which the second frame draws and the first does not (see
     /// [`super::second_frame`]). Call it before `prepare_pair`.
     ///
-    /// Inserts, removes, new meshes and light changes belong to both frames (one cull
-    /// order, one set of lights): they are [`Error::Unsupported`] here and leave `live`'s
-    /// changes untaken. So is a renderer of one frame per submission.
+    /// Inserts join the cull order both frames share, hidden from the first frame's
+    /// views; removes wait for the next sync (the first frame still draws them), hidden
+    /// from the second frame's. New meshes, inserts that lay the cull order out again or
+    /// pass the renderer's room, an insert into a place a remove emptied, and light
+    /// changes belong to both frames: they are [`Error::Unsupported`] here and leave
+    /// `live`'s changes untaken. So is a renderer of one frame per submission.
     pub fn sync_next(
         &mut self,
         device: &wgpu::Device,
@@ -275,35 +281,42 @@ impl Renderer {
                 "the second frame's sync: {why}"
             )));
         };
-        let Changes {
-            mut moved,
-            recolored,
-            joints,
-            ..
-        } = live.take_changes();
-        let scene = live.scene();
-        let grown = second.grow(scene, &mut moved);
-        self.path.core_mut().culler.grown(&grown);
-        let records = (recolored.iter())
-            .map(|&slot| record_edit(live, slot))
-            .collect();
-        let targets = || self.path.scatter_targets();
+        if live.slot_count() > self.slots {
+            return Err(Error::Unsupported(
+                "the second frame's sync: an insert past the renderer's room uploads everything again, for both frames: make it before the first frame's sync".into(),
+            ));
+        }
+        let changes = live.take_changes();
+        let (filled, born) = second.split(changes.placed, &changes.removed);
+        let mut moved = changes.moved;
+        let culler = &mut self.path.core_mut().culler;
+        culler.place(&filled);
+        culler.grown(&second.grow(live.scene(), &mut moved, &born));
+        let staged = second_frame::Staged {
+            filled,
+            moved,
+            recolored: changes.recolored,
+            removed: changes.removed,
+        };
         let mut stats = SyncStats {
-            moved: moved.len() as u32,
+            moved: staged.moved.len() as u32,
+            placed: staged.filled.len() as u32,
             ..SyncStats::default()
         };
-        let mut spare = Vec::new();
-        if !moved.is_empty() {
-            let bytes;
-            (bytes, spare) = second.scatter.moves.stage(device, moved, targets());
-            stats.bytes_uploaded += bytes;
-        }
-        if !recolored.is_empty() {
-            stats.bytes_uploaded += second.scatter.records.stage(device, records, targets()).0;
-        }
+        let core = self.path.core();
+        let copy = ScatterTargets {
+            instances: &(core.draw_scene.previous.as_ref())
+                .expect("pairs keep the first frame's records")
+                .instances,
+            spheres: None,
+            visibility: (0, 0),
+        };
+        let targets = (self.path.scatter_targets(), copy);
+        let (bytes, spare) = second.stage(device, live, staged, targets);
+        stats.bytes_uploaded += bytes;
         if let Some(skin) = &mut self.skin {
-            for range in joints {
-                stats.bytes_uploaded += skin.upload_next(queue, &scene.skins, range);
+            for range in changes.joints {
+                stats.bytes_uploaded += skin.upload_next(queue, &live.scene().skins, range);
             }
         }
         live.recycle(Vec::new(), spare);

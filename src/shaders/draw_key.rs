@@ -284,9 +284,14 @@ fn motion_source(windows: &Windows) -> String {
 /// Group 3 (the first frame's records) and the instance color of the first frame's
 /// views from them, for the first-pose variants.
 fn first_pose_source(windows: &Windows) -> String {
+    let vacant = format!(
+        "const VACANT_MESH: u32 = {}u;\n",
+        crate::scene::Instance::VACANT_MESH
+    );
     [
         &declarations(&MOTION_BINDINGS, 3, windows),
         FIRST_POSE_COLOR,
+        &vacant,
     ]
     .concat()
 }
