@@ -357,12 +357,22 @@ fn the_second_frames_inserts_and_removes_reach_it_alone() {
     for cull in [CullMode::Gpu, CullMode::Cpu] {
         // Room for the inserts: the scene with a vacant place per mesh and more slots.
         let mut live = LiveScene::new(scene.clone());
+        // Placed apart from the inserts (a first frame's view that drew a stale record
+        // of a slot the second frame fills would show it).
         let spares: Vec<_> = (copied.iter())
-            .map(|&s| live.scene().instances[s])
+            .map(|&s| {
+                let mut spare = live.scene().instances[s];
+                let down = Affine3A::from_translation(Vec3::new(-0.3, -0.4, 0.0));
+                spare.world_from_local = down * spare.world_from_local;
+                spare
+            })
             .collect();
         let extra: Vec<_> = spares.iter().map(|&i| live.insert(i).unwrap()).collect();
         let mut renderer =
             Renderer::new(&gpu.device, live.scene(), &rig, options(cull, 2)).unwrap();
+        // Laid out with the spares (their inserts restructured the order); removed
+        // after, their records stay in the renderer's buffer.
+        renderer.sync(&gpu.device, &gpu.queue, &mut live).unwrap();
         for h in extra {
             live.remove(h).unwrap();
         }

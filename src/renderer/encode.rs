@@ -240,7 +240,13 @@ impl Renderer {
         second: bool,
     ) -> (u32, std::time::Duration) {
         let (scattered, cpu_staging) = match (&mut self.second, second) {
-            (Some(frame), true) => frame.scatter.encode(encoder),
+            // The first frame's copy of the records (just made) gets its vacant
+            // records first.
+            (Some(frame), true) => {
+                let (vacant, staging) = frame.first.encode(encoder);
+                let (own, own_staging) = frame.scatter.encode(encoder);
+                (vacant + own, staging + own_staging)
+            }
             _ => self.scatter.encode(encoder),
         };
         if scattered > 0 {
