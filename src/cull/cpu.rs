@@ -14,7 +14,6 @@ use super::{BinDraws, CoarseCull, CullJob, CullOutput, HiddenArea, Split};
 /// Their old path, kept for one release: they are the frame's, not the CPU culler's.
 pub use super::{FrameCull, FrameLod};
 use crate::cull::tiles::TileMask;
-use crate::frustum::plane_distance;
 use crate::records::{CullLayout, DrawArgs, lod_level};
 use crate::scene::MAX_LODS;
 
@@ -23,6 +22,9 @@ const CHUNK: usize = 1 << 14;
 // One mask word per coarse block: the block tests skip whole words.
 const _: () = assert!(BLOCK == 64);
 const WORDS_PER_CHUNK: usize = CHUNK / 64;
+
+mod groups;
+use groups::{group_where, hidden_group, split_group, test_group};
 
 /// Culls every instance for one job and builds its draws.
 pub fn cull(layout: &CullLayout, job: &CullJob) -> CullOutput {
@@ -202,84 +204,6 @@ fn test_chunk(
         }
     }
     counts
-}
-
-/// Visibility bits of up to 64 spheres given as columns. Per sphere and plane the
-/// arithmetic is exactly [`crate::frustum::sphere_in_planes`]'s (so the decisions are
-/// the GPU's); the loops run plane by plane over 64 lanes of fixed size so that they
-/// vectorize, with AVX2 where the processor has it (the same IEEE operations, wider).
-fn test_group(planes: &[[f32; 4]; 6], cols: [&[f32]; 4]) -> u64 {
-    if let [Ok(x), Ok(y), Ok(z), Ok(r)] = cols.map(<&[f32; 64]>::try_from) {
-        return test_lanes(planes, [x, y, z, r]);
-    }
-    // The last group of a scene is short: pad it, then drop the padding's bits.
-    let n = cols[0].len();
-    let lanes: [[f32; 64]; 4] = cols.map(|c| {
-        let mut lane = [0.0; 64];
-        lane[..n].copy_from_slice(c);
-        lane
-    });
-    let [x, y, z, r] = &lanes;
-    test_lanes(planes, [x, y, z, r]) & ((1u64 << n) - 1)
-}
-
-/// The bits of up to 64 spheres given as columns that `split` keeps ([`Split::keeps`]).
-fn split_group(split: &Split, [x, y, z, neg_r]: [&[f32]; 4]) -> u64 {
-    let mut bits = 0u64;
-    for i in 0..x.len() {
-        let sphere = glam::Vec4::new(x[i], y[i], z[i], -neg_r[i]);
-        bits |= (split.keeps(sphere) as u64) << i;
-    }
-    bits
-}
-
-/// Which of `bits` (spheres given as columns) `hidden` hides.
-fn hidden_group(hidden: &HiddenArea, bits: u64, cols: [&[f32]; 4]) -> u64 {
-    group_where(bits, cols, |s| hidden.hides(s))
-}
-
-/// Which of `bits` (spheres given as columns) pass `test`.
-fn group_where(bits: u64, [x, y, z, neg_r]: [&[f32]; 4], test: impl Fn(Vec4) -> bool) -> u64 {
-    let mut passed = 0u64;
-    let mut rest = bits;
-    while rest != 0 {
-        let i = rest.trailing_zeros() as usize;
-        let sphere = Vec4::new(x[i], y[i], z[i], -neg_r[i]);
-        passed |= (test(sphere) as u64) << i;
-        rest &= rest - 1;
-    }
-    passed
-}
-
-fn test_lanes(planes: &[[f32; 4]; 6], lanes: [&[f32; 64]; 4]) -> u64 {
-    #[cfg(target_arch = "x86_64")]
-    if std::is_x86_feature_detected!("avx2") {
-        // SAFETY: the processor has AVX2, checked just above.
-        return unsafe { test_lanes_avx2(planes, lanes) };
-    }
-    test_lanes_portable(planes, lanes)
-}
-
-#[cfg(target_arch = "x86_64")]
-#[target_feature(enable = "avx2")]
-fn test_lanes_avx2(planes: &[[f32; 4]; 6], lanes: [&[f32; 64]; 4]) -> u64 {
-    test_lanes_portable(planes, lanes)
-}
-
-#[inline(always)]
-fn test_lanes_portable(planes: &[[f32; 4]; 6], [x, y, z, neg_r]: [&[f32; 64]; 4]) -> u64 {
-    let mut inside = [u32::MAX; 64];
-    for p in planes {
-        for i in 0..64 {
-            let dist = plane_distance(*p, [x[i], y[i], z[i]]);
-            inside[i] &= ((dist >= neg_r[i]) as u32).wrapping_neg();
-        }
-    }
-    let mut bits = 0u64;
-    for (i, m) in inside.iter().enumerate() {
-        bits |= ((m & 1) as u64) << i;
-    }
-    bits
 }
 
 /// The contract's buffers from one display's visibility bits.
