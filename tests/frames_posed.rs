@@ -69,7 +69,25 @@ fn render_pair(
         .collect()
 }
 
-/// `scene` as one frame draws it alone at `time`, after `edit`.
+/// Each frame of a pair (`got`) against the frame drawn alone at its time (`want`),
+/// and the two frames alone more than `apart` pixels apart, where `apart` is not 0
+/// (what moved between them: a pair whose views all read one pose fails a comparison).
+fn assert_pair(
+    label: &str,
+    got: (&RgbaImage, &RgbaImage),
+    want: (&RgbaImage, &RgbaImage),
+    apart: usize,
+) {
+    assert_images_match(&format!("{label}-now"), got.0, want.0, PLACED);
+    assert_images_match(&format!("{label}-next"), got.1, want.1, PLACED);
+    let moved = (want.0.pixels().zip(want.1.pixels())).filter(|(p, q)| p != q);
+    assert!(
+        apart == 0 || moved.count() > apart,
+        "{label}: the frames alone barely differ"
+    );
+}
+
+/// `scene` as one frame draws it alone at `time`.
 fn alone(gpu: &Gpu, scene: &Scene, rig: &Rig, cull: CullMode, time: f32) -> Vec<RgbaImage> {
     let mut posed = scene.clone();
     posed.pose(time);
@@ -112,15 +130,8 @@ fn posed_content_is_drawn_at_each_frames_time() {
                 pair.iter().zip(first.iter().zip(&second)).enumerate()
             {
                 let label = format!("posed-{name}-{preset}-{cull:?}-{d}");
-                assert_images_match(&format!("{label}-now"), a, want_a, PLACED);
-                assert_images_match(&format!("{label}-next"), b, want_b, PLACED);
-                // The animation moved between the frames: a pair whose views all read
-                // one pose fails one of the comparisons above.
-                let apart = want_a.pixels().zip(want_b.pixels()).filter(|(p, q)| p != q);
-                assert!(
-                    d > 0 || apart.count() > 20,
-                    "{label}: the frames alone barely differ"
-                );
+                let apart = if d == 0 { 20 } else { 0 };
+                assert_pair(&label, (a, b), (want_a, want_b), apart);
             }
         }
     }
@@ -148,10 +159,8 @@ fn morph_targets_are_morphed_at_each_frames_time() {
         let first = alone(&gpu, &scene, &rig, cull, 0.9);
         let second = alone(&gpu, &scene, &rig, cull, 0.9 + DT);
         let label = format!("morph-{cull:?}");
-        assert_images_match(&format!("{label}-now"), &pair[0].0, &first[0], PLACED);
-        assert_images_match(&format!("{label}-next"), &pair[0].1, &second[0], PLACED);
-        let apart = (first[0].pixels().zip(second[0].pixels())).filter(|(p, q)| p != q);
-        assert!(apart.count() > 20, "{label}: the weights barely moved");
+        let (got, want) = ((&pair[0].0, &pair[0].1), (&first[0], &second[0]));
+        assert_pair(&label, got, want, 20);
     }
 }
 
@@ -191,13 +200,9 @@ fn the_pose_pass_poses_each_frame_at_its_time() {
             let (w, h) = (both.width() / 2, both.height());
             let half = |x| imageops::crop_imm(&both, x, 0, w, h).to_image();
             let label = format!("gpu-posed-{name}-{preset}-{d}");
-            assert_images_match(&format!("{label}-now"), &half(0), &first[d], PLACED);
-            assert_images_match(&format!("{label}-next"), &half(w), &second[d], PLACED);
-            let apart = (first[d].pixels().zip(second[d].pixels())).filter(|(p, q)| p != q);
-            assert!(
-                d > 0 || apart.count() > 20,
-                "{label}: the frames barely differ"
-            );
+            let (now, next) = (half(0), half(w));
+            let apart = if d == 0 { 20 } else { 0 };
+            assert_pair(&label, (&now, &next), (&first[d], &second[d]), apart);
         }
         // Each posed sphere holds the first pose's sphere and the second's.
         let spheres = |t: f32| {
@@ -257,10 +262,8 @@ fn the_second_frames_own_edits_reach_it_alone() {
         let first = alone(&gpu, &scene, &rig, cull, 0.0);
         let second = alone(&gpu, &edited, &rig, cull, DT);
         let label = format!("second-edits-{cull:?}");
-        assert_images_match(&format!("{label}-now"), &pair[0].0, &first[0], PLACED);
-        assert_images_match(&format!("{label}-next"), &pair[0].1, &second[0], PLACED);
-        let apart = (first[0].pixels().zip(second[0].pixels())).filter(|(p, q)| p != q);
-        assert!(apart.count() > 100, "{label}: the edits changed little");
+        let (got, want) = ((&pair[0].0, &pair[0].1), (&first[0], &second[0]));
+        assert_pair(&label, got, want, 100);
     }
 }
 
@@ -382,10 +385,8 @@ fn the_second_frames_inserts_and_removes_reach_it_alone() {
         let first = alone(&gpu, &before, &rig, cull, 0.0);
         let second = alone(&gpu, &after, &rig, cull, DT);
         let label = format!("second-inserts-{cull:?}");
-        assert_images_match(&format!("{label}-now"), &pair[0].0, &first[0], PLACED);
-        assert_images_match(&format!("{label}-next"), &pair[0].1, &second[0], PLACED);
-        let apart = (first[0].pixels().zip(second[0].pixels())).filter(|(p, q)| p != q);
-        assert!(apart.count() > 100, "{label}: the edits changed little");
+        let (got, want) = ((&pair[0].0, &pair[0].1), (&first[0], &second[0]));
+        assert_pair(&label, got, want, 100);
         culls.push(support::read_culls(&gpu, &renderer, &rig));
         // The next pair: the removes have reached the cull order.
         let next = render_pair(&gpu, &mut renderer, &mut live, (&rig, 2.0 * DT), &|_| {});
