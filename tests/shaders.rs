@@ -10,7 +10,9 @@ use stereocull::cull::CoarseCull;
 use stereocull::cull::gpu_buffers::CullParams;
 use stereocull::cull::hidden::{HiddenArea, HiddenRegion, HiddenView, MAX_HIDDEN_REGIONS};
 use stereocull::cull::rig::{MAX_RIG_VIEWS, RigCull, RigOcclusion, RigView};
+use stereocull::cull::tile_marks::TileDisplay;
 use stereocull::draw::VERTEX_ATTRIBUTES;
+use stereocull::draw::keep_tiles::TileGrid;
 use stereocull::materials::MaterialRecord;
 use stereocull::occlusion::pyramid::{PyramidSet, PyramidSlice};
 use stereocull::records::{
@@ -21,11 +23,11 @@ use stereocull::scene::Vertex;
 use stereocull::shaders::{
     Access, Binding, CANDIDATE_BINDINGS, COARSE_BINDINGS, CULL_BINDINGS, CullPass,
     DEPTH_RESOLVE_BINDINGS, DRAW_BINDINGS, DrawKey, EditKind, FAR_COMPOSITE_BINDINGS,
-    FOVEATED_COMPOSITE_BINDINGS, KEEP_TILES_BINDINGS, MATERIAL_BINDINGS, MOTION_BINDINGS,
-    POSE_BINDINGS, PYRAMID_SET_DEPTHS, SCATTER_BINDINGS, SHADOW_MAP_BINDINGS, SKIN_BINDINGS,
-    Window, Windows, all_sources, depth_resolve_source, far_composite_source,
-    foveated_composite_source, keep_tiles_source, pose_source, pyramid_bindings, pyramid_source,
-    scatter_source, shadow_cutout_source, shadow_source, skin_source,
+    FOVEATED_COMPOSITE_BINDINGS, KEEP_TILES_BINDINGS, MARK_TILES_BINDINGS, MATERIAL_BINDINGS,
+    MOTION_BINDINGS, POSE_BINDINGS, PYRAMID_SET_DEPTHS, SCATTER_BINDINGS, SHADOW_MAP_BINDINGS,
+    SKIN_BINDINGS, Window, Windows, all_sources, depth_resolve_source, far_composite_source,
+    foveated_composite_source, keep_mark_source, keep_tiles_source, pose_source, pyramid_bindings,
+    pyramid_source, scatter_source, shadow_cutout_source, shadow_source, skin_source,
 };
 
 fn parse(label: &str, source: &str) -> Module {
@@ -567,6 +569,47 @@ fn rig_records_match_wgsl() {
     assert_eq!(f32_at(&bytes, test_at as u32 + margin), 704.0);
 }
 
+/// The tile marking pass's display records (encase) and list, and the tile pass's grid
+/// (bytemuck), against naga's offsets in their own modules.
+#[test]
+fn tile_records_match_wgsl() {
+    let mark = parse("keep_mark", &keep_mark_source(&Windows::WHOLE));
+    let display = |k: f32| TileDisplay {
+        eyes: RigOcclusion {
+            view_from_world: [Mat4::from_cols_array(&[k; 16]), Mat4::IDENTITY],
+            clip_from_view: [Mat4::IDENTITY, Mat4::IDENTITY],
+            resolution: Vec2::new(k + 2.0, k + 3.0),
+            margin_px: k + 4.0,
+            views: 2,
+        },
+        planes: std::array::from_fn(|i| Vec4::splat(k + 10.0 + i as f32)),
+        base: 77,
+    };
+    let bytes = storage_bytes(&[display(1.0), display(500.0)]);
+    let (members, span) = wgsl_struct(&mark, "TileDisplay");
+    assert_eq!(bytes.len(), 2 * span as usize, "TileDisplay stride");
+    let names: Vec<&str> = members.iter().map(|(n, _)| n.as_str()).collect();
+    assert_eq!(names, ["eyes", "planes", "base"]);
+    let at = |member: usize, record: u32| f32_at(&bytes, record * span + members[member].1);
+    assert_eq!(
+        (at(0, 0), at(1, 0), at(2, 0)),
+        (1.0, 11.0, f32::from_bits(77))
+    );
+    assert_eq!((at(0, 1), at(1, 1)), (500.0, 510.0));
+    let (marks, _) = wgsl_struct(&mark, "Marks");
+    assert_eq!(marks, [("count".to_string(), 0), ("list".to_string(), 4)]);
+    let clear = keep_tiles_source(wgpu::TextureFormat::Rgba8UnormSrgb, wgpu::Color::BLACK);
+    let (members, _) = wgsl_struct(&parse("keep_tiles", &clear), "TileWords");
+    let want = [
+        ("cols", offset_of!(TileGrid, cols)),
+        ("width", offset_of!(TileGrid, width)),
+        ("height", offset_of!(TileGrid, height)),
+        ("words", size_of::<TileGrid>()),
+    ];
+    let want: Vec<(String, u32)> = want.map(|(n, o)| (n.to_string(), o as u32)).into();
+    assert_eq!(members, want);
+}
+
 #[test]
 fn hidden_areas_match_wgsl() {
     let region = |k: f32| HiddenRegion {
@@ -661,7 +704,12 @@ fn pipelines_and_their_lists() -> Vec<(String, String, Vec<Vec<Binding>>)> {
             )
         }),
     );
-    let others: [(&str, String, Vec<Vec<Binding>>); 8] = [
+    let others: [(&str, String, Vec<Vec<Binding>>); 9] = [
+        (
+            "keep_mark",
+            keep_mark_source(whole),
+            lists(&[&MARK_TILES_BINDINGS]),
+        ),
         ("shadow", shadow_source(whole), lists(&[&DRAW_BINDINGS])),
         (
             "shadow.cutout",

@@ -208,6 +208,21 @@ impl Switch {
 }
 
 /// Writes `image` to `path` (its extension names the format).
+/// The tiles a frame with `stats` redrew (0 where drawn whole), read back: the GPU marks
+/// them where it culls.
+pub(crate) fn tiles_changed(
+    renderer: &crate::renderer::Renderer,
+    gpu: &crate::device::Gpu,
+    stats: &crate::renderer::FrameStats,
+) -> Result<u32> {
+    match stats.whole_redraw {
+        Some(_) => Ok(0),
+        None => Ok(renderer
+            .diagnostics(&gpu.device, &gpu.queue)
+            .tiles_changed()?),
+    }
+}
+
 pub(crate) fn save(image: &image::RgbaImage, path: &std::path::Path) -> Result<()> {
     image.save(path).map_err(|source| Error::Image {
         path: path.to_path_buf(),

@@ -162,7 +162,8 @@ pub(super) fn measure(
             .push(recorded.cpu_staging.as_secs_f64() * 1e3);
         samples.copy.extend(copied);
         samples.moved = synced.moved;
-        samples.tiles.push(f64::from(prepared.tiles_changed));
+        let tiles = super::tiles_changed(&renderer, gpu, &prepared)?;
+        samples.tiles.push(f64::from(tiles));
         samples.whole += u32::from(prepared.whole_redraw.is_some());
         samples.submit.push(ms(submit_start, end));
         samples.passes = pass_reports(&renderer, rig, queries.as_ref());

@@ -274,7 +274,7 @@ pub fn stress(args: &StressArgs) -> Result<()> {
             triangles_submitted,
             fragment_invocations: queries.as_ref().and_then(|q| q.fragment_invocations),
             samples_passed: queries.as_ref().and_then(|q| q.samples_passed),
-            tiles_changed: stats.tiles_changed,
+            tiles_changed: super::tiles_changed(&session.renderer, &session.gpu, &stats)?,
             whole_redraw: stats.whole_redraw,
             frame_ms,
             pose_age_ms: figures.pose_age_ms,

@@ -330,6 +330,12 @@ impl CullScene {
             .collect())
     }
 
+    /// Where the changed tiles start in the occlusion buffer and the words from one
+    /// display slot's to the next's.
+    pub fn tile_layout(&self) -> (u32, u32) {
+        self.tile_layout
+    }
+
     /// Where the scatter passes write (the spheres in cull order, each slot's
     /// position, each position's slot, the places' visibility bits) and what they read
     /// (each mesh's local bounds).

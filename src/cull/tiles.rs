@@ -84,27 +84,6 @@ impl TileMask {
         self.words.iter().map(|w| w.count_ones()).sum()
     }
 
-    /// Each changed tile as two triangles in the target's normalized coordinates
-    /// (clipped to the target): what the tile pass clears.
-    pub fn quads(&self) -> Vec<[f32; 2]> {
-        let target = UVec2::new(self.size.x * self.eyes.len() as u32, self.size.y);
-        let ndc = |x: u32, y: u32| {
-            [
-                x as f32 / target.x as f32 * 2.0 - 1.0,
-                1.0 - y as f32 / target.y as f32 * 2.0,
-            ]
-        };
-        (0..self.grid.x * self.grid.y)
-            .filter(|&i| self.changed(i))
-            .flat_map(|i| {
-                let (x, y) = ((i % self.grid.x) * TILE, (i / self.grid.x) * TILE);
-                let (x1, y1) = ((x + TILE).min(target.x), (y + TILE).min(target.y));
-                let [a, b, c, d] = [ndc(x, y), ndc(x1, y), ndc(x, y1), ndc(x1, y1)];
-                [a, b, c, c, b, d]
-            })
-            .collect()
-    }
-
     /// The tiles (first and last, inclusive) of the pixels sphere `s` may cover in eye
     /// `e`: its projected bounds grown by [`MARGIN_PX`], or the eye's whole view
     /// where it reaches the near plane; `None` outside the view.

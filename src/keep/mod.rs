@@ -56,6 +56,25 @@ pub enum WholeRedraw {
     Unsupported(&'static str),
 }
 
+/// A slot whose tiles a kept frame redraws: its instance's world sphere as last drawn
+/// and now (`None`: no instance).
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub struct Change {
+    /// The instance's slot.
+    pub slot: u32,
+    /// Its sphere as last drawn.
+    pub before: Option<Vec4>,
+    /// Its sphere now.
+    pub after: Option<Vec4>,
+}
+
+impl Change {
+    /// The spheres that mark its tiles.
+    pub fn spheres(&self) -> impl Iterator<Item = Vec4> {
+        self.before.into_iter().chain(self.after)
+    }
+}
+
 /// What a renderer tracks between frames to keep their unchanged pixels.
 pub struct Keeper {
     mode: KeepUnchanged,
@@ -71,9 +90,10 @@ pub struct Keeper {
     animates: Vec<bool>,
     animated: Vec<u32>,
     animated_stale: bool,
-    /// Spheres whose tiles changed since the last frame: each changed instance's before
-    /// and after.
-    changed: Vec<Vec4>,
+    /// The slots that changed since the last frame, each once, with its sphere as last
+    /// drawn and now; `pending[slot]`: its index in `changed` plus one (0: unchanged).
+    changed: Vec<Change>,
+    pending: Vec<u32>,
     /// A change since the last frame that redraws whole.
     forced: Option<WholeRedraw>,
     /// The head moves: changes are not tracked ([`WholeRedraw::Settling`]); `missed`:
@@ -106,6 +126,7 @@ impl Keeper {
             animated: Vec::new(),
             animated_stale: false,
             changed: Vec::new(),
+            pending: Vec::new(),
             forced: None,
             paused: false,
             missed: false,
@@ -171,9 +192,8 @@ impl Keeper {
                 self.spheres.resize(s + 1, None);
                 self.animates.resize(s + 1, false);
             }
-            self.changed.extend(self.spheres[s]);
             let now = occupied(slot).then(|| scene.world_sphere(&scene.instances[s]));
-            self.changed.extend(now);
+            self.change(slot, self.spheres[s], now);
             self.spheres[s] = now;
             self.blended |= now.is_some() && self.is_blended(scene, slot);
             let animated = now.is_some() && animates(scene, slot);
@@ -187,15 +207,42 @@ impl Keeper {
         }
     }
 
+    /// Slot `slot` goes from `before` to `after` this frame (after any earlier change
+    /// this frame: its first `before` stays).
+    fn change(&mut self, slot: u32, before: Option<Vec4>, after: Option<Vec4>) {
+        let s = slot as usize;
+        if s >= self.pending.len() {
+            self.pending.resize(s + 1, 0);
+        }
+        match self.pending[s] {
+            0 => {
+                self.changed.push(Change {
+                    slot,
+                    before,
+                    after,
+                });
+                self.pending[s] = self.changed.len() as u32;
+            }
+            at => self.changed[at as usize - 1].after = after,
+        }
+    }
+
+    fn set_pending(&mut self, changes: &[Change], value: u32) {
+        for c in changes {
+            self.pending[c.slot as usize] = value;
+        }
+    }
+
     /// The lights changed: they light pixels far from any changed instance.
     pub fn lights_changed(&mut self) {
         self.forced.get_or_insert(WholeRedraw::Scene);
     }
 
-    /// The frame at `rig`'s pose and `time`: either the spheres whose tiles it redraws,
+    /// The frame at `rig`'s pose and `time`: either the slots whose tiles it redraws,
     /// or why it redraws whole. Either way it becomes the last frame.
-    pub fn frame(&mut self, rig: &Rig, time: f32) -> Result<Vec<Vec4>, WholeRedraw> {
+    pub fn frame(&mut self, rig: &Rig, time: f32) -> Result<Vec<Change>, WholeRedraw> {
         let changed = std::mem::take(&mut self.changed);
+        self.set_pending(&changed, 0);
         let forced = self.forced.take();
         let last = self.last.replace((rig.clone(), time));
         if self.mode == KeepUnchanged::Off {
@@ -226,7 +273,7 @@ impl Keeper {
         if self.blended {
             return Err(WholeRedraw::Blended);
         }
-        let mut spheres = changed;
+        let mut changes = changed;
         if time != last_time {
             if self.animated_stale {
                 let flags = self.animates.iter().enumerate();
@@ -236,10 +283,24 @@ impl Keeper {
             if self.shadows && !self.animated.is_empty() {
                 return Err(WholeRedraw::Shadows);
             }
-            let animated = self.animated.iter();
-            spheres.extend(animated.filter_map(|&s| self.spheres[s as usize]));
+            // A changed slot's before and after already hold its animation's reach.
+            self.set_pending(&changes, 1);
+            let (pending, spheres) = (&self.pending, &self.spheres);
+            let unchanged = (self.animated.iter())
+                .filter(|&&s| pending.get(s as usize).is_none_or(|&p| p == 0));
+            let animated = unchanged.filter_map(|&slot| {
+                let x = spheres[slot as usize]?;
+                Some(Change {
+                    slot,
+                    before: Some(x),
+                    after: Some(x),
+                })
+            });
+            let animated: Vec<Change> = animated.collect();
+            self.set_pending(&changes, 0);
+            changes.extend(animated);
         }
-        Ok(spheres)
+        Ok(changes)
     }
 
     /// Whether changes are tracked: frames may keep pixels.

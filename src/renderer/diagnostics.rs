@@ -70,6 +70,27 @@ impl Diagnostics<'_> {
         culler.read_sphere_tests(self.device, self.queue, displays)
     }
 
+    /// Display `index`'s changed tiles in the last frame, a bit each (row-major over its
+    /// target, [`crate::cull::tiles::TileMask::words`]), as its draw pass cleared them
+    /// (whether the CPU or the GPU marked them); `None` where it was drawn whole or on a
+    /// classic path.
+    pub fn changed_tiles(&self, index: usize) -> Result<Option<Vec<u32>>> {
+        match &self.renderer.path {
+            Path::Indirect(p) => p.read_changed_tiles(self.device, self.queue, index),
+            Path::Classic(_) => Ok(None),
+        }
+    }
+
+    /// Tiles the last frame's displays redrew (0 where all were drawn whole).
+    pub fn tiles_changed(&self) -> Result<u32> {
+        let mut count = 0;
+        for i in 0..self.renderer.shapes.len() {
+            let words = self.changed_tiles(i)?.unwrap_or_default();
+            count += words.iter().map(|w| w.count_ones()).sum::<u32>();
+        }
+        Ok(count)
+    }
+
     /// Display `index`'s cull result of the last frame: on the indirect path its buffers
     /// read back (after the frame was submitted: the visible list up to the visible
     /// total, all draws, the draw count); in the classic modes the CPU cull they drew

@@ -199,11 +199,17 @@ impl Renderer {
         if !pairs {
             self.path.core_mut().draw_scene.keep_previous(encoder);
         }
+        // A kept frame's changed tiles: the spheres as last drawn, then as posed now.
+        let marked = self.path.core_mut().culler.encode_marks(encoder, false);
         let (mut posing, mut cpu_staging) = self.encode_pose(encoder, rec, false);
         if pairs {
             self.path.core_mut().draw_scene.keep_previous(encoder);
             let (second, staging) = self.encode_pose(encoder, rec, true);
             (posing, cpu_staging) = (posing + second, cpu_staging + staging);
+        }
+        let marked = marked + self.path.core_mut().culler.encode_marks(encoder, true);
+        if marked > 0 {
+            rec.log(PassRecord::frame("keep_mark"));
         }
         let coarse = match &self.path {
             Path::Indirect(p) => p.encode_frame(encoder, rec),
@@ -222,7 +228,7 @@ impl Renderer {
             None => (0, 0),
         };
         FrameStats {
-            dispatches: posing + coarse + shadowed,
+            dispatches: posing + marked + coarse + shadowed,
             draw_calls,
             cpu_staging,
             ..Default::default()

@@ -3,13 +3,15 @@
 
 use std::sync::Arc;
 
-use glam::{UVec2, Vec4};
+use glam::UVec2;
 
 use super::options::{OcclusionMode, PosingMode, RendererOptions, StereoMode};
-use super::plan::{CullView, FramePlan};
+use super::plan::{CullView, FramePlan, KeptTiles};
 use crate::contexts::DisplayContext;
+use crate::cull::tile_marks::{MARK_AFTER, MARK_BEFORE};
 use crate::cull::tiles::{self, CULL_TILES, TileEye, TileMask};
 use crate::frustum::sphere_in_planes;
+use crate::keep::Change;
 use crate::scene::Scene;
 
 /// Why no frame of a renderer made with `options` for `scene`, whose displays have
@@ -65,23 +67,30 @@ pub fn tiles(plan: &FramePlan) -> Vec<u32> {
         .collect()
 }
 
-/// Keeps `plan`'s frame: each display's tiles that `spheres` (the changed instances'
-/// bounds, before and after) cover, set into its plan, its cull and its context.
-/// Returns the tiles changed.
-pub fn keep(plan: &mut FramePlan, spheres: &[Vec4]) -> u32 {
+/// Keeps `plan`'s frame: each display's tiles that `changes` (the changed instances'
+/// bounds, before and after) cover, marked here (`on_gpu` false: returns the tiles
+/// changed) or listed for the GPU's marking pass (returns 0: the count is the GPU's,
+/// read back by the diagnostics). Either way set into each display's plan, cull and
+/// context.
+pub fn keep(plan: &mut FramePlan, changes: &[Change], on_gpu: bool) -> u32 {
+    if on_gpu {
+        plan.marks = changes.iter().map(mark_entry).collect();
+    }
     let mut changed = 0;
     for (i, context) in plan.displays.iter_mut().enumerate() {
+        context.hidden |= CULL_TILES;
+        if on_gpu {
+            plan.tiles[i] = Some(KeptTiles::Gpu);
+            continue;
+        }
         let (size, eyes) = eyes(context);
         let mut mask = TileMask::new(eyes, size);
         // What the display frustum does not hold no eye of the display sees.
-        let seen = spheres
-            .iter()
-            .filter(|&&s| sphere_in_planes(&context.planes, s));
-        for &s in seen {
+        let spheres = changes.iter().flat_map(Change::spheres);
+        for s in spheres.filter(|&s| sphere_in_planes(&context.planes, s)) {
             mask.mark(s);
         }
         changed += mask.count();
-        context.hidden |= CULL_TILES;
         let mask = Arc::new(mask);
         for cull in plan
             .culls
@@ -90,7 +99,22 @@ pub fn keep(plan: &mut FramePlan, spheres: &[Vec4]) -> u32 {
         {
             cull.job.tiles = Some(mask.clone());
         }
-        plan.tiles[i] = Some(mask);
+        plan.tiles[i] = Some(KeptTiles::Cpu(mask));
     }
     changed
+}
+
+/// `change`'s entry in the marking pass's list: its slot, and the phases that mark it.
+fn mark_entry(change: &Change) -> u32 {
+    let before = if change.before.is_some() {
+        MARK_BEFORE
+    } else {
+        0
+    };
+    let after = if change.after.is_some() {
+        MARK_AFTER
+    } else {
+        0
+    };
+    change.slot | before | after
 }

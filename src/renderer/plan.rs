@@ -45,8 +45,10 @@ pub struct FrameStats {
     /// edits).
     #[serde(skip)]
     pub cpu_staging: Duration,
-    /// Keeping unchanged pixels: the tiles the displays redrew (0 in a frame drawn
-    /// whole).
+    /// Keeping unchanged pixels with the CPU cull: the tiles the displays redrew, as
+    /// the CPU marked them (0 in a frame drawn whole, and with the GPU cull, whose
+    /// marking pass finds them: read them back with
+    /// [`crate::renderer::Diagnostics::tiles_changed`]).
     pub tiles_changed: u32,
     /// Why the frame was drawn whole (`None`: it kept what did not change).
     pub whole_redraw: Option<WholeRedraw>,
@@ -159,7 +161,30 @@ pub struct FramePlan {
     /// Per display: keeping unchanged pixels, its changed tiles, which its cull keeps
     /// only what touches and its draw pass alone redraws ([`crate::keep`]); `None`:
     /// drawn whole. The renderer sets them ([`crate::renderer::Renderer::prepare`]).
-    pub tiles: Vec<Option<Arc<TileMask>>>,
+    pub tiles: Vec<Option<KeptTiles>>,
+    /// Keeping unchanged pixels with the tiles marked on the GPU: the slots whose
+    /// tiles change, each with its phases ([`crate::cull::tile_marks::MARK_BEFORE`],
+    /// [`crate::cull::tile_marks::MARK_AFTER`]).
+    pub marks: Vec<u32>,
+}
+
+/// A kept display's changed tiles: marked on the CPU (culling on the CPU: its cull and
+/// its draw pass read this mask), or on the GPU by the marking pass, from the frame's
+/// listed slots ([`FramePlan::marks`], [`crate::cull::tile_marks`]).
+#[derive(Clone, Debug, PartialEq)]
+pub enum KeptTiles {
+    Cpu(Arc<TileMask>),
+    Gpu,
+}
+
+impl KeptTiles {
+    /// The mask the CPU marked.
+    pub fn mask(&self) -> Option<&TileMask> {
+        match self {
+            KeptTiles::Cpu(mask) => Some(mask),
+            KeptTiles::Gpu => None,
+        }
+    }
 }
 
 impl FramePlan {
@@ -279,6 +304,7 @@ impl FramePlan {
             inset_culls,
             hidden,
             tiles: vec![None; rig.displays.len()],
+            marks: Vec::new(),
         })
     }
 

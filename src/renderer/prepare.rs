@@ -86,7 +86,10 @@ impl Renderer {
             self.motion_from = self.motion_last.take();
         }
         let (tiles_changed, whole_redraw) = match self.keeper.frame(rig, time) {
-            Ok(spheres) => (keeping::keep(&mut plan, &spheres), None),
+            Ok(changes) => {
+                let on_gpu = self.options.cull == super::options::CullMode::Gpu;
+                (keeping::keep(&mut plan, &changes, on_gpu), None)
+            }
             Err(why) => (0, Some(why)),
         };
         self.keeps = whole_redraw.is_none();

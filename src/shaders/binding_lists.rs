@@ -347,12 +347,43 @@ pub const VISIBILITY_MASK_BINDINGS: [Binding; 1] = [binding(
     wgpu::ShaderStages::VERTEX,
 )];
 
-/// A kept frame's changed tiles cleared (`wgsl/keep_tiles.wgsl`): their triangles'
-/// corners, placed in the target.
+/// A kept frame's changed tiles marked on the GPU (`wgsl/keep_mark.wgsl`).
+pub const MARK_TILES_BINDINGS: [Binding; 6] = [
+    // The listed slots, each with its phases' flags.
+    binding("marks", Access::StorageRead, "Marks", COMPUTE),
+    // The phase this dispatch marks: MARK_BEFORE or MARK_AFTER.
+    binding("phase", Access::Uniform, "u32", COMPUTE),
+    binding(
+        "tile_displays",
+        Access::StorageRead,
+        "array<TileDisplay>",
+        COMPUTE,
+    ),
+    // Cull position of each slot.
+    binding("positions", Access::StorageRead, "array<u32>", COMPUTE),
+    // The GPU culler's occlusion words (CULL_BINDINGS' `occlusion`): each display's
+    // tiles.
+    binding(
+        "tiles",
+        Access::StorageReadWrite,
+        "array<atomic<u32>>",
+        COMPUTE,
+    ),
+    windowed(
+        "spheres",
+        Access::StorageRead,
+        "array<vec4<f32>>",
+        COMPUTE,
+        Windowed::Spheres,
+    ),
+];
+
+/// A kept frame's changed tiles cleared (`wgsl/keep_tiles.wgsl`): the display's grid
+/// of tiles and their bits.
 pub const KEEP_TILES_BINDINGS: [Binding; 1] = [binding(
-    "corners",
+    "tiles",
     Access::StorageRead,
-    "array<vec2<f32>>",
+    "TileWords",
     wgpu::ShaderStages::VERTEX,
 )];
 

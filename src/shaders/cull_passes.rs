@@ -7,7 +7,7 @@ use super::binding_lists::{PYRAMID_SET_DEPTHS, PYRAMID_SET_SLICES, pyramid_bindi
 use super::bindings::declarations;
 use super::{
     CANDIDATE_BINDINGS, COARSE_BINDINGS, CONTEXTS, CULL_BINDINGS, CULL_MATH, CULL_SUBGROUPS, KEEP,
-    OCCLUSION, PYRAMID, RECORDS, WORKGROUP_SIZE, Windows, constants,
+    OCCLUSION, PYRAMID, RECORDS, SPHERE_PIXELS, WORKGROUP_SIZE, Windows, constants,
 };
 
 const OVER_EVERYTHING: &str = include_str!("../../wgsl/shared/over_everything.wgsl");
@@ -204,6 +204,7 @@ impl CullPass {
             CONTEXTS,
             RECORDS,
             &bindings,
+            SPHERE_PIXELS,
             CULL_MATH,
             over,
             PYRAMID,

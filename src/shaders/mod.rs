@@ -36,6 +36,16 @@ pub const TILE: u32 = 16;
 /// rounding of the projection (as occlusion's, `crate::contexts::BOUNDS_GROWTH_PX`).
 pub const TILE_MARGIN_PX: f32 = 1.0;
 
+/// A slot listed for the tile marking pass ([`crate::cull::tile_marks`]): it held an
+/// instance as last drawn (its sphere then marks).
+pub const MARK_BEFORE: u32 = 1 << 31;
+/// A listed slot's flag: it holds an instance now (its sphere now marks).
+pub const MARK_AFTER: u32 = 1 << 30;
+/// The slot's bits of a listed entry.
+pub const MARK_SLOT: u32 = MARK_AFTER - 1;
+/// Invocations per workgroup of the tile marking pass.
+pub const MARK_GROUP: u32 = 64;
+
 /// Views a display's hidden area holds ([`crate::cull::hidden`]): a stereo pair, or two
 /// frames' pairs in one submission ([`crate::renderer::frames`]).
 pub const MAX_HIDDEN_VIEWS: usize = 4;
@@ -60,6 +70,7 @@ const CULL_MATH: &str = include_str!("../../wgsl/shared/cull_math.wgsl");
 const PYRAMID: &str = include_str!("../../wgsl/shared/pyramid.wgsl");
 const OCCLUSION: &str = include_str!("../../wgsl/shared/occlusion.wgsl");
 const KEEP: &str = include_str!("../../wgsl/shared/keep.wgsl");
+const SPHERE_PIXELS: &str = include_str!("../../wgsl/shared/sphere_pixels.wgsl");
 const CULL_SUBGROUPS: &str = concat!(
     include_str!("../../wgsl/cull.wgsl"),
     include_str!("../../wgsl/cull_subgroups.wgsl")
@@ -88,9 +99,9 @@ mod windows;
 pub use binding_lists::{
     CANDIDATE_BINDINGS, COARSE_BINDINGS, CULL_BINDINGS, DEPTH_RESOLVE_BINDINGS, DRAW_BINDINGS,
     FAR_COMPOSITE_BINDINGS, FOVEATED_COMPOSITE_BINDINGS, KEEP_TILES_BINDINGS,
-    LIGHT_CLUSTER_BINDINGS, MATERIAL_BINDINGS, MORPH_BINDINGS, MOTION_BINDINGS, POSE_BINDINGS,
-    PYRAMID_SET_DEPTHS, PYRAMID_SET_SLICES, SCATTER_BINDINGS, SHADOW_MAP_BINDINGS, SKIN_BINDINGS,
-    VISIBILITY_MASK_BINDINGS, pyramid_bindings,
+    LIGHT_CLUSTER_BINDINGS, MARK_TILES_BINDINGS, MATERIAL_BINDINGS, MORPH_BINDINGS,
+    MOTION_BINDINGS, POSE_BINDINGS, PYRAMID_SET_DEPTHS, PYRAMID_SET_SLICES, SCATTER_BINDINGS,
+    SHADOW_MAP_BINDINGS, SKIN_BINDINGS, VISIBILITY_MASK_BINDINGS, pyramid_bindings,
 };
 pub use bindings::{
     Access, Binding, Bound, TextureKind, bind_group, bind_group_layout, declarations,
@@ -143,6 +154,24 @@ pub fn scatter_source(windows: &Windows, kind: EditKind) -> String {
         hidden_constant()
     );
     [&span, RECORDS, &bindings, shared, body].concat()
+}
+
+/// The marking pass of a kept frame's changed tiles ([`crate::cull::tile_marks`]) for
+/// spheres bound in `windows`.
+pub fn keep_mark_source(windows: &Windows) -> String {
+    let bindings = declarations(&MARK_TILES_BINDINGS, 0, windows);
+    let marks =
+        format!("const MARK_GROUP: u32 = {MARK_GROUP}u;\nconst MARK_SLOT: u32 = {MARK_SLOT}u;\n");
+    let body = include_str!("../../wgsl/keep_mark.wgsl");
+    [
+        &constants(),
+        &marks,
+        RECORDS,
+        &bindings,
+        SPHERE_PIXELS,
+        body,
+    ]
+    .concat()
 }
 
 /// The shading function of [`crate::scene::Shading::Unlit`] materials: the base color alone.
@@ -337,6 +366,7 @@ pub fn all_sources() -> Vec<(String, String)> {
                     "stereocull.keep_tiles".to_string(),
                     keep_tiles_source(wgpu::TextureFormat::Rgba8UnormSrgb, wgpu::Color::BLACK),
                 ),
+                ("stereocull.keep_mark".to_string(), keep_mark_source(w)),
                 ("stereocull.morph".to_string(), morph_source()),
                 (
                     "stereocull.light_clusters".to_string(),

@@ -55,9 +55,10 @@ pub fn visibility_mask_source(multiview: bool) -> String {
 pub fn keep_tiles_source(format: wgpu::TextureFormat, clear: wgpu::Color) -> String {
     let [r, g, b, a] = stored_clear(format, clear);
     let clear = format!("const CLEAR_COLOR: vec4<f32> = vec4<f32>({r:?}, {g:?}, {b:?}, {a:?});\n");
+    let tile = format!("const TILE: u32 = {}u;\n", super::TILE);
     let bindings = declarations(&KEEP_TILES_BINDINGS, 0, &Windows::WHOLE);
     let body = include_str!("../../wgsl/keep_tiles.wgsl");
-    [clear, bindings, body.to_string()].concat()
+    [clear, tile, bindings, body.to_string()].concat()
 }
 
 /// Clear color `c` as a fragment must write it to store what a clear stores: in

@@ -1,15 +1,3 @@
-// The CPU twin is frustum::sphere_in_planes. Same products, same sums, left to right,
-// no fma: CPU and GPU reach identical decisions, which the byte-for-byte tests need.
-fn sphere_in_planes(planes: array<vec4<f32>, 6>, s: vec4<f32>) -> bool {
-    for (var i = 0u; i < 6u; i++) {
-        let p = planes[i];
-        if (p.x * s.x + p.y * s.y + p.z * s.z + p.w < -s.w) {
-            return false;
-        }
-    }
-    return true;
-}
-
 // A block's box (center c.xyz, half extents e) against a slot's test. The CPU twin
 // is CoarseCull::test_block.
 fn block_test(t: CoarseTest, c: vec4<f32>, e: vec3<f32>) -> bool {

@@ -9,7 +9,6 @@
 // non-negative floats order as their bits).
 
 const ENTRY_SEEN: u32 = 0x40000000u;
-const DEPTH_SLACK: f32 = 1.0 / 262144.0;
 const DEPTH_MARGIN: f32 = 1.0 / 1048576.0;
 
 // Whether the display drew cull position k last frame.
@@ -85,36 +84,6 @@ fn occluded_for(s: vec4<f32>, o: RigOcclusion, base: u32) -> bool {
 
 fn pyramid_texel(i: u32) -> f32 {
     return bitcast<f32>(occlusion[i]);
-}
-
-fn view_center(s: vec4<f32>, m: mat4x4<f32>) -> vec3<f32> {
-    return vec3(
-        m[0].x * s.x + m[1].x * s.y + m[2].x * s.z + m[3].x,
-        m[0].y * s.x + m[1].y * s.y + m[2].y * s.z + m[3].y,
-        m[0].z * s.x + m[1].z * s.y + m[2].z * s.z + m[3].z,
-    );
-}
-
-// The radius grown for the rounding of c (grown_radius in src/occlusion/mod.rs: the
-// same sum, left to right).
-fn grown_radius(s: vec4<f32>, m: mat4x4<f32>, c: vec3<f32>) -> f32 {
-    let t = m[3];
-    let magnitude = abs(c.x) + abs(c.y) + abs(c.z) + abs(s.x) + abs(s.y) + abs(s.z) + abs(t.x) + abs(t.y) + abs(t.z) + s.w;
-    return s.w + magnitude * DEPTH_SLACK;
-}
-
-// Depth-buffer value at view distance d > 0.
-fn depth_at(d: f32, clip: mat4x4<f32>) -> f32 {
-    return (clip[2].z * -d + clip[3].z) / d;
-}
-
-// Slopes (a / z) of the two tangents from the eye to the circle of radius r about
-// (a, z), least first.
-fn tangent_slopes(a: f32, z: f32, r: f32) -> vec2<f32> {
-    let t = sqrt(a * a + z * z - r * r);
-    let lo = (a * t - z * r) / (z * t + a * r);
-    let hi = (a * t + z * r) / (z * t - a * r);
-    return vec2(lo, hi);
 }
 
 // The finest level where pixels lo..=hi span at most two texels per axis.

@@ -1,5 +1,5 @@
-//! The GPU culler's per-frame writes into its buffers: the changed tiles, the hidden
-//! areas, the coarse cull's block tests and the rig cull's members.
+//! The GPU culler's per-frame writes into its buffers: the hidden areas, the coarse
+//! cull's block tests and the rig cull's members.
 
 use super::CullScene;
 use crate::buffers::Upload;
@@ -11,16 +11,6 @@ use glam::Vec4;
 use std::sync::Arc;
 
 impl CullScene {
-    /// Writes display slot `slot`'s changed tiles for this frame (keeping unchanged
-    /// pixels); returns the bytes written.
-    pub fn write_tiles(&self, queue: &impl Upload, slot: u32, words: &[u32]) -> u64 {
-        let (offset, stride) = self.tile_layout;
-        let words = &words[..words.len().min(stride as usize)];
-        let at = 4 * (offset + slot * stride) as u64;
-        queue.write_buffer(&self.occlusion, at, bytemuck::cast_slice(words));
-        4 * words.len() as u64
-    }
-
     /// Writes this frame's hidden areas, one per display slot (in order; `None` drops
     /// nothing). Returns the bytes written; nothing where no display's cull drops by one.
     pub fn write_hidden(&self, queue: &impl Upload, areas: &[Option<Arc<HiddenArea>>]) -> u64 {

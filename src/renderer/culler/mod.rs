@@ -10,6 +10,7 @@
 
 mod diagnostics;
 mod edits;
+mod marks;
 
 pub use diagnostics::WallCulls;
 mod occlusion;
@@ -26,6 +27,7 @@ use crate::cull::gpu::{CoarseGroups, CullerFeatures, GpuCuller};
 use crate::cull::gpu_buffers::{CullScene, OcclusionRoom};
 use crate::cull::rig::RigSets;
 use crate::cull::targets::CullTargets;
+use crate::cull::tile_marks::TileMarks;
 
 use crate::occlusion::{Phase, cull_early};
 use crate::records::CullLayout;
@@ -55,6 +57,8 @@ enum Kind {
         /// groups (made with the first member's view).
         rig: Vec<CullTargets>,
         rig_groups: OnceLock<Vec<wgpu::BindGroup>>,
+        /// Keeping unchanged pixels: the pass that marks the changed tiles.
+        marks: Option<TileMarks>,
     },
     /// The CPU culler over its own copy of the cull layout, and this frame's results;
     /// with occlusion, per display that culls by it its visibility words (the CPU's
@@ -151,12 +155,17 @@ impl Culler {
                     0 => Vec::new(),
                     n => CullTargets::bank(device, shape.slots, draws, n),
                 };
+                let marks = (shape.occlusion.tiles.0 > 0).then(|| {
+                    let room = (shape.slots, shape.occlusion.tiles.0);
+                    TileMarks::new(device, &scene, room, windows)
+                });
                 Kind::Gpu {
                     culler,
                     scene,
                     coarse,
                     rig,
                     rig_groups: OnceLock::new(),
+                    marks,
                 }
             }
         };
@@ -223,16 +232,15 @@ impl Culler {
     /// displays' hidden areas and changed tiles. Returns the bytes written.
     pub(super) fn prepare(&mut self, queue: &impl Upload, plan: &FramePlan) -> u64 {
         match &mut self.kind {
-            Kind::Gpu { scene, .. } => {
+            Kind::Gpu { scene, marks, .. } => {
                 let planes: Vec<_> = plan.resolved.displays.iter().map(|d| d.planes).collect();
-                let tiles = (plan.tiles.iter().zip(&plan.displays))
-                    .filter_map(|(t, d)| {
-                        Some(scene.write_tiles(queue, d.cull_slot, &t.as_ref()?.words))
-                    })
-                    .sum::<u64>();
+                let marked = match marks {
+                    Some(marks) => marks::write_marks(queue, marks, plan),
+                    None => 0,
+                };
                 scene.write_block_tests(queue, &planes)
                     + scene.write_hidden(queue, &plan.hidden)
-                    + tiles
+                    + marked
             }
             Kind::Cpu {
                 layout,

@@ -24,6 +24,26 @@ impl IndirectPath {
         self.read_targets(device, queue, self.displays[index].view.cull())
     }
 
+    /// Display `index`'s changed tiles in the last frame (`None`: drawn whole), as its
+    /// tile pass read them (marked on the CPU or the GPU), read back.
+    pub(in crate::renderer) fn read_changed_tiles(
+        &self,
+        device: &wgpu::Device,
+        queue: &wgpu::Queue,
+        index: usize,
+    ) -> Result<Option<Vec<u32>>> {
+        let (Some(keep), Some(kept)) = (&self.keep, self.kept[index]) else {
+            return Ok(None);
+        };
+        let at = keep.words(index);
+        Ok(Some(read_pod_at(
+            device,
+            queue,
+            at,
+            4 * u64::from(kept.words),
+        )?))
+    }
+
     /// Display `index`'s far layer's cull buffers (`None` without one), read back after
     /// the frame was submitted.
     pub(in crate::renderer) fn read_far_cull(

@@ -24,6 +24,7 @@ use crate::occlusion::{Phase, PyramidShape};
 use crate::renderer::culler::{CullShape, Culler};
 use crate::renderer::keeping;
 use crate::renderer::options::StereoMode;
+use crate::renderer::plan::KeptTiles;
 use crate::renderer::plan::{CullView, FramePlan, FrameStats};
 use crate::renderer::recorder::{PassRecord, Recorder, begin_draw_pass};
 use crate::renderer::targets::TargetViews;
@@ -56,9 +57,18 @@ pub(in crate::renderer) struct IndirectPath {
     /// first in the display's clearing draw pass.
     pub(in crate::renderer) masks: Vec<Option<(MaskPipeline, DisplayMask)>>,
     /// Keeping unchanged pixels where frames may: the pass that clears changed tiles.
-    keep: Option<KeepTiles>,
-    /// Per display: whether this frame keeps its unchanged pixels.
-    kept: Vec<bool>,
+    pub(super) keep: Option<KeepTiles>,
+    /// Per display: whether this frame keeps its unchanged pixels, and how.
+    pub(super) kept: Vec<Option<Kept>>,
+}
+
+/// A display whose frame keeps its unchanged pixels.
+#[derive(Clone, Copy, Debug)]
+pub(super) struct Kept {
+    /// Words of its tiles' bits.
+    pub words: u32,
+    /// The cull slot whose tiles the GPU marked (`None`: the CPU marked them).
+    pub marked_in: Option<u32>,
 }
 
 impl IndirectPath {
@@ -154,7 +164,7 @@ impl IndirectPath {
             pyramids,
             masks: Vec::new(),
             keep,
-            kept: vec![false; plan.displays.len()],
+            kept: vec![None; plan.displays.len()],
         })
     }
 
@@ -187,10 +197,16 @@ impl IndirectPath {
             stats.bytes_uploaded += far.prepare(to, &plan, &self.core.culler);
         }
         for (i, tiles) in plan.tiles.iter().enumerate() {
-            self.kept[i] = false;
+            self.kept[i] = None;
             if let (Some(keep), Some(tiles)) = (&mut self.keep, tiles) {
-                stats.bytes_uploaded += keep.write(to.queue, i, tiles);
-                self.kept[i] = true;
+                let c = &plan.displays[i];
+                let (size, views) = (c.resolution.as_uvec2(), c.views.min(2));
+                stats.bytes_uploaded += keep.write(to.queue, i, (size, views), tiles.mask());
+                let g = crate::cull::tiles::grid(size, views);
+                self.kept[i] = Some(Kept {
+                    words: crate::cull::tiles::tile_words(g),
+                    marked_in: matches!(tiles, KeptTiles::Gpu).then_some(c.cull_slot),
+                });
             }
         }
         stats.cpu_upload = start.elapsed();
@@ -226,7 +242,13 @@ impl IndirectPath {
         // With occlusion the far layer is drawn and composited in the late phase.
         let composite = self.displays[index].late.is_none();
         let mut open = rec.open(encoder, PassRecord::display("draw", index));
-        let kept = self.kept[index];
+        let kept = self.kept[index].is_some();
+        // Where the GPU marked this display's tiles, in the culler's buffer.
+        let marked = (self.kept[index].as_ref())
+            .and_then(|k| self.core.culler.marked_words(k.marked_in?, k.words));
+        if let (Some(keep), Some(marked)) = (&self.keep, marked) {
+            keep.copy(encoder, index, marked);
+        }
         let mut pass = begin_draw_pass(encoder, rec, (target, !kept, multiview), &mut open);
         let mut draw_calls = match (&self.keep, kept) {
             (Some(keep), true) => keep.draw(&mut pass, index),
