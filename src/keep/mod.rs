@@ -44,8 +44,8 @@ pub enum WholeRedraw {
     /// The head just stopped: instances changed while it moved, untracked (tracking
     /// costs every moving frame), so their bounds are taken again at the next sync.
     Settling,
-    /// The scene was laid out again or grew, or a light changed (it lights every
-    /// pixel it reaches).
+    /// The scene was laid out again or grew, a light changed (it lights every pixel
+    /// it reaches), or morph weights were set by hand.
     Scene,
     /// With shadows, an instance changed: its shadow falls away from it.
     Shadows,
@@ -84,8 +84,10 @@ pub struct Keeper {
     last: Option<(Rig, f32)>,
     /// Each slot's world sphere as last drawn (`None`: vacant).
     spheres: Vec<Option<Vec4>>,
-    /// Per slot, whether its instance spins or bobs (its pixels change with the time),
-    /// and those slots in order; rebuilt from the flags when one changes (rarely: moves
+    /// What the time moves.
+    by_time: ByTime,
+    /// Per slot, whether its pixels change with the time ([`ByTime::moves`]), and those
+    /// slots in order; rebuilt from the flags when one changes (rarely: moves
     /// keep an instance's animation).
     animates: Vec<bool>,
     animated: Vec<u32>,
@@ -122,6 +124,10 @@ impl Keeper {
             never,
             last: None,
             spheres: Vec::new(),
+            by_time: ByTime {
+                posed: Vec::new(),
+                morphed: Vec::new(),
+            },
             animates: Vec::new(),
             animated: Vec::new(),
             animated_stale: false,
@@ -154,7 +160,11 @@ impl Keeper {
         self.spheres = (slots.clone())
             .map(|s| occupied(s).then(|| scene.world_sphere(&scene.instances[s as usize])))
             .collect();
-        self.animates = slots.map(|s| occupied(s) && animates(scene, s)).collect();
+        self.by_time = ByTime::of(scene);
+        let by_time = &self.by_time;
+        self.animates = slots
+            .map(|s| occupied(s) && by_time.moves(scene, s))
+            .collect();
         self.animated_stale = true;
         let bins = crate::bins::Bins::of(scene);
         let first = bins.first_blend_bin();
@@ -196,7 +206,7 @@ impl Keeper {
             self.change(slot, self.spheres[s], now);
             self.spheres[s] = now;
             self.blended |= now.is_some() && self.is_blended(scene, slot);
-            let animated = now.is_some() && animates(scene, slot);
+            let animated = now.is_some() && self.by_time.moves(scene, slot);
             if self.animates[s] != animated {
                 self.animates[s] = animated;
                 self.animated_stale = true;
@@ -233,8 +243,10 @@ impl Keeper {
         }
     }
 
-    /// The lights changed: they light pixels far from any changed instance.
-    pub fn lights_changed(&mut self) {
+    /// The lights changed (they light pixels far from any changed instance), or morph
+    /// weights were set by hand (every instance of the mesh moves): the next frame is
+    /// drawn whole.
+    pub fn redraw_whole(&mut self) {
         self.forced.get_or_insert(WholeRedraw::Scene);
     }
 
@@ -320,8 +332,53 @@ impl Keeper {
     }
 }
 
-/// Whether the instance in `slot` spins or bobs.
-fn animates(scene: &Scene, slot: u32) -> bool {
-    let a = scene.instances[slot as usize].animation;
-    a.spin != 0.0 || a.bob != 0.0
+/// What the time alone moves in a scene: per slot, whether the scene's own animations
+/// pose it (its node's clips or its skin; the slots as loaded), and per mesh whether
+/// its morph's weights play.
+struct ByTime {
+    posed: Vec<bool>,
+    morphed: Vec<bool>,
+}
+
+impl ByTime {
+    fn of(scene: &Scene) -> ByTime {
+        let mut posed = vec![false; scene.instances.len()];
+        let skins = scene.skins.skins.iter().map(|s| s.instance);
+        for slot in scene
+            .posing
+            .instances
+            .iter()
+            .map(|n| n.instance)
+            .chain(skins)
+        {
+            if let Some(p) = posed.get_mut(slot as usize) {
+                *p = true;
+            }
+        }
+        let mut morphed = vec![false; scene.meshes.len()];
+        let played = scene
+            .morphs
+            .morphs
+            .iter()
+            .filter(|m| !m.channels.is_empty());
+        for m in played {
+            morphed[m.mesh as usize] = true;
+        }
+        ByTime { posed, morphed }
+    }
+
+    /// Whether the instance in `slot` changes with the time: it spins or bobs, is
+    /// posed, or draws a playing morph.
+    fn moves(&self, scene: &Scene, slot: u32) -> bool {
+        let instance = &scene.instances[slot as usize];
+        let a = instance.animation;
+        a.spin != 0.0
+            || a.bob != 0.0
+            || self.posed.get(slot as usize).copied().unwrap_or(false)
+            || self
+                .morphed
+                .get(instance.mesh as usize)
+                .copied()
+                .unwrap_or(false)
+    }
 }

@@ -34,11 +34,8 @@ pub fn never(
         _ if views.any(|v| v > 2) => {
             "a foveated display's insets are composited over its outer views"
         }
-        _ if !scene.skins.is_empty() || !scene.morphs.is_empty() => {
-            "skins and morph targets move vertices that no instance's change marks"
-        }
-        o if o.posing == PosingMode::Gpu && !scene.posing.clips.is_empty() => {
-            "posing on the GPU moves instances the CPU never sees change: pose on the CPU"
+        o if o.posing == PosingMode::Gpu && !scene.posing.lights.is_empty() => {
+            "lights posed on the GPU light every pixel they reach: pose on the CPU"
         }
         _ => return None,
     })

@@ -305,7 +305,7 @@ impl Renderer {
     /// follow): an engine moves, adds and removes lights so. More than
     /// [`crate::lights::MAX_LIGHTS`], or a light that is not valid, is an error.
     pub fn set_lights(&mut self, lights: &[crate::lights::Light]) -> Result<()> {
-        self.keeper.lights_changed();
+        self.keeper.redraw_whole();
         self.lighting.set(lights)
     }
 
@@ -317,7 +317,9 @@ impl Renderer {
     pub fn set_morph_weights(&mut self, m: usize, weights: &[f32]) -> Result<()> {
         let morph = (self.morph.as_mut())
             .ok_or_else(|| Error::InvalidScene("the scene has no morph targets".into()))?;
-        morph.set_weights(m, weights).map_err(Error::InvalidScene)
+        morph.set_weights(m, weights).map_err(Error::InvalidScene)?;
+        self.keeper.redraw_whole();
+        Ok(())
     }
 
     /// Vertices the frame's morph pass moves (0 without morph targets).

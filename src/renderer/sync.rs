@@ -52,7 +52,7 @@ impl Renderer {
         }
         if changes.lights {
             self.lighting.set(&live.lights())?;
-            self.keeper.lights_changed();
+            self.keeper.redraw_whole();
         }
         let joints = std::mem::take(&mut changes.joints);
         let driven = std::mem::take(&mut changes.driven);
