@@ -23,11 +23,12 @@ use stereocull::scene::Vertex;
 use stereocull::shaders::{
     Access, Binding, CANDIDATE_BINDINGS, COARSE_BINDINGS, CULL_BINDINGS, CullPass,
     DEPTH_RESOLVE_BINDINGS, DRAW_BINDINGS, DrawKey, EditKind, FAR_COMPOSITE_BINDINGS,
-    FOVEATED_COMPOSITE_BINDINGS, KEEP_TILES_BINDINGS, MARK_TILES_BINDINGS, MATERIAL_BINDINGS,
-    MOTION_BINDINGS, POSE_BINDINGS, PYRAMID_SET_DEPTHS, SCATTER_BINDINGS, SHADOW_MAP_BINDINGS,
-    SKIN_BINDINGS, Window, Windows, all_sources, depth_resolve_source, far_composite_source,
-    foveated_composite_source, keep_mark_source, keep_tiles_source, pose_source, pyramid_bindings,
-    pyramid_source, scatter_source, shadow_cutout_source, shadow_source, skin_source,
+    FOVEATED_COMPOSITE_BINDINGS, KEEP_LIST_BINDINGS, KEEP_TILES_BINDINGS, MARK_TILES_BINDINGS,
+    MATERIAL_BINDINGS, MOTION_BINDINGS, POSE_BINDINGS, PYRAMID_SET_DEPTHS, SCATTER_BINDINGS,
+    SHADOW_MAP_BINDINGS, SKIN_BINDINGS, Window, Windows, all_sources, depth_resolve_source,
+    far_composite_source, foveated_composite_source, keep_list_source, keep_mark_source,
+    keep_tiles_source, pose_source, pyramid_bindings, pyramid_source, scatter_source,
+    shadow_cutout_source, shadow_source, skin_source,
 };
 
 fn parse(label: &str, source: &str) -> Module {
@@ -608,6 +609,17 @@ fn tile_records_match_wgsl() {
     ];
     let want: Vec<(String, u32)> = want.map(|(n, o)| (n.to_string(), o as u32)).into();
     assert_eq!(members, want);
+    // The listing's count is the tile pass's indirect draw.
+    let (members, span) = wgsl_struct(&parse("keep_list", &keep_list_source()), "TileDraw");
+    use wgpu::util::DrawIndirectArgs as Args;
+    let want = [
+        ("vertex_count", offset_of!(Args, vertex_count)),
+        ("instance_count", offset_of!(Args, instance_count)),
+        ("first_vertex", offset_of!(Args, first_vertex)),
+        ("first_instance", offset_of!(Args, first_instance)),
+    ];
+    let want: Vec<(String, u32)> = want.map(|(n, o)| (n.to_string(), o as u32)).into();
+    assert_eq!((members, span as usize), (want, size_of::<Args>()));
 }
 
 #[test]
@@ -704,11 +716,16 @@ fn pipelines_and_their_lists() -> Vec<(String, String, Vec<Vec<Binding>>)> {
             )
         }),
     );
-    let others: [(&str, String, Vec<Vec<Binding>>); 9] = [
+    let others: [(&str, String, Vec<Vec<Binding>>); 10] = [
         (
             "keep_mark",
             keep_mark_source(whole),
             lists(&[&MARK_TILES_BINDINGS]),
+        ),
+        (
+            "keep_list",
+            keep_list_source(),
+            lists(&[&KEEP_LIST_BINDINGS]),
         ),
         ("shadow", shadow_source(whole), lists(&[&DRAW_BINDINGS])),
         (

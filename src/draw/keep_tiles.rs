@@ -1,21 +1,24 @@
 //! A kept frame's changed tiles cleared ([`crate::keep`], `wgsl/keep_tiles.wgsl`): at
 //! the start of a display's draw pass, which loads last frame's color and depth, each
 //! changed tile becomes the clear color at the far plane, as a cleared pass would
-//! leave it, before the scene redraws it. One draw per display: an instance of two
-//! triangles per tile, placed from the tile's bit, which the CPU writes (culling on
-//! the CPU) or the GPU's marking pass leaves in the culler's occlusion buffer
-//! ([`crate::cull::tile_marks`]), copied here.
+//! leave it, before the scene redraws it. The tiles' bits come from the CPU (culling on
+//! the CPU) or from the GPU's marking pass, copied here from the culler's occlusion
+//! buffer ([`crate::cull::tile_marks`]). A dispatch lists the changed tiles
+//! (`wgsl/keep_list.wgsl`) and one indirect draw per display clears them: an instance
+//! of two triangles per changed tile, none for the rest.
 
 use super::TargetFormat;
 use crate::buffers::storage_buffer;
 use crate::cull::tiles::{self, TileMask};
 use crate::shaders::{
-    Bound, KEEP_TILES_BINDINGS, ScreenTargets, Windows, bind_group, bind_group_layout, depth_write,
-    keep_tiles_source, screen_pipeline,
+    Bound, KEEP_LIST_BINDINGS, KEEP_TILES_BINDINGS, LIST_GROUP, ScreenTargets, Windows, bind_group,
+    bind_group_layout, compute_pipeline, depth_write, keep_list_source, keep_tiles_source,
+    pipeline_layout, screen_pipeline,
 };
 use glam::UVec2;
 
-/// A display's grid of tiles (`TileWords` in `wgsl/keep_tiles.wgsl`), before its bits.
+/// A display's grid of tiles (`TileWords` in `wgsl/shared/tile_words.wgsl`), before its
+/// bits.
 #[repr(C)]
 #[derive(Clone, Copy, Debug, PartialEq, Eq, bytemuck::Pod, bytemuck::Zeroable)]
 pub struct TileGrid {
@@ -29,17 +32,30 @@ pub struct TileGrid {
 
 const GRID_BYTES: u64 = size_of::<TileGrid>() as u64;
 
-/// The tile pass's pipeline for targets of one format, and each display's tiles.
+/// The tile pass's draw before the listing counts its instances: six corners each.
+const NO_TILES: wgpu::util::DrawIndirectArgs = wgpu::util::DrawIndirectArgs {
+    vertex_count: 6,
+    instance_count: 0,
+    first_vertex: 0,
+    first_instance: 0,
+};
+
+/// The tile pass's pipelines for targets of one format (the listing and the clear),
+/// and each display's tiles.
 pub struct KeepTiles {
-    pipeline: wgpu::RenderPipeline,
+    list: wgpu::ComputePipeline,
+    clear: wgpu::RenderPipeline,
     displays: Vec<DisplayTiles>,
 }
 
-/// One display's grid and bits, bound, and its tiles when this frame keeps.
+/// One display's grid and bits, its changed tiles' list and draw, bound, and its words
+/// when this frame keeps (0: it does not).
 struct DisplayTiles {
     words: wgpu::Buffer,
-    bind_group: wgpu::BindGroup,
-    tiles: u32,
+    draw: wgpu::Buffer,
+    list_group: wgpu::BindGroup,
+    clear_group: wgpu::BindGroup,
+    word_count: u32,
 }
 
 impl KeepTiles {
@@ -48,7 +64,15 @@ impl KeepTiles {
     /// `tiles[i]` tiles on display `i`.
     pub fn new(device: &wgpu::Device, format: TargetFormat, tiles: &[u32]) -> KeepTiles {
         let label = "stereocull.keep_tiles";
-        let layout = bind_group_layout(device, label, &KEEP_TILES_BINDINGS, &Windows::WHOLE);
+        let list_layout = bind_group_layout(device, label, &KEEP_LIST_BINDINGS, &Windows::WHOLE);
+        let clear_layout = bind_group_layout(device, label, &KEEP_TILES_BINDINGS, &Windows::WHOLE);
+        let list = compute_pipeline(
+            device,
+            "stereocull.keep_list",
+            &pipeline_layout(device, label, &list_layout),
+            keep_list_source(),
+            "list_tiles",
+        );
         let targets = ScreenTargets {
             color: vec![wgpu::ColorTargetState {
                 format: format.color,
@@ -59,36 +83,24 @@ impl KeepTiles {
             samples: format.samples,
             multiview_mask: None,
         };
-        let pipeline = screen_pipeline(
+        let clear = screen_pipeline(
             device,
             label,
-            (keep_tiles_source(format.color, super::CLEAR_COLOR), &layout),
+            (
+                keep_tiles_source(format.color, super::CLEAR_COLOR),
+                &clear_layout,
+            ),
             targets,
         );
+        let layouts = (&list_layout, &clear_layout);
         let displays = (tiles.iter())
-            .map(|&n| {
-                let size = GRID_BYTES + 4 * u64::from(n.div_ceil(32));
-                // Read back by the diagnostics.
-                let usage = wgpu::BufferUsages::STORAGE
-                    | wgpu::BufferUsages::COPY_DST
-                    | wgpu::BufferUsages::COPY_SRC;
-                let words = storage_buffer(device, label, size, usage);
-                let bind_group = bind_group(
-                    device,
-                    label,
-                    &layout,
-                    &KEEP_TILES_BINDINGS,
-                    &Windows::WHOLE,
-                    [words.bound()],
-                );
-                DisplayTiles {
-                    words,
-                    bind_group,
-                    tiles: 0,
-                }
-            })
+            .map(|&n| DisplayTiles::new(device, layouts, n))
             .collect();
-        KeepTiles { pipeline, displays }
+        KeepTiles {
+            list,
+            clear,
+            displays,
+        }
     }
 
     /// Writes display `index`'s grid for this frame, over `views` views of `size`
@@ -108,27 +120,40 @@ impl KeepTiles {
             height: size.y,
         };
         let display = &mut self.displays[index];
-        display.tiles = grid.x * grid.y;
+        display.word_count = tiles::tile_words(grid);
         queue.write_buffer(&display.words, 0, bytemuck::bytes_of(&header));
+        queue.write_buffer(&display.draw, 0, NO_TILES.as_bytes());
         let words: &[u8] = mask.map_or(&[], |m| bytemuck::cast_slice(&m.words));
         if !words.is_empty() {
             queue.write_buffer(&display.words, GRID_BYTES, words);
         }
-        GRID_BYTES + words.len() as u64
+        GRID_BYTES + (NO_TILES.as_bytes().len() + words.len()) as u64
     }
 
-    /// Records the copy of display `index`'s bits from where the GPU marked them: a
-    /// buffer, the offset and the bytes.
-    pub fn copy(
+    /// Records, for display `index` where this frame keeps, the copy of its bits from
+    /// where the GPU marked them (`marked`: a buffer, the offset and the bytes), then
+    /// the listing of its changed tiles. Returns the dispatches.
+    pub fn encode_list(
         &self,
         encoder: &mut wgpu::CommandEncoder,
         index: usize,
-        (from, at, bytes): (&wgpu::Buffer, u64, u64),
-    ) {
+        marked: Option<(&wgpu::Buffer, u64, u64)>,
+    ) -> u32 {
         let display = &self.displays[index];
-        if display.tiles > 0 {
+        if display.word_count == 0 {
+            return 0;
+        }
+        if let Some((from, at, bytes)) = marked {
             encoder.copy_buffer_to_buffer(from, at, &display.words, GRID_BYTES, bytes);
         }
+        let mut pass = encoder.begin_compute_pass(&wgpu::ComputePassDescriptor {
+            label: Some("stereocull.keep_list"),
+            timestamp_writes: None,
+        });
+        pass.set_pipeline(&self.list);
+        pass.set_bind_group(0, &display.list_group, &[]);
+        pass.dispatch_workgroups(display.word_count.div_ceil(LIST_GROUP), 1, 1);
+        1
     }
 
     /// Display `index`'s bits buffer and where its bits start (diagnostics).
@@ -140,12 +165,59 @@ impl KeepTiles {
     /// loading the last frame; returns the draw calls (0 or 1).
     pub fn draw(&self, pass: &mut wgpu::RenderPass, index: usize) -> u32 {
         let display = &self.displays[index];
-        if display.tiles == 0 {
+        if display.word_count == 0 {
             return 0;
         }
-        pass.set_pipeline(&self.pipeline);
-        pass.set_bind_group(0, &display.bind_group, &[]);
-        pass.draw(0..6, 0..display.tiles);
+        pass.set_pipeline(&self.clear);
+        pass.set_bind_group(0, &display.clear_group, &[]);
+        pass.draw_indirect(&display.draw, 0);
         1
+    }
+}
+
+impl DisplayTiles {
+    /// Room for `tiles` tiles, bound for the listing and the clear.
+    fn new(
+        device: &wgpu::Device,
+        (list_layout, clear_layout): (&wgpu::BindGroupLayout, &wgpu::BindGroupLayout),
+        tiles: u32,
+    ) -> DisplayTiles {
+        let label = "stereocull.keep_tiles";
+        use wgpu::BufferUsages as U;
+        let size = GRID_BYTES + 4 * u64::from(tiles.div_ceil(32));
+        // Read back by the diagnostics.
+        let words = storage_buffer(device, label, size, U::STORAGE | U::COPY_DST | U::COPY_SRC);
+        let list = storage_buffer(device, label, 4 * u64::from(tiles), U::STORAGE);
+        let draw_bytes = NO_TILES.as_bytes().len() as u64;
+        let draw = storage_buffer(
+            device,
+            label,
+            draw_bytes,
+            U::STORAGE | U::INDIRECT | U::COPY_DST,
+        );
+        let whole = &Windows::WHOLE;
+        let list_group = bind_group(
+            device,
+            label,
+            list_layout,
+            &KEEP_LIST_BINDINGS,
+            whole,
+            [words.bound(), list.bound(), draw.bound()],
+        );
+        let clear_group = bind_group(
+            device,
+            label,
+            clear_layout,
+            &KEEP_TILES_BINDINGS,
+            whole,
+            [words.bound(), list.bound()],
+        );
+        DisplayTiles {
+            words,
+            draw,
+            list_group,
+            clear_group,
+            word_count: 0,
+        }
     }
 }

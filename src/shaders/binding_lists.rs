@@ -379,14 +379,29 @@ pub const MARK_TILES_BINDINGS: [Binding; 6] = [
 ];
 
 /// A kept frame's changed tiles cleared (`wgsl/keep_tiles.wgsl`): the display's grid
-/// of tiles and their bits.
-pub const KEEP_TILES_BINDINGS: [Binding; 1] = [binding(
-    "tiles",
-    Access::StorageRead,
-    "TileWords",
-    wgpu::ShaderStages::VERTEX,
-)];
+/// of tiles and the changed ones' list.
+pub const KEEP_TILES_BINDINGS: [Binding; 2] = [
+    binding(
+        "tiles",
+        Access::StorageRead,
+        "TileWords",
+        wgpu::ShaderStages::VERTEX,
+    ),
+    binding(
+        "list",
+        Access::StorageRead,
+        "array<u32>",
+        wgpu::ShaderStages::VERTEX,
+    ),
+];
 
+/// A kept frame's changed tiles listed (`wgsl/keep_list.wgsl`): the display's bits in,
+/// the list and the tile pass's indirect draw out.
+pub const KEEP_LIST_BINDINGS: [Binding; 3] = [
+    binding("tiles", Access::StorageRead, "TileWords", COMPUTE),
+    binding("list", Access::StorageReadWrite, "array<u32>", COMPUTE),
+    binding("draw", Access::StorageReadWrite, "TileDraw", COMPUTE),
+];
 /// The compositor's depth resolve (`wgsl/depth_resolve.wgsl`): one layer of a
 /// multisampled depth attachment.
 pub const DEPTH_RESOLVE_BINDINGS: [Binding; 1] = [texture(

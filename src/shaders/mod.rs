@@ -45,6 +45,8 @@ pub const MARK_AFTER: u32 = 1 << 30;
 pub const MARK_SLOT: u32 = MARK_AFTER - 1;
 /// Invocations per workgroup of the tile marking pass.
 pub const MARK_GROUP: u32 = 64;
+/// Invocations (words of tiles) per workgroup of the tile listing pass.
+pub const LIST_GROUP: u32 = 64;
 
 /// Views a display's hidden area holds ([`crate::cull::hidden`]): a stereo pair, or two
 /// frames' pairs in one submission ([`crate::renderer::frames`]).
@@ -98,7 +100,7 @@ mod windows;
 
 pub use binding_lists::{
     CANDIDATE_BINDINGS, COARSE_BINDINGS, CULL_BINDINGS, DEPTH_RESOLVE_BINDINGS, DRAW_BINDINGS,
-    FAR_COMPOSITE_BINDINGS, FOVEATED_COMPOSITE_BINDINGS, KEEP_TILES_BINDINGS,
+    FAR_COMPOSITE_BINDINGS, FOVEATED_COMPOSITE_BINDINGS, KEEP_LIST_BINDINGS, KEEP_TILES_BINDINGS,
     LIGHT_CLUSTER_BINDINGS, MARK_TILES_BINDINGS, MATERIAL_BINDINGS, MORPH_BINDINGS,
     MOTION_BINDINGS, POSE_BINDINGS, PYRAMID_SET_DEPTHS, PYRAMID_SET_SLICES, SCATTER_BINDINGS,
     SHADOW_MAP_BINDINGS, SKIN_BINDINGS, VISIBILITY_MASK_BINDINGS, pyramid_bindings,
@@ -114,7 +116,7 @@ pub use draw_key::DrawKey;
 pub use hooks::{Shaders, check_shading};
 pub use screen::{
     MAX_MASK_TRIANGLES, depth_resolve_source, far_composite_source, foveated_composite_source,
-    keep_tiles_source, visibility_mask_source,
+    keep_list_source, keep_tiles_source, visibility_mask_source,
 };
 pub(crate) use screen::{ScreenTargets, depth_write, screen_pipeline};
 pub use windows::{Window, Windowed, Windows};
@@ -367,6 +369,7 @@ pub fn all_sources() -> Vec<(String, String)> {
                     keep_tiles_source(wgpu::TextureFormat::Rgba8UnormSrgb, wgpu::Color::BLACK),
                 ),
                 ("stereocull.keep_mark".to_string(), keep_mark_source(w)),
+                ("stereocull.keep_list".to_string(), keep_list_source()),
                 ("stereocull.morph".to_string(), morph_source()),
                 (
                     "stereocull.light_clusters".to_string(),

@@ -5,7 +5,7 @@
 use super::bindings::{declarations, pipeline_layout};
 use super::{
     CONTEXTS, DEPTH_RESOLVE_BINDINGS, FAR_COMPOSITE_BINDINGS, FOVEATED_COMPOSITE_BINDINGS,
-    KEEP_TILES_BINDINGS, VISIBILITY_MASK_BINDINGS, Windows, constants,
+    KEEP_LIST_BINDINGS, KEEP_TILES_BINDINGS, VISIBILITY_MASK_BINDINGS, Windows, constants,
 };
 
 /// The far layer's composite into a stereo display (`wgsl/far_composite.wgsl`).
@@ -58,8 +58,22 @@ pub fn keep_tiles_source(format: wgpu::TextureFormat, clear: wgpu::Color) -> Str
     let tile = format!("const TILE: u32 = {}u;\n", super::TILE);
     let bindings = declarations(&KEEP_TILES_BINDINGS, 0, &Windows::WHOLE);
     let body = include_str!("../../wgsl/keep_tiles.wgsl");
-    [clear, tile, bindings, body.to_string()].concat()
+    [&clear, &tile, TILE_WORDS, &bindings, body].concat()
 }
+
+/// A kept frame's changed tiles listed for the tile pass (`wgsl/keep_list.wgsl`).
+pub fn keep_list_source() -> String {
+    let constants = format!(
+        "const TILE: u32 = {}u;\nconst LIST_GROUP: u32 = {}u;\n",
+        super::TILE,
+        super::LIST_GROUP
+    );
+    let bindings = declarations(&KEEP_LIST_BINDINGS, 0, &Windows::WHOLE);
+    let body = include_str!("../../wgsl/keep_list.wgsl");
+    [&constants, TILE_WORDS, &bindings, body].concat()
+}
+
+const TILE_WORDS: &str = include_str!("../../wgsl/shared/tile_words.wgsl");
 
 /// Clear color `c` as a fragment must write it to store what a clear stores: in
 /// an 8-bit target, the stored level's own value, which any encoding rounds back to that

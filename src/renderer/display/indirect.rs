@@ -241,14 +241,9 @@ impl IndirectPath {
         let multiview = self.displays[index].key.multiview_mask();
         // With occlusion the far layer is drawn and composited in the late phase.
         let composite = self.displays[index].late.is_none();
+        let listed = self.encode_tile_list(encoder, index);
         let mut open = rec.open(encoder, PassRecord::display("draw", index));
         let kept = self.kept[index].is_some();
-        // Where the GPU marked this display's tiles, in the culler's buffer.
-        let marked = (self.kept[index].as_ref())
-            .and_then(|k| self.core.culler.marked_words(k.marked_in?, k.words));
-        if let (Some(keep), Some(marked)) = (&self.keep, marked) {
-            keep.copy(encoder, index, marked);
-        }
         let mut pass = begin_draw_pass(encoder, rec, (target, !kept, multiview), &mut open);
         let mut draw_calls = match (&self.keep, kept) {
             (Some(keep), true) => keep.draw(&mut pass, index),
@@ -264,8 +259,20 @@ impl IndirectPath {
         rec.close_render(encoder, pass, open);
         FrameStats {
             draw_calls: culled.draw_calls + draw_calls,
+            dispatches: culled.dispatches + listed,
             ..culled
         }
+    }
+
+    /// Where display `index` keeps this frame: its changed tiles listed for the tile
+    /// pass, their bits first copied from where the GPU marked them (the culler's
+    /// buffer). Returns the dispatches.
+    fn encode_tile_list(&self, encoder: &mut wgpu::CommandEncoder, index: usize) -> u32 {
+        let (Some(keep), Some(kept)) = (&self.keep, &self.kept[index]) else {
+            return 0;
+        };
+        let marked = (kept.marked_in).and_then(|s| self.core.culler.marked_words(s, kept.words));
+        keep.encode_list(encoder, index, marked)
     }
 
     /// Display `index`'s far layer, with what every far layer shares (`None` without).
