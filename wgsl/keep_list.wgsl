@@ -5,6 +5,10 @@
 
 @compute @workgroup_size(LIST_GROUP)
 fn list_tiles(@builtin(global_invocation_id) id: vec3<u32>) {
+    // The draw comes cleared: six corners per instance.
+    if (id.x == 0u) {
+        draw.vertex_count = 6u;
+    }
     let rows = (tiles.height + TILE - 1u) / TILE;
     if (id.x >= (tiles.cols * rows + 31u) / 32u) {
         return;

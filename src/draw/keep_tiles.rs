@@ -32,14 +32,6 @@ pub struct TileGrid {
 
 const GRID_BYTES: u64 = size_of::<TileGrid>() as u64;
 
-/// The tile pass's draw before the listing counts its instances: six corners each.
-const NO_TILES: wgpu::util::DrawIndirectArgs = wgpu::util::DrawIndirectArgs {
-    vertex_count: 6,
-    instance_count: 0,
-    first_vertex: 0,
-    first_instance: 0,
-};
-
 /// The tile pass's pipelines for targets of one format (the listing and the clear),
 /// and each display's tiles.
 pub struct KeepTiles {
@@ -48,9 +40,10 @@ pub struct KeepTiles {
     displays: Vec<DisplayTiles>,
 }
 
-/// One display's grid and bits, its changed tiles' list and draw, bound, and its words
-/// when this frame keeps (0: it does not).
+/// One display's grid (as last written) and bits, its changed tiles' list and draw,
+/// bound, and its words when this frame keeps (0: it does not).
 struct DisplayTiles {
+    grid: Option<TileGrid>,
     words: wgpu::Buffer,
     draw: wgpu::Buffer,
     list_group: wgpu::BindGroup,
@@ -121,13 +114,18 @@ impl KeepTiles {
         };
         let display = &mut self.displays[index];
         display.word_count = tiles::tile_words(grid);
-        queue.write_buffer(&display.words, 0, bytemuck::bytes_of(&header));
-        queue.write_buffer(&display.draw, 0, NO_TILES.as_bytes());
+        let mut written = 0;
+        // The grid changes with the target alone: kept frames share it.
+        if display.grid != Some(header) {
+            queue.write_buffer(&display.words, 0, bytemuck::bytes_of(&header));
+            display.grid = Some(header);
+            written += GRID_BYTES;
+        }
         let words: &[u8] = mask.map_or(&[], |m| bytemuck::cast_slice(&m.words));
         if !words.is_empty() {
             queue.write_buffer(&display.words, GRID_BYTES, words);
         }
-        GRID_BYTES + (NO_TILES.as_bytes().len() + words.len()) as u64
+        written + words.len() as u64
     }
 
     /// Records, for display `index` where this frame keeps, the copy of its bits from
@@ -146,6 +144,8 @@ impl KeepTiles {
         if let Some((from, at, bytes)) = marked {
             encoder.copy_buffer_to_buffer(from, at, &display.words, GRID_BYTES, bytes);
         }
+        // The listing counts from no instances (and sets the six corners).
+        encoder.clear_buffer(&display.draw, 0, None);
         let mut pass = encoder.begin_compute_pass(&wgpu::ComputePassDescriptor {
             label: Some("stereocull.keep_list"),
             timestamp_writes: None,
@@ -188,7 +188,7 @@ impl DisplayTiles {
         // Read back by the diagnostics.
         let words = storage_buffer(device, label, size, U::STORAGE | U::COPY_DST | U::COPY_SRC);
         let list = storage_buffer(device, label, 4 * u64::from(tiles), U::STORAGE);
-        let draw_bytes = NO_TILES.as_bytes().len() as u64;
+        let draw_bytes = size_of::<wgpu::util::DrawIndirectArgs>() as u64;
         let draw = storage_buffer(
             device,
             label,
@@ -213,6 +213,7 @@ impl DisplayTiles {
             [words.bound(), list.bound()],
         );
         DisplayTiles {
+            grid: None,
             words,
             draw,
             list_group,
