@@ -1854,9 +1854,16 @@ fn a_still_head_keeps_unchanged_pixels_and_stress_reports_the_tiles() {
         frames[1..].iter().all(|f| f["whole_redraw"].is_null()),
         "{v}"
     );
+    // 16 x 16 pixels per eye: one tile each, 256 pixels a tile.
+    let pixels = |f: &Value| f["pixels_redrawn"].as_u64().unwrap();
+    assert_eq!(pixels(&frames[0]), 2 * 16 * 16, "{v}");
+    for f in &frames[1..] {
+        assert_eq!(pixels(f), 256 * f["tiles_changed"].as_u64().unwrap(), "{v}");
+    }
     let s = &v["summary"];
     assert_eq!(s["whole_redraws"].as_u64(), Some(1));
     assert!(s["tiles_changed_median"].as_f64().unwrap() > 0.0, "{s}");
+    assert!(s["pixels_redrawn_median"].as_f64().unwrap() > 0.0, "{s}");
     assert!(s.get("fragment_invocations_median").is_some(), "{s}");
     let mut args = stress_args("procedural:200", "hmd", "2");
     args.extend(["--keep-unchanged", "on", "--motion-vectors", "on"]);

@@ -167,6 +167,13 @@ fn every_kept_frame_is_the_frame_drawn_whole() {
                 // The CPU counts the tiles it marks; the GPU's are read back.
                 let counted = if cull == CullMode::Cpu { changed } else { 0 };
                 assert_eq!(stats.tiles_changed, counted, "{name}");
+                // The target is whole tiles: 256 pixels each.
+                let pixels = diagnostics.pixels_redrawn().unwrap();
+                assert_eq!(pixels, 256 * u64::from(changed), "{name}");
+            } else {
+                let diagnostics = kept.renderer.diagnostics(&gpu.device, &gpu.queue);
+                let pixels = diagnostics.pixels_redrawn().unwrap();
+                assert_eq!(pixels, 2 * 192 * 160, "{name}: every view's pixels");
             }
         }
         assert_eq!(kept_frames, 5);

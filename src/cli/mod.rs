@@ -208,19 +208,19 @@ impl Switch {
 }
 
 /// Writes `image` to `path` (its extension names the format).
-/// The tiles a frame with `stats` redrew (0 where drawn whole), read back: the GPU marks
-/// them where it culls.
-pub(crate) fn tiles_changed(
+/// The tiles and pixels a frame with `stats` redrew (no tiles where drawn whole), read
+/// back: the GPU marks the tiles where it culls.
+pub(crate) fn redrawn(
     renderer: &crate::renderer::Renderer,
     gpu: &crate::device::Gpu,
     stats: &crate::renderer::FrameStats,
-) -> Result<u32> {
-    match stats.whole_redraw {
-        Some(_) => Ok(0),
-        None => Ok(renderer
-            .diagnostics(&gpu.device, &gpu.queue)
-            .tiles_changed()?),
-    }
+) -> Result<(u32, u64)> {
+    let diagnostics = renderer.diagnostics(&gpu.device, &gpu.queue);
+    let tiles = match stats.whole_redraw {
+        Some(_) => 0,
+        None => diagnostics.tiles_changed()?,
+    };
+    Ok((tiles, diagnostics.pixels_redrawn()?))
 }
 
 pub(crate) fn save(image: &image::RgbaImage, path: &std::path::Path) -> Result<()> {

@@ -162,7 +162,7 @@ pub(super) fn measure(
             .push(recorded.cpu_staging.as_secs_f64() * 1e3);
         samples.copy.extend(copied);
         samples.moved = synced.moved;
-        let tiles = super::tiles_changed(&renderer, gpu, &prepared)?;
+        let (tiles, _) = super::redrawn(&renderer, gpu, &prepared)?;
         samples.tiles.push(f64::from(tiles));
         samples.whole += u32::from(prepared.whole_redraw.is_some());
         samples.submit.push(ms(submit_start, end));

@@ -67,8 +67,10 @@ struct FrameRecord {
     /// them before its depth test), and the display draws' samples that passed it.
     fragment_invocations: Option<u64>,
     samples_passed: Option<u64>,
-    /// Keeping unchanged pixels: the tiles redrawn, or why the frame was drawn whole.
+    /// Keeping unchanged pixels: the tiles and pixels redrawn (every view's where drawn
+    /// whole), or why the frame was drawn whole.
     tiles_changed: u32,
+    pixels_redrawn: u64,
     whole_redraw: Option<crate::keep::WholeRedraw>,
     /// Until the GPU finished the frame.
     frame_ms: f64,
@@ -134,11 +136,12 @@ struct Summary {
     /// that passed the depth test.
     fragment_invocations_median: Option<f64>,
     samples_passed_median: Option<f64>,
-    /// Keeping unchanged pixels (`--keep-unchanged`, `--still`): the median tiles
-    /// redrawn, and the frames drawn whole.
+    /// Keeping unchanged pixels (`--keep-unchanged`, `--still`): the median tiles and
+    /// pixels redrawn, and the frames drawn whole.
     keep_unchanged: crate::keep::KeepUnchanged,
     still: bool,
     tiles_changed_median: f64,
+    pixels_redrawn_median: f64,
     whole_redraws: usize,
     gpu_bytes_per_instance: u64,
     /// Vertices the skinning pass poses per frame (once for every display and eye), and
@@ -263,6 +266,8 @@ pub fn stress(args: &StressArgs) -> Result<()> {
             .renderer
             .diagnostics(&session.gpu.device, &session.gpu.queue)
             .sphere_tests()?;
+        let (tiles_changed, pixels_redrawn) =
+            super::redrawn(&session.renderer, &session.gpu, &stats)?;
         let record = FrameRecord {
             frame,
             cpu_ms,
@@ -274,7 +279,8 @@ pub fn stress(args: &StressArgs) -> Result<()> {
             triangles_submitted,
             fragment_invocations: queries.as_ref().and_then(|q| q.fragment_invocations),
             samples_passed: queries.as_ref().and_then(|q| q.samples_passed),
-            tiles_changed: super::tiles_changed(&session.renderer, &session.gpu, &stats)?,
+            tiles_changed,
+            pixels_redrawn,
             whole_redraw: stats.whole_redraw,
             frame_ms,
             pose_age_ms: figures.pose_age_ms,
@@ -382,6 +388,7 @@ fn summarize(
         keep_unchanged: session.renderer.options().keep_unchanged,
         still: args.still,
         tiles_changed_median: percentile(&of(|r| r.tiles_changed as f64), 0.5),
+        pixels_redrawn_median: percentile(&of(|r| r.pixels_redrawn as f64), 0.5),
         whole_redraws: records.iter().filter(|r| r.whole_redraw.is_some()).count(),
         sphere_tests_median: median_of(records, |r| r.sphere_tests),
         shadows: session.renderer.options().shadows,

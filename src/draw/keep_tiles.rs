@@ -30,6 +30,24 @@ pub struct TileGrid {
     pub height: u32,
 }
 
+impl TileGrid {
+    /// The target's pixels in the tiles `words` marks (tiles at the right and bottom
+    /// edges clipped to the target).
+    pub fn pixels(&self, words: &[u32]) -> u64 {
+        let rows = self.height.div_ceil(tiles::TILE);
+        let tiles =
+            (0..self.cols * rows).filter(|&t| (words[(t / 32) as usize] >> (t % 32)) & 1 != 0);
+        tiles
+            .map(|t| {
+                let (x, y) = ((t % self.cols) * tiles::TILE, (t / self.cols) * tiles::TILE);
+                let w = tiles::TILE.min(self.width - x);
+                let h = tiles::TILE.min(self.height - y);
+                u64::from(w * h)
+            })
+            .sum()
+    }
+}
+
 const GRID_BYTES: u64 = size_of::<TileGrid>() as u64;
 
 /// The tile pass's pipelines for targets of one format (the listing and the clear),
@@ -156,9 +174,11 @@ impl KeepTiles {
         1
     }
 
-    /// Display `index`'s bits buffer and where its bits start (diagnostics).
-    pub fn words(&self, index: usize) -> (&wgpu::Buffer, u64) {
-        (&self.displays[index].words, GRID_BYTES)
+    /// Display `index`'s bits buffer and where its bits start, and its grid as last
+    /// written (diagnostics).
+    pub fn words(&self, index: usize) -> ((&wgpu::Buffer, u64), Option<TileGrid>) {
+        let display = &self.displays[index];
+        ((&display.words, GRID_BYTES), display.grid)
     }
 
     /// Clears display `index`'s changed tiles in `pass`, which must have just opened,

@@ -4,6 +4,7 @@
 
 use super::{Path, Renderer, WallCulls};
 use crate::cull::CullOutput;
+use crate::draw::keep_tiles::TileGrid;
 use crate::error::Result;
 use crate::occlusion::PyramidShape;
 use crate::readback::read_pod;
@@ -75,10 +76,33 @@ impl Diagnostics<'_> {
     /// (whether the CPU or the GPU marked them); `None` where it was drawn whole or on a
     /// classic path.
     pub fn changed_tiles(&self, index: usize) -> Result<Option<Vec<u32>>> {
+        Ok(self.changed_tiles_in_grid(index)?.map(|(words, _)| words))
+    }
+
+    fn changed_tiles_in_grid(&self, index: usize) -> Result<Option<(Vec<u32>, TileGrid)>> {
         match &self.renderer.path {
             Path::Indirect(p) => p.read_changed_tiles(self.device, self.queue, index),
             Path::Classic(_) => Ok(None),
         }
+    }
+
+    /// Pixels the last frame's displays redrew: a kept display's changed tiles (those
+    /// at its target's edges clipped to it), every view of a display drawn whole.
+    pub fn pixels_redrawn(&self) -> Result<u64> {
+        let mut pixels = 0;
+        for (i, shape) in self.renderer.shapes.iter().enumerate() {
+            pixels += match self.changed_tiles_in_grid(i)? {
+                Some((words, grid)) => grid.pixels(&words),
+                None => (shape
+                    .layout
+                    .viewports
+                    .iter()
+                    .take(shape.layout.views as usize))
+                .map(|v| u64::from(v[2]) * u64::from(v[3]))
+                .sum(),
+            };
+        }
+        Ok(pixels)
     }
 
     /// Tiles the last frame's displays redrew (0 where all were drawn whole).

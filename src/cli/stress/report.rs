@@ -68,10 +68,11 @@ pub(super) fn print_summary(s: &Summary) {
     );
     if s.keep_unchanged != crate::keep::KeepUnchanged::Off {
         println!(
-            "kept pixels ({:?}{}): median {} tiles redrawn, {} of {} frames drawn whole, {} fragment invocations (median)",
+            "kept pixels ({:?}{}): median {} tiles and {} pixels redrawn, {} of {} frames drawn whole, {} fragment invocations (median)",
             s.keep_unchanged,
             if s.still { ", head still" } else { "" },
             s.tiles_changed_median,
+            s.pixels_redrawn_median,
             s.whole_redraws,
             s.frames,
             show(s.fragment_invocations_median),

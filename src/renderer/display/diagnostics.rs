@@ -5,6 +5,7 @@
 use super::indirect::IndirectPath;
 use crate::cull::targets::{COUNTS_BYTES, CullTargets};
 use crate::cull::{BinDraws, CullOutput};
+use crate::draw::keep_tiles::TileGrid;
 use crate::error::Result;
 use crate::occlusion::PyramidShape;
 use crate::readback::read_pod_at;
@@ -25,23 +26,21 @@ impl IndirectPath {
     }
 
     /// Display `index`'s changed tiles in the last frame (`None`: drawn whole), as its
-    /// tile pass read them (marked on the CPU or the GPU), read back.
+    /// tile pass read them (marked on the CPU or the GPU), read back, with its grid.
     pub(in crate::renderer) fn read_changed_tiles(
         &self,
         device: &wgpu::Device,
         queue: &wgpu::Queue,
         index: usize,
-    ) -> Result<Option<Vec<u32>>> {
+    ) -> Result<Option<(Vec<u32>, TileGrid)>> {
         let (Some(keep), Some(kept)) = (&self.keep, self.kept[index]) else {
             return Ok(None);
         };
-        let at = keep.words(index);
-        Ok(Some(read_pod_at(
-            device,
-            queue,
-            at,
-            4 * u64::from(kept.words),
-        )?))
+        let (at, Some(grid)) = keep.words(index) else {
+            return Ok(None);
+        };
+        let words = read_pod_at(device, queue, at, 4 * u64::from(kept.words))?;
+        Ok(Some((words, grid)))
     }
 
     /// Display `index`'s far layer's cull buffers (`None` without one), read back after
