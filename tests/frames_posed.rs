@@ -143,10 +143,7 @@ fn posed_content_is_drawn_at_each_frames_time() {
 #[test]
 fn morph_targets_are_morphed_at_each_frames_time() {
     let gpu = gpu();
-    let dir = tempfile::tempdir().unwrap();
-    let path = dir.path().join("morph.glb");
-    std::fs::write(&path, support::morph::morph_file()).unwrap();
-    let scene = load(path.to_str().unwrap());
+    let scene = support::morph::morph_scene();
     let mut rig = sized("hmd", 96, 80);
     rig.viewer.position = [0.0, 0.5, 2.2];
     for cull in [CullMode::Gpu, CullMode::Cpu] {

@@ -11,20 +11,16 @@
 mod support;
 
 use glam::{Vec3, Vec4};
-use image::RgbaImage;
 use rand::{Rng, SeedableRng};
 use rand_pcg::Pcg64Mcg;
-use stereocull::device::Gpu;
 use stereocull::error::Error;
 use stereocull::live::LiveScene;
-use stereocull::readback::read_rgba8;
 use stereocull::renderer::{
-    CullMode, DisplayTarget, FrameStats, KeepUnchanged, OcclusionMode, Renderer, RendererOptions,
-    WholeRedraw,
+    CullMode, KeepUnchanged, OcclusionMode, Renderer, RendererOptions, WholeRedraw,
 };
-use stereocull::rig::Rig;
 use stereocull::scene::{Animation, Instance, Scene};
 use stereocull::scene_spec;
+use support::keep::Run;
 use support::{Tolerance, assert_images_match, gpu, sized};
 
 fn options(cull: CullMode, keep: KeepUnchanged) -> RendererOptions {
@@ -33,39 +29,6 @@ fn options(cull: CullMode, keep: KeepUnchanged) -> RendererOptions {
         occlusion: OcclusionMode::Off,
         keep_unchanged: keep,
         ..Default::default()
-    }
-}
-
-/// A renderer, its targets and its live scene, drawn frame after frame.
-struct Run {
-    renderer: Renderer,
-    targets: Vec<DisplayTarget>,
-    live: LiveScene,
-}
-
-impl Run {
-    fn new(gpu: &Gpu, scene: &Scene, rig: &Rig, options: RendererOptions) -> Run {
-        let renderer = Renderer::new(&gpu.device, scene, rig, options).unwrap();
-        let targets = renderer.create_targets(&gpu.device);
-        Run {
-            renderer,
-            targets,
-            live: LiveScene::new(scene.clone()),
-        }
-    }
-
-    /// Syncs the live scene's edits and draws the frame; its stats and images.
-    fn frame(&mut self, gpu: &Gpu, rig: &Rig, time: f32) -> (FrameStats, Vec<RgbaImage>) {
-        (self.renderer)
-            .sync(&gpu.device, &gpu.queue, &mut self.live)
-            .unwrap();
-        let stats = (self.renderer)
-            .submit_frame(&gpu.device, &gpu.queue, rig, time, &self.targets)
-            .unwrap();
-        let images = (self.targets.iter())
-            .map(|t| read_rgba8(&gpu.device, &gpu.queue, &t.color).unwrap())
-            .collect();
-        (stats, images)
     }
 }
 

@@ -11,17 +11,14 @@
 
 mod support;
 
-use image::RgbaImage;
 use stereocull::device::Gpu;
-use stereocull::live::LiveScene;
-use stereocull::readback::read_rgba8;
 use stereocull::renderer::{
-    CullMode, DisplayTarget, FrameStats, KeepUnchanged, OcclusionMode, PosingMode, Renderer,
-    RendererOptions, WholeRedraw,
+    CullMode, KeepUnchanged, OcclusionMode, PosingMode, RendererOptions, WholeRedraw,
 };
 use stereocull::rig::Rig;
 use stereocull::scene::Scene;
 use stereocull::scene_spec;
+use support::keep::Run;
 use support::{Tolerance, assert_images_match, gpu, sized};
 
 fn options(cull: CullMode, posing: PosingMode, keep: KeepUnchanged) -> RendererOptions {
@@ -31,42 +28,6 @@ fn options(cull: CullMode, posing: PosingMode, keep: KeepUnchanged) -> RendererO
         occlusion: OcclusionMode::Off,
         keep_unchanged: keep,
         ..Default::default()
-    }
-}
-
-/// A renderer, its targets and its live scene, posed (on the CPU where the renderer
-/// does not pose) and drawn frame after frame.
-struct Run {
-    renderer: Renderer,
-    targets: Vec<DisplayTarget>,
-    live: LiveScene,
-}
-
-impl Run {
-    fn new(gpu: &Gpu, scene: &Scene, rig: &Rig, options: RendererOptions) -> Run {
-        let renderer = Renderer::new(&gpu.device, scene, rig, options).unwrap();
-        let targets = renderer.create_targets(&gpu.device);
-        Run {
-            renderer,
-            targets,
-            live: LiveScene::new(scene.clone()),
-        }
-    }
-
-    fn frame(&mut self, gpu: &Gpu, rig: &Rig, time: f32) -> (FrameStats, Vec<RgbaImage>) {
-        if self.renderer.options().posing == PosingMode::Cpu {
-            self.live.pose(time).unwrap();
-        }
-        (self.renderer)
-            .sync(&gpu.device, &gpu.queue, &mut self.live)
-            .unwrap();
-        let stats = (self.renderer)
-            .submit_frame(&gpu.device, &gpu.queue, rig, time, &self.targets)
-            .unwrap();
-        let images = (self.targets.iter())
-            .map(|t| read_rgba8(&gpu.device, &gpu.queue, &t.color).unwrap())
-            .collect();
-        (stats, images)
     }
 }
 
@@ -141,10 +102,7 @@ fn posed_content_keeps_unchanged_pixels() {
 #[test]
 fn morph_targets_keep_unchanged_pixels() {
     let gpu = gpu();
-    let dir = tempfile::tempdir().unwrap();
-    let path = dir.path().join("morph.glb");
-    std::fs::write(&path, support::morph::morph_file()).unwrap();
-    let mut scene = load(path.to_str().unwrap());
+    let mut scene = support::morph::morph_scene();
     let mut copy = scene.instances[0];
     copy.world_from_local.translation += glam::Vec3A::new(-1.4, 0.0, 0.0);
     scene.instances.push(copy);
@@ -161,10 +119,7 @@ fn morph_targets_keep_unchanged_pixels() {
 #[test]
 fn morph_weights_set_by_hand_redraw_whole() {
     let gpu = gpu();
-    let dir = tempfile::tempdir().unwrap();
-    let path = dir.path().join("morph.glb");
-    std::fs::write(&path, support::morph::morph_file()).unwrap();
-    let scene = load(path.to_str().unwrap());
+    let scene = support::morph::morph_scene();
     let rig = sized("hmd", 96, 80);
     let options = options(CullMode::Gpu, PosingMode::Cpu, KeepUnchanged::On);
     let mut run = Run::new(&gpu, &scene, &rig, options);

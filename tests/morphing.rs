@@ -14,14 +14,7 @@ use stereocull::renderer::{Renderer, RendererOptions};
 use stereocull::scene::Scene;
 use stereocull::scene_spec;
 use stereocull::skinning::skin_vertex;
-use support::morph::{SIDE, morph_file};
-
-fn load(name: &str, bytes: &[u8]) -> Scene {
-    let dir = tempfile::tempdir().unwrap();
-    let path = dir.path().join(name);
-    std::fs::write(&path, bytes).unwrap();
-    scene_spec::load(path.to_str().unwrap()).unwrap()
-}
+use support::morph::SIDE;
 
 /// SimpleSkin with one target on its mesh (each vertex pushed out along x by its
 /// height), its weight animated from 0 to 1 over the skin's own 5.5 s.
@@ -91,7 +84,7 @@ fn assert_close(g: [f32; 3], c: [f32; 3], what: &str) {
 
 #[test]
 fn the_file_reads_two_targets_their_defaults_and_both_animations() {
-    let mut scene = load("morph.glb", &morph_file());
+    let mut scene = support::morph::morph_scene();
     let morphs = &scene.morphs;
     assert_eq!(morphs.morphs.len(), 2, "one morph per node");
     assert_eq!(morphs.vertices.len(), 2 * SIDE * SIDE);
@@ -122,7 +115,7 @@ fn the_file_reads_two_targets_their_defaults_and_both_animations() {
 #[test]
 fn the_gpu_morphs_what_the_cpu_twin_morphs_once_per_frame() {
     let gpu = support::gpu();
-    let scene = load("morph.glb", &morph_file());
+    let scene = support::morph::morph_scene();
     for (preset, time) in [("hmd", 0.4), ("cave", 0.7), ("hmd-peripheral", 1.9)] {
         let rig = support::sized(preset, 32, 32);
         let mut renderer =
@@ -165,7 +158,7 @@ fn the_gpu_morphs_what_the_cpu_twin_morphs_once_per_frame() {
 /// the bulge leaves it (checked: the grid's rest sphere is flat).
 #[test]
 fn every_sampled_pose_stays_in_the_culling_sphere() {
-    let mut scene = load("morph.glb", &morph_file());
+    let mut scene = support::morph::morph_scene();
     // The flat grid's sphere: its half diagonal.
     let flat = std::f32::consts::FRAC_1_SQRT_2;
     for i in 0..=200 {
@@ -252,7 +245,7 @@ fn a_morphed_skin_is_morphed_before_it_is_skinned() {
 #[test]
 fn an_engine_sets_its_own_weights_within_the_bound() {
     let gpu = support::gpu();
-    let scene = load("morph.glb", &morph_file());
+    let scene = support::morph::morph_scene();
     let rig = support::sized("hmd", 32, 32);
     let options = RendererOptions::default();
     let mut renderer = Renderer::new(&gpu.device, &scene, &rig, options).unwrap();

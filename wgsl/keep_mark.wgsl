@@ -40,16 +40,11 @@ fn mark(@builtin(workgroup_id) wid: vec3<u32>, @builtin(num_workgroups) groups: 
     let eyes = min(d.eyes.views, 2u);
     let cols = (size.x * eyes + TILE - 1u) / TILE;
     for (var e = 0u; e < eyes; e++) {
-        let p = eye_pixels(s, d.eyes.view_from_world[e], d.eyes.clip_from_view[e], size);
-        if (p.x > p.z) {
-            continue;
-        }
-        let lo = (p.xy + vec2(e * size.x, 0u)) / TILE;
-        let hi = (p.zw + vec2(e * size.x, 0u)) / TILE;
-        for (var y = lo.y; y <= hi.y; y++) {
-            for (var x = lo.x; x <= hi.x; x++) {
-                let t = y * cols + x;
-                atomicOr(&tiles[d.base + t / 32u], 1u << (t % 32u));
+        let t = eye_tiles(s, d.eyes.view_from_world[e], d.eyes.clip_from_view[e], size, e);
+        for (var y = t.y; y <= t.w && t.x <= t.z; y++) {
+            for (var x = t.x; x <= t.z; x++) {
+                let i = y * cols + x;
+                atomicOr(&tiles[d.base + i / 32u], 1u << (i % 32u));
             }
         }
     }

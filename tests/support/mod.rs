@@ -6,6 +6,7 @@
 #![allow(dead_code)]
 
 pub mod glb;
+pub mod keep;
 pub mod ktx2;
 pub mod morph;
 pub mod room;
@@ -210,6 +211,14 @@ impl Tolerance {
 
 /// The variable that relocates the shared glTF samples.
 pub const SAMPLES_VAR: &str = "STEREOCULL_GLTF_SAMPLES";
+
+/// A scene loaded from a file `name` holding `bytes`, as the CLI loads one.
+pub fn load_bytes(name: &str, bytes: &[u8]) -> Scene {
+    let dir = tempfile::tempdir().unwrap();
+    let path = dir.path().join(name);
+    std::fs::write(&path, bytes).unwrap();
+    stereocull::scene_spec::load(path.to_str().unwrap()).unwrap()
+}
 
 /// `<samples>/<name>/<name>.<ext>` in the shared Khronos samples: `../shared/gltf-samples/`
 /// beside the clone, or where [`SAMPLES_VAR`] says. A missing directory fails with one

@@ -113,3 +113,8 @@ pub fn morph_file() -> Vec<u8> {
     });
     write_glb(&json, &bin)
 }
+
+/// [`morph_file`]'s scene, loaded as a file is.
+pub fn morph_scene() -> stereocull::scene::Scene {
+    super::load_bytes("morph.glb", &morph_file())
+}

@@ -23,14 +23,9 @@ fn touches_changed_tiles(slot: u32, views: array<mat4x4<f32>, 2>, clips: array<m
     let cols = (size.x * eyes + TILE - 1u) / TILE;
     let base = params.tile_offset + slot * params.tile_stride;
     for (var e = 0u; e < eyes; e++) {
-        let p = eye_pixels(s, views[e], clips[e], size);
-        if (p.x > p.z) {
-            continue;
-        }
-        let lo = (p.xy + vec2(e * size.x, 0u)) / TILE;
-        let hi = (p.zw + vec2(e * size.x, 0u)) / TILE;
-        for (var y = lo.y; y <= hi.y; y++) {
-            for (var x = lo.x; x <= hi.x; x++) {
+        let t = eye_tiles(s, views[e], clips[e], size, e);
+        for (var y = t.y; y <= t.w && t.x <= t.z; y++) {
+            for (var x = t.x; x <= t.z; x++) {
                 let i = y * cols + x;
                 if (((occlusion[base + i / 32u] >> (i % 32u)) & 1u) != 0u) {
                     return true;

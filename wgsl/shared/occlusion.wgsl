@@ -115,25 +115,12 @@ fn occluded_in_eye(s: vec4<f32>, view: mat4x4<f32>, clip: mat4x4<f32>, e: u32, a
     if (near_depth < 0.0) {
         return false;
     }
-    let xs = tangent_slopes(c.x, -c.z, r);
-    let ys = tangent_slopes(c.y, -c.z, r);
-    let x0 = clip[0].x * xs.x - clip[2].x;
-    let y0 = clip[1].y * ys.x - clip[2].y;
-    let x1 = clip[0].x * xs.y - clip[2].x;
-    let y1 = clip[1].y * ys.y - clip[2].y;
-    let w = f32(at.size.x);
-    let h = f32(at.size.y);
-    let px0 = (x0 * 0.5 + 0.5) * w - at.margin_px;
-    let px1 = (x1 * 0.5 + 0.5) * w + at.margin_px;
-    let py0 = (0.5 - y1 * 0.5) * h - at.margin_px;
-    let py1 = (0.5 - y0 * 0.5) * h + at.margin_px;
-    if (px1 < 0.0 || py1 < 0.0 || px0 >= w || py0 >= h) {
+    let p = sphere_rect(c, r, clip, at.size, at.margin_px);
+    if (p.x > p.z) {
         return true;
     }
-    // Clamped as floats: a conversion of a value out of range is not defined.
-    let last = vec2(w - 1.0, h - 1.0);
-    let lo = vec2<u32>(clamp(vec2(px0, py0), vec2(0.0), last));
-    let hi = vec2<u32>(clamp(vec2(px1, py1), vec2(0.0), last));
+    let lo = p.xy;
+    let hi = p.zw;
     let levels = pyramid_levels(at.size);
     let l = pyramid_level(lo, hi, levels);
     let a = lo >> vec2(l + 1u);

@@ -72,6 +72,15 @@ fn eye_pixels(s: vec4<f32>, view: mat4x4<f32>, clip: mat4x4<f32>, size: vec2<u32
     if (!(bounded(c.x, -c.z, r) && bounded(c.y, -c.z, r))) {
         return whole;
     }
+    return sphere_rect(c, r, clip, size, TILE_MARGIN_PX);
+}
+
+// The pixels (first x, y, last x, y) of a view of `size` that the sphere about c (in
+// the view) of radius r covers, wholly ahead of the eye with both tangents: its
+// projected bounds grown by `margin` pixels each way, clamped to the view; x0 > x1
+// where they miss it. The tiles' and occlusion's rectangle (their CPU twins:
+// cull::tiles::pixels_of and occlusion::occluded_in_eye, the same operations).
+fn sphere_rect(c: vec3<f32>, r: f32, clip: mat4x4<f32>, size: vec2<u32>, margin: f32) -> vec4<u32> {
     let xs = tangent_slopes(c.x, -c.z, r);
     let ys = tangent_slopes(c.y, -c.z, r);
     let x0 = clip[0].x * xs.x - clip[2].x;
@@ -80,15 +89,28 @@ fn eye_pixels(s: vec4<f32>, view: mat4x4<f32>, clip: mat4x4<f32>, size: vec2<u32
     let y1 = clip[1].y * ys.y - clip[2].y;
     let w = f32(size.x);
     let h = f32(size.y);
-    let px0 = (x0 * 0.5 + 0.5) * w - TILE_MARGIN_PX;
-    let px1 = (x1 * 0.5 + 0.5) * w + TILE_MARGIN_PX;
-    let py0 = (0.5 - y1 * 0.5) * h - TILE_MARGIN_PX;
-    let py1 = (0.5 - y0 * 0.5) * h + TILE_MARGIN_PX;
+    let px0 = (x0 * 0.5 + 0.5) * w - margin;
+    let px1 = (x1 * 0.5 + 0.5) * w + margin;
+    let py0 = (0.5 - y1 * 0.5) * h - margin;
+    let py1 = (0.5 - y0 * 0.5) * h + margin;
     if (px1 < 0.0 || py1 < 0.0 || px0 >= w || py0 >= h) {
         return vec4(1u, 0u, 0u, 0u);
     }
+    // Clamped as floats: a conversion of a value out of range is not defined.
     let last = vec2(w - 1.0, h - 1.0);
     let lo = vec2<u32>(clamp(vec2(px0, py0), vec2(0.0), last));
     let hi = vec2<u32>(clamp(vec2(px1, py1), vec2(0.0), last));
     return vec4(lo, hi);
+}
+
+// The tiles (first x, y, last x, y) of a target whose views of `size` lie side by side
+// that sphere s may cover in view e: eye_pixels' in tiles (TileMask::tiles_of in
+// src/cull/tiles.rs); x0 > x1 where none.
+fn eye_tiles(s: vec4<f32>, view: mat4x4<f32>, clip: mat4x4<f32>, size: vec2<u32>, e: u32) -> vec4<u32> {
+    let p = eye_pixels(s, view, clip, size);
+    if (p.x > p.z) {
+        return p;
+    }
+    let x = vec2(e * size.x, 0u);
+    return vec4((p.xy + x) / TILE, (p.zw + x) / TILE);
 }
