@@ -57,7 +57,8 @@ pub enum WholeRedraw {
 }
 
 /// A slot whose tiles a kept frame redraws: its instance's world sphere as last drawn
-/// and now (`None`: no instance).
+/// and now (`None`: no instance; zero where the GPU marks the tiles: see
+/// [`Keeper::new`]'s `measures`).
 #[derive(Clone, Copy, Debug, PartialEq)]
 pub struct Change {
     /// The instance's slot.
@@ -82,8 +83,13 @@ pub struct Keeper {
     never: Option<&'static str>,
     /// The rig and time the last frame was drawn at.
     last: Option<(Rig, f32)>,
-    /// Each slot's world sphere as last drawn (`None`: vacant).
+    /// Each slot's world sphere as last drawn (`None`: vacant). Measured only where the
+    /// CPU marks the tiles (`measures`: culling on the CPU); where the GPU marks them
+    /// from its own spheres, only whether a slot is occupied counts, and the sphere is
+    /// held as zero (measuring it took a third of a change's bookkeeping, caches cold:
+    /// docs/performance.md).
     spheres: Vec<Option<Vec4>>,
+    measures: bool,
     /// What the time moves.
     by_time: ByTime,
     /// Per slot, whether its pixels change with the time ([`ByTime::moves`]), and those
@@ -112,18 +118,21 @@ pub struct Keeper {
 
 impl Keeper {
     /// The keeper of a renderer made for `scene`, whose frames `never` keep pixels for
-    /// that reason where given.
+    /// that reason where given; `measures`: whether the CPU marks the tiles (culling on
+    /// the CPU), which needs each changed instance's world sphere.
     pub fn new(
         scene: &Scene,
         mode: KeepUnchanged,
         never: Option<&'static str>,
         shadows: bool,
+        measures: bool,
     ) -> Keeper {
         let mut keeper = Keeper {
             mode,
             never,
             last: None,
             spheres: Vec::new(),
+            measures,
             by_time: ByTime {
                 posed: Vec::new(),
                 morphed: Vec::new(),
@@ -158,7 +167,7 @@ impl Keeper {
         (self.paused, self.missed, self.rebuild) = (false, false, false);
         let slots = 0..scene.instances.len() as u32;
         self.spheres = (slots.clone())
-            .map(|s| occupied(s).then(|| scene.world_sphere(&scene.instances[s as usize])))
+            .map(|s| occupied(s).then(|| self.sphere(scene, s)))
             .collect();
         self.by_time = ByTime::of(scene);
         let by_time = &self.by_time;
@@ -202,7 +211,7 @@ impl Keeper {
                 self.spheres.resize(s + 1, None);
                 self.animates.resize(s + 1, false);
             }
-            let now = occupied(slot).then(|| scene.world_sphere(&scene.instances[s]));
+            let now = occupied(slot).then(|| self.sphere(scene, slot));
             self.change(slot, self.spheres[s], now);
             self.spheres[s] = now;
             self.blended |= now.is_some() && self.is_blended(scene, slot);
@@ -234,6 +243,14 @@ impl Keeper {
                 self.pending[s] = self.changed.len() as u32;
             }
             at => self.changed[at as usize - 1].after = after,
+        }
+    }
+
+    /// The world sphere of the instance in `slot`, where the CPU marks the tiles.
+    fn sphere(&self, scene: &Scene, slot: u32) -> Vec4 {
+        match self.measures {
+            true => scene.world_sphere(&scene.instances[slot as usize]),
+            false => Vec4::ZERO,
         }
     }
 

@@ -208,7 +208,14 @@ impl Renderer {
                 "keeping unchanged pixels: {why} (--keep-unchanged auto draws such frames whole)"
             )));
         }
-        let keeper = Keeper::new(scene, options.keep_unchanged, never, options.shadows);
+        let measures = options.cull == CullMode::Cpu;
+        let keeper = Keeper::new(
+            scene,
+            options.keep_unchanged,
+            never,
+            options.shadows,
+            measures,
+        );
         let resolved = rig.resolve()?;
         let coarse = options.coarse_for(&resolved, Some(device));
         let plan = FramePlan::of(rig, resolved, &options, coarse, 0.0)?;
