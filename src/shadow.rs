@@ -51,6 +51,19 @@ pub struct LightView {
 }
 
 impl LightView {
+    /// The frame's light without a shadow map: its direction alone. Nothing reads
+    /// `clip_from_world` then (the draw tests `shadows` first), so it is the identity
+    /// and the box holds everything; fitting the box takes a latch's time
+    /// ([`crate::renderer::Renderer::latch`]) for nothing.
+    pub fn unfitted(light: &Light) -> LightView {
+        LightView {
+            clip_from_world: Mat4::IDENTITY,
+            planes: [Vec4::W; 6],
+            // As the fitted box's: normalized in f64, so both shade alike.
+            direction: light.direction.as_dvec3().normalize_or(DVec3::Y).as_vec3(),
+        }
+    }
+
     /// Fitted to `resolved`'s displays (every eye, each cut at the shadow distance).
     pub fn fit(light: &Light, resolved: &ResolvedRig) -> LightView {
         // Fitted to every display planned for, drawn or not: a subset casts the shadows

@@ -135,6 +135,27 @@ fn the_coarse_cull_and_the_light_are_decided_once_for_the_frame() {
     );
 }
 
+/// Without a shadow map the light's box is not fitted (nothing reads it), yet it
+/// shades alike: its direction is the fitted one's, bit for bit, for any light.
+#[test]
+fn without_shadows_the_light_keeps_its_direction_and_skips_the_fit() {
+    use rand::{Rng, SeedableRng};
+    let mut rng = rand_pcg::Pcg64::seed_from_u64(42);
+    for _ in 0..32 {
+        let mut options = RendererOptions::default();
+        let d = [0; 3].map(|_| rng.random_range(-1.0f32..1.0));
+        options.light.direction = glam::Vec3::from(d) * rng.random_range(0.1f32..4.0);
+        let off = plan("cave", &options, false);
+        options.shadows = true;
+        let on = plan("cave", &options, false);
+        assert_eq!(off.light.direction, on.light.direction, "{d:?}");
+        assert_eq!(off.frame.light_direction, on.frame.light_direction);
+        assert_eq!(off.light.clip_from_world, glam::Mat4::IDENTITY);
+        assert_ne!(on.light.clip_from_world, glam::Mat4::IDENTITY);
+        assert_eq!(off.frame.shadows, 0);
+    }
+}
+
 #[test]
 fn lod_scales_with_the_sharpest_display_and_is_off_by_default() {
     let off = plan("hmd", &RendererOptions::default(), false);

@@ -258,7 +258,10 @@ impl FramePlan {
             lod: frame_lod(rig, &resolved, options.lod_levels()),
             coarse: coarse.then(|| resolved.coarse_cull(options.mode.culls_per_eye())),
         };
-        let light = LightView::fit(&options.light, &resolved);
+        let light = match options.shadows {
+            true => LightView::fit(&options.light, &resolved),
+            false => LightView::unfitted(&options.light),
+        };
         let frame = FrameContext::new(
             &rig.viewer,
             time,
