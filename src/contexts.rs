@@ -111,14 +111,14 @@ impl EyeContext {
     /// The eye context of view `v`.
     pub fn from_view(v: &View) -> EyeContext {
         let clip_from_view = v.clip_from_view();
-        let clip_from_world = v.clip_from_world();
+        let [view_from_world, clip_from_world, world_from_clip] = v.world_matrices();
         EyeContext {
-            view_from_world: v.view_from_world(),
+            view_from_world,
             world_from_view: v.world_from_view_f32(),
             clip_from_view,
             view_from_clip: clip_from_view.inverse(),
             clip_from_world,
-            world_from_clip: v.world_from_clip(),
+            world_from_clip,
             previous_clip_from_world: clip_from_world,
             position: v.position(),
             time_ahead: 0.0,
@@ -268,7 +268,9 @@ impl DisplayContext {
         layout: &ViewLayout,
         instances_per_object: u32,
     ) -> DisplayContext {
-        let combined = EyeContext::from_view(&display.combined);
+        // The combined frustum's view and projection only: it is culled by, never drawn.
+        let combined = &display.combined;
+        let clip_from_view = combined.clip_from_view();
         let eyes = &display.eyes;
         let viewports = layout.viewports();
         // Each view's context once (its f64 compositions and inverses), then repeated.
@@ -278,12 +280,12 @@ impl DisplayContext {
         let eye = |e: usize| placed[e.min(placed.len() - 1)];
         let [_, _, w, h] = viewports[0];
         DisplayContext {
-            view_from_world: combined.view_from_world,
-            world_from_view: combined.world_from_view,
-            clip_from_view: combined.clip_from_view,
-            view_from_clip: combined.view_from_clip,
+            view_from_world: combined.view_from_world(),
+            world_from_view: combined.world_from_view_f32(),
+            clip_from_view,
+            view_from_clip: clip_from_view.inverse(),
             eye: std::array::from_fn(eye),
-            position: combined.position,
+            position: combined.position(),
             resolution: Vec2::new(w as f32, h as f32),
             planes: display.planes,
             instances_per_object,

@@ -71,7 +71,11 @@ impl View {
 
     /// World to view space, rounded to f32.
     pub fn view_from_world(&self) -> Mat4 {
-        glam::DMat4::from(self.world_from_view.inverse()).as_mat4()
+        self.view_from_world_f64().as_mat4()
+    }
+
+    fn view_from_world_f64(&self) -> glam::DMat4 {
+        glam::DMat4::from(self.world_from_view.inverse())
     }
 
     /// View to world space, rounded to f32.
@@ -107,9 +111,17 @@ impl View {
         self.clip_from_world_f64().inverse().as_mat4()
     }
 
+    /// [`View::view_from_world`], [`View::clip_from_world`] and
+    /// [`View::world_from_clip`] together, bit for bit, with the f64 products they share
+    /// made once: a context needs all three for every view of every frame.
+    pub fn world_matrices(&self) -> [Mat4; 3] {
+        let view_from_world = self.view_from_world_f64();
+        let clip_from_world = self.clip_from_view().as_dmat4() * view_from_world;
+        [view_from_world, clip_from_world, clip_from_world.inverse()].map(|m| m.as_mat4())
+    }
+
     fn clip_from_world_f64(&self) -> glam::DMat4 {
-        let view_from_world = glam::DMat4::from(self.world_from_view.inverse());
-        self.clip_from_view().as_dmat4() * view_from_world
+        self.clip_from_view().as_dmat4() * self.view_from_world_f64()
     }
 
     /// The six planes, built from the pose and tangents rather than extracted from
@@ -384,6 +396,22 @@ mod tests {
                 "{i}: {p}"
             );
         }
+    }
+
+    #[test]
+    fn world_matrices_are_the_three_made_apart() {
+        let mut v = eye(0.3);
+        v.world_from_view = DAffine3::from_rotation_translation(
+            DQuat::from_euler(glam::EulerRot::YXZ, 0.7, -0.2, 0.05),
+            DVec3::new(12.5, 1.7, -30.25),
+        );
+        let expected = [
+            v.view_from_world(),
+            v.clip_from_world(),
+            v.world_from_clip(),
+        ];
+        assert_eq!(v.world_matrices(), expected);
+        assert_ne!(expected[1], Mat4::IDENTITY);
     }
 
     #[test]
