@@ -145,7 +145,8 @@ pub struct FramePlan {
     pub culls: Vec<PlannedCull>,
     /// Per display: its far layer's plan (stereo displays with the far layer on).
     pub far: Vec<Option<FarPlan>>,
-    /// The frame's light: it shades every display, and with shadows draws the map.
+    /// The frame's light: it shades every display, and with shadows draws the map
+    /// (its box fitted only then: [`LightView::unfitted`]).
     pub light: LightView,
     /// With shadows: the light's cull, outside the frame frustum (never coarse).
     pub light_cull: Option<PlannedCull>,
