@@ -116,12 +116,17 @@ impl View {
     /// made once: a context needs all three for every view of every frame.
     pub fn world_matrices(&self) -> [Mat4; 3] {
         let view_from_world = self.view_from_world_f64();
-        let clip_from_world = self.clip_from_view().as_dmat4() * view_from_world;
+        let clip_from_world = self.clip_from(view_from_world);
         [view_from_world, clip_from_world, clip_from_world.inverse()].map(|m| m.as_mat4())
     }
 
     fn clip_from_world_f64(&self) -> glam::DMat4 {
-        self.clip_from_view().as_dmat4() * self.view_from_world_f64()
+        self.clip_from(self.view_from_world_f64())
+    }
+
+    /// World to clip in f64, from the view's `view_from_world`.
+    fn clip_from(&self, view_from_world: glam::DMat4) -> glam::DMat4 {
+        self.clip_from_view().as_dmat4() * view_from_world
     }
 
     /// The six planes, built from the pose and tangents rather than extracted from

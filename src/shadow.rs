@@ -36,6 +36,14 @@ impl Default for Light {
 /// Meters beyond the lit volume, towards the light, whose casters still shade it.
 const CASTER_REACH: f64 = 200.0;
 
+impl Light {
+    /// Towards the light, unit length, in f64: what a fitted box is oriented by and
+    /// what every light view, fitted or not, shades with.
+    fn towards(&self) -> DVec3 {
+        self.direction.as_dvec3().normalize_or(DVec3::Y)
+    }
+}
+
 /// The light's view for one frame: an orthographic box along the light, holding a
 /// sphere around every display frustum (cut at the shadow distance) and reaching
 /// `CASTER_REACH` further towards the light.
@@ -59,8 +67,7 @@ impl LightView {
         LightView {
             clip_from_world: Mat4::IDENTITY,
             planes: [Vec4::W; 6],
-            // As the fitted box's: normalized in f64, so both shade alike.
-            direction: light.direction.as_dvec3().normalize_or(DVec3::Y).as_vec3(),
+            direction: light.towards().as_vec3(),
         }
     }
 
@@ -82,12 +89,12 @@ impl LightView {
             .iter()
             .map(|p| p.distance(center))
             .fold(1e-3, f64::max);
-        Self::around(light.direction.as_dvec3(), center, radius)
+        Self::around(light.towards(), center, radius)
     }
 
-    /// The box of half-width `radius` around `center` along `towards_light`.
-    fn around(towards_light: DVec3, center: DVec3, radius: f64) -> LightView {
-        let back = towards_light.normalize_or(DVec3::Y);
+    /// The box of half-width `radius` around `center` along `back` (unit, towards the
+    /// light).
+    fn around(back: DVec3, center: DVec3, radius: f64) -> LightView {
         let side = back.any_orthonormal_vector();
         let up = back.cross(side);
         let eye = center + back * (radius + CASTER_REACH);
