@@ -127,9 +127,16 @@ impl Rig {
                     (p, orientation, fov)
                 })
                 .collect()),
-            Mount::Screen(s) => positions
-                .map(|p| screen_basis(s, p).map(|(orientation, fov)| (p, orientation, fov)))
-                .collect(),
+            Mount::Screen(s) => {
+                let screen = ScreenBasis::of(s);
+                positions
+                    .map(|p| {
+                        screen
+                            .seen_from(p)
+                            .map(|(orientation, fov)| (p, orientation, fov))
+                    })
+                    .collect()
+            }
             Mount::Views(views) => Ok(views
                 .iter()
                 .map(|v: &PosedView| (v.position(), v.rotation(), v.fov.tangents()))
@@ -295,28 +302,53 @@ fn head_fixed_basis(viewer: &Viewer, h: &HeadFixed, eye: usize, views: u32) -> (
 }
 
 /// Kooima's generalized perspective projection: the view looks along the screen's
-/// inward normal and its window is the screen rectangle seen from `eye`.
+/// inward normal and its window is the screen rectangle seen from the eye.
 ///
 /// The rectangle is the screen's completion: the lower edge as given, the up direction
 /// made perpendicular to it (Gram-Schmidt), and the height of `upper_left` above the
 /// lower edge. Validation allows corners a hair off a right angle; this is then the
-/// rectangle both the projection and the culling frustum use.
-fn screen_basis(s: &Screen, eye: DVec3) -> std::result::Result<(DQuat, Fov), String> {
-    let [pa, pb, pc] =
-        [s.lower_left, s.lower_right, s.upper_left].map(|p| DVec3::from(p.map(f64::from)));
-    let vr = (pb - pa).normalize();
-    let vu = (pc - pa).reject_from_normalized(vr).normalize();
-    let vn = vr.cross(vu);
-    let (va, vb, vc) = (pa - eye, pb - eye, pc - eye);
-    let dist = -va.dot(vn);
-    if dist <= 1e-4 {
-        return Err(format!("the eye at {eye} is on or behind the screen"));
+/// rectangle both the projection and the culling frustum use. The basis is the same for
+/// every eye: made once per display, it is half a CAVE wall's work per frame (and per
+/// latch).
+struct ScreenBasis {
+    corners: [DVec3; 3],
+    right: DVec3,
+    up: DVec3,
+    normal: DVec3,
+    orientation: DQuat,
+}
+
+impl ScreenBasis {
+    fn of(s: &Screen) -> ScreenBasis {
+        let corners =
+            [s.lower_left, s.lower_right, s.upper_left].map(|p| DVec3::from(p.map(f64::from)));
+        let [pa, pb, pc] = corners;
+        let right = (pb - pa).normalize();
+        let up = (pc - pa).reject_from_normalized(right).normalize();
+        let normal = right.cross(up);
+        ScreenBasis {
+            corners,
+            right,
+            up,
+            normal,
+            orientation: DQuat::from_mat3(&DMat3::from_cols(right, up, normal)),
+        }
     }
-    let fov = Fov {
-        left: (-vr.dot(va) / dist) as f32,
-        right: (vr.dot(vb) / dist) as f32,
-        up: (vu.dot(vc) / dist) as f32,
-        down: (-vu.dot(va) / dist) as f32,
-    };
-    Ok((DQuat::from_mat3(&DMat3::from_cols(vr, vu, vn)), fov))
+
+    /// The view's orientation and window from `eye`.
+    fn seen_from(&self, eye: DVec3) -> std::result::Result<(DQuat, Fov), String> {
+        let (vr, vu) = (self.right, self.up);
+        let [va, vb, vc] = self.corners.map(|p| p - eye);
+        let dist = -va.dot(self.normal);
+        if dist <= 1e-4 {
+            return Err(format!("the eye at {eye} is on or behind the screen"));
+        }
+        let fov = Fov {
+            left: (-vr.dot(va) / dist) as f32,
+            right: (vr.dot(vb) / dist) as f32,
+            up: (vu.dot(vc) / dist) as f32,
+            down: (-vu.dot(va) / dist) as f32,
+        };
+        Ok((self.orientation, fov))
+    }
 }
