@@ -78,6 +78,17 @@ pub(crate) fn uniform_buffer<T: encase::ShaderType>(
 pub trait Upload {
     /// Writes `data` at `offset` of `buffer` before the next submission's commands.
     fn write_buffer(&self, buffer: &wgpu::Buffer, offset: u64, data: &[u8]);
+
+    /// Writes `value` laid out as its WGSL uniform at `offset` of `buffer`; returns the
+    /// bytes written.
+    fn write_uniform<T>(&self, buffer: &wgpu::Buffer, offset: u64, value: &T) -> u64
+    where
+        T: encase::ShaderType + encase::internal::WriteInto,
+    {
+        let bytes = crate::records::uniform_bytes(value);
+        self.write_buffer(buffer, offset, &bytes);
+        bytes.len() as u64
+    }
 }
 
 impl Upload for wgpu::Queue {

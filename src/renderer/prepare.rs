@@ -7,9 +7,8 @@ use super::keeping;
 use super::plan::{FramePlan, FrameStats};
 use super::uploads::Writes;
 use super::{CullMode, Path, Renderer};
-use crate::buffers::write;
+use crate::buffers::Upload;
 use crate::error::{Error, Result};
-use crate::records::uniform_bytes;
 use crate::rig::Rig;
 
 impl Renderer {
@@ -35,8 +34,8 @@ impl Renderer {
         let frames = self.options.frames_per_submit;
         let same = rig.displays.len() == self.shapes.len()
             && rig.displays.iter().zip(&self.shapes).all(|(d, s)| {
-                let same_layout = frames::layout(d, s.layered, frames) == s.layout;
-                d.views() * frames == s.views() && (d.views() < 4 || same_layout)
+                let same_layout = || frames::layout(d, s.layered, frames) == s.layout;
+                d.views() * frames == s.views() && (d.views() < 4 || same_layout())
             });
         match same {
             true => Ok(()),
@@ -168,7 +167,7 @@ impl Renderer {
             pose: &self.uploads,
             queue,
         };
-        let frame_bytes = write(to.pose, &self.frame, &uniform_bytes(&plan.frame));
+        let frame_bytes = to.pose.write_uniform(&self.frame, 0, &plan.frame);
         let light_bytes = self.lighting.prepare(to.pose, &plan);
         let light = plan.light_cull.as_ref().map(|_| plan.light);
         let mut stats = match &mut self.path {

@@ -43,6 +43,9 @@ pub(super) struct Coalesced {
     placed: Vec<Entry>,
     /// Whether an encode recorded copies of `placed` since they were placed.
     recorded: bool,
+    /// Where uniforms are laid out before they are gathered: one vector for the
+    /// frame's dozen, not one each.
+    scratch: RefCell<Vec<u8>>,
 }
 
 impl Upload for Coalesced {
@@ -56,6 +59,20 @@ impl Upload for Coalesced {
         });
         bytes.extend_from_slice(data);
     }
+
+    fn write_uniform<T>(&self, buffer: &wgpu::Buffer, offset: u64, value: &T) -> u64
+    where
+        T: encase::ShaderType + encase::internal::WriteInto,
+    {
+        let mut scratch = self.scratch.borrow_mut();
+        scratch.clear();
+        let mut laid_out = encase::UniformBuffer::new(&mut *scratch);
+        laid_out
+            .write(value)
+            .expect("writing into a growable Vec cannot fail");
+        self.write_buffer(buffer, offset, &scratch);
+        scratch.len() as u64
+    }
 }
 
 impl Coalesced {
@@ -66,6 +83,7 @@ impl Coalesced {
             staging: None,
             placed: Vec::new(),
             recorded: false,
+            scratch: RefCell::default(),
         }
     }
 

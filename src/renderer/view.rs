@@ -125,7 +125,7 @@ impl ViewPass {
     /// the GPU); returns the bytes written.
     pub(super) fn prepare(&self, to: Writes, context: &DisplayContext, culler: &Culler) -> u64 {
         let member = culler.write_member(to.pose, &self.cull, context);
-        write(to.pose, &self.context, &uniform_bytes(context))
+        to.pose.write_uniform(&self.context, 0, context)
             + culler.upload(to.queue, &self.cull)
             + member
     }

@@ -6,7 +6,7 @@ use crate::buffers::Upload;
 use crate::cull::HiddenArea;
 use crate::cull::coarse::CoarseCull;
 use crate::cull::rig::{RigCull, RigOcclusion, RigView};
-use crate::records::{storage_bytes, uniform_bytes};
+use crate::records::storage_bytes;
 use glam::Vec4;
 use std::sync::Arc;
 
@@ -49,14 +49,7 @@ impl CullScene {
         let (group, index) = self.rig_sets.place(m);
         let base = group as u64 * self.rig_stride;
         let (view_at, test_at) = RigCull::offsets(index as usize);
-        let bytes = uniform_bytes(record);
-        queue.write_buffer(&self.rig, base + view_at, &bytes);
-        let mut written = bytes.len();
-        if let Some(test) = test {
-            let bytes = uniform_bytes(test);
-            queue.write_buffer(&self.rig, base + test_at, &bytes);
-            written += bytes.len();
-        }
-        written as u64
+        let written = queue.write_uniform(&self.rig, base + view_at, record);
+        written + test.map_or(0, |t| queue.write_uniform(&self.rig, base + test_at, t))
     }
 }

@@ -6,14 +6,13 @@
 use std::time::Instant;
 
 use super::{PathCore, PathInputs};
-use crate::buffers::{storage_buffer, write};
+use crate::buffers::{Upload, storage_buffer, write};
 use crate::contexts::context_buffer;
 use crate::cull::CullOutput;
 use crate::draw::{
     BinDraw, BinPipelines, DrawFeatures, DrawScene, Drawer, Drawing, NO_OWN_PIPELINES, set_viewport,
 };
 use crate::error::Result;
-use crate::records::uniform_bytes;
 use crate::renderer::culler::{CullShape, Culler};
 use crate::renderer::options::StereoMode;
 use crate::renderer::plan::{CullView, FramePlan, FrameStats};
@@ -126,10 +125,9 @@ impl ClassicPath {
         stats.cpu_cull = start.elapsed();
         let start = Instant::now();
         for (i, (state, ctx)) in self.displays.iter().zip(&plan.displays).enumerate() {
-            stats.bytes_uploaded += write(to.pose, &state.context, &uniform_bytes(ctx));
+            stats.bytes_uploaded += to.pose.write_uniform(&state.context, 0, ctx);
             for (e, eye) in state.eyes.iter().enumerate() {
-                let context = uniform_bytes(&ctx.for_eye(e));
-                stats.bytes_uploaded += write(to.pose, &eye.context, &context);
+                stats.bytes_uploaded += to.pose.write_uniform(&eye.context, 0, &ctx.for_eye(e));
             }
             for (out, buffer) in self.visible_lists(i) {
                 let visible = bytemuck::cast_slice(&out.visible);
