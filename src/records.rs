@@ -408,11 +408,21 @@ pub fn pack_unorm4x8(c: Vec4) -> u32 {
 /// Serializes a uniform (a context, the cull parameters) into the bytes the WGSL
 /// struct expects.
 pub fn uniform_bytes<T: encase::ShaderType + encase::internal::WriteInto>(value: &T) -> Vec<u8> {
-    let mut buffer = encase::UniformBuffer::new(Vec::new());
-    buffer
+    let mut bytes = Vec::new();
+    uniform_bytes_into(value, &mut bytes);
+    bytes
+}
+
+/// [`uniform_bytes`] into `bytes` (cleared first), whose allocation a caller that lays
+/// out many uniforms keeps.
+pub fn uniform_bytes_into<T>(value: &T, bytes: &mut Vec<u8>)
+where
+    T: encase::ShaderType + encase::internal::WriteInto,
+{
+    bytes.clear();
+    encase::UniformBuffer::new(bytes)
         .write(value)
         .expect("writing into a growable Vec cannot fail");
-    buffer.into_inner()
 }
 
 /// Serializes storage records (a runtime-sized array) into the bytes the WGSL array

@@ -65,11 +65,7 @@ impl Upload for Coalesced {
         T: encase::ShaderType + encase::internal::WriteInto,
     {
         let mut scratch = self.scratch.borrow_mut();
-        scratch.clear();
-        let mut laid_out = encase::UniformBuffer::new(&mut *scratch);
-        laid_out
-            .write(value)
-            .expect("writing into a growable Vec cannot fail");
+        crate::records::uniform_bytes_into(value, &mut scratch);
         self.write_buffer(buffer, offset, &scratch);
         scratch.len() as u64
     }
