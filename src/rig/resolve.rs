@@ -308,8 +308,7 @@ fn head_fixed_basis(viewer: &Viewer, h: &HeadFixed, eye: usize, views: u32) -> (
 /// made perpendicular to it (Gram-Schmidt), and the height of `upper_left` above the
 /// lower edge. Validation allows corners a hair off a right angle; this is then the
 /// rectangle both the projection and the culling frustum use. The basis is the same for
-/// every eye: made once per display, it is half a CAVE wall's work per frame (and per
-/// latch).
+/// every eye, so it is made once per display; each eye finds its window from it.
 struct ScreenBasis {
     corners: [DVec3; 3],
     right: DVec3,
