@@ -225,7 +225,7 @@ fn open(args: &ClusterArgs, rank: u32, ranks: u32) -> Result<Node> {
         false => {
             let mut scene = args.scene.clone();
             scene.displays = displays.clone();
-            let how = (args.cull, args.mode, args.msaa);
+            let how = (args.cull, args.mode, args.msaa, false);
             Some(Session::open(&scene, how, &args.edits, args.time)?)
         }
     };

@@ -227,7 +227,7 @@ fn frames_apart(
 
 pub fn render(args: &RenderArgs) -> Result<()> {
     let edits = EditArgs::default();
-    let how = (args.cull, args.mode, args.msaa);
+    let how = (args.cull, args.mode, args.msaa, false);
     let mut session = Session::open(&args.scene, how, &edits, args.time)?;
     // Room for every display's draw passes (one per eye, or two with occlusion, at
     // most) and the shadow pass.

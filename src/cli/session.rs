@@ -73,12 +73,12 @@ impl Session {
 
     /// Loads the rig and scene (posed at `time` seconds, or with `--animation off`
     /// stripped of its animations) and opens the device, then the renderer with `cull`,
-    /// `mode` and `msaa` samples per pixel (checked against the adapter's counts; `None`:
-    /// [`default_msaa`]). A scene with edits or animations is live: each
+    /// `mode`, `msaa` samples per pixel (checked against the adapter's counts; `None`:
+    /// [`default_msaa`]) and, where every frame will be latched, `late_latch`. A scene with edits or animations is live: each
     /// [`Session::frame`] poses it at the frame's time.
     pub fn open(
         args: &SceneArgs,
-        (cull, mode, msaa): (CullMode, StereoMode, Option<u32>),
+        (cull, mode, msaa, late_latch): (CullMode, StereoMode, Option<u32>, bool),
         edits: &EditArgs,
         time: f32,
     ) -> Result<Session> {
@@ -94,6 +94,7 @@ impl Session {
             cull,
             mode,
             posing: args.posing.resolve(cull),
+            late_latch,
             ..args.options()
         };
         let counts = gpu.sample_counts(options.color_format);

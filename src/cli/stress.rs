@@ -37,7 +37,8 @@ pub struct StressArgs {
     #[arg(long)]
     pub json: bool,
     /// Latch each frame's pose at the submit (GPU cull): the pose is sampled from the
-    /// viewer's path again once the frame is recorded ([`crate::renderer::Renderer::latch`]).
+    /// viewer's path again once the frame is recorded ([`crate::renderer::Renderer::latch`]),
+    /// by a renderer made for it (`RendererOptions::late_latch`).
     #[arg(long)]
     pub latch: bool,
     /// Hold the head still (no walk): with `--keep-unchanged`, frames redraw only what
@@ -195,7 +196,7 @@ impl MemorySample {
 
 pub fn stress(args: &StressArgs) -> Result<()> {
     let msaa = Some(args.msaa);
-    let how = (args.cull, args.mode, msaa);
+    let how = (args.cull, args.mode, msaa, args.latch);
     let mut session = Session::open(&args.scene, how, &args.edits, 0.0)?;
     // Room for every display's draw passes (one per eye, or two with occlusion, at
     // most) and the shadow pass.

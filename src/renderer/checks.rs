@@ -5,6 +5,7 @@ use super::options::StereoMode;
 use super::options::{CullMode, PosingMode, RendererOptions};
 use crate::draw::DrawScene;
 use crate::error::{Error, Result};
+use crate::keep::KeepUnchanged;
 use crate::records::MeshRecord;
 use crate::rig::Rig;
 use crate::scene::{Scene, Shading, Vertex};
@@ -93,6 +94,22 @@ fn check_motion(options: &RendererOptions) -> Result<()> {
     )))
 }
 
+/// Late latching latches every frame: what a latch refuses, the renderer does.
+fn check_late_latch(options: &RendererOptions) -> Result<()> {
+    if !options.late_latch {
+        return Ok(());
+    }
+    let why = super::prepare::why_no_latch(options).or_else(|| {
+        (options.keep_unchanged != KeepUnchanged::Off).then_some(
+            "a latched pose moves every pixel, so no frame keeps the last one's: keep_unchanged off",
+        )
+    });
+    match why {
+        Some(why) => Err(Error::Unsupported(format!("late latching: {why}"))),
+        None => Ok(()),
+    }
+}
+
 /// Materials drawn by a pipeline of the caller's own need the GPU-driven modes, whose
 /// bins are one multi-draw each, and no far layer (its own pass draws far instances
 /// with the built-in pipelines into a layer of its own shape).
@@ -147,6 +164,7 @@ pub(super) fn check_device(
     }
     check_own_shading(scene, options)?;
     check_motion(options)?;
+    check_late_latch(options)?;
     if options.posing == PosingMode::Gpu && options.cull != CullMode::Gpu {
         return Err(Error::Unsupported(
             "posing on the GPU writes the culling spheres on the GPU, which a CPU cull cannot read: use --posing cpu or --cull gpu".into(),

@@ -290,7 +290,8 @@ impl Renderer {
     }
 
     /// Headless convenience: [`Renderer::prepare`], [`Renderer::encode`] into a new encoder
-    /// and submit, rendering into `targets` (from [`Renderer::create_targets`]).
+    /// (with `late_latch`, [`Renderer::latch`] at `rig`) and submit, rendering into
+    /// `targets` (from [`Renderer::create_targets`]).
     pub fn submit_frame(
         &mut self,
         device: &wgpu::Device,
@@ -326,6 +327,9 @@ impl Renderer {
             }
             false => self.encode(&mut encoder, &views, timer)?,
         };
+        if self.options.late_latch {
+            self.latch(queue, rig)?;
+        }
         queue.submit([encoder.finish()]);
         Ok(prepared + recorded)
     }

@@ -209,6 +209,7 @@ impl Renderer {
             )));
         }
         let measures = options.cull == CullMode::Cpu;
+        let uploads = Coalesced::new(device, options.late_latch);
         let keeper = Keeper::new(
             scene,
             options.keep_unchanged,
@@ -302,7 +303,7 @@ impl Renderer {
             prepared: None,
             motion_from: None,
             motion_last: None,
-            uploads: Coalesced::new(device),
+            uploads,
             keeper,
             keeps: false,
         })

@@ -240,6 +240,14 @@ pub struct RendererOptions {
     /// the tiles that something changed ([`crate::keep`]); `on` and `auto` turn
     /// occlusion's `auto` off (its phases need every instance tested each frame).
     pub keep_unchanged: KeepUnchanged,
+    /// Every frame's pose is latched at its submit ([`super::Renderer::latch`]): the
+    /// pose's writes wait in memory mapped before the pose is sampled, which the latch
+    /// fills and closes, so that a latch makes no staging of its own. Every encoded
+    /// frame is then latched (at the planned pose where nothing newer came) before its
+    /// submit, and submitted before the next `prepare`: wgpu refuses a submit that reads
+    /// a mapped buffer. Needs GPU culling, one frame per submission and
+    /// `keep_unchanged` off, as latching does.
+    pub late_latch: bool,
 }
 
 /// One period of a 90 Hz display: the default distance between a submission's frames.
@@ -365,6 +373,7 @@ impl Default for RendererOptions {
             frames_per_submit: 1,
             dt: DEFAULT_DT,
             keep_unchanged: KeepUnchanged::Off,
+            late_latch: false,
         }
     }
 }

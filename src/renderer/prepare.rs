@@ -6,7 +6,7 @@ use super::frames;
 use super::keeping;
 use super::plan::{FramePlan, FrameStats};
 use super::uploads::Writes;
-use super::{CullMode, Path, Renderer};
+use super::{CullMode, Path, Renderer, RendererOptions};
 use crate::buffers::Upload;
 use crate::error::{Error, Result};
 use crate::rig::Rig;
@@ -92,7 +92,7 @@ impl Renderer {
             Err(why) => (0, Some(why)),
         };
         self.keeps = whole_redraw.is_none();
-        let mut stats = self.write_plan(queue, plan, true);
+        let mut stats = self.write_plan(queue, plan, true)?;
         stats.tiles_changed = tiles_changed;
         stats.whole_redraw = whole_redraw;
         if let Some(morph) = &mut self.morph {
@@ -122,15 +122,8 @@ impl Renderer {
     /// pose, and the frame's draws hold its results; that is [`Error::Unsupported`], as
     /// is a latch before any `prepare`.
     pub fn latch(&mut self, queue: &wgpu::Queue, rig: &Rig) -> Result<FrameStats> {
-        if self.options.frames_per_submit != 1 {
-            return Err(Error::Unsupported(
-                "latching a pose takes one frame per submission: the second frame's pose is a prediction already".into(),
-            ));
-        }
-        if self.options.cull == CullMode::Cpu {
-            return Err(Error::Unsupported(
-                "latching a pose needs the GPU cull: the CPU cull ran in prepare, from the planned pose, and the recorded draws hold its results".into(),
-            ));
+        if let Some(why) = why_no_latch(&self.options) {
+            return Err(Error::Unsupported(why.into()));
         }
         let Some(time) = self.prepared else {
             return Err(Error::Unsupported(
@@ -145,7 +138,7 @@ impl Renderer {
         // The frame is drawn at `rig`, not at the pose the keeper compares the next with.
         self.keeper.forget();
         let plan = self.plan(rig, time)?;
-        Ok(self.write_plan(queue, plan, false))
+        self.write_plan(queue, plan, false)
     }
 
     /// Plans the frame from `rig` at `time` and writes what its passes read of the
@@ -155,7 +148,12 @@ impl Renderer {
     /// plan is the next frame's previous. The pose's writes go up as one
     /// ([`super::uploads`]): placed anew when `fresh` (a prepare), else where the
     /// recorded frame copies them from (a latch).
-    fn write_plan(&mut self, queue: &wgpu::Queue, mut plan: FramePlan, fresh: bool) -> FrameStats {
+    fn write_plan(
+        &mut self,
+        queue: &wgpu::Queue,
+        mut plan: FramePlan,
+        fresh: bool,
+    ) -> Result<FrameStats> {
         if self.options.motion_vectors {
             if let Some(previous) = &self.motion_from {
                 plan.measure_from(previous);
@@ -180,8 +178,23 @@ impl Renderer {
             stats.bytes_uploaded += shadow.prepare(to, &light, size, culler);
             stats.cpu_upload += start.elapsed();
         }
-        self.uploads.send(queue, fresh);
+        self.uploads.send(queue, fresh)?;
         stats.bytes_uploaded += frame_bytes + light_bytes;
-        stats
+        Ok(stats)
     }
+}
+
+/// Why a renderer made with `options` cannot latch a pose, where it cannot.
+pub(super) fn why_no_latch(options: &RendererOptions) -> Option<&'static str> {
+    if options.frames_per_submit != 1 {
+        return Some(
+            "latching a pose takes one frame per submission: the second frame's pose is a prediction already",
+        );
+    }
+    if options.cull == CullMode::Cpu {
+        return Some(
+            "latching a pose needs the GPU cull: the CPU cull ran in prepare, from the planned pose, and the recorded draws hold its results",
+        );
+    }
+    None
 }

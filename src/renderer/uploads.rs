@@ -3,11 +3,17 @@
 //! lights' views) is gathered into one staging buffer, written with one call, and
 //! copied into place by commands `encode` records before any pass. wgpu stages every
 //! `write_buffer` call on its own (a dozen for a five-wall CAVE); one call is what
-//! makes a latch cheap. The CPU culls' results are not the pose's: they go straight.
+//! makes a latch cheap. With late latching ([`open`]) the staging is mapped memory the
+//! latch writes in place, not wgpu's. The CPU culls' results are not the pose's: they
+//! go straight.
+
+mod open;
 
 use std::cell::RefCell;
 
 use crate::buffers::Upload;
+use crate::error::{Error, Result};
+use open::OpenRing;
 
 /// Where a frame's writes go: the pose's coalesced, the CPU culls' results straight.
 #[derive(Clone, Copy)]
@@ -38,7 +44,7 @@ impl Entry {
 pub(super) struct Coalesced {
     device: wgpu::Device,
     gathered: RefCell<(Vec<u8>, Vec<Entry>)>,
-    staging: Option<wgpu::Buffer>,
+    staging: Staging,
     /// The entries the staging buffer holds, in its order.
     placed: Vec<Entry>,
     /// Whether an encode recorded copies of `placed` since they were placed.
@@ -46,6 +52,14 @@ pub(super) struct Coalesced {
     /// Where uniforms are laid out before they are gathered: one vector for the
     /// frame's dozen, not one each.
     scratch: RefCell<Vec<u8>>,
+}
+
+/// Where the placed writes wait for the encode's copies.
+enum Staging {
+    /// A buffer the queue writes (grown to hold them).
+    Written(Option<wgpu::Buffer>),
+    /// Late latching: mapped buffers written in place, closed by the latch.
+    Open(OpenRing),
 }
 
 impl Upload for Coalesced {
@@ -72,11 +86,15 @@ impl Upload for Coalesced {
 }
 
 impl Coalesced {
-    pub(super) fn new(device: &wgpu::Device) -> Coalesced {
+    /// Placed in a buffer the queue writes, or with `late_latch` in mapped ones.
+    pub(super) fn new(device: &wgpu::Device, late_latch: bool) -> Coalesced {
         Coalesced {
             device: device.clone(),
             gathered: RefCell::default(),
-            staging: None,
+            staging: match late_latch {
+                true => Staging::Open(OpenRing::new(device)),
+                false => Staging::Written(None),
+            },
             placed: Vec::new(),
             recorded: false,
             scratch: RefCell::default(),
@@ -91,67 +109,92 @@ impl Coalesced {
     }
 
     /// Sends what was gathered. A `latch` (not `fresh`) after an encode recorded its
-    /// copies writes each write where its copy reads from, in one call when the writes
+    /// copies writes each write where its copy reads from, in one write when the writes
     /// are those the copies carry (the latch of the frame prepared); a write no copy
-    /// carries goes straight. Otherwise (a prepare) the writes are placed anew, for the
-    /// next encode to copy.
-    pub(super) fn send(&mut self, queue: &wgpu::Queue, fresh: bool) {
+    /// carries goes straight. With late latching that closes the frame's staging, and
+    /// a second latch of one frame is refused. Otherwise (a prepare) the writes are
+    /// placed anew, for the next encode to copy.
+    pub(super) fn send(&mut self, queue: &wgpu::Queue, fresh: bool) -> Result<()> {
         let (bytes, entries) = std::mem::take(self.gathered.get_mut());
-        match (&self.staging, self.recorded && !fresh) {
-            (Some(staging), true) => self.resend(queue, staging, (&bytes, &entries)),
-            _ => self.place(queue, &bytes, &entries),
-        }
+        let sent = match self.recorded && !fresh {
+            true => self.resend(queue, (&bytes, &entries)),
+            false => self.place(queue, &bytes, &entries),
+        };
         *self.gathered.get_mut() = (bytes, entries);
+        sent
     }
 
-    fn resend(
-        &self,
-        queue: &wgpu::Queue,
-        staging: &wgpu::Buffer,
-        (bytes, entries): (&[u8], &[Entry]),
-    ) {
+    fn resend(&mut self, queue: &wgpu::Queue, (bytes, entries): (&[u8], &[Entry])) -> Result<()> {
+        if let Staging::Open(ring) = &self.staging
+            && !ring.is_open()
+        {
+            return Err(Error::Unsupported(
+                "with late latching a frame latches once: its latch closed the staging its copies read".into(),
+            ));
+        }
         let same = entries.len() == self.placed.len()
             && entries.iter().zip(&self.placed).all(|(e, p)| e.lands_as(p));
         if same {
-            if !bytes.is_empty() {
-                queue.write_buffer(staging, 0, bytes);
-            }
-            return;
-        }
-        for e in entries {
-            let data = &bytes[e.from as usize..(e.from + e.size) as usize];
-            match self.placed.iter().find(|p| p.lands_as(e)) {
-                Some(p) => queue.write_buffer(staging, p.from, data),
-                None => queue.write_buffer(&e.to, e.at, data),
+            self.write_staging(queue, 0, bytes);
+        } else {
+            for e in entries {
+                let data = &bytes[e.from as usize..(e.from + e.size) as usize];
+                match self.placed.iter().find(|p| p.lands_as(e)) {
+                    Some(p) => self.write_staging(queue, p.from, data),
+                    None => queue.write_buffer(&e.to, e.at, data),
+                }
             }
         }
+        if let Staging::Open(ring) = &mut self.staging {
+            ring.close();
+        }
+        Ok(())
     }
 
-    /// Writes `bytes` into the staging buffer (grown to hold them) for the next encode.
-    fn place(&mut self, queue: &wgpu::Queue, bytes: &[u8], entries: &[Entry]) {
+    /// Writes `bytes` into the staging buffer (grown or opened to hold them) for the
+    /// next encode.
+    fn place(&mut self, queue: &wgpu::Queue, bytes: &[u8], entries: &[Entry]) -> Result<()> {
         self.placed = entries.to_vec();
         self.recorded = false;
         if bytes.is_empty() {
-            return;
+            return Ok(());
         }
         let size = bytes.len() as u64;
-        if self.staging.as_ref().is_none_or(|s| s.size() < size) {
-            self.staging = Some(self.device.create_buffer(&wgpu::BufferDescriptor {
-                label: Some("stereocull.pose_staging"),
-                size: size.next_power_of_two(),
-                usage: wgpu::BufferUsages::COPY_SRC | wgpu::BufferUsages::COPY_DST,
-                mapped_at_creation: false,
-            }));
+        match &mut self.staging {
+            Staging::Open(ring) => ring.open(size)?,
+            Staging::Written(staging) => {
+                if staging.as_ref().is_none_or(|s| s.size() < size) {
+                    *staging = Some(self.device.create_buffer(&wgpu::BufferDescriptor {
+                        label: Some("stereocull.pose_staging"),
+                        size: size.next_power_of_two(),
+                        usage: wgpu::BufferUsages::COPY_SRC | wgpu::BufferUsages::COPY_DST,
+                        mapped_at_creation: false,
+                    }));
+                }
+            }
         }
-        if let Some(staging) = &self.staging {
-            queue.write_buffer(staging, 0, bytes);
+        self.write_staging(queue, 0, bytes);
+        Ok(())
+    }
+
+    fn write_staging(&mut self, queue: &wgpu::Queue, at: u64, data: &[u8]) {
+        match &mut self.staging {
+            Staging::Open(ring) => ring.write(at, data),
+            Staging::Written(Some(staging)) if !data.is_empty() => {
+                queue.write_buffer(staging, at, data)
+            }
+            Staging::Written(_) => {}
         }
     }
 
     /// Records the copies of the placed writes into place: first in a frame, before
     /// any pass reads them.
     pub(super) fn record(&mut self, encoder: &mut wgpu::CommandEncoder) {
-        let Some(staging) = &self.staging else {
+        let staging = match &self.staging {
+            Staging::Open(ring) => ring.buffer(),
+            Staging::Written(staging) => staging.as_ref(),
+        };
+        let Some(staging) = staging else {
             return;
         };
         for e in &self.placed {
