@@ -74,8 +74,9 @@ impl Session {
     /// Loads the rig and scene (posed at `time` seconds, or with `--animation off`
     /// stripped of its animations) and opens the device, then the renderer with `cull`,
     /// `mode`, `msaa` samples per pixel (checked against the adapter's counts; `None`:
-    /// [`default_msaa`]) and, where every frame will be latched, `late_latch`. A scene with edits or animations is live: each
-    /// [`Session::frame`] poses it at the frame's time.
+    /// [`default_msaa`]) and, where every frame will be latched, `late_latch`. A scene
+    /// with edits or animations is live: each [`Session::frame`] poses it at the
+    /// frame's time.
     pub fn open(
         args: &SceneArgs,
         (cull, mode, msaa, late_latch): (CullMode, StereoMode, Option<u32>, bool),

@@ -135,6 +135,7 @@ impl Renderer {
                 "this frame keeps the last frame's pixels, which a new pose would move: latch frames with keep_unchanged off".into(),
             ));
         }
+        self.uploads.check_latch()?;
         // The frame is drawn at `rig`, not at the pose the keeper compares the next with.
         self.keeper.forget();
         let plan = self.plan(rig, time)?;

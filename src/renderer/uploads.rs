@@ -111,27 +111,34 @@ impl Coalesced {
     /// Sends what was gathered. A `latch` (not `fresh`) after an encode recorded its
     /// copies writes each write where its copy reads from, in one write when the writes
     /// are those the copies carry (the latch of the frame prepared); a write no copy
-    /// carries goes straight. With late latching that closes the frame's staging, and
-    /// a second latch of one frame is refused. Otherwise (a prepare) the writes are
+    /// carries goes straight. With late latching that closes the frame's staging
+    /// ([`Coalesced::check_latch`]). Otherwise (a prepare) the writes are
     /// placed anew, for the next encode to copy.
     pub(super) fn send(&mut self, queue: &wgpu::Queue, fresh: bool) -> Result<()> {
         let (bytes, entries) = std::mem::take(self.gathered.get_mut());
         let sent = match self.recorded && !fresh {
-            true => self.resend(queue, (&bytes, &entries)),
+            true => {
+                self.resend(queue, (&bytes, &entries));
+                Ok(())
+            }
             false => self.place(queue, &bytes, &entries),
         };
         *self.gathered.get_mut() = (bytes, entries);
         sent
     }
 
-    fn resend(&mut self, queue: &wgpu::Queue, (bytes, entries): (&[u8], &[Entry])) -> Result<()> {
-        if let Staging::Open(ring) = &self.staging
-            && !ring.is_open()
-        {
-            return Err(Error::Unsupported(
+    /// Refuses a second latch of a frame with late latching: the first closed the
+    /// staging the frame's copies read.
+    pub(super) fn check_latch(&self) -> Result<()> {
+        match &self.staging {
+            Staging::Open(ring) if self.recorded && !ring.is_open() => Err(Error::Unsupported(
                 "with late latching a frame latches once: its latch closed the staging its copies read".into(),
-            ));
+            )),
+            _ => Ok(()),
         }
+    }
+
+    fn resend(&mut self, queue: &wgpu::Queue, (bytes, entries): (&[u8], &[Entry])) {
         let same = entries.len() == self.placed.len()
             && entries.iter().zip(&self.placed).all(|(e, p)| e.lands_as(p));
         if same {
@@ -148,7 +155,6 @@ impl Coalesced {
         if let Staging::Open(ring) = &mut self.staging {
             ring.close();
         }
-        Ok(())
     }
 
     /// Writes `bytes` into the staging buffer (grown or opened to hold them) for the
