@@ -108,23 +108,42 @@ pub struct EyeContext {
 }
 
 impl EyeContext {
+    /// A slot before its view is placed in it.
+    const UNSET: EyeContext = EyeContext {
+        view_from_world: Mat4::IDENTITY,
+        world_from_view: Mat4::IDENTITY,
+        clip_from_view: Mat4::IDENTITY,
+        view_from_clip: Mat4::IDENTITY,
+        clip_from_world: Mat4::IDENTITY,
+        world_from_clip: Mat4::IDENTITY,
+        previous_clip_from_world: Mat4::IDENTITY,
+        position: Vec3::ZERO,
+        time_ahead: 0.0,
+        viewport: Vec4::ZERO,
+        placement: IDENTITY_PLACEMENT,
+    };
+
     /// The eye context of view `v`.
     pub fn from_view(v: &View) -> EyeContext {
+        let mut context = EyeContext::UNSET;
+        context.set_view(v);
+        context
+    }
+
+    /// This slot holds view `v` (its viewport and placement unchanged), written field
+    /// by field: the context is 480 bytes, and moving it whole costs more than its math.
+    fn set_view(&mut self, v: &View) {
         let clip_from_view = v.clip_from_view();
         let [view_from_world, clip_from_world, world_from_clip] = v.world_matrices();
-        EyeContext {
-            view_from_world,
-            world_from_view: v.world_from_view_f32(),
-            clip_from_view,
-            view_from_clip: clip_from_view.inverse(),
-            clip_from_world,
-            world_from_clip,
-            previous_clip_from_world: clip_from_world,
-            position: v.position(),
-            time_ahead: 0.0,
-            viewport: Vec4::ZERO,
-            placement: IDENTITY_PLACEMENT,
-        }
+        self.view_from_world = view_from_world;
+        self.world_from_view = v.world_from_view_f32();
+        self.clip_from_view = clip_from_view;
+        self.view_from_clip = v.view_from_clip();
+        self.clip_from_world = clip_from_world;
+        self.world_from_clip = world_from_clip;
+        self.previous_clip_from_world = clip_from_world;
+        self.position = v.position();
+        self.time_ahead = 0.0;
     }
 
     /// This eye drawn into `viewport` (`[x, y, width, height]` pixels) of a target of
@@ -268,35 +287,65 @@ impl DisplayContext {
         layout: &ViewLayout,
         instances_per_object: u32,
     ) -> DisplayContext {
+        let mut context = DisplayContext::UNSET;
+        context.set(display, layout, instances_per_object);
+        context
+    }
+
+    /// A context before its display is set in it.
+    pub const UNSET: DisplayContext = DisplayContext {
+        view_from_world: Mat4::IDENTITY,
+        world_from_view: Mat4::IDENTITY,
+        clip_from_view: Mat4::IDENTITY,
+        view_from_clip: Mat4::IDENTITY,
+        eye: [EyeContext::UNSET; MAX_VIEWS],
+        position: Vec3::ZERO,
+        resolution: Vec2::ZERO,
+        planes: [Vec4::ZERO; 6],
+        instances_per_object: 0,
+        first_eye: 0,
+        split_keep: 0,
+        split_distance: 0.0,
+        cull_slot: 0,
+        views: 0,
+        occlusion_margin_px: BOUNDS_GROWTH_PX,
+        hidden: 0,
+    };
+
+    /// [`DisplayContext::new`] in place, field by field: a context is 2.4 KB, moving it
+    /// whole costs more than its math, and a latch builds every display's on the
+    /// submit's path. Leaves the split, the cull slot and the hidden flag as they are.
+    pub fn set(
+        &mut self,
+        display: &ResolvedDisplay,
+        layout: &ViewLayout,
+        instances_per_object: u32,
+    ) {
         // The combined frustum's view and projection only: it is culled by, never drawn.
         let combined = &display.combined;
         let clip_from_view = combined.clip_from_view();
-        let eyes = &display.eyes;
         let viewports = layout.viewports();
-        // Each view's context once (its f64 compositions and inverses), then repeated.
-        let placed: Vec<EyeContext> = (eyes.iter().zip(viewports))
-            .map(|(v, &viewport)| EyeContext::from_view(v).placed(viewport, layout.size))
-            .collect();
-        let eye = |e: usize| placed[e.min(placed.len() - 1)];
         let [_, _, w, h] = viewports[0];
-        DisplayContext {
-            view_from_world: combined.view_from_world(),
-            world_from_view: combined.world_from_view_f32(),
-            clip_from_view,
-            view_from_clip: clip_from_view.inverse(),
-            eye: std::array::from_fn(eye),
-            position: combined.position(),
-            resolution: Vec2::new(w as f32, h as f32),
-            planes: display.planes,
-            instances_per_object,
-            first_eye: 0,
-            split_keep: 0,
-            split_distance: 0.0,
-            cull_slot: 0,
-            views: eyes.len() as u32,
-            occlusion_margin_px: BOUNDS_GROWTH_PX,
-            hidden: 0,
+        self.view_from_world = combined.view_from_world();
+        self.world_from_view = combined.world_from_view_f32();
+        self.clip_from_view = clip_from_view;
+        self.view_from_clip = combined.view_from_clip();
+        self.position = combined.position();
+        self.resolution = Vec2::new(w as f32, h as f32);
+        self.planes = display.planes;
+        self.instances_per_object = instances_per_object;
+        self.first_eye = 0;
+        self.views = display.eyes.len() as u32;
+        self.occlusion_margin_px = BOUNDS_GROWTH_PX;
+        // Each view's context once (its f64 compositions and inverses), then repeated.
+        let views = display.eyes.len().min(viewports.len());
+        for (slot, (v, &viewport)) in self.eye.iter_mut().zip(display.eyes.iter().zip(viewports)) {
+            slot.set_view(v);
+            slot.viewport = Vec4::from(viewport.map(|v| v as f32));
+            slot.placement = placement(viewport, layout.size);
         }
+        let (set, repeated) = self.eye.split_at_mut(views);
+        repeated.fill(set[views - 1]);
     }
 
     /// A foveated display's inset context (from its own, `self`): the insets in the eye

@@ -8,7 +8,7 @@
 //! position to spare, and at a grazing angle one f32 ulp of the eye tilts a side plane
 //! by meters at a few kilometers' distance.
 
-use glam::{DAffine3, DQuat, DVec3, Mat4, Vec3, Vec4, Vec4Swizzles};
+use glam::{DAffine3, DMat3, DQuat, DVec3, Mat4, Vec3, Vec4, Vec4Swizzles};
 use serde::{Deserialize, Serialize};
 
 /// Field of view as tangents of the half-angles from the view axis to each edge.
@@ -106,9 +106,51 @@ impl View {
         self.clip_from_world_f64().as_mat4()
     }
 
-    /// The inverse of [`View::clip_from_world`], from the f64 product.
+    /// The inverse of [`View::clip_from_world`]: the pose times
+    /// [`View::view_from_clip`]'s f64 form, composed in f64 and rounded once.
     pub fn world_from_clip(&self) -> Mat4 {
-        self.clip_from_world_f64().inverse().as_mat4()
+        self.world_from_clip_f64().as_mat4()
+    }
+
+    /// The pose times [`View::view_from_clip`]'s columns, term by term: the pose is
+    /// rigid and the inverse sparse, so this is a fifth of a full product.
+    fn world_from_clip_f64(&self) -> glam::DMat4 {
+        let [x, y, z, w] = self.view_from_clip_columns();
+        let pose = self.world_from_view;
+        let [rx, ry, rz] = [
+            pose.matrix3.x_axis,
+            pose.matrix3.y_axis,
+            pose.matrix3.z_axis,
+        ];
+        let t = pose.translation;
+        glam::DMat4::from_cols(
+            (rx * x.x).extend(0.0),
+            (ry * y.y).extend(0.0),
+            (t * z.w).extend(z.w),
+            (rx * w.x + ry * w.y + rz * w.z + t * w.w).extend(w.w),
+        )
+    }
+
+    /// The inverse of [`View::clip_from_view`] (of the f32 matrix, in f64, rounded once).
+    pub fn view_from_clip(&self) -> Mat4 {
+        glam::DMat4::from_cols_array_2d(&self.view_from_clip_columns().map(|c| c.to_array()))
+            .as_mat4()
+    }
+
+    /// A perspective's inverse in closed form, by columns (a general 4x4 inverse costs
+    /// five times as much, and a latch makes one for every view): with `x' = sx x + a z`,
+    /// `y' = sy y + b z`, `z' = c z + d`, `w' = -z`, the view point is
+    /// `((x' + a w') / sx, (y' + b w') / sy, -w', (z' + c w') / d)`.
+    fn view_from_clip_columns(&self) -> [glam::DVec4; 4] {
+        let p = self.clip_from_view().as_dmat4();
+        let (sx, sy, d) = (p.x_axis.x, p.y_axis.y, p.w_axis.z);
+        let (a, b, c) = (p.z_axis.x, p.z_axis.y, p.z_axis.z);
+        [
+            glam::DVec4::new(1.0 / sx, 0.0, 0.0, 0.0),
+            glam::DVec4::new(0.0, 1.0 / sy, 0.0, 0.0),
+            glam::DVec4::new(0.0, 0.0, 0.0, 1.0 / d),
+            glam::DVec4::new(a / sx, b / sy, -1.0, c / d),
+        ]
     }
 
     /// [`View::view_from_world`], [`View::clip_from_world`] and
@@ -117,7 +159,11 @@ impl View {
     pub fn world_matrices(&self) -> [Mat4; 3] {
         let view_from_world = self.view_from_world_f64();
         let clip_from_world = self.clip_from(view_from_world);
-        [view_from_world, clip_from_world, clip_from_world.inverse()].map(|m| m.as_mat4())
+        [
+            view_from_world.as_mat4(),
+            clip_from_world.as_mat4(),
+            self.world_from_clip_f64().as_mat4(),
+        ]
     }
 
     fn clip_from_world_f64(&self) -> glam::DMat4 {
@@ -160,23 +206,18 @@ impl View {
     /// upper-left, then the far ones in the same order (corner `i` and `i + 4` span
     /// one lateral edge).
     pub fn corners(&self) -> [DVec3; 8] {
-        self.corners_from(DVec3::ZERO)
-    }
-
-    /// [`View::corners`] relative to `origin` (the viewer): what combined frusta are
-    /// built from, so that they keep millimeters near eyes far from the world origin.
-    pub fn corners_from(&self, origin: DVec3) -> [DVec3; 8] {
-        let relative = DAffine3 {
-            translation: self.world_from_view.translation - origin,
-            ..self.world_from_view
-        };
-        let [l, r, u, d] = self.fov.tangents();
-        let window = [(-l, -d), (r, -d), (r, u), (-l, u)];
+        let window = self.window();
         std::array::from_fn(|i| {
             let dist = if i < 4 { self.near } else { self.far } as f64;
-            let (tx, ty) = window[i % 4];
-            relative.transform_point3(DVec3::new(tx * dist, ty * dist, -dist))
+            self.world_from_view.transform_point3(window[i % 4] * dist)
         })
+    }
+
+    /// The directions of the four lateral edges in view space (lower-left,
+    /// lower-right, upper-right, upper-left), at unit depth.
+    fn window(&self) -> [DVec3; 4] {
+        let [l, r, u, d] = self.fov.tangents();
+        [(-l, -d), (r, -d), (r, u), (-l, u)].map(|(x, y)| DVec3::new(x, y, -1.0))
     }
 }
 
@@ -226,7 +267,8 @@ pub fn plane_distance(p: [f32; 4], c: [f32; 3]) -> f32 {
 const ENCLOSING_SLACK: f64 = 1e-5;
 
 /// The smallest-apex perspective view, oriented by `orientation`, that contains every
-/// given frustum (each as its 8 corners relative to `origin`, see [`View::corners_from`]).
+/// given view's frustum. `origin` (the viewer) is where the corners are measured from,
+/// so that combined frusta keep millimeters near eyes far from the world origin.
 ///
 /// The chapter's Figure 1.2, generalised to asymmetric, canted and off-axis views: each
 /// side takes the widest lateral-edge tangent of the inputs, then the apex is placed
@@ -234,26 +276,41 @@ const ENCLOSING_SLACK: f64 = 1e-5;
 /// take the nearest and farthest input corners. For two parallel eyes this is exactly the
 /// chapter's construction (right plane = left eye's right plane moved to the right eye).
 /// `None` when the inputs span 180 degrees or more (no single frustum holds them: a CAVE).
-pub fn enclosing_view(orientation: DQuat, origin: DVec3, frusta: &[[DVec3; 8]]) -> Option<View> {
-    let to_basis = orientation.inverse();
-    let local: Vec<[DVec3; 8]> = frusta.iter().map(|c| c.map(|p| to_basis * p)).collect();
-    let fov = widest_fov(&local)?;
+///
+/// Each view is carried into the basis as one rotation and offset, not corner by corner:
+/// a latch builds every display's on the submit's path.
+pub fn enclosing_view(orientation: DQuat, origin: DVec3, views: &[View]) -> Option<View> {
+    let to_basis = DMat3::from_quat(orientation.inverse());
+    // A view in the basis: its apex, and its four lateral edges' directions at unit
+    // depth (a corner is the apex plus a direction times its depth).
+    let in_basis = |v: &View| {
+        let rotation = to_basis * v.world_from_view.matrix3;
+        let apex = to_basis * (v.world_from_view.translation - origin);
+        (apex, v.window().map(|w| rotation * w))
+    };
+    let fov = widest_fov(views.iter().map(|v| in_basis(v).1))?;
     let [left, right, up, down] = fov.tangents();
     // One pass over the corners for the four side reaches and the depth range.
     let mut reach = [f64::MIN; 4];
     let (mut z_nearest, mut z_farthest) = (f64::MIN, f64::MAX);
-    for p in local.iter().flatten() {
-        let sides = [
-            p.x + right * p.z,
-            -p.x + left * p.z,
-            p.y + up * p.z,
-            -p.y + down * p.z,
-        ];
-        for (r, s) in reach.iter_mut().zip(sides) {
-            *r = r.max(s);
+    for v in views {
+        let (apex, edges) = in_basis(v);
+        for dist in [v.near, v.far].map(f64::from) {
+            for e in edges {
+                let p = apex + e * dist;
+                let sides = [
+                    p.x + right * p.z,
+                    -p.x + left * p.z,
+                    p.y + up * p.z,
+                    -p.y + down * p.z,
+                ];
+                for (r, s) in reach.iter_mut().zip(sides) {
+                    *r = wider(*r, s);
+                }
+                z_nearest = wider(z_nearest, p.z);
+                z_farthest = -wider(-z_farthest, -p.z);
+            }
         }
-        z_nearest = z_nearest.max(p.z);
-        z_farthest = z_farthest.min(p.z);
     }
     let [c_right, c_left, c_up, c_down] = reach.map(|r| r + ENCLOSING_SLACK);
     let apex_z = f64::max(
@@ -279,23 +336,22 @@ pub fn enclosing_view(orientation: DQuat, origin: DVec3, frusta: &[[DVec3; 8]]) 
     })
 }
 
-/// Widest tangent per side over all lateral edges, in the basis the corners are given
-/// in, rounded outwards to f32.
-fn widest_fov(local: &[[DVec3; 8]]) -> Option<Fov> {
+/// Widest tangent per side over all lateral edges (each view's edge directions in the
+/// basis), rounded outwards to f32.
+fn widest_fov(views: impl Iterator<Item = [DVec3; 4]>) -> Option<Fov> {
     let mut widest = [f64::MIN; 4];
-    for c in local {
-        for i in 0..4 {
-            let e = c[i + 4] - c[i];
+    for edges in views {
+        for e in edges {
             let depth = -e.z;
             // An edge at 89.9 degrees or more from the axis: no finite tangent holds it.
             if depth <= 1e-3 * e.length() {
                 return None;
             }
             let [right, left, up, down] = &mut widest;
-            *right = right.max(e.x / depth);
-            *left = left.max(-e.x / depth);
-            *up = up.max(e.y / depth);
-            *down = down.max(-e.y / depth);
+            *right = wider(*right, e.x / depth);
+            *left = wider(*left, -e.x / depth);
+            *up = wider(*up, e.y / depth);
+            *down = wider(*down, -e.y / depth);
         }
     }
     let [right, left, up, down] = widest.map(round_up);
@@ -306,6 +362,13 @@ fn widest_fov(local: &[[DVec3; 8]]) -> Option<Fov> {
         down,
     };
     fov.is_valid().then_some(fov)
+}
+
+/// The larger of `a` and `b`, both finite (the rig is validated): one instruction,
+/// where `f64::max`'s NaN rule costs several in the corner loops.
+#[inline(always)]
+fn wider(a: f64, b: f64) -> f64 {
+    if b > a { b } else { a }
 }
 
 /// The smallest f32 not below `x`.
@@ -419,10 +482,53 @@ mod tests {
         assert_ne!(expected[1], Mat4::IDENTITY);
     }
 
+    /// The closed-form inverses against the general inverse of the f64 products, on
+    /// random poses and windows (off-axis, far from the origin).
+    #[test]
+    fn closed_form_inverses_match_the_general_inverse() {
+        use rand::{Rng, SeedableRng};
+        let mut rng = rand_pcg::Pcg64Mcg::seed_from_u64(42);
+        for _ in 0..200 {
+            let mut tangent = || rng.random_range(-0.3..1.5_f32);
+            let fov = Fov {
+                left: tangent(),
+                right: tangent() + 0.4,
+                up: tangent(),
+                down: tangent() + 0.4,
+            };
+            let angles = [(); 3].map(|_| rng.random_range(-3.0..3.0));
+            let at = [(); 3].map(|_| rng.random_range(-2e3..2e3));
+            let v = View {
+                world_from_view: DAffine3::from_rotation_translation(
+                    DQuat::from_euler(glam::EulerRot::YXZ, angles[0], angles[1], angles[2]),
+                    DVec3::from(at),
+                ),
+                fov,
+                near: rng.random_range(0.01..1.0),
+                far: rng.random_range(10.0..1e4),
+            };
+            let close = |closed: Mat4, general: Mat4, tolerance: f32| {
+                let scale = general
+                    .abs()
+                    .to_cols_array()
+                    .into_iter()
+                    .fold(1.0, f32::max);
+                assert!(
+                    closed.abs_diff_eq(general, tolerance * scale),
+                    "{closed} vs {general}"
+                );
+            };
+            let general = v.clip_from_view().as_dmat4().inverse();
+            close(v.view_from_clip(), general.as_mat4(), 1e-6);
+            let general = v.clip_from_world_f64().inverse();
+            close(v.world_from_clip(), general.as_mat4(), 1e-6);
+        }
+    }
+
     #[test]
     fn parallel_eyes_give_the_chapters_construction() {
         let (l, r) = (eye(-0.032), eye(0.032));
-        let d = enclosing_view(DQuat::IDENTITY, DVec3::ZERO, &[l.corners(), r.corners()]).unwrap();
+        let d = enclosing_view(DQuat::IDENTITY, DVec3::ZERO, &[l, r]).unwrap();
         // The apex lies behind the eyes where the two outer planes meet.
         let expected_z = 0.064 / (1.0 + 0.8);
         assert!(

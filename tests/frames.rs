@@ -247,7 +247,7 @@ fn a_pairs_plan_holds_both_frames_eyes_and_times_its_views() {
         planes: display.planes,
     };
     for (e, eye) in display.eyes.iter().enumerate() {
-        for corner in eye.corners_from(glam::DVec3::ZERO) {
+        for corner in eye.corners() {
             assert!(
                 frustum.contains_point(corner.as_vec3()),
                 "eye {e}'s corner {corner} is outside"

@@ -377,7 +377,7 @@ fn display_contexts(
     inset_cull: bool,
 ) -> Vec<DisplayContext> {
     let (mode, frames) = (options.mode, options.frames_per_submit);
-    let mut contexts = Vec::with_capacity(rig.displays.len());
+    let mut contexts = vec![DisplayContext::UNSET; rig.displays.len()];
     for (i, (d, r)) in rig.displays.iter().zip(&resolved.displays).enumerate() {
         let views = match inset_cull {
             true => d.views().min(2),
@@ -386,14 +386,14 @@ fn display_contexts(
         let layered = mode == StereoMode::Multiview && d.stereo;
         let per_object = instances_per_object(mode, views);
         let layout = frames::layout(d, layered, frames);
-        let mut context = DisplayContext::new(r, &layout, per_object);
+        let context = &mut contexts[i];
+        context.set(r, &layout, per_object);
         context.cull_slot = i as u32;
         context.hidden = u32::from(hidden[i].is_some());
         if let Some(plan) = &far[i] {
             context.split_keep = 1;
             context.split_distance = plan.distance;
         }
-        contexts.push(context);
     }
     contexts
 }
@@ -437,7 +437,9 @@ fn culls(
     (contexts, hidden): (&[DisplayContext], &[Option<Arc<HiddenArea>>]),
     far: &[Option<FarPlan>],
 ) -> Vec<PlannedCull> {
-    let mut culls = Vec::new();
+    // At most a cull per eye and a far cull per display.
+    let most = resolved.displays.iter().map(|r| r.eyes.len() + 1).sum();
+    let mut culls = Vec::with_capacity(most);
     for (i, (r, context)) in resolved.displays.iter().zip(contexts).enumerate() {
         let split = far[i].map(|plan| plan.split(false));
         match (mode.culls_per_eye(), r.eyes.as_slice()) {

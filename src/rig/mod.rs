@@ -64,12 +64,8 @@ impl Viewer {
     /// stereo, and for foveated stereo left, right, left, right (the insets share their
     /// eye's center).
     pub fn eye_positions(&self, views: u32) -> Vec<DVec3> {
-        let right = self.orientation() * DVec3::X * (0.5 * self.ipd as f64);
-        let pair = [self.position() - right, self.position() + right];
-        match views {
-            1 => vec![self.position()],
-            _ => pair.into_iter().cycle().take(views as usize).collect(),
-        }
+        let head = resolve::Head::of(self);
+        (0..views as usize).map(|e| head.eye(e, views)).collect()
     }
 }
 
@@ -162,7 +158,7 @@ impl Display {
                 let [outer, inset] = f.view_sizes(self.resolution);
                 ViewLayout::side_by_side(&[outer, outer, inset, inset])
             }
-            (views, _) => ViewLayout::side_by_side(&vec![(w, h); views as usize]),
+            (views, _) => ViewLayout::side_by_side(&[(w, h); 4][..views as usize]),
         }
     }
 
@@ -177,7 +173,7 @@ impl Display {
         let size = |v: &[u32; 4]| (v[2], v[3]);
         let (w, h) = (packed.viewports().iter().map(size))
             .fold((0, 0), |(w, h), (x, y)| (w.max(x), h.max(y)));
-        ViewLayout::side_by_side(&vec![(w, h); packed.views as usize])
+        ViewLayout::side_by_side(&[(w, h); 4][..packed.views as usize])
     }
 }
 

@@ -16,7 +16,9 @@ impl Rig {
     /// from the result (contexts, cull jobs) cannot fail.
     pub fn resolve(&self) -> Result<ResolvedRig> {
         self.validate("(this frame's pose)")?;
-        let resolve = |d: &Display| self.resolve_display(d).map_err(|m| Error::rig(&d.name, m));
+        let head = Head::of(&self.viewer);
+        let resolve =
+            |d: &Display| (self.resolve_display(d, &head)).map_err(|m| Error::rig(&d.name, m));
         let displays = self
             .displays
             .iter()
@@ -26,8 +28,8 @@ impl Rig {
         Ok(ResolvedRig {
             displays,
             frame_only,
-            viewer_position: self.viewer.position(),
-            viewer_orientation: self.viewer.orientation(),
+            viewer_position: head.position,
+            viewer_orientation: head.orientation,
         })
     }
 
@@ -43,33 +45,24 @@ impl Rig {
             .collect())
     }
 
-    fn resolve_display(&self, d: &Display) -> std::result::Result<ResolvedDisplay, String> {
-        let (bases, gaze_clamped) = self.view_bases(d)?;
-        let eyes = bases
-            .into_iter()
-            .map(|(position, orientation, fov)| View {
-                world_from_view: DAffine3::from_rotation_translation(orientation, position),
-                fov,
-                near: self.near,
-                far: self.far,
-            })
-            .collect::<Vec<View>>();
+    fn resolve_display(
+        &self,
+        d: &Display,
+        head: &Head,
+    ) -> std::result::Result<ResolvedDisplay, String> {
+        let (eyes, gaze_clamped) = self.views(d, head)?;
         let combined = match (eyes.as_slice(), &d.mount) {
             ([mono], _) => Some(*mono),
             (_, mount) => {
                 let (orientation, origin) = match mount {
-                    Mount::Head(h) => (
-                        head_panel_orientation(&self.viewer, h),
-                        self.viewer.position(),
-                    ),
+                    Mount::Head(h) => (head.panel(h), head.position),
                     Mount::Screen(_) => (
                         DQuat::from_mat3(&eyes[0].world_from_view.matrix3),
-                        self.viewer.position(),
+                        head.position,
                     ),
                     Mount::Views(v) => (posed::middle_rotation(v), posed::middle_position(v)),
                 };
-                let corners: Vec<_> = eyes.iter().map(|e| e.corners_from(origin)).collect();
-                enclosing_view(orientation, origin, &corners)
+                enclosing_view(orientation, origin, &eyes)
             }
         };
         let combined = combined
@@ -77,11 +70,10 @@ impl Rig {
         let planes = combined.frustum().planes;
         // The inset pair from the display frustum's apex and orientation: inside the
         // display frustum, so it exists whenever that does.
-        let insets = eyes.get(2..).map(|insets| {
+        let insets = eyes.get(2..).filter(|i| !i.is_empty()).map(|insets| {
             let origin = combined.world_from_view.translation;
             let orientation = DQuat::from_mat3(&combined.world_from_view.matrix3);
-            let corners: Vec<_> = insets.iter().map(|e| e.corners_from(origin)).collect();
-            enclosing_view(orientation, origin, &corners)
+            enclosing_view(orientation, origin, insets)
         });
         Ok(ResolvedDisplay {
             eyes,
@@ -92,56 +84,104 @@ impl Rig {
         })
     }
 
-    /// [`Rig::eye_bases`] with a foveated display's insets after its eyes (each inside
-    /// its eye's window, around the gaze), and whether a gaze was moved to keep an inset
+    /// [`Rig::eyes`] with a foveated display's insets after its eyes (each inside its
+    /// eye's window, around the gaze), and whether a gaze was moved to keep an inset
     /// inside. Posed views bring their insets with them.
-    #[allow(clippy::type_complexity)]
-    fn view_bases(
-        &self,
-        d: &Display,
-    ) -> std::result::Result<(Vec<(DVec3, DQuat, Fov)>, bool), String> {
-        let mut bases = self.eye_bases(d)?;
+    fn views(&self, d: &Display, head: &Head) -> std::result::Result<(Vec<View>, bool), String> {
+        let mut views = Vec::with_capacity(d.views() as usize);
+        self.eyes(d, head, &mut views)?;
         let (Some(foveation), false) = (d.foveation, matches!(d.mount, Mount::Views(_))) else {
-            return Ok((bases, false));
+            return Ok((views, false));
         };
         let mut clamped = false;
         for e in 0..2 {
-            let (position, orientation, window) = bases[e];
-            let (inset, moved) = foveation.inset(window, e);
+            let (inset, moved) = foveation.inset(views[e].fov, e);
             clamped |= moved;
-            bases.push((position, orientation, inset));
+            views.push(View {
+                fov: inset,
+                ..views[e]
+            });
         }
-        Ok((bases, clamped))
+        Ok((views, clamped))
     }
 
-    /// Each eye's position, orientation and window: from the viewer and the panel, from
-    /// the viewer and the screen, or as the runtime posed them.
-    fn eye_bases(&self, d: &Display) -> std::result::Result<Vec<(DVec3, DQuat, Fov)>, String> {
+    /// Each eye's view, pushed onto `views`: placed from the viewer and the panel, from
+    /// the viewer and the screen, or as the runtime posed it.
+    fn eyes(
+        &self,
+        d: &Display,
+        head: &Head,
+        views: &mut Vec<View>,
+    ) -> std::result::Result<(), String> {
         let eyes = d.views().min(2);
-        let positions = self.viewer.eye_positions(eyes).into_iter();
+        let view = |position, orientation, fov| View {
+            world_from_view: DAffine3::from_rotation_translation(orientation, position),
+            fov,
+            near: self.near,
+            far: self.far,
+        };
         match &d.mount {
-            Mount::Head(h) => Ok(positions
-                .enumerate()
-                .map(|(e, p)| {
-                    let (orientation, fov) = head_fixed_basis(&self.viewer, h, e, eyes);
-                    (p, orientation, fov)
-                })
-                .collect()),
+            Mount::Head(h) => {
+                let panel = head.panel(h);
+                for e in 0..eyes as usize {
+                    let (orientation, fov) = head_fixed_basis(panel, h, e, eyes);
+                    views.push(view(head.eye(e, eyes), orientation, fov));
+                }
+            }
             Mount::Screen(s) => {
                 let screen = ScreenBasis::of(s);
-                positions
-                    .map(|p| {
-                        screen
-                            .seen_from(p)
-                            .map(|(orientation, fov)| (p, orientation, fov))
-                    })
-                    .collect()
+                for e in 0..eyes as usize {
+                    let p = head.eye(e, eyes);
+                    let (orientation, fov) = screen.seen_from(p)?;
+                    views.push(view(p, orientation, fov));
+                }
             }
-            Mount::Views(views) => Ok(views
-                .iter()
-                .map(|v: &PosedView| (v.position(), v.rotation(), v.fov.tangents()))
-                .collect()),
+            Mount::Views(posed) => {
+                let fov = |v: &PosedView| v.fov.tangents();
+                views.extend(
+                    posed
+                        .iter()
+                        .map(|v| view(v.position(), v.rotation(), fov(v))),
+                );
+            }
         }
+        Ok(())
+    }
+}
+
+/// The viewer's pose for one frame, made once from its angles (every display's eyes
+/// are placed from it).
+pub(crate) struct Head {
+    position: DVec3,
+    orientation: DQuat,
+    /// Half the eye separation, along the head's right.
+    half_ipd: DVec3,
+}
+
+impl Head {
+    pub(crate) fn of(viewer: &Viewer) -> Head {
+        let orientation = viewer.orientation();
+        Head {
+            position: viewer.position(),
+            orientation,
+            half_ipd: orientation * DVec3::X * (0.5 * viewer.ipd as f64),
+        }
+    }
+
+    /// Eye `e`'s center of a display of `views` views: the cyclopean point for mono,
+    /// left then right for stereo, and for foveated stereo left, right, left, right
+    /// (the insets share their eye's center).
+    pub(crate) fn eye(&self, e: usize, views: u32) -> DVec3 {
+        match (views, e % 2) {
+            (1, _) => self.position,
+            (_, 0) => self.position - self.half_ipd,
+            _ => self.position + self.half_ipd,
+        }
+    }
+
+    /// A head-fixed panel's orientation.
+    fn panel(&self, h: &HeadFixed) -> DQuat {
+        self.orientation * euler(h.yaw_deg, h.pitch_deg, 0.0)
     }
 }
 
@@ -161,12 +201,8 @@ impl ResolvedRig {
     /// `None` when the displays surround the viewer (a CAVE) and no single frustum can.
     /// Built on demand: no per-frame pass uses it yet.
     pub fn frame(&self) -> Option<View> {
-        let origin = self.viewer_position;
-        let corners: Vec<_> = self
-            .frame_displays()
-            .map(|d| d.combined.corners_from(origin))
-            .collect();
-        enclosing_view(self.viewer_orientation, origin, &corners)
+        let combined: Vec<View> = self.frame_displays().map(|d| d.combined).collect();
+        enclosing_view(self.viewer_orientation, self.viewer_position, &combined)
     }
 
     /// Every display the frame is planned for: the drawn ones, then the frame-only ones.
@@ -252,8 +288,7 @@ impl ResolvedDisplay {
         let (a, b) = (self.combined.world_from_view, next.combined.world_from_view);
         let (qa, qb) = (DQuat::from_mat3(&a.matrix3), DQuat::from_mat3(&b.matrix3));
         let origin = (a.translation + b.translation) * 0.5;
-        let corners: Vec<_> = eyes.iter().map(|e| e.corners_from(origin)).collect();
-        let combined = enclosing_view(qa.slerp(qb, 0.5), origin, &corners)?;
+        let combined = enclosing_view(qa.slerp(qb, 0.5), origin, &eyes)?;
         Some(ResolvedDisplay {
             eyes,
             combined,
@@ -282,12 +317,7 @@ impl ResolvedDisplay {
     }
 }
 
-fn head_panel_orientation(viewer: &Viewer, h: &HeadFixed) -> DQuat {
-    viewer.orientation() * euler(h.yaw_deg, h.pitch_deg, 0.0)
-}
-
-fn head_fixed_basis(viewer: &Viewer, h: &HeadFixed, eye: usize, views: u32) -> (DQuat, Fov) {
-    let panel = head_panel_orientation(viewer, h);
+fn head_fixed_basis(panel: DQuat, h: &HeadFixed, eye: usize, views: u32) -> (DQuat, Fov) {
     if views == 1 {
         return (panel, h.fov);
     }
