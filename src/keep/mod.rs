@@ -83,6 +83,8 @@ pub struct Keeper {
     never: Option<&'static str>,
     /// The rig and time the last frame was drawn at.
     last: Option<(Rig, f32)>,
+    /// The last frame's pose was replaced after it was planned ([`Keeper::forget`]).
+    forgotten: bool,
     /// Each slot's world sphere as last drawn (`None`: vacant). Measured only where the
     /// CPU marks the tiles (`measures`: culling on the CPU); where the GPU marks them
     /// from its own spheres, only whether a slot is occupied counts, and the sphere is
@@ -131,6 +133,7 @@ impl Keeper {
             mode,
             never,
             last: None,
+            forgotten: false,
             spheres: Vec::new(),
             measures,
             by_time: ByTime {
@@ -273,7 +276,8 @@ impl Keeper {
         let changed = std::mem::take(&mut self.changed);
         self.set_pending(&changed, 0);
         let forced = self.forced.take();
-        let last = self.last.replace((rig.clone(), time));
+        let forgotten = std::mem::take(&mut self.forgotten);
+        let last = (self.last.replace((rig.clone(), time))).filter(|_| !forgotten);
         if self.mode == KeepUnchanged::Off {
             return Err(WholeRedraw::Off);
         }
@@ -344,8 +348,10 @@ impl Keeper {
 
     /// Forgets the last frame: the next one is drawn whole (its pose was replaced after
     /// it was planned, or it was not drawn).
+    /// A flag, not a drop: a latch forgets on the submit's path, and freeing the rig's
+    /// copy there cost a tenth of the latch; the next frame frees it.
     pub fn forget(&mut self) {
-        self.last = None;
+        self.forgotten = true;
     }
 }
 
@@ -397,5 +403,27 @@ impl ByTime {
                 .get(instance.mesh as usize)
                 .copied()
                 .unwrap_or(false)
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    /// A forgotten frame (its pose latched after it was planned) is no last frame to
+    /// keep from: the next frame at the same pose, which would keep, is drawn whole.
+    #[test]
+    fn a_forgotten_frame_is_not_kept_from() {
+        let scene = crate::procedural::scene(40, 3, 7);
+        let rig = Rig::preset("hmd").expect("the hmd preset");
+        let mut keeper = Keeper::new(&scene, KeepUnchanged::On, None, false, true);
+        assert_eq!(keeper.frame(&rig, 0.0).err(), Some(WholeRedraw::FirstFrame));
+        assert!(keeper.frame(&rig, 0.0).is_ok(), "an unchanged frame keeps");
+        keeper.forget();
+        assert_eq!(keeper.frame(&rig, 0.0).err(), Some(WholeRedraw::FirstFrame));
+        assert!(
+            keeper.frame(&rig, 0.0).is_ok(),
+            "the frame after it keeps again"
+        );
     }
 }

@@ -161,7 +161,7 @@ impl Renderer {
             }
             self.motion_last = Some(plan.as_previous());
         }
-        self.uploads.begin();
+        self.uploads.begin(fresh);
         let to = Writes {
             pose: &self.uploads,
             queue,

@@ -36,14 +36,39 @@ struct Entry {
 impl Entry {
     /// The same destination and size: a latch's write that an encode's copy carries.
     fn lands_as(&self, other: &Entry) -> bool {
-        (&self.to, self.at, self.size) == (&other.to, other.at, other.size)
+        self.lands_at(&other.to, other.at, other.size)
+    }
+
+    fn lands_at(&self, to: &wgpu::Buffer, at: u64, size: u64) -> bool {
+        (&self.to, self.at, self.size) == (to, at, size)
+    }
+}
+
+/// The writes gathered since [`Coalesced::begin`].
+#[derive(Default)]
+struct Gathered {
+    bytes: Vec<u8>,
+    entries: Vec<Entry>,
+    /// A latch's writes while each lands as the placed write of its order: counted, not
+    /// listed (a listed write holds a clone of its buffer, whose count the latch would
+    /// raise and drop on the submit's path). The first that does not lists them all.
+    landed: Option<usize>,
+}
+
+impl Gathered {
+    /// The writes as entries: those counted are the first placed ones.
+    fn entries<'a>(&'a self, placed: &'a [Entry]) -> &'a [Entry] {
+        match self.landed {
+            Some(n) => &placed[..n],
+            None => &self.entries,
+        }
     }
 }
 
 /// The gathered writes, the staging buffer and what it holds.
 pub(super) struct Coalesced {
     device: wgpu::Device,
-    gathered: RefCell<(Vec<u8>, Vec<Entry>)>,
+    gathered: RefCell<Gathered>,
     staging: Staging,
     /// The entries the staging buffer holds, in its order.
     placed: Vec<Entry>,
@@ -64,14 +89,25 @@ enum Staging {
 
 impl Upload for Coalesced {
     fn write_buffer(&self, buffer: &wgpu::Buffer, offset: u64, data: &[u8]) {
-        let (bytes, entries) = &mut *self.gathered.borrow_mut();
-        entries.push(Entry {
+        let gathered = &mut *self.gathered.borrow_mut();
+        let size = data.len() as u64;
+        if let Some(n) = gathered.landed {
+            // Landing as placed, the bytes gathered so far lie as the placed ones do.
+            if (self.placed.get(n)).is_some_and(|p| p.lands_at(buffer, offset, size)) {
+                gathered.landed = Some(n + 1);
+                gathered.bytes.extend_from_slice(data);
+                return;
+            }
+            gathered.entries = self.placed[..n].to_vec();
+            gathered.landed = None;
+        }
+        gathered.entries.push(Entry {
             to: buffer.clone(),
             at: offset,
-            from: bytes.len() as u64,
-            size: data.len() as u64,
+            from: gathered.bytes.len() as u64,
+            size,
         });
-        bytes.extend_from_slice(data);
+        gathered.bytes.extend_from_slice(data);
     }
 
     fn write_uniform<T>(&self, buffer: &wgpu::Buffer, offset: u64, value: &T) -> u64
@@ -101,11 +137,13 @@ impl Coalesced {
         }
     }
 
-    /// Forgets what was gathered: a plan's writes come next.
-    pub(super) fn begin(&self) {
-        let (bytes, entries) = &mut *self.gathered.borrow_mut();
-        bytes.clear();
-        entries.clear();
+    /// Forgets what was gathered: a plan's writes come next, placed anew when `fresh`
+    /// (a prepare), else a latch's.
+    pub(super) fn begin(&self, fresh: bool) {
+        let gathered = &mut *self.gathered.borrow_mut();
+        gathered.bytes.clear();
+        gathered.entries.clear();
+        gathered.landed = (self.recorded && !fresh).then_some(0);
     }
 
     /// Sends what was gathered. A `latch` (not `fresh`) after an encode recorded its
@@ -115,15 +153,15 @@ impl Coalesced {
     /// ([`Coalesced::check_latch`]). Otherwise (a prepare) the writes are
     /// placed anew, for the next encode to copy.
     pub(super) fn send(&mut self, queue: &wgpu::Queue, fresh: bool) -> Result<()> {
-        let (bytes, entries) = std::mem::take(self.gathered.get_mut());
+        let gathered = std::mem::take(self.gathered.get_mut());
         let sent = match self.recorded && !fresh {
             true => {
-                self.resend(queue, (&bytes, &entries));
+                self.resend(queue, &gathered);
                 Ok(())
             }
-            false => self.place(queue, &bytes, &entries),
+            false => self.place(queue, &gathered.bytes, &gathered.entries),
         };
-        *self.gathered.get_mut() = (bytes, entries);
+        *self.gathered.get_mut() = gathered;
         sent
     }
 
@@ -138,19 +176,20 @@ impl Coalesced {
         }
     }
 
-    fn resend(&mut self, queue: &wgpu::Queue, (bytes, entries): (&[u8], &[Entry])) {
-        let same = entries.len() == self.placed.len()
-            && entries.iter().zip(&self.placed).all(|(e, p)| e.lands_as(p));
-        if same {
+    fn resend(&mut self, queue: &wgpu::Queue, gathered: &Gathered) {
+        let bytes = &gathered.bytes;
+        if gathered.landed == Some(self.placed.len()) {
             self.write_staging(queue, 0, bytes);
         } else {
-            for e in entries {
+            let placed = std::mem::take(&mut self.placed);
+            for e in gathered.entries(&placed) {
                 let data = &bytes[e.from as usize..(e.from + e.size) as usize];
-                match self.placed.iter().find(|p| p.lands_as(e)) {
+                match placed.iter().find(|p| p.lands_as(e)) {
                     Some(p) => self.write_staging(queue, p.from, data),
                     None => queue.write_buffer(&e.to, e.at, data),
                 }
             }
+            self.placed = placed;
         }
         if let Staging::Open(ring) = &mut self.staging {
             ring.close();
@@ -207,5 +246,69 @@ impl Coalesced {
             encoder.copy_buffer_to_buffer(staging, e.from, &e.to, e.at, e.size);
         }
         self.recorded = true;
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+    use crate::device::Gpu;
+
+    fn target(gpu: &Gpu) -> wgpu::Buffer {
+        gpu.device.create_buffer(&wgpu::BufferDescriptor {
+            label: None,
+            size: 64,
+            usage: wgpu::BufferUsages::COPY_DST | wgpu::BufferUsages::COPY_SRC,
+            mapped_at_creation: false,
+        })
+    }
+
+    fn bytes(seed: u8) -> Vec<u8> {
+        (0..64u8)
+            .map(|i| i.wrapping_mul(seed).wrapping_add(seed))
+            .collect()
+    }
+
+    /// A prepare's writes placed and their copies recorded, then a latch's: written
+    /// where the copies read when they land as the placed ones in order (counted), and
+    /// also when one of them goes elsewhere (listed: the placed ones through the
+    /// staging, the stray one straight), under both kinds of staging.
+    #[test]
+    fn a_latchs_writes_land_where_the_recorded_copies_read() {
+        let gpu = Gpu::headless().unwrap();
+        let read = |b: &wgpu::Buffer| {
+            crate::readback::read_buffer(&gpu.device, &gpu.queue, b, 64).unwrap()
+        };
+        for late_latch in [false, true] {
+            for stray in [false, true] {
+                let mut uploads = Coalesced::new(&gpu.device, late_latch);
+                let [a, b, c] = [(); 3].map(|_| target(&gpu));
+                uploads.begin(true);
+                uploads.write_buffer(&a, 0, &bytes(3));
+                uploads.write_buffer(&b, 0, &bytes(5));
+                uploads.send(&gpu.queue, true).unwrap();
+                let mut encoder = gpu.device.create_command_encoder(&Default::default());
+                uploads.record(&mut encoder);
+                uploads.begin(false);
+                uploads.write_buffer(&a, 0, &bytes(7));
+                match stray {
+                    true => uploads.write_buffer(&c, 0, &bytes(11)),
+                    false => uploads.write_buffer(&b, 0, &bytes(13)),
+                }
+                let counted = uploads.gathered.borrow().landed;
+                assert_eq!(counted, (!stray).then_some(2), "stray {stray}");
+                uploads.send(&gpu.queue, false).unwrap();
+                gpu.queue.submit([encoder.finish()]);
+                let case = format!("late latch {late_latch}, stray {stray}");
+                assert_eq!(read(&a), bytes(7), "{case}");
+                match stray {
+                    true => {
+                        assert_eq!(read(&b), bytes(5), "{case}");
+                        assert_eq!(read(&c), bytes(11), "{case}");
+                    }
+                    false => assert_eq!(read(&b), bytes(13), "{case}"),
+                }
+            }
+        }
     }
 }
