@@ -72,6 +72,7 @@ pub mod shaders;
 pub mod shadow;
 pub mod shapes;
 pub mod skinning;
+mod sphere_projection;
 
 pub use error::{Error, Result};
 pub use live::LiveScene;

@@ -7,7 +7,7 @@
 
 use glam::{Mat4, UVec2, Vec4};
 
-use crate::frustum::{depth_at, grown_radius, tangent_slopes, view_center};
+use crate::sphere_projection::{depth_at, grown_radius, tangent_slopes, view_center};
 
 pub use crate::shaders::{TILE, TILE_MARGIN_PX as MARGIN_PX};
 

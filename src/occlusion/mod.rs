@@ -22,9 +22,9 @@ use crate::contexts::{DisplayContext, EyeContext};
 use crate::cull::FrameLod;
 use crate::cull::cpu;
 use crate::cull::{CullJob, CullOutput};
-use crate::frustum::{depth_at, grown_radius, tangent_slopes, view_center};
 use crate::records::CullLayout;
 use crate::shaders::SPAN;
+use crate::sphere_projection::{depth_at, grown_radius, tangent_slopes, view_center};
 
 pub mod pyramid;
 
@@ -131,7 +131,7 @@ fn farthest4(d: [f32; 4]) -> f32 {
 }
 
 pub use crate::contexts::BOUNDS_GROWTH_PX;
-pub use crate::frustum::DEPTH_SLACK;
+pub use crate::sphere_projection::DEPTH_SLACK;
 /// How far (in depth-buffer units) the sphere's nearest depth must lie beyond the
 /// farthest occluder depth: covers the rasterizer's depth interpolation.
 pub const DEPTH_MARGIN: f32 = 1.0 / 1048576.0;

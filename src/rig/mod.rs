@@ -59,14 +59,6 @@ impl Viewer {
     pub fn position(&self) -> DVec3 {
         DVec3::from(self.position.map(f64::from))
     }
-
-    /// Eye centers, one per view: the cyclopean point for mono, left then right for
-    /// stereo, and for foveated stereo left, right, left, right (the insets share their
-    /// eye's center).
-    pub fn eye_positions(&self, views: u32) -> Vec<DVec3> {
-        let head = resolve::Head::of(self);
-        (0..views as usize).map(|e| head.eye(e, views)).collect()
-    }
 }
 
 /// A panel fixed to the head, like an HMD's.

@@ -1,7 +1,8 @@
 // A world sphere against a view: the frustum's planes, its center and radius in the
 // view, its depth and its projected pixels. Pure functions, shared by the cull passes
 // (occlusion, the changed tiles) and the tile marking pass; each has its CPU twin in
-// src/frustum.rs or src/cull/tiles.rs (same operations, same order).
+// src/frustum.rs, src/sphere_projection.rs or src/cull/tiles.rs (same operations, same
+// order).
 
 const DEPTH_SLACK: f32 = 1.0 / 262144.0;
 
