@@ -127,6 +127,7 @@ pub use options::{
     StereoMode, frame_lod,
 };
 use path::{FramePasses, Path};
+use plan::PlanStorage;
 pub use plan::{
     CullView, DispatchLevels, FramePlan, FrameStats, PlannedCull, instances_per_object,
 };
@@ -184,6 +185,8 @@ pub struct Renderer {
     motion_last: Option<PreviousFrame>,
     /// What `prepare` and `latch` write of the pose, as one upload.
     uploads: Coalesced,
+    /// The last written plan's vectors, which the next plan fills.
+    spare: PlanStorage,
     /// What changed since the last frame, to keep the pixels nothing changed.
     keeper: Keeper,
     /// Whether the frame last prepared keeps pixels (a latch would move them all).
@@ -304,6 +307,7 @@ impl Renderer {
             motion_from: None,
             motion_last: None,
             uploads,
+            spare: PlanStorage::default(),
             keeper,
             keeps: false,
         })

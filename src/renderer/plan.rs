@@ -19,7 +19,7 @@ use crate::error::{Error, Result};
 use crate::far_layer::FarPlan;
 use crate::keep::WholeRedraw;
 use crate::motion::PreviousFrame;
-use crate::rig::{ResolvedRig, Rig};
+use crate::rig::{ResolvedDisplay, ResolvedRig, Rig};
 use crate::shadow::LightView;
 
 /// What one frame recorded and uploaded, and the CPU time of its phases.
@@ -128,6 +128,16 @@ pub struct PlannedCull {
     pub job: CullJob,
 }
 
+/// A spent plan's two largest vectors, for the next plan to fill: the display contexts
+/// (2.4 KB each) and the resolved displays. Both are too large for the allocator's
+/// per-thread cache, and every frame (a latch on the submit's path) would allocate
+/// and free them otherwise.
+#[derive(Default)]
+pub(crate) struct PlanStorage {
+    contexts: Vec<DisplayContext>,
+    resolved: Vec<ResolvedDisplay>,
+}
+
 /// Everything one frame decides.
 #[derive(Clone, Debug, PartialEq)]
 pub struct FramePlan {
@@ -151,8 +161,9 @@ pub struct FramePlan {
     /// With shadows: the light's cull, outside the frame frustum (never coarse).
     pub light_cull: Option<PlannedCull>,
     /// Per display: with the inset cull, a foveated display's inset context (the inset
-    /// pair in the eye slots, the inset frustum's planes).
-    pub insets: Vec<Option<DisplayContext>>,
+    /// pair in the eye slots, the inset frustum's planes). Boxed: a context is 2.4 KB,
+    /// and most displays have none.
+    pub insets: Vec<Option<Box<DisplayContext>>>,
     /// The inset culls (never coarse), one per display with an inset context.
     pub inset_culls: Vec<PlannedCull>,
     /// Per display: with the visibility mask on the GPU-driven path, the lens's hidden
@@ -203,7 +214,32 @@ impl FramePlan {
     /// whether the renderer was built for the coarse cull ([`RendererOptions::coarse_for`],
     /// decided once: it sizes buffers).
     pub fn new(rig: &Rig, options: &RendererOptions, coarse: bool, time: f32) -> Result<FramePlan> {
-        FramePlan::of(rig, rig.resolve()?, options, coarse, time)
+        FramePlan::new_in(rig, options, coarse, time, PlanStorage::default())
+    }
+
+    /// [`FramePlan::new`] into the vectors of a spent plan ([`FramePlan::into_storage`]).
+    pub(crate) fn new_in(
+        rig: &Rig,
+        options: &RendererOptions,
+        coarse: bool,
+        time: f32,
+        storage: PlanStorage,
+    ) -> Result<FramePlan> {
+        let resolved = rig.resolve_into(storage.resolved)?;
+        if options.frames_per_submit == 2 {
+            let pair = frames::pair(&resolved, &resolved)?;
+            let times = [time, time + options.dt];
+            return FramePlan::build(rig, pair, options, coarse, times, storage.contexts);
+        }
+        FramePlan::build(rig, resolved, options, coarse, [time; 2], storage.contexts)
+    }
+
+    /// The plan's vectors that the next plan fills again ([`PlanStorage`]).
+    pub(crate) fn into_storage(self) -> PlanStorage {
+        PlanStorage {
+            contexts: self.displays,
+            resolved: self.resolved.displays,
+        }
     }
 
     /// [`FramePlan::new`] for a rig already resolved. With two frames per submission
@@ -217,9 +253,10 @@ impl FramePlan {
     ) -> Result<FramePlan> {
         if options.frames_per_submit == 2 {
             let pair = frames::pair(&resolved, &resolved)?;
-            return FramePlan::build(rig, pair, options, coarse, [time, time + options.dt]);
+            let times = [time, time + options.dt];
+            return FramePlan::build(rig, pair, options, coarse, times, Vec::new());
         }
-        FramePlan::build(rig, resolved, options, coarse, [time; 2])
+        FramePlan::build(rig, resolved, options, coarse, [time; 2], Vec::new())
     }
 
     /// The plan of a submission of two frames ([`RendererOptions::frames_per_submit`]
@@ -239,17 +276,19 @@ impl FramePlan {
             ));
         }
         let pair = frames::pair(&now.0.resolve()?, &next.0.resolve()?)?;
-        FramePlan::build(now.0, pair, options, coarse, [now.1, next.1])
+        FramePlan::build(now.0, pair, options, coarse, [now.1, next.1], Vec::new())
     }
 
     /// The plan from a resolved rig whose displays hold one frame's views (`times[0]`),
-    /// or two frames' ([`frames::pair`]; the second at `times[1]`).
+    /// or two frames' ([`frames::pair`]; the second at `times[1]`); its display
+    /// contexts in `contexts`' allocation.
     fn build(
         rig: &Rig,
         resolved: ResolvedRig,
         options: &RendererOptions,
         coarse: bool,
         times: [f32; 2],
+        contexts: Vec<DisplayContext>,
     ) -> Result<FramePlan> {
         if resolved.displays.len() != rig.displays.len() {
             return Err(Error::rig("plan", "the resolved rig's displays differ"));
@@ -277,15 +316,23 @@ impl FramePlan {
         };
         let inset_cull = options.inset_cull && options.mode == StereoMode::Instanced;
         let hidden = hidden_areas(rig, &resolved, options, inset_cull);
-        let mut displays = display_contexts(rig, &resolved, options, (&far, &hidden), inset_cull);
+        let mut displays = contexts;
+        display_contexts(
+            &mut displays,
+            rig,
+            &resolved,
+            options,
+            (&far, &hidden),
+            inset_cull,
+        );
         frames::time_views(&mut displays, rig, times[1] - times[0]);
         let culls = culls(&resolved, options.mode, (&displays, &hidden), &far);
-        let insets: Vec<Option<DisplayContext>> = (displays.iter().zip(&resolved.displays))
+        let insets: Vec<Option<Box<DisplayContext>>> = (displays.iter().zip(&resolved.displays))
             .map(|(context, r)| {
                 r.insets
                     .as_ref()
                     .filter(|_| inset_cull)
-                    .map(|v| context.insets(v))
+                    .map(|v| Box::new(context.insets(v)))
             })
             .collect();
         let inset_culls = (insets.iter().enumerate())
@@ -368,16 +415,19 @@ fn inset_job(i: usize, context: &DisplayContext) -> PlannedCull {
 
 /// Each display's context; a display with a far plan keeps its near instances only, one
 /// with a hidden area culls by it, and with `inset_cull` a foveated display's own cull
-/// draws its outer pair only. (Contexts are large: each is built once, in place.)
+/// draws its outer pair only, each built once, in place, in `contexts` (a context is
+/// large).
 fn display_contexts(
+    contexts: &mut Vec<DisplayContext>,
     rig: &Rig,
     resolved: &ResolvedRig,
     options: &RendererOptions,
     (far, hidden): (&[Option<FarPlan>], &[Option<Arc<HiddenArea>>]),
     inset_cull: bool,
-) -> Vec<DisplayContext> {
+) {
     let (mode, frames) = (options.mode, options.frames_per_submit);
-    let mut contexts = vec![DisplayContext::UNSET; rig.displays.len()];
+    contexts.clear();
+    contexts.resize(rig.displays.len(), DisplayContext::UNSET);
     for (i, (d, r)) in rig.displays.iter().zip(&resolved.displays).enumerate() {
         let views = match inset_cull {
             true => d.views().min(2),
@@ -395,7 +445,6 @@ fn display_contexts(
             context.split_distance = plan.distance;
         }
     }
-    contexts
 }
 
 /// Each display's hidden area where its cull drops by it: the visibility mask on, a
@@ -484,4 +533,28 @@ fn culls(
         })
     }));
     culls
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    /// A plan made in a spent plan's vectors equals one made afresh, whatever the spent
+    /// plan held: more displays, far splits, another pose and time.
+    #[test]
+    fn a_plan_in_a_spent_plans_vectors_is_a_fresh_plan() {
+        let cave = Rig::preset("cave").unwrap();
+        let far = RendererOptions {
+            far_layer: true,
+            ..RendererOptions::default()
+        };
+        let spent = FramePlan::new(&cave, &far, false, 0.5).unwrap();
+        assert!(spent.displays.iter().all(|c| c.split_keep != 0));
+        let mut hmd = Rig::preset("hmd").unwrap();
+        hmd.viewer.yaw_deg = 20.0;
+        let options = RendererOptions::default();
+        let storage = spent.into_storage();
+        let reused = FramePlan::new_in(&hmd, &options, false, 1.0, storage).unwrap();
+        assert_eq!(reused, FramePlan::new(&hmd, &options, false, 1.0).unwrap());
+    }
 }

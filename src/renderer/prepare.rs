@@ -4,7 +4,7 @@
 
 use super::frames;
 use super::keeping;
-use super::plan::{FramePlan, FrameStats};
+use super::plan::{FramePlan, FrameStats, PlanStorage};
 use super::uploads::Writes;
 use super::{CullMode, Path, Renderer, RendererOptions};
 use crate::buffers::Upload;
@@ -15,9 +15,19 @@ impl Renderer {
     /// What the frame at `time` for `rig`'s pose will do ([`FramePlan`]): what
     /// [`Renderer::prepare`] writes, for inspection.
     pub fn plan(&self, rig: &Rig, time: f32) -> Result<FramePlan> {
+        self.plan_in(rig, time, PlanStorage::default())
+    }
+
+    fn plan_in(&self, rig: &Rig, time: f32, storage: PlanStorage) -> Result<FramePlan> {
         self.check_shapes(rig)?;
-        let plan = FramePlan::new(rig, &self.options, self.coarse, time)?;
+        let plan = FramePlan::new_in(rig, &self.options, self.coarse, time, storage)?;
         Ok(plan.with_far_sizes(&self.far_sizes))
+    }
+
+    /// [`Renderer::plan`] in the last written plan's vectors.
+    fn plan_again(&mut self, rig: &Rig, time: f32) -> Result<FramePlan> {
+        let storage = std::mem::take(&mut self.spare);
+        self.plan_in(rig, time, storage)
     }
 
     /// What a submission of two frames ([`super::RendererOptions::frames_per_submit`]
@@ -54,7 +64,7 @@ impl Renderer {
     /// A renderer made for two frames per submission draws the second at the same pose,
     /// `RendererOptions::dt` later: [`Renderer::prepare_pair`] takes its own pose.
     pub fn prepare(&mut self, queue: &wgpu::Queue, rig: &Rig, time: f32) -> Result<FrameStats> {
-        let plan = self.plan(rig, time)?;
+        let plan = self.plan_again(rig, time)?;
         let next = time + self.options.dt;
         self.prepare_plan(queue, plan, (rig, time), next)
     }
@@ -138,7 +148,7 @@ impl Renderer {
         self.uploads.check_latch()?;
         // The frame is drawn at `rig`, not at the pose the keeper compares the next with.
         self.keeper.forget();
-        let plan = self.plan(rig, time)?;
+        let plan = self.plan_again(rig, time)?;
         self.write_plan(queue, plan, false)
     }
 
@@ -170,7 +180,7 @@ impl Renderer {
         let light_bytes = self.lighting.prepare(to.pose, &plan);
         let light = plan.light_cull.as_ref().map(|_| plan.light);
         let mut stats = match &mut self.path {
-            Path::Indirect(p) => p.prepare(to, plan),
+            Path::Indirect(p) => p.prepare(to, &plan),
             Path::Classic(p) => p.prepare(to, &plan),
         };
         if let (Some(shadow), Some(light)) = (&self.shadow, light) {
@@ -181,6 +191,12 @@ impl Renderer {
         }
         self.uploads.send(queue, fresh)?;
         stats.bytes_uploaded += frame_bytes + light_bytes;
+        // Culling on the CPU with occlusion, the frame's late culls keep the plan.
+        let spent = match &mut self.path {
+            Path::Indirect(p) => p.core.culler.keep_for_late(plan),
+            Path::Classic(_) => Some(plan),
+        };
+        self.spare = spent.map(FramePlan::into_storage).unwrap_or_default();
         Ok(stats)
     }
 }

@@ -153,13 +153,18 @@ impl Coalesced {
     /// ([`Coalesced::check_latch`]). Otherwise (a prepare) the writes are
     /// placed anew, for the next encode to copy.
     pub(super) fn send(&mut self, queue: &wgpu::Queue, fresh: bool) -> Result<()> {
-        let gathered = std::mem::take(self.gathered.get_mut());
+        let mut gathered = std::mem::take(self.gathered.get_mut());
         let sent = match self.recorded && !fresh {
             true => {
                 self.resend(queue, &gathered);
                 Ok(())
             }
-            false => self.place(queue, &gathered.bytes, &gathered.entries),
+            // Moved, not cloned: a latch's `begin` would drop the clones on the
+            // submit's path.
+            false => {
+                let entries = std::mem::take(&mut gathered.entries);
+                self.place(queue, &gathered.bytes, entries)
+            }
         };
         *self.gathered.get_mut() = gathered;
         sent
@@ -198,8 +203,8 @@ impl Coalesced {
 
     /// Writes `bytes` into the staging buffer (grown or opened to hold them) for the
     /// next encode.
-    fn place(&mut self, queue: &wgpu::Queue, bytes: &[u8], entries: &[Entry]) -> Result<()> {
-        self.placed = entries.to_vec();
+    fn place(&mut self, queue: &wgpu::Queue, bytes: &[u8], entries: Vec<Entry>) -> Result<()> {
+        self.placed = entries;
         self.recorded = false;
         if bytes.is_empty() {
             return Ok(());

@@ -15,15 +15,19 @@ impl Rig {
     /// from them, on demand, the frame frustum). Validates first, so that what is built
     /// from the result (contexts, cull jobs) cannot fail.
     pub fn resolve(&self) -> Result<ResolvedRig> {
+        self.resolve_into(Vec::new())
+    }
+
+    /// [`Rig::resolve`] with the displays in `displays`' allocation (a spent frame's).
+    pub(crate) fn resolve_into(&self, mut displays: Vec<ResolvedDisplay>) -> Result<ResolvedRig> {
         self.validate("(this frame's pose)")?;
         let head = Head::of(&self.viewer);
         let resolve =
             |d: &Display| (self.resolve_display(d, &head)).map_err(|m| Error::rig(&d.name, m));
-        let displays = self
-            .displays
-            .iter()
-            .map(resolve)
-            .collect::<Result<Vec<_>>>()?;
+        displays.clear();
+        for d in &self.displays {
+            displays.push(resolve(d)?);
+        }
         let frame_only = self.frame_only.iter().map(resolve).collect::<Result<_>>()?;
         Ok(ResolvedRig {
             displays,

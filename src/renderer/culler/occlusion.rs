@@ -100,10 +100,15 @@ impl Culler {
         matches!(&self.kind, Kind::Cpu { late: Some(_), .. })
     }
 
-    /// Keeps `plan` for the frame's late culls where they run on the CPU.
-    pub(in crate::renderer) fn keep_for_late(&mut self, plan: FramePlan) {
-        if let Kind::Cpu { late: Some(l), .. } = &mut self.kind {
-            l.plan = Some(plan);
+    /// Keeps `plan` for the frame's late culls where they run on the CPU; else gives it
+    /// back.
+    pub(in crate::renderer) fn keep_for_late(&mut self, plan: FramePlan) -> Option<FramePlan> {
+        match &mut self.kind {
+            Kind::Cpu { late: Some(l), .. } => {
+                l.plan = Some(plan);
+                None
+            }
+            _ => Some(plan),
         }
     }
 

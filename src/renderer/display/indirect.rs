@@ -174,12 +174,11 @@ impl IndirectPath {
     }
 
     /// Writes `plan`'s display contexts and the culler's results for every view: each
-    /// display's, each far layer's, the light's. Culling on the CPU with occlusion, the
-    /// plan is kept for the frame's late culls.
-    pub(in crate::renderer) fn prepare(&mut self, to: Writes, plan: FramePlan) -> FrameStats {
+    /// display's, each far layer's, the light's.
+    pub(in crate::renderer) fn prepare(&mut self, to: Writes, plan: &FramePlan) -> FrameStats {
         let mut stats = FrameStats::default();
         let start = Instant::now();
-        stats.bytes_uploaded += self.core.culler.prepare(to.pose, &plan);
+        stats.bytes_uploaded += self.core.culler.prepare(to.pose, plan);
         stats.cpu_cull = start.elapsed();
         let start = Instant::now();
         let culler = &self.core.culler;
@@ -194,7 +193,7 @@ impl IndirectPath {
             }
         }
         if let Some(far) = &mut self.far {
-            stats.bytes_uploaded += far.prepare(to, &plan, &self.core.culler);
+            stats.bytes_uploaded += far.prepare(to, plan, &self.core.culler);
         }
         for (i, tiles) in plan.tiles.iter().enumerate() {
             self.kept[i] = None;
@@ -210,7 +209,6 @@ impl IndirectPath {
             }
         }
         stats.cpu_upload = start.elapsed();
-        self.core.culler.keep_for_late(plan);
         stats
     }
 
@@ -436,7 +434,7 @@ fn indirect_displays(
                 view: display,
                 key,
                 own: OwnPipelines::new(),
-                inset: plan.insets[i].map(|_| view(CullView::Inset(i))),
+                inset: plan.insets[i].as_ref().map(|_| view(CullView::Inset(i))),
                 late,
             }
         })
