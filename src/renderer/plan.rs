@@ -226,12 +226,7 @@ impl FramePlan {
         storage: PlanStorage,
     ) -> Result<FramePlan> {
         let resolved = rig.resolve_into(storage.resolved)?;
-        if options.frames_per_submit == 2 {
-            let pair = frames::pair(&resolved, &resolved)?;
-            let times = [time, time + options.dt];
-            return FramePlan::build(rig, pair, options, coarse, times, storage.contexts);
-        }
-        FramePlan::build(rig, resolved, options, coarse, [time; 2], storage.contexts)
+        FramePlan::of_in(rig, resolved, options, coarse, time, storage.contexts)
     }
 
     /// The plan's vectors that the next plan fills again ([`PlanStorage`]).
@@ -251,12 +246,24 @@ impl FramePlan {
         coarse: bool,
         time: f32,
     ) -> Result<FramePlan> {
+        FramePlan::of_in(rig, resolved, options, coarse, time, Vec::new())
+    }
+
+    /// [`FramePlan::of`] with the display contexts in `contexts`' allocation.
+    fn of_in(
+        rig: &Rig,
+        resolved: ResolvedRig,
+        options: &RendererOptions,
+        coarse: bool,
+        time: f32,
+        contexts: Vec<DisplayContext>,
+    ) -> Result<FramePlan> {
         if options.frames_per_submit == 2 {
             let pair = frames::pair(&resolved, &resolved)?;
             let times = [time, time + options.dt];
-            return FramePlan::build(rig, pair, options, coarse, times, Vec::new());
+            return FramePlan::build(rig, pair, options, coarse, times, contexts);
         }
-        FramePlan::build(rig, resolved, options, coarse, [time; 2], Vec::new())
+        FramePlan::build(rig, resolved, options, coarse, [time; 2], contexts)
     }
 
     /// The plan of a submission of two frames ([`RendererOptions::frames_per_submit`]
