@@ -3,7 +3,7 @@
 //! pyramids), and the headless conveniences that prepare, record and submit.
 
 use super::display::indirect::IndirectPath;
-use super::plan::FrameStats;
+use super::frame_stats::FrameStats;
 use super::recorder::Recorder;
 use super::{DisplayTarget, PassRecord, Path, Renderer, TargetViews};
 use crate::error::{Error, Result};

@@ -97,6 +97,7 @@ mod diagnostics;
 mod display;
 mod encode;
 mod frame;
+mod frame_stats;
 pub mod frames;
 mod keeping;
 mod options;
@@ -122,15 +123,14 @@ use frame::morph::MorphPass;
 use frame::pose::PosePass;
 use frame::shadow::{ShadowMap, ShadowPass};
 use frame::skin::SkinPass;
+pub use frame_stats::{DispatchLevels, FrameStats};
 pub use options::{
     CoarseMode, CullMode, DEFAULT_DT, LOD_PIXELS, OcclusionMode, PosingMode, RendererOptions,
     StereoMode, frame_lod,
 };
 use path::{FramePasses, Path};
 use plan::PlanStorage;
-pub use plan::{
-    CullView, DispatchLevels, FramePlan, FrameStats, PlannedCull, instances_per_object,
-};
+pub use plan::{CullView, FramePlan, PlannedCull, instances_per_object};
 pub use recorder::{Level, PassRecord};
 use second_frame::SecondFrame;
 pub use second_frame::grown;

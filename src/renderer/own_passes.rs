@@ -2,7 +2,7 @@
 //! into its encoder, then each display's draws inside a render pass it began, with the
 //! built-in pipelines or one of its own.
 
-use super::plan::FrameStats;
+use super::frame_stats::FrameStats;
 use super::recorder::Recorder;
 use super::{Path, Renderer};
 use crate::cull::targets::CullTargets;

@@ -2,9 +2,10 @@
 //! `prepare` before the frame is recorded, and written again by `latch` from a later
 //! pose before it is submitted.
 
+use super::frame_stats::FrameStats;
 use super::frames;
 use super::keeping;
-use super::plan::{FramePlan, FrameStats, PlanStorage};
+use super::plan::{FramePlan, PlanStorage};
 use super::uploads::Writes;
 use super::{CullMode, Path, Renderer, RendererOptions};
 use crate::buffers::Upload;

@@ -12,7 +12,8 @@ use super::{Culler, Kind, ViewCull, set_output};
 use crate::error::Result;
 use crate::occlusion::{self, PyramidShape};
 use crate::readback::read_pod;
-use crate::renderer::plan::{CullView, FramePlan, FrameStats};
+use crate::renderer::frame_stats::FrameStats;
+use crate::renderer::plan::{CullView, FramePlan};
 use crate::shaders::SPAN;
 
 /// Per display, its pyramids read back and their shape (`None` without occlusion).

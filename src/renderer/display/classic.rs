@@ -14,8 +14,9 @@ use crate::draw::{
 };
 use crate::error::Result;
 use crate::renderer::culler::{CullShape, Culler};
+use crate::renderer::frame_stats::FrameStats;
 use crate::renderer::options::StereoMode;
-use crate::renderer::plan::{CullView, FramePlan, FrameStats};
+use crate::renderer::plan::{CullView, FramePlan};
 use crate::renderer::recorder::{PassRecord, Recorder, begin_draw_pass};
 use crate::renderer::targets::TargetViews;
 use crate::renderer::uploads::Writes;

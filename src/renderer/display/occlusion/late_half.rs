@@ -8,7 +8,7 @@ use super::{check_depth, occlusion_bytes};
 use crate::error::Result;
 use crate::occlusion::Phase;
 use crate::renderer::display::indirect::IndirectPath;
-use crate::renderer::plan::FrameStats;
+use crate::renderer::frame_stats::FrameStats;
 use crate::renderer::recorder::Recorder;
 use crate::renderer::targets::TargetViews;
 
