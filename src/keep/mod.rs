@@ -348,9 +348,9 @@ impl Keeper {
 
     /// Forgets the last frame: the next one is drawn whole (its pose was replaced after
     /// it was planned, or it was not drawn).
-    /// A flag, not a drop: a latch forgets on the submit's path, and freeing the rig's
-    /// copy there cost a tenth of the latch; the next frame frees it.
     pub fn forget(&mut self) {
+        // A flag, not a drop: a latch forgets on the submit's path, and freeing the
+        // rig's copy there cost a tenth of the latch; the next frame frees it.
         self.forgotten = true;
     }
 }
