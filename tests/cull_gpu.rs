@@ -7,13 +7,14 @@ mod support;
 use glam::Vec3;
 use stereocull::cull::cpu;
 use stereocull::device::Gpu;
+use stereocull::keep::KeepUnchanged;
 use stereocull::procedural;
 use stereocull::records::CullLayout;
-use stereocull::renderer::{RendererOptions, frame_lod};
+use stereocull::renderer::{CullMode, OcclusionMode, Renderer, RendererOptions, frame_lod};
 use stereocull::rig::Rig;
 use stereocull::scene::MAX_LODS;
 use stereocull::scene::Scene;
-use stereocull::shaders::{SPAN, WORKGROUP_SIZE, subgroup_tier};
+use stereocull::shaders::{CullTests, SPAN, WORKGROUP_SIZE, subgroup_tier};
 use support::{cubes, frustum_only, gpu, reference_culls};
 
 /// Runs one GPU-culled frame and compares every display's buffers with the CPU's.
@@ -176,4 +177,62 @@ fn scans_edges(gpu: &Gpu) {
             eprintln!("{what}: visible {}", want[0].visible.len());
         }
     }
+}
+
+/// A renderer's cull holds the optional tests its frames can use and no other: a frame
+/// without the lens mask, kept pixels, occlusion or the far layer runs a cull compiled
+/// without them (the GPU == CPU tests above and the mask's, keep's, occlusion's and far
+/// layer's own hold the images and buffers of each variant).
+#[test]
+fn the_cull_holds_only_the_tests_its_frames_can_use() {
+    let gpu = gpu();
+    let scene = procedural::scene(500, 4, 7);
+    let rig = small("hmd");
+    let tests = |options: RendererOptions| {
+        let renderer = Renderer::new(&gpu.device, &scene, &rig, options).unwrap();
+        renderer.diagnostics(&gpu.device, &gpu.queue).cull_tests()
+    };
+    let with = |tests: CullTests| Some(tests);
+    assert_eq!(tests(frustum_only()), with(CullTests::NONE));
+    let mask = RendererOptions {
+        visibility_mask: true,
+        ..frustum_only()
+    };
+    let hidden = CullTests {
+        hidden: true,
+        ..CullTests::NONE
+    };
+    assert_eq!(tests(mask), with(hidden));
+    let keep = RendererOptions {
+        keep_unchanged: KeepUnchanged::On,
+        ..frustum_only()
+    };
+    let tiles = CullTests {
+        tiles: true,
+        ..CullTests::NONE
+    };
+    assert_eq!(tests(keep), with(tiles));
+    let occlusion = RendererOptions {
+        occlusion: OcclusionMode::On,
+        ..Default::default()
+    };
+    let early = CullTests {
+        early: true,
+        ..CullTests::NONE
+    };
+    assert_eq!(tests(occlusion), with(early));
+    let far = RendererOptions {
+        far_layer: true,
+        ..frustum_only()
+    };
+    let split = CullTests {
+        split: true,
+        ..CullTests::NONE
+    };
+    assert_eq!(tests(far), with(split));
+    let cpu = RendererOptions {
+        cull: CullMode::Cpu,
+        ..frustum_only()
+    };
+    assert_eq!(tests(cpu), None);
 }

@@ -21,7 +21,7 @@ use stereocull::records::{
 use stereocull::records::{storage_bytes, uniform_bytes};
 use stereocull::scene::Vertex;
 use stereocull::shaders::{
-    Access, Binding, CANDIDATE_BINDINGS, COARSE_BINDINGS, CULL_BINDINGS, CullPass,
+    Access, Binding, CANDIDATE_BINDINGS, COARSE_BINDINGS, CULL_BINDINGS, CullKey, CullPass,
     DEPTH_RESOLVE_BINDINGS, DRAW_BINDINGS, DrawKey, EditKind, FAR_COMPOSITE_BINDINGS,
     FOVEATED_COMPOSITE_BINDINGS, KEEP_LIST_BINDINGS, KEEP_TILES_BINDINGS, MARK_TILES_BINDINGS,
     MATERIAL_BINDINGS, MOTION_BINDINGS, POSE_BINDINGS, PYRAMID_SET_DEPTHS, SCATTER_BINDINGS,
@@ -72,7 +72,10 @@ fn wgsl_struct(module: &Module, name: &str) -> (Vec<(String, u32)>, u32) {
 }
 
 fn module() -> Module {
-    parse("cull", &CullPass::Cull.source(false, &Windows::WHOLE))
+    parse(
+        "cull",
+        &CullPass::Cull.source(CullKey::over(false), &Windows::WHOLE),
+    )
 }
 
 #[test]
@@ -679,11 +682,16 @@ fn pipelines_and_their_lists() -> Vec<(String, String, Vec<Vec<Binding>>)> {
         }
     };
     let draw = lists(&[&DRAW_BINDINGS, &MATERIAL_BINDINGS, &SHADOW_MAP_BINDINGS]);
+    let keyed = |(p, k): (CullPass, CullKey)| {
+        let label = k.phase.label(&p.label(k.over_candidates));
+        (label, p.source(k, whole))
+    };
     let mut out: Vec<_> = (CullPass::variants().into_iter())
-        .map(|(p, c)| (p.label(c), p.source(c, whole)))
+        .map(|(p, c)| (p.label(c), p.source(CullKey::over(c), whole)))
+        .chain(CullPass::occlusion_variants().into_iter().map(keyed))
         .chain(
-            (CullPass::occlusion_variants().into_iter())
-                .map(|(p, c, phase)| (phase.label(&p.label(c)), p.phased_source(c, phase, whole))),
+            (CullPass::bare_variants().into_iter().map(keyed))
+                .map(|(label, source)| (format!("{label}.bare"), source)),
         )
         .map(|(label, source)| {
             let groups = cull_lists(&label);

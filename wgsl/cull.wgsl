@@ -50,7 +50,6 @@ fn cull_rig(
     // Each position's level (bits 2i, 2i + 1), chosen when a member first keeps it.
     var levels = 0u;
     var chosen = 0u;
-    var masks: array<u32, MAX_RIG_VIEWS>;
     for (var b = 0u; b < rig.members; b++) {
         let view = rig.views[b];
         // The member's eyes: what the late phase (OCCLUSION 2) tests the pyramids with,
@@ -69,15 +68,12 @@ fn cull_rig(
             var kept: bool;
             if (OCCLUSION == 2u) {
                 // The display's own late cull (cull_entry, occlusion_entry), in order.
-                let shown = framed && ((view.hidden & CULL_HIDDEN) == 0u || !hidden_in_views(view.cull_slot, s)) && !occluded_for(s, late, base);
+                let shown = framed && !hides(view.hidden, view.cull_slot, s) && !occluded_for(s, late, base);
                 unhidden |= select(0u, 1u << i, shown && !blended(first + i));
                 kept = shown && !drawn_by(view.cull_slot, first + i);
             } else {
-                let seen = view.early == 0u || drawn_by(view.cull_slot, first + i);
                 // The hidden area and the tiles last: their tests cost several frustums'.
-                let unhidden = (view.hidden & CULL_HIDDEN) == 0u || !hidden_in_views(view.cull_slot, s);
-                let touched = (view.hidden & CULL_TILES) == 0u || touches_changed_tiles(view.cull_slot, late.view_from_world, late.clip_from_view, late.resolution, late.views, s);
-                kept = framed && seen && unhidden && touched;
+                kept = framed && member_saw(view, first + i) && !hides(view.hidden, view.cull_slot, s) && !member_untouched(view, late, s);
             }
             if (kept) {
                 if (((chosen >> i) & 1u) == 0u) {
@@ -87,7 +83,6 @@ fn cull_rig(
                 mask |= 1u << (2u * i);
             }
         }
-        masks[b] = mask;
         if (count > 0u) {
             entries[rig_mask_index(b, span)] = mask;
             // The span's word, which this invocation alone writes (as cull_span does).
@@ -99,32 +94,62 @@ fn cull_rig(
     if (count > 0u) {
         entries[span] = levels;
     }
-    scan_rig_fields(group, local, n, masks, levels);
+    scan_rig(group, local, n, levels);
 }
 
-// The workgroup's scans of every member's span counts, eight (member, level) fields at
-// a time: a workgroup's total per field is at most WORKGROUP_SIZE * SPAN = 4096, so two
-// fit a word. Field f is member f / levels's level f % levels. Three barriers per eight
-// fields, where a scan per member would take three per member.
-fn scan_rig_fields(group: u32, local: u32, n: u32, masks: array<u32, MAX_RIG_VIEWS>, levels: u32) {
+// Whether rig member `view` keeps position k by what its display drew last frame: in
+// its early occlusion phase only what it drew. Compiled out without TEST_EARLY.
+fn member_saw(view: RigView, k: u32) -> bool {
+    if (!TEST_EARLY) {
+        return true;
+    }
+    return view.early == 0u || drawn_by(view.cull_slot, k);
+}
+
+// Whether a kept frame's changed tiles leave sphere s out for rig member `view`
+// (tested with its eyes, `late`). Compiled out without TEST_TILES.
+fn member_untouched(view: RigView, late: RigOcclusion, s: vec4<f32>) -> bool {
+    if (!TEST_TILES) {
+        return false;
+    }
+    return (view.hidden & CULL_TILES) != 0u && !touches_changed_tiles(view.cull_slot, late.view_from_world, late.clip_from_view, late.resolution, late.views, s);
+}
+
+// `scan_rig(group, local, n, levels)` follows this file, composed from the pipeline's
+// key (CullKey::rig_scans in src/shaders/cull_passes.rs): a call of scan_rig_fields per
+// eight fields the key's members and levels have, in straight code.
+
+// The workgroup's scan of the rig's (member, level) fields `base` to `base + 7`, each
+// member's span counts from the mask it wrote in `entries`: a workgroup's total per
+// field is at most WORKGROUP_SIZE * SPAN = 4096, so two fit a word. Field f is member
+// f / levels's level f % levels. Three barriers per eight fields, where a scan per
+// member would take three per member. The loops have a constant bound, so that they
+// unroll into constant indices of `packed`.
+fn scan_rig_fields(base: u32, group: u32, local: u32, n: u32, levels: u32) {
     let all = rig.members * params.lod_levels;
-    for (var base = 0u; base < all; base += 8u) {
-        var packed = vec4(0u);
-        for (var i = 0u; i < min(8u, all - base); i++) {
-            let f = base + i;
-            let level = f % params.lod_levels;
-            let count = countOneBits(masks[f / params.lod_levels] & level_match(levels, level));
-            packed[i / 2u] |= count << (16u * (i % 2u));
+    let span = group * WORKGROUP_SIZE + local;
+    let spanned = span * SPAN < n;
+    var packed = vec4(0u);
+    for (var i = 0u; i < 8u; i++) {
+        let f = base + i;
+        if (f >= all) {
+            break;
         }
-        let scan = workgroup_exclusive_scan4(local, packed);
-        for (var i = 0u; i < min(8u, all - base); i++) {
-            let f = base + i;
-            member = f / params.lod_levels;
-            let half = 16u * (i % 2u);
-            let before = (scan.before[i / 2u] >> half) & 0xffffu;
-            let total = (scan.total[i / 2u] >> half) & 0xffffu;
-            write_level_sums(vec2(group, local), n, f % params.lod_levels, vec2(before, total));
+        let mask = select(0u, entries[rig_mask_index(f / params.lod_levels, span)], spanned);
+        let count = countOneBits(mask & level_match(levels, f % params.lod_levels));
+        packed[i / 2u] |= count << (16u * (i % 2u));
+    }
+    let scan = workgroup_exclusive_scan4(local, packed);
+    for (var i = 0u; i < 8u; i++) {
+        let f = base + i;
+        if (f >= all) {
+            break;
         }
+        member = f / params.lod_levels;
+        let half = 16u * (i % 2u);
+        let before = (scan.before[i / 2u] >> half) & 0xffffu;
+        let total = (scan.total[i / 2u] >> half) & 0xffffu;
+        write_level_sums(vec2(group, local), n, f % params.lod_levels, vec2(before, total));
     }
 }
 
@@ -189,11 +214,14 @@ fn cull_entry(j: u32) -> u32 {
     if (!(sphere_in_planes(display.planes, s) && in_split(s))) {
         return 0u;
     }
-    if ((display.hidden & CULL_HIDDEN) != 0u && hidden_in_views(display.cull_slot, s)) {
+    if (hides(display.hidden, display.cull_slot, s)) {
         return 0u;
     }
-    if ((display.hidden & CULL_TILES) != 0u && !touched_in_display(s)) {
-        return 0u;
+    // Compiled out without TEST_TILES (a renderer that keeps no pixels).
+    if (TEST_TILES) {
+        if ((display.hidden & CULL_TILES) != 0u && !touched_in_display(s)) {
+            return 0u;
+        }
     }
     return occlusion_entry(k, s, ENTRY_VISIBLE | (lod_level(k, s) << ENTRY_LEVEL_SHIFT));
 }

@@ -10,13 +10,13 @@
 //! count. The buffers they read and write are [`super::gpu_buffers`]'s.
 
 use crate::cull::gpu_buffers::CullScene;
-use crate::cull::rig::RigCull;
+use crate::cull::rig::{MAX_RIG_VIEWS, RigCull, RigSets};
 use crate::cull::targets::CullTargets;
 use crate::shaders::Bound;
 use crate::shaders::Phase;
 use crate::shaders::{
-    CANDIDATE_BINDINGS, COARSE_BINDINGS, CULL_BINDINGS, CullPass, Windows, bind_group,
-    bind_group_layout, compute_pipeline, pipeline_layout, subgroup_tier,
+    CANDIDATE_BINDINGS, COARSE_BINDINGS, CULL_BINDINGS, CullKey, CullPass, CullTests, Windows,
+    bind_group, bind_group_layout, compute_pipeline, pipeline_layout, subgroup_tier,
 };
 use encase::ShaderType;
 
@@ -42,6 +42,8 @@ pub struct GpuCuller {
     rig: Vec<wgpu::ComputePipeline>,
     /// With occlusion, the rig's cull pass for its late members.
     rig_late: Option<wgpu::ComputePipeline>,
+    /// The optional tests its cull passes hold.
+    tests: CullTests,
 }
 
 /// What a [`GpuCuller`] is built for besides the display passes.
@@ -57,9 +59,13 @@ pub struct CullerFeatures {
     pub tested: bool,
     /// Blended material bins: the blend pass after the display passes.
     pub blend: bool,
-    /// The rig cull ([`crate::cull::rig`]): its passes, and the floor kernel as the
-    /// rig's.
-    pub rig: bool,
+    /// The rig cull's members ([`crate::cull::rig`]; none: it does not run): its
+    /// passes, and the floor kernel as the rig's.
+    pub rig: RigSets,
+    /// The optional tests the cull passes hold: those a frame of the renderer can use.
+    pub tests: CullTests,
+    /// Levels of detail in use (1, or [`crate::scene::MAX_LODS`] with LOD on).
+    pub levels: u32,
 }
 
 /// The coarse cull's pipelines.
@@ -93,12 +99,23 @@ impl GpuCuller {
             occlusion,
             tested,
             blend,
-            rig,
+            rig: sets,
+            tests,
+            levels,
         } = features;
+        let rig = sets.members() > 0;
+        // The rig's first part and its late members each fill sets of their own.
+        let fields = |members: u32| members.min(MAX_RIG_VIEWS as u32) * levels;
+        let key = |over_candidates: bool| CullKey {
+            over_candidates,
+            phase: Phase::Frustum,
+            tests,
+            rig_fields: fields(sets.first),
+        };
         let layout = bind_group_layout(device, "stereocull.cull", &CULL_BINDINGS, &windows);
         let build = |passes: &[CullPass], candidates: bool, with: &wgpu::PipelineLayout| {
             let build_one = |pass: &CullPass| {
-                let source = pass.source(candidates, &windows);
+                let source = pass.source(key(candidates), &windows);
                 let label = pass.label(candidates);
                 compute_pipeline(device, &label, with, source, pass.entry_point())
             };
@@ -155,7 +172,11 @@ impl GpuCuller {
         // (the other rig passes read no phase).
         let rig_late = (rig && occlusion).then(|| {
             let pass = CullPass::RigCull;
-            let source = pass.phased_source(false, Phase::Late, &windows);
+            let late = CullKey {
+                rig_fields: fields(sets.late),
+                ..key(false).in_phase(Phase::Late)
+            };
+            let source = pass.source(late, &windows);
             let label = Phase::Late.label(&pass.label(false));
             compute_pipeline(device, &label, &display_layout, source, pass.entry_point())
         });
@@ -165,7 +186,7 @@ impl GpuCuller {
         };
         let cull = display[0];
         let phased = |candidates: bool, phase: Phase| {
-            let source = cull.phased_source(candidates, phase, &windows);
+            let source = cull.source(key(candidates).in_phase(phase), &windows);
             let label = phase.label(&cull.label(candidates));
             let with = layout_over(candidates);
             let pipeline = compute_pipeline(device, &label, with, source, cull.entry_point());
@@ -181,7 +202,7 @@ impl GpuCuller {
             .filter(|_| blend)
             .map(|c| {
                 let pass = CullPass::Blend;
-                let (label, source) = (pass.label(c), pass.source(c, &windows));
+                let (label, source) = (pass.label(c), pass.source(key(c), &windows));
                 let entry = pass.entry_point();
                 (
                     c,
@@ -199,7 +220,13 @@ impl GpuCuller {
             blend,
             rig,
             rig_late,
+            tests,
         }
+    }
+
+    /// The optional tests its cull passes hold.
+    pub fn tests(&self) -> CullTests {
+        self.tests
     }
 
     /// The bind group for one display: the frame context, shared scene data, and the
@@ -426,8 +453,7 @@ impl GpuCuller {
                     _ => pass.set_pipeline(pipeline),
                 }
                 let (x, y) = match kind {
-                    CullPass::RigCull => scene.groups.spans,
-                    CullPass::RigCompact => scene.groups.positions,
+                    CullPass::RigCull | CullPass::RigCompact => scene.groups.spans,
                     _ => (1, sets.members_in(g)),
                 };
                 pass.dispatch_workgroups(x, y, 1);

@@ -8,6 +8,7 @@ use crate::draw::keep_tiles::TileGrid;
 use crate::error::Result;
 use crate::occlusion::PyramidShape;
 use crate::readback::read_pod;
+use crate::shaders::CullTests;
 
 /// One display's far/near split in a frame ([`Diagnostics::far_split`]).
 #[derive(Clone, Copy, Debug, PartialEq, serde::Serialize)]
@@ -69,6 +70,12 @@ impl Diagnostics<'_> {
     pub fn sphere_tests(&self) -> Result<Option<u64>> {
         let (culler, displays) = self.renderer.culler();
         culler.read_sphere_tests(self.device, self.queue, displays)
+    }
+
+    /// The optional tests the GPU cull's pipelines hold ([`CullTests`]: those a frame
+    /// of this renderer can use, the rest compiled out); `None` on the CPU.
+    pub fn cull_tests(&self) -> Option<CullTests> {
+        self.renderer.culler().0.tests()
     }
 
     /// Display `index`'s changed tiles in the last frame, a bit each (row-major over its

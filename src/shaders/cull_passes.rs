@@ -7,8 +7,9 @@ use super::binding_lists::{PYRAMID_SET_DEPTHS, PYRAMID_SET_SLICES, pyramid_bindi
 use super::bindings::declarations;
 use super::{
     CANDIDATE_BINDINGS, COARSE_BINDINGS, CONTEXTS, CULL_BINDINGS, CULL_MATH, CULL_SUBGROUPS, KEEP,
-    OCCLUSION, PYRAMID, RECORDS, SPHERE_PIXELS, WORKGROUP_SIZE, Windows, constants,
+    MAX_RIG_VIEWS, OCCLUSION, PYRAMID, RECORDS, SPHERE_PIXELS, WORKGROUP_SIZE, Windows, constants,
 };
+use crate::scene::MAX_LODS;
 
 const OVER_EVERYTHING: &str = include_str!("../../wgsl/shared/over_everything.wgsl");
 const OVER_CANDIDATES: &str = include_str!("../../wgsl/shared/over_candidates.wgsl");
@@ -75,7 +76,7 @@ pub enum CullPass {
     RigCull,
     /// [`CullPass::Draws`] for every member (a workgroup each).
     RigDraws,
-    /// [`CullPass::Compact`] for every member, a position per invocation.
+    /// [`CullPass::Compact`] for every member, a span per invocation.
     RigCompact,
     /// [`CullPass::Blend`] for every member (a workgroup each).
     RigBlend,
@@ -158,14 +159,8 @@ impl CullPass {
         }
     }
 
-    /// The pass's source: a display pass runs over every instance, or with
-    /// `over_candidates` over the frame's coarse cull candidates.
-    pub fn source(self, over_candidates: bool, windows: &Windows) -> String {
-        self.phased_source(over_candidates, Phase::Frustum, windows)
-    }
-
-    /// [`CullPass::source`] in occlusion `phase` (which only the cull pass reads).
-    pub fn phased_source(self, over_candidates: bool, phase: Phase, windows: &Windows) -> String {
+    /// The pass's source for the pipeline `key` describes.
+    pub fn source(self, key: CullKey, windows: &Windows) -> String {
         let body = match self {
             CullPass::CoarseBlocks | CullPass::CoarseLists | CullPass::CoarsePlace => {
                 include_str!("../../wgsl/cull_coarse.wgsl")
@@ -179,12 +174,17 @@ impl CullPass {
             CullPass::Blend | CullPass::RigBlend => include_str!("../../wgsl/cull_blend.wgsl"),
             CullPass::Floor | CullPass::RigFloor => include_str!("../../wgsl/cull_floor.wgsl"),
         };
-        let candidates = over_candidates && !self.is_frame();
-        let coarse = format!(
-            "const OCCLUSION: u32 = {}u;\nconst RIG: bool = {};\n",
-            phase as u32,
+        let candidates = key.over_candidates && !self.is_frame();
+        let keyed = format!(
+            "const OCCLUSION: u32 = {}u;\nconst RIG: bool = {};\n{}",
+            key.phase as u32,
             self.is_rig(),
+            key.tests.constants(),
         );
+        let rig_scans = match self {
+            CullPass::Cull | CullPass::RigCull | CullPass::CullSubgroups => key.rig_scans(),
+            _ => String::new(),
+        };
         let mut bindings = declarations(&CULL_BINDINGS, 0, windows);
         let whole = &Windows::WHOLE;
         let over = match (self.is_frame(), candidates) {
@@ -200,7 +200,7 @@ impl CullPass {
         };
         [
             &constants(),
-            &coarse,
+            &keyed,
             CONTEXTS,
             RECORDS,
             &bindings,
@@ -211,18 +211,39 @@ impl CullPass {
             OCCLUSION,
             KEEP,
             body,
+            &rig_scans,
         ]
         .concat()
     }
 
-    /// The cull passes' occlusion variants: both tiers, over everything and over
-    /// candidates, early, late and tested.
-    pub fn occlusion_variants() -> Vec<(CullPass, bool, Phase)> {
-        let passes = [CullPass::Cull, CullPass::CullSubgroups];
+    /// The cull passes' occlusion variants: both tiers and the rig's, over everything
+    /// and over candidates (the rig's over everything), early, late and tested, with
+    /// every test.
+    pub fn occlusion_variants() -> Vec<(CullPass, CullKey)> {
+        let passes = [CullPass::Cull, CullPass::CullSubgroups, CullPass::RigCull];
         let phases = [Phase::Early, Phase::Late, Phase::Tested];
         (passes.into_iter())
             .flat_map(|p| [false, true].map(|c| (p, c)))
-            .flat_map(|(p, c)| phases.map(|phase| (p, c, phase)))
+            .filter(|(p, c)| !(p.is_rig() && *c))
+            .flat_map(|(p, c)| phases.map(|phase| (p, CullKey::over(c).in_phase(phase))))
+            .collect()
+    }
+
+    /// The cull passes without their optional tests ([`CullTests::NONE`]): both tiers
+    /// and the rig's, over everything and over candidates, with one member.
+    pub fn bare_variants() -> Vec<(CullPass, CullKey)> {
+        let passes = [CullPass::Cull, CullPass::CullSubgroups, CullPass::RigCull];
+        (passes.into_iter())
+            .flat_map(|p| [false, true].map(|c| (p, c)))
+            .filter(|(p, c)| !(p.is_rig() && *c))
+            .map(|(p, c)| {
+                let key = CullKey {
+                    tests: CullTests::NONE,
+                    rig_fields: MAX_LODS as u32,
+                    ..CullKey::over(c)
+                };
+                (p, key)
+            })
             .collect()
     }
 
@@ -246,6 +267,103 @@ impl CullPass {
             .collect()
     }
 }
+
+/// The cull's optional tests, each in a pipeline only where a frame of its renderer can
+/// use it: `TEST_HIDDEN`, `TEST_TILES`, `TEST_EARLY` and `TEST_SPLIT` in the WGSL.
+/// A test the pipeline holds still reads its view's flag (a display without a mask
+/// skips the mask's test); one it does not hold is compiled out. A runtime flag alone
+/// is no saving on lavapipe, which runs a branch's body under a mask for every lane
+/// even where no lane takes it: the mask's and the tiles' tests project each sphere
+/// into both eyes, and cost `hmd`'s cull at 1M instances 80 of its 230 ms.
+#[derive(Clone, Copy, Debug, Default, PartialEq, Eq, Hash)]
+pub struct CullTests {
+    /// The lens's hidden area (a context's `hidden & CULL_HIDDEN`).
+    pub hidden: bool,
+    /// A kept frame's changed tiles (`hidden & CULL_TILES`).
+    pub tiles: bool,
+    /// The rig cull's early occlusion members (a member's `early`): what its display
+    /// drew last frame.
+    pub early: bool,
+    /// The far layer's split (a context's `split_keep`).
+    pub split: bool,
+}
+
+impl CullTests {
+    /// Every test: what shader validation covers, and what a renderer with every
+    /// feature builds.
+    pub const ALL: CullTests = CullTests {
+        hidden: true,
+        tiles: true,
+        early: true,
+        split: true,
+    };
+    /// None: the frustum and the levels of detail alone.
+    pub const NONE: CullTests = CullTests {
+        hidden: false,
+        tiles: false,
+        early: false,
+        split: false,
+    };
+
+    fn constants(self) -> String {
+        format!(
+            "const TEST_HIDDEN: bool = {};\nconst TEST_TILES: bool = {};\n\
+             const TEST_EARLY: bool = {};\nconst TEST_SPLIT: bool = {};\n",
+            self.hidden, self.tiles, self.early, self.split
+        )
+    }
+}
+
+/// What one cull pipeline is built for besides its pass.
+#[derive(Clone, Copy, Debug, PartialEq, Eq, Hash)]
+pub struct CullKey {
+    /// A display pass over the frame's coarse cull candidates (else every position).
+    pub over_candidates: bool,
+    /// The occlusion phase (which only the cull pass reads).
+    pub phase: Phase,
+    /// The optional tests it holds.
+    pub tests: CullTests,
+    /// The rig cull's (member, level) fields: the most members one set of its
+    /// dispatches culls times the levels of detail.
+    pub rig_fields: u32,
+}
+
+impl CullKey {
+    /// A display pass over every position or `over_candidates`, in the frustum phase,
+    /// with every test and room for the most rig fields.
+    pub fn over(over_candidates: bool) -> CullKey {
+        CullKey {
+            over_candidates,
+            phase: Phase::Frustum,
+            tests: CullTests::ALL,
+            rig_fields: (MAX_RIG_VIEWS * MAX_LODS) as u32,
+        }
+    }
+
+    /// The same key in occlusion `phase`.
+    pub fn in_phase(self, phase: Phase) -> CullKey {
+        CullKey { phase, ..self }
+    }
+
+    /// `scan_rig` (wgsl/cull.wgsl): the workgroup scans of the rig's fields, eight a
+    /// scan, written out one call per scan. lavapipe runs barriers inside a loop at
+    /// about twice their cost in straight code (`hmd`'s rig cull pass at 1M: 132 ms
+    /// with the loop, 93 without), so the scans are as many calls as the key's fields
+    /// need.
+    fn rig_scans(self) -> String {
+        let calls: String = (0..self.rig_fields.div_ceil(RIG_FIELDS_PER_SCAN))
+            .map(|k| {
+                let base = k * RIG_FIELDS_PER_SCAN;
+                format!("    scan_rig_fields({base}u, group, local, n, levels);\n")
+            })
+            .collect();
+        format!("\nfn scan_rig(group: u32, local: u32, n: u32, levels: u32) {{\n{calls}}}\n")
+    }
+}
+
+/// (member, level) fields one workgroup scan of the rig cull carries: four words of two
+/// 16-bit counts.
+const RIG_FIELDS_PER_SCAN: u32 = 8;
 
 /// Whether the cull pass runs its subgroup tier on `device`: subgroup operations, and
 /// one subgroup size that divides [`WORKGROUP_SIZE`], so that every workgroup is made

@@ -110,7 +110,8 @@ pub use bindings::{
 };
 pub(crate) use bindings::{compute_pipeline, dispatch_size, pipeline_layout};
 pub use cull_passes::{
-    CullPass, PYRAMID_LEVELS_PER_DISPATCH, PYRAMID_SIDE, Phase, pyramid_source, subgroup_tier,
+    CullKey, CullPass, CullTests, PYRAMID_LEVELS_PER_DISPATCH, PYRAMID_SIDE, Phase, pyramid_source,
+    subgroup_tier,
 };
 pub use draw_key::DrawKey;
 pub use hooks::{Shaders, check_shading};
@@ -311,9 +312,17 @@ pub fn all_sources() -> Vec<(String, String)> {
             };
             let cull = CullPass::variants()
                 .into_iter()
-                .map(move |(p, c)| (p.label(c), p.source(c, w)));
-            let occlusion = (CullPass::occlusion_variants().into_iter())
-                .map(move |(p, c, phase)| (phase.label(&p.label(c)), p.phased_source(c, phase, w)));
+                .map(move |(p, c)| (p.label(c), p.source(CullKey::over(c), w)));
+            let occlusion = (CullPass::occlusion_variants().into_iter()).map(move |(p, k)| {
+                let label = k.phase.label(&p.label(k.over_candidates));
+                (label, p.source(k, w))
+            });
+            let bare = (CullPass::bare_variants().into_iter()).map(move |(p, k)| {
+                (
+                    format!("{}.bare", p.label(k.over_candidates)),
+                    p.source(k, w),
+                )
+            });
             let draw = (DrawKey::ALL.iter().flat_map(|k| k.alpha_variants()))
                 .flat_map(|k| {
                     [
@@ -386,6 +395,7 @@ pub fn all_sources() -> Vec<(String, String)> {
                     (label, pyramid_source(samples, layered, depths))
                 });
             cull.chain(occlusion)
+                .chain(bare)
                 .chain(draw)
                 .chain(others)
                 .chain(pyramids)

@@ -49,14 +49,25 @@ fn in_split(s: vec4<f32>) -> bool {
 }
 
 // in_split for any split (a rig member's): `keep` and `distance` from `apex`.
+// Compiled out without TEST_SPLIT (a renderer without the far layer).
 fn in_split_of(keep: u32, distance: f32, apex: vec3<f32>, s: vec4<f32>) -> bool {
-    if (keep == 0u) {
+    if (!TEST_SPLIT || keep == 0u) {
         return true;
     }
     let d = s.xyz - apex;
     let d2 = d.x * d.x + d.y * d.y + d.z * d.z;
     let reach = distance + s.w;
     return (d2 >= reach * reach) == (keep == 2u);
+}
+
+// Whether a view whose flags (a context's `hidden`) say it culls by the hidden area of
+// display slot `slot` has s hidden there. Compiled out without TEST_HIDDEN (a renderer
+// without the lens mask): see CullTests in src/shaders/cull_passes.rs.
+fn hides(flags: u32, slot: u32, s: vec4<f32>) -> bool {
+    if (!TEST_HIDDEN) {
+        return false;
+    }
+    return (flags & CULL_HIDDEN) != 0u && hidden_in_views(slot, s);
 }
 
 // Whether display slot `slot`'s hidden area (src/cull/hidden.rs) hides sphere s in
@@ -192,9 +203,12 @@ fn flagged_before(level: u32, pos: u32, n: u32, total: u32) -> u32 {
     if (pos >= n) {
         return total;
     }
-    let span = pos / SPAN;
-    let within = within_span(level, pos);
-    return span_sums[sum_index(group_slot(n, level, span / WORKGROUP_SIZE))] + span_sums[sum_index(level * span_count(n) + span)] + within;
+    return span_before(level, pos / SPAN, n) + within_span(level, pos);
+}
+
+// flagged_before the first position of span `span`: its group's prefix and its own.
+fn span_before(level: u32, span: u32, n: u32) -> u32 {
+    return span_sums[sum_index(group_slot(n, level, span / WORKGROUP_SIZE))] + span_sums[sum_index(level * span_count(n) + span)];
 }
 
 // The rig's entries (RIG_ENTRIES): per span of SPAN positions, at `entries[span]` a
@@ -266,31 +280,37 @@ struct Scan4 {
 }
 
 // Exclusive prefix sums of four values at once over the workgroup (the cull's four
-// levels of detail in one pass). Each invocation adds the chunk sums before its chunk
-// and the values before it in its chunk (at most 30 reads): three barriers, where a
-// Hillis-Steele scan takes two per doubling.
+// levels of detail in one pass). The first invocation of each chunk turns the chunk's
+// values into prefixes within it; then each invocation adds the chunk sums before its
+// chunk to its own prefix (a loop of constant bound: every lane reads the same sum).
+// Three barriers, where a Hillis-Steele scan takes two per doubling, and at most 17
+// reads an invocation (lavapipe runs an invocation's reads as gathers: the scan that
+// summed the values before it in its chunk, up to 30 reads, cost the rig cull's three
+// scans on `cave` at 1M more than its sphere tests).
 fn workgroup_exclusive_scan4(local: u32, value: vec4<u32>) -> Scan4 {
     scan_scratch[local] = value;
     workgroupBarrier();
+    // A loop that only the chunks' first invocations enter, not a branch: a SIMD CPU
+    // adapter (lavapipe) skips a loop no lane enters.
+    let chunk_turns = select(0u, SCAN_CHUNK, local < WORKGROUP_SIZE / SCAN_CHUNK);
+    var sum = vec4(0u);
+    for (var i = 0u; i < chunk_turns; i++) {
+        let at = local * SCAN_CHUNK + i;
+        let v = scan_scratch[at];
+        scan_scratch[at] = sum;
+        sum += v;
+    }
     if (local < WORKGROUP_SIZE / SCAN_CHUNK) {
-        var sum = vec4(0u);
-        for (var i = 0u; i < SCAN_CHUNK; i++) {
-            sum += scan_scratch[local * SCAN_CHUNK + i];
-        }
         chunk_sums[local] = sum;
     }
     workgroupBarrier();
     let chunk = local / SCAN_CHUNK;
-    var before = vec4(0u);
-    for (var c = 0u; c < chunk; c++) {
-        before += chunk_sums[c];
-    }
-    for (var i = chunk * SCAN_CHUNK; i < local; i++) {
-        before += scan_scratch[i];
-    }
+    var before = scan_scratch[local];
     var total = vec4(0u);
     for (var c = 0u; c < WORKGROUP_SIZE / SCAN_CHUNK; c++) {
-        total += chunk_sums[c];
+        let sum = chunk_sums[c];
+        before += select(vec4(0u), sum, vec4(c < chunk));
+        total += sum;
     }
     workgroupBarrier();
     return Scan4(before, total);

@@ -7,6 +7,7 @@ use crate::cull::coarse::BLOCK;
 use crate::error::Result;
 use crate::profiling::percentile;
 use crate::readback::{read_pod, wait_idle};
+use crate::shaders::CullTests;
 
 /// Wall-clock medians of culls submitted alone ([`Culler::time_against_floor`]).
 #[derive(Clone, Debug, PartialEq)]
@@ -99,6 +100,14 @@ impl Culler {
             rig_ms: medians.next().unwrap_or_default(),
             views_ms: medians.collect(),
         }))
+    }
+
+    /// The optional tests the GPU cull holds (`None` on the CPU).
+    pub(in crate::renderer) fn tests(&self) -> Option<CullTests> {
+        match &self.kind {
+            Kind::Gpu { culler, .. } => Some(culler.tests()),
+            Kind::Cpu { .. } => None,
+        }
     }
 
     /// The coarse cull's candidates per display (GPU culling with it on).

@@ -32,7 +32,7 @@ use crate::cull::tile_marks::TileMarks;
 use crate::occlusion::{Phase, cull_early};
 use crate::records::CullLayout;
 
-use crate::shaders::Windows;
+use crate::shaders::{CullTests, Windows};
 use std::sync::OnceLock;
 
 pub(super) struct Culler {
@@ -90,6 +90,8 @@ pub(super) struct CullShape {
     pub tested: bool,
     /// Display slots whose hidden areas the GPU cull reads (0: no cull drops by one).
     pub hidden_slots: u32,
+    /// The optional tests the GPU cull's pipelines hold: those a frame can use.
+    pub tests: CullTests,
 }
 
 /// One view's cull outputs (per the cull contract) and, on the GPU, its bindings.
@@ -118,6 +120,12 @@ impl Culler {
             CullMode::Gpu => shape.rig.clone(),
             CullMode::Cpu => Vec::new(),
         };
+        let late = members.iter().filter(|m| matches!(m, CullView::Late(_)));
+        let late = late.count() as u32;
+        let sets = RigSets {
+            first: members.len() as u32 - late,
+            late,
+        };
         let kind = match mode {
             CullMode::Cpu => Kind::Cpu {
                 layout,
@@ -132,15 +140,11 @@ impl Culler {
                     occlusion: shape.occlusion.displays > 0,
                     tested: shape.tested,
                     blend: layout.bins.first_blend_bin() != u32::MAX,
-                    rig: !members.is_empty(),
+                    rig: sets,
+                    tests: shape.tests,
+                    levels: shape.levels,
                 };
                 let culler = GpuCuller::new(device, features, windows);
-                let late = members.iter().filter(|m| matches!(m, CullView::Late(_)));
-                let late = late.count() as u32;
-                let sets = RigSets {
-                    first: members.len() as u32 - late,
-                    late,
-                };
                 let room = (
                     shape.coarse_slots,
                     shape.occlusion,
