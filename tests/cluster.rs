@@ -2,9 +2,9 @@
 //! its second command): every rank's images and cull dumps of every frame equal one
 //! process's, over 3 and 6 ranks on `cave` and 2 on `hmd-peripheral`, with a walking
 //! viewer, moving and churned instances and an animated glTF; one frame equals
-//! `render`'s; and a rank that cannot start, loaded another scene, is killed or receives
-//! a damaged frame ends the job non-zero within seconds, naming itself, with no process
-//! left behind.
+//! `render`'s; the README's command runs as written; and a rank that cannot start,
+//! loaded another scene, is killed or receives a damaged frame ends the job non-zero
+//! within seconds, naming itself, with no process left behind.
 
 #![cfg(feature = "cluster")]
 
@@ -119,6 +119,47 @@ fn every_rank_draws_what_one_process_draws() {
         animated.display()
     );
     same_over(&[2], &hmd, &root.path().join("hmd"));
+}
+
+/// The README's cluster command exactly as written (the binary its build made, the
+/// test build's here), plus only the flags the README says to add on a machine like
+/// CI's, root with fewer cores than ranks: all five walls written, and on fewer cores
+/// than ranks the one line that says they share them.
+#[test]
+fn the_readmes_command_draws_the_five_walls() {
+    let _job = one_job();
+    let readme = std::fs::read_to_string(concat!(env!("CARGO_MANIFEST_DIR"), "/README.md"))
+        .expect("README.md");
+    let line = (readme.lines())
+        .find(|l| l.starts_with("mpirun "))
+        .expect("the README's mpirun command");
+    let mut command = words(line);
+    assert_eq!(command[3], "target/release/stereocull", "{line}");
+    command[3] = BIN.into();
+    // Right after `mpirun`, as the README says.
+    let added = ["--allow-run-as-root", "--oversubscribe"];
+    for flag in added {
+        assert!(
+            readme.contains(&format!("`{flag}`")),
+            "the README names {flag}"
+        );
+    }
+    let dir = tempfile::tempdir().unwrap();
+    let done = Command::new(&command[0])
+        .args(added)
+        .args(&command[1..])
+        .current_dir(dir.path())
+        .output()
+        .expect("mpirun runs");
+    let stderr = String::from_utf8_lossy(&done.stderr);
+    assert!(done.status.success(), "{stderr}");
+    for wall in ["front", "left", "right", "floor", "ceiling"] {
+        let image = dir.path().join(format!("out/{wall}.png"));
+        assert!(image.is_file(), "{} missing", image.display());
+    }
+    let cores = std::thread::available_parallelism().map_or(1, |n| n.get());
+    let said = stderr.matches("ranks share").count();
+    assert_eq!(said, usize::from(cores < 3), "{stderr}");
 }
 
 #[test]
