@@ -192,44 +192,47 @@ fn the_cull_holds_only_the_tests_its_frames_can_use() {
         let renderer = Renderer::new(&gpu.device, &scene, &rig, options).unwrap();
         renderer.diagnostics(&gpu.device, &gpu.queue).cull_tests()
     };
-    let with = |tests: CullTests| Some(tests);
-    assert_eq!(tests(frustum_only()), with(CullTests::NONE));
-    let mask = RendererOptions {
-        visibility_mask: true,
-        ..frustum_only()
-    };
-    let hidden = CullTests {
-        hidden: true,
-        ..CullTests::NONE
-    };
-    assert_eq!(tests(mask), with(hidden));
-    let keep = RendererOptions {
-        keep_unchanged: KeepUnchanged::On,
-        ..frustum_only()
-    };
-    let tiles = CullTests {
-        tiles: true,
-        ..CullTests::NONE
-    };
-    assert_eq!(tests(keep), with(tiles));
-    let occlusion = RendererOptions {
-        occlusion: OcclusionMode::On,
-        ..Default::default()
-    };
-    let early = CullTests {
-        early: true,
-        ..CullTests::NONE
-    };
-    assert_eq!(tests(occlusion), with(early));
-    let far = RendererOptions {
-        far_layer: true,
-        ..frustum_only()
-    };
-    let split = CullTests {
-        split: true,
-        ..CullTests::NONE
-    };
-    assert_eq!(tests(far), with(split));
+    assert_eq!(tests(frustum_only()), Some(CullTests::NONE));
+    // Each option, and the one test it adds: (hidden, tiles, early, split).
+    let cases: [(RendererOptions, [bool; 4]); 4] = [
+        (
+            RendererOptions {
+                visibility_mask: true,
+                ..frustum_only()
+            },
+            [true, false, false, false],
+        ),
+        (
+            RendererOptions {
+                keep_unchanged: KeepUnchanged::On,
+                ..frustum_only()
+            },
+            [false, true, false, false],
+        ),
+        (
+            RendererOptions {
+                occlusion: OcclusionMode::On,
+                ..Default::default()
+            },
+            [false, false, true, false],
+        ),
+        (
+            RendererOptions {
+                far_layer: true,
+                ..frustum_only()
+            },
+            [false, false, false, true],
+        ),
+    ];
+    for (options, [hidden, tiles, early, split]) in cases {
+        let want = CullTests {
+            hidden,
+            tiles,
+            early,
+            split,
+        };
+        assert_eq!(tests(options), Some(want), "{want:?}");
+    }
     let cpu = RendererOptions {
         cull: CullMode::Cpu,
         ..frustum_only()
