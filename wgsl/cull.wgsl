@@ -73,7 +73,7 @@ fn cull_rig(
                 kept = shown && !drawn_by(view.cull_slot, first + i);
             } else {
                 // The hidden area and the tiles last: their tests cost several frustums'.
-                kept = framed && member_saw(view, first + i) && !hides(view.hidden, view.cull_slot, s) && !member_untouched(view, late, s);
+                kept = framed && member_saw(view, first + i) && !hides(view.hidden, view.cull_slot, s) && !untouched(view.hidden, view.cull_slot, late.view_from_world, late.clip_from_view, late.resolution, late.views, s);
             }
             if (kept) {
                 if (((chosen >> i) & 1u) == 0u) {
@@ -104,15 +104,6 @@ fn member_saw(view: RigView, k: u32) -> bool {
         return true;
     }
     return view.early == 0u || drawn_by(view.cull_slot, k);
-}
-
-// Whether a kept frame's changed tiles leave sphere s out for rig member `view`
-// (tested with its eyes, `late`). Compiled out without TEST_TILES.
-fn member_untouched(view: RigView, late: RigOcclusion, s: vec4<f32>) -> bool {
-    if (!TEST_TILES) {
-        return false;
-    }
-    return (view.hidden & CULL_TILES) != 0u && !touches_changed_tiles(view.cull_slot, late.view_from_world, late.clip_from_view, late.resolution, late.views, s);
 }
 
 // `scan_rig(group, local, n, levels)` follows this file, composed from the pipeline's
@@ -217,11 +208,8 @@ fn cull_entry(j: u32) -> u32 {
     if (hides(display.hidden, display.cull_slot, s)) {
         return 0u;
     }
-    // Compiled out without TEST_TILES (a renderer that keeps no pixels).
-    if (TEST_TILES) {
-        if ((display.hidden & CULL_TILES) != 0u && !touched_in_display(s)) {
-            return 0u;
-        }
+    if (untouched_in_display(s)) {
+        return 0u;
     }
     return occlusion_entry(k, s, ENTRY_VISIBLE | (lod_level(k, s) << ENTRY_LEVEL_SHIFT));
 }

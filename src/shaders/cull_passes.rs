@@ -220,11 +220,8 @@ impl CullPass {
     /// and over candidates (the rig's over everything), early, late and tested, with
     /// every test.
     pub fn occlusion_variants() -> Vec<(CullPass, CullKey)> {
-        let passes = [CullPass::Cull, CullPass::CullSubgroups, CullPass::RigCull];
         let phases = [Phase::Early, Phase::Late, Phase::Tested];
-        (passes.into_iter())
-            .flat_map(|p| [false, true].map(|c| (p, c)))
-            .filter(|(p, c)| !(p.is_rig() && *c))
+        Self::cull_passes_over()
             .flat_map(|(p, c)| phases.map(|phase| (p, CullKey::over(c).in_phase(phase))))
             .collect()
     }
@@ -232,10 +229,7 @@ impl CullPass {
     /// The cull passes without their optional tests ([`CullTests::NONE`]): both tiers
     /// and the rig's, over everything and over candidates, with one member.
     pub fn bare_variants() -> Vec<(CullPass, CullKey)> {
-        let passes = [CullPass::Cull, CullPass::CullSubgroups, CullPass::RigCull];
-        (passes.into_iter())
-            .flat_map(|p| [false, true].map(|c| (p, c)))
-            .filter(|(p, c)| !(p.is_rig() && *c))
+        Self::cull_passes_over()
             .map(|(p, c)| {
                 let key = CullKey {
                     tests: CullTests::NONE,
@@ -245,6 +239,15 @@ impl CullPass {
                 (p, key)
             })
             .collect()
+    }
+
+    /// The passes that test spheres (both tiers and the rig's), each over everything
+    /// and (the display's) over candidates.
+    fn cull_passes_over() -> impl Iterator<Item = (CullPass, bool)> {
+        let passes = [CullPass::Cull, CullPass::CullSubgroups, CullPass::RigCull];
+        (passes.into_iter())
+            .flat_map(|p| [false, true].map(|c| (p, c)))
+            .filter(|(p, c)| !(p.is_rig() && *c))
     }
 
     /// Every cull pipeline variant: the frame passes, the display passes (both tiers

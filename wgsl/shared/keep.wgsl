@@ -8,11 +8,23 @@
 const CULL_HIDDEN: u32 = 1u;
 const CULL_TILES: u32 = 2u;
 
-// Whether sphere s may cover a changed tile of the display the pass culls for.
-fn touched_in_display(s: vec4<f32>) -> bool {
+// Whether a kept frame's changed tiles leave sphere s out of the display the pass culls
+// for (untouched, tested with its eyes).
+fn untouched_in_display(s: vec4<f32>) -> bool {
     let views = array(display.eye[0].view_from_world, display.eye[1].view_from_world);
     let clips = array(display.eye[0].clip_from_view, display.eye[1].clip_from_view);
-    return touches_changed_tiles(display.cull_slot, views, clips, display.resolution, display.views, s);
+    return untouched(display.hidden, display.cull_slot, views, clips, display.resolution, display.views, s);
+}
+
+// Whether a view whose flags (a context's `hidden`) say its frame keeps pixels has
+// sphere s cover none of display slot `slot`'s changed tiles in its first `count` eyes.
+// Compiled out without TEST_TILES (a renderer that keeps no pixels): see CullTests in
+// src/shaders/cull_passes.rs.
+fn untouched(flags: u32, slot: u32, views: array<mat4x4<f32>, 2>, clips: array<mat4x4<f32>, 2>, resolution: vec2<f32>, count: u32, s: vec4<f32>) -> bool {
+    if (!TEST_TILES) {
+        return false;
+    }
+    return (flags & CULL_TILES) != 0u && !touches_changed_tiles(slot, views, clips, resolution, count, s);
 }
 
 // Whether sphere s may cover a changed tile of display slot `slot`, in one of its first

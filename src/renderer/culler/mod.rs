@@ -90,8 +90,20 @@ pub(super) struct CullShape {
     pub tested: bool,
     /// Display slots whose hidden areas the GPU cull reads (0: no cull drops by one).
     pub hidden_slots: u32,
+    /// Whether views cull by a far split (the far layer).
+    pub split: bool,
+}
+
+impl CullShape {
     /// The optional tests the GPU cull's pipelines hold: those a frame can use.
-    pub tests: CullTests,
+    fn tests(&self) -> CullTests {
+        CullTests {
+            hidden: self.hidden_slots > 0,
+            tiles: self.occlusion.tiles.0 > 0,
+            early: self.occlusion.displays > 0,
+            split: self.split,
+        }
+    }
 }
 
 /// One view's cull outputs (per the cull contract) and, on the GPU, its bindings.
@@ -141,7 +153,7 @@ impl Culler {
                     tested: shape.tested,
                     blend: layout.bins.first_blend_bin() != u32::MAX,
                     rig: sets,
-                    tests: shape.tests,
+                    tests: shape.tests(),
                     levels: shape.levels,
                 };
                 let culler = GpuCuller::new(device, features, windows);

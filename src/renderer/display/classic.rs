@@ -21,7 +21,6 @@ use crate::renderer::recorder::{PassRecord, Recorder, begin_draw_pass};
 use crate::renderer::targets::TargetViews;
 use crate::renderer::uploads::Writes;
 use crate::shaders::Bound;
-use crate::shaders::CullTests;
 use crate::shaders::DrawKey;
 
 /// One view of a stereo display (an eye, or a foveated display's inset): its own
@@ -98,10 +97,7 @@ impl ClassicPath {
             occlusion: Default::default(),
             tested: false,
             hidden_slots: 0,
-            tests: CullTests {
-                split: options.far_layer,
-                ..CullTests::NONE
-            },
+            split: options.far_layer,
         };
         let culler = Culler::new(device, options.cull, layout, shape, windows);
         let draw_scene = DrawScene::new(device, &drawer, (scene, records, shadow_group), slots)?;

@@ -32,7 +32,6 @@ use crate::renderer::targets::TargetViews;
 use crate::renderer::uploads::Writes;
 use crate::renderer::view::ViewPass;
 use crate::scene::Shading;
-use crate::shaders::CullTests;
 use crate::shaders::DrawKey;
 
 /// One display: a view (its context, cull and draw bindings) and its pipeline variant,
@@ -124,12 +123,7 @@ impl IndirectPath {
                 true => plan.displays.len() as u32,
                 false => 0,
             },
-            tests: CullTests {
-                hidden: plan.hidden.iter().any(Option::is_some),
-                tiles: keeps,
-                early: occlusion.displays > 0,
-                split: options.far_layer,
-            },
+            split: options.far_layer,
         };
         let kinds = layout.bins.kinds.clone();
         let mut culler = Culler::new(device, options.cull, layout, shape, windows);
