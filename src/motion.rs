@@ -49,20 +49,25 @@ pub struct PreviousFrame {
 impl PreviousFrame {
     /// The frame of these contexts, as the next frame's previous
     /// ([`crate::renderer::FramePlan::as_previous`]).
-    pub fn of(frame: &FrameContext, displays: &[DisplayContext]) -> PreviousFrame {
+    pub fn of<'a>(
+        frame: &FrameContext,
+        displays: impl Iterator<Item = &'a DisplayContext>,
+    ) -> PreviousFrame {
         PreviousFrame {
             time: frame.time,
-            views: (displays.iter())
-                .map(|d| d.eye.map(|e| e.clip_from_world))
-                .collect(),
+            views: displays.map(|d| d.eye.map(|e| e.clip_from_world)).collect(),
         }
     }
 
     /// These contexts measured from this frame: the previous time and matrices set (a
     /// display this frame lacks keeps its own: no motion of the head).
-    pub fn carry_into(&self, frame: &mut FrameContext, displays: &mut [DisplayContext]) {
+    pub fn carry_into<'a>(
+        &self,
+        frame: &mut FrameContext,
+        displays: impl Iterator<Item = &'a mut DisplayContext>,
+    ) {
         frame.previous_time = self.time;
-        for (display, views) in displays.iter_mut().zip(&self.views) {
+        for (display, views) in displays.zip(&self.views) {
             for (eye, &previous) in display.eye.iter_mut().zip(views) {
                 eye.previous_clip_from_world = previous;
             }

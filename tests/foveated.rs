@@ -541,7 +541,7 @@ fn the_inset_cull_is_exact_and_smaller() {
     );
     let plan = renderer.plan(&rig, 0.0).unwrap();
     let layout = stereocull::records::CullLayout::new(&scene);
-    let jobs: Vec<_> = plan.inset_culls.iter().map(|c| c.job.clone()).collect();
+    let jobs: Vec<_> = plan.inset_culls().iter().map(|c| c.job.clone()).collect();
     let reference = stereocull::cull::cpu::cull_many(&layout, &jobs);
     assert_eq!(inset, reference[0], "GPU inset cull == CPU");
     assert!(inset.visible.iter().all(|id| display.visible.contains(id)));

@@ -28,23 +28,23 @@ fn instanced_culls_each_display_once_for_both_eyes_as_the_reference_does() {
     for preset in ["hmd", "cave", "hmd-peripheral"] {
         let rig = Rig::preset(preset).unwrap();
         let plan = plan(preset, &RendererOptions::default(), false);
-        let views: Vec<_> = plan.culls.iter().map(|c| c.view).collect();
+        let views: Vec<_> = plan.culls().iter().map(|c| c.view).collect();
         let displays: Vec<_> = (0..rig.displays.len()).map(CullView::Display).collect();
         assert_eq!(views, displays, "{preset}");
         assert_eq!(plan.jobs(), rig.cull_jobs().unwrap(), "{preset}");
-        for (d, context) in rig.displays.iter().zip(&plan.displays) {
-            assert_eq!(context.instances_per_object, d.views(), "{preset}");
+        for (d, display) in rig.displays.iter().zip(&plan.displays) {
+            assert_eq!(display.context.instances_per_object, d.views(), "{preset}");
         }
         assert_eq!(plan.light_cull, None, "no shadows, no light cull");
-        assert!(plan.far.iter().all(Option::is_none));
+        assert!(plan.displays.iter().all(|d| d.far.is_none()));
         assert_eq!(plan.frame.time, 0.25);
     }
 }
 
 #[test]
 fn multi_camera_culls_each_eye_of_a_stereo_display_against_its_own_frustum() {
-    let plan = plan("hmd-peripheral", &mode(StereoMode::MultiCamera), false);
-    let views: Vec<_> = plan.culls.iter().map(|c| c.view).collect();
+    let culls = plan("hmd-peripheral", &mode(StereoMode::MultiCamera), false).culls();
+    let views: Vec<_> = culls.iter().map(|c| c.view).collect();
     assert_eq!(
         views,
         [
@@ -54,11 +54,12 @@ fn multi_camera_culls_each_eye_of_a_stereo_display_against_its_own_frustum() {
             CullView::Display(2)
         ]
     );
-    let eyes = &plan.resolved.displays[0].eyes;
-    assert_eq!(plan.culls[0].job.planes, eyes[0].frustum().planes);
-    assert_eq!(plan.culls[1].job.planes, eyes[1].frustum().planes);
-    assert_ne!(plan.culls[0].job.planes, plan.culls[1].job.planes);
-    assert!(plan.culls.iter().all(|c| c.job.instances_per_object == 1));
+    let rig = Rig::preset("hmd-peripheral").unwrap().resolve().unwrap();
+    let eyes = &rig.displays[0].eyes;
+    assert_eq!(culls[0].job.planes, eyes[0].frustum().planes);
+    assert_eq!(culls[1].job.planes, eyes[1].frustum().planes);
+    assert_ne!(culls[0].job.planes, culls[1].job.planes);
+    assert!(culls.iter().all(|c| c.job.instances_per_object == 1));
 }
 
 #[test]
@@ -70,8 +71,9 @@ fn only_instanced_doubles_the_instances_of_a_stereo_display() {
         (StereoMode::MultiPass, 1),
     ] {
         let plan = plan("hmd", &mode(m), false);
-        assert_eq!(plan.culls[0].job.instances_per_object, doubled, "{m:?}");
-        assert_eq!(plan.displays[0].instances_per_object, doubled, "{m:?}");
+        assert_eq!(plan.culls()[0].job.instances_per_object, doubled, "{m:?}");
+        let context = &plan.displays[0].context;
+        assert_eq!(context.instances_per_object, doubled, "{m:?}");
     }
 }
 
@@ -85,13 +87,12 @@ fn the_far_layer_splits_each_stereo_display_and_adds_its_far_cull() {
     let plan = plan("hmd-peripheral", &options, false);
     let resolved = rig.resolve().unwrap();
     let want = far_layer::plans(&rig, &resolved, options.far_threshold_px);
-    assert_eq!(plan.far, want);
-    let far = plan.far[0].expect("the stereo display has a far plan");
-    assert!(
-        plan.far[1].is_none() && plan.far[2].is_none(),
-        "mono panels"
-    );
-    let views: Vec<_> = plan.culls.iter().map(|c| c.view).collect();
+    let planned: Vec<_> = plan.displays.iter().map(|d| d.far).collect();
+    assert_eq!(planned, want);
+    let far = planned[0].expect("the stereo display has a far plan");
+    assert!(planned[1].is_none() && planned[2].is_none(), "mono panels");
+    let culls = plan.culls();
+    let views: Vec<_> = culls.iter().map(|c| c.view).collect();
     assert_eq!(
         views,
         [
@@ -101,13 +102,13 @@ fn the_far_layer_splits_each_stereo_display_and_adds_its_far_cull() {
             CullView::Far(0)
         ]
     );
-    assert_eq!(plan.culls[0].job.split, Some(far.split(false)));
-    assert_eq!(plan.culls[1].job.split, None);
-    assert_eq!(plan.culls[3].job.split, Some(far.split(true)));
-    assert_eq!(plan.culls[3].job.instances_per_object, 1, "drawn once");
-    assert_eq!(plan.displays[0].split_keep, 1);
-    assert_eq!(plan.displays[0].split_distance, far.distance);
-    assert_eq!(plan.displays[1].split_keep, 0);
+    assert_eq!(culls[0].job.split, Some(far.split(false)));
+    assert_eq!(culls[1].job.split, None);
+    assert_eq!(culls[3].job.split, Some(far.split(true)));
+    assert_eq!(culls[3].job.instances_per_object, 1, "drawn once");
+    assert_eq!(plan.displays[0].context.split_keep, 1);
+    assert_eq!(plan.displays[0].context.split_distance, far.distance);
+    assert_eq!(plan.displays[1].context.split_keep, 0);
 }
 
 #[test]
@@ -121,7 +122,7 @@ fn the_coarse_cull_and_the_light_are_decided_once_for_the_frame() {
     assert!(on.cull.coarse.is_some() && off.cull.coarse.is_none());
     assert_eq!(off.frame.coarse_planes, CoarseCull::EVERYTHING.planes);
     assert_eq!(on.frame.shadows, 1);
-    let light = on.light_cull.expect("shadows cull the light");
+    let light = on.light_cull.clone().expect("shadows cull the light");
     assert_eq!(light.view, CullView::Light);
     assert_eq!(light.job, on.light.cull_job());
     assert_eq!(
@@ -130,7 +131,8 @@ fn the_coarse_cull_and_the_light_are_decided_once_for_the_frame() {
         "the light never takes blocks"
     );
     assert_eq!(
-        on.culls, off.culls,
+        on.culls(),
+        off.culls(),
         "the coarse cull changes work, not culls"
     );
 }
@@ -203,10 +205,14 @@ fn a_subset_is_planned_as_the_whole_rig() {
         for (k, d) in subset.displays.iter().enumerate() {
             let i = rig.displays.iter().position(|x| x.name == d.name).unwrap();
             // The coarse cull's slot is the drawn display's index in this process.
-            let mut expected = full.displays[i];
+            let mut expected = full.displays[i].context;
             expected.cull_slot = k as u32;
-            assert_eq!(part.displays[k], expected, "{preset} {}", d.name);
-            assert_eq!(part.far[k], full.far[i], "{preset} {}", d.name);
+            assert_eq!(part.displays[k].context, expected, "{preset} {}", d.name);
+            assert_eq!(
+                part.displays[k].far, full.displays[i].far,
+                "{preset} {}",
+                d.name
+            );
         }
         // Drawn alone, without the rest of the rig, the side panel would decide otherwise.
         let mut alone = subset.clone();

@@ -208,7 +208,10 @@ fn the_lens_mask_masks_both_frames_and_culls_what_all_four_views_hide() {
         assert_eq!(renderer.masked_pixels(), 2 * alone.masked_pixels());
         let plan =
             FramePlan::pair((&now, 0.5), (&next, 0.5 + DT), &masked(cull, 2), false).unwrap();
-        let area = plan.hidden[0].as_ref().expect("the pair's hidden area");
+        let area = plan.displays[0]
+            .hidden
+            .as_ref()
+            .expect("the pair's hidden area");
         assert_eq!(
             area.count, 4,
             "every view of both frames must hide a dropped sphere"
@@ -254,14 +257,20 @@ fn a_pairs_plan_holds_both_frames_eyes_and_times_its_views() {
             );
         }
     }
-    let context = &plan.displays[0];
+    let context = &plan.displays[0].context;
     assert_eq!((context.views, context.instances_per_object), (4, 4));
     let ahead: Vec<f32> = context.eye.iter().map(|e| e.time_ahead).collect();
     assert_eq!(ahead, [0.0, 0.0, DT, DT]);
     assert_eq!(plan.frame.time, 2.0);
     // One frame per submission keeps every view at the frame's time.
     let single = FramePlan::new(&now, &options(CullMode::Gpu, 1), false, 2.0).unwrap();
-    assert!(single.displays[0].eye.iter().all(|e| e.time_ahead == 0.0));
+    assert!(
+        single.displays[0]
+            .context
+            .eye
+            .iter()
+            .all(|e| e.time_ahead == 0.0)
+    );
 }
 
 #[test]

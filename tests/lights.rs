@@ -97,7 +97,7 @@ fn gpu_clusters_equal_the_cpu_twins_on_every_preset() {
             let records: Vec<_> = lights.iter().map(Light::record).collect();
             let plan = renderer.plan(&rig, 0.0).unwrap();
             let mut set = 0usize;
-            for (d, context) in plan.displays.iter().enumerate() {
+            for (d, context) in plan.displays.iter().map(|d| &d.context).enumerate() {
                 let want =
                     cluster_bits(&records, &context.view_from_world, &context.clip_from_view);
                 let at = (d as u32 * DISPLAY_WORDS) as usize;
@@ -409,7 +409,7 @@ fn posing_on_the_gpu_moves_lights_on_animated_nodes() {
         let mut posed = scene.clone();
         posed.pose(time);
         let records: Vec<_> = posed.lights.iter().map(Light::record).collect();
-        let context = &renderer.plan(&rig, time).unwrap().displays[0];
+        let context = &renderer.plan(&rig, time).unwrap().displays[0].context;
         let want = cluster_bits(&records, &context.view_from_world, &context.clip_from_view);
         assert!(
             got[..want.len()] == want[..],

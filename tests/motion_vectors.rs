@@ -125,7 +125,7 @@ fn matches(drawn: &Drawn, candidates: &[Previously]) -> Vec<usize> {
             assert_eq!(gpu, DVec2::ZERO, "background pixel ({x}, {y}) moves");
             continue;
         }
-        let eye = &drawn.plan.displays[0].eye[(x >= SIZE) as usize];
+        let eye = &drawn.plan.displays[0].context.eye[(x >= SIZE) as usize];
         let pixel = DVec2::new(x as f64 + 0.5, y as f64 + 0.5);
         let twins: Vec<DVec2> = (candidates.iter())
             .map(|c| motion_at(eye, (pixel, depth), c))
@@ -241,7 +241,7 @@ fn moved_spinning_and_new_instances_move_as_they_did() {
     assert!(counts[1] > 100 && counts[2] > 100, "{counts:?}");
     // The newcomer is in view (its center's pixel shows it), and none of its pixels
     // came from its slot's last occupant.
-    let eye = &drawn.plan.displays[0].eye[0];
+    let eye = &drawn.plan.displays[0].context.eye[0];
     let center = newcomer.world_from_local.translation.as_dvec3();
     let p = pixel_of(eye.clip_from_world, eye.viewport, center).unwrap();
     let at = (p.y as u32 * 2 * SIZE + p.x as u32) as usize;

@@ -354,7 +354,7 @@ fn assert_dropped_are_hidden(
         return;
     }
     let plan = off.renderer.plan(pose, 0.0).unwrap();
-    let context = &plan.displays[d];
+    let context = &plan.displays[d].context;
     let eye = context.resolution.as_uvec2();
     let eyes = context.views.min(2);
     let mut full = read_depth(gpu, depth);
@@ -424,7 +424,7 @@ fn gpu_phases_match_the_cpu_twin() {
             let (shape, seen) = diagnostics.visibility(0).unwrap().unwrap();
             let pyramid = diagnostics.pyramid(0).unwrap().unwrap();
             let plan = session.renderer.plan(pose, 0.0).unwrap();
-            let job = (&plan.culls[0].job, &plan.displays[0]);
+            let job = (&plan.culls()[0].job, &plan.displays[0].context);
             let twin =
                 occlusion::cull_phases(&layout, job, &plan.cull.lod, &drawn, (&pyramid, shape));
             let (early, late) = session.phases(&gpu, 0);
@@ -614,7 +614,7 @@ fn what_one_eye_sees_around_an_edge_is_drawn() {
     let pyramid = diagnostics.pyramid(0).unwrap().unwrap();
     let plan = session.renderer.plan(&rig, 0.0).unwrap();
     let sphere = CullLayout::new(&scene(0.0)).spheres[1];
-    let eyes = &plan.displays[0].eye;
+    let eyes = &plan.displays[0].context.eye;
     assert!(occlusion::occluded_in_eye(
         sphere,
         &eyes[0],
@@ -700,7 +700,7 @@ fn a_sphere_any_pixel_shows_is_never_hidden() {
     for preset in ["hmd", "cave", "hmd-peripheral"] {
         let rig = sized(preset, 61, 47);
         let plan = FramePlan::new(&rig, &RendererOptions::default(), false, 0.0).unwrap();
-        for (d, context) in plan.displays.iter().enumerate() {
+        for (d, context) in plan.displays.iter().map(|d| &d.context).enumerate() {
             let eyes = plan.resolved.displays[d].eyes.len();
             for e in 0..eyes {
                 let eye = &context.eye[e];
@@ -1044,7 +1044,8 @@ fn occlusion_culls_far_instances_hidden_by_near_ones() {
             let pyramid = diagnostics.pyramid(0).unwrap().unwrap();
             let plan = on.renderer.plan(&pose, 0.0).unwrap();
             let job = plan.job(CullView::Far(0)).unwrap();
-            let context = plan.far[0].unwrap().tested_context(&plan.displays[0]);
+            let display = &plan.displays[0];
+            let context = display.far.unwrap().tested_context(&display.context);
             let twin = occlusion::cull_tested(
                 &layout,
                 (&job, &context),

@@ -159,11 +159,12 @@ fn cpu_cull(rig: &Rig, options: &RendererOptions, scene: &Scene) -> Result<Culls
     let plan = FramePlan::of(rig, resolved, options, coarse, 0.0)?;
     let layout = CullLayout::new(scene);
     let outputs = cpu::cull_frame(&layout, &plan.jobs(), &plan.cull);
-    let apart: Vec<_> = plan.inset_culls.iter().map(|c| c.job.clone()).collect();
+    let inset_culls = plan.inset_culls();
+    let apart: Vec<_> = inset_culls.iter().map(|c| c.job.clone()).collect();
     let insets = cpu::cull_many_lod(&layout, &apart, &plan.cull.lod);
     let n = rig.displays.len();
     let (mut near, mut far, mut inset) = (vec![None; n], vec![None; n], vec![None; n]);
-    let planned = plan.culls.iter().chain(&plan.inset_culls);
+    let planned = plan.culls().into_iter().chain(inset_culls);
     for (cull, out) in planned.zip(outputs.into_iter().chain(insets)) {
         match cull.view {
             CullView::Display(i) => near[i] = Some(out),

@@ -51,8 +51,9 @@ pub fn occlusion_report(
     let plan = renderer.plan(rig, time)?;
     let layout = CullLayout::new(scene);
     let culled = cpu::cull_frame(&layout, &plan.jobs(), &plan.cull);
+    let culls = plan.culls();
     let kept_by = |view: CullView| {
-        let at = plan.culls.iter().position(|c| c.view == view);
+        let at = culls.iter().position(|c| c.view == view);
         at.map(|k| &culled[k])
     };
     let frustum = |i: usize| kept_by(CullView::Display(i));
@@ -64,7 +65,7 @@ pub fn occlusion_report(
         };
         let drops = match (diagnostics.visibility(i)?, diagnostics.pyramid(i)?) {
             (Some((shape, _)), Some(pyramid)) => {
-                let display = &plan.displays[i];
+                let display = &plan.displays[i].context;
                 let hidden = |id: u32, e: u32| {
                     let s = layout.spheres[layout.positions[id as usize] as usize];
                     let eye = &display.eye[e as usize];

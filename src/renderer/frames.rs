@@ -51,16 +51,14 @@ pub(super) fn pair(now: &ResolvedRig, next: &ResolvedRig) -> Result<ResolvedRig>
     })
 }
 
-/// Marks the second frame's views of every display (those past its own views) as
+/// Marks the second frame's views of display `d` (those past its own views) as
 /// `ahead` seconds after the frame context's time; with one frame per submission,
 /// every view's context keeps 0.
-pub(super) fn time_views(contexts: &mut [DisplayContext], rig: &Rig, ahead: f32) {
-    for (context, d) in contexts.iter_mut().zip(&rig.displays) {
-        let own = d.views() as usize;
-        if context.views as usize > own {
-            for eye in &mut context.eye[own..] {
-                eye.time_ahead = ahead;
-            }
+pub(super) fn time_views(context: &mut DisplayContext, d: &Display, ahead: f32) {
+    let own = d.views() as usize;
+    if context.views as usize > own {
+        for eye in &mut context.eye[own..] {
+            eye.time_ahead = ahead;
         }
     }
 }

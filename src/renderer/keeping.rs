@@ -56,7 +56,7 @@ fn eyes(context: &DisplayContext) -> (UVec2, Vec<TileEye>) {
 
 /// Tiles per display in `plan`.
 pub fn tiles(plan: &FramePlan) -> Vec<u32> {
-    (plan.displays.iter())
+    (plan.displays.iter().map(|d| &d.context))
         .map(|c| {
             let g = tiles::grid(c.resolution.as_uvec2(), c.views.min(2));
             g.x * g.y
@@ -74,12 +74,13 @@ pub fn keep(plan: &mut FramePlan, changes: &[Change], on_gpu: bool) -> u32 {
         plan.marks = changes.iter().map(mark_entry).collect();
     }
     let mut changed = 0;
-    for (i, context) in plan.displays.iter_mut().enumerate() {
-        context.hidden |= CULL_TILES;
+    for display in &mut plan.displays {
+        display.context.hidden |= CULL_TILES;
         if on_gpu {
-            plan.tiles[i] = Some(KeptTiles::Gpu);
+            display.tiles = Some(KeptTiles::Gpu);
             continue;
         }
+        let context = &display.context;
         let (size, eyes) = eyes(context);
         let mut mask = TileMask::new(eyes, size);
         // What the display frustum does not hold no eye of the display sees.
@@ -89,14 +90,10 @@ pub fn keep(plan: &mut FramePlan, changes: &[Change], on_gpu: bool) -> u32 {
         }
         changed += mask.count();
         let mask = Arc::new(mask);
-        for cull in plan
-            .culls
-            .iter_mut()
-            .filter(|c| c.view == CullView::Display(i))
-        {
+        for cull in (display.culls.iter_mut()).filter(|c| matches!(c.view, CullView::Display(_))) {
             cull.job.tiles = Some(mask.clone());
         }
-        plan.tiles[i] = Some(KeptTiles::Cpu(mask));
+        display.tiles = Some(KeptTiles::Cpu(mask));
     }
     changed
 }

@@ -130,7 +130,7 @@ pub use options::{
 };
 use path::{FramePasses, Path};
 use plan::PlanStorage;
-pub use plan::{CullView, FramePlan, PlannedCull, instances_per_object};
+pub use plan::{CullView, DisplayPlan, FramePlan, PlannedCull, instances_per_object};
 pub use recorder::{Level, PassRecord};
 use second_frame::SecondFrame;
 pub use second_frame::grown;
@@ -301,7 +301,7 @@ impl Renderer {
             slots,
             rig: rig.clone(),
             coarse,
-            far_sizes: plan.far_sizes(),
+            far_sizes: plan.displays.iter().map(|d| Some(d.far?.size)).collect(),
             passes: Vec::new(),
             prepared: None,
             motion_from: None,

@@ -17,7 +17,7 @@ use crate::cull::{CoarseCull, CullJob, HiddenArea};
 use crate::error::{Error, Result};
 use crate::far_layer::FarPlan;
 use crate::motion::PreviousFrame;
-use crate::rig::{ResolvedDisplay, ResolvedRig, Rig};
+use crate::rig::{Display, ResolvedDisplay, ResolvedRig, Rig};
 use crate::shadow::LightView;
 
 /// The view a cull is for.
@@ -63,56 +63,96 @@ pub struct PlannedCull {
     pub job: CullJob,
 }
 
-/// A spent plan's two largest vectors, for the next plan to fill: the display contexts
-/// (2.4 KB each) and the resolved displays. Both are too large for the allocator's
-/// per-thread cache, and every frame (a latch on the submit's path) would allocate
-/// and free them otherwise.
+/// A spent plan's two largest vectors, for the next plan to fill: the display plans
+/// (each with its 2.4 KB context) and the resolved displays. Both are too large for the
+/// allocator's per-thread cache, and every frame (a latch on the submit's path) would
+/// allocate and free them otherwise.
 #[derive(Default)]
 pub(crate) struct PlanStorage {
-    contexts: Vec<DisplayContext>,
+    displays: Vec<DisplayPlan>,
     resolved: Vec<ResolvedDisplay>,
 }
 
-/// Everything one frame decides.
+/// Everything one frame decides: the frame level's (the contexts every pass reads, the
+/// culls' shared inputs, the light) and one [`DisplayPlan`] per display.
 #[derive(Clone, Debug, PartialEq)]
 pub struct FramePlan {
     /// The rig's views, resolved once for this frame.
     pub resolved: ResolvedRig,
     /// What every pass reads once per frame.
     pub frame: FrameContext,
-    /// Per display, in the rig's order: its context (with a far layer, its near cull's
-    /// split).
-    pub displays: Vec<DisplayContext>,
     /// What every cull of the frame shares: the levels of detail, the coarse test.
     pub cull: FrameCull,
-    /// The culls the frame frustum holds, in the order the CPU culler runs them: each
-    /// display's (each eye's in `multi-camera`), then each far layer's.
-    pub culls: Vec<PlannedCull>,
-    /// Per display: its far layer's plan (stereo displays with the far layer on).
-    pub far: Vec<Option<FarPlan>>,
     /// The frame's light: it shades every display, and with shadows draws the map
     /// (its box fitted only then: [`LightView::unfitted`]).
     pub light: LightView,
     /// With shadows: the light's cull, outside the frame frustum (never coarse).
     pub light_cull: Option<PlannedCull>,
-    /// Per display: with the inset cull, a foveated display's inset context (the inset
-    /// pair in the eye slots, the inset frustum's planes). Boxed: a context is 2.4 KB,
-    /// and most displays have none.
-    pub insets: Vec<Option<Box<DisplayContext>>>,
-    /// The inset culls (never coarse), one per display with an inset context.
-    pub inset_culls: Vec<PlannedCull>,
-    /// Per display: with the visibility mask on the GPU-driven path, the lens's hidden
-    /// area its cull drops by (the display's own cull and its late phase; never its far
-    /// layer's or its insets').
-    pub hidden: Vec<Option<Arc<HiddenArea>>>,
-    /// Per display: keeping unchanged pixels, its changed tiles, which its cull keeps
-    /// only what touches and its draw pass alone redraws ([`crate::keep`]); `None`:
-    /// drawn whole. The renderer sets them ([`crate::renderer::Renderer::prepare`]).
-    pub tiles: Vec<Option<KeptTiles>>,
+    /// Per display, in the rig's order.
+    pub displays: Vec<DisplayPlan>,
     /// Keeping unchanged pixels with the tiles marked on the GPU: the slots whose
     /// tiles change, each with its phases ([`crate::cull::tile_marks::MARK_BEFORE`],
     /// [`crate::cull::tile_marks::MARK_AFTER`]).
     pub marks: Vec<u32>,
+}
+
+/// What one frame decides for one display.
+#[derive(Clone, Debug, PartialEq)]
+pub struct DisplayPlan {
+    /// Its context (with a far layer, its near cull's split).
+    pub context: DisplayContext,
+    /// Its culls against the display frustum: one, or in `multi-camera` one per eye
+    /// of a stereo display.
+    pub culls: Vec<PlannedCull>,
+    /// Its far layer's plan (stereo displays with the far layer on).
+    pub far: Option<FarPlan>,
+    /// With the inset cull, a foveated display's inset context (the inset pair in the
+    /// eye slots, the inset frustum's planes). Boxed: a context is 2.4 KB, and most
+    /// displays have none.
+    pub inset: Option<Box<DisplayContext>>,
+    /// With the visibility mask on the GPU-driven path, the lens's hidden area its cull
+    /// drops by (the display's own cull and its late phase; never its far layer's or
+    /// its insets').
+    pub hidden: Option<Arc<HiddenArea>>,
+    /// Keeping unchanged pixels, its changed tiles, which its cull keeps only what
+    /// touches and its draw pass alone redraws ([`crate::keep`]); `None`: drawn whole.
+    /// The renderer sets them ([`crate::renderer::Renderer::prepare`]).
+    pub tiles: Option<KeptTiles>,
+}
+
+impl DisplayPlan {
+    /// Display `i`'s far cull (the display frustum's far side, drawn once), where it
+    /// has a far layer.
+    pub fn far_cull(&self, i: usize) -> Option<PlannedCull> {
+        let plan = self.far.as_ref()?;
+        Some(PlannedCull {
+            view: CullView::Far(i),
+            job: CullJob {
+                planes: plan.view.frustum().planes,
+                instances_per_object: 1,
+                split: Some(plan.split(true)),
+                hidden: None,
+                tiles: None,
+                sort_origin: plan.view.position(),
+            },
+        })
+    }
+
+    /// Display `i`'s inset cull (never coarse), where it culls its insets apart.
+    pub fn inset_cull(&self, i: usize) -> Option<PlannedCull> {
+        let context = self.inset.as_ref()?;
+        Some(PlannedCull {
+            view: CullView::Inset(i),
+            job: CullJob {
+                planes: context.planes,
+                instances_per_object: context.instances_per_object,
+                split: None,
+                hidden: None,
+                tiles: None,
+                sort_origin: context.sort_origin(),
+            },
+        })
+    }
 }
 
 /// A kept display's changed tiles: marked on the CPU (culling on the CPU: its cull and
@@ -137,12 +177,13 @@ impl KeptTiles {
 impl FramePlan {
     /// This frame as the next one's previous, for motion vectors.
     pub fn as_previous(&self) -> PreviousFrame {
-        PreviousFrame::of(&self.frame, &self.displays)
+        PreviousFrame::of(&self.frame, self.displays.iter().map(|d| &d.context))
     }
 
     /// This frame's contexts measured from `previous` (motion vectors).
     pub fn measure_from(&mut self, previous: &PreviousFrame) {
-        previous.carry_into(&mut self.frame, &mut self.displays);
+        let contexts = self.displays.iter_mut().map(|d| &mut d.context);
+        previous.carry_into(&mut self.frame, contexts);
     }
 
     /// The plan of the frame at `time` for `rig`'s pose under `options`; `coarse` is
@@ -161,13 +202,13 @@ impl FramePlan {
         storage: PlanStorage,
     ) -> Result<FramePlan> {
         let resolved = rig.resolve_into(storage.resolved)?;
-        FramePlan::of_in(rig, resolved, options, coarse, time, storage.contexts)
+        FramePlan::of_in(rig, resolved, options, coarse, time, storage.displays)
     }
 
     /// The plan's vectors that the next plan fills again ([`PlanStorage`]).
     pub(crate) fn into_storage(self) -> PlanStorage {
         PlanStorage {
-            contexts: self.displays,
+            displays: self.displays,
             resolved: self.resolved.displays,
         }
     }
@@ -184,21 +225,21 @@ impl FramePlan {
         FramePlan::of_in(rig, resolved, options, coarse, time, Vec::new())
     }
 
-    /// [`FramePlan::of`] with the display contexts in `contexts`' allocation.
+    /// [`FramePlan::of`] with the display plans in `displays`' allocation.
     fn of_in(
         rig: &Rig,
         resolved: ResolvedRig,
         options: &RendererOptions,
         coarse: bool,
         time: f32,
-        contexts: Vec<DisplayContext>,
+        displays: Vec<DisplayPlan>,
     ) -> Result<FramePlan> {
         if options.frames_per_submit == 2 {
             let pair = frames::pair(&resolved, &resolved)?;
             let times = [time, time + options.dt];
-            return FramePlan::build(rig, pair, options, coarse, times, contexts);
+            return FramePlan::build(rig, pair, options, coarse, times, displays);
         }
-        FramePlan::build(rig, resolved, options, coarse, [time; 2], contexts)
+        FramePlan::build(rig, resolved, options, coarse, [time; 2], displays)
     }
 
     /// The plan of a submission of two frames ([`RendererOptions::frames_per_submit`]
@@ -222,20 +263,19 @@ impl FramePlan {
     }
 
     /// The plan from a resolved rig whose displays hold one frame's views (`times[0]`),
-    /// or two frames' ([`frames::pair`]; the second at `times[1]`); its display
-    /// contexts in `contexts`' allocation.
+    /// or two frames' ([`frames::pair`]; the second at `times[1]`); its display plans
+    /// in `displays`' allocation.
     fn build(
         rig: &Rig,
         resolved: ResolvedRig,
         options: &RendererOptions,
         coarse: bool,
         times: [f32; 2],
-        contexts: Vec<DisplayContext>,
+        mut displays: Vec<DisplayPlan>,
     ) -> Result<FramePlan> {
         if resolved.displays.len() != rig.displays.len() {
             return Err(Error::rig("plan", "the resolved rig's displays differ"));
         }
-        let time = times[0];
         let cull = FrameCull {
             lod: frame_lod(rig, &resolved, options.lod_levels()),
             coarse: coarse.then(|| resolved.coarse_cull(options.mode.culls_per_eye())),
@@ -246,7 +286,7 @@ impl FramePlan {
         };
         let frame = FrameContext::new(
             &rig.viewer,
-            time,
+            times[0],
             cull.lod.lod_scale,
             &cull.coarse.unwrap_or(CoarseCull::EVERYTHING),
             &light,
@@ -258,28 +298,17 @@ impl FramePlan {
         };
         let inset_cull = options.inset_cull && options.mode == StereoMode::Instanced;
         let hidden = hidden_areas(rig, &resolved, options, inset_cull);
-        let mut displays = contexts;
-        display_contexts(
-            &mut displays,
-            rig,
-            &resolved,
-            options,
-            (&far, &hidden),
-            inset_cull,
-        );
-        frames::time_views(&mut displays, rig, times[1] - times[0]);
-        let culls = culls(&resolved, options.mode, (&displays, &hidden), &far);
-        let insets: Vec<Option<Box<DisplayContext>>> = (displays.iter().zip(&resolved.displays))
-            .map(|(context, r)| {
-                r.insets
-                    .as_ref()
-                    .filter(|_| inset_cull)
-                    .map(|v| Box::new(context.insets(v)))
-            })
-            .collect();
-        let inset_culls = (insets.iter().enumerate())
-            .filter_map(|(i, c)| Some(inset_job(i, c.as_ref()?)))
-            .collect();
+        displays.truncate(rig.displays.len());
+        displays.resize_with(rig.displays.len(), DisplayPlan::unset);
+        let each = (rig.displays.iter().zip(&resolved.displays)).zip(far.into_iter().zip(hidden));
+        for (i, (plan, ((d, r), (far, hidden)))) in displays.iter_mut().zip(each).enumerate() {
+            let shown = Shown {
+                options,
+                inset_cull,
+                ahead: times[1] - times[0],
+            };
+            plan.set(i, (d, r), (far, hidden), shown);
+        }
         let light_cull = options.shadows.then(|| PlannedCull {
             view: CullView::Light,
             job: light.cull_job(),
@@ -287,46 +316,153 @@ impl FramePlan {
         Ok(FramePlan {
             resolved,
             frame,
-            displays,
             cull,
-            culls,
-            far,
             light,
             light_cull,
-            insets,
-            inset_culls,
-            hidden,
-            tiles: vec![None; rig.displays.len()],
+            displays,
             marks: Vec::new(),
         })
     }
 
-    /// Each far layer at the size it was made for (`sizes[i]`, from the plan of the rig
-    /// the renderer was made with): a layer's texture keeps its size, while a posed
-    /// view's field of view may move the size a new plan asks for.
-    pub(super) fn with_far_sizes(mut self, sizes: &[Option<(u32, u32)>]) -> FramePlan {
-        for (far, size) in self.far.iter_mut().zip(sizes) {
-            if let (Some(far), Some(size)) = (far, size) {
-                far.size = *size;
+    /// Each far layer at the size it was made for (`sizes`, from the plan of the rig
+    /// the renderer was made with, per display): a layer's texture keeps its size, while
+    /// a posed view's field of view may move the size a new plan asks for.
+    pub(super) fn with_far_sizes(
+        mut self,
+        sizes: impl Iterator<Item = Option<(u32, u32)>>,
+    ) -> FramePlan {
+        for (display, size) in self.displays.iter_mut().zip(sizes) {
+            if let (Some(far), Some(size)) = (&mut display.far, size) {
+                far.size = size;
             }
         }
         self
     }
 
-    /// The far layers' sizes.
-    pub(super) fn far_sizes(&self) -> Vec<Option<(u32, u32)>> {
-        self.far.iter().map(|f| f.map(|p| p.size)).collect()
+    /// The culls the frame frustum holds, in the order the CPU culler runs them: each
+    /// display's (each eye's in `multi-camera`), then each far layer's.
+    pub fn culls(&self) -> Vec<PlannedCull> {
+        let own = self.displays.iter().flat_map(|d| d.culls.iter().cloned());
+        let far = (self.displays.iter().enumerate()).filter_map(|(i, d)| d.far_cull(i));
+        own.chain(far).collect()
+    }
+
+    /// The inset culls (never coarse), one per display with an inset context.
+    pub fn inset_culls(&self) -> Vec<PlannedCull> {
+        (self.displays.iter().enumerate())
+            .filter_map(|(i, d)| d.inset_cull(i))
+            .collect()
     }
 
     /// The jobs of [`FramePlan::culls`], in order: what the CPU culler takes.
     pub fn jobs(&self) -> Vec<CullJob> {
-        self.culls.iter().map(|c| c.job.clone()).collect()
+        self.culls().into_iter().map(|c| c.job).collect()
     }
 
     /// The job of [`FramePlan::culls`] for `view` (`None` if the frame frustum's culls
     /// have none).
     pub fn job(&self, view: CullView) -> Option<CullJob> {
-        (self.culls.iter().find(|c| c.view == view)).map(|c| c.job.clone())
+        match view {
+            CullView::Far(i) => Some(self.displays.get(i)?.far_cull(i)?.job),
+            CullView::Display(i) | CullView::Eye(i, _) => (self.displays.get(i)?.culls.iter())
+                .find(|c| c.view == view)
+                .map(|c| c.job.clone()),
+            CullView::Late(_) | CullView::Inset(_) | CullView::Light => None,
+        }
+    }
+}
+
+/// How a display's views are shown: what its plan reads of the options, and how far
+/// ahead of the first frame's views a second frame's are.
+struct Shown<'a> {
+    options: &'a RendererOptions,
+    inset_cull: bool,
+    ahead: f32,
+}
+
+impl DisplayPlan {
+    /// A plan to be set ([`DisplayPlan::set`]).
+    fn unset() -> DisplayPlan {
+        DisplayPlan {
+            context: DisplayContext::UNSET,
+            culls: Vec::new(),
+            far: None,
+            inset: None,
+            hidden: None,
+            tiles: None,
+        }
+    }
+
+    /// Display `i`'s plan (`d` as resolved `r`), in place (a context is large, and the
+    /// culls' vector is kept): its context, where it has a far plan keeping its near
+    /// instances only, where it has a hidden area culling by it, and with the inset
+    /// cull a foveated display's own cull drawing its outer pair only.
+    fn set(
+        &mut self,
+        i: usize,
+        (d, r): (&Display, &ResolvedDisplay),
+        (far, hidden): (Option<FarPlan>, Option<Arc<HiddenArea>>),
+        shown: Shown,
+    ) {
+        let Shown {
+            options,
+            inset_cull,
+            ahead,
+        } = shown;
+        let (mode, frames) = (options.mode, options.frames_per_submit);
+        let views = match inset_cull {
+            true => d.views().min(2),
+            false => d.views() * frames,
+        };
+        let layered = mode == StereoMode::Multiview && d.stereo;
+        let per_object = instances_per_object(mode, views);
+        let layout = frames::layout(d, layered, frames);
+        let context = &mut self.context;
+        *context = DisplayContext::UNSET;
+        context.set(r, &layout, per_object);
+        context.cull_slot = i as u32;
+        context.hidden = u32::from(hidden.is_some());
+        if let Some(plan) = &far {
+            context.split_keep = 1;
+            context.split_distance = plan.distance;
+        }
+        frames::time_views(context, d, ahead);
+        self.inset = (r.insets.as_ref())
+            .filter(|_| inset_cull)
+            .map(|v| Box::new(self.context.insets(v)));
+        self.culls.clear();
+        let split = far.map(|plan| plan.split(false));
+        let context = &self.context;
+        match (mode.culls_per_eye(), r.eyes.as_slice()) {
+            (true, eyes) if eyes.len() > 1 => {
+                self.culls
+                    .extend(eyes.iter().enumerate().map(|(e, eye)| PlannedCull {
+                        view: CullView::Eye(i, e),
+                        job: CullJob {
+                            planes: eye.frustum().planes,
+                            instances_per_object: 1,
+                            split,
+                            hidden: None,
+                            tiles: None,
+                            // One order for both eyes, as the display draws it.
+                            sort_origin: context.sort_origin(),
+                        },
+                    }))
+            }
+            _ => self.culls.push(PlannedCull {
+                view: CullView::Display(i),
+                job: CullJob {
+                    split,
+                    hidden: hidden.clone(),
+                    tiles: None,
+                    sort_origin: context.sort_origin(),
+                    ..r.cull_job(context.instances_per_object)
+                },
+            }),
+        }
+        self.far = far;
+        self.hidden = hidden;
+        self.tiles = None;
     }
 }
 
@@ -337,55 +473,6 @@ pub fn instances_per_object(mode: StereoMode, views: u32) -> u32 {
     match mode {
         StereoMode::Instanced => views,
         _ => 1,
-    }
-}
-
-/// The cull of display `i`'s insets, from their context.
-fn inset_job(i: usize, context: &DisplayContext) -> PlannedCull {
-    PlannedCull {
-        view: CullView::Inset(i),
-        job: CullJob {
-            planes: context.planes,
-            instances_per_object: context.instances_per_object,
-            split: None,
-            hidden: None,
-            tiles: None,
-            sort_origin: context.sort_origin(),
-        },
-    }
-}
-
-/// Each display's context; a display with a far plan keeps its near instances only, one
-/// with a hidden area culls by it, and with `inset_cull` a foveated display's own cull
-/// draws its outer pair only, each built once, in place, in `contexts` (a context is
-/// large).
-fn display_contexts(
-    contexts: &mut Vec<DisplayContext>,
-    rig: &Rig,
-    resolved: &ResolvedRig,
-    options: &RendererOptions,
-    (far, hidden): (&[Option<FarPlan>], &[Option<Arc<HiddenArea>>]),
-    inset_cull: bool,
-) {
-    let (mode, frames) = (options.mode, options.frames_per_submit);
-    contexts.clear();
-    contexts.resize(rig.displays.len(), DisplayContext::UNSET);
-    for (i, (d, r)) in rig.displays.iter().zip(&resolved.displays).enumerate() {
-        let views = match inset_cull {
-            true => d.views().min(2),
-            false => d.views() * frames,
-        };
-        let layered = mode == StereoMode::Multiview && d.stereo;
-        let per_object = instances_per_object(mode, views);
-        let layout = frames::layout(d, layered, frames);
-        let context = &mut contexts[i];
-        context.set(r, &layout, per_object);
-        context.cull_slot = i as u32;
-        context.hidden = u32::from(hidden[i].is_some());
-        if let Some(plan) = &far[i] {
-            context.split_keep = 1;
-            context.split_distance = plan.distance;
-        }
     }
 }
 
@@ -418,65 +505,6 @@ fn hidden_areas(
         .collect()
 }
 
-/// The culls the frame frustum holds: per display one against its display frustum (or,
-/// culling per eye, one per eye of a stereo display), each keeping its near side where
-/// it has a far plan and dropping what its hidden area hides; then one far cull per
-/// plan (the display frustum, drawn once).
-fn culls(
-    resolved: &ResolvedRig,
-    mode: StereoMode,
-    (contexts, hidden): (&[DisplayContext], &[Option<Arc<HiddenArea>>]),
-    far: &[Option<FarPlan>],
-) -> Vec<PlannedCull> {
-    // At most a cull per eye and a far cull per display.
-    let most = resolved.displays.iter().map(|r| r.eyes.len() + 1).sum();
-    let mut culls = Vec::with_capacity(most);
-    for (i, (r, context)) in resolved.displays.iter().zip(contexts).enumerate() {
-        let split = far[i].map(|plan| plan.split(false));
-        match (mode.culls_per_eye(), r.eyes.as_slice()) {
-            (true, eyes) if eyes.len() > 1 => {
-                culls.extend(eyes.iter().enumerate().map(|(e, eye)| PlannedCull {
-                    view: CullView::Eye(i, e),
-                    job: CullJob {
-                        planes: eye.frustum().planes,
-                        instances_per_object: 1,
-                        split,
-                        hidden: None,
-                        tiles: None,
-                        // One order for both eyes, as the display draws it.
-                        sort_origin: context.sort_origin(),
-                    },
-                }))
-            }
-            _ => culls.push(PlannedCull {
-                view: CullView::Display(i),
-                job: CullJob {
-                    split,
-                    hidden: hidden[i].clone(),
-                    tiles: None,
-                    sort_origin: context.sort_origin(),
-                    ..r.cull_job(context.instances_per_object)
-                },
-            }),
-        }
-    }
-    culls.extend(far.iter().enumerate().filter_map(|(i, plan)| {
-        let plan = plan.as_ref()?;
-        Some(PlannedCull {
-            view: CullView::Far(i),
-            job: CullJob {
-                planes: plan.view.frustum().planes,
-                instances_per_object: 1,
-                split: Some(plan.split(true)),
-                hidden: None,
-                tiles: None,
-                sort_origin: plan.view.position(),
-            },
-        })
-    }));
-    culls
-}
-
 #[cfg(test)]
 mod tests {
     use super::*;
@@ -491,7 +519,7 @@ mod tests {
             ..RendererOptions::default()
         };
         let spent = FramePlan::new(&cave, &far, false, 0.5).unwrap();
-        assert!(spent.displays.iter().all(|c| c.split_keep != 0));
+        assert!(spent.displays.iter().all(|d| d.context.split_keep != 0));
         let mut hmd = Rig::preset("hmd").unwrap();
         hmd.viewer.yaw_deg = 20.0;
         let options = RendererOptions::default();

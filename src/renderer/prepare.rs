@@ -22,7 +22,7 @@ impl Renderer {
     fn plan_in(&self, rig: &Rig, time: f32, storage: PlanStorage) -> Result<FramePlan> {
         self.check_shapes(rig)?;
         let plan = FramePlan::new_in(rig, &self.options, self.coarse, time, storage)?;
-        Ok(plan.with_far_sizes(&self.far_sizes))
+        Ok(plan.with_far_sizes(self.far_sizes.iter().copied()))
     }
 
     /// [`Renderer::plan`] in the last written plan's vectors.
@@ -38,7 +38,7 @@ impl Renderer {
         self.check_shapes(now.0)?;
         self.check_shapes(next.0)?;
         let plan = FramePlan::pair(now, next, &self.options, self.coarse)?;
-        Ok(plan.with_far_sizes(&self.far_sizes))
+        Ok(plan.with_far_sizes(self.far_sizes.iter().copied()))
     }
 
     fn check_shapes(&self, rig: &Rig) -> Result<()> {

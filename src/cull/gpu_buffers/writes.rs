@@ -8,17 +8,20 @@ use crate::cull::coarse::CoarseCull;
 use crate::cull::rig::{RigCull, RigOcclusion, RigView};
 use crate::records::storage_bytes;
 use glam::Vec4;
-use std::sync::Arc;
 
 impl CullScene {
     /// Writes this frame's hidden areas, one per display slot (in order; `None` drops
     /// nothing). Returns the bytes written; nothing where no display's cull drops by one.
-    pub fn write_hidden(&self, queue: &impl Upload, areas: &[Option<Arc<HiddenArea>>]) -> u64 {
+    pub fn write_hidden<'a>(
+        &self,
+        queue: &impl Upload,
+        areas: impl Iterator<Item = Option<&'a HiddenArea>>,
+    ) -> u64 {
         if self.hidden_slots == 0 {
             return 0;
         }
-        let records: Vec<HiddenArea> = (areas.iter().take(self.hidden_slots as usize))
-            .map(|a| a.as_deref().copied().unwrap_or(HiddenArea::NONE))
+        let records: Vec<HiddenArea> = (areas.take(self.hidden_slots as usize))
+            .map(|a| a.copied().unwrap_or(HiddenArea::NONE))
             .collect();
         let bytes = storage_bytes(&records);
         queue.write_buffer(&self.hidden, 0, &bytes);

@@ -47,10 +47,10 @@ impl Culler {
 /// Arms `marks` for `plan`'s frame where it keeps with the tiles marked on the GPU:
 /// its listed slots, over its kept displays. Returns the bytes written.
 pub(super) fn write_marks(queue: &impl Upload, marks: &mut TileMarks, plan: &FramePlan) -> u64 {
-    let kept =
-        (plan.displays.iter().zip(&plan.tiles)).filter(|(_, t)| matches!(t, Some(KeptTiles::Gpu)));
+    let kept = (plan.displays.iter()).filter(|d| matches!(d.tiles, Some(KeptTiles::Gpu)));
     let displays: Vec<TileDisplay> = kept
-        .map(|(c, _)| TileDisplay {
+        .map(|d| &d.context)
+        .map(|c| TileDisplay {
             eyes: c.rig_occlusion(),
             planes: c.planes,
             base: marks.base(c.cull_slot),

@@ -255,7 +255,7 @@ impl Culler {
                     None => 0,
                 };
                 scene.write_block_tests(queue, &planes)
-                    + scene.write_hidden(queue, &plan.hidden)
+                    + scene.write_hidden(queue, plan.displays.iter().map(|d| d.hidden.as_deref()))
                     + marked
             }
             Kind::Cpu {
@@ -269,12 +269,14 @@ impl Culler {
                     CullView::Display(i) => visibility.get(i).is_some_and(Option::is_some),
                     _ => false,
                 };
-                let plain: Vec<_> = plan.culls.iter().filter(|c| !occludes(c.view)).collect();
+                let culls = plan.culls();
+                let plain: Vec<_> = culls.iter().filter(|c| !occludes(c.view)).collect();
                 let jobs: Vec<_> = plain.iter().map(|c| c.job.clone()).collect();
                 let culled = cpu::cull_frame(layout, &jobs, &plan.cull);
                 *outputs = plain.iter().map(|c| c.view).zip(culled).collect();
                 // Outside the coarse cull: one more pass for the light and the insets.
-                let apart: Vec<_> = plan.light_cull.iter().chain(&plan.inset_culls).collect();
+                let insets = plan.inset_culls();
+                let apart: Vec<_> = plan.light_cull.iter().chain(&insets).collect();
                 if !apart.is_empty() {
                     let jobs: Vec<_> = apart.iter().map(|c| c.job.clone()).collect();
                     let out = cpu::cull_many_lod(layout, &jobs, &plan.cull.lod);

@@ -212,12 +212,13 @@ impl Culler {
                 continue;
             };
             let pyramid = (&texels[..], *shape);
-            let display = (&job, &plan.displays[i]);
+            let display = (&job, &plan.displays[i].context);
             let (culled, seen) = occlusion::cull_late(layout, display, lod, words, pyramid);
             *words = seen;
             set_output(outputs, CullView::Late(i), culled);
-            if let (Some(far), Some(far_job)) = (plan.far[i], plan.job(CullView::Far(i))) {
-                let tested = far.tested_context(&plan.displays[i]);
+            let d = &plan.displays[i];
+            if let (Some(far), Some(far_job)) = (d.far, d.far_cull(i)) {
+                let (far_job, tested) = (far_job.job, far.tested_context(&d.context));
                 let kept = occlusion::cull_tested(layout, (&far_job, &tested), lod, pyramid);
                 set_output(outputs, CullView::Far(i), kept);
             }

@@ -126,7 +126,8 @@ impl ClassicPath {
         stats.bytes_uploaded += self.core.culler.prepare(to.pose, plan);
         stats.cpu_cull = start.elapsed();
         let start = Instant::now();
-        for (i, (state, ctx)) in self.displays.iter().zip(&plan.displays).enumerate() {
+        let contexts = plan.displays.iter().map(|d| &d.context);
+        for (i, (state, ctx)) in self.displays.iter().zip(contexts).enumerate() {
             stats.bytes_uploaded += to.pose.write_uniform(&state.context, 0, ctx);
             for (e, eye) in state.eyes.iter().enumerate() {
                 stats.bytes_uploaded += to.pose.write_uniform(&eye.context, 0, &ctx.for_eye(e));
@@ -275,8 +276,7 @@ fn classic_displays(
         (drawing.drawer).bind_group(device, [frame, context], drawing.scene, list.bound())
     };
     let views = plan.resolved.displays.iter().map(|r| r.eyes.len());
-    plan.displays
-        .iter()
+    (plan.displays.iter().map(|d| &d.context))
         .zip(views)
         .map(|(d, views)| {
             let context = context_buffer(device);

@@ -264,10 +264,10 @@ impl Far {
         (contexts, tested): (&[&wgpu::Buffer], &[bool]),
         culler: &Culler,
     ) -> Far {
-        let displays = (plan.far.iter().zip(contexts).zip(tested))
+        let displays = (plan.displays.iter().zip(contexts).zip(tested))
             .enumerate()
-            .map(|(i, ((far, context), &tested))| {
-                let far = far.as_ref()?;
+            .map(|(i, ((display, context), &tested))| {
+                let far = display.far.as_ref()?;
                 let drawing = layers.drawing(scene);
                 let view = match tested {
                     true => ViewPass::tested(device, drawing, frame, culler, CullView::Far(i)),
@@ -286,9 +286,13 @@ impl Far {
     /// Writes every far layer's context for `plan` and the culler's far culls. Returns
     /// the bytes written.
     pub(super) fn prepare(&mut self, to: Writes, plan: &FramePlan, culler: &Culler) -> u64 {
-        self.distances = plan.far.iter().map(|p| p.map(|p| p.distance)).collect();
-        (self.displays.iter().zip(&plan.far).zip(&plan.displays))
-            .filter_map(|((far, plan), display)| Some((far.as_ref()?, plan.as_ref()?, display)))
+        self.distances = plan
+            .displays
+            .iter()
+            .map(|d| Some(d.far?.distance))
+            .collect();
+        (self.displays.iter().zip(&plan.displays))
+            .filter_map(|(far, d)| Some((far.as_ref()?, d.far.as_ref()?, &d.context)))
             .map(|(far, plan, display)| far.prepare(to, (plan, display), culler))
             .sum()
     }

@@ -95,7 +95,7 @@ impl IndirectPath {
             None => 0,
         };
         let shapes = pyramid_shapes(plan, options, scene.triangles());
-        let views = plan.displays.iter().map(|c| c.views);
+        let views = plan.displays.iter().map(|d| d.context.views);
         let keeps = options.keep_unchanged != KeepUnchanged::Off
             && keeping::never(scene, views, options).is_none();
         let tiles = keeps.then(|| keeping::tiles(plan));
@@ -119,7 +119,7 @@ impl IndirectPath {
             floor: options.cull_floor,
             occlusion,
             tested: options.far_layer && occlusion.displays > 0,
-            hidden_slots: match plan.hidden.iter().any(Option::is_some) {
+            hidden_slots: match plan.displays.iter().any(|d| d.hidden.is_some()) {
                 true => plan.displays.len() as u32,
                 false => 0,
             },
@@ -184,7 +184,8 @@ impl IndirectPath {
         stats.cpu_cull = start.elapsed();
         let start = Instant::now();
         let culler = &self.core.culler;
-        for ((state, ctx), inset) in self.displays.iter().zip(&plan.displays).zip(&plan.insets) {
+        for (state, display) in self.displays.iter().zip(&plan.displays) {
+            let (ctx, inset) = (&display.context, &display.inset);
             stats.bytes_uploaded += state.view.prepare(to, ctx, culler);
             // The late phase shares the early one's context; a rig member has a record.
             if let Some(late) = &state.late {
@@ -197,10 +198,10 @@ impl IndirectPath {
         if let Some(far) = &mut self.far {
             stats.bytes_uploaded += far.prepare(to, plan, &self.core.culler);
         }
-        for (i, tiles) in plan.tiles.iter().enumerate() {
+        for (i, display) in plan.displays.iter().enumerate() {
             self.kept[i] = None;
-            if let (Some(keep), Some(tiles)) = (&mut self.keep, tiles) {
-                let c = &plan.displays[i];
+            if let (Some(keep), Some(tiles)) = (&mut self.keep, &display.tiles) {
+                let c = &display.context;
                 let (size, views) = (c.resolution.as_uvec2(), c.views.min(2));
                 stats.bytes_uploaded += keep.write(to.queue, i, (size, views), tiles.mask());
                 let g = crate::cull::tiles::grid(size, views);
@@ -436,7 +437,10 @@ fn indirect_displays(
                 view: display,
                 key,
                 own: OwnPipelines::new(),
-                inset: plan.insets[i].as_ref().map(|_| view(CullView::Inset(i))),
+                inset: plan.displays[i]
+                    .inset
+                    .as_ref()
+                    .map(|_| view(CullView::Inset(i))),
                 late,
             }
         })
@@ -460,11 +464,11 @@ fn rig_members(plan: &FramePlan, shapes: &[Option<PyramidShape>], coarse: bool) 
         .filter(|(_, shape)| shape.is_some())
         .map(|(i, _)| CullView::Late(i));
     let displays = (0..shapes.len()).map(CullView::Display);
-    let far = (plan.far.iter().zip(shapes).enumerate())
-        .filter(|(_, (far, shape))| far.is_some() && shape.is_none())
+    let far = (plan.displays.iter().zip(shapes).enumerate())
+        .filter(|(_, (d, shape))| d.far.is_some() && shape.is_none())
         .map(|(i, _)| CullView::Far(i));
-    let insets = (plan.insets.iter().enumerate())
-        .filter(|(_, inset)| inset.is_some())
+    let insets = (plan.displays.iter().enumerate())
+        .filter(|(_, d)| d.inset.is_some())
         .map(|(i, _)| CullView::Inset(i));
     displays.chain(far).chain(insets).chain(late).collect()
 }
@@ -475,8 +479,8 @@ fn rig_members(plan: &FramePlan, shapes: &[Option<PyramidShape>], coarse: bool) 
 /// its own viewport.
 fn draw_keys(device: &wgpu::Device, plan: &FramePlan, mode: StereoMode) -> Vec<DrawKey> {
     let clip = DrawFeatures::of(device).clip_distances;
-    (plan.resolved.displays.iter().zip(&plan.insets))
-        .map(|(d, inset)| match (d.eyes.len(), mode, inset) {
+    (plan.resolved.displays.iter().zip(&plan.displays))
+        .map(|(d, display)| match (d.eyes.len(), mode, &display.inset) {
             (2, StereoMode::Multiview, _) => DrawKey::MULTIVIEW,
             (4, StereoMode::Multiview, _) => DrawKey::MULTIVIEW_QUAD,
             (4, _, Some(_)) => DrawKey::placed(2, clip),

@@ -137,7 +137,7 @@ impl Lighting {
         let mut header = vec![self.records.len() as u32];
         header.extend((0..=CLUSTER_Z).map(|k| slice_start(k).to_bits()));
         let mut bytes = write(queue, &self.views, 0, &header);
-        for (i, d) in plan.displays.iter().enumerate() {
+        for (i, d) in plan.displays.iter().map(|d| &d.context).enumerate() {
             let mut matrices = d.view_from_world.to_cols_array().to_vec();
             matrices.extend(d.clip_from_view.to_cols_array());
             let words: Vec<u32> = matrices.iter().map(|f| f.to_bits()).collect();

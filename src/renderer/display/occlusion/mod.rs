@@ -175,7 +175,7 @@ fn set_slices(
             continue;
         };
         for eye in 0..shape.eyes {
-            let viewport = plan.displays[i].eye[eye as usize].viewport;
+            let viewport = plan.displays[i].context.eye[eye as usize].viewport;
             slices.push(PyramidSlice {
                 origin: match layered {
                     true => glam::UVec2::ZERO,
@@ -278,9 +278,9 @@ pub(in crate::renderer::display) fn pyramid_shapes(
     triangles: u64,
 ) -> Vec<Option<PyramidShape>> {
     (plan.resolved.displays.iter().zip(&plan.displays))
-        .map(|(d, context)| {
+        .map(|(d, display)| {
             let shape = PyramidShape {
-                eye: context.resolution.as_uvec2(),
+                eye: display.context.resolution.as_uvec2(),
                 eyes: d.eyes.len() as u32,
             };
             let pixels = shape.eye.element_product() as u64 * shape.eyes as u64;
