@@ -114,23 +114,19 @@ impl MaskPipeline {
     }
 }
 
-/// Each display's mask pass where it has a mask: `displays` as (mask, layout of its
-/// views, one layer each or not), drawn into targets of `format`.
-pub fn display_masks(
+/// A display's mask pass for `mask` over its views' `layout` (one layer each or not),
+/// drawn into targets of `format`.
+pub fn display_mask(
     device: &wgpu::Device,
-    displays: &[(Option<&VisibilityMask>, &ViewLayout, bool)],
+    mask: &VisibilityMask,
+    (layout, layered): (&ViewLayout, bool),
     format: TargetFormat,
-) -> Vec<Option<(MaskPipeline, DisplayMask)>> {
-    (displays.iter())
-        .map(|&(mask, layout, layered)| {
-            let mask = mask?;
-            // In multiview the pass renders every layer (`DrawKey::multiview_mask`).
-            let layers = layered.then(|| std::num::NonZeroU32::new((1 << layout.views) - 1));
-            let pipeline = MaskPipeline::new(device, format, layers.flatten());
-            let display = pipeline.display(device, mask, layout, layered);
-            Some((pipeline, display))
-        })
-        .collect()
+) -> (MaskPipeline, DisplayMask) {
+    // In multiview the pass renders every layer (`DrawKey::multiview_mask`).
+    let layers = layered.then(|| std::num::NonZeroU32::new((1 << layout.views) - 1));
+    let pipeline = MaskPipeline::new(device, format, layers.flatten());
+    let display = pipeline.display(device, mask, layout, layered);
+    (pipeline, display)
 }
 
 /// The mask buffer: per masked view ([`MAX_HIDDEN_VIEWS`] slots: a foveated display's

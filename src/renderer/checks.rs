@@ -1,8 +1,10 @@
-//! What a device must have for the options and scene asked of it, said before anything
-//! is built.
+//! Every refusal of a renderer's options, in one place, each with its reason: what a
+//! device must have for the options and scene asked of it, what a rig and two frames
+//! per submission can draw, when pixels can be kept and a pose latched; said before
+//! anything is built.
 
-use super::options::StereoMode;
 use super::options::{CullMode, PosingMode, RendererOptions};
+use super::options::{OcclusionMode, StereoMode};
 use crate::draw::DrawScene;
 use crate::error::{Error, Result};
 use crate::keep::KeepUnchanged;
@@ -99,7 +101,7 @@ fn check_late_latch(options: &RendererOptions) -> Result<()> {
     if !options.late_latch {
         return Ok(());
     }
-    let why = super::prepare::why_no_latch(options).or_else(|| {
+    let why = why_no_latch(options).or_else(|| {
         (options.keep_unchanged != KeepUnchanged::Off).then_some(
             "a latched pose moves every pixel, so no frame keeps the last one's: keep_unchanged off",
         )
@@ -135,6 +137,28 @@ fn check_own_shading(scene: &Scene, options: &RendererOptions) -> Result<()> {
             ""
         }
     )))
+}
+
+/// Whether a renderer can be made for `scene` and `rig` with `options` on `device`.
+pub(super) fn check_renderer(
+    device: &wgpu::Device,
+    scene: &Scene,
+    rig: &Rig,
+    options: &RendererOptions,
+) -> Result<()> {
+    check_device(device, scene, options)?;
+    check_rig(rig, options, device.limits().max_multiview_view_count)?;
+    check_frames(scene, rig, options)?;
+    let views = rig.displays.iter().map(|d| d.views());
+    match (
+        options.keep_unchanged,
+        super::keeping::never(scene, views, options),
+    ) {
+        (KeepUnchanged::On, Some(why)) => Err(Error::Unsupported(format!(
+            "keeping unchanged pixels: {why} (--keep-unchanged auto draws such frames whole)"
+        ))),
+        _ => Ok(()),
+    }
 }
 
 /// What a mode cannot do without, said before anything is built.
@@ -264,4 +288,89 @@ fn check_shadows(
         )));
     }
     Ok(())
+}
+
+/// What two frames per submission cannot draw: it takes the `instanced` mode's one
+/// multi-draw, content posed on the CPU for each frame (or by the draw, from the time),
+/// and none of the features whose state belongs to a single frame.
+fn check_frames(scene: &Scene, rig: &Rig, options: &RendererOptions) -> Result<()> {
+    match options.frames_per_submit {
+        1 => return Ok(()),
+        2 => {}
+        n => {
+            return Err(Error::Unsupported(format!(
+                "{n} frames per submission: 1 or 2"
+            )));
+        }
+    }
+    if !(options.dt.is_finite() && options.dt > 0.0) {
+        return Err(Error::Unsupported(format!(
+            "dt {} s between a submission's frames: it must be a positive number",
+            options.dt
+        )));
+    }
+    let why = unjoined_option(options).or_else(|| unjoined_content(scene, rig, options));
+    match why {
+        Some(why) => Err(Error::Unsupported(format!(
+            "two frames per submission: {why}"
+        ))),
+        None => Ok(()),
+    }
+}
+
+/// The options that keep state of a single frame.
+fn unjoined_option(options: &RendererOptions) -> Option<&'static str> {
+    Some(match options {
+        o if o.mode != StereoMode::Instanced => {
+            "the instanced mode draws both frames' views in one multi-draw; the other modes, kept to compare submission costs against, draw each frame in passes of its own: submit their frames one at a time"
+        }
+        o if o.occlusion == OcclusionMode::On => {
+            "occlusion's early phase draws what the previous frame saw, and the second frame's previous is the first, drawn in the same pass: use --occlusion off or auto"
+        }
+        o if o.far_layer => {
+            "the far layer is one shared image per frame, composited before the display's draw: the second frame would need a layer of its own"
+        }
+        o if o.motion_vectors => {
+            "motion vectors measure each frame from the one before, and the second frame's is in the same target: not built yet"
+        }
+        _ => return None,
+    })
+}
+
+/// The rig and scene content whose second frame cannot be drawn so: a foveated
+/// display's views, and posed content (`second_frame.rs`) where the lights or the
+/// shadow are one per submission.
+fn unjoined_content(scene: &Scene, rig: &Rig, options: &RendererOptions) -> Option<&'static str> {
+    if rig.displays.iter().any(|d| d.views() > 2) {
+        return Some(
+            "a foveated display's four views would make eight, and a display context holds four",
+        );
+    }
+    let posed = !scene.posing.clips.is_empty() || !scene.skins.is_empty();
+    if !posed && scene.morphs.is_empty() {
+        return None;
+    }
+    if !scene.posing.lights.is_empty() {
+        return Some(
+            "lights on animated nodes light both frames of a submission as one set: posed once per submission",
+        );
+    }
+    options.shadows.then_some(
+        "the shadow map is drawn once per submission, at the second frame's pose of node animations, skins and morph targets: use --shadows off",
+    )
+}
+
+/// Why a renderer made with `options` cannot latch a pose, where it cannot.
+pub(super) fn why_no_latch(options: &RendererOptions) -> Option<&'static str> {
+    if options.frames_per_submit != 1 {
+        return Some(
+            "latching a pose takes one frame per submission: the second frame's pose is a prediction already",
+        );
+    }
+    if options.cull == CullMode::Cpu {
+        return Some(
+            "latching a pose needs the GPU cull: the CPU cull ran in prepare, from the planned pose, and the recorded draws hold its results",
+        );
+    }
+    None
 }

@@ -2,7 +2,9 @@
 //! display's cull buffers (and its far layer's), visible totals, the far/near split,
 //! and what the coarse cull saved. None of it is needed to draw.
 
-use super::{Path, Renderer, WallCulls};
+use super::display::Display;
+use super::display::indirect::{Gpu, IndirectDisplay};
+use super::{Renderer, WallCulls};
 use crate::cull::CullOutput;
 use crate::draw::keep_tiles::TileGrid;
 use crate::error::Result;
@@ -87,17 +89,33 @@ impl Diagnostics<'_> {
     }
 
     fn changed_tiles_in_grid(&self, index: usize) -> Result<Option<(Vec<u32>, TileGrid)>> {
-        match &self.renderer.path {
-            Path::Indirect(p) => p.read_changed_tiles(self.device, self.queue, index),
-            Path::Classic(_) => Ok(None),
+        match self.indirect(index) {
+            Some(d) => d.read_changed_tiles(self.gpu(), self.renderer.shared.keep()),
+            None => Ok(None),
         }
+    }
+
+    /// Display `index` on the GPU-driven path (`None` past the displays or in a classic
+    /// mode).
+    fn indirect(&self, index: usize) -> Option<&IndirectDisplay> {
+        self.renderer.displays.get(index)?.indirect()
+    }
+
+    fn gpu(&self) -> Gpu<'_> {
+        (self.device, self.queue)
     }
 
     /// Pixels the last frame's displays redrew: a kept display's changed tiles (those
     /// at its target's edges clipped to it), every view of a display drawn whole.
     pub fn pixels_redrawn(&self) -> Result<u64> {
         let mut pixels = 0;
-        for (i, shape) in self.renderer.shapes.iter().enumerate() {
+        for (i, shape) in self
+            .renderer
+            .displays
+            .iter()
+            .map(Display::shape)
+            .enumerate()
+        {
             pixels += match self.changed_tiles_in_grid(i)? {
                 Some((words, grid)) => grid.pixels(&words),
                 None => (shape
@@ -115,7 +133,7 @@ impl Diagnostics<'_> {
     /// Tiles the last frame's displays redrew (0 where all were drawn whole).
     pub fn tiles_changed(&self) -> Result<u32> {
         let mut count = 0;
-        for i in 0..self.renderer.shapes.len() {
+        for i in 0..self.renderer.displays.len() {
             let words = self.changed_tiles(i)?.unwrap_or_default();
             count += words.iter().map(|w| w.count_ones()).sum::<u32>();
         }
@@ -127,9 +145,12 @@ impl Diagnostics<'_> {
     /// total, all draws, the draw count); in the classic modes the CPU cull they drew
     /// from (multi-camera: the left eye's).
     pub fn cull(&self, index: usize) -> Result<CullOutput> {
-        match &self.renderer.path {
-            Path::Indirect(p) => p.read_cull(self.device, self.queue, index),
-            Path::Classic(p) => Ok(p.cull_output(index)),
+        let culler = &self.renderer.shared.culler;
+        let display = self.renderer.display(index)?;
+        match (display.indirect(), display.classic()) {
+            (Some(d), _) => d.read_cull(self.gpu(), culler),
+            (_, Some(d)) => Ok(d.cull_output(culler)),
+            (None, None) => Ok(CullOutput::default()),
         }
     }
 
@@ -137,11 +158,9 @@ impl Diagnostics<'_> {
     /// once; the contract's buffers with V = 1), read back after it was submitted;
     /// `None` for a display without a far layer.
     pub fn far_cull(&self, index: usize) -> Result<Option<CullOutput>> {
-        match self.renderer.path.indirect() {
-            Some(p) if index < self.renderer.shapes.len() => {
-                p.read_far_cull(self.device, self.queue, index)
-            }
-            _ => Ok(None),
+        match self.indirect(index) {
+            Some(d) => d.read_far_cull(self.gpu(), &self.renderer.shared.culler),
+            None => Ok(None),
         }
     }
 
@@ -149,11 +168,9 @@ impl Diagnostics<'_> {
     /// with [`super::RendererOptions::inset_cull`]; the contract's buffers with V = 2),
     /// read back after it was submitted; `None` for a display without one.
     pub fn inset_cull(&self, index: usize) -> Result<Option<CullOutput>> {
-        match self.renderer.path.indirect() {
-            Some(p) if index < self.renderer.shapes.len() => {
-                p.read_inset_cull(self.device, self.queue, index)
-            }
-            _ => Ok(None),
+        match self.indirect(index) {
+            Some(d) => d.read_inset_cull(self.gpu(), &self.renderer.shared.culler),
+            None => Ok(None),
         }
     }
 
@@ -161,21 +178,21 @@ impl Diagnostics<'_> {
     /// did not draw and its pyramids do not hide; the contract's buffers), read back
     /// after it was submitted; `None` for a display without occlusion.
     pub fn late_cull(&self, index: usize) -> Result<Option<CullOutput>> {
-        match self.renderer.path.indirect() {
-            Some(p) if index < self.renderer.shapes.len() => {
-                p.read_late_cull(self.device, self.queue, index)
-            }
-            _ => Ok(None),
+        match self.indirect(index) {
+            Some(d) => d.read_late_cull(self.gpu(), &self.renderer.shared.culler),
+            None => Ok(None),
         }
     }
 
     /// Per display, what its two occlusion phases drew in the last frame (read back
     /// from their counts buffers); `None` for a display without occlusion.
     pub fn occlusion_counts(&self) -> Result<Vec<Option<OcclusionCounts>>> {
-        match &self.renderer.path {
-            Path::Indirect(p) => p.read_occlusion_counts(self.device, self.queue),
-            Path::Classic(_) => Ok(vec![None; self.renderer.shapes.len()]),
-        }
+        (self.renderer.displays.iter())
+            .map(|d| match d.indirect() {
+                Some(d) => d.read_occlusion_counts(self.gpu()),
+                None => Ok(None),
+            })
+            .collect()
     }
 
     /// Display `index`'s occlusion state after the last frame: its pyramids' shape and
@@ -183,46 +200,44 @@ impl Diagnostics<'_> {
     /// SPAN` of word `k / SPAN` set where the late phase found place `k` not hidden),
     /// read back; `None` for a display without occlusion.
     pub fn visibility(&self, index: usize) -> Result<Option<(PyramidShape, Vec<u32>)>> {
-        let Some(p) = self.renderer.path.indirect() else {
+        let Some(shape) = self
+            .indirect(index)
+            .and_then(IndirectDisplay::pyramid_shape)
+        else {
             return Ok(None);
         };
-        let Some(shape) = p.pyramid_shapes().get(index).copied().flatten() else {
-            return Ok(None);
-        };
-        let words = p
-            .core
-            .culler
-            .read_visibility(self.device, self.queue, index)?;
+        let culler = &self.renderer.shared.culler;
+        let words = culler.read_visibility(self.device, self.queue, index)?;
         Ok(words.map(|words| (shape, words)))
     }
 
     /// The depth pyramids display `index` built in the last frame, read back; `None`
     /// for a display without occlusion.
     pub fn pyramid(&self, index: usize) -> Result<Option<Vec<f32>>> {
-        let Some(p) = self.renderer.path.indirect() else {
+        let Some(shape) = self
+            .indirect(index)
+            .and_then(IndirectDisplay::pyramid_shape)
+        else {
             return Ok(None);
         };
-        let Some(shape) = p.pyramid_shapes().get(index).copied().flatten() else {
-            return Ok(None);
-        };
-        p.core
-            .culler
-            .read_pyramid(self.device, self.queue, (index, shape))
+        let culler = &self.renderer.shared.culler;
+        culler.read_pyramid(self.device, self.queue, (index, shape))
     }
 
     /// The last frame's far/near split per display (`None` for displays without a far
     /// layer): the far distance and the visible far and near instances, read back.
     pub fn far_split(&self) -> Result<Vec<Option<FarSplit>>> {
-        let Some(p) = self.renderer.path.indirect() else {
-            return Ok(vec![None; self.renderer.shapes.len()]);
-        };
-        let near = p.visible_counts(self.device, self.queue)?;
-        (0..self.renderer.shapes.len())
-            .zip(p.far_distances())
-            .zip(near)
-            .map(|((i, distance), near)| {
-                let far = p.read_far_cull(self.device, self.queue, i)?;
-                Ok(distance.zip(far).map(|(distance, far)| FarSplit {
+        let culler = &self.renderer.shared.culler;
+        (self.renderer.displays.iter())
+            .map(|d| {
+                let Some(d) = d.indirect() else {
+                    return Ok(None);
+                };
+                let (near, far) = (
+                    d.visible_count(self.gpu())?,
+                    d.read_far_cull(self.gpu(), culler)?,
+                );
+                Ok(d.far_distance().zip(far).map(|(distance, far)| FarSplit {
                     distance,
                     far: far.visible.len() as u32,
                     near,
@@ -237,19 +252,20 @@ impl Diagnostics<'_> {
     /// path; `None` otherwise). Where timestamps are unreliable (lavapipe), this is the
     /// cost; on a GPU it adds a submission's latency to each.
     pub fn cull_against_floor(&self, rounds: u32) -> Result<Option<WallCulls>> {
-        let Some(p) = self.renderer.path.indirect() else {
+        let views: Vec<_> = (self.renderer.displays.iter())
+            .filter_map(|d| Some(d.indirect()?.view_cull()))
+            .collect();
+        if views.is_empty() {
             return Ok(None);
-        };
-        let views = p.display_culls();
-        p.core
-            .culler
-            .time_against_floor(self.device, self.queue, &views, rounds)
+        }
+        let culler = &self.renderer.shared.culler;
+        culler.time_against_floor(self.device, self.queue, &views, rounds)
     }
 
     /// The scene's vertices as the frame drew them: skinned meshes as the skinning
     /// pass posed them (in their instances' local space), the rest as uploaded.
     pub fn vertices(&self) -> Result<Vec<crate::scene::Vertex>> {
-        let buffer = &&self.renderer.path.core().draw_scene.vertices;
+        let buffer = &self.renderer.shared.draw_scene.vertices;
         read_pod(self.device, self.queue, buffer, buffer.size())
     }
 
@@ -282,7 +298,7 @@ impl Diagnostics<'_> {
     /// Every slot's instance record as the frame drew it (a posed instance's
     /// transform as the pose pass wrote it, with GPU posing).
     pub fn instance_records(&self) -> Result<Vec<crate::records::InstanceRecord>> {
-        let buffer = &&self.renderer.path.core().draw_scene.instances;
+        let buffer = &self.renderer.shared.draw_scene.instances;
         let mut records: Vec<crate::records::InstanceRecord> =
             read_pod(self.device, self.queue, buffer, buffer.size())?;
         records.truncate(self.renderer.slots as usize);
@@ -298,7 +314,7 @@ impl Diagnostics<'_> {
 
     /// The joint matrices the frame's skinning pass applied (`None` without skins).
     pub fn joint_matrices(&self) -> Result<Option<Vec<crate::skinning::JointMatrix>>> {
-        let Some(skin) = &self.renderer.skin else {
+        let Some(skin) = &self.renderer.frame_passes.skin else {
             return Ok(None);
         };
         let buffer = skin.joint_matrices();
@@ -309,16 +325,20 @@ impl Diagnostics<'_> {
     /// indirect path (with occlusion both phases': what the display drew), taken from
     /// this frame's CPU culls in the classic modes.
     pub fn visible_counts(&self) -> Result<Vec<u32>> {
-        match &self.renderer.path {
-            Path::Indirect(p) => p.visible_counts(self.device, self.queue),
-            Path::Classic(p) => Ok(p.visible_counts()),
-        }
+        let culler = &self.renderer.shared.culler;
+        (self.renderer.displays.iter())
+            .map(|d| match (d.indirect(), d.classic()) {
+                (Some(d), _) => d.visible_count(self.gpu()),
+                (_, Some(d)) => Ok(d.visible_count(culler)),
+                (None, None) => Ok(0),
+            })
+            .collect()
     }
 }
 
 impl Renderer {
     /// The frame's culler, and how many displays it culls for.
     fn culler(&self) -> (&super::culler::Culler, usize) {
-        (&self.path.core().culler, self.shapes.len())
+        (&self.shared.culler, self.displays.len())
     }
 }

@@ -2,10 +2,11 @@
 //! display's (whole, or in two halves around a submission where the CPU culler needs the
 //! pyramids), and the headless conveniences that prepare, record and submit.
 
-use super::display::indirect::IndirectPath;
+use super::display::occlusion::cull_late;
+use super::frame::FramePasses;
 use super::frame_stats::FrameStats;
 use super::recorder::Recorder;
-use super::{DisplayTarget, PassRecord, Path, Renderer, TargetViews};
+use super::{DisplayTarget, PassRecord, Renderer, TargetViews};
 use crate::error::{Error, Result};
 use crate::profiling::GpuTimer;
 use crate::rig::Rig;
@@ -19,6 +20,10 @@ impl Renderer {
     /// Culling on the CPU with occlusion a frame needs its pyramids on the CPU halfway:
     /// that is [`Error::Unsupported`] here; record it with [`Renderer::encode_early`] and
     /// [`Renderer::encode_late`].
+    ///
+    /// A frame, top-down: the frame level's passes; each display's cull and draw (with
+    /// occlusion, its early phase); every display's pyramids; the late culls (the rig's
+    /// in one set of dispatches, or each display's own); each display's late phase.
     pub fn encode(
         &mut self,
         encoder: &mut wgpu::CommandEncoder,
@@ -30,7 +35,12 @@ impl Renderer {
                 "occlusion with CPU culling needs each display's pyramids on the CPU between the frame's two halves: record them with encode_early and encode_late, submitting in between (or use submit_frame)".into(),
             ));
         }
-        self.encode_part(encoder, targets, timer, Part::Whole)
+        self.check_targets(targets)?;
+        let mut rec = Recorder::new(timer, Vec::new());
+        let early = self.record_early(encoder, targets, &mut rec);
+        let late = self.record_late(encoder, targets, &mut rec);
+        self.passes = rec.finish(encoder, true);
+        Ok(early + late)
     }
 
     /// The first half of a frame: the frame's passes and each display's cull, draw and,
@@ -43,7 +53,11 @@ impl Renderer {
         targets: &[TargetViews],
         timer: Option<&mut GpuTimer>,
     ) -> Result<FrameStats> {
-        self.encode_part(encoder, targets, timer, Part::Early)
+        self.check_targets(targets)?;
+        let mut rec = Recorder::new(timer, Vec::new());
+        let early = self.record_early(encoder, targets, &mut rec);
+        self.passes = rec.finish(encoder, false);
+        Ok(early)
     }
 
     /// The second half of a frame, after the encoder of [`Renderer::encode_early`] was
@@ -57,32 +71,30 @@ impl Renderer {
         targets: &[TargetViews],
         timer: Option<&mut GpuTimer>,
     ) -> Result<FrameStats> {
-        let culled = match &mut self.path {
-            Path::Indirect(p) => p.cull_late(device, queue)?,
-            Path::Classic(_) => FrameStats::default(),
-        };
-        Ok(culled + self.encode_part(encoder, targets, timer, Part::Rest)?)
+        self.check_targets(targets)?;
+        let culled = cull_late((device, queue), &mut self.shared.culler, &self.displays)?;
+        // The second half's log continues the first's.
+        let mut rec = Recorder::new(timer, std::mem::take(&mut self.passes));
+        let late = self.record_late(encoder, targets, &mut rec);
+        self.passes = rec.finish(encoder, true);
+        Ok(culled + late)
     }
 
     /// Whether each frame reads its pyramids back halfway (CPU culling with occlusion):
     /// then record it with [`Renderer::encode_early`], submit, and
     /// [`Renderer::encode_late`].
     pub fn reads_back(&self) -> bool {
-        self.path.core().culler.reads_back()
+        self.shared.culler.reads_back()
     }
 
-    /// Records `part` of the frame into `encoder`.
-    fn encode_part(
-        &mut self,
-        encoder: &mut wgpu::CommandEncoder,
-        targets: &[TargetViews],
-        timer: Option<&mut GpuTimer>,
-        part: Part,
-    ) -> Result<FrameStats> {
-        if targets.len() != self.shapes.len() {
+    /// Whether `targets` fit the displays: one each, with a motion attachment where
+    /// the renderer draws motion, depth an occluding display's pyramids can read, and
+    /// the caller's own pipelines for every own bin.
+    fn check_targets(&self, targets: &[TargetViews]) -> Result<()> {
+        if targets.len() != self.displays.len() {
             return Err(Error::TargetCount {
                 targets: targets.len(),
-                displays: self.shapes.len(),
+                displays: self.displays.len(),
             });
         }
         let motion = self.options.motion_vectors;
@@ -93,93 +105,48 @@ impl Renderer {
                 if motion { "with" } else { "without" },
             )));
         }
-        if let Some(p) = self.path.indirect() {
-            p.check_depth(targets)?;
-            (0..self.shapes.len()).try_for_each(|i| p.check_own_pipelines(i))?;
-        }
-        // The second half's log continues the first's.
-        let log = match part {
-            Part::Rest => std::mem::take(&mut self.passes),
-            _ => Vec::new(),
-        };
-        let mut rec = Recorder::new(timer, log);
-        let mut stats = match part {
-            Part::Rest => FrameStats::default(),
-            _ => self.encode_frame(encoder, &mut rec),
-        };
-        stats.dispatch_levels.frame = stats.dispatches;
-        // A whole frame is its two halves: every display's early half, then every
-        // display's rest, so that one set of dispatches culls every late phase between.
-        let halves = match part {
-            Part::Whole => &[Part::Early, Part::Rest][..],
-            Part::Early => &[Part::Early],
-            Part::Rest => &[Part::Rest],
-        };
-        for &half in halves {
-            stats = stats + self.encode_half(encoder, targets, &mut rec, half);
-        }
-        self.passes = rec.finish(encoder, part != Part::Early);
-        Ok(stats)
-    }
-
-    /// Records every display's `half` of the frame (`Early` or `Rest`); after the
-    /// early halves, every display's pyramids and late culls.
-    fn encode_half(
-        &self,
-        encoder: &mut wgpu::CommandEncoder,
-        targets: &[TargetViews],
-        rec: &mut Recorder,
-        half: Part,
-    ) -> FrameStats {
-        let mut stats = FrameStats::default();
-        for (i, target) in targets.iter().enumerate() {
-            // No scope (timestamps) for a display with no late half (the classic
-            // modes' displays have none).
-            let rest = matches!(&self.path, Path::Indirect(p) if p.has_late(i));
-            if half == Part::Rest && !rest {
-                continue;
+        for (display, target) in self.displays.iter().zip(targets) {
+            if let Some(d) = display.indirect() {
+                d.check_depth(target)?;
+                d.check_own_pipelines(&self.shared.culler)?;
             }
-            rec.enter(encoder, &self.names[i]);
-            let at = (i, target);
-            let recorded = match (&self.path, half) {
-                (Path::Indirect(p), Part::Rest) => p.encode_rest(encoder, at, rec),
-                (Path::Indirect(p), _) => p.encode_early(encoder, at, rec),
-                (Path::Classic(p), _) => p.encode_display(encoder, at, rec),
-            };
-            stats.draw_calls += recorded.draw_calls;
-            stats.dispatches += recorded.dispatches;
-            stats.dispatch_levels.display += recorded.dispatches;
-            rec.leave(encoder);
         }
-        if let (Path::Indirect(p), Part::Early) = (&self.path, half) {
-            stats = stats + self.encode_late_culls(p, encoder, targets, rec);
-        }
-        stats
+        Ok(())
     }
 
-    /// With occlusion, after every display's early half: every display's pyramids,
-    /// then the late culls (the rig cull's late members in one set of dispatches, or
-    /// each display's own). The pyramids and the rig's late culls count at the frame
-    /// level: one set of dispatches serves every display.
-    fn encode_late_culls(
+    /// The frame up to the late phases: the frame level's passes, each display's
+    /// first half, then with occlusion every display's pyramids and the late culls.
+    fn record_early(
+        &mut self,
+        encoder: &mut wgpu::CommandEncoder,
+        targets: &[TargetViews],
+        rec: &mut Recorder,
+    ) -> FrameStats {
+        let mut stats = self.encode_frame(encoder, rec);
+        stats.dispatch_levels.frame = stats.dispatches;
+        for (display, target) in self.displays.iter().zip(targets) {
+            stats = stats + display.encode_early(encoder, (&self.shared, target), rec);
+        }
+        let pyramids = (self.pyramids).encode(encoder, (&self.shared.culler, targets), rec);
+        for display in &self.displays {
+            stats = stats + display.encode_late_cull(encoder, &self.shared, rec);
+        }
+        // The pyramids and the rig's late culls serve every display at once.
+        let rig_late = self.shared.culler.encode_late_rig(encoder, rec);
+        stats + FrameStats::frame_level(pyramids + rig_late)
+    }
+
+    /// Each display's late phase (with occlusion; nothing without).
+    fn record_late(
         &self,
-        p: &IndirectPath,
         encoder: &mut wgpu::CommandEncoder,
         targets: &[TargetViews],
         rec: &mut Recorder,
     ) -> FrameStats {
         let mut stats = FrameStats::default();
-        let frame = p.encode_pyramids(encoder, targets, rec);
-        for i in (0..targets.len()).filter(|&i| p.culls_late_apart(i)) {
-            rec.enter(encoder, &self.names[i]);
-            let own = p.encode_late_cull(encoder, i, rec);
-            stats.dispatches += own;
-            stats.dispatch_levels.display += own;
-            rec.leave(encoder);
+        for (display, target) in self.displays.iter().zip(targets) {
+            stats = stats + display.encode_late(encoder, (&self.shared, target), rec);
         }
-        let frame = frame + p.encode_late_rig(encoder, rec);
-        stats.dispatches += frame;
-        stats.dispatch_levels.frame += frame;
         stats
     }
 
@@ -197,33 +164,32 @@ impl Renderer {
         self.uploads.record(encoder);
         let pairs = self.second.is_some();
         if !pairs {
-            self.path.core_mut().draw_scene.keep_previous(encoder);
+            self.shared.draw_scene.keep_previous(encoder);
         }
         // A kept frame's changed tiles: the spheres as last drawn, then as posed now.
-        let marked = self.path.core_mut().culler.encode_marks(encoder, false);
+        let marked = self.shared.culler.encode_marks(encoder, false);
         let (mut posing, mut cpu_staging) = self.encode_pose(encoder, rec, false);
         if pairs {
-            self.path.core_mut().draw_scene.keep_previous(encoder);
+            self.shared.draw_scene.keep_previous(encoder);
             let (second, staging) = self.encode_pose(encoder, rec, true);
             (posing, cpu_staging) = (posing + second, cpu_staging + staging);
         }
-        let marked = marked + self.path.core_mut().culler.encode_marks(encoder, true);
+        let marked = marked + self.shared.culler.encode_marks(encoder, true);
         if marked > 0 {
             rec.log(PassRecord::frame("keep_mark"));
         }
-        let coarse = match &self.path {
-            Path::Indirect(p) => p.encode_frame(encoder, rec),
-            Path::Classic(_) => 0,
+        let any = self.displays.first().and_then(|d| d.indirect());
+        let coarse = match any {
+            Some(d) => self
+                .shared
+                .culler
+                .encode_frame(encoder, Some(d.view_cull()), rec),
+            None => 0,
         };
-        let (shadowed, draw_calls) = match &self.shadow {
+        let (shadowed, draw_calls) = match &self.frame_passes.shadow {
             Some(shadow) => {
-                let core = self.path.core();
-                shadow.encode(
-                    encoder,
-                    (core.drawing(), &core.culler),
-                    &self.shadow_map,
-                    rec,
-                )
+                let shared = (self.shared.drawing(), &self.shared.culler);
+                shadow.encode(encoder, shared, &self.shadow_map, rec)
             }
             None => (0, 0),
         };
@@ -258,12 +224,15 @@ impl Renderer {
         if scattered > 0 {
             rec.log(PassRecord::frame("scatter"));
         }
-        let posed = match (&self.pose, second) {
+        let FramePasses {
+            skin, morph, pose, ..
+        } = &mut self.frame_passes;
+        let posed = match (pose, second) {
             (Some(pose), false) => pose.encode(encoder, rec),
             (Some(pose), true) => pose.encode_next(encoder, rec),
             (None, _) => 0,
         };
-        let morphed = match (&self.morph, second) {
+        let morphed = match (morph, second) {
             (Some(morph), false) => morph.encode(encoder, rec),
             (Some(morph), true) => morph.encode_next(encoder, rec),
             (None, _) => 0,
@@ -272,12 +241,12 @@ impl Renderer {
             false => self.lighting.encode(encoder, rec),
             true => 0,
         };
-        let skinned = match (&mut self.skin, second) {
+        let skinned = match (skin, second) {
             (Some(skin), false) => skin.encode(encoder, rec),
             (Some(skin), true) => skin.encode_next(encoder, rec),
             (None, _) => 0,
         };
-        (self.path.core_mut().draw_scene).rewritten(scattered + posed > 0, skinned + morphed > 0);
+        (self.shared.draw_scene).rewritten(scattered + posed > 0, skinned + morphed > 0);
         let dispatches = scattered + posed + morphed + clustered + skinned;
         (dispatches, cpu_staging)
     }
@@ -333,14 +302,4 @@ impl Renderer {
         queue.submit([encoder.finish()]);
         Ok(prepared + recorded)
     }
-}
-
-/// Which part of a frame an `encode` records.
-#[derive(Clone, Copy, Debug, PartialEq, Eq)]
-enum Part {
-    Whole,
-    /// Up to each display's pyramids.
-    Early,
-    /// The rest.
-    Rest,
 }

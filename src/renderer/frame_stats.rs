@@ -37,6 +37,39 @@ pub struct FrameStats {
     pub whole_redraw: Option<WholeRedraw>,
 }
 
+impl FrameStats {
+    /// `draw_calls` and `dispatches` recorded at the display level.
+    pub(super) fn display_level(draw_calls: u32, dispatches: u32) -> FrameStats {
+        FrameStats {
+            draw_calls,
+            dispatches,
+            dispatch_levels: DispatchLevels {
+                frame: 0,
+                display: dispatches,
+            },
+            ..FrameStats::default()
+        }
+    }
+
+    /// What a display's passes recorded (their draw calls and dispatches), counted at
+    /// the display level.
+    pub(super) fn at_display_level(self) -> FrameStats {
+        FrameStats::display_level(self.draw_calls, self.dispatches)
+    }
+
+    /// `dispatches` recorded at the frame level.
+    pub(super) fn frame_level(dispatches: u32) -> FrameStats {
+        FrameStats {
+            dispatches,
+            dispatch_levels: DispatchLevels {
+                frame: dispatches,
+                display: 0,
+            },
+            ..FrameStats::default()
+        }
+    }
+}
+
 /// A frame's compute dispatches by the level that records them.
 #[derive(Clone, Copy, Debug, Default, PartialEq, Eq, serde::Serialize)]
 pub struct DispatchLevels {

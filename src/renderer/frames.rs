@@ -7,13 +7,11 @@
 //! ([`crate::contexts::EyeContext::time_ahead`]), so the draw animates each view's
 //! instances at its own frame's time.
 //!
-//! What cannot join, and why, is [`check`]'s to say.
+//! What cannot join, and why, is `checks.rs`'s to say (`check_frames`).
 
 use crate::contexts::DisplayContext;
 use crate::error::{Error, Result};
-use crate::renderer::options::{OcclusionMode, RendererOptions, StereoMode};
-use crate::rig::{Display, ResolvedRig, Rig, ViewLayout, VisibilityMask};
-use crate::scene::Scene;
+use crate::rig::{Display, ResolvedRig, ViewLayout, VisibilityMask};
 
 /// Where display `d`'s views lie in its target for `frames` frames per submission:
 /// one frame's layout ([`Display::layout_in`]), or the second frame's views after the
@@ -61,74 +59,4 @@ pub(super) fn time_views(context: &mut DisplayContext, d: &Display, ahead: f32) 
             eye.time_ahead = ahead;
         }
     }
-}
-
-/// What two frames per submission cannot draw: it takes the `instanced` mode's one
-/// multi-draw, content posed on the CPU for each frame (or by the draw, from the time),
-/// and none of the features whose state belongs to a single frame.
-pub(super) fn check(scene: &Scene, rig: &Rig, options: &RendererOptions) -> Result<()> {
-    match options.frames_per_submit {
-        1 => return Ok(()),
-        2 => {}
-        n => {
-            return Err(Error::Unsupported(format!(
-                "{n} frames per submission: 1 or 2"
-            )));
-        }
-    }
-    if !(options.dt.is_finite() && options.dt > 0.0) {
-        return Err(Error::Unsupported(format!(
-            "dt {} s between a submission's frames: it must be a positive number",
-            options.dt
-        )));
-    }
-    let why = unjoined_option(options).or_else(|| unjoined_content(scene, rig, options));
-    match why {
-        Some(why) => Err(Error::Unsupported(format!(
-            "two frames per submission: {why}"
-        ))),
-        None => Ok(()),
-    }
-}
-
-/// The options that keep state of a single frame.
-fn unjoined_option(options: &RendererOptions) -> Option<&'static str> {
-    Some(match options {
-        o if o.mode != StereoMode::Instanced => {
-            "the instanced mode draws both frames' views in one multi-draw; the other modes, kept to compare submission costs against, draw each frame in passes of its own: submit their frames one at a time"
-        }
-        o if o.occlusion == OcclusionMode::On => {
-            "occlusion's early phase draws what the previous frame saw, and the second frame's previous is the first, drawn in the same pass: use --occlusion off or auto"
-        }
-        o if o.far_layer => {
-            "the far layer is one shared image per frame, composited before the display's draw: the second frame would need a layer of its own"
-        }
-        o if o.motion_vectors => {
-            "motion vectors measure each frame from the one before, and the second frame's is in the same target: not built yet"
-        }
-        _ => return None,
-    })
-}
-
-/// The rig and scene content whose second frame cannot be drawn so: a foveated
-/// display's views, and posed content ([`super::second_frame`]) where the lights or the
-/// shadow are one per submission.
-fn unjoined_content(scene: &Scene, rig: &Rig, options: &RendererOptions) -> Option<&'static str> {
-    if rig.displays.iter().any(|d| d.views() > 2) {
-        return Some(
-            "a foveated display's four views would make eight, and a display context holds four",
-        );
-    }
-    let posed = !scene.posing.clips.is_empty() || !scene.skins.is_empty();
-    if !posed && scene.morphs.is_empty() {
-        return None;
-    }
-    if !scene.posing.lights.is_empty() {
-        return Some(
-            "lights on animated nodes light both frames of a submission as one set: posed once per submission",
-        );
-    }
-    options.shadows.then_some(
-        "the shadow map is drawn once per submission, at the second frame's pose of node animations, skins and morph targets: use --shadows off",
-    )
 }

@@ -102,7 +102,6 @@ pub mod frames;
 mod keeping;
 mod options;
 mod own_passes;
-mod path;
 mod plan;
 mod prepare;
 mod recorder;
@@ -112,25 +111,26 @@ mod targets;
 mod uploads;
 mod view;
 
-use checks::check_device;
 pub use checks::check_rig;
 pub use culler::WallCulls;
 pub use diagnostics::{Diagnostics, FarSplit, OcclusionCounts};
-use display::PathInputs;
+use display::indirect::IndirectDisplay;
 pub use display::occlusion::OcclusionBytes;
+use display::occlusion::PyramidSets;
+use display::{Display, PathInputs, Shared};
 use frame::lights::Lighting;
 use frame::morph::MorphPass;
 use frame::pose::PosePass;
-use frame::shadow::{ShadowMap, ShadowPass};
+use frame::shadow::ShadowMap;
 use frame::skin::SkinPass;
+use frame::{FrameBindings, FramePasses};
 pub use frame_stats::{DispatchLevels, FrameStats};
 pub use options::{
     CoarseMode, CullMode, DEFAULT_DT, LOD_PIXELS, OcclusionMode, PosingMode, RendererOptions,
     StereoMode, frame_lod,
 };
-use path::{FramePasses, Path};
 use plan::PlanStorage;
-pub use plan::{CullView, DisplayPlan, FramePlan, PlannedCull, instances_per_object};
+pub use plan::{CullView, DisplayPlan, FramePlan, KeptTiles, PlannedCull, instances_per_object};
 pub use recorder::{Level, PassRecord};
 use second_frame::SecondFrame;
 pub use second_frame::grown;
@@ -138,34 +138,46 @@ pub use sync::SyncStats;
 pub use targets::{DisplayTarget, TargetShape, TargetViews};
 use uploads::Coalesced;
 
+/// What the frame level's passes are built over: `frame`, the frame context, in
+/// `windows`, and what the displays' passes share.
+fn frame_bindings<'a>(
+    shared: &'a Shared,
+    frame: &'a wgpu::Buffer,
+    windows: crate::shaders::Windows,
+) -> FrameBindings<'a> {
+    FrameBindings {
+        frame,
+        windows,
+        drawing: shared.drawing(),
+        culler: &shared.culler,
+        scatter: shared.scatter_targets(),
+    }
+}
+
 /// The scene submission backend: one per scene and rig shape, see the module docs for the
 /// calls in order.
 pub struct Renderer {
     options: RendererOptions,
     /// The frame context's uniform, written once per frame, bound by every pass.
     frame: wgpu::Buffer,
-    path: Path,
-    /// Per display, as made: what targets must look like and what `prepare` checks.
-    shapes: Vec<TargetShape>,
-    /// Per display: the rig's name, for timer scopes.
-    names: Vec<String>,
+    /// The frame level's passes: posing, morph targets, skinning, the shadow pass (the
+    /// light culled as one more view of the displays' culler).
+    frame_passes: FramePasses,
     /// Moved instances, staged by `sync`, dispatched by the next `encode`.
     scatter: Scatters,
     /// Two frames per submission: the second frame's own edits (`sync_next`).
     second: Option<SecondFrame>,
-    /// With skins: the frame's skinning pass.
-    skin: Option<SkinPass>,
-    /// With morph targets: the frame's morph pass.
-    morph: Option<MorphPass>,
     /// The punctual lights and their clusters.
     lighting: Lighting,
-    /// Posing on the GPU, with animations: the frame's pose pass.
-    pose: Option<PosePass>,
-    /// With shadows: the frame's shadow pass (the light culled as one more view of the
-    /// path's culler).
-    shadow: Option<ShadowPass>,
-    /// The map it draws (1 x 1 without shadows: the draw pipelines bind it either way).
+    /// The map the shadow pass draws (1 x 1 without shadows: the draw pipelines bind it
+    /// either way).
     shadow_map: ShadowMap,
+    /// What every display's passes share: the culler, the draw pipelines, the scene.
+    shared: Shared,
+    /// With occlusion: every occluding display's pyramids, built together.
+    pyramids: PyramidSets,
+    /// Each rig display, in the rig's order.
+    displays: Vec<Display>,
     /// Instance slots the buffers have room for.
     slots: u32,
     /// The rig as made: the displays (and far layer sizes) a reallocation rebuilds for.
@@ -173,8 +185,6 @@ pub struct Renderer {
     /// Whether each frame starts with the coarse cull ([`RendererOptions::coarse_for`]),
     /// decided once: it sizes buffers.
     coarse: bool,
-    /// Per display, its far layer's texels as made (every frame's plan is sized so).
-    far_sizes: Vec<Option<(u32, u32)>>,
     /// What the last `encode` or `encode_culls` recorded, pass by pass.
     passes: Vec<PassRecord>,
     /// The time the last `prepare` planned for: what a `latch` plans at again.
@@ -194,23 +204,16 @@ pub struct Renderer {
 }
 
 impl Renderer {
-    /// Uploads the scene once and builds the chosen path's pipelines and per-display
-    /// buffers (and nothing the other path would need).
+    /// Uploads the scene once and builds the chosen path's pipelines and displays (and
+    /// nothing the other path would need).
     pub fn new(
         device: &wgpu::Device,
         scene: &Scene,
         rig: &Rig,
         options: RendererOptions,
     ) -> Result<Renderer> {
-        check_device(device, scene, &options)?;
-        check_rig(rig, &options, device.limits().max_multiview_view_count)?;
-        frames::check(scene, rig, &options)?;
+        checks::check_renderer(device, scene, rig, &options)?;
         let never = keeping::never(scene, rig.displays.iter().map(|d| d.views()), &options);
-        if let (KeepUnchanged::On, Some(why)) = (options.keep_unchanged, never) {
-            return Err(Error::Unsupported(format!(
-                "keeping unchanged pixels: {why} (--keep-unchanged auto draws such frames whole)"
-            )));
-        }
         let measures = options.cull == CullMode::Cpu;
         let uploads = Coalesced::new(device, options.late_latch);
         let keeper = Keeper::new(
@@ -223,13 +226,10 @@ impl Renderer {
         let resolved = rig.resolve()?;
         let coarse = options.coarse_for(&resolved, Some(device));
         let plan = FramePlan::of(rig, resolved, &options, coarse, 0.0)?;
-        let scatter = Scatters::new(
-            device,
-            options.windows(device, scene.instances.len() as u32),
-        );
-        let frame = uniform_buffer::<FrameContext>(device, "stereocull.frame_context");
         let slots = scene.instances.len() as u32;
-        let places = Places::tight(scene);
+        let windows = options.windows(device, slots);
+        let scatter = Scatters::new(device, windows);
+        let frame = uniform_buffer::<FrameContext>(device, "stereocull.frame_context");
         let mut lighting = Lighting::new(device, &scene.lights, rig.displays.len() as u32)?;
         if options.posing == PosingMode::Gpu {
             lighting.pose_with(&scene.posing, &scene.lights);
@@ -240,68 +240,34 @@ impl Renderer {
         let inputs = PathInputs {
             scene,
             records: &records,
-            layout: CullLayout::with_places(scene, &places),
+            rig,
             plan: &plan,
             frame: &frame,
             options: &options,
             slots,
             shadow_group: &shadow_map.bind_group,
         };
-        let mut path = Path::new(device, inputs)?;
-        let bound = (&frame, options.windows(device, slots));
-        let FramePasses {
-            skin,
-            morph,
-            pose,
-            shadow,
-        } = path.frame_passes(device, (scene, &options), bound, |_| true)?;
-        let shapes: Vec<TargetShape> = rig
-            .displays
-            .iter()
-            .map(|d| {
-                let layered = options.mode == StereoMode::Multiview && d.stereo;
-                TargetShape {
-                    layout: frames::layout(d, layered, options.frames_per_submit),
-                    layered,
-                }
-            })
-            .collect();
-        if let (Path::Indirect(p), true) = (&mut path, options.visibility_mask) {
-            let frames = options.frames_per_submit;
-            let masks: Vec<Option<_>> = (rig.displays.iter())
-                .map(|d| {
-                    Some(frames::masked(
-                        d.visibility_mask.as_ref()?,
-                        d.views(),
-                        frames,
-                    ))
-                })
-                .collect();
-            let displays: Vec<_> = (masks.iter().zip(&shapes))
-                .map(|(m, s)| (m.as_ref(), &s.layout, s.layered))
-                .collect();
-            p.masks = crate::draw::mask::display_masks(device, &displays, options.target_format());
-        }
-        let second = (options.frames_per_submit == 2)
-            .then(|| SecondFrame::new(device, options.windows(device, slots), scene));
+        let layout = CullLayout::with_places(scene, &Places::tight(scene));
+        let built = display::build(device, layout, &inputs)?;
+        let made = (scene, &options);
+        let bound = frame_bindings(&built.shared, &frame, windows);
+        let frame_passes = FramePasses::new(device, made, bound, |_| true)?;
+        let second =
+            (options.frames_per_submit == 2).then(|| SecondFrame::new(device, windows, scene));
         Ok(Renderer {
             options,
             frame,
-            path,
-            shapes,
-            names: rig.displays.iter().map(|d| d.name.clone()).collect(),
+            frame_passes,
             scatter,
             second,
-            skin,
-            morph,
-            pose,
-            shadow,
-            shadow_map,
             lighting,
+            shadow_map,
+            shared: built.shared,
+            pyramids: built.pyramids,
+            displays: built.displays,
             slots,
             rig: rig.clone(),
             coarse,
-            far_sizes: plan.displays.iter().map(|d| Some(d.far?.size)).collect(),
             passes: Vec::new(),
             prepared: None,
             motion_from: None,
@@ -327,7 +293,7 @@ impl Renderer {
     /// shapes. Weights past the largest the file gives (or 1) are an error: the morphed
     /// mesh's culling sphere holds no more ([`crate::morphing::Morph::weight_bound`]).
     pub fn set_morph_weights(&mut self, m: usize, weights: &[f32]) -> Result<()> {
-        let morph = (self.morph.as_mut())
+        let morph = (self.frame_passes.morph.as_mut())
             .ok_or_else(|| Error::InvalidScene("the scene has no morph targets".into()))?;
         morph.set_weights(m, weights).map_err(Error::InvalidScene)?;
         self.keeper.redraw_whole();
@@ -336,18 +302,27 @@ impl Renderer {
 
     /// Vertices the frame's morph pass moves (0 without morph targets).
     pub fn morphed_vertices(&self) -> u32 {
-        self.morph.as_ref().map_or(0, MorphPass::vertices)
+        self.frame_passes
+            .morph
+            .as_ref()
+            .map_or(0, MorphPass::vertices)
     }
 
     /// Vertices the frame's skinning pass poses (0 without skins): the same for any
     /// rig, since it runs once per frame.
     pub fn skinned_vertices(&self) -> u32 {
-        self.skin.as_ref().map_or(0, SkinPass::vertices)
+        self.frame_passes
+            .skin
+            .as_ref()
+            .map_or(0, SkinPass::vertices)
     }
 
     /// GPU bytes the pose pass holds (its tables and per-node scratch); 0 without it.
     pub fn posing_bytes(&self) -> u64 {
-        self.pose.as_ref().map_or(0, PosePass::gpu_bytes)
+        self.frame_passes
+            .pose
+            .as_ref()
+            .map_or(0, PosePass::gpu_bytes)
     }
 
     /// Where display `index`'s views lie in its target: side by side at their own sizes,
@@ -355,7 +330,7 @@ impl Renderer {
     /// [`crate::readback::read_rgba8`] places them). What a foveated display's composite
     /// takes ([`crate::foveated_composite::CompositeParams::new`]).
     pub fn layout(&self, index: usize) -> Option<crate::rig::ViewLayout> {
-        self.shapes.get(index).map(|s| s.layout)
+        self.displays.get(index).map(|d| d.shape().layout)
     }
 
     /// Display `index`'s depth as an XR compositor's depth layer takes it: each view's
@@ -363,8 +338,8 @@ impl Renderer {
     /// ([`crate::compositor`]); `rig` as the frame was drawn.
     pub fn depth_layer(&self, rig: &Rig, index: usize) -> Result<crate::compositor::DepthLayer> {
         let resolved = rig.resolve()?;
-        let (Some(shape), Some(display)) = (self.shapes.get(index), resolved.displays.get(index))
-        else {
+        let shape = self.displays.get(index).map(Display::shape);
+        let (Some(shape), Some(display)) = (shape, resolved.displays.get(index)) else {
             return Err(Error::Unsupported(format!("no display {index}")));
         };
         let samples = self.options.sample_count;
@@ -380,10 +355,10 @@ impl Renderer {
     /// `RendererOptions::visibility_mask` off or no masks; the classic modes mask
     /// nothing).
     pub fn masked_pixels(&self) -> u64 {
-        match &self.path {
-            Path::Indirect(p) => p.masked_pixels(),
-            Path::Classic(_) => 0,
-        }
+        (self.displays.iter())
+            .filter_map(Display::indirect)
+            .map(IndirectDisplay::masked_pixels)
+            .sum()
     }
 
     /// The options the renderer was made with.
@@ -406,29 +381,28 @@ impl Renderer {
     /// scratch (GPU culling only), and 4 bytes of visible list per display.
     pub fn gpu_bytes_per_instance(&self) -> u64 {
         let culling = culler::Culler::bytes_per_instance(self.options.cull);
-        DrawScene::BYTES_PER_INSTANCE + culling + 4 * self.shapes.len() as u64
+        DrawScene::BYTES_PER_INSTANCE + culling + 4 * self.displays.len() as u64
     }
 
     /// GPU bytes occlusion culling adds, per display that runs it (its visibility bits,
     /// the late phase's visible list and draws) and once for the renderer (the depth
     /// pyramids, which the displays share); `None` without occlusion.
     pub fn occlusion_bytes(&self) -> Option<OcclusionBytes> {
-        let p = self.path.indirect()?;
-        p.occlusion_bytes()
+        let late = self.displays.iter().filter_map(|d| d.indirect()?.late());
+        display::occlusion::occlusion_bytes(late, &self.shared.culler)
     }
 
     /// The formats of the color and the data texture array: RGBA8, or BC7 where every
     /// texture of the encoding came as Basis Universal and the device samples BC.
     pub fn texture_formats(&self) -> [wgpu::TextureFormat; 2] {
-        self.path.core().draw_scene.materials.formats()
+        self.shared.draw_scene.materials.formats()
     }
 
     /// Color (`RENDER_ATTACHMENT | COPY_SRC`) and depth textures for every display, shaped
     /// as [`TargetViews`] describes for this renderer's mode.
     pub fn create_targets(&self, device: &wgpu::Device) -> Vec<DisplayTarget> {
-        self.shapes
-            .iter()
-            .map(|s| s.create(device, self.options.target_format()))
+        (self.displays.iter())
+            .map(|d| d.shape().create(device, self.options.target_format()))
             .collect()
     }
 }

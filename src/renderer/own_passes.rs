@@ -4,7 +4,7 @@
 
 use super::frame_stats::FrameStats;
 use super::recorder::Recorder;
-use super::{Path, Renderer};
+use super::{Display, Renderer};
 use crate::cull::targets::CullTargets;
 use crate::draw::OwnPipeline;
 use crate::error::{Error, Result};
@@ -31,13 +31,9 @@ impl Renderer {
         }
         let mut rec = Recorder::new(timer, Vec::new());
         let mut stats = self.encode_frame(encoder, &mut rec);
-        if let Some(p) = self.path.indirect() {
-            for i in 0..self.shapes.len() {
-                rec.enter(encoder, &self.names[i]);
-                let culled = p.encode_cull(encoder, (i, true), &mut rec);
-                stats.dispatches += culled.dispatches;
-                stats.draw_calls += culled.draw_calls;
-            }
+        stats.dispatch_levels.frame = stats.dispatches;
+        for display in &self.displays {
+            stats = stats + display.encode_cull(encoder, &self.shared, &mut rec);
         }
         self.passes = rec.finish(encoder, true);
         Ok(stats)
@@ -50,19 +46,15 @@ impl Renderer {
     /// multiview. Its load and store operations, and whatever the caller draws before and
     /// after (sky, UI, transparent geometry), are the caller's. Returns the draw calls.
     pub fn draw_display(&self, pass: &mut wgpu::RenderPass, index: usize) -> Result<u32> {
-        if index >= self.shapes.len() {
-            return Err(Error::NoSuchDisplay {
-                index,
-                displays: self.shapes.len(),
-            });
-        }
-        Ok(match &self.path {
-            Path::Indirect(p) => {
-                p.check_own_pipelines(index)?;
-                p.draw(pass, index)
-            }
-            Path::Classic(p) => p.draw(pass, index),
-        })
+        self.display(index)?.draw(pass, &self.shared)
+    }
+
+    /// Display `index`, or [`Error::NoSuchDisplay`].
+    pub(super) fn display(&self, index: usize) -> Result<&Display> {
+        let displays = self.displays.len();
+        self.displays
+            .get(index)
+            .ok_or(Error::NoSuchDisplay { index, displays })
     }
 
     /// Sets display `index`'s pipeline of the caller's own for the material bins of
@@ -72,32 +64,35 @@ impl Renderer {
     /// may serve several displays of one target shape. A frame whose display draws an
     /// own bin without its pipeline is [`Error::MissingOwnPipeline`].
     pub fn set_own_pipeline(&mut self, index: usize, shading: u32, own: OwnPipeline) -> Result<()> {
-        let displays = self.shapes.len();
-        match &mut self.path {
-            Path::Indirect(_) if index >= displays => Err(Error::NoSuchDisplay { index, displays }),
-            Path::Indirect(p) => {
-                p.set_own_pipeline(index, shading, own);
-                Ok(())
-            }
-            Path::Classic(_) => Err(Error::Unsupported(format!(
-                "{} draws per instance; pipelines of the caller's own draw the indirect modes",
-                self.options.mode.name()
-            ))),
+        if self.options.mode.per_instance() {
+            return Err(self.per_instance());
         }
+        self.display(index)?;
+        if let Some(d) = self.displays[index].indirect_mut() {
+            d.set_own_pipeline(shading, own);
+        }
+        Ok(())
+    }
+
+    /// What the classic modes answer a call for the indirect modes' own pipelines.
+    fn per_instance(&self) -> Error {
+        Error::Unsupported(format!(
+            "{} draws per instance; pipelines of the caller's own draw the indirect modes",
+            self.options.mode.name()
+        ))
     }
 
     /// For an engine's own draw pipeline (the indirect modes): group 0's layout, to
     /// build its pipeline layout on (its own bind groups from group 1), with
     /// [`Renderer::decode_source`] as the shader's start. `None` in the classic modes.
     pub fn bind_group_layout(&self) -> Option<&wgpu::BindGroupLayout> {
-        self.path.indirect().map(|p| p.bind_group_layout())
+        (!self.options.mode.per_instance()).then(|| self.shared.drawer.layout())
     }
 
     /// Display `index`'s cull outputs on the GPU (the indirect modes): the visible list,
     /// the draws and the counts, per the README's cull contract.
     pub fn cull_buffers(&self, index: usize) -> Option<&CullTargets> {
-        let p = self.path.indirect().filter(|_| index < self.shapes.len())?;
-        Some(p.cull_targets(index))
+        Some(self.displays.get(index)?.indirect()?.cull_targets())
     }
 
     /// Display `index`'s one multi-draw-indirect call, in a pass the caller began with a
@@ -108,30 +103,25 @@ impl Renderer {
         pass: &mut wgpu::RenderPass,
         index: usize,
     ) -> Result<()> {
-        match &self.path {
-            Path::Indirect(_) if self.options.far_layer => Err(Error::Unsupported(
-                "with the far layer the renderer composites before its draws; draw_display draws both".into(),
-            )),
-            Path::Indirect(p) if index < self.shapes.len() => {
-                p.draw_with_own_pipeline(pass, index);
-                Ok(())
-            }
-            Path::Indirect(_) => Err(Error::NoSuchDisplay {
-                index,
-                displays: self.shapes.len(),
-            }),
-            Path::Classic(_) => Err(Error::Unsupported(format!(
-                "{} draws per instance; pipelines of the caller's own draw the indirect modes",
-                self.options.mode.name()
-            ))),
+        if self.options.mode.per_instance() {
+            return Err(self.per_instance());
         }
+        if self.options.far_layer {
+            return Err(Error::Unsupported(
+                "with the far layer the renderer composites before its draws; draw_display draws both".into(),
+            ));
+        }
+        if let Some(d) = self.display(index)?.indirect() {
+            d.draw_with_own_pipeline(pass, &self.shared);
+        }
+        Ok(())
     }
 
     /// The stereo decode for an engine's own pipeline on this renderer's group 0
     /// ([`crate::shaders::decode_source_with`] with this renderer's binding windows):
     /// `None` in the classic modes.
     pub fn decode_source(&self, views: u32) -> Option<String> {
-        let p = self.path.indirect()?;
-        Some(crate::shaders::decode_source_with(views, &p.windows()))
+        (!self.options.mode.per_instance())
+            .then(|| crate::shaders::decode_source_with(views, &self.shared.drawer.windows))
     }
 }

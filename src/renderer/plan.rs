@@ -160,7 +160,9 @@ impl DisplayPlan {
 /// listed slots ([`FramePlan::marks`], [`crate::cull::tile_marks`]).
 #[derive(Clone, Debug, PartialEq)]
 pub enum KeptTiles {
+    /// The CPU marked them: the mask its cull and draw pass read.
     Cpu(Arc<TileMask>),
+    /// The GPU's marking pass marks them.
     Gpu,
 }
 

@@ -2,12 +2,13 @@
 //! `prepare` before the frame is recorded, and written again by `latch` from a later
 //! pose before it is submitted.
 
+use super::Renderer;
+use super::display::{Display, Shared};
 use super::frame_stats::FrameStats;
 use super::frames;
 use super::keeping;
 use super::plan::{FramePlan, PlanStorage};
 use super::uploads::Writes;
-use super::{CullMode, Path, Renderer, RendererOptions};
 use crate::buffers::Upload;
 use crate::error::{Error, Result};
 use crate::rig::Rig;
@@ -22,7 +23,7 @@ impl Renderer {
     fn plan_in(&self, rig: &Rig, time: f32, storage: PlanStorage) -> Result<FramePlan> {
         self.check_shapes(rig)?;
         let plan = FramePlan::new_in(rig, &self.options, self.coarse, time, storage)?;
-        Ok(plan.with_far_sizes(self.far_sizes.iter().copied()))
+        Ok(plan.with_far_sizes(self.displays.iter().map(Display::far_size)))
     }
 
     /// [`Renderer::plan`] in the last written plan's vectors.
@@ -38,13 +39,14 @@ impl Renderer {
         self.check_shapes(now.0)?;
         self.check_shapes(next.0)?;
         let plan = FramePlan::pair(now, next, &self.options, self.coarse)?;
-        Ok(plan.with_far_sizes(self.far_sizes.iter().copied()))
+        Ok(plan.with_far_sizes(self.displays.iter().map(Display::far_size)))
     }
 
     fn check_shapes(&self, rig: &Rig) -> Result<()> {
         let frames = self.options.frames_per_submit;
-        let same = rig.displays.len() == self.shapes.len()
-            && rig.displays.iter().zip(&self.shapes).all(|(d, s)| {
+        let same = rig.displays.len() == self.displays.len()
+            && (rig.displays.iter().zip(&self.displays)).all(|(d, display)| {
+                let s = display.shape();
                 let same_layout = || frames::layout(d, s.layered, frames) == s.layout;
                 d.views() * frames == s.views() && (d.views() < 4 || same_layout())
             });
@@ -97,7 +99,7 @@ impl Renderer {
         }
         let (tiles_changed, whole_redraw) = match self.keeper.frame(rig, time) {
             Ok(changes) => {
-                let on_gpu = self.options.cull == super::options::CullMode::Gpu;
+                let on_gpu = self.options.cull == super::CullMode::Gpu;
                 (keeping::keep(&mut plan, &changes, on_gpu), None)
             }
             Err(why) => (0, Some(why)),
@@ -106,14 +108,14 @@ impl Renderer {
         let mut stats = self.write_plan(queue, plan, true)?;
         stats.tiles_changed = tiles_changed;
         stats.whole_redraw = whole_redraw;
-        if let Some(morph) = &mut self.morph {
+        if let Some(morph) = &mut self.frame_passes.morph {
             stats.bytes_uploaded += morph.prepare(queue, time);
             if self.second.is_some() {
                 stats.bytes_uploaded += morph.prepare_next(queue, next_time);
             }
         }
         // Texels go up with the first frame: `new` has no queue.
-        stats.bytes_uploaded += self.path.core_mut().draw_scene.materials.upload(queue);
+        stats.bytes_uploaded += self.shared.draw_scene.materials.upload(queue);
         self.prepared = Some(time);
         Ok(stats)
     }
@@ -133,7 +135,7 @@ impl Renderer {
     /// pose, and the frame's draws hold its results; that is [`Error::Unsupported`], as
     /// is a latch before any `prepare`.
     pub fn latch(&mut self, queue: &wgpu::Queue, rig: &Rig) -> Result<FrameStats> {
-        if let Some(why) = why_no_latch(&self.options) {
+        if let Some(why) = super::checks::why_no_latch(&self.options) {
             return Err(Error::Unsupported(why.into()));
         }
         let Some(time) = self.prepared else {
@@ -180,39 +182,37 @@ impl Renderer {
         let frame_bytes = to.pose.write_uniform(&self.frame, 0, &plan.frame);
         let light_bytes = self.lighting.prepare(to.pose, &plan);
         let light = plan.light_cull.as_ref().map(|_| plan.light);
-        let mut stats = match &mut self.path {
-            Path::Indirect(p) => p.prepare(to, &plan),
-            Path::Classic(p) => p.prepare(to, &plan),
-        };
-        if let (Some(shadow), Some(light)) = (&self.shadow, light) {
+        let mut stats = write_displays(to, &plan, (&mut self.shared, &mut self.displays));
+        if let (Some(shadow), Some(light)) = (&self.frame_passes.shadow, light) {
             let start = std::time::Instant::now();
-            let (size, culler) = (self.shadow_map.size, &self.path.core().culler);
+            let (size, culler) = (self.shadow_map.size, &self.shared.culler);
             stats.bytes_uploaded += shadow.prepare(to, &light, size, culler);
             stats.cpu_upload += start.elapsed();
         }
         self.uploads.send(queue, fresh)?;
         stats.bytes_uploaded += frame_bytes + light_bytes;
         // Culling on the CPU with occlusion, the frame's late culls keep the plan.
-        let spent = match &mut self.path {
-            Path::Indirect(p) => p.core.culler.keep_for_late(plan),
-            Path::Classic(_) => Some(plan),
-        };
+        let spent = self.shared.culler.keep_for_late(plan);
         self.spare = spent.map(FramePlan::into_storage).unwrap_or_default();
         Ok(stats)
     }
 }
 
-/// Why a renderer made with `options` cannot latch a pose, where it cannot.
-pub(super) fn why_no_latch(options: &RendererOptions) -> Option<&'static str> {
-    if options.frames_per_submit != 1 {
-        return Some(
-            "latching a pose takes one frame per submission: the second frame's pose is a prediction already",
-        );
+/// Writes the culler's results for `plan` (culling on the CPU, its culls), then each
+/// display's contexts and cull inputs.
+fn write_displays(
+    to: Writes,
+    plan: &FramePlan,
+    (shared, displays): (&mut Shared, &mut [Display]),
+) -> FrameStats {
+    let mut stats = FrameStats::default();
+    let start = std::time::Instant::now();
+    stats.bytes_uploaded += shared.culler.prepare(to.pose, plan);
+    stats.cpu_cull = start.elapsed();
+    let start = std::time::Instant::now();
+    for (display, planned) in displays.iter_mut().zip(&plan.displays) {
+        stats.bytes_uploaded += display.prepare(to, planned, shared);
     }
-    if options.cull == CullMode::Cpu {
-        return Some(
-            "latching a pose needs the GPU cull: the CPU cull ran in prepare, from the planned pose, and the recorded draws hold its results",
-        );
-    }
-    None
+    stats.cpu_upload = start.elapsed();
+    stats
 }

@@ -1,11 +1,12 @@
 //! A changing scene reaching the GPU: [`Renderer::sync`] uploads what a
 //! [`LiveScene`] changed since the last sync, sparsely where it can.
 
+use super::Renderer;
 use super::checks::check_device;
-use super::display::PathInputs;
+use super::display::{self, PathInputs};
+use super::frame::FramePasses;
 use super::plan::FramePlan;
 use super::second_frame::{self, SecondFrame};
-use super::{Path, Renderer};
 use crate::error::{Error, Result};
 use crate::live::{Changes, LiveScene, MoveEdit, PlaceEdit};
 use crate::records::{CullLayout, RecordEdit};
@@ -64,12 +65,12 @@ impl Renderer {
             .collect::<Vec<_>>();
         let mut stats = self.sync_instances(device, queue, live, changes)?;
         // After a reallocation the pass was built from the live scene as it is.
-        if let (Some(pose), false) = (&mut self.pose, stats.reallocated) {
+        if let (Some(pose), false) = (&mut self.frame_passes.pose, stats.reallocated) {
             for slot in stopped {
                 stats.bytes_uploaded += pose.stop(queue, slot);
             }
         }
-        if let Some(skin) = &self.skin {
+        if let Some(skin) = &self.frame_passes.skin {
             for range in joints {
                 stats.bytes_uploaded += skin.upload(queue, &live.scene().skins, range);
             }
@@ -104,7 +105,7 @@ impl Renderer {
         if changes.restructured {
             let layout = CullLayout::with_places(scene, places);
             // A blended bin's range has an entry per place of its meshes.
-            let culler = &self.path.core().culler;
+            let culler = &self.shared.culler;
             if culler.bins() != layout.bin_ranges(self.options.lod_levels()) {
                 return self.reallocate(device, live, needed);
             }
@@ -139,14 +140,16 @@ impl Renderer {
         let inputs = PathInputs {
             scene,
             records: &records,
-            layout: CullLayout::with_places(scene, places),
+            rig: &self.rig,
             plan: &plan,
             frame: &self.frame,
             options: &self.options,
             slots: room,
             shadow_group: &self.shadow_map.bind_group,
         };
-        self.path = Path::new(device, inputs)?;
+        let built = display::build(device, CullLayout::with_places(scene, places), &inputs)?;
+        (self.shared, self.pyramids, self.displays) =
+            (built.shared, built.pyramids, built.displays);
         self.slots = room;
         // The bindings may now need more windows.
         let windows = self.options.windows(device, room);
@@ -155,10 +158,8 @@ impl Renderer {
             self.second = Some(SecondFrame::new(device, windows, scene));
         }
         let made = (scene, &self.options);
-        let posed = |s| live.animates(s);
-        let passes = (self.path).frame_passes(device, made, (&self.frame, windows), posed)?;
-        (self.skin, self.morph, self.pose, self.shadow) =
-            (passes.skin, passes.morph, passes.pose, passes.shadow);
+        let bound = super::frame_bindings(&self.shared, &self.frame, windows);
+        self.frame_passes = FramePasses::new(device, made, bound, |s| live.animates(s))?;
         let bytes = std::mem::size_of_val(&records[..]) as u64;
         Ok(SyncStats {
             bytes_uploaded: bytes,
@@ -175,7 +176,7 @@ impl Renderer {
             second.reload(live.scene());
         }
         let records = live.instance_records();
-        let core = self.path.core_mut();
+        let core = &mut self.shared;
         queue.write_buffer(
             &core.draw_scene.instances,
             0,
@@ -202,8 +203,8 @@ impl Renderer {
             return (SyncStats::default(), placed);
         }
         let count = placed.len() as u32;
-        self.path.core_mut().culler.place(&placed);
-        let targets = self.path.scatter_targets();
+        self.shared.culler.place(&placed);
+        let targets = self.shared.scatter_targets();
         let (bytes, spare) = self.scatter.stage_places(device, placed, targets);
         let stats = SyncStats {
             bytes_uploaded: bytes,
@@ -225,8 +226,8 @@ impl Renderer {
             return (SyncStats::default(), moved);
         }
         let count = moved.len() as u32;
-        self.path.core_mut().culler.moved(scene, &moved);
-        let targets = self.path.scatter_targets();
+        self.shared.culler.moved(scene, &moved);
+        let targets = self.shared.scatter_targets();
         let (bytes, spare) = self.scatter.moves.stage(device, moved, targets);
         let stats = SyncStats {
             bytes_uploaded: bytes,
@@ -246,7 +247,7 @@ impl Renderer {
             .iter()
             .map(|&slot| record_edit(live, slot))
             .collect();
-        let targets = self.path.scatter_targets();
+        let targets = self.shared.scatter_targets();
         self.scatter.records.stage(device, records, targets).0
     }
 }
@@ -289,7 +290,7 @@ impl Renderer {
         let changes = live.take_changes();
         let (filled, born) = second.split(changes.placed, &changes.removed);
         let mut moved = changes.moved;
-        let culler = &mut self.path.core_mut().culler;
+        let culler = &mut self.shared.culler;
         culler.place(&filled);
         culler.grown(&second.grow(live.scene(), &mut moved, &born));
         let staged = second_frame::Staged {
@@ -303,7 +304,7 @@ impl Renderer {
             placed: staged.filled.len() as u32,
             ..SyncStats::default()
         };
-        let core = self.path.core();
+        let core = &self.shared;
         let copy = ScatterTargets {
             instances: &(core.draw_scene.previous.as_ref())
                 .expect("pairs keep the first frame's records")
@@ -311,10 +312,10 @@ impl Renderer {
             spheres: None,
             visibility: (0, 0),
         };
-        let targets = (self.path.scatter_targets(), copy);
+        let targets = (self.shared.scatter_targets(), copy);
         let (bytes, spare) = second.stage(device, live, staged, targets);
         stats.bytes_uploaded += bytes;
-        if let Some(skin) = &mut self.skin {
+        if let Some(skin) = &mut self.frame_passes.skin {
             for range in changes.joints {
                 stats.bytes_uploaded += skin.upload_next(queue, &live.scene().skins, range);
             }

@@ -1,6 +1,8 @@
 //! Display targets: the color and depth views each display renders into, and textures
 //! of the right shape for callers that have none.
 
+use super::frames;
+use super::options::{RendererOptions, StereoMode};
 use crate::draw::{Attachments, TargetFormat};
 use crate::motion::MOTION_FORMAT;
 use crate::rig::ViewLayout;
@@ -93,6 +95,17 @@ pub struct TargetShape {
 }
 
 impl TargetShape {
+    /// The shape of rig display `d`'s target under `options`: one array layer per view
+    /// for a stereo display in multiview, else its views side by side (with two frames
+    /// per submission, both frames').
+    pub fn of(d: &crate::rig::Display, options: &RendererOptions) -> TargetShape {
+        let layered = options.mode == StereoMode::Multiview && d.stereo;
+        TargetShape {
+            layout: frames::layout(d, layered, options.frames_per_submit),
+            layered,
+        }
+    }
+
     /// Pixels of one eye's view (a foveated display's outer view; in multiview, every
     /// layer's).
     pub fn eye_size(&self) -> (u32, u32) {

@@ -11,7 +11,6 @@ use crate::draw::{
 use crate::far_layer::FarPlan;
 use crate::occlusion::Phase;
 use crate::renderer::culler::Culler;
-use crate::renderer::plan::{CullView, FramePlan};
 use crate::renderer::recorder::{PassRecord, Recorder};
 use crate::renderer::uploads::Writes;
 use crate::renderer::view::ViewPass;
@@ -34,7 +33,7 @@ pub(in crate::renderer) struct FarLayers {
 pub(in crate::renderer) struct FarDisplay {
     /// The display it belongs to (and whose coarse blocks its cull runs over).
     index: usize,
-    pub(super) view: ViewPass,
+    view: ViewPass,
     color: wgpu::TextureView,
     depth: wgpu::TextureView,
     composite_bind_group: wgpu::BindGroup,
@@ -163,7 +162,7 @@ impl FarLayers {
         (dispatches, draw_calls)
     }
 
-    fn drawing<'a>(&'a self, scene: &'a DrawScene) -> Drawing<'a> {
+    pub(super) fn drawing<'a>(&'a self, scene: &'a DrawScene) -> Drawing<'a> {
         Drawing {
             drawer: &self.drawer,
             scene,
@@ -181,6 +180,16 @@ impl FarLayers {
 }
 
 impl FarDisplay {
+    /// Its cull, as the culler keeps it.
+    pub(super) fn view_cull(&self) -> &crate::renderer::culler::ViewCull {
+        self.view.view_cull()
+    }
+
+    /// Its cull outputs, per the cull contract.
+    pub(super) fn cull(&self) -> &crate::cull::targets::CullTargets {
+        self.view.cull()
+    }
+
     /// Writes this frame's far context for `plan` (over the coarse cull's `slot`, its
     /// display's), with occlusion the context its cull tests with (paired with
     /// `display`'s), and the culler's far cull. Returns the bytes written.
@@ -240,60 +249,4 @@ fn composite_pipeline(
         multiview_mask: None,
     };
     screen_pipeline(device, label, (far_composite_source(), layout), targets)
-}
-
-/// The indirect path's far layers: what they share, each stereo display's own, and this
-/// frame's plans.
-pub(in crate::renderer) struct Far {
-    pub(super) layers: FarLayers,
-    /// Per display; `None` for mono displays (nothing to share between eyes).
-    pub(super) displays: Vec<Option<FarDisplay>>,
-    /// The last prepared frame's far distance per display.
-    pub(super) distances: Vec<Option<f32>>,
-}
-
-impl Far {
-    /// Far layers for the stereo displays of `plan` (the rig as made, which sizes
-    /// them), each composited into the display whose context is `contexts[i]` (and,
-    /// where `tested[i]`, culled against its pyramids), culled by `culler` and drawn
-    /// from `scene` with the frame context `frame`.
-    pub(super) fn new(
-        device: &wgpu::Device,
-        (layers, plan): (FarLayers, &FramePlan),
-        (scene, frame): (&DrawScene, &wgpu::Buffer),
-        (contexts, tested): (&[&wgpu::Buffer], &[bool]),
-        culler: &Culler,
-    ) -> Far {
-        let displays = (plan.displays.iter().zip(contexts).zip(tested))
-            .enumerate()
-            .map(|(i, ((display, context), &tested))| {
-                let far = display.far.as_ref()?;
-                let drawing = layers.drawing(scene);
-                let view = match tested {
-                    true => ViewPass::tested(device, drawing, frame, culler, CullView::Far(i)),
-                    false => ViewPass::new(device, drawing, frame, culler, CullView::Far(i)),
-                };
-                Some(layers.display(device, i, view, context, far))
-            })
-            .collect();
-        Far {
-            layers,
-            displays,
-            distances: Vec::new(),
-        }
-    }
-
-    /// Writes every far layer's context for `plan` and the culler's far culls. Returns
-    /// the bytes written.
-    pub(super) fn prepare(&mut self, to: Writes, plan: &FramePlan, culler: &Culler) -> u64 {
-        self.distances = plan
-            .displays
-            .iter()
-            .map(|d| Some(d.far?.distance))
-            .collect();
-        (self.displays.iter().zip(&plan.displays))
-            .filter_map(|(far, d)| Some((far.as_ref()?, d.far.as_ref()?, &d.context)))
-            .map(|(far, plan, display)| far.prepare(to, (plan, display), culler))
-            .sum()
-    }
 }

@@ -5,258 +5,303 @@
 //! Per frame on the GPU-culled path the CPU writes one display context per display and
 //! records a fixed number of commands: its cost does not depend on the instance count.
 
-use std::time::Instant;
-
-use super::far_layer::{Far, FarDisplay, FarLayers};
+use super::far_layer::{FarDisplay, FarLayers};
 use super::occlusion::{LatePhase, PyramidSets, pyramid_shapes};
-use super::{PathCore, PathInputs};
+use super::{Display, DisplayPasses, PathInputs, Shared};
 use crate::contexts::context_buffer;
 use crate::cull::gpu_buffers::OcclusionRoom;
-use crate::cull::targets::CullTargets;
+use crate::cull::targets::{COUNTS_BYTES, CullTargets};
+use crate::cull::{BinDraws, CullOutput};
 use crate::draw::keep_tiles::KeepTiles;
+use crate::draw::keep_tiles::TileGrid;
 use crate::draw::mask::{DisplayMask, MaskPipeline};
-use crate::draw::{
-    BinPipelines, DrawFeatures, DrawScene, Drawer, Drawing, OwnPipeline, OwnPipelines,
-};
+use crate::draw::{BinPipelines, DrawFeatures, DrawScene, Drawer, OwnPipeline};
+use crate::draw::{OwnPipelines, mask};
 use crate::error::{Error, Result};
 use crate::keep::KeepUnchanged;
 use crate::occlusion::{Phase, PyramidShape};
+use crate::readback::read_pod_at;
+use crate::records::CullLayout;
+use crate::records::DrawArgs;
 use crate::renderer::culler::{CullShape, Culler};
+use crate::renderer::diagnostics::OcclusionCounts;
 use crate::renderer::frame_stats::FrameStats;
 use crate::renderer::keeping;
 use crate::renderer::options::StereoMode;
-use crate::renderer::plan::KeptTiles;
-use crate::renderer::plan::{CullView, FramePlan};
+use crate::renderer::plan::{CullView, DisplayPlan, FramePlan, KeptTiles};
 use crate::renderer::recorder::{PassRecord, Recorder, begin_draw_pass};
-use crate::renderer::targets::TargetViews;
+use crate::renderer::targets::{TargetShape, TargetViews};
 use crate::renderer::uploads::Writes;
 use crate::renderer::view::ViewPass;
 use crate::scene::Shading;
 use crate::shaders::DrawKey;
 
-/// One display: a view (its context, cull and draw bindings) and its pipeline variant,
-/// which also fixes the instances per visible object; with the inset cull, a foveated
-/// display's inset pair is one more view, drawn by the same pipeline in the same pass.
-pub(super) struct IndirectDisplay {
-    pub(super) view: ViewPass,
+/// One display of the GPU-driven path: a view (its context, cull and draw bindings)
+/// and its pipeline variant, which also fixes the instances per visible object; with
+/// the inset cull, a foveated display's inset pair is one more view, drawn by the same
+/// pipeline in the same pass; with occlusion its late phase, with the far layer its far
+/// layer, with the visibility mask its mask pass, keeping pixels its kept tiles.
+pub(in crate::renderer) struct IndirectDisplay {
+    index: usize,
+    view: ViewPass,
     key: DrawKey,
     /// Pipelines of the caller's own for its [`crate::scene::Shading::Own`] bins.
-    pub(super) own: OwnPipelines,
-    pub(super) inset: Option<ViewPass>,
+    own: OwnPipelines,
+    inset: Option<ViewPass>,
     /// With occlusion: the late phase (`view` is then the early one).
-    pub(super) late: Option<LatePhase>,
-}
-
-pub(in crate::renderer) struct IndirectPath {
-    pub(in crate::renderer) core: PathCore,
-    pub(super) displays: Vec<IndirectDisplay>,
-    /// With the far layer: the stereo displays' far layers.
-    pub(super) far: Option<Far>,
-    /// With occlusion: every display's pyramids, in sets of displays.
-    pub(super) pyramids: PyramidSets,
-    /// Per display with a visibility mask (and the option on): its mask pass, drawn
-    /// first in the display's clearing draw pass.
-    pub(in crate::renderer) masks: Vec<Option<(MaskPipeline, DisplayMask)>>,
-    /// Keeping unchanged pixels where frames may: the pass that clears changed tiles.
-    pub(super) keep: Option<KeepTiles>,
-    /// Per display: whether this frame keeps its unchanged pixels, and how.
-    pub(super) kept: Vec<Option<Kept>>,
+    late: Option<LatePhase>,
+    /// With the far layer (a stereo display): its far layer.
+    far: Option<FarDisplay>,
+    /// The last prepared frame's far distance (with a far layer).
+    far_distance: Option<f32>,
+    /// With a visibility mask (and the option on): its mask pass, drawn first in the
+    /// display's clearing draw pass.
+    mask: Option<(MaskPipeline, DisplayMask)>,
+    /// Whether this frame keeps its unchanged pixels, and how.
+    kept: Option<Kept>,
 }
 
 /// A display whose frame keeps its unchanged pixels.
 #[derive(Clone, Copy, Debug)]
-pub(super) struct Kept {
+struct Kept {
     /// Words of its tiles' bits.
-    pub words: u32,
+    words: u32,
     /// The cull slot whose tiles the GPU marked (`None`: the CPU marked them).
-    pub marked_in: Option<u32>,
+    marked_in: Option<u32>,
 }
 
-impl IndirectPath {
-    /// The path for `inputs`: built for its plan (the rig as made, which sizes the far
-    /// layers) and its coarse cull.
-    pub(in crate::renderer) fn new(
-        device: &wgpu::Device,
-        inputs: PathInputs,
-    ) -> Result<IndirectPath> {
-        let PathInputs {
-            scene,
-            records,
-            layout,
-            plan,
-            frame,
-            options,
-            slots,
-            shadow_group,
-        } = inputs;
-        let windows = options.windows(device, slots);
-        let coarse_slots = match plan.cull.coarse {
-            Some(_) => plan.displays.len() as u32,
-            None => 0,
-        };
-        let shapes = pyramid_shapes(plan, options, scene.triangles());
-        let views = plan.displays.iter().map(|d| d.context.views);
-        let keeps = options.keep_unchanged != KeepUnchanged::Off
-            && keeping::never(scene, views, options).is_none();
-        let tiles = keeps.then(|| keeping::tiles(plan));
-        let most_tiles = tiles.iter().flatten().max().copied().unwrap_or(0);
-        let occlusion = OcclusionRoom {
-            displays: plan.displays.len() as u32 * u32::from(shapes.iter().any(Option::is_some)),
-            pyramid_texels: shapes.iter().flatten().map(|s| s.len()).max().unwrap_or(0),
-            tiles: match keeps {
-                true => (plan.displays.len() as u32, most_tiles.div_ceil(32)),
-                false => (0, 0),
-            },
-        };
-        let shape = CullShape {
-            rig: match options.rig_cull {
-                true => rig_members(plan, &shapes, coarse_slots > 0),
-                false => Vec::new(),
-            },
-            slots,
-            levels: options.lod_levels(),
-            coarse_slots,
-            floor: options.cull_floor,
-            occlusion,
-            tested: options.far_layer && occlusion.displays > 0,
-            hidden_slots: match plan.displays.iter().any(|d| d.hidden.is_some()) {
-                true => plan.displays.len() as u32,
-                false => 0,
-            },
-            split: options.far_layer,
-        };
-        let kinds = layout.bins.kinds.clone();
-        let mut culler = Culler::new(device, options.cull, layout, shape, windows);
-        culler.track_visibility(device, &shapes);
-        let keys = draw_keys(device, plan, options.mode);
-        let shaders = options.shaders();
-        let target = options.target_format();
-        let keep = tiles.map(|tiles| KeepTiles::new(device, target, &tiles));
-        let drawer = Drawer::new(
-            device,
-            target,
-            (&keys, &kinds),
-            shaders,
-            options.shadow_size(),
-            windows,
-        );
-        let draw_scene = DrawScene::new(device, &drawer, (scene, records, shadow_group), slots)?;
-        let drawing = Drawing {
-            drawer: &drawer,
-            scene: &draw_scene,
-        };
-        let shaped = (&keys[..], plan, &shapes[..]);
-        let displays = indirect_displays(device, shaped, drawing, frame, &culler);
-        let pyramids = PyramidSets::new(device, options, shaped, &culler);
-        let far = options.far_layer.then(|| {
-            let layers = FarLayers::new(device, (target, &kinds), shaders, windows);
-            let contexts: Vec<&wgpu::Buffer> = displays.iter().map(|d| d.view.context()).collect();
-            let tested: Vec<bool> = displays.iter().map(|d| d.late.is_some()).collect();
-            let scene = (&draw_scene, frame);
-            Far::new(device, (layers, plan), scene, (&contexts, &tested), &culler)
-        });
-        Ok(IndirectPath {
-            core: PathCore {
-                culler,
-                drawer,
-                draw_scene,
-            },
-            displays,
-            far,
-            pyramids,
-            masks: Vec::new(),
-            keep,
-            kept: vec![None; plan.displays.len()],
+/// What the indirect path builds: what its displays share, the pyramids of those that
+/// occlude, and each display.
+pub(super) type Built = (Shared, PyramidSets, Vec<Display>);
+
+/// The path for `inputs`: built for its plan (the rig as made, which sizes the far
+/// layers) and its coarse cull.
+pub(super) fn build(
+    device: &wgpu::Device,
+    layout: CullLayout,
+    inputs: &PathInputs,
+) -> Result<Built> {
+    let &PathInputs {
+        scene,
+        records,
+        plan,
+        options,
+        slots,
+        shadow_group,
+        ..
+    } = inputs;
+    let windows = options.windows(device, slots);
+    let shapes = pyramid_shapes(plan, options, scene.triangles());
+    let views = plan.displays.iter().map(|d| d.context.views);
+    let keeps = options.keep_unchanged != KeepUnchanged::Off
+        && keeping::never(scene, views, options).is_none();
+    let tiles = keeps.then(|| keeping::tiles(plan));
+    let shape = cull_shape(plan, options, &shapes, tiles.as_deref(), slots);
+    let kinds = layout.bins.kinds.clone();
+    let mut culler = Culler::new(device, options.cull, layout, shape, windows);
+    culler.track_visibility(device, &shapes);
+    let keys = draw_keys(device, plan, options.mode);
+    let shaders = options.shaders();
+    let target = options.target_format();
+    let keep = tiles.map(|tiles| KeepTiles::new(device, target, &tiles));
+    let drawer = Drawer::new(
+        device,
+        target,
+        (&keys, &kinds),
+        shaders,
+        options.shadow_size(),
+        windows,
+    );
+    let draw_scene = DrawScene::new(device, &drawer, (scene, records, shadow_group), slots)?;
+    let far =
+        (options.far_layer).then(|| FarLayers::new(device, (target, &kinds), shaders, windows));
+    let shared = Shared {
+        culler,
+        drawer,
+        draw_scene,
+        far,
+        keep,
+    };
+    let pyramids = PyramidSets::new(device, options, (&keys, plan, &shapes), &shared.culler);
+    let displays = (0..plan.displays.len())
+        .map(|i| {
+            let made = Made {
+                device,
+                inputs,
+                shared: &shared,
+            };
+            let passes = IndirectDisplay::new(made, i, keys[i], shapes[i]);
+            Display::new(inputs, i, DisplayPasses::Indirect(Box::new(passes)))
         })
+        .collect();
+    Ok((shared, pyramids, displays))
+}
+
+/// What a display is made from: the device, the renderer's inputs and what its passes
+/// share.
+#[derive(Clone, Copy)]
+struct Made<'a> {
+    device: &'a wgpu::Device,
+    inputs: &'a PathInputs<'a>,
+    shared: &'a Shared,
+}
+
+/// The culler's shape for `plan`: its rig members, its occlusion room (with `shapes`,
+/// the occluding displays' pyramids, and `tiles`, each kept display's), its hidden
+/// slots and far split.
+fn cull_shape(
+    plan: &FramePlan,
+    options: &crate::renderer::RendererOptions,
+    shapes: &[Option<PyramidShape>],
+    tiles: Option<&[u32]>,
+    slots: u32,
+) -> CullShape {
+    let displays = plan.displays.len() as u32;
+    let coarse_slots = match plan.cull.coarse {
+        Some(_) => displays,
+        None => 0,
+    };
+    let most_tiles = tiles.iter().copied().flatten().max().copied().unwrap_or(0);
+    let occlusion = OcclusionRoom {
+        displays: displays * u32::from(shapes.iter().any(Option::is_some)),
+        pyramid_texels: shapes.iter().flatten().map(|s| s.len()).max().unwrap_or(0),
+        tiles: match tiles {
+            Some(_) => (displays, most_tiles.div_ceil(32)),
+            None => (0, 0),
+        },
+    };
+    CullShape {
+        rig: match options.rig_cull {
+            true => rig_members(plan, shapes, coarse_slots > 0),
+            false => Vec::new(),
+        },
+        slots,
+        levels: options.lod_levels(),
+        coarse_slots,
+        floor: options.cull_floor,
+        occlusion,
+        tested: options.far_layer && occlusion.displays > 0,
+        hidden_slots: match plan.displays.iter().any(|d| d.hidden.is_some()) {
+            true => displays,
+            false => 0,
+        },
+        split: options.far_layer,
+    }
+}
+
+impl IndirectDisplay {
+    /// Display `index`, drawn with pipeline variant `key`, its pyramids `shape` where
+    /// it occludes: its views (early and late with occlusion, its inset pair's), its far
+    /// layer and its mask, made whole.
+    fn new(made: Made, index: usize, key: DrawKey, shape: Option<PyramidShape>) -> Self {
+        let Made {
+            device,
+            inputs,
+            shared,
+        } = made;
+        let frame = inputs.frame;
+        let drawing = shared.drawing();
+        let culler = &shared.culler;
+        let view = |v| ViewPass::new(device, drawing, frame, culler, v);
+        let phased = |v, context| ViewPass::phased(device, drawing, frame, culler, v, context);
+        let (view, late) = match shape {
+            Some(shape) => {
+                let early = phased(
+                    (CullView::Display(index), Phase::Early),
+                    context_buffer(device),
+                );
+                let context = early.context().clone();
+                let late = phased((CullView::Late(index), Phase::Late), context);
+                (early, Some(LatePhase::new((index, key), late, shape)))
+            }
+            None => (view(CullView::Display(index)), None),
+        };
+        let planned = &inputs.plan.displays[index];
+        let inset = planned
+            .inset
+            .as_ref()
+            .map(|_| ViewPass::new(device, drawing, frame, culler, CullView::Inset(index)));
+        let far = far_display(made, (index, planned), (view.context(), late.is_some()));
+        IndirectDisplay {
+            index,
+            view,
+            key,
+            own: OwnPipelines::new(),
+            inset,
+            late,
+            far,
+            far_distance: None,
+            mask: display_mask(made, index),
+            kept: None,
+        }
     }
 
-    /// Pixels the visibility masks cover in each frame, all displays together.
-    pub(in crate::renderer) fn masked_pixels(&self) -> u64 {
-        self.masks.iter().flatten().map(|(_, m)| m.pixels).sum()
+    /// Writes `plan`'s context and the culler's results for each of the display's
+    /// views (its own, its late phase's record, its insets', its far layer's) and its
+    /// kept tiles. Returns the bytes written.
+    pub(super) fn prepare(&mut self, to: Writes, plan: &DisplayPlan, shared: &mut Shared) -> u64 {
+        let culler = &shared.culler;
+        let ctx = &plan.context;
+        let mut bytes = self.view.prepare(to, ctx, culler);
+        // The late phase shares the early one's context; a rig member has a record.
+        if let Some(late) = &self.late {
+            bytes += culler.write_member(to.pose, late.view_cull(), ctx);
+        }
+        if let (Some(view), Some(inset)) = (&self.inset, &plan.inset) {
+            bytes += view.prepare(to, inset, culler);
+        }
+        self.far_distance = plan.far.map(|p| p.distance);
+        if let (Some(far), Some(far_plan)) = (&self.far, &plan.far) {
+            bytes += far.prepare(to, (far_plan, ctx), culler);
+        }
+        self.kept = None;
+        if let (Some(keep), Some(tiles)) = (&mut shared.keep, &plan.tiles) {
+            let (size, views) = (ctx.resolution.as_uvec2(), ctx.views.min(2));
+            bytes += keep.write(to.queue, self.index, (size, views), tiles.mask());
+            let g = crate::cull::tiles::grid(size, views);
+            self.kept = Some(Kept {
+                words: crate::cull::tiles::tile_words(g),
+                marked_in: matches!(tiles, KeptTiles::Gpu).then_some(ctx.cull_slot),
+            });
+        }
+        bytes
     }
 
-    /// Writes `plan`'s display contexts and the culler's results for every view: each
-    /// display's, each far layer's, the light's.
-    pub(in crate::renderer) fn prepare(&mut self, to: Writes, plan: &FramePlan) -> FrameStats {
-        let mut stats = FrameStats::default();
-        let start = Instant::now();
-        stats.bytes_uploaded += self.core.culler.prepare(to.pose, plan);
-        stats.cpu_cull = start.elapsed();
-        let start = Instant::now();
-        let culler = &self.core.culler;
-        for (state, display) in self.displays.iter().zip(&plan.displays) {
-            let (ctx, inset) = (&display.context, &display.inset);
-            stats.bytes_uploaded += state.view.prepare(to, ctx, culler);
-            // The late phase shares the early one's context; a rig member has a record.
-            if let Some(late) = &state.late {
-                stats.bytes_uploaded += culler.write_member(to.pose, late.view.view_cull(), ctx);
-            }
-            if let (Some(view), Some(inset)) = (&state.inset, inset) {
-                stats.bytes_uploaded += view.prepare(to, inset, culler);
-            }
-        }
-        if let Some(far) = &mut self.far {
-            stats.bytes_uploaded += far.prepare(to, plan, &self.core.culler);
-        }
-        for (i, display) in plan.displays.iter().enumerate() {
-            self.kept[i] = None;
-            if let (Some(keep), Some(tiles)) = (&mut self.keep, &display.tiles) {
-                let c = &display.context;
-                let (size, views) = (c.resolution.as_uvec2(), c.views.min(2));
-                stats.bytes_uploaded += keep.write(to.queue, i, (size, views), tiles.mask());
-                let g = crate::cull::tiles::grid(size, views);
-                self.kept[i] = Some(Kept {
-                    words: crate::cull::tiles::tile_words(g),
-                    marked_in: matches!(tiles, KeptTiles::Gpu).then_some(c.cull_slot),
-                });
-            }
-        }
-        stats.cpu_upload = start.elapsed();
-        stats
+    /// The display's view cull (the one the coarse cull and the floor timing read).
+    pub(in crate::renderer) fn view_cull(&self) -> &crate::renderer::culler::ViewCull {
+        self.view.view_cull()
     }
 
-    /// The path's frame-level pass: the coarse cull (when it runs, on the GPU).
-    /// Returns the dispatches.
-    pub(in crate::renderer) fn encode_frame(
+    /// The display up to what its late phase needs: its cull and its draw (with
+    /// occlusion the early one). With occlusion, once every display's is recorded, the
+    /// pyramids reduce every display's depth and the late culls follow (the rig's, or
+    /// each display's own); culling on the CPU with occlusion the frame stops after the
+    /// pyramids until the late culls have them.
+    pub(super) fn encode_early(
         &self,
         encoder: &mut wgpu::CommandEncoder,
-        rec: &mut Recorder,
-    ) -> u32 {
-        let any = self.displays.first().map(|d| d.view.view_cull());
-        self.core.culler.encode_frame(encoder, any, rec)
-    }
-
-    /// Display `index` up to what its late phase needs: its cull and its draw (with
-    /// occlusion the early one). With occlusion, once every display's is recorded,
-    /// [`IndirectPath::encode_pyramids`] reduces every display's depth, and the late
-    /// culls follow ([`IndirectPath::encode_late_rig`], or each display's own). Culling
-    /// on the CPU with occlusion the frame stops after the pyramids until
-    /// [`IndirectPath::cull_late`] has them.
-    pub(in crate::renderer) fn encode_early(
-        &self,
-        encoder: &mut wgpu::CommandEncoder,
-        (index, target): (usize, &TargetViews),
+        (shared, target): (&Shared, &TargetViews),
         rec: &mut Recorder,
     ) -> FrameStats {
-        let culled = self.encode_cull(encoder, (index, false), rec);
-        let multiview = self.displays[index].key.multiview_mask();
+        let culled = self.encode_cull(encoder, (shared, false), rec);
+        let multiview = self.key.multiview_mask();
         // With occlusion the far layer is drawn and composited in the late phase.
-        let composite = self.displays[index].late.is_none();
-        let listed = self.encode_tile_list(encoder, index);
-        let mut open = rec.open(encoder, PassRecord::display("draw", index));
-        let kept = self.kept[index].is_some();
+        let composite = self.late.is_none();
+        let listed = self.encode_tile_list(encoder, shared);
+        let mut open = rec.open(encoder, PassRecord::display("draw", self.index));
+        let kept = self.kept.is_some();
         let mut pass = begin_draw_pass(encoder, rec, (target, !kept, multiview), &mut open);
-        let mut draw_calls = match (&self.keep, kept) {
-            (Some(keep), true) => keep.draw(&mut pass, index),
+        let mut draw_calls = match (&shared.keep, kept) {
+            (Some(keep), true) => keep.draw(&mut pass, self.index),
             _ => 0,
         };
-        if let Some((pipeline, mask)) = self.masks.get(index).and_then(Option::as_ref) {
+        if let Some((pipeline, mask)) = &self.mask {
             pipeline.draw(&mut pass, mask);
             draw_calls += 1;
         }
         // The mask's own samples are not the scene's.
         rec.count_samples(&mut pass, &mut open);
-        draw_calls += self.draw_views(&mut pass, index, composite);
+        draw_calls += self.draw_views(&mut pass, shared, composite);
         rec.close_render(encoder, pass, open);
         FrameStats {
             draw_calls: culled.draw_calls + draw_calls,
@@ -265,35 +310,29 @@ impl IndirectPath {
         }
     }
 
-    /// Where display `index` keeps this frame: its changed tiles listed for the tile
-    /// pass, their bits first copied from where the GPU marked them (the culler's
-    /// buffer). Returns the dispatches.
-    fn encode_tile_list(&self, encoder: &mut wgpu::CommandEncoder, index: usize) -> u32 {
-        let (Some(keep), Some(kept)) = (&self.keep, &self.kept[index]) else {
+    /// Where the display keeps this frame: its changed tiles listed for the tile pass,
+    /// their bits first copied from where the GPU marked them (the culler's buffer).
+    /// Returns the dispatches.
+    fn encode_tile_list(&self, encoder: &mut wgpu::CommandEncoder, shared: &Shared) -> u32 {
+        let (Some(keep), Some(kept)) = (&shared.keep, &self.kept) else {
             return 0;
         };
-        let marked = (kept.marked_in).and_then(|s| self.core.culler.marked_words(s, kept.words));
-        keep.encode_list(encoder, index, marked)
+        let marked = (kept.marked_in).and_then(|s| shared.culler.marked_words(s, kept.words));
+        keep.encode_list(encoder, self.index, marked)
     }
 
-    /// Display `index`'s far layer, with what every far layer shares (`None` without).
-    pub(super) fn far_layer(&self, index: usize) -> Option<(&Far, &FarDisplay)> {
-        let far = self.far.as_ref()?;
-        Some((far, far.displays[index].as_ref()?))
-    }
-
-    /// With a far layer, display `index`'s far cull in `phase` and far layer pass.
-    pub(super) fn encode_far(
+    /// With a far layer, its far cull in `phase` and far layer pass.
+    fn encode_far(
         &self,
         encoder: &mut wgpu::CommandEncoder,
-        (index, phase): (usize, Phase),
+        (shared, phase): (&Shared, Phase),
         rec: &mut Recorder,
     ) -> FrameStats {
-        let Some((far, layer)) = self.far_layer(index) else {
+        let (Some(layers), Some(far)) = (&shared.far, &self.far) else {
             return FrameStats::default();
         };
-        let culling = (&self.core.draw_scene, &self.core.culler);
-        let (dispatches, draw_calls) = (far.layers).encode(encoder, (layer, phase), culling, rec);
+        let culling = (&shared.draw_scene, &shared.culler);
+        let (dispatches, draw_calls) = layers.encode(encoder, (far, phase), culling, rec);
         FrameStats {
             dispatches,
             draw_calls,
@@ -301,150 +340,191 @@ impl IndirectPath {
         }
     }
 
-    /// Display `index`'s cull (on the GPU; the culler's upload wrote a CPU cull) and,
-    /// with a far layer, its far cull and far layer pass, timed inside `display`. For a
+    /// The display's cull (on the GPU; the culler's upload wrote a CPU cull) and, with
+    /// a far layer, its far cull and far layer pass, timed inside its scope. For a
     /// display drawn in `one_pass` (the caller's), with occlusion its cull is the
     /// frustum's alone, which draws everything in that pass.
-    pub(in crate::renderer) fn encode_cull(
+    pub(super) fn encode_cull(
         &self,
         encoder: &mut wgpu::CommandEncoder,
-        (index, one_pass): (usize, bool),
+        (shared, one_pass): (&Shared, bool),
         rec: &mut Recorder,
     ) -> FrameStats {
-        let state = &self.displays[index];
-        let what = PassRecord::display("cull", index);
+        let culler = &shared.culler;
+        let what = PassRecord::display("cull", self.index);
         let dispatches = match one_pass {
             true => {
-                let frustum = (state.view.view_cull(), Phase::Frustum);
-                self.core.culler.encode(encoder, frustum, rec, what)
+                let frustum = (self.view.view_cull(), Phase::Frustum);
+                culler.encode(encoder, frustum, rec, what)
             }
-            false => state
-                .view
-                .encode_cull(encoder, &self.core.culler, rec, what),
+            false => self.view.encode_cull(encoder, culler, rec, what),
         };
         let mut stats = FrameStats {
             dispatches,
             ..FrameStats::default()
         };
-        if let Some(inset) = &state.inset {
-            let what = PassRecord::display("inset_cull", index);
-            stats.dispatches += inset.encode_cull(encoder, &self.core.culler, rec, what);
+        if let Some(inset) = &self.inset {
+            let what = PassRecord::display("inset_cull", self.index);
+            stats.dispatches += inset.encode_cull(encoder, culler, rec, what);
         }
         // With occlusion in the renderer's passes, the far layer waits for the pyramids.
-        if one_pass || state.late.is_none() {
-            stats = stats + self.encode_far(encoder, (index, Phase::Frustum), rec);
+        if one_pass || self.late.is_none() {
+            stats = stats + self.encode_far(encoder, (shared, Phase::Frustum), rec);
         }
         stats
     }
 
-    /// Display `index`'s one multi-draw-indirect call into `pass`, whose pipeline the
+    /// The display's one multi-draw-indirect call into `pass`, whose pipeline the
     /// caller set (built on [`Drawer::layout`] and the decode).
     pub(in crate::renderer) fn draw_with_own_pipeline(
         &self,
         pass: &mut wgpu::RenderPass,
-        index: usize,
+        shared: &Shared,
     ) {
-        self.displays[index]
-            .view
-            .draw(pass, self.core.drawing(), BinPipelines::Own);
+        self.view.draw(pass, shared.drawing(), BinPipelines::Own);
     }
 
-    /// Sets display `index`'s pipeline of the caller's own for its
+    /// Sets the display's pipeline of the caller's own for its
     /// [`Shading::Own`]`(shading)` bins.
-    pub(in crate::renderer) fn set_own_pipeline(
-        &mut self,
-        index: usize,
-        shading: u32,
-        own: OwnPipeline,
-    ) {
-        self.displays[index].own.insert(shading, own);
+    pub(in crate::renderer) fn set_own_pipeline(&mut self, shading: u32, own: OwnPipeline) {
+        self.own.insert(shading, own);
     }
 
-    /// Display `index` must have a pipeline for each [`Shading::Own`] bin it draws.
-    pub(in crate::renderer) fn check_own_pipelines(&self, index: usize) -> Result<()> {
-        let own = &self.displays[index].own;
-        let missing = (self.core.culler.bins().iter()).find_map(|b| match b.kind.shading {
-            Shading::Own(i) if !own.contains_key(&i) => Some(i),
+    /// The display must have a pipeline for each [`Shading::Own`] bin it draws.
+    pub(in crate::renderer) fn check_own_pipelines(&self, culler: &Culler) -> Result<()> {
+        let missing = (culler.bins().iter()).find_map(|b| match b.kind.shading {
+            Shading::Own(i) if !self.own.contains_key(&i) => Some(i),
             _ => None,
         });
         match missing {
-            Some(shading) => Err(Error::MissingOwnPipeline { index, shading }),
+            Some(shading) => Err(Error::MissingOwnPipeline {
+                index: self.index,
+                shading,
+            }),
             None => Ok(()),
         }
     }
 
-    /// How the instance records are bound.
-    pub(in crate::renderer) fn windows(&self) -> crate::shaders::Windows {
-        self.core.drawer.windows
+    /// With occlusion, its late phase.
+    pub(in crate::renderer) fn late(&self) -> Option<&LatePhase> {
+        self.late.as_ref()
     }
 
-    pub(in crate::renderer) fn bind_group_layout(&self) -> &wgpu::BindGroupLayout {
-        self.core.drawer.layout()
+    /// Its late phase where its late cull takes dispatches of its own (GPU culling
+    /// with occlusion, where the rig cull does not take it).
+    pub(super) fn late_apart(&self, culler: &Culler) -> Option<&LatePhase> {
+        self.late.as_ref().filter(|l| culler.records(l.view_cull()))
     }
 
-    pub(in crate::renderer) fn cull_targets(&self, index: usize) -> &CullTargets {
-        self.displays[index].view.cull()
+    /// With occlusion, the rest of its late phase after its early half and the late
+    /// culls: with a far layer its cull against the pyramids and its pass, then the
+    /// late draw (opening with the far composite).
+    pub(super) fn encode_late(
+        &self,
+        encoder: &mut wgpu::CommandEncoder,
+        (shared, target): (&Shared, &TargetViews),
+        rec: &mut Recorder,
+    ) -> FrameStats {
+        let Some(late) = &self.late else {
+            return FrameStats::default();
+        };
+        let mut stats = self.encode_far(encoder, (shared, Phase::Tested), rec);
+        let far = shared.far.as_ref().zip(self.far.as_ref());
+        let with = (shared.drawing(), &self.own, far);
+        stats.draw_calls += late.encode_draw(encoder, with, target, rec);
+        stats
     }
 
-    /// Display `index`'s one multi-draw-indirect call into `pass`.
-    /// With a far layer, its composite goes first (one more draw call); with an inset
-    /// cull, the inset pair's multi-draw follows (one more).
-    pub(in crate::renderer) fn draw(&self, pass: &mut wgpu::RenderPass, index: usize) -> u32 {
-        self.draw_views(pass, index, true)
+    /// With occlusion, whether its depth target can be read into its pyramids.
+    pub(in crate::renderer) fn check_depth(&self, target: &TargetViews) -> Result<()> {
+        let bindable = wgpu::TextureUsages::TEXTURE_BINDING;
+        match self.late.is_some() && !target.depth.texture().usage().contains(bindable) {
+            true => Err(Error::DepthNotBindable {
+                display: self.index,
+            }),
+            false => Ok(()),
+        }
     }
 
-    /// [`IndirectPath::draw`], with the far composite only where `composite`.
-    fn draw_views(&self, pass: &mut wgpu::RenderPass, index: usize, composite: bool) -> u32 {
-        let state = &self.displays[index];
-        let composite = match self.far_layer(index) {
-            Some((far, layer)) if composite => far.layers.composite(pass, layer),
+    /// Its far layer's cull (with one).
+    pub(super) fn far_view_cull(&self) -> Option<&crate::renderer::culler::ViewCull> {
+        self.far.as_ref().map(FarDisplay::view_cull)
+    }
+
+    /// The display's cull outputs, per the cull contract.
+    pub(in crate::renderer) fn cull_targets(&self) -> &CullTargets {
+        self.view.cull()
+    }
+
+    /// Pixels its visibility mask covers in each frame.
+    pub(in crate::renderer) fn masked_pixels(&self) -> u64 {
+        self.mask.as_ref().map_or(0, |(_, m)| m.pixels)
+    }
+
+    /// The display's one multi-draw-indirect call into `pass`. With a far layer, its
+    /// composite goes first (one more draw call); with an inset cull, the inset pair's
+    /// multi-draw follows (one more).
+    pub(super) fn draw(&self, pass: &mut wgpu::RenderPass, shared: &Shared) -> u32 {
+        self.draw_views(pass, shared, true)
+    }
+
+    /// [`IndirectDisplay::draw`], with the far composite only where `composite`.
+    fn draw_views(&self, pass: &mut wgpu::RenderPass, shared: &Shared, composite: bool) -> u32 {
+        let composite = match (&shared.far, &self.far) {
+            (Some(layers), Some(far)) if composite => layers.composite(pass, far),
             _ => 0,
         };
-        let with = BinPipelines::Draw(state.key, &state.own);
-        let outer = state.view.draw(pass, self.core.drawing(), with);
-        let insets = match &state.inset {
-            Some(inset) => inset.draw(pass, self.core.drawing(), with),
+        let with = BinPipelines::Draw(self.key, &self.own);
+        let outer = self.view.draw(pass, shared.drawing(), with);
+        let insets = match &self.inset {
+            Some(inset) => inset.draw(pass, shared.drawing(), with),
             None => 0,
         };
         composite + outer + insets
     }
 }
 
-/// Each display's view, for its pipeline variant `keys[i]`, and its inset view where
-/// `plan` culls the display's insets.
-fn indirect_displays(
-    device: &wgpu::Device,
-    (keys, plan, shapes): (&[DrawKey], &FramePlan, &[Option<PyramidShape>]),
-    drawing: Drawing,
-    frame: &wgpu::Buffer,
-    culler: &Culler,
-) -> Vec<IndirectDisplay> {
-    let view = |v| ViewPass::new(device, drawing, frame, culler, v);
-    let phased = |v, context| ViewPass::phased(device, drawing, frame, culler, v, context);
-    (keys.iter().enumerate().zip(shapes))
-        .map(|((i, &key), shape)| {
-            let (display, late) = match shape {
-                Some(shape) => {
-                    let early =
-                        phased((CullView::Display(i), Phase::Early), context_buffer(device));
-                    let context = early.context().clone();
-                    let late = phased((CullView::Late(i), Phase::Late), context);
-                    (early, Some(LatePhase::new((i, key), late, *shape)))
-                }
-                _ => (view(CullView::Display(i)), None),
-            };
-            IndirectDisplay {
-                view: display,
-                key,
-                own: OwnPipelines::new(),
-                inset: plan.displays[i]
-                    .inset
-                    .as_ref()
-                    .map(|_| view(CullView::Inset(i))),
-                late,
-            }
-        })
-        .collect()
+/// Display `index`'s far layer (`planned`'s, where it has one), composited into the
+/// display whose context is `context` and, where `tested` (it occludes), culled against
+/// its pyramids.
+fn far_display(
+    made: Made,
+    (index, planned): (usize, &DisplayPlan),
+    (context, tested): (&wgpu::Buffer, bool),
+) -> Option<FarDisplay> {
+    let Made {
+        device,
+        inputs,
+        shared,
+    } = made;
+    let (layers, plan) = (shared.far.as_ref()?, planned.far.as_ref()?);
+    let drawing = layers.drawing(&shared.draw_scene);
+    let (frame, culler, view) = (inputs.frame, &shared.culler, CullView::Far(index));
+    let view = match tested {
+        true => ViewPass::tested(device, drawing, frame, culler, view),
+        false => ViewPass::new(device, drawing, frame, culler, view),
+    };
+    Some(layers.display(device, index, view, context, plan))
+}
+
+/// Display `index`'s mask pass, where it has a visibility mask and the option is on.
+fn display_mask(made: Made, index: usize) -> Option<(MaskPipeline, DisplayMask)> {
+    let options = made.inputs.options;
+    let d = made
+        .inputs
+        .rig
+        .displays
+        .get(index)
+        .filter(|_| options.visibility_mask)?;
+    let frames = options.frames_per_submit;
+    let masked = crate::renderer::frames::masked(d.visibility_mask.as_ref()?, d.views(), frames);
+    let shape = TargetShape::of(d, options);
+    Some(mask::display_mask(
+        made.device,
+        &masked,
+        (&shape.layout, shape.layered),
+        options.target_format(),
+    ))
 }
 
 /// The views the rig cull culls together: every view of `plan` that culls over every
@@ -487,4 +567,133 @@ fn draw_keys(device: &wgpu::Device, plan: &FramePlan, mode: StereoMode) -> Vec<D
             (views, _, _) => DrawKey::new(views as u32, clip),
         })
         .collect()
+}
+
+/// What a submitted frame holds, read back for [`crate::renderer::Diagnostics`]: the
+/// display's cull buffers (its early and late phases, its far layer's and inset
+/// pair's), visible totals, occlusion counts and kept tiles.
+impl IndirectDisplay {
+    /// Its cull buffers.
+    pub(in crate::renderer) fn read_cull(&self, gpu: Gpu, culler: &Culler) -> Result<CullOutput> {
+        read_targets(gpu, culler, self.view.cull())
+    }
+
+    /// Its changed tiles in the last frame (`None`: drawn whole), as its tile pass read
+    /// them (marked on the CPU or the GPU), with its grid.
+    pub(in crate::renderer) fn read_changed_tiles(
+        &self,
+        gpu: Gpu,
+        keep: Option<&KeepTiles>,
+    ) -> Result<Option<(Vec<u32>, TileGrid)>> {
+        let (Some(keep), Some(kept)) = (keep, self.kept) else {
+            return Ok(None);
+        };
+        let (at, Some(grid)) = keep.words(self.index) else {
+            return Ok(None);
+        };
+        let words = read_pod_at(gpu.0, gpu.1, at, 4 * u64::from(kept.words))?;
+        Ok(Some((words, grid)))
+    }
+
+    /// Its far layer's cull buffers (`None` without one).
+    pub(in crate::renderer) fn read_far_cull(
+        &self,
+        gpu: Gpu,
+        culler: &Culler,
+    ) -> Result<Option<CullOutput>> {
+        let far = self.far.as_ref().map(FarDisplay::cull);
+        far.map(|cull| read_targets(gpu, culler, cull)).transpose()
+    }
+
+    /// Its inset cull buffers (`None` without an inset cull).
+    pub(in crate::renderer) fn read_inset_cull(
+        &self,
+        gpu: Gpu,
+        culler: &Culler,
+    ) -> Result<Option<CullOutput>> {
+        let inset = self.inset.as_ref().map(ViewPass::cull);
+        inset
+            .map(|cull| read_targets(gpu, culler, cull))
+            .transpose()
+    }
+
+    /// Its late phase's cull buffers (`None` without occlusion).
+    pub(in crate::renderer) fn read_late_cull(
+        &self,
+        gpu: Gpu,
+        culler: &Culler,
+    ) -> Result<Option<CullOutput>> {
+        let late = self.late.as_ref().map(LatePhase::cull);
+        late.map(|cull| read_targets(gpu, culler, cull)).transpose()
+    }
+
+    /// The last prepared frame's far distance (`None` without a far layer).
+    pub(in crate::renderer) fn far_distance(&self) -> Option<f32> {
+        self.far_distance
+    }
+
+    /// Its visible total, from its counts buffer (with occlusion, both phases': what
+    /// it drew).
+    pub(in crate::renderer) fn visible_count(&self, gpu: Gpu) -> Result<u32> {
+        let late = self.late.as_ref().map(LatePhase::cull);
+        let late = match late {
+            Some(cull) => read_counts(gpu, cull)?[1],
+            None => 0,
+        };
+        Ok(read_counts(gpu, self.view.cull())?[1] + late)
+    }
+
+    /// What its two occlusion phases drew (`None` without occlusion).
+    pub(in crate::renderer) fn read_occlusion_counts(
+        &self,
+        gpu: Gpu,
+    ) -> Result<Option<OcclusionCounts>> {
+        let Some(late) = &self.late else {
+            return Ok(None);
+        };
+        let early = read_counts(gpu, self.view.cull())?[1];
+        let late = read_counts(gpu, late.cull())?[1];
+        Ok(Some(OcclusionCounts { early, late }))
+    }
+
+    /// Its pyramids' shape (`None` without occlusion).
+    pub(in crate::renderer) fn pyramid_shape(&self) -> Option<PyramidShape> {
+        self.late.as_ref().map(LatePhase::shape)
+    }
+}
+
+/// The device and queue a read waits on.
+pub(in crate::renderer) type Gpu<'a> = (&'a wgpu::Device, &'a wgpu::Queue);
+
+/// A view's cull buffers as `culler`'s layout lays them out, read back.
+fn read_targets(gpu: Gpu, culler: &Culler, cull: &CullTargets) -> Result<CullOutput> {
+    let counts = read_counts(gpu, cull)?;
+    let [draw_count, visible_total] = [counts[0], counts[1]];
+    let (device, queue) = gpu;
+    let visible = match visible_total {
+        0 => Vec::new(),
+        n => read_pod_at(
+            device,
+            queue,
+            (&cull.visible, cull.visible_at),
+            4 * n as u64,
+        )?,
+    };
+    let draws_bytes = (size_of::<DrawArgs>() as u32 * culler.draws()) as u64;
+    Ok(CullOutput {
+        visible,
+        draws: read_pod_at(device, queue, (&cull.draws, cull.draws_at), draws_bytes)?,
+        draw_count,
+        bins: (culler.bins().iter().zip(&counts[2..]))
+            .map(|(r, &count)| BinDraws {
+                first: r.first,
+                count,
+            })
+            .collect(),
+    })
+}
+
+/// The counts buffer: the draw count, the visible total, each bin's draw count.
+fn read_counts((device, queue): Gpu, cull: &CullTargets) -> Result<Vec<u32>> {
+    read_pod_at(device, queue, (&cull.counts, cull.counts_at), COUNTS_BYTES)
 }

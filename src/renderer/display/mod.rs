@@ -1,31 +1,46 @@
-//! The display level: everything recorded once per display, for both eyes. The path
-//! chosen once in `Renderer::new` ([`indirect`]: the GPU-driven `instanced` and
-//! `multiview`, one cull and one multi-draw per display; [`classic`]: the per-instance
-//! modes, the only ones with passes per eye), the far layer (`far_layer.rs`) and
-//! occlusion's passes (`occlusion/`), and what a path is built from.
+//! The display level: everything that exists once per rig display, as one value
+//! ([`Display`]: its name, target shape and passes), and what every display's passes
+//! share ([`Shared`]). A display's passes are those of the path chosen once in
+//! `Renderer::new` ([`indirect`]: the GPU-driven `instanced` and `multiview`, one cull
+//! and one multi-draw per display, with its far layer (`far_layer.rs`), occlusion's
+//! late phase (`occlusion.rs`), its mask and kept tiles; [`classic`]: the
+//! per-instance modes, the only ones with passes per eye).
 
 pub(in crate::renderer) mod classic;
-mod diagnostics;
 pub(in crate::renderer) mod far_layer;
 pub(in crate::renderer) mod indirect;
 pub(in crate::renderer) mod occlusion;
 
+use classic::ClassicDisplay;
+use far_layer::FarLayers;
+use indirect::IndirectDisplay;
+use occlusion::PyramidSets;
+
+use crate::draw::keep_tiles::KeepTiles;
 use crate::draw::{DrawScene, Drawer, Drawing};
+use crate::error::{Error, Result};
 use crate::records::{CullLayout, InstanceRecord};
 use crate::renderer::culler::Culler;
+use crate::renderer::frame_stats::FrameStats;
 use crate::renderer::options::RendererOptions;
-use crate::renderer::plan::FramePlan;
+use crate::renderer::plan::{DisplayPlan, FramePlan};
+use crate::renderer::recorder::Recorder;
+use crate::renderer::targets::{TargetShape, TargetViews};
+use crate::renderer::uploads::Writes;
+use crate::rig::Rig;
+use crate::scatter::ScatterTargets;
 use crate::scene::Scene;
 
-/// The scene, its cull layout, the frame plan of the rig as made, and the options.
+/// What a renderer's displays are made from: the scene, the rig and
+/// the frame plan of the rig as made, and the options.
 pub(in crate::renderer) struct PathInputs<'a> {
     pub(in crate::renderer) scene: &'a Scene,
     /// The instance records the draw starts from: the scene's, or a live scene's (with
     /// its slots' generations) when a sync reallocates.
     pub(in crate::renderer) records: &'a [InstanceRecord],
-    /// The scene's instances at their places of the cull order.
-    pub(in crate::renderer) layout: CullLayout,
-    /// The rig as made: its displays, coarse cull and far layer sizes.
+    /// The rig as made: its displays' names, shapes and masks.
+    pub(in crate::renderer) rig: &'a Rig,
+    /// Its plan: its displays, coarse cull and far layer sizes.
     pub(in crate::renderer) plan: &'a FramePlan,
     /// The frame context's uniform, bound by every pass.
     pub(in crate::renderer) frame: &'a wgpu::Buffer,
@@ -36,20 +51,234 @@ pub(in crate::renderer) struct PathInputs<'a> {
     pub(in crate::renderer) shadow_group: &'a wgpu::BindGroup,
 }
 
-/// What every path has: the one culler all its views cull through, the draw pipelines,
-/// and the scene as the GPU draws it.
-pub(in crate::renderer) struct PathCore {
+/// What every display's passes share: the one culler all views cull through, the draw
+/// pipelines, the scene as the GPU draws it, and on the GPU-driven path the far layers'
+/// pipelines and the kept tiles' pass.
+pub(in crate::renderer) struct Shared {
     pub(in crate::renderer) culler: Culler,
     pub(in crate::renderer) drawer: Drawer,
     pub(in crate::renderer) draw_scene: DrawScene,
+    /// With the far layer: what every far layer shares.
+    far: Option<FarLayers>,
+    /// Keeping unchanged pixels where frames may: the pass that clears changed tiles.
+    keep: Option<KeepTiles>,
 }
 
-impl PathCore {
+impl Shared {
     /// The pipelines and the scene, as a pass draws them.
     pub(in crate::renderer) fn drawing(&self) -> Drawing<'_> {
         Drawing {
             drawer: &self.drawer,
             scene: &self.draw_scene,
         }
+    }
+
+    /// The kept tiles' pass (keeping unchanged pixels on the GPU-driven path).
+    pub(in crate::renderer) fn keep(&self) -> Option<&KeepTiles> {
+        self.keep.as_ref()
+    }
+
+    /// Where the scatter passes (and the pose pass) write edits.
+    pub(in crate::renderer) fn scatter_targets(&self) -> ScatterTargets<'_> {
+        let (spheres, visibility) = self.culler.scatter_targets();
+        ScatterTargets {
+            instances: &self.draw_scene.instances,
+            spheres,
+            visibility,
+        }
+    }
+}
+
+/// What one rig display has, made whole by [`Display::new`]: its name (its timer
+/// scope), its target's shape, its far layer's size as made, and its passes.
+pub(in crate::renderer) struct Display {
+    name: String,
+    shape: TargetShape,
+    /// Its far layer's texels as made (every frame's plan is sized so).
+    far_size: Option<(u32, u32)>,
+    passes: DisplayPasses,
+}
+
+/// A display's passes on the path chosen once for the renderer.
+pub(in crate::renderer) enum DisplayPasses {
+    Indirect(Box<IndirectDisplay>),
+    Classic(Box<ClassicDisplay>),
+}
+
+/// What a renderer's displays are: what they share, occlusion's pyramids (every
+/// occluding display's, built together), and each display.
+pub(in crate::renderer) struct Displays {
+    pub(in crate::renderer) shared: Shared,
+    pub(in crate::renderer) pyramids: PyramidSets,
+    pub(in crate::renderer) displays: Vec<Display>,
+}
+
+/// The displays of `inputs` on the path its options choose, culled over `layout`
+/// (the scene's instances at their places of the cull order).
+pub(in crate::renderer) fn build(
+    device: &wgpu::Device,
+    layout: CullLayout,
+    inputs: &PathInputs,
+) -> Result<Displays> {
+    let scope = device.push_error_scope(wgpu::ErrorFilter::Validation);
+    let built = match inputs.options.mode.per_instance() {
+        false => indirect::build(device, layout, inputs),
+        true => classic::build(device, layout, inputs),
+    };
+    // Popped before returning any error, so the caller's device keeps its scopes.
+    if let Some(e) = pollster::block_on(scope.pop()) {
+        return Err(Error::Wgpu(e));
+    }
+    let (shared, pyramids, displays) = built?;
+    Ok(Displays {
+        shared,
+        pyramids,
+        displays,
+    })
+}
+
+impl Display {
+    /// Display `index` of `inputs`' rig, drawn by `passes`.
+    fn new(inputs: &PathInputs, index: usize, passes: DisplayPasses) -> Display {
+        let d = &inputs.rig.displays[index];
+        Display {
+            name: d.name.clone(),
+            shape: TargetShape::of(d, inputs.options),
+            far_size: inputs.plan.displays[index].far.map(|p| p.size),
+            passes,
+        }
+    }
+
+    /// What its targets must look like.
+    pub(in crate::renderer) fn shape(&self) -> &TargetShape {
+        &self.shape
+    }
+
+    /// Its far layer's size as made.
+    pub(in crate::renderer) fn far_size(&self) -> Option<(u32, u32)> {
+        self.far_size
+    }
+
+    /// Its passes on the GPU-driven path (`None` in the classic modes).
+    pub(in crate::renderer) fn indirect(&self) -> Option<&IndirectDisplay> {
+        match &self.passes {
+            DisplayPasses::Indirect(d) => Some(d),
+            DisplayPasses::Classic(_) => None,
+        }
+    }
+
+    pub(in crate::renderer) fn indirect_mut(&mut self) -> Option<&mut IndirectDisplay> {
+        match &mut self.passes {
+            DisplayPasses::Indirect(d) => Some(d),
+            DisplayPasses::Classic(_) => None,
+        }
+    }
+
+    /// Its passes in the classic modes (`None` on the GPU-driven path).
+    pub(in crate::renderer) fn classic(&self) -> Option<&ClassicDisplay> {
+        match &self.passes {
+            DisplayPasses::Classic(d) => Some(d),
+            DisplayPasses::Indirect(_) => None,
+        }
+    }
+
+    /// Writes this frame's contexts from `plan` (the display's) and the culler's
+    /// results for its views. Returns the bytes written.
+    pub(in crate::renderer) fn prepare(
+        &mut self,
+        to: Writes,
+        plan: &DisplayPlan,
+        shared: &mut Shared,
+    ) -> u64 {
+        match &mut self.passes {
+            DisplayPasses::Indirect(d) => d.prepare(to, plan, shared),
+            DisplayPasses::Classic(d) => d.prepare(to, plan, &shared.culler),
+        }
+    }
+
+    /// The display's first half of a frame into `target`: its cull and draw (with
+    /// occlusion, the early phase's), inside its scope.
+    pub(in crate::renderer) fn encode_early(
+        &self,
+        encoder: &mut wgpu::CommandEncoder,
+        (shared, target): (&Shared, &TargetViews),
+        rec: &mut Recorder,
+    ) -> FrameStats {
+        rec.enter(encoder, &self.name);
+        let recorded = match &self.passes {
+            DisplayPasses::Indirect(d) => d.encode_early(encoder, (shared, target), rec),
+            DisplayPasses::Classic(d) => d.encode(encoder, (shared, target), rec),
+        };
+        rec.leave(encoder);
+        recorded.at_display_level()
+    }
+
+    /// For a display drawn in the caller's pass: its cull (with occlusion the
+    /// frustum's alone) and far layer, inside its scope (GPU-driven; nothing in the
+    /// classic modes, culled in `prepare`).
+    pub(in crate::renderer) fn encode_cull(
+        &self,
+        encoder: &mut wgpu::CommandEncoder,
+        shared: &Shared,
+        rec: &mut Recorder,
+    ) -> FrameStats {
+        let Some(d) = self.indirect() else {
+            return FrameStats::default();
+        };
+        rec.enter(encoder, &self.name);
+        let culled = d.encode_cull(encoder, (shared, true), rec);
+        rec.leave(encoder);
+        culled.at_display_level()
+    }
+
+    /// With occlusion, after every display's pyramids: the display's late cull in
+    /// dispatches of its own (culling on the GPU where the rig cull does not take it),
+    /// inside its scope; nothing, and no scope, for a display without one.
+    pub(in crate::renderer) fn encode_late_cull(
+        &self,
+        encoder: &mut wgpu::CommandEncoder,
+        shared: &Shared,
+        rec: &mut Recorder,
+    ) -> FrameStats {
+        let Some(late) = self.indirect().and_then(|d| d.late_apart(&shared.culler)) else {
+            return FrameStats::default();
+        };
+        rec.enter(encoder, &self.name);
+        let dispatches = late.encode_cull(encoder, &shared.culler, rec);
+        rec.leave(encoder);
+        FrameStats::display_level(0, dispatches)
+    }
+
+    /// With occlusion, after the late culls: the rest of the display's late phase into
+    /// `target` (its far layer tested against its pyramids, its late draw), inside its
+    /// scope; nothing, and no scope, for a display without one.
+    pub(in crate::renderer) fn encode_late(
+        &self,
+        encoder: &mut wgpu::CommandEncoder,
+        (shared, target): (&Shared, &TargetViews),
+        rec: &mut Recorder,
+    ) -> FrameStats {
+        let Some(d) = self.indirect().filter(|d| d.late().is_some()) else {
+            return FrameStats::default();
+        };
+        rec.enter(encoder, &self.name);
+        let recorded = d.encode_late(encoder, (shared, target), rec);
+        rec.leave(encoder);
+        recorded.at_display_level()
+    }
+
+    /// The display drawn into a pass the caller began. Returns the draw calls.
+    pub(in crate::renderer) fn draw(
+        &self,
+        pass: &mut wgpu::RenderPass,
+        shared: &Shared,
+    ) -> Result<u32> {
+        Ok(match &self.passes {
+            DisplayPasses::Indirect(d) => {
+                d.check_own_pipelines(&shared.culler)?;
+                d.draw(pass, shared)
+            }
+            DisplayPasses::Classic(d) => d.draw(pass, shared),
+        })
     }
 }

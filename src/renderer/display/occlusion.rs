@@ -1,21 +1,21 @@
 //! Occlusion's passes on the GPU-driven path (`indirect.rs`): after every display's
 //! early draw, every display's depth pyramids in sets of displays (`PyramidSets`),
 //! then each display's late cull (the rig cull's late members, or its own dispatches)
-//! and its late draw; which displays cull by occlusion, and what it costs in GPU
-//! memory. The technique is [`crate::occlusion`]'s; where the late cull reads the
-//! pyramids, and culling on the CPU its late phase between the frame's halves, is the
-//! culler's (`culler/occlusion.rs`).
-
-mod late_half;
+//! and its late draw ([`LatePhase`]); culling on the CPU, the late culls between the
+//! frame's halves ([`cull_late`]); which displays cull by occlusion, and what it costs
+//! in GPU memory. The technique and its CPU twin are [`crate::occlusion`]'s; where the
+//! late cull reads the pyramids is the culler's (`culler/occlusion.rs`).
 
 use std::sync::Mutex;
 
-use super::far_layer::{Far, FarDisplay};
+use super::Display;
+use super::far_layer::{FarDisplay, FarLayers};
 use crate::draw::{BinPipelines, Drawing, OwnPipelines};
 use crate::error::Result;
 use crate::occlusion::PyramidShape;
 use crate::occlusion::pyramid::{PyramidDispatch, PyramidPass, PyramidSlice};
-use crate::renderer::culler::Culler;
+use crate::renderer::culler::{Culler, ViewCull};
+use crate::renderer::frame_stats::FrameStats;
 use crate::renderer::options::RendererOptions;
 use crate::renderer::plan::FramePlan;
 use crate::renderer::recorder::{PassRecord, Recorder, begin_draw_pass};
@@ -26,8 +26,8 @@ use crate::shaders::{DrawKey, PYRAMID_SET_DEPTHS};
 /// Display `index`'s late occlusion phase: its cull and draw (whose context is the
 /// display's), its pipeline variant and the shape of its pyramids.
 pub(in crate::renderer) struct LatePhase {
-    pub(in crate::renderer::display) view: ViewPass,
-    pub(in crate::renderer::display) shape: PyramidShape,
+    view: ViewPass,
+    shape: PyramidShape,
     index: usize,
     key: DrawKey,
 }
@@ -35,7 +35,7 @@ pub(in crate::renderer) struct LatePhase {
 impl LatePhase {
     /// Display `index`'s late phase, drawn with pipeline variant `key` and culled and
     /// drawn by `view` (whose context is the display's), its pyramids `shape`.
-    pub(in crate::renderer::display) fn new(
+    pub(super) fn new(
         (index, key): (usize, DrawKey),
         view: ViewPass,
         shape: PyramidShape,
@@ -52,7 +52,7 @@ impl LatePhase {
 /// Every display's pyramids, in sets of up to [`PYRAMID_SET_DEPTHS`] displays whose
 /// depth targets one pass reads (side by side, or a layer per eye): one set of
 /// dispatches each.
-pub(in crate::renderer::display) struct PyramidSets {
+pub(in crate::renderer) struct PyramidSets {
     sets: Vec<PyramidSetPass>,
     device: wgpu::Device,
 }
@@ -69,10 +69,18 @@ struct PyramidSetPass {
 }
 
 impl PyramidSets {
+    /// No sets: no display occludes.
+    pub(super) fn none(device: &wgpu::Device) -> PyramidSets {
+        PyramidSets {
+            sets: Vec::new(),
+            device: device.clone(),
+        }
+    }
+
     /// The sets of the displays with a pyramid shape (`shapes`), drawn with pipeline
     /// variants `keys` into targets laid out as `plan`'s contexts say, into their
     /// regions of `culler`'s pyramids.
-    pub(in crate::renderer::display) fn new(
+    pub(super) fn new(
         device: &wgpu::Device,
         options: &RendererOptions,
         (keys, plan, shapes): (&[DrawKey], &FramePlan, &[Option<PyramidShape>]),
@@ -109,7 +117,7 @@ impl PyramidSets {
     /// Records every set's pyramids of the early depth in `targets` (one per
     /// display), where `culler` reads them, as one frame-level pass `pyramid`.
     /// Returns the dispatches.
-    pub(in crate::renderer::display) fn encode(
+    pub(in crate::renderer) fn encode(
         &self,
         encoder: &mut wgpu::CommandEncoder,
         (culler, targets): (&Culler, &[TargetViews]),
@@ -207,7 +215,7 @@ pub struct OcclusionBytes {
 impl LatePhase {
     /// The display's late cull in its own dispatches (culling on the GPU, where the
     /// rig cull does not take it), after every display's pyramids.
-    pub(in crate::renderer::display) fn encode_cull(
+    pub(super) fn encode_cull(
         &self,
         encoder: &mut wgpu::CommandEncoder,
         culler: &Culler,
@@ -220,10 +228,10 @@ impl LatePhase {
     /// The late draw into `target`: a pass that keeps what the early one drew, opening
     /// with the display's far layer composited (where it has one). Returns the draw
     /// calls.
-    pub(in crate::renderer::display) fn encode_draw(
+    pub(super) fn encode_draw(
         &self,
         encoder: &mut wgpu::CommandEncoder,
-        (drawing, own, far): (Drawing, &OwnPipelines, Option<(&Far, &FarDisplay)>),
+        (drawing, own, far): (Drawing, &OwnPipelines, Option<(&FarLayers, &FarDisplay)>),
         target: &TargetViews,
         rec: &mut Recorder,
     ) -> u32 {
@@ -231,7 +239,7 @@ impl LatePhase {
         let mask = self.key.multiview_mask();
         let mut pass = begin_draw_pass(encoder, rec, (target, false, mask), &mut open);
         rec.count_samples(&mut pass, &mut open);
-        let composite = far.map_or(0, |(far, layer)| far.layers.composite(&mut pass, layer));
+        let composite = far.map_or(0, |(layers, far)| layers.composite(&mut pass, far));
         let with = BinPipelines::Draw(self.key, own);
         let calls = composite + self.view.draw(&mut pass, drawing, with);
         rec.close_render(encoder, pass, open);
@@ -239,25 +247,10 @@ impl LatePhase {
     }
 }
 
-/// Whether each display with occlusion (`late`, per display) can read its depth target
-/// into its pyramids.
-pub(in crate::renderer::display) fn check_depth<'a>(
-    late: impl Iterator<Item = Option<&'a LatePhase>>,
-    targets: &[TargetViews],
-) -> Result<()> {
-    let bindable = wgpu::TextureUsages::TEXTURE_BINDING;
-    for (display, (late, target)) in late.zip(targets).enumerate() {
-        if late.is_some() && !target.depth.texture().usage().contains(bindable) {
-            return Err(crate::error::Error::DepthNotBindable { display });
-        }
-    }
-    Ok(())
-}
-
 /// What occlusion adds in GPU memory for displays' `late` phases (`None` without any):
 /// culling on the GPU, the bits and the shared pyramids; culling on the CPU, the
 /// `read_back` pyramids (one region per display; the bits stay on the CPU).
-pub(in crate::renderer::display) fn occlusion_bytes<'a>(
+pub(in crate::renderer) fn occlusion_bytes<'a>(
     late: impl Iterator<Item = &'a LatePhase> + Clone,
     culler: &Culler,
 ) -> Option<OcclusionBytes> {
@@ -272,7 +265,7 @@ pub(in crate::renderer::display) fn occlusion_bytes<'a>(
 
 /// Each display's pyramid shape where it culls by occlusion ([`RendererOptions::occludes`])
 /// in a scene of `triangles` triangles.
-pub(in crate::renderer::display) fn pyramid_shapes(
+pub(super) fn pyramid_shapes(
     plan: &FramePlan,
     options: &RendererOptions,
     triangles: u64,
@@ -289,4 +282,38 @@ pub(in crate::renderer::display) fn pyramid_shapes(
                 .then_some(shape)
         })
         .collect()
+}
+
+impl LatePhase {
+    /// Its cull, as the culler keeps it.
+    pub(super) fn view_cull(&self) -> &ViewCull {
+        self.view.view_cull()
+    }
+
+    /// Its cull outputs, per the cull contract.
+    pub(super) fn cull(&self) -> &crate::cull::targets::CullTargets {
+        self.view.cull()
+    }
+
+    /// The shape of its pyramids.
+    pub(super) fn shape(&self) -> PyramidShape {
+        self.shape
+    }
+}
+
+/// Culling on the CPU with occlusion, after the frame's early half was submitted: each
+/// display's late phase and far layer culled against its pyramids, read back
+/// ([`Culler::cull_late`]).
+pub(in crate::renderer) fn cull_late(
+    (device, queue): (&wgpu::Device, &wgpu::Queue),
+    culler: &mut Culler,
+    displays: &[Display],
+) -> Result<FrameStats> {
+    let views: Vec<_> = (displays.iter())
+        .map(|d| match d.indirect() {
+            Some(d) => (d.late().map(LatePhase::view_cull), d.far_view_cull()),
+            None => (None, None),
+        })
+        .collect();
+    culler.cull_late((device, queue), &views)
 }
