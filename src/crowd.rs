@@ -9,9 +9,9 @@ use std::f32::consts::{PI, TAU};
 use glam::{Affine3A, Quat, Vec3, Vec4};
 use rand::{Rng, SeedableRng};
 
-use crate::posing::{Channel, Clip, Interpolation, PoseNode, Property, Trs};
+use crate::pose::{Channel, Clip, Interpolation, PoseNode, Property, Trs};
 use crate::scene::{Animation, Instance, Scene, Vertex};
-use crate::skinning::{Skin, SkinVertex};
+use crate::skin::{Skin, SkinVertex};
 
 /// One joint of the figure and the bone box it moves.
 struct Bone {

@@ -254,7 +254,7 @@ impl LiveScene {
         Ok(())
     }
 
-    /// Poses the scene's node animations at `time` seconds ([`crate::posing`], once per
+    /// Poses the scene's node animations at `time` seconds ([`crate::pose`], once per
     /// frame): every instance they move that is still in the scene (in its slot since
     /// [`LiveScene::new`]) moves as by [`LiveScene::set_transform`], so only the posed
     /// instances' edits cross the bus. Returns how many moved.

@@ -2,7 +2,7 @@
 //! frame's pose pass reads (`wgsl/pose.wgsl`), so that what changes per frame is the
 //! frame context's time and nothing else crosses the bus.
 //!
-//! The pass runs the CPU's posing ([`crate::posing`], [`crate::skinning`]) in three
+//! The pass runs the CPU's posing ([`crate::pose`], [`crate::skin`]) in three
 //! dispatches: each node's local transform from its channels sampled at the time,
 //! each node's world transform (walking up to its root, then multiplying down in the
 //! CPU's order), and each target (an instance on a node, or a skin: its culling sphere
@@ -18,7 +18,7 @@ use glam::{Affine3A, Vec4};
 
 use crate::error::{Error, Result};
 use crate::places::Places;
-use crate::posing::{Interpolation, Property};
+use crate::pose::{Interpolation, Property};
 use crate::scene::{Scene, affine_rows};
 
 /// The deepest posed tree the pass walks (a node and its ancestors); deeper trees are
@@ -70,11 +70,11 @@ pub struct PoseChannelRecord {
     pub keys: u32,
     /// Its first value in [`PoseTables::values`] (three per key for a cubic spline).
     pub first_value: u32,
-    /// Its clip's [`crate::posing::Clip::offset`].
+    /// Its clip's [`crate::pose::Clip::offset`].
     pub offset: f32,
-    /// Its clip's [`crate::posing::Clip::speed`].
+    /// Its clip's [`crate::pose::Clip::speed`].
     pub speed: f32,
-    /// Its clip's [`crate::posing::Clip::duration`].
+    /// Its clip's [`crate::pose::Clip::duration`].
     pub duration: f32,
 }
 
@@ -265,7 +265,7 @@ type KeyBits = (Vec<u32>, Vec<[u32; 4]>);
 
 impl KeyStore {
     /// Where `c`'s times and values lie in `tables`, added unless stored already.
-    fn add(&mut self, tables: &mut PoseTables, c: &crate::posing::Channel) -> (u32, u32) {
+    fn add(&mut self, tables: &mut PoseTables, c: &crate::pose::Channel) -> (u32, u32) {
         let bits = (
             c.times.iter().map(|t| t.to_bits()).collect(),
             c.values

@@ -8,7 +8,7 @@ mod support;
 use glam::{Affine3A, Quat, Vec3, Vec4};
 use rand::{Rng, SeedableRng};
 use stereocull::live::LiveScene;
-use stereocull::posing::{Channel, Clip, Interpolation, NodeInstance, PoseNode, Property, Trs};
+use stereocull::pose::{Channel, Clip, Interpolation, NodeInstance, PoseNode, Property, Trs};
 use stereocull::records::InstanceRecord;
 use stereocull::renderer::{CullMode, PosingMode, Renderer, RendererOptions};
 use stereocull::scene::Scene;

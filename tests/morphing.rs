@@ -9,11 +9,11 @@ mod support;
 use base64::Engine;
 use glam::{Vec3, Vec4};
 use serde_json::json;
-use stereocull::morphing::{MorphVertex, Morphs, morph_vertex};
+use stereocull::morph::{MorphVertex, Morphs, morph_vertex};
 use stereocull::renderer::{Renderer, RendererOptions};
 use stereocull::scene::Scene;
 use stereocull::scene_spec;
-use stereocull::skinning::skin_vertex;
+use stereocull::skin::skin_vertex;
 use support::morph::SIDE;
 
 /// SimpleSkin with one target on its mesh (each vertex pushed out along x by its
@@ -211,7 +211,7 @@ fn a_morphed_skin_is_morphed_before_it_is_skinned() {
         let placed = scene.instances[0].world_from_local;
         for (m, rest) in scene.morphs.vertices.iter().zip(&scene.skins.vertices) {
             let (position, normal, tangent) = morphed(&scene.morphs, m);
-            let morphed_rest = stereocull::skinning::SkinVertex {
+            let morphed_rest = stereocull::skin::SkinVertex {
                 position,
                 normal,
                 tangent,

@@ -8,7 +8,7 @@ mod support;
 use glam::{Affine3A, DQuat, DVec3, Quat, Vec3, Vec4};
 use rand::{Rng, SeedableRng};
 use stereocull::live::LiveScene;
-use stereocull::posing::{Channel, Interpolation, Property};
+use stereocull::pose::{Channel, Interpolation, Property};
 use stereocull::renderer::RendererOptions;
 use stereocull::scene_spec;
 use support::Tolerance;

@@ -987,7 +987,7 @@ fn windowed_arrays_take_one_binding_per_window() {
 #[test]
 fn skin_records_match_wgsl() {
     use stereocull::scene::Vertex;
-    use stereocull::skinning::{JointMatrix, SkinVertex};
+    use stereocull::skin::{JointMatrix, SkinVertex};
     let source = stereocull::shaders::skin_source();
     let module = parse("skin", &source);
     let (members, span) = wgsl_struct(&module, "SkinVertex");

@@ -10,7 +10,7 @@ use rand::{Rng, SeedableRng};
 use stereocull::renderer::{Renderer, RendererOptions};
 use stereocull::scene::Scene;
 use stereocull::scene_spec;
-use stereocull::skinning::skin_vertex;
+use stereocull::skin::skin_vertex;
 
 fn simple_skin() -> Scene {
     let path = support::gltf_sample("SimpleSkin", "gltf");

@@ -182,18 +182,10 @@ fn module_files_form_no_circle() {
     assert_no_circle(&graph);
 }
 
-/// The files of `renderer/` that extend `Renderer` itself (its methods, by the part of
-/// the embedding API they serve), and `path`, the path it assembles: they assemble the
+/// The files of `renderer/` that serve the embedding API beside `renderer/mod.rs`: a
+/// frame's calls (`submit`), the diagnostics and the option checks. They assemble the
 /// levels, so they may name them all.
-const RENDERER_API: [&str; 7] = [
-    "path",
-    "sync",
-    "prepare",
-    "encode",
-    "diagnostics",
-    "own_passes",
-    "checks",
-];
+const RENDERER_API: [&str; 3] = ["submit", "diagnostics", "checks"];
 
 /// The modules of `renderer/` below `renderer` itself, but the API's files.
 fn renderer_inner(files: &[(Vec<String>, String)]) -> Vec<&(Vec<String>, String)> {
@@ -287,4 +279,82 @@ fn the_module_reader_sees_grouped_nested_relative_and_child_paths() {
         &modules,
     );
     assert_eq!(parent, [module(&["renderer", "culler"])]);
+}
+
+/// The fields of `struct name` in `file` (under `src/`), each as its line of code.
+fn struct_fields(file: &str, name: &str) -> Vec<String> {
+    let path = Path::new(env!("CARGO_MANIFEST_DIR")).join("src").join(file);
+    let text = std::fs::read_to_string(path).unwrap();
+    let start = text
+        .find(&format!("pub struct {name} {{"))
+        .unwrap_or_else(|| panic!("no struct {name} in {file}"));
+    let body = &text[start..];
+    let body = &body[body.find('{').unwrap() + 1..body.find("\n}").unwrap()];
+    (body.lines())
+        .map(str::trim)
+        .filter(|l| !l.is_empty() && !l.starts_with("//") && !l.starts_with('#'))
+        .map(String::from)
+        .collect()
+}
+
+/// The chapter's levels are values: what exists once per display is one field of one
+/// `DisplayPlan` or `Display`, never a vector indexed by display beside `displays`.
+/// Every other vector of the frame's plan and of the renderer is listed here with what
+/// it is indexed by, so a new one must say why it is not per display.
+#[test]
+fn a_frame_plan_and_a_renderer_keep_their_displays_in_one_vector() {
+    let per_what = [
+        (
+            "renderer/plan.rs",
+            "FramePlan",
+            "displays: Vec<DisplayPlan>,",
+        ),
+        ("renderer/plan.rs", "FramePlan", "marks: Vec<u32>,"),
+        ("renderer/mod.rs", "Renderer", "displays: Vec<Display>,"),
+        ("renderer/mod.rs", "Renderer", "passes: Vec<PassRecord>,"),
+    ];
+    for (file, name) in [
+        ("renderer/plan.rs", "FramePlan"),
+        ("renderer/mod.rs", "Renderer"),
+    ] {
+        let fields = struct_fields(file, name);
+        assert!(fields.len() > 4, "{name}: {fields:?}");
+        for field in fields.iter().filter(|f| f.contains("Vec<")) {
+            let field = field.trim_start_matches("pub ");
+            let listed = (per_what.iter()).any(|&(f, n, l)| (f, n, l) == (file, name, field));
+            assert!(listed, "{name} has a vector that is not listed: {field}");
+        }
+        assert!(
+            !fields.iter().any(|f| f.contains("Vec<Option<")),
+            "{name}: {fields:?}"
+        );
+    }
+}
+
+/// `impl Renderer` keeps the embedding API and hands each level to its type: it lives
+/// in at most two files (making the renderer and asking it things; a frame's calls).
+#[test]
+fn the_renderer_is_implemented_in_at_most_two_files() {
+    let files = module_files();
+    let implementing: Vec<String> = (files.iter())
+        .filter(|(_, code)| code.contains("impl Renderer {"))
+        .map(|(m, _)| m.join("::"))
+        .collect();
+    assert!(!implementing.is_empty());
+    assert!(implementing.len() <= 2, "{implementing:?}");
+}
+
+#[test]
+fn the_field_reader_sees_each_field_of_the_frame_plan() {
+    let fields = struct_fields("renderer/plan.rs", "FramePlan");
+    assert!(
+        fields
+            .iter()
+            .any(|f| f == "pub displays: Vec<DisplayPlan>,"),
+        "{fields:?}"
+    );
+    assert!(
+        fields.iter().any(|f| f == "pub frame: FrameContext,"),
+        "{fields:?}"
+    );
 }

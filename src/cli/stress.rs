@@ -408,8 +408,8 @@ fn summarize(
         },
         posing_bytes: session.renderer.posing_bytes(),
         skinning_bytes: serde_json::json!({
-            "per_skinned_vertex": size_of::<crate::skinning::SkinVertex>(),
-            "per_joint": size_of::<crate::skinning::JointMatrix>(),
+            "per_skinned_vertex": size_of::<crate::skin::SkinVertex>(),
+            "per_joint": size_of::<crate::skin::JointMatrix>(),
         }),
         occlusion_bytes: session.renderer.occlusion_bytes(),
         occlusion: Vec::new(),

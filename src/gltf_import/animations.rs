@@ -1,4 +1,4 @@
-//! glTF node animations into [`crate::posing`]: the nodes the channels move (and their
+//! glTF node animations into [`crate::pose`]: the nodes the channels move (and their
 //! descendants, which move with them) become posed nodes, parents first; each channel's
 //! keys are read and checked, and a malformed one is an error naming it.
 
@@ -8,7 +8,7 @@ use glam::{Affine3A, Quat, Vec3, Vec4};
 use gltf::animation::{Interpolation as GltfInterpolation, Property as GltfProperty};
 
 use super::{Importer, Step};
-use crate::posing::{Channel, Clip, Interpolation, PoseNode, Property, Trs};
+use crate::pose::{Channel, Clip, Interpolation, PoseNode, Property, Trs};
 
 /// The nodes some channel animates.
 pub(super) fn targets(document: &gltf::Document) -> HashSet<usize> {

@@ -5,7 +5,7 @@ use glam::{Affine3A, Vec3};
 
 use super::{Importer, Step};
 use crate::lights::{Light, LightKind};
-use crate::posing::NodeInstance;
+use crate::pose::NodeInstance;
 
 impl Importer<'_> {
     /// The node's `KHR_lights_punctual` light, at the node's origin shining along its

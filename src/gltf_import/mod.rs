@@ -15,7 +15,7 @@ use gltf::buffer::Data;
 use gltf::{Document, Semantic};
 
 use crate::error::{Error, Result};
-use crate::posing::NodeInstance;
+use crate::pose::NodeInstance;
 use crate::scene::{Animation, Instance, Scene, Vertex, both_windings};
 
 mod animations;

@@ -1,4 +1,4 @@
-//! glTF morph targets into [`crate::morphing`]: a node's morphed primitive gets a mesh
+//! glTF morph targets into [`crate::morph`]: a node's morphed primitive gets a mesh
 //! of its own (the morph pass writes its weighted vertices into it; the node's
 //! instancing copies share it), its targets' `POSITION`, `NORMAL` and `TANGENT` offsets
 //! become the pass's deltas, its weights come from the node (else the mesh, else zeros)
@@ -10,8 +10,8 @@ use glam::Vec3;
 use gltf::Semantic;
 
 use super::{Importer, Step};
-use crate::morphing::{Morph, MorphDelta, MorphVertex, WeightChannel};
-use crate::posing::{Channel, Interpolation, Property};
+use crate::morph::{Morph, MorphDelta, MorphVertex, WeightChannel};
+use crate::pose::{Channel, Interpolation, Property};
 use crate::scene::Vertex;
 
 /// A morph read while placing nodes, finished once the animations are read.

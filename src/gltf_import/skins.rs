@@ -1,4 +1,4 @@
-//! glTF skins into [`crate::skinning`]: a skinned node's primitives each get a mesh of
+//! glTF skins into [`crate::skin`]: a skinned node's primitives each get a mesh of
 //! their own (the skinning pass writes that instance's posed vertices into it), their
 //! `JOINTS_0` / `WEIGHTS_0` become rest vertices for the pass, and the skin's joints
 //! become posed nodes with their inverse bind matrices and the bounds of what each
@@ -10,7 +10,7 @@ use gltf::mesh::util::{ReadJoints, ReadWeights};
 
 use super::{Importer, Step, check_accessor};
 use crate::scene::{Animation, Instance, sphere_around};
-use crate::skinning::{Skin, SkinVertex};
+use crate::skin::{Skin, SkinVertex};
 
 /// A skinned instance read before its joints are placed: its skin, and its vertices'
 /// range of the scene's skin vertices.

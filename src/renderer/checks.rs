@@ -140,7 +140,7 @@ fn check_own_shading(scene: &Scene, options: &RendererOptions) -> Result<()> {
 }
 
 /// Whether a renderer can be made for `scene` and `rig` with `options` on `device`.
-pub(super) fn check_renderer(
+pub fn check_renderer(
     device: &wgpu::Device,
     scene: &Scene,
     rig: &Rig,
@@ -162,11 +162,7 @@ pub(super) fn check_renderer(
 }
 
 /// What a mode cannot do without, said before anything is built.
-pub(super) fn check_device(
-    device: &wgpu::Device,
-    scene: &Scene,
-    options: &RendererOptions,
-) -> Result<()> {
+pub fn check_device(device: &wgpu::Device, scene: &Scene, options: &RendererOptions) -> Result<()> {
     let features = device.features();
     let mode = options.mode.name();
     check_sample_count(features, options)?;
@@ -361,7 +357,7 @@ fn unjoined_content(scene: &Scene, rig: &Rig, options: &RendererOptions) -> Opti
 }
 
 /// Why a renderer made with `options` cannot latch a pose, where it cannot.
-pub(super) fn why_no_latch(options: &RendererOptions) -> Option<&'static str> {
+pub fn why_no_latch(options: &RendererOptions) -> Option<&'static str> {
     if options.frames_per_submit != 1 {
         return Some(
             "latching a pose takes one frame per submission: the second frame's pose is a prediction already",

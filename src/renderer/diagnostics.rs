@@ -31,16 +31,14 @@ pub struct Diagnostics<'a> {
     queue: &'a wgpu::Queue,
 }
 
-impl Renderer {
-    /// The last submitted frame's diagnostics, read back through `device` and `queue`
-    /// (the renderer's own).
-    pub fn diagnostics<'a>(
-        &'a self,
+impl<'a> Diagnostics<'a> {
+    pub(super) fn new(
+        renderer: &'a Renderer,
         device: &'a wgpu::Device,
         queue: &'a wgpu::Queue,
     ) -> Diagnostics<'a> {
         Diagnostics {
-            renderer: self,
+            renderer,
             device,
             queue,
         }
@@ -61,7 +59,7 @@ impl Diagnostics<'_> {
     /// was submitted (GPU culling with the coarse cull; `None` otherwise): the cull
     /// positions of the blocks listed for each display, all its cull tested.
     pub fn candidates(&self) -> Result<Option<Vec<u32>>> {
-        let (culler, displays) = self.renderer.culler();
+        let (culler, displays) = self.culler();
         culler.read_candidates(self.device, self.queue, displays)
     }
 
@@ -70,14 +68,14 @@ impl Diagnostics<'_> {
     /// coarse cull every instance once (for its block's sphere), every block once for
     /// the frame and once per display, and each display's candidates.
     pub fn sphere_tests(&self) -> Result<Option<u64>> {
-        let (culler, displays) = self.renderer.culler();
+        let (culler, displays) = self.culler();
         culler.read_sphere_tests(self.device, self.queue, displays)
     }
 
     /// The optional tests the GPU cull's pipelines hold ([`CullTests`]: those a frame
     /// of this renderer can use, the rest compiled out); `None` on the CPU.
     pub fn cull_tests(&self) -> Option<CullTests> {
-        self.renderer.culler().0.tests()
+        self.culler().0.tests()
     }
 
     /// Display `index`'s changed tiles in the last frame, a bit each (row-major over its
@@ -99,6 +97,11 @@ impl Diagnostics<'_> {
     /// mode).
     fn indirect(&self, index: usize) -> Option<&IndirectDisplay> {
         self.renderer.displays.get(index)?.indirect()
+    }
+
+    /// The frame's culler, and how many displays it culls for.
+    fn culler(&self) -> (&super::culler::Culler, usize) {
+        (&self.renderer.shared.culler, self.renderer.displays.len())
     }
 
     fn gpu(&self) -> Gpu<'_> {
@@ -253,7 +256,7 @@ impl Diagnostics<'_> {
     /// cost; on a GPU it adds a submission's latency to each.
     pub fn cull_against_floor(&self, rounds: u32) -> Result<Option<WallCulls>> {
         let views: Vec<_> = (self.renderer.displays.iter())
-            .filter_map(|d| Some(d.indirect()?.view_cull()))
+            .filter_map(|d| Some(d.indirect()?.cull_pass()))
             .collect();
         if views.is_empty() {
             return Ok(None);
@@ -272,7 +275,7 @@ impl Diagnostics<'_> {
     /// The clusters buffer as the frame left it ([`crate::lights`]): per display its
     /// clusters' records ([`crate::lights::cluster_bits`]).
     pub fn light_clusters(&self) -> Result<Vec<u32>> {
-        let buffer = &self.renderer.lighting.clusters;
+        let buffer = &self.renderer.frame.lighting().clusters;
         read_pod(self.device, self.queue, buffer, buffer.size())
     }
 
@@ -284,7 +287,10 @@ impl Diagnostics<'_> {
             .map(|_| {
                 let mut encoder = self.device.create_command_encoder(&Default::default());
                 let mut rec = super::recorder::Recorder::new(None, Vec::new());
-                self.renderer.lighting.encode(&mut encoder, &mut rec);
+                self.renderer
+                    .frame
+                    .lighting()
+                    .encode(&mut encoder, &mut rec);
                 let start = std::time::Instant::now();
                 self.queue.submit([encoder.finish()]);
                 crate::readback::wait_idle(self.device)?;
@@ -308,13 +314,13 @@ impl Diagnostics<'_> {
     /// Every slot's world sphere as the GPU cull tested it (GPU culling; `None`
     /// otherwise): with GPU posing, what the pose pass wrote.
     pub fn spheres(&self) -> Result<Option<Vec<[f32; 4]>>> {
-        let (culler, _) = self.renderer.culler();
+        let (culler, _) = self.culler();
         culler.read_spheres(self.device, self.queue, self.renderer.slots)
     }
 
     /// The joint matrices the frame's skinning pass applied (`None` without skins).
-    pub fn joint_matrices(&self) -> Result<Option<Vec<crate::skinning::JointMatrix>>> {
-        let Some(skin) = &self.renderer.frame_passes.skin else {
+    pub fn joint_matrices(&self) -> Result<Option<Vec<crate::skin::JointMatrix>>> {
+        let Some(skin) = &self.renderer.frame.passes.skin else {
             return Ok(None);
         };
         let buffer = skin.joint_matrices();
@@ -333,12 +339,5 @@ impl Diagnostics<'_> {
                 (None, None) => Ok(0),
             })
             .collect()
-    }
-}
-
-impl Renderer {
-    /// The frame's culler, and how many displays it culls for.
-    fn culler(&self) -> (&super::culler::Culler, usize) {
-        (&self.shared.culler, self.displays.len())
     }
 }

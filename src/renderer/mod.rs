@@ -77,36 +77,31 @@
 //! logs the passes. The eye level lives in the contexts (`eye[e]`) and the shaders, and
 //! in the classic modes' per-eye passes.
 
-use crate::buffers::uniform_buffer;
-use crate::contexts::FrameContext;
-use crate::draw::DrawScene;
+use crate::cull::targets::CullTargets;
+use crate::draw::{DrawScene, OwnPipeline};
 use crate::error::{Error, Result};
 use crate::keep::Keeper;
 pub use crate::keep::{KeepUnchanged, WholeRedraw};
 use crate::motion::PreviousFrame;
 
+use crate::live::LiveScene;
 use crate::places::Places;
 use crate::records::{CullLayout, instance_records};
 use crate::rig::Rig;
-use crate::scatter::Scatters;
 use crate::scene::Scene;
 
 mod checks;
 mod culler;
 mod diagnostics;
 mod display;
-mod encode;
 mod frame;
 mod frame_stats;
 pub mod frames;
 mod keeping;
 mod options;
-mod own_passes;
 mod plan;
-mod prepare;
 mod recorder;
-mod second_frame;
-mod sync;
+mod submit;
 mod targets;
 mod uploads;
 mod view;
@@ -118,13 +113,14 @@ use display::indirect::IndirectDisplay;
 pub use display::occlusion::OcclusionBytes;
 use display::occlusion::PyramidSets;
 use display::{Display, PathInputs, Shared};
-use frame::lights::Lighting;
+pub use frame::edits::SyncStats;
+use frame::edits::{self, Edits};
 use frame::morph::MorphPass;
 use frame::pose::PosePass;
-use frame::shadow::ShadowMap;
 use frame::skin::SkinPass;
-use frame::{FrameBindings, FramePasses};
+use frame::{FrameBase, FrameBindings, FrameLevel, FramePasses};
 pub use frame_stats::{DispatchLevels, FrameStats};
+pub use frames::grown;
 pub use options::{
     CoarseMode, CullMode, DEFAULT_DT, LOD_PIXELS, OcclusionMode, PosingMode, RendererOptions,
     StereoMode, frame_lod,
@@ -132,52 +128,24 @@ pub use options::{
 use plan::PlanStorage;
 pub use plan::{CullView, DisplayPlan, FramePlan, KeptTiles, PlannedCull, instances_per_object};
 pub use recorder::{Level, PassRecord};
-use second_frame::SecondFrame;
-pub use second_frame::grown;
-pub use sync::SyncStats;
 pub use targets::{DisplayTarget, TargetShape, TargetViews};
 use uploads::Coalesced;
-
-/// What the frame level's passes are built over: `frame`, the frame context, in
-/// `windows`, and what the displays' passes share.
-fn frame_bindings<'a>(
-    shared: &'a Shared,
-    frame: &'a wgpu::Buffer,
-    windows: crate::shaders::Windows,
-) -> FrameBindings<'a> {
-    FrameBindings {
-        frame,
-        windows,
-        drawing: shared.drawing(),
-        culler: &shared.culler,
-        scatter: shared.scatter_targets(),
-    }
-}
 
 /// The scene submission backend: one per scene and rig shape, see the module docs for the
 /// calls in order.
 pub struct Renderer {
     options: RendererOptions,
-    /// The frame context's uniform, written once per frame, bound by every pass.
-    frame: wgpu::Buffer,
-    /// The frame level's passes: posing, morph targets, skinning, the shadow pass (the
-    /// light culled as one more view of the displays' culler).
-    frame_passes: FramePasses,
-    /// Moved instances, staged by `sync`, dispatched by the next `encode`.
-    scatter: Scatters,
-    /// Two frames per submission: the second frame's own edits (`sync_next`).
-    second: Option<SecondFrame>,
-    /// The punctual lights and their clusters.
-    lighting: Lighting,
-    /// The map the shadow pass draws (1 x 1 without shadows: the draw pipelines bind it
-    /// either way).
-    shadow_map: ShadowMap,
-    /// What every display's passes share: the culler, the draw pipelines, the scene.
+    /// What exists once per frame: the frame context, the lights, the frame level's
+    /// passes and the edits staged for them.
+    frame: FrameLevel,
+    /// What every level's passes share: the culler, the draw pipelines, the scene.
     shared: Shared,
     /// With occlusion: every occluding display's pyramids, built together.
     pyramids: PyramidSets,
     /// Each rig display, in the rig's order.
     displays: Vec<Display>,
+    /// What `prepare` and `latch` write of the pose, as one upload.
+    uploads: Coalesced,
     /// Instance slots the buffers have room for.
     slots: u32,
     /// The rig as made: the displays (and far layer sizes) a reallocation rebuilds for.
@@ -193,14 +161,36 @@ pub struct Renderer {
     /// last written (prepared or latched), the next one's.
     motion_from: Option<PreviousFrame>,
     motion_last: Option<PreviousFrame>,
-    /// What `prepare` and `latch` write of the pose, as one upload.
-    uploads: Coalesced,
     /// The last written plan's vectors, which the next plan fills.
     spare: PlanStorage,
     /// What changed since the last frame, to keep the pixels nothing changed.
     keeper: Keeper,
     /// Whether the frame last prepared keeps pixels (a latch would move them all).
     keeps: bool,
+}
+
+/// What the GPU holds of a scene: the frame level's passes and edits, what the levels
+/// share, the pyramids and the displays ([`Renderer::new`]; again when a sync
+/// reallocates).
+struct Built {
+    passes: FramePasses,
+    edits: Edits,
+    shared: Shared,
+    pyramids: PyramidSets,
+    displays: Vec<Display>,
+}
+
+/// What a renderer's GPU copy of a scene is built from: the scene (with its slots'
+/// records, and its instances' places of the cull order), the room, and what it binds
+/// of the frame level.
+#[derive(Clone, Copy)]
+struct Made<'a> {
+    scene: &'a Scene,
+    records: &'a [crate::records::InstanceRecord],
+    places: &'a Places,
+    slots: u32,
+    /// Whether the pose pass poses each slot.
+    posed: &'a dyn Fn(u32) -> bool,
 }
 
 impl Renderer {
@@ -215,7 +205,6 @@ impl Renderer {
         checks::check_renderer(device, scene, rig, &options)?;
         let never = keeping::never(scene, rig.displays.iter().map(|d| d.views()), &options);
         let measures = options.cull == CullMode::Cpu;
-        let uploads = Coalesced::new(device, options.late_latch);
         let keeper = Keeper::new(
             scene,
             options.keep_unchanged,
@@ -225,57 +214,73 @@ impl Renderer {
         );
         let resolved = rig.resolve()?;
         let coarse = options.coarse_for(&resolved, Some(device));
-        let plan = FramePlan::of(rig, resolved, &options, coarse, 0.0)?;
-        let slots = scene.instances.len() as u32;
-        let windows = options.windows(device, slots);
-        let scatter = Scatters::new(device, windows);
-        let frame = uniform_buffer::<FrameContext>(device, "stereocull.frame_context");
-        let mut lighting = Lighting::new(device, &scene.lights, rig.displays.len() as u32)?;
-        if options.posing == PosingMode::Gpu {
-            lighting.pose_with(&scene.posing, &scene.lights);
-        }
-        let lit = (&lighting.lights, &lighting.views, &lighting.clusters);
-        let shadow_map = ShadowMap::new(device, options.shadow_size().unwrap_or(1), lit);
+        let base = FrameBase::new(device, scene, rig.displays.len() as u32, &options)?;
         let records = instance_records(scene);
-        let inputs = PathInputs {
+        let made = Made {
             scene,
             records: &records,
-            rig,
-            plan: &plan,
-            frame: &frame,
-            options: &options,
-            slots,
-            shadow_group: &shadow_map.bind_group,
+            places: &Places::tight(scene),
+            slots: scene.instances.len() as u32,
+            posed: &|_| true,
         };
-        let layout = CullLayout::with_places(scene, &Places::tight(scene));
-        let built = display::build(device, layout, &inputs)?;
-        let made = (scene, &options);
-        let bound = frame_bindings(&built.shared, &frame, windows);
-        let frame_passes = FramePasses::new(device, made, bound, |_| true)?;
-        let second =
-            (options.frames_per_submit == 2).then(|| SecondFrame::new(device, windows, scene));
+        let built = build(
+            device,
+            made,
+            (rig, coarse, &options),
+            (base.uniform(), base.shadow_group()),
+        )?;
         Ok(Renderer {
-            options,
-            frame,
-            frame_passes,
-            scatter,
-            second,
-            lighting,
-            shadow_map,
+            frame: FrameLevel::new(base, built.passes, built.edits),
             shared: built.shared,
             pyramids: built.pyramids,
             displays: built.displays,
-            slots,
+            uploads: Coalesced::new(device, options.late_latch),
+            slots: made.slots,
+            options,
             rig: rig.clone(),
             coarse,
             passes: Vec::new(),
             prepared: None,
             motion_from: None,
             motion_last: None,
-            uploads,
             spare: PlanStorage::default(),
             keeper,
             keeps: false,
+        })
+    }
+
+    /// Builds the GPU copy of `live` again into new buffers with room for `room`
+    /// slots (a sync's reallocation, when the scene outgrew its buffers or gained
+    /// meshes: half as much room again): the displays and frame passes as `new` made
+    /// them, over the same frame context, lights and shadow map.
+    fn reallocate(
+        &mut self,
+        device: &wgpu::Device,
+        live: &LiveScene,
+        room: u32,
+    ) -> Result<SyncStats> {
+        let scene = live.scene();
+        checks::check_device(device, scene, &self.options)?;
+        // The records with their slots' generations (a reused slot's went up).
+        let records = live.instance_records();
+        let made = Made {
+            scene,
+            records: &records,
+            places: live.places(),
+            slots: room,
+            posed: &|s| live.animates(s),
+        };
+        let bound = (self.frame.uniform(), self.frame.shadow_group());
+        let built = build(device, made, (&self.rig, self.coarse, &self.options), bound)?;
+        (self.frame.passes, self.frame.edits) = (built.passes, built.edits);
+        (self.shared, self.pyramids, self.displays) =
+            (built.shared, built.pyramids, built.displays);
+        self.slots = room;
+        Ok(SyncStats {
+            bytes_uploaded: std::mem::size_of_val(&records[..]) as u64,
+            reloaded: true,
+            reallocated: true,
+            ..SyncStats::default()
         })
     }
 
@@ -284,16 +289,16 @@ impl Renderer {
     /// [`crate::lights::MAX_LIGHTS`], or a light that is not valid, is an error.
     pub fn set_lights(&mut self, lights: &[crate::lights::Light]) -> Result<()> {
         self.keeper.redraw_whole();
-        self.lighting.set(lights)
+        self.frame.lighting_mut().set(lights)
     }
 
-    /// Morph `m`'s weights ([`crate::morphing::Morphs::morphs`], in the scene the
+    /// Morph `m`'s weights ([`crate::morph::Morphs::morphs`], in the scene the
     /// renderer was made with; `Morph::mesh` names the mesh it moves) from the next
     /// `prepare` on, its animations stopped: for an engine that plays its own blend
     /// shapes. Weights past the largest the file gives (or 1) are an error: the morphed
-    /// mesh's culling sphere holds no more ([`crate::morphing::Morph::weight_bound`]).
+    /// mesh's culling sphere holds no more ([`crate::morph::Morph::weight_bound`]).
     pub fn set_morph_weights(&mut self, m: usize, weights: &[f32]) -> Result<()> {
-        let morph = (self.frame_passes.morph.as_mut())
+        let morph = (self.frame.passes.morph.as_mut())
             .ok_or_else(|| Error::InvalidScene("the scene has no morph targets".into()))?;
         morph.set_weights(m, weights).map_err(Error::InvalidScene)?;
         self.keeper.redraw_whole();
@@ -302,7 +307,8 @@ impl Renderer {
 
     /// Vertices the frame's morph pass moves (0 without morph targets).
     pub fn morphed_vertices(&self) -> u32 {
-        self.frame_passes
+        self.frame
+            .passes
             .morph
             .as_ref()
             .map_or(0, MorphPass::vertices)
@@ -311,7 +317,8 @@ impl Renderer {
     /// Vertices the frame's skinning pass poses (0 without skins): the same for any
     /// rig, since it runs once per frame.
     pub fn skinned_vertices(&self) -> u32 {
-        self.frame_passes
+        self.frame
+            .passes
             .skin
             .as_ref()
             .map_or(0, SkinPass::vertices)
@@ -319,7 +326,8 @@ impl Renderer {
 
     /// GPU bytes the pose pass holds (its tables and per-node scratch); 0 without it.
     pub fn posing_bytes(&self) -> u64 {
-        self.frame_passes
+        self.frame
+            .passes
             .pose
             .as_ref()
             .map_or(0, PosePass::gpu_bytes)
@@ -405,4 +413,142 @@ impl Renderer {
             .map(|d| d.shape().create(device, self.options.target_format()))
             .collect()
     }
+
+    /// Draws display `index` into a render pass the caller began, after
+    /// [`Renderer::encode_culls`] was recorded for this frame. The pass must render into
+    /// that display's target shape ([`super::TargetViews`]) with the formats and sample count of
+    /// [`super::RendererOptions`], and with `multiview_mask` `0b11` for a stereo display in
+    /// multiview. Its load and store operations, and whatever the caller draws before and
+    /// after (sky, UI, transparent geometry), are the caller's. Returns the draw calls.
+    pub fn draw_display(&self, pass: &mut wgpu::RenderPass, index: usize) -> Result<u32> {
+        self.display(index)?.draw(pass, &self.shared)
+    }
+
+    /// Display `index`, or [`Error::NoSuchDisplay`].
+    fn display(&self, index: usize) -> Result<&Display> {
+        let displays = self.displays.len();
+        self.displays
+            .get(index)
+            .ok_or(Error::NoSuchDisplay { index, displays })
+    }
+
+    /// Sets display `index`'s pipeline of the caller's own for the material bins of
+    /// [`crate::scene::Shading::Own`]`(shading)` (the GPU-driven modes): from now on
+    /// every draw of the display, in the renderer's passes and in
+    /// [`Renderer::draw_display`], issues those bins' multi-draw with it. One pipeline
+    /// may serve several displays of one target shape. A frame whose display draws an
+    /// own bin without its pipeline is [`Error::MissingOwnPipeline`].
+    pub fn set_own_pipeline(&mut self, index: usize, shading: u32, own: OwnPipeline) -> Result<()> {
+        if self.options.mode.per_instance() {
+            return Err(self.per_instance());
+        }
+        self.display(index)?;
+        if let Some(d) = self.displays[index].indirect_mut() {
+            d.set_own_pipeline(shading, own);
+        }
+        Ok(())
+    }
+
+    /// What the classic modes answer a call for the indirect modes' own pipelines.
+    fn per_instance(&self) -> Error {
+        Error::Unsupported(format!(
+            "{} draws per instance; pipelines of the caller's own draw the indirect modes",
+            self.options.mode.name()
+        ))
+    }
+
+    /// For an engine's own draw pipeline (the indirect modes): group 0's layout, to
+    /// build its pipeline layout on (its own bind groups from group 1), with
+    /// [`Renderer::decode_source`] as the shader's start. `None` in the classic modes.
+    pub fn bind_group_layout(&self) -> Option<&wgpu::BindGroupLayout> {
+        (!self.options.mode.per_instance()).then(|| self.shared.drawer.layout())
+    }
+
+    /// Display `index`'s cull outputs on the GPU (the indirect modes): the visible list,
+    /// the draws and the counts, per the README's cull contract.
+    pub fn cull_buffers(&self, index: usize) -> Option<&CullTargets> {
+        Some(self.displays.get(index)?.indirect()?.cull_targets())
+    }
+
+    /// Display `index`'s one multi-draw-indirect call, in a pass the caller began with a
+    /// pipeline of its own already set (layout from [`Renderer::bind_group_layout`]):
+    /// binds group 0, the vertex and index buffers, and draws. The indirect modes only.
+    pub fn draw_display_with_own_pipeline(
+        &self,
+        pass: &mut wgpu::RenderPass,
+        index: usize,
+    ) -> Result<()> {
+        if self.options.mode.per_instance() {
+            return Err(self.per_instance());
+        }
+        if self.options.far_layer {
+            return Err(Error::Unsupported(
+                "with the far layer the renderer composites before its draws; draw_display draws both".into(),
+            ));
+        }
+        if let Some(d) = self.display(index)?.indirect() {
+            d.draw_with_own_pipeline(pass, &self.shared);
+        }
+        Ok(())
+    }
+
+    /// The stereo decode for an engine's own pipeline on this renderer's group 0
+    /// ([`crate::shaders::decode_source_with`] with this renderer's binding windows):
+    /// `None` in the classic modes.
+    pub fn decode_source(&self, views: u32) -> Option<String> {
+        (!self.options.mode.per_instance())
+            .then(|| crate::shaders::decode_source_with(views, &self.shared.drawer.windows))
+    }
+
+    /// The last submitted frame's diagnostics, read back through `device` and `queue`
+    /// (the renderer's own).
+    pub fn diagnostics<'a>(
+        &'a self,
+        device: &'a wgpu::Device,
+        queue: &'a wgpu::Queue,
+    ) -> Diagnostics<'a> {
+        Diagnostics::new(self, device, queue)
+    }
+}
+
+/// The GPU copy of `made` for `rig` (planned at time 0: its displays and far layer
+/// sizes; `coarse`, whether frames start with the coarse cull) under `options`, bound
+/// to `frame`, the frame context, and `shadow_group`, the shadow map.
+fn build(
+    device: &wgpu::Device,
+    made: Made,
+    (rig, coarse, options): (&Rig, bool, &RendererOptions),
+    (frame, shadow_group): (&wgpu::Buffer, &wgpu::BindGroup),
+) -> Result<Built> {
+    let plan = FramePlan::new(rig, options, coarse, 0.0)?;
+    let inputs = PathInputs {
+        scene: made.scene,
+        records: made.records,
+        rig,
+        plan: &plan,
+        frame,
+        options,
+        slots: made.slots,
+        shadow_group,
+    };
+    let layout = CullLayout::with_places(made.scene, made.places);
+    let built = display::build(device, layout, &inputs)?;
+    let windows = options.windows(device, made.slots);
+    let (culler, draw_scene) = (&built.shared.culler, &built.shared.draw_scene);
+    let bindings = FrameBindings {
+        frame,
+        windows,
+        drawing: built.shared.drawing(),
+        culler,
+        scatter: edits::scatter_targets(culler, draw_scene),
+    };
+    let passes = FramePasses::new(device, (made.scene, options), bindings, made.posed)?;
+    let pairs = options.frames_per_submit == 2;
+    Ok(Built {
+        passes,
+        edits: Edits::new(device, windows, (made.scene, pairs)),
+        shared: built.shared,
+        pyramids: built.pyramids,
+        displays: built.displays,
+    })
 }

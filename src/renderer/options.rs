@@ -134,7 +134,7 @@ pub enum OcclusionMode {
     Off,
 }
 
-/// Where a scene's animations ([`crate::posing`], [`crate::skinning`]) are posed.
+/// Where a scene's animations ([`crate::pose`], [`crate::skin`]) are posed.
 #[derive(Clone, Copy, Debug, Default, PartialEq, Eq, Hash, serde::Serialize)]
 #[cfg_attr(feature = "cli", derive(clap::ValueEnum))]
 #[serde(rename_all = "lowercase")]

@@ -73,7 +73,7 @@ impl PassRecord {
 /// in (a display's, `frame` or `shadow`), and the log of what the frame recorded. A pass
 /// function opens its pass ([`Recorder::open`]), begins it with the writes that gives
 /// and closes it ([`Recorder::close_compute`], [`Recorder::close_render`]).
-pub(super) struct Recorder<'a> {
+pub struct Recorder<'a> {
     timer: Option<&'a mut GpuTimer>,
     /// The open level scope, when timing.
     scope: Option<GpuProfilerQuery>,
@@ -81,7 +81,7 @@ pub(super) struct Recorder<'a> {
 }
 
 /// A pass being recorded: its timer scope (when timing) and its log entry.
-pub(super) struct OpenPass {
+pub struct OpenPass {
     scope: Option<GpuProfilerQuery>,
     what: PassRecord,
     /// Whether it counts the samples passing depth ([`Recorder::count_samples`]).
@@ -93,12 +93,12 @@ pub(super) struct OpenPass {
 
 impl OpenPass {
     /// The timestamp writes of a render pass's descriptor.
-    pub(super) fn render_writes(&self) -> Option<wgpu::RenderPassTimestampWrites<'_>> {
+    pub fn render_writes(&self) -> Option<wgpu::RenderPassTimestampWrites<'_>> {
         self.scope.as_ref()?.render_pass_timestamp_writes()
     }
 
     /// The compute pass it opened, begun in `encoder`.
-    pub(super) fn compute(&self, encoder: &mut wgpu::CommandEncoder) -> wgpu::ComputePass<'static> {
+    pub fn compute(&self, encoder: &mut wgpu::CommandEncoder) -> wgpu::ComputePass<'static> {
         let label = format!("stereocull.{}", self.what.name);
         let writes = self
             .scope
@@ -115,7 +115,7 @@ impl OpenPass {
 
 impl<'a> Recorder<'a> {
     /// A frame's recording, its log continuing `log` (empty for a new frame).
-    pub(super) fn new(timer: Option<&'a mut GpuTimer>, log: Vec<PassRecord>) -> Recorder<'a> {
+    pub fn new(timer: Option<&'a mut GpuTimer>, log: Vec<PassRecord>) -> Recorder<'a> {
         Recorder {
             timer,
             scope: None,
@@ -125,20 +125,20 @@ impl<'a> Recorder<'a> {
 
     /// Opens the level scope `name` (a display's name, `frame`, `shadow`) that the
     /// passes opened until [`Recorder::leave`] nest in.
-    pub(super) fn enter(&mut self, encoder: &mut wgpu::CommandEncoder, name: &str) {
+    pub fn enter(&mut self, encoder: &mut wgpu::CommandEncoder, name: &str) {
         self.leave(encoder);
         self.scope = self.timer.as_deref().map(|t| t.scope(name, encoder));
     }
 
     /// Closes the open level scope.
-    pub(super) fn leave(&mut self, encoder: &mut wgpu::CommandEncoder) {
+    pub fn leave(&mut self, encoder: &mut wgpu::CommandEncoder) {
         if let (Some(t), Some(scope)) = (self.timer.as_deref(), self.scope.take()) {
             t.end(encoder, scope);
         }
     }
 
     /// Opens pass `what` inside the level scope.
-    pub(super) fn open(&self, encoder: &mut wgpu::CommandEncoder, what: PassRecord) -> OpenPass {
+    pub fn open(&self, encoder: &mut wgpu::CommandEncoder, what: PassRecord) -> OpenPass {
         let scope = match (self.timer.as_deref(), &self.scope) {
             (Some(t), Some(parent)) => Some(t.pass(what.name, parent, encoder)),
             _ => None,
@@ -152,7 +152,7 @@ impl<'a> Recorder<'a> {
     }
 
     /// One compute pass, opened as `what`, for a frame pass or a display's.
-    pub(super) fn compute_pass(
+    pub fn compute_pass(
         &self,
         encoder: &mut wgpu::CommandEncoder,
         what: PassRecord,
@@ -163,7 +163,7 @@ impl<'a> Recorder<'a> {
 
     /// A frame-level compute pass `name`, alone in a `frame` scope (closed by
     /// [`Recorder::close_frame_pass`]), as the frame's passes are timed.
-    pub(super) fn frame_pass(
+    pub fn frame_pass(
         &mut self,
         encoder: &mut wgpu::CommandEncoder,
         name: &'static str,
@@ -173,7 +173,7 @@ impl<'a> Recorder<'a> {
     }
 
     /// Ends a [`Recorder::frame_pass`] and its scope.
-    pub(super) fn close_frame_pass(
+    pub fn close_frame_pass(
         &mut self,
         encoder: &mut wgpu::CommandEncoder,
         pass: wgpu::ComputePass<'static>,
@@ -184,7 +184,7 @@ impl<'a> Recorder<'a> {
     }
 
     /// Ends compute pass `pass` of `open`: its scope closed, the pass logged.
-    pub(super) fn close_compute(
+    pub fn close_compute(
         &mut self,
         encoder: &mut wgpu::CommandEncoder,
         pass: wgpu::ComputePass<'static>,
@@ -196,7 +196,7 @@ impl<'a> Recorder<'a> {
 
     /// Counts render pass `pass` of `open` (pipeline statistics, when timing) from here
     /// to [`Recorder::close_render`].
-    pub(super) fn count(&mut self, pass: &mut wgpu::RenderPass, open: &mut OpenPass) {
+    pub fn count(&mut self, pass: &mut wgpu::RenderPass, open: &mut OpenPass) {
         open.what.statistics = self
             .timer
             .as_deref_mut()
@@ -207,14 +207,14 @@ impl<'a> Recorder<'a> {
     /// by [`begin_draw_pass`]), when timing, from here to [`Recorder::close_render`]:
     /// called before the scene's draws, after the lens's mask. Multiview passes are
     /// not counted.
-    pub(super) fn count_samples(&mut self, pass: &mut wgpu::RenderPass, open: &mut OpenPass) {
+    pub fn count_samples(&mut self, pass: &mut wgpu::RenderPass, open: &mut OpenPass) {
         let timer = self.timer.as_deref_mut().filter(|_| !open.multiview);
         open.samples = timer.is_some_and(|t| t.begin_samples(pass));
     }
 
     /// Ends render pass `pass` of `open`: its statistics and scope closed, the pass
     /// logged.
-    pub(super) fn close_render(
+    pub fn close_render(
         &mut self,
         encoder: &mut wgpu::CommandEncoder,
         mut pass: wgpu::RenderPass<'static>,
@@ -234,17 +234,13 @@ impl<'a> Recorder<'a> {
     }
 
     /// Logs a pass recorded without a scope of its own (the scatter of edits).
-    pub(super) fn log(&mut self, what: PassRecord) {
+    pub fn log(&mut self, what: PassRecord) {
         self.log.push(what);
     }
 
     /// The recording's end: the level scope closed, with `resolve` the timer's queries
     /// resolved into `encoder`; returns the log.
-    pub(super) fn finish(
-        mut self,
-        encoder: &mut wgpu::CommandEncoder,
-        resolve: bool,
-    ) -> Vec<PassRecord> {
+    pub fn finish(mut self, encoder: &mut wgpu::CommandEncoder, resolve: bool) -> Vec<PassRecord> {
         self.leave(encoder);
         if let Some(t) = self.timer.filter(|_| resolve) {
             t.resolve(encoder);
@@ -255,7 +251,7 @@ impl<'a> Recorder<'a> {
 
 /// Begins the draw pass into `target`, clearing it or not (and in multiview or not),
 /// for `open`, counted.
-pub(super) fn begin_draw_pass(
+pub fn begin_draw_pass(
     encoder: &mut wgpu::CommandEncoder,
     rec: &mut Recorder,
     (target, clear, multiview_mask): (&TargetViews, bool, Option<std::num::NonZeroU32>),

@@ -17,7 +17,7 @@ use open::OpenRing;
 
 /// Where a frame's writes go: the pose's coalesced, the CPU culls' results straight.
 #[derive(Clone, Copy)]
-pub(super) struct Writes<'a> {
+pub struct Writes<'a> {
     /// The pose's writes.
     pub pose: &'a Coalesced,
     /// Everything else.
@@ -66,7 +66,7 @@ impl Gathered {
 }
 
 /// The gathered writes, the staging buffer and what it holds.
-pub(super) struct Coalesced {
+pub struct Coalesced {
     device: wgpu::Device,
     gathered: RefCell<Gathered>,
     staging: Staging,
@@ -123,7 +123,7 @@ impl Upload for Coalesced {
 
 impl Coalesced {
     /// Placed in a buffer the queue writes, or with `late_latch` in mapped ones.
-    pub(super) fn new(device: &wgpu::Device, late_latch: bool) -> Coalesced {
+    pub fn new(device: &wgpu::Device, late_latch: bool) -> Coalesced {
         Coalesced {
             device: device.clone(),
             gathered: RefCell::default(),
@@ -139,7 +139,7 @@ impl Coalesced {
 
     /// Forgets what was gathered: a plan's writes come next, placed anew when `fresh`
     /// (a prepare), else a latch's.
-    pub(super) fn begin(&self, fresh: bool) {
+    pub fn begin(&self, fresh: bool) {
         let gathered = &mut *self.gathered.borrow_mut();
         gathered.bytes.clear();
         gathered.entries.clear();
@@ -152,7 +152,7 @@ impl Coalesced {
     /// carries goes straight. With late latching that closes the frame's staging
     /// ([`Coalesced::check_latch`]). Otherwise (a prepare) the writes are
     /// placed anew, for the next encode to copy.
-    pub(super) fn send(&mut self, queue: &wgpu::Queue, fresh: bool) -> Result<()> {
+    pub fn send(&mut self, queue: &wgpu::Queue, fresh: bool) -> Result<()> {
         let mut gathered = std::mem::take(self.gathered.get_mut());
         let sent = match self.recorded && !fresh {
             true => {
@@ -172,7 +172,7 @@ impl Coalesced {
 
     /// Refuses a second latch of a frame with late latching: the first closed the
     /// staging the frame's copies read.
-    pub(super) fn check_latch(&self) -> Result<()> {
+    pub fn check_latch(&self) -> Result<()> {
         match &self.staging {
             Staging::Open(ring) if self.recorded && !ring.is_open() => Err(Error::Unsupported(
                 "with late latching a frame latches once: its latch closed the staging its copies read".into(),
@@ -239,7 +239,7 @@ impl Coalesced {
 
     /// Records the copies of the placed writes into place: first in a frame, before
     /// any pass reads them.
-    pub(super) fn record(&mut self, encoder: &mut wgpu::CommandEncoder) {
+    pub fn record(&mut self, encoder: &mut wgpu::CommandEncoder) {
         let staging = match &self.staging {
             Staging::Open(ring) => ring.buffer(),
             Staging::Written(staging) => staging.as_ref(),

@@ -2,7 +2,7 @@
 //! context, culled by the frame's culler like a display into its own cull outputs, and
 //! drawn with one multi-draw-indirect call.
 
-use super::culler::{Culler, ViewCull};
+use super::culler::{CullPass, Culler};
 use super::plan::CullView;
 use super::recorder::{PassRecord, Recorder};
 use crate::bins::BinRange;
@@ -17,12 +17,12 @@ use crate::records::uniform_bytes;
 use crate::renderer::uploads::Writes;
 
 /// The view's context, its cull and bindings.
-pub(super) struct ViewPass {
+pub struct ViewPass {
     context: wgpu::Buffer,
     /// A context of its own for the cull, where the cull tests against another view's
     /// pyramids (a far layer's, [`Phase::Tested`]); else the cull reads `context`.
     cull_context: Option<wgpu::Buffer>,
-    cull: ViewCull,
+    cull: CullPass,
     draw_bind_group: wgpu::BindGroup,
     /// The material bins' ranges of the draws.
     bins: Vec<BinRange>,
@@ -31,7 +31,7 @@ pub(super) struct ViewPass {
 impl ViewPass {
     /// `view`, culled by `culler` and drawn with `drawing` (both bound to `frame`, the
     /// frame context).
-    pub(super) fn new(
+    pub fn new(
         device: &wgpu::Device,
         drawing: Drawing,
         frame: &wgpu::Buffer,
@@ -51,7 +51,7 @@ impl ViewPass {
 
     /// `view` in occlusion `phase`, with `context` for its context buffer (the late
     /// phase shares its display's).
-    pub(super) fn phased(
+    pub fn phased(
         device: &wgpu::Device,
         drawing: Drawing,
         frame: &wgpu::Buffer,
@@ -66,7 +66,7 @@ impl ViewPass {
     /// `view` culled in [`Phase::Tested`]: against its display's pyramids, with a cull
     /// context of its own ([`crate::far_layer::FarPlan::tested_context`]) beside the
     /// context it is drawn with.
-    pub(super) fn tested(
+    pub fn tested(
         device: &wgpu::Device,
         drawing: Drawing,
         frame: &wgpu::Buffer,
@@ -90,7 +90,7 @@ impl ViewPass {
         drawing: Drawing,
         frame: &wgpu::Buffer,
         culler: &Culler,
-        (context, cull_context, cull): (wgpu::Buffer, Option<wgpu::Buffer>, ViewCull),
+        (context, cull_context, cull): (wgpu::Buffer, Option<wgpu::Buffer>, CullPass),
     ) -> ViewPass {
         ViewPass {
             draw_bind_group: drawing.drawer.bind_group(
@@ -107,23 +107,23 @@ impl ViewPass {
     }
 
     /// The view's context buffer (what a composite reads of it).
-    pub(super) fn context(&self) -> &wgpu::Buffer {
+    pub fn context(&self) -> &wgpu::Buffer {
         &self.context
     }
 
     /// The view's cull, as the culler keeps it.
-    pub(super) fn view_cull(&self) -> &ViewCull {
+    pub fn cull_pass(&self) -> &CullPass {
         &self.cull
     }
 
     /// The view's cull outputs, per the cull contract.
-    pub(super) fn cull(&self) -> &CullTargets {
+    pub fn cull(&self) -> &CullTargets {
         &self.cull.targets
     }
 
     /// Writes this frame's `context` and the culler's result for the view (nothing on
     /// the GPU); returns the bytes written.
-    pub(super) fn prepare(&self, to: Writes, context: &DisplayContext, culler: &Culler) -> u64 {
+    pub fn prepare(&self, to: Writes, context: &DisplayContext, culler: &Culler) -> u64 {
         let member = culler.write_member(to.pose, &self.cull, context);
         to.pose.write_uniform(&self.context, 0, context)
             + culler.upload(to.queue, &self.cull)
@@ -132,11 +132,7 @@ impl ViewPass {
 
     /// Writes this frame's cull context, for a view that has one of its own
     /// ([`ViewPass::tested`]); returns the bytes written.
-    pub(super) fn prepare_cull_context(
-        &self,
-        queue: &impl Upload,
-        context: &DisplayContext,
-    ) -> u64 {
+    pub fn prepare_cull_context(&self, queue: &impl Upload, context: &DisplayContext) -> u64 {
         match &self.cull_context {
             Some(buffer) => write(queue, buffer, &uniform_bytes(context)),
             None => 0,
@@ -145,7 +141,7 @@ impl ViewPass {
 
     /// Records the view's cull (on the GPU) in its phase, timed and logged as `what`.
     /// Returns the dispatches.
-    pub(super) fn encode_cull(
+    pub fn encode_cull(
         &self,
         encoder: &mut wgpu::CommandEncoder,
         culler: &Culler,
@@ -157,7 +153,7 @@ impl ViewPass {
 
     /// [`ViewPass::encode_cull`] in `phase` (a tested view culled by its frustum alone
     /// where its display draws in one pass).
-    pub(super) fn encode_cull_in(
+    pub fn encode_cull_in(
         &self,
         encoder: &mut wgpu::CommandEncoder,
         (culler, phase): (&Culler, Phase),
@@ -169,7 +165,7 @@ impl ViewPass {
 
     /// The view's draws into `pass`: per material bin, its pipeline of `with` and one
     /// multi-draw. Returns the draw calls.
-    pub(super) fn draw(
+    pub fn draw(
         &self,
         pass: &mut wgpu::RenderPass,
         Drawing { drawer, scene }: Drawing,

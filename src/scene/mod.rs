@@ -162,13 +162,13 @@ pub struct Scene {
     /// Base color images, by index.
     pub textures: Vec<Texture>,
     /// Node animations and the instances they move (by the ids instances have here):
-    /// posed once per frame ([`crate::posing`]); empty for a still scene.
-    pub posing: crate::posing::Posing,
-    /// Skinned instances, moved by posed nodes ([`crate::skinning`]); empty without.
-    pub skins: crate::skinning::Skins,
-    /// Morphed meshes, moved by their targets' weights ([`crate::morphing`]); empty
+    /// posed once per frame ([`crate::pose`]); empty for a still scene.
+    pub posing: crate::pose::Posing,
+    /// Skinned instances, moved by posed nodes ([`crate::skin`]); empty without.
+    pub skins: crate::skin::Skins,
+    /// Morphed meshes, moved by their targets' weights ([`crate::morph`]); empty
     /// without.
-    pub morphs: crate::morphing::Morphs,
+    pub morphs: crate::morph::Morphs,
     /// Punctual lights ([`crate::lights`]), shaded through each display's clusters.
     pub lights: Vec<crate::lights::Light>,
 }
@@ -203,7 +203,7 @@ impl Scene {
     /// and returns each posed instance (node and skinned) with its world transform.
     pub fn posed(&mut self, time: f32) -> Vec<(u32, Affine3A)> {
         let worlds = self.posing.node_worlds(time);
-        crate::posing::place_lights(&self.posing.lights, &worlds, &mut self.lights);
+        crate::pose::place_lights(&self.posing.lights, &worlds, &mut self.lights);
         let nodes = self.posing.instance_transforms_in(&worlds);
         let mut posed: Vec<(u32, Affine3A)> =
             (self.posing.instances.iter().map(|i| i.instance).zip(nodes)).collect();

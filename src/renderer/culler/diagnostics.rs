@@ -2,7 +2,7 @@
 //! `profile`: the floor kernel's and each view's cull time by the wall clock, the coarse
 //! cull's candidates, the sphere tests.
 
-use super::{Culler, Kind, ViewCull};
+use super::{CullPass, Culler, Kind};
 use crate::cull::coarse::BLOCK;
 use crate::error::Result;
 use crate::profiling::percentile;
@@ -30,11 +30,11 @@ impl Culler {
     /// culling with [`super::RendererOptions::cull_floor`]). For adapters whose in-pass
     /// timestamps do not bracket a compute pass's first dispatch (lavapipe): on a CPU
     /// device the wall clock is the cost. The culls rewrite the same outputs.
-    pub(in crate::renderer) fn time_against_floor(
+    pub fn time_against_floor(
         &self,
         device: &wgpu::Device,
         queue: &wgpu::Queue,
-        views: &[&ViewCull],
+        views: &[&CullPass],
         rounds: u32,
     ) -> Result<Option<WallCulls>> {
         let (
@@ -66,7 +66,7 @@ impl Culler {
             .iter()
             .filter_map(|v| Some((v, v.bind_group.as_ref()?)))
             .collect();
-        let encode_view = |pass: &mut wgpu::ComputePass, v: &ViewCull, group| {
+        let encode_view = |pass: &mut wgpu::ComputePass, v: &CullPass, group| {
             let slot = super::over_candidates(coarse.as_ref(), v);
             culler.encode(pass, scene, group, (slot, v.phase));
         };
@@ -103,7 +103,7 @@ impl Culler {
     }
 
     /// The optional tests the GPU cull holds (`None` on the CPU).
-    pub(in crate::renderer) fn tests(&self) -> Option<CullTests> {
+    pub fn tests(&self) -> Option<CullTests> {
         match &self.kind {
             Kind::Gpu { culler, .. } => Some(culler.tests()),
             Kind::Cpu { .. } => None,
@@ -111,7 +111,7 @@ impl Culler {
     }
 
     /// The coarse cull's candidates per display (GPU culling with it on).
-    pub(in crate::renderer) fn read_candidates(
+    pub fn read_candidates(
         &self,
         device: &wgpu::Device,
         queue: &wgpu::Queue,
@@ -134,7 +134,7 @@ impl Culler {
     /// instance once per display, or with the coarse cull every instance once (for its
     /// block's sphere), every block once for the frame and once per display, and each
     /// display's candidates.
-    pub(in crate::renderer) fn read_sphere_tests(
+    pub fn read_sphere_tests(
         &self,
         device: &wgpu::Device,
         queue: &wgpu::Queue,

@@ -11,7 +11,7 @@ use crate::shaders::SPAN;
 impl Culler {
     /// Takes a new `layout` (instances inserted or removed, same room); returns the
     /// bytes written.
-    pub(in crate::renderer) fn reload(&mut self, queue: &wgpu::Queue, layout: CullLayout) -> u64 {
+    pub fn reload(&mut self, queue: &wgpu::Queue, layout: CullLayout) -> u64 {
         match &mut self.kind {
             Kind::Gpu { scene, .. } => scene.reload(queue, &layout),
             Kind::Cpu {
@@ -32,7 +32,7 @@ impl Culler {
     }
 
     /// Each slot's world sphere on the GPU (`None` culling on the CPU).
-    pub(in crate::renderer) fn read_spheres(
+    pub fn read_spheres(
         &self,
         device: &wgpu::Device,
         queue: &wgpu::Queue,
@@ -48,7 +48,7 @@ impl Culler {
     /// words, which the scatter passes write edits into, and the visibility words' shape
     /// (words per display slot, slots); `None` for the CPU culler, which takes edits
     /// into its layout ([`Culler::place`], [`Culler::moved`]).
-    pub(in crate::renderer) fn scatter_targets(&self) -> (Option<[&wgpu::Buffer; 5]>, (u32, u32)) {
+    pub fn scatter_targets(&self) -> (Option<[&wgpu::Buffer; 5]>, (u32, u32)) {
         match &self.kind {
             Kind::Gpu { scene, .. } => (Some(scene.scatter_targets()), scene.visibility_shape()),
             Kind::Cpu { .. } => (None, (0, 0)),
@@ -58,7 +58,7 @@ impl Culler {
     /// The places filled and vacated, into the CPU culler's layout (the GPU's are
     /// scattered). Whoever now holds a place was not drawn last frame: its bit goes in
     /// every display's words, as `wgsl/scatter_places.wgsl` clears the GPU's.
-    pub(in crate::renderer) fn place(&mut self, placed: &[PlaceEdit]) {
+    pub fn place(&mut self, placed: &[PlaceEdit]) {
         if let Kind::Cpu {
             layout, visibility, ..
         } = &mut self.kind
@@ -75,7 +75,7 @@ impl Culler {
 
     /// The moved instances' new spheres, into the CPU culler's layout (the GPU's are
     /// scattered).
-    pub(in crate::renderer) fn moved(&mut self, scene: &Scene, moved: &[MoveEdit]) {
+    pub fn moved(&mut self, scene: &Scene, moved: &[MoveEdit]) {
         if let Kind::Cpu { layout, .. } = &mut self.kind {
             for edit in moved {
                 let slot = edit.slot as usize;
@@ -87,7 +87,7 @@ impl Culler {
 
     /// A second frame's moved spheres, grown to hold both frames' poses, into the CPU
     /// culler's layout, as the moves scatter writes the GPU's in its grow mode.
-    pub(in crate::renderer) fn grown(&mut self, grown: &[(u32, glam::Vec4)]) {
+    pub fn grown(&mut self, grown: &[(u32, glam::Vec4)]) {
         if let Kind::Cpu { layout, .. } = &mut self.kind {
             for &(slot, sphere) in grown {
                 layout.set_sphere(layout.positions[slot as usize], sphere);

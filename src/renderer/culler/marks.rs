@@ -12,11 +12,7 @@ impl Culler {
     /// Records the marking pass's phase before the frame's scatter and pose (`after`
     /// false: every kept display's tiles cleared, the spheres as last drawn marked) or
     /// after them. Returns the dispatches (0 unless the frame keeps on the GPU).
-    pub(in crate::renderer) fn encode_marks(
-        &mut self,
-        encoder: &mut wgpu::CommandEncoder,
-        after: bool,
-    ) -> u32 {
+    pub fn encode_marks(&mut self, encoder: &mut wgpu::CommandEncoder, after: bool) -> u32 {
         match &mut self.kind {
             Kind::Gpu {
                 marks: Some(marks), ..
@@ -30,11 +26,7 @@ impl Culler {
 
     /// Display slot `slot`'s `words` words of marked tiles: the buffer, the offset and
     /// the bytes (`None` where the GPU marks none).
-    pub(in crate::renderer) fn marked_words(
-        &self,
-        slot: u32,
-        words: u32,
-    ) -> Option<(&wgpu::Buffer, u64, u64)> {
+    pub fn marked_words(&self, slot: u32, words: u32) -> Option<(&wgpu::Buffer, u64, u64)> {
         match &self.kind {
             Kind::Gpu {
                 marks: Some(marks), ..

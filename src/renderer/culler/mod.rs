@@ -35,7 +35,7 @@ use crate::records::CullLayout;
 use crate::shaders::{CullTests, Windows};
 use std::sync::OnceLock;
 
-pub(super) struct Culler {
+pub struct Culler {
     kind: Kind,
     /// Instance slots of room: what every view's visible list holds.
     slots: u32,
@@ -76,7 +76,7 @@ enum Kind {
 /// displays the coarse cull lists blocks for (0: no coarse cull), and whether it times
 /// the floor kernel ([`super::RendererOptions::cull_floor`]).
 #[derive(Clone, Debug)]
-pub(super) struct CullShape {
+pub struct CullShape {
     /// The views the rig cull culls together (GPU culling; empty: none): those of its
     /// first part (frustum and early phases), then its late members
     /// ([`CullView::Late`]).
@@ -107,11 +107,11 @@ impl CullShape {
 }
 
 /// One view's cull outputs (per the cull contract) and, on the GPU, its bindings.
-pub(super) struct ViewCull {
-    pub(super) view: CullView,
+pub struct CullPass {
+    pub view: CullView,
     /// Which part of a two-phase cull it is (the frustum alone without occlusion).
     phase: Phase,
-    pub(super) targets: CullTargets,
+    pub targets: CullTargets,
     bind_group: Option<wgpu::BindGroup>,
     /// Its index among the rig cull's members, if it is one (the rig's dispatches cull
     /// it in its phase).
@@ -120,7 +120,7 @@ pub(super) struct ViewCull {
 
 impl Culler {
     /// The culler `mode` asks for, over `layout`.
-    pub(super) fn new(
+    pub fn new(
         device: &wgpu::Device,
         mode: CullMode,
         layout: CullLayout,
@@ -194,23 +194,23 @@ impl Culler {
     }
 
     /// Draw entries of every view's outputs: the bins' ranges together.
-    pub(super) fn draws(&self) -> u32 {
+    pub fn draws(&self) -> u32 {
         self.bins.iter().map(|r| r.capacity).sum()
     }
 
     /// The material bins' ranges of every view's draws.
-    pub(super) fn bins(&self) -> &[BinRange] {
+    pub fn bins(&self) -> &[BinRange] {
         &self.bins
     }
 
     /// `view`'s cull outputs (room for every slot and draw: a rig member's range of
     /// the rig's) and its bindings to the frame's and the view's contexts.
-    pub(super) fn view(
+    pub fn view(
         &self,
         device: &wgpu::Device,
         (view, phase): (CullView, Phase),
         contexts: [&wgpu::Buffer; 2],
-    ) -> ViewCull {
+    ) -> CullPass {
         let member = (self.members.iter().position(|m| *m == view))
             .filter(|_| matches!(phase, Phase::Frustum | Phase::Early | Phase::Late));
         let (targets, bind_group) = match &self.kind {
@@ -234,7 +234,7 @@ impl Culler {
             }
             Kind::Cpu { .. } => (CullTargets::new(device, self.slots, self.draws()), None),
         };
-        ViewCull {
+        CullPass {
             view,
             phase,
             targets,
@@ -246,7 +246,7 @@ impl Culler {
     /// This frame's culls as `plan` lists them: on the CPU, all of them (and the
     /// light's); on the GPU, the coarse cull's block tests, one per display, and the
     /// displays' hidden areas and changed tiles. Returns the bytes written.
-    pub(super) fn prepare(&mut self, queue: &impl Upload, plan: &FramePlan) -> u64 {
+    pub fn prepare(&mut self, queue: &impl Upload, plan: &FramePlan) -> u64 {
         match &mut self.kind {
             Kind::Gpu { scene, marks, .. } => {
                 let planes: Vec<_> = plan.resolved.displays.iter().map(|d| d.planes).collect();
@@ -297,7 +297,7 @@ impl Culler {
 
     /// This frame's result for `view` in CPU memory: the CPU culler's (`None` on the GPU,
     /// whose results stay in its buffers, or for a view the plan does not cull).
-    pub(super) fn output(&self, view: CullView) -> Option<&CullOutput> {
+    pub fn output(&self, view: CullView) -> Option<&CullOutput> {
         match &self.kind {
             Kind::Cpu { outputs, .. } => outputs.iter().find(|(v, _)| *v == view).map(|(_, o)| o),
             Kind::Gpu { .. } => None,
@@ -306,17 +306,17 @@ impl Culler {
 
     /// Writes `view`'s CPU result into its outputs (nothing on the GPU, whose passes
     /// write them); returns the bytes written.
-    pub(super) fn upload(&self, queue: &wgpu::Queue, view: &ViewCull) -> u64 {
+    pub fn upload(&self, queue: &wgpu::Queue, view: &CullPass) -> u64 {
         self.output(view.view)
             .map_or(0, |out| view.targets.upload(queue, out))
     }
 
     /// Writes a rig member's record for this frame from `context`, the context it culls
     /// by (nothing for another view); returns the bytes written.
-    pub(super) fn write_member(
+    pub fn write_member(
         &self,
         queue: &impl Upload,
-        view: &ViewCull,
+        view: &CullPass,
         context: &DisplayContext,
     ) -> u64 {
         match (&self.kind, view.member) {
@@ -337,10 +337,10 @@ impl Culler {
     /// and the rig cull, timed as `rig_cull`; `any` is any display's view (the coarse
     /// passes read none of its bindings; without the rig cull the floor writes its
     /// scratch, which its cull overwrites). Returns the dispatches.
-    pub(super) fn encode_frame(
+    pub fn encode_frame(
         &self,
         encoder: &mut wgpu::CommandEncoder,
-        any: Option<&ViewCull>,
+        any: Option<&CullPass>,
         rec: &mut Recorder,
     ) -> u32 {
         let Kind::Gpu {
@@ -386,11 +386,7 @@ impl Culler {
     /// Records the rig cull's late members (GPU culling with occlusion and the rig
     /// cull), timed as `rig_late_cull` inside a `frame` scope: after every display's
     /// early draw and pyramids. Returns the dispatches.
-    pub(super) fn encode_late_rig(
-        &self,
-        encoder: &mut wgpu::CommandEncoder,
-        rec: &mut Recorder,
-    ) -> u32 {
+    pub fn encode_late_rig(&self, encoder: &mut wgpu::CommandEncoder, rec: &mut Recorder) -> u32 {
         let Kind::Gpu {
             culler,
             scene,
@@ -412,7 +408,7 @@ impl Culler {
 
     /// Whether [`Culler::encode`] records passes for `view` in its own phase: culling
     /// on the GPU, where the rig cull does not take it.
-    pub(super) fn records(&self, view: &ViewCull) -> bool {
+    pub fn records(&self, view: &CullPass) -> bool {
         matches!(self.kind, Kind::Gpu { .. }) && view.bind_group.is_some() && view.member.is_none()
     }
 
@@ -420,10 +416,10 @@ impl Culler {
     /// cull), its pass timed and logged as `what`; nothing on the CPU (`upload` wrote
     /// it) or for a rig member (the frame's rig cull culled it). Returns the
     /// dispatches.
-    pub(super) fn encode(
+    pub fn encode(
         &self,
         encoder: &mut wgpu::CommandEncoder,
-        (view, phase): (&ViewCull, Phase),
+        (view, phase): (&CullPass, Phase),
         rec: &mut Recorder,
         what: PassRecord,
     ) -> u32 {
@@ -451,7 +447,7 @@ impl Culler {
     }
 
     /// GPU bytes per instance the culler keeps besides the views' outputs.
-    pub(super) fn bytes_per_instance(mode: CullMode) -> u64 {
+    pub fn bytes_per_instance(mode: CullMode) -> u64 {
         match mode {
             CullMode::Gpu => CullScene::BYTES_PER_INSTANCE,
             CullMode::Cpu => 0,
@@ -463,7 +459,7 @@ impl Culler {
 /// that takes no blocks runs over everything).
 fn over_candidates<'a>(
     coarse: Option<&'a CoarseGroups>,
-    view: &ViewCull,
+    view: &CullPass,
 ) -> Option<(u32, &'a wgpu::BindGroup)> {
     Some((view.view.coarse_slot()?, &coarse?.candidates))
 }
@@ -476,9 +472,9 @@ fn set_output(outputs: &mut Vec<(CullView, CullOutput)>, view: CullView, out: Cu
     }
 }
 
-impl ViewCull {
+impl CullPass {
     /// Which part of a two-phase cull the view is.
-    pub(super) fn phase(&self) -> Phase {
+    pub fn phase(&self) -> Phase {
         self.phase
     }
 }

@@ -8,7 +8,7 @@
 
 use std::time::Instant;
 
-use super::{Culler, Kind, ViewCull, set_output};
+use super::{CullPass, Culler, Kind, set_output};
 use crate::error::Result;
 use crate::occlusion::{self, PyramidShape};
 use crate::readback::read_pod;
@@ -17,10 +17,10 @@ use crate::renderer::plan::{CullView, FramePlan};
 use crate::shaders::SPAN;
 
 /// Per display, its pyramids read back and their shape (`None` without occlusion).
-pub(in crate::renderer) type ReadPyramids = Vec<Option<(Vec<f32>, PyramidShape)>>;
+pub type ReadPyramids = Vec<Option<(Vec<f32>, PyramidShape)>>;
 
 /// Per display, the views its late half uploads: the late phase's and the far layer's.
-pub(in crate::renderer) type LateViews<'a> = (Option<&'a ViewCull>, Option<&'a ViewCull>);
+pub type LateViews<'a> = (Option<&'a CullPass>, Option<&'a CullPass>);
 
 /// Culling on the CPU with occlusion: every occluding display's pyramids in one buffer,
 /// each at its own offset (as the GPU culler keeps them in its occlusion buffer), read
@@ -74,11 +74,7 @@ impl Culler {
     /// Culling by occlusion on the displays with a pyramid shape in `shapes`: culling on
     /// the CPU, keeps their visibility words (every place starts as not drawn) and room
     /// to read their pyramids back; the GPU culler keeps its own words.
-    pub(in crate::renderer) fn track_visibility(
-        &mut self,
-        device: &wgpu::Device,
-        shapes: &[Option<PyramidShape>],
-    ) {
+    pub fn track_visibility(&mut self, device: &wgpu::Device, shapes: &[Option<PyramidShape>]) {
         if let Kind::Cpu {
             layout,
             visibility,
@@ -97,13 +93,13 @@ impl Culler {
 
     /// Whether a frame needs its pyramids on the CPU before its late phase: CPU culling
     /// with occlusion.
-    pub(in crate::renderer) fn reads_back(&self) -> bool {
+    pub fn reads_back(&self) -> bool {
         matches!(&self.kind, Kind::Cpu { late: Some(_), .. })
     }
 
     /// Keeps `plan` for the frame's late culls where they run on the CPU; else gives it
     /// back.
-    pub(in crate::renderer) fn keep_for_late(&mut self, plan: FramePlan) -> Option<FramePlan> {
+    pub fn keep_for_late(&mut self, plan: FramePlan) -> Option<FramePlan> {
         match &mut self.kind {
             Kind::Cpu { late: Some(l), .. } => {
                 l.plan = Some(plan);
@@ -115,7 +111,7 @@ impl Culler {
 
     /// Where display `i`'s pyramids are reduced into, and from where its late cull
     /// reads them: the buffer and the offset (bytes).
-    pub(in crate::renderer) fn pyramid_texels(&self, i: usize) -> Option<(&wgpu::Buffer, u64)> {
+    pub fn pyramid_texels(&self, i: usize) -> Option<(&wgpu::Buffer, u64)> {
         match &self.kind {
             Kind::Gpu { scene, .. } => Some((scene.occlusion(), scene.pyramid_offset(i))),
             Kind::Cpu { late, .. } => {
@@ -128,7 +124,7 @@ impl Culler {
 
     /// Display `i`'s visibility words after the last frame: the CPU's, or the GPU's
     /// read back (`None` for a display without occlusion).
-    pub(in crate::renderer) fn read_visibility(
+    pub fn read_visibility(
         &self,
         device: &wgpu::Device,
         queue: &wgpu::Queue,
@@ -149,7 +145,7 @@ impl Culler {
     }
 
     /// Display `i`'s pyramids (of `shape`) as the last frame built them, read back.
-    pub(in crate::renderer) fn read_pyramid(
+    pub fn read_pyramid(
         &self,
         device: &wgpu::Device,
         queue: &wgpu::Queue,
@@ -173,7 +169,7 @@ impl Culler {
     /// GPU bytes occlusion adds to the culler: per display, its visibility words (on
     /// the GPU; the CPU keeps its own), and once the pyramids' room (the occlusion
     /// buffer's regions, or the read-back buffer).
-    pub(in crate::renderer) fn occlusion_bytes(&self) -> (u64, u64) {
+    pub fn occlusion_bytes(&self) -> (u64, u64) {
         match &self.kind {
             Kind::Gpu { scene, .. } => (4 * scene.visibility_words() as u64, scene.pyramid_bytes()),
             Kind::Cpu { late, .. } => (0, late.as_ref().map_or(0, |l| l.buffer.size())),
@@ -185,7 +181,7 @@ impl Culler {
     /// late phase and far layer against them (rewriting its visibility words), and
     /// uploads both into `views` (per display). Returns the bytes uploaded and the CPU
     /// time the culls took; nothing on the GPU.
-    pub(in crate::renderer) fn cull_late(
+    pub fn cull_late(
         &mut self,
         (device, queue): (&wgpu::Device, &wgpu::Queue),
         views: &[LateViews],

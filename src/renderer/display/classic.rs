@@ -36,7 +36,7 @@ struct EyeState {
 }
 
 /// One display in a classic mode: its context, visible list and binding, its eyes'.
-pub(in crate::renderer) struct ClassicDisplay {
+pub struct ClassicDisplay {
     index: usize,
     mode: StereoMode,
     context: wgpu::Buffer,
@@ -186,7 +186,7 @@ impl ClassicDisplay {
 
     /// The display into its own passes, inside its scope: one per eye for a stereo
     /// display in multi-pass and multi-camera, else one.
-    pub(in crate::renderer) fn encode(
+    pub fn encode(
         &self,
         encoder: &mut wgpu::CommandEncoder,
         (shared, target): (&Shared, &TargetViews),
@@ -251,12 +251,12 @@ impl ClassicDisplay {
     }
 
     /// This frame's cull of the display (multi-camera: its left eye's).
-    pub(in crate::renderer) fn cull_output(&self, culler: &Culler) -> CullOutput {
+    pub fn cull_output(&self, culler: &Culler) -> CullOutput {
         self.cull_of(culler, Some(0)).clone()
     }
 
     /// This frame's visible total (multi-camera: its left eye's).
-    pub(in crate::renderer) fn visible_count(&self, culler: &Culler) -> u32 {
+    pub fn visible_count(&self, culler: &Culler) -> u32 {
         self.cull_of(culler, Some(0)).visible.len() as u32
     }
 }

@@ -21,7 +21,7 @@ use crate::shaders::{
 
 /// What every far layer shares: the mono pipeline drawing into them (single-sampled),
 /// the composite pipeline and its layout.
-pub(in crate::renderer) struct FarLayers {
+pub struct FarLayers {
     drawer: Drawer,
     composite: wgpu::RenderPipeline,
     composite_layout: wgpu::BindGroupLayout,
@@ -30,7 +30,7 @@ pub(in crate::renderer) struct FarLayers {
 }
 
 /// One stereo display's far layer: one more view, and its textures.
-pub(in crate::renderer) struct FarDisplay {
+pub struct FarDisplay {
     /// The display it belongs to (and whose coarse blocks its cull runs over).
     index: usize,
     view: ViewPass,
@@ -181,8 +181,8 @@ impl FarLayers {
 
 impl FarDisplay {
     /// Its cull, as the culler keeps it.
-    pub(super) fn view_cull(&self) -> &crate::renderer::culler::ViewCull {
-        self.view.view_cull()
+    pub(super) fn cull_pass(&self) -> &crate::renderer::culler::CullPass {
+        self.view.cull_pass()
     }
 
     /// Its cull outputs, per the cull contract.

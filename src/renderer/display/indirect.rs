@@ -41,7 +41,7 @@ use crate::shaders::DrawKey;
 /// the inset cull, a foveated display's inset pair is one more view, drawn by the same
 /// pipeline in the same pass; with occlusion its late phase, with the far layer its far
 /// layer, with the visibility mask its mask pass, keeping pixels its kept tiles.
-pub(in crate::renderer) struct IndirectDisplay {
+pub struct IndirectDisplay {
     index: usize,
     view: ViewPass,
     key: DrawKey,
@@ -245,7 +245,7 @@ impl IndirectDisplay {
         let mut bytes = self.view.prepare(to, ctx, culler);
         // The late phase shares the early one's context; a rig member has a record.
         if let Some(late) = &self.late {
-            bytes += culler.write_member(to.pose, late.view_cull(), ctx);
+            bytes += culler.write_member(to.pose, late.cull_pass(), ctx);
         }
         if let (Some(view), Some(inset)) = (&self.inset, &plan.inset) {
             bytes += view.prepare(to, inset, culler);
@@ -268,8 +268,8 @@ impl IndirectDisplay {
     }
 
     /// The display's view cull (the one the coarse cull and the floor timing read).
-    pub(in crate::renderer) fn view_cull(&self) -> &crate::renderer::culler::ViewCull {
-        self.view.view_cull()
+    pub fn cull_pass(&self) -> &crate::renderer::culler::CullPass {
+        self.view.cull_pass()
     }
 
     /// The display up to what its late phase needs: its cull and its draw (with
@@ -354,7 +354,7 @@ impl IndirectDisplay {
         let what = PassRecord::display("cull", self.index);
         let dispatches = match one_pass {
             true => {
-                let frustum = (self.view.view_cull(), Phase::Frustum);
+                let frustum = (self.view.cull_pass(), Phase::Frustum);
                 culler.encode(encoder, frustum, rec, what)
             }
             false => self.view.encode_cull(encoder, culler, rec, what),
@@ -376,22 +376,18 @@ impl IndirectDisplay {
 
     /// The display's one multi-draw-indirect call into `pass`, whose pipeline the
     /// caller set (built on [`Drawer::layout`] and the decode).
-    pub(in crate::renderer) fn draw_with_own_pipeline(
-        &self,
-        pass: &mut wgpu::RenderPass,
-        shared: &Shared,
-    ) {
+    pub fn draw_with_own_pipeline(&self, pass: &mut wgpu::RenderPass, shared: &Shared) {
         self.view.draw(pass, shared.drawing(), BinPipelines::Own);
     }
 
     /// Sets the display's pipeline of the caller's own for its
     /// [`Shading::Own`]`(shading)` bins.
-    pub(in crate::renderer) fn set_own_pipeline(&mut self, shading: u32, own: OwnPipeline) {
+    pub fn set_own_pipeline(&mut self, shading: u32, own: OwnPipeline) {
         self.own.insert(shading, own);
     }
 
     /// The display must have a pipeline for each [`Shading::Own`] bin it draws.
-    pub(in crate::renderer) fn check_own_pipelines(&self, culler: &Culler) -> Result<()> {
+    pub fn check_own_pipelines(&self, culler: &Culler) -> Result<()> {
         let missing = (culler.bins().iter()).find_map(|b| match b.kind.shading {
             Shading::Own(i) if !self.own.contains_key(&i) => Some(i),
             _ => None,
@@ -406,14 +402,14 @@ impl IndirectDisplay {
     }
 
     /// With occlusion, its late phase.
-    pub(in crate::renderer) fn late(&self) -> Option<&LatePhase> {
+    pub fn late(&self) -> Option<&LatePhase> {
         self.late.as_ref()
     }
 
     /// Its late phase where its late cull takes dispatches of its own (GPU culling
     /// with occlusion, where the rig cull does not take it).
     pub(super) fn late_apart(&self, culler: &Culler) -> Option<&LatePhase> {
-        self.late.as_ref().filter(|l| culler.records(l.view_cull()))
+        self.late.as_ref().filter(|l| culler.records(l.cull_pass()))
     }
 
     /// With occlusion, the rest of its late phase after its early half and the late
@@ -436,7 +432,7 @@ impl IndirectDisplay {
     }
 
     /// With occlusion, whether its depth target can be read into its pyramids.
-    pub(in crate::renderer) fn check_depth(&self, target: &TargetViews) -> Result<()> {
+    pub fn check_depth(&self, target: &TargetViews) -> Result<()> {
         let bindable = wgpu::TextureUsages::TEXTURE_BINDING;
         match self.late.is_some() && !target.depth.texture().usage().contains(bindable) {
             true => Err(Error::DepthNotBindable {
@@ -447,17 +443,17 @@ impl IndirectDisplay {
     }
 
     /// Its far layer's cull (with one).
-    pub(super) fn far_view_cull(&self) -> Option<&crate::renderer::culler::ViewCull> {
-        self.far.as_ref().map(FarDisplay::view_cull)
+    pub(super) fn far_view_cull(&self) -> Option<&crate::renderer::culler::CullPass> {
+        self.far.as_ref().map(FarDisplay::cull_pass)
     }
 
     /// The display's cull outputs, per the cull contract.
-    pub(in crate::renderer) fn cull_targets(&self) -> &CullTargets {
+    pub fn cull_targets(&self) -> &CullTargets {
         self.view.cull()
     }
 
     /// Pixels its visibility mask covers in each frame.
-    pub(in crate::renderer) fn masked_pixels(&self) -> u64 {
+    pub fn masked_pixels(&self) -> u64 {
         self.mask.as_ref().map_or(0, |(_, m)| m.pixels)
     }
 
@@ -574,13 +570,13 @@ fn draw_keys(device: &wgpu::Device, plan: &FramePlan, mode: StereoMode) -> Vec<D
 /// pair's), visible totals, occlusion counts and kept tiles.
 impl IndirectDisplay {
     /// Its cull buffers.
-    pub(in crate::renderer) fn read_cull(&self, gpu: Gpu, culler: &Culler) -> Result<CullOutput> {
+    pub fn read_cull(&self, gpu: Gpu, culler: &Culler) -> Result<CullOutput> {
         read_targets(gpu, culler, self.view.cull())
     }
 
     /// Its changed tiles in the last frame (`None`: drawn whole), as its tile pass read
     /// them (marked on the CPU or the GPU), with its grid.
-    pub(in crate::renderer) fn read_changed_tiles(
+    pub fn read_changed_tiles(
         &self,
         gpu: Gpu,
         keep: Option<&KeepTiles>,
@@ -596,21 +592,13 @@ impl IndirectDisplay {
     }
 
     /// Its far layer's cull buffers (`None` without one).
-    pub(in crate::renderer) fn read_far_cull(
-        &self,
-        gpu: Gpu,
-        culler: &Culler,
-    ) -> Result<Option<CullOutput>> {
+    pub fn read_far_cull(&self, gpu: Gpu, culler: &Culler) -> Result<Option<CullOutput>> {
         let far = self.far.as_ref().map(FarDisplay::cull);
         far.map(|cull| read_targets(gpu, culler, cull)).transpose()
     }
 
     /// Its inset cull buffers (`None` without an inset cull).
-    pub(in crate::renderer) fn read_inset_cull(
-        &self,
-        gpu: Gpu,
-        culler: &Culler,
-    ) -> Result<Option<CullOutput>> {
+    pub fn read_inset_cull(&self, gpu: Gpu, culler: &Culler) -> Result<Option<CullOutput>> {
         let inset = self.inset.as_ref().map(ViewPass::cull);
         inset
             .map(|cull| read_targets(gpu, culler, cull))
@@ -618,23 +606,19 @@ impl IndirectDisplay {
     }
 
     /// Its late phase's cull buffers (`None` without occlusion).
-    pub(in crate::renderer) fn read_late_cull(
-        &self,
-        gpu: Gpu,
-        culler: &Culler,
-    ) -> Result<Option<CullOutput>> {
+    pub fn read_late_cull(&self, gpu: Gpu, culler: &Culler) -> Result<Option<CullOutput>> {
         let late = self.late.as_ref().map(LatePhase::cull);
         late.map(|cull| read_targets(gpu, culler, cull)).transpose()
     }
 
     /// The last prepared frame's far distance (`None` without a far layer).
-    pub(in crate::renderer) fn far_distance(&self) -> Option<f32> {
+    pub fn far_distance(&self) -> Option<f32> {
         self.far_distance
     }
 
     /// Its visible total, from its counts buffer (with occlusion, both phases': what
     /// it drew).
-    pub(in crate::renderer) fn visible_count(&self, gpu: Gpu) -> Result<u32> {
+    pub fn visible_count(&self, gpu: Gpu) -> Result<u32> {
         let late = self.late.as_ref().map(LatePhase::cull);
         let late = match late {
             Some(cull) => read_counts(gpu, cull)?[1],
@@ -644,10 +628,7 @@ impl IndirectDisplay {
     }
 
     /// What its two occlusion phases drew (`None` without occlusion).
-    pub(in crate::renderer) fn read_occlusion_counts(
-        &self,
-        gpu: Gpu,
-    ) -> Result<Option<OcclusionCounts>> {
+    pub fn read_occlusion_counts(&self, gpu: Gpu) -> Result<Option<OcclusionCounts>> {
         let Some(late) = &self.late else {
             return Ok(None);
         };
@@ -657,13 +638,13 @@ impl IndirectDisplay {
     }
 
     /// Its pyramids' shape (`None` without occlusion).
-    pub(in crate::renderer) fn pyramid_shape(&self) -> Option<PyramidShape> {
+    pub fn pyramid_shape(&self) -> Option<PyramidShape> {
         self.late.as_ref().map(LatePhase::shape)
     }
 }
 
 /// The device and queue a read waits on.
-pub(in crate::renderer) type Gpu<'a> = (&'a wgpu::Device, &'a wgpu::Queue);
+pub type Gpu<'a> = (&'a wgpu::Device, &'a wgpu::Queue);
 
 /// A view's cull buffers as `culler`'s layout lays them out, read back.
 fn read_targets(gpu: Gpu, culler: &Culler, cull: &CullTargets) -> Result<CullOutput> {

@@ -6,10 +6,10 @@
 //! late phase (`occlusion.rs`), its mask and kept tiles; [`classic`]: the
 //! per-instance modes, the only ones with passes per eye).
 
-pub(in crate::renderer) mod classic;
-pub(in crate::renderer) mod far_layer;
-pub(in crate::renderer) mod indirect;
-pub(in crate::renderer) mod occlusion;
+pub mod classic;
+pub mod far_layer;
+pub mod indirect;
+pub mod occlusion;
 
 use classic::ClassicDisplay;
 use far_layer::FarLayers;
@@ -28,36 +28,35 @@ use crate::renderer::recorder::Recorder;
 use crate::renderer::targets::{TargetShape, TargetViews};
 use crate::renderer::uploads::Writes;
 use crate::rig::Rig;
-use crate::scatter::ScatterTargets;
 use crate::scene::Scene;
 
 /// What a renderer's displays are made from: the scene, the rig and
 /// the frame plan of the rig as made, and the options.
-pub(in crate::renderer) struct PathInputs<'a> {
-    pub(in crate::renderer) scene: &'a Scene,
+pub struct PathInputs<'a> {
+    pub scene: &'a Scene,
     /// The instance records the draw starts from: the scene's, or a live scene's (with
     /// its slots' generations) when a sync reallocates.
-    pub(in crate::renderer) records: &'a [InstanceRecord],
+    pub records: &'a [InstanceRecord],
     /// The rig as made: its displays' names, shapes and masks.
-    pub(in crate::renderer) rig: &'a Rig,
+    pub rig: &'a Rig,
     /// Its plan: its displays, coarse cull and far layer sizes.
-    pub(in crate::renderer) plan: &'a FramePlan,
+    pub plan: &'a FramePlan,
     /// The frame context's uniform, bound by every pass.
-    pub(in crate::renderer) frame: &'a wgpu::Buffer,
-    pub(in crate::renderer) options: &'a RendererOptions,
+    pub frame: &'a wgpu::Buffer,
+    pub options: &'a RendererOptions,
     /// Instance slots (and places) of room.
-    pub(in crate::renderer) slots: u32,
+    pub slots: u32,
     /// Group 2 of the draw pipelines: the frame's shadow map.
-    pub(in crate::renderer) shadow_group: &'a wgpu::BindGroup,
+    pub shadow_group: &'a wgpu::BindGroup,
 }
 
 /// What every display's passes share: the one culler all views cull through, the draw
 /// pipelines, the scene as the GPU draws it, and on the GPU-driven path the far layers'
 /// pipelines and the kept tiles' pass.
-pub(in crate::renderer) struct Shared {
-    pub(in crate::renderer) culler: Culler,
-    pub(in crate::renderer) drawer: Drawer,
-    pub(in crate::renderer) draw_scene: DrawScene,
+pub struct Shared {
+    pub culler: Culler,
+    pub drawer: Drawer,
+    pub draw_scene: DrawScene,
     /// With the far layer: what every far layer shares.
     far: Option<FarLayers>,
     /// Keeping unchanged pixels where frames may: the pass that clears changed tiles.
@@ -66,7 +65,7 @@ pub(in crate::renderer) struct Shared {
 
 impl Shared {
     /// The pipelines and the scene, as a pass draws them.
-    pub(in crate::renderer) fn drawing(&self) -> Drawing<'_> {
+    pub fn drawing(&self) -> Drawing<'_> {
         Drawing {
             drawer: &self.drawer,
             scene: &self.draw_scene,
@@ -74,24 +73,14 @@ impl Shared {
     }
 
     /// The kept tiles' pass (keeping unchanged pixels on the GPU-driven path).
-    pub(in crate::renderer) fn keep(&self) -> Option<&KeepTiles> {
+    pub fn keep(&self) -> Option<&KeepTiles> {
         self.keep.as_ref()
-    }
-
-    /// Where the scatter passes (and the pose pass) write edits.
-    pub(in crate::renderer) fn scatter_targets(&self) -> ScatterTargets<'_> {
-        let (spheres, visibility) = self.culler.scatter_targets();
-        ScatterTargets {
-            instances: &self.draw_scene.instances,
-            spheres,
-            visibility,
-        }
     }
 }
 
 /// What one rig display has, made whole by [`Display::new`]: its name (its timer
 /// scope), its target's shape, its far layer's size as made, and its passes.
-pub(in crate::renderer) struct Display {
+pub struct Display {
     name: String,
     shape: TargetShape,
     /// Its far layer's texels as made (every frame's plan is sized so).
@@ -100,26 +89,22 @@ pub(in crate::renderer) struct Display {
 }
 
 /// A display's passes on the path chosen once for the renderer.
-pub(in crate::renderer) enum DisplayPasses {
+pub enum DisplayPasses {
     Indirect(Box<IndirectDisplay>),
     Classic(Box<ClassicDisplay>),
 }
 
 /// What a renderer's displays are: what they share, occlusion's pyramids (every
 /// occluding display's, built together), and each display.
-pub(in crate::renderer) struct Displays {
-    pub(in crate::renderer) shared: Shared,
-    pub(in crate::renderer) pyramids: PyramidSets,
-    pub(in crate::renderer) displays: Vec<Display>,
+pub struct Displays {
+    pub shared: Shared,
+    pub pyramids: PyramidSets,
+    pub displays: Vec<Display>,
 }
 
 /// The displays of `inputs` on the path its options choose, culled over `layout`
 /// (the scene's instances at their places of the cull order).
-pub(in crate::renderer) fn build(
-    device: &wgpu::Device,
-    layout: CullLayout,
-    inputs: &PathInputs,
-) -> Result<Displays> {
+pub fn build(device: &wgpu::Device, layout: CullLayout, inputs: &PathInputs) -> Result<Displays> {
     let scope = device.push_error_scope(wgpu::ErrorFilter::Validation);
     let built = match inputs.options.mode.per_instance() {
         false => indirect::build(device, layout, inputs),
@@ -150,24 +135,24 @@ impl Display {
     }
 
     /// What its targets must look like.
-    pub(in crate::renderer) fn shape(&self) -> &TargetShape {
+    pub fn shape(&self) -> &TargetShape {
         &self.shape
     }
 
     /// Its far layer's size as made.
-    pub(in crate::renderer) fn far_size(&self) -> Option<(u32, u32)> {
+    pub fn far_size(&self) -> Option<(u32, u32)> {
         self.far_size
     }
 
     /// Its passes on the GPU-driven path (`None` in the classic modes).
-    pub(in crate::renderer) fn indirect(&self) -> Option<&IndirectDisplay> {
+    pub fn indirect(&self) -> Option<&IndirectDisplay> {
         match &self.passes {
             DisplayPasses::Indirect(d) => Some(d),
             DisplayPasses::Classic(_) => None,
         }
     }
 
-    pub(in crate::renderer) fn indirect_mut(&mut self) -> Option<&mut IndirectDisplay> {
+    pub fn indirect_mut(&mut self) -> Option<&mut IndirectDisplay> {
         match &mut self.passes {
             DisplayPasses::Indirect(d) => Some(d),
             DisplayPasses::Classic(_) => None,
@@ -175,7 +160,7 @@ impl Display {
     }
 
     /// Its passes in the classic modes (`None` on the GPU-driven path).
-    pub(in crate::renderer) fn classic(&self) -> Option<&ClassicDisplay> {
+    pub fn classic(&self) -> Option<&ClassicDisplay> {
         match &self.passes {
             DisplayPasses::Classic(d) => Some(d),
             DisplayPasses::Indirect(_) => None,
@@ -184,12 +169,7 @@ impl Display {
 
     /// Writes this frame's contexts from `plan` (the display's) and the culler's
     /// results for its views. Returns the bytes written.
-    pub(in crate::renderer) fn prepare(
-        &mut self,
-        to: Writes,
-        plan: &DisplayPlan,
-        shared: &mut Shared,
-    ) -> u64 {
+    pub fn prepare(&mut self, to: Writes, plan: &DisplayPlan, shared: &mut Shared) -> u64 {
         match &mut self.passes {
             DisplayPasses::Indirect(d) => d.prepare(to, plan, shared),
             DisplayPasses::Classic(d) => d.prepare(to, plan, &shared.culler),
@@ -198,7 +178,7 @@ impl Display {
 
     /// The display's first half of a frame into `target`: its cull and draw (with
     /// occlusion, the early phase's), inside its scope.
-    pub(in crate::renderer) fn encode_early(
+    pub fn encode_early(
         &self,
         encoder: &mut wgpu::CommandEncoder,
         (shared, target): (&Shared, &TargetViews),
@@ -216,7 +196,7 @@ impl Display {
     /// For a display drawn in the caller's pass: its cull (with occlusion the
     /// frustum's alone) and far layer, inside its scope (GPU-driven; nothing in the
     /// classic modes, culled in `prepare`).
-    pub(in crate::renderer) fn encode_cull(
+    pub fn encode_cull(
         &self,
         encoder: &mut wgpu::CommandEncoder,
         shared: &Shared,
@@ -234,7 +214,7 @@ impl Display {
     /// With occlusion, after every display's pyramids: the display's late cull in
     /// dispatches of its own (culling on the GPU where the rig cull does not take it),
     /// inside its scope; nothing, and no scope, for a display without one.
-    pub(in crate::renderer) fn encode_late_cull(
+    pub fn encode_late_cull(
         &self,
         encoder: &mut wgpu::CommandEncoder,
         shared: &Shared,
@@ -252,7 +232,7 @@ impl Display {
     /// With occlusion, after the late culls: the rest of the display's late phase into
     /// `target` (its far layer tested against its pyramids, its late draw), inside its
     /// scope; nothing, and no scope, for a display without one.
-    pub(in crate::renderer) fn encode_late(
+    pub fn encode_late(
         &self,
         encoder: &mut wgpu::CommandEncoder,
         (shared, target): (&Shared, &TargetViews),
@@ -268,11 +248,7 @@ impl Display {
     }
 
     /// The display drawn into a pass the caller began. Returns the draw calls.
-    pub(in crate::renderer) fn draw(
-        &self,
-        pass: &mut wgpu::RenderPass,
-        shared: &Shared,
-    ) -> Result<u32> {
+    pub fn draw(&self, pass: &mut wgpu::RenderPass, shared: &Shared) -> Result<u32> {
         Ok(match &self.passes {
             DisplayPasses::Indirect(d) => {
                 d.check_own_pipelines(&shared.culler)?;

@@ -14,7 +14,7 @@ use crate::draw::{BinPipelines, Drawing, OwnPipelines};
 use crate::error::Result;
 use crate::occlusion::PyramidShape;
 use crate::occlusion::pyramid::{PyramidDispatch, PyramidPass, PyramidSlice};
-use crate::renderer::culler::{Culler, ViewCull};
+use crate::renderer::culler::{CullPass, Culler};
 use crate::renderer::frame_stats::FrameStats;
 use crate::renderer::options::RendererOptions;
 use crate::renderer::plan::FramePlan;
@@ -25,7 +25,7 @@ use crate::shaders::{DrawKey, PYRAMID_SET_DEPTHS};
 
 /// Display `index`'s late occlusion phase: its cull and draw (whose context is the
 /// display's), its pipeline variant and the shape of its pyramids.
-pub(in crate::renderer) struct LatePhase {
+pub struct LatePhase {
     view: ViewPass,
     shape: PyramidShape,
     index: usize,
@@ -52,7 +52,7 @@ impl LatePhase {
 /// Every display's pyramids, in sets of up to [`PYRAMID_SET_DEPTHS`] displays whose
 /// depth targets one pass reads (side by side, or a layer per eye): one set of
 /// dispatches each.
-pub(in crate::renderer) struct PyramidSets {
+pub struct PyramidSets {
     sets: Vec<PyramidSetPass>,
     device: wgpu::Device,
 }
@@ -117,7 +117,7 @@ impl PyramidSets {
     /// Records every set's pyramids of the early depth in `targets` (one per
     /// display), where `culler` reads them, as one frame-level pass `pyramid`.
     /// Returns the dispatches.
-    pub(in crate::renderer) fn encode(
+    pub fn encode(
         &self,
         encoder: &mut wgpu::CommandEncoder,
         (culler, targets): (&Culler, &[TargetViews]),
@@ -250,7 +250,7 @@ impl LatePhase {
 /// What occlusion adds in GPU memory for displays' `late` phases (`None` without any):
 /// culling on the GPU, the bits and the shared pyramids; culling on the CPU, the
 /// `read_back` pyramids (one region per display; the bits stay on the CPU).
-pub(in crate::renderer) fn occlusion_bytes<'a>(
+pub fn occlusion_bytes<'a>(
     late: impl Iterator<Item = &'a LatePhase> + Clone,
     culler: &Culler,
 ) -> Option<OcclusionBytes> {
@@ -286,8 +286,8 @@ pub(super) fn pyramid_shapes(
 
 impl LatePhase {
     /// Its cull, as the culler keeps it.
-    pub(super) fn view_cull(&self) -> &ViewCull {
-        self.view.view_cull()
+    pub(super) fn cull_pass(&self) -> &CullPass {
+        self.view.cull_pass()
     }
 
     /// Its cull outputs, per the cull contract.
@@ -304,14 +304,14 @@ impl LatePhase {
 /// Culling on the CPU with occlusion, after the frame's early half was submitted: each
 /// display's late phase and far layer culled against its pyramids, read back
 /// ([`Culler::cull_late`]).
-pub(in crate::renderer) fn cull_late(
+pub fn cull_late(
     (device, queue): (&wgpu::Device, &wgpu::Queue),
     culler: &mut Culler,
     displays: &[Display],
 ) -> Result<FrameStats> {
     let views: Vec<_> = (displays.iter())
         .map(|d| match d.indirect() {
-            Some(d) => (d.late().map(LatePhase::view_cull), d.far_view_cull()),
+            Some(d) => (d.late().map(LatePhase::cull_pass), d.far_view_cull()),
             None => (None, None),
         })
         .collect();

@@ -21,10 +21,10 @@ use crate::shaders::{
 const WORKGROUP: u32 = 64;
 
 /// The lights' buffers and the cluster pass.
-pub(in crate::renderer) struct Lighting {
-    pub(in crate::renderer) lights: wgpu::Buffer,
-    pub(in crate::renderer) views: wgpu::Buffer,
-    pub(in crate::renderer) clusters: wgpu::Buffer,
+pub struct Lighting {
+    pub lights: wgpu::Buffer,
+    pub views: wgpu::Buffer,
+    pub clusters: wgpu::Buffer,
     pipeline: wgpu::ComputePipeline,
     bind_group: wgpu::BindGroup,
     records: Vec<LightRecord>,
@@ -32,17 +32,13 @@ pub(in crate::renderer) struct Lighting {
     dirty: bool,
     /// Posing on the GPU, the scene's lights and the animations that move some of
     /// them: posed at each frame's time here (until an engine sets lights itself).
-    posed: Option<(crate::posing::Posing, Vec<Light>)>,
+    posed: Option<(crate::pose::Posing, Vec<Light>)>,
     displays: u32,
 }
 
 impl Lighting {
     /// The buffers for `displays` displays, holding `lights` (at most [`MAX_LIGHTS`]).
-    pub(in crate::renderer) fn new(
-        device: &wgpu::Device,
-        lights: &[Light],
-        displays: u32,
-    ) -> Result<Lighting> {
+    pub fn new(device: &wgpu::Device, lights: &[Light], displays: u32) -> Result<Lighting> {
         let records = records(lights)?;
         let storage = wgpu::BufferUsages::STORAGE | wgpu::BufferUsages::COPY_DST;
         let room = vec![LightRecord::default(); MAX_LIGHTS];
@@ -101,7 +97,7 @@ impl Lighting {
 
     /// Replaces the lights from the next frame on (the engine's: animations no longer
     /// move them).
-    pub(in crate::renderer) fn set(&mut self, lights: &[Light]) -> Result<()> {
+    pub fn set(&mut self, lights: &[Light]) -> Result<()> {
         self.records = records(lights)?;
         self.dirty = true;
         self.posed = None;
@@ -111,11 +107,7 @@ impl Lighting {
     /// Poses `lights` by `posing`'s animations at each frame's time (posing on the
     /// GPU, where nothing on the CPU poses the scene); nothing without lights on
     /// animated nodes.
-    pub(in crate::renderer) fn pose_with(
-        &mut self,
-        posing: &crate::posing::Posing,
-        lights: &[Light],
-    ) {
+    pub fn pose_with(&mut self, posing: &crate::pose::Posing, lights: &[Light]) {
         if !posing.lights.is_empty() {
             self.posed = Some((posing.clone(), lights.to_vec()));
         }
@@ -124,10 +116,10 @@ impl Lighting {
     /// Writes the count, the slices' depths, the lights where they changed and each
     /// display's combined frustum (`plan`'s); returns the bytes. Nothing while there
     /// are no lights (the count stays 0).
-    pub(in crate::renderer) fn prepare(&mut self, queue: &impl Upload, plan: &FramePlan) -> u64 {
+    pub fn prepare(&mut self, queue: &impl Upload, plan: &FramePlan) -> u64 {
         if let Some((posing, lights)) = &mut self.posed {
             let worlds = posing.node_worlds(plan.frame.time);
-            crate::posing::place_lights(&posing.lights, &worlds, lights);
+            crate::pose::place_lights(&posing.lights, &worlds, lights);
             self.records = lights.iter().map(Light::record).collect();
             self.dirty = true;
         }
@@ -155,11 +147,7 @@ impl Lighting {
 
     /// Records the clusters of every display: cleared, then one dispatch (nothing
     /// without lights).
-    pub(in crate::renderer) fn encode(
-        &self,
-        encoder: &mut wgpu::CommandEncoder,
-        rec: &mut Recorder,
-    ) -> u32 {
+    pub fn encode(&self, encoder: &mut wgpu::CommandEncoder, rec: &mut Recorder) -> u32 {
         if self.records.is_empty() {
             return 0;
         }

@@ -1,9 +1,9 @@
-//! The frame's morph pass on the GPU ([`crate::morphing`], `wgsl/morph.wgsl`): one
+//! The frame's morph pass on the GPU ([`crate::morph`], `wgsl/morph.wgsl`): one
 //! dispatch per frame over every morphed vertex, before the skinning pass (which moves
 //! what it writes into a skin's rest), the shadow pass and every display.
 
 use crate::buffers::init_buffer;
-use crate::morphing::Morphs;
+use crate::morph::Morphs;
 use crate::renderer::recorder::Recorder;
 use crate::shaders::{
     MORPH_BINDINGS, Windows, bind_group, bind_group_layout, compute_pipeline, dispatch_size,
@@ -11,7 +11,7 @@ use crate::shaders::{
 };
 
 /// What the pass reads and writes, its pipeline, and the weights' animations.
-pub(in crate::renderer) struct MorphPass {
+pub struct MorphPass {
     pipeline: wgpu::ComputePipeline,
     bind_group: wgpu::BindGroup,
     /// The weights (their defaults and channels; no vertices), sampled each frame.
@@ -29,7 +29,7 @@ const WORKGROUP: u32 = 64;
 impl MorphPass {
     /// The pass for `morphs` writing into `vertex_buffer` and, for skinned meshes, the
     /// skins' `skin_rest` (`None` without morphs).
-    pub(in crate::renderer) fn new(
+    pub fn new(
         device: &wgpu::Device,
         morphs: &Morphs,
         (vertex_buffer, skin_rest): (&wgpu::Buffer, Option<&wgpu::Buffer>),
@@ -119,16 +119,12 @@ impl MorphPass {
     }
 
     /// See [`crate::renderer::Renderer::set_morph_weights`].
-    pub(in crate::renderer) fn set_weights(
-        &mut self,
-        m: usize,
-        weights: &[f32],
-    ) -> Result<(), String> {
+    pub fn set_weights(&mut self, m: usize, weights: &[f32]) -> Result<(), String> {
         self.morphs.set_weights(m, weights)
     }
 
     /// Samples every morph's weights at `time` and writes them; returns the bytes.
-    pub(in crate::renderer) fn prepare(&mut self, queue: &wgpu::Queue, time: f32) -> u64 {
+    pub fn prepare(&mut self, queue: &wgpu::Queue, time: f32) -> u64 {
         self.morphs.set_time(time);
         let bytes: &[u8] = bytemuck::cast_slice(&self.morphs.weights);
         queue.write_buffer(&self.weights, 0, bytes);
@@ -137,7 +133,7 @@ impl MorphPass {
 
     /// [`MorphPass::prepare`] for a two-frame submission's second frame, at its
     /// `time`: the weights go to [`MorphPass::encode_next`]'s copy.
-    pub(in crate::renderer) fn prepare_next(&mut self, queue: &wgpu::Queue, time: f32) -> u64 {
+    pub fn prepare_next(&mut self, queue: &wgpu::Queue, time: f32) -> u64 {
         self.morphs.set_time(time);
         let bytes: &[u8] = bytemuck::cast_slice(&self.morphs.weights);
         queue.write_buffer(&self.next_weights, 0, bytes);
@@ -145,28 +141,20 @@ impl MorphPass {
     }
 
     /// A two-frame submission's second morph dispatch, after its weights' copy.
-    pub(in crate::renderer) fn encode_next(
-        &self,
-        encoder: &mut wgpu::CommandEncoder,
-        rec: &mut Recorder,
-    ) -> u32 {
+    pub fn encode_next(&self, encoder: &mut wgpu::CommandEncoder, rec: &mut Recorder) -> u32 {
         let size = self.weights.size();
         encoder.copy_buffer_to_buffer(&self.next_weights, 0, &self.weights, 0, size);
         self.encode(encoder, rec)
     }
 
     /// Records the frame's one morph dispatch, logged as the frame pass `morph`.
-    pub(in crate::renderer) fn encode(
-        &self,
-        encoder: &mut wgpu::CommandEncoder,
-        rec: &mut Recorder,
-    ) -> u32 {
+    pub fn encode(&self, encoder: &mut wgpu::CommandEncoder, rec: &mut Recorder) -> u32 {
         let with = (&self.pipeline, &self.bind_group, self.dispatch);
         super::one_dispatch(encoder, rec, "morph", with)
     }
 
     /// Morphed vertices per frame.
-    pub(in crate::renderer) fn vertices(&self) -> u32 {
+    pub fn vertices(&self) -> u32 {
         self.vertices
     }
 }

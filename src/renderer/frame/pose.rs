@@ -21,7 +21,7 @@ use crate::shaders::{
 };
 
 /// The pass's pipelines, tables and bindings.
-pub(in crate::renderer) struct PosePass {
+pub struct PosePass {
     pipelines: [wgpu::ComputePipeline; 3],
     /// The frame's pose: one group for its three entry points (`POSE_BINDINGS`), and
     /// the scatter of its moves.
@@ -44,7 +44,7 @@ struct PoseAt {
 
 /// Where the pass writes: the skins' joint matrices and the scatter's targets; and,
 /// for two frames per submission, the second frame's `dt`.
-pub(in crate::renderer) struct PoseOutputs<'a> {
+pub struct PoseOutputs<'a> {
     pub joint_matrices: &'a wgpu::Buffer,
     pub scatter: ScatterTargets<'a>,
     pub windows: Windows,
@@ -53,7 +53,7 @@ pub(in crate::renderer) struct PoseOutputs<'a> {
 
 impl PosePass {
     /// The pass for `tables`, reading the frame context `frame`.
-    pub(in crate::renderer) fn new(
+    pub fn new(
         device: &wgpu::Device,
         tables: &PoseTables,
         frame: &wgpu::Buffer,
@@ -154,7 +154,7 @@ impl PosePass {
 
     /// Stops posing the instance in `slot` (removed, or posed by the engine now): its
     /// target's slot goes void (4 bytes); returns the bytes written.
-    pub(in crate::renderer) fn stop(&mut self, queue: &wgpu::Queue, slot: u32) -> u64 {
+    pub fn stop(&mut self, queue: &wgpu::Queue, slot: u32) -> u64 {
         let Some(k) = self.targets_of.remove(&slot) else {
             return 0;
         };
@@ -166,21 +166,13 @@ impl PosePass {
 
     /// Records the frame's posing, logged as the frame pass `pose`; returns its
     /// dispatches.
-    pub(in crate::renderer) fn encode(
-        &self,
-        encoder: &mut wgpu::CommandEncoder,
-        rec: &mut Recorder,
-    ) -> u32 {
+    pub fn encode(&self, encoder: &mut wgpu::CommandEncoder, rec: &mut Recorder) -> u32 {
         self.encode_at(&self.first, encoder, rec)
     }
 
     /// Records a two-frame submission's second pose, `dt` ahead (none for a pass made
     /// without one); returns its dispatches.
-    pub(in crate::renderer) fn encode_next(
-        &self,
-        encoder: &mut wgpu::CommandEncoder,
-        rec: &mut Recorder,
-    ) -> u32 {
+    pub fn encode_next(&self, encoder: &mut wgpu::CommandEncoder, rec: &mut Recorder) -> u32 {
         match &self.second {
             Some(second) => self.encode_at(second, encoder, rec),
             None => 0,
@@ -206,23 +198,23 @@ impl PosePass {
     }
 
     /// GPU bytes of its tables and scratch.
-    pub(in crate::renderer) fn gpu_bytes(&self) -> u64 {
+    pub fn gpu_bytes(&self) -> u64 {
         self.gpu_bytes
     }
 }
 
 /// What the pose pass binds: the frame context, the skins' joint matrices, and where
 /// its moves go (the path's scatter targets).
-pub(in crate::renderer) struct GpuParts<'a> {
-    pub(in crate::renderer) frame: &'a wgpu::Buffer,
-    pub(in crate::renderer) skin: Option<&'a SkinPass>,
-    pub(in crate::renderer) windows: Windows,
-    pub(in crate::renderer) scatter: ScatterTargets<'a>,
+pub struct GpuParts<'a> {
+    pub frame: &'a wgpu::Buffer,
+    pub skin: Option<&'a SkinPass>,
+    pub windows: Windows,
+    pub scatter: ScatterTargets<'a>,
 }
 
 /// The pose pass, with [`PosingMode::Gpu`] and a scene that moves; `posed(slot)`: whether
 /// it still poses the instance in `slot`.
-pub(in crate::renderer) fn build(
+pub fn build(
     device: &wgpu::Device,
     scene: &Scene,
     options: &RendererOptions,

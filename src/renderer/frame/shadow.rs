@@ -13,12 +13,12 @@ use crate::shaders::{SHADOW_MAP_BINDINGS, Windows, bind_group_layout};
 use crate::shadow::{LightView, SHADOW_FORMAT};
 
 /// The light as one more view.
-pub(in crate::renderer) struct ShadowPass {
+pub struct ShadowPass {
     view: ViewPass,
 }
 
 impl ShadowPass {
-    pub(in crate::renderer) fn new(
+    pub fn new(
         device: &wgpu::Device,
         drawing: Drawing,
         frame: &wgpu::Buffer,
@@ -31,13 +31,7 @@ impl ShadowPass {
 
     /// Writes the light's context for `view` and the culler's result for it. Returns the
     /// bytes written.
-    pub(in crate::renderer) fn prepare(
-        &self,
-        to: Writes,
-        view: &LightView,
-        size: u32,
-        culler: &Culler,
-    ) -> u64 {
+    pub fn prepare(&self, to: Writes, view: &LightView, size: u32, culler: &Culler) -> u64 {
         let context = DisplayContext::light(view, size);
         self.view.prepare(to, &context, culler)
     }
@@ -45,7 +39,7 @@ impl ShadowPass {
     /// Records the light's cull (on the GPU) and the shadow pass, timed as
     /// `shadow_cull` and `shadow` inside a `shadow` scope, logged at the frame level.
     /// Returns (dispatches, draw calls).
-    pub(in crate::renderer) fn encode(
+    pub fn encode(
         &self,
         encoder: &mut wgpu::CommandEncoder,
         (drawing, culler): (Drawing, &Culler),
@@ -79,20 +73,20 @@ impl ShadowPass {
 
 /// The frame's shadow map on the GPU (1 x 1 and never drawn with shadows off, so that
 /// the draw pipelines bind the same groups either way).
-pub(in crate::renderer) struct ShadowMap {
+pub struct ShadowMap {
     /// The depth texture's view.
     view: wgpu::TextureView,
     /// Group 2 of the draw pipelines ([`SHADOW_MAP_BINDINGS`]): the map and its
     /// comparison sampler.
-    pub(in crate::renderer) bind_group: wgpu::BindGroup,
+    pub bind_group: wgpu::BindGroup,
     /// Texels a side.
-    pub(in crate::renderer) size: u32,
+    pub size: u32,
 }
 
 impl ShadowMap {
     /// A `size` x `size` shadow map, bound with the punctual lights and their
     /// clusters (the rest of group 2).
-    pub(in crate::renderer) fn new(
+    pub fn new(
         device: &wgpu::Device,
         size: u32,
         (lights, views, clusters): (&wgpu::Buffer, &wgpu::Buffer, &wgpu::Buffer),

@@ -1,4 +1,4 @@
-//! The frame's skinning pass on the GPU ([`crate::skinning`], `wgsl/skin.wgsl`): one
+//! The frame's skinning pass on the GPU ([`crate::skin`], `wgsl/skin.wgsl`): one
 //! dispatch per frame over every skinned vertex, before the shadow pass and every
 //! display, writing into the vertex buffer they all draw from.
 
@@ -9,10 +9,10 @@ use crate::shaders::{
 };
 use std::ops::Range;
 
-use crate::skinning::{JointMatrix, Skins};
+use crate::skin::{JointMatrix, Skins};
 
 /// What the pass reads and writes, and its pipeline.
-pub(in crate::renderer) struct SkinPass {
+pub struct SkinPass {
     pipeline: wgpu::ComputePipeline,
     bind_group: wgpu::BindGroup,
     rest: wgpu::Buffer,
@@ -30,7 +30,7 @@ const WORKGROUP: u32 = 64;
 
 impl SkinPass {
     /// The pass for `skins` writing into `vertex_buffer` (`None` without skins).
-    pub(in crate::renderer) fn new(
+    pub fn new(
         device: &wgpu::Device,
         skins: &Skins,
         vertex_buffer: &wgpu::Buffer,
@@ -109,35 +109,21 @@ impl SkinPass {
     }
 
     /// Writes `skins`' current joint matrices in `range`; returns the bytes.
-    pub(in crate::renderer) fn upload(
-        &self,
-        queue: &wgpu::Queue,
-        skins: &Skins,
-        range: Range<u32>,
-    ) -> u64 {
+    pub fn upload(&self, queue: &wgpu::Queue, skins: &Skins, range: Range<u32>) -> u64 {
         write_matrices(queue, &self.joints, skins, range)
     }
 
     /// [`SkinPass::upload`] for a two-frame submission's second frame: its matrices
     /// in `range` replace the first frame's before its dispatch
     /// ([`SkinPass::encode_next`]).
-    pub(in crate::renderer) fn upload_next(
-        &mut self,
-        queue: &wgpu::Queue,
-        skins: &Skins,
-        range: Range<u32>,
-    ) -> u64 {
+    pub fn upload_next(&mut self, queue: &wgpu::Queue, skins: &Skins, range: Range<u32>) -> u64 {
         self.next_ranges.push(range.clone());
         write_matrices(queue, &self.next, skins, range)
     }
 
     /// A two-frame submission's second skinning: the second frame's matrices copied
     /// into place, then the dispatch.
-    pub(in crate::renderer) fn encode_next(
-        &mut self,
-        encoder: &mut wgpu::CommandEncoder,
-        rec: &mut Recorder,
-    ) -> u32 {
+    pub fn encode_next(&mut self, encoder: &mut wgpu::CommandEncoder, rec: &mut Recorder) -> u32 {
         let size = size_of::<JointMatrix>() as u64;
         for range in self.next_ranges.drain(..) {
             let (at, bytes) = (range.start as u64 * size, range.len() as u64 * size);
@@ -147,27 +133,23 @@ impl SkinPass {
     }
 
     /// Records the frame's one skinning dispatch, logged as the frame pass `skin`.
-    pub(in crate::renderer) fn encode(
-        &self,
-        encoder: &mut wgpu::CommandEncoder,
-        rec: &mut Recorder,
-    ) -> u32 {
+    pub fn encode(&self, encoder: &mut wgpu::CommandEncoder, rec: &mut Recorder) -> u32 {
         let with = (&self.pipeline, &self.bind_group, self.dispatch);
         super::one_dispatch(encoder, rec, "skin", with)
     }
 
     /// The rest vertices the pass moves (the morph pass writes a morphed skin's).
-    pub(in crate::renderer) fn rest(&self) -> &wgpu::Buffer {
+    pub fn rest(&self) -> &wgpu::Buffer {
         &self.rest
     }
 
     /// The joint matrices the pass applies (the pose pass writes them on the GPU).
-    pub(in crate::renderer) fn joint_matrices(&self) -> &wgpu::Buffer {
+    pub fn joint_matrices(&self) -> &wgpu::Buffer {
         &self.joints
     }
 
     /// Skinned vertices per frame.
-    pub(in crate::renderer) fn vertices(&self) -> u32 {
+    pub fn vertices(&self) -> u32 {
         self.vertices
     }
 }

@@ -16,7 +16,7 @@
 use bytemuck::{Pod, Zeroable};
 use glam::{Vec3, Vec4};
 
-use crate::posing::{Channel, Interpolation};
+use crate::pose::{Channel, Interpolation};
 
 /// A morphed vertex at rest, as the pass reads it (`MorphVertex` in `wgsl/morph.wgsl`).
 #[repr(C)]
@@ -35,7 +35,7 @@ pub struct MorphVertex {
     /// Its morph's targets.
     pub targets: u32,
     /// What it writes: a vertex of the scene's vertices, or with `skinned` a skin's rest
-    /// vertex ([`crate::skinning::Skins::vertices`]).
+    /// vertex ([`crate::skin::Skins::vertices`]).
     pub destination: u32,
     /// 1 where `destination` is a skin's rest vertex, else 0.
     pub skinned: u32,

@@ -1,5 +1,5 @@
 //! Skinning, frame-level work after posing: each skinned instance's vertices are moved by
-//! its joints (posed nodes, [`crate::posing`]) once per frame, on the GPU
+//! its joints (posed nodes, [`crate::pose`]) once per frame, on the GPU
 //! (`wgsl/skin.wgsl`), into the instance's own range of the one vertex buffer that every
 //! display, both eyes, the shadow pass and the far layer draw from. Never per eye, never
 //! per display.
@@ -46,7 +46,7 @@ pub struct Skin {
     /// The instance's own mesh's rest bounding sphere (xyz center, w radius): the
     /// instance transform maps it onto the posed sphere.
     pub rest_sphere: Vec4,
-    /// Its joints: indices into [`crate::posing::Posing::nodes`].
+    /// Its joints: indices into [`crate::pose::Posing::nodes`].
     pub joints: Vec<u32>,
     /// Per joint, glTF's inverse bind matrix.
     pub inverse_binds: Vec<Affine3A>,
@@ -129,7 +129,7 @@ impl Skins {
     /// vertices stay, writing their own meshes, which nothing draws), the rest take the
     /// instances' new ids.
     pub fn keep_instances(&mut self, kept: &[bool]) {
-        let new_id = crate::posing::new_ids(kept);
+        let new_id = crate::pose::new_ids(kept);
         self.skins.retain_mut(|s| {
             let id = new_id.get(s.instance as usize).copied().flatten();
             s.instance = id.unwrap_or(u32::MAX);
