@@ -45,11 +45,6 @@ use crate::places::Places;
 use crate::records::{InstanceRecord, instance_record};
 use crate::scene::{Instance, Scene, Vertex};
 
-mod changes;
-mod lights;
-pub use changes::Changes;
-pub use lights::LightHandle;
-
 /// A stable reference to one inserted instance.
 #[derive(Clone, Copy, Debug, PartialEq, Eq, Hash, serde::Serialize, serde::Deserialize)]
 pub struct Handle {
@@ -480,5 +475,121 @@ fn check_finite(t: &Affine3A) -> Result<()> {
     match Mat4::from(*t).is_finite() {
         true => Ok(()),
         false => Err(Error::NonFinite("the transform".into())),
+    }
+}
+
+// What a live scene's edits changed since the last sync ([`Changes`]): the lists
+// `Renderer::sync` uploads from.
+/// What changed since the last sync.
+#[derive(Clone, Debug, Default, PartialEq)]
+pub struct Changes {
+    /// Places filled or vacated (each place once, its last state; in first-change
+    /// order). Applied before the moves: an inserted instance's sphere goes up as its
+    /// move, to its new place.
+    pub placed: Vec<PlaceEdit>,
+    /// Edits of the instances whose transform changed or that were inserted (each slot
+    /// once, its last move; none for slots removed since).
+    pub moved: Vec<MoveEdit>,
+    /// Slots whose record changed otherwise (color, material, an insert), each once.
+    pub recolored: Vec<u32>,
+    /// Slots removed: a move staged by an earlier sync is void.
+    pub removed: Vec<u32>,
+    /// A mesh ran out of vacant places and the cull order was laid out again
+    /// ([`LiveScene::places`](super::LiveScene::places)): the whole order goes up.
+    pub restructured: bool,
+    /// Meshes were added: geometry grows.
+    pub geometry: bool,
+    /// Ranges of the skins' joint matrices that changed ([`LiveScene::pose`](super::LiveScene::pose): all of
+    /// them; [`LiveScene::set_joints`](super::LiveScene::set_joints): one skin's): they go up.
+    pub joints: Vec<std::ops::Range<u32>>,
+    /// Skinned slots the engine began to pose itself ([`LiveScene::set_joints`](super::LiveScene::set_joints)): GPU
+    /// posing stops posing them.
+    pub driven: Vec<u32>,
+    /// A punctual light was inserted, changed, removed or posed: the lights go up
+    /// whole (at most [`crate::lights::MAX_LIGHTS`] records).
+    pub lights: bool,
+}
+
+impl Changes {
+    /// Whether nothing changed.
+    pub fn is_empty(&self) -> bool {
+        *self == Changes::default()
+    }
+}
+
+// A live scene's punctual lights by handle: each in a slot of `Scene::lights` with a
+// generation, lit or removed; a change sends the lit ones up whole at the next sync.
+/// A stable reference to one punctual light of a [`LiveScene`].
+#[derive(Clone, Copy, Debug, PartialEq, Eq, Hash)]
+pub struct LightHandle {
+    slot: u32,
+    generation: u32,
+}
+
+impl LiveScene {
+    /// The handles of the lights the scene started with, in order.
+    pub fn light_handles(&self) -> Vec<LightHandle> {
+        (self.light_slots.iter().enumerate())
+            .filter(|(_, (_, lit))| *lit)
+            .map(|(slot, &(generation, _))| LightHandle {
+                slot: slot as u32,
+                generation,
+            })
+            .collect()
+    }
+
+    /// The lights lit now, as the renderer shades them.
+    pub fn lights(&self) -> Vec<crate::lights::Light> {
+        (self.scene.lights.iter().zip(&self.light_slots))
+            .filter(|(_, (_, lit))| *lit)
+            .map(|(l, _)| *l)
+            .collect()
+    }
+
+    /// Adds `light` (checked: [`crate::lights::Light::check`]) in a new slot; an error
+    /// past [`crate::lights::MAX_LIGHTS`] lit lights.
+    pub fn insert_light(&mut self, light: crate::lights::Light) -> Result<LightHandle> {
+        light.check().map_err(Error::InvalidScene)?;
+        let lit = self.light_slots.iter().filter(|(_, lit)| *lit).count();
+        if lit >= crate::lights::MAX_LIGHTS {
+            return Err(Error::InvalidScene(format!(
+                "a light past the budget of {} (lights::MAX_LIGHTS)",
+                crate::lights::MAX_LIGHTS
+            )));
+        }
+        self.scene.lights.push(light);
+        self.light_slots.push((0, true));
+        self.changes.lights = true;
+        Ok(LightHandle {
+            slot: self.light_slots.len() as u32 - 1,
+            generation: 0,
+        })
+    }
+
+    /// Replaces the light behind `handle` (moved, recolored, re-aimed).
+    pub fn set_light(&mut self, handle: LightHandle, light: crate::lights::Light) -> Result<()> {
+        self.check_light(handle)?;
+        light.check().map_err(Error::InvalidScene)?;
+        self.scene.lights[handle.slot as usize] = light;
+        self.changes.lights = true;
+        Ok(())
+    }
+
+    /// Turns the light behind `handle` off for good; `handle` is then an error.
+    pub fn remove_light(&mut self, handle: LightHandle) -> Result<crate::lights::Light> {
+        self.check_light(handle)?;
+        let slot = &mut self.light_slots[handle.slot as usize];
+        *slot = (slot.0.wrapping_add(1), false);
+        self.changes.lights = true;
+        Ok(self.scene.lights[handle.slot as usize])
+    }
+
+    fn check_light(&self, handle: LightHandle) -> Result<()> {
+        match self.light_slots.get(handle.slot as usize) {
+            Some(&(generation, true)) if generation == handle.generation => Ok(()),
+            _ => Err(Error::BadHandle(format!(
+                "light {handle:?} was removed or never given"
+            ))),
+        }
     }
 }

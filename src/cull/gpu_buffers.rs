@@ -3,16 +3,16 @@
 //! outputs are [`crate::cull::targets`].
 
 use crate::bins::BinKind;
+use crate::buffers::Upload;
 use crate::buffers::{init_buffer, init_buffer_with_room, storage_buffer};
 use crate::cull::HiddenArea;
 use crate::cull::coarse::{BLOCK, CoarseCull};
-use crate::cull::rig::{MAX_RIG_VIEWS, RigCull, RigSets, RigView};
+use crate::cull::rig::{MAX_RIG_VIEWS, RigCull, RigOcclusion, RigSets, RigView};
 use crate::records::CullLayout;
 use crate::records::{storage_bytes, uniform_bytes};
 use crate::shaders::{SPAN, WORKGROUP_SIZE, dispatch_size};
 use encase::ShaderType;
-
-mod writes;
+use glam::Vec4;
 
 /// The uniform the cull passes read besides the display context (`CullParams` in
 /// `wgsl/shared/records.wgsl`); encase lays it out as WGSL does.
@@ -471,4 +471,54 @@ fn cull_params(layout: &CullLayout, room: Room) -> (CullParams, Grids) {
         member_sums,
     };
     (params, groups)
+}
+
+// The GPU culler's per-frame writes into its buffers: the hidden areas, the coarse
+// cull's block tests and the rig cull's members.
+impl CullScene {
+    /// Writes this frame's hidden areas, one per display slot (in order; `None` drops
+    /// nothing). Returns the bytes written; nothing where no display's cull drops by one.
+    pub fn write_hidden<'a>(
+        &self,
+        queue: &impl Upload,
+        areas: impl Iterator<Item = Option<&'a HiddenArea>>,
+    ) -> u64 {
+        if self.hidden_slots == 0 {
+            return 0;
+        }
+        let records: Vec<HiddenArea> = (areas.take(self.hidden_slots as usize))
+            .map(|a| a.copied().unwrap_or(HiddenArea::NONE))
+            .collect();
+        let bytes = storage_bytes(&records);
+        queue.write_buffer(&self.hidden, 0, &bytes);
+        bytes.len() as u64
+    }
+
+    /// Writes this frame's block tests, one per coarse slot (display, in order): the
+    /// display frustums' planes grown for rounding ([`CoarseCull::around`]). Returns the
+    /// bytes written; nothing without the coarse cull.
+    pub fn write_block_tests(&self, queue: &impl Upload, planes: &[[Vec4; 6]]) -> u64 {
+        if self.coarse_slots == 0 {
+            return 0;
+        }
+        let tests: Vec<CoarseCull> = planes.iter().map(|p| CoarseCull::around(*p)).collect();
+        let bytes = storage_bytes(&tests);
+        queue.write_buffer(&self.block_tests, 0, &bytes);
+        bytes.len() as u64
+    }
+
+    /// Writes rig member `m`'s record for this frame, and a late member's occlusion
+    /// test; returns the bytes written.
+    pub fn write_rig_member(
+        &self,
+        queue: &impl Upload,
+        m: u32,
+        (record, test): (&RigView, Option<&RigOcclusion>),
+    ) -> u64 {
+        let (group, index) = self.rig_sets.place(m);
+        let base = group as u64 * self.rig_stride;
+        let (view_at, test_at) = RigCull::offsets(index as usize);
+        let written = queue.write_uniform(&self.rig, base + view_at, record);
+        written + test.map_or(0, |t| queue.write_uniform(&self.rig, base + test_at, t))
+    }
 }

@@ -223,12 +223,8 @@ impl Renderer {
             slots: scene.instances.len() as u32,
             posed: &|_| true,
         };
-        let built = build(
-            device,
-            made,
-            (rig, coarse, &options),
-            (base.uniform(), base.shadow_group()),
-        )?;
+        let (frame, shadow) = (base.uniform(), base.shadow_group());
+        let built = build(device, made, (rig, coarse), &options, frame, shadow)?;
         Ok(Renderer {
             frame: FrameLevel::new(base, built.passes, built.edits),
             shared: built.shared,
@@ -270,8 +266,15 @@ impl Renderer {
             slots: room,
             posed: &|s| live.animates(s),
         };
-        let bound = (self.frame.uniform(), self.frame.shadow_group());
-        let built = build(device, made, (&self.rig, self.coarse, &self.options), bound)?;
+        let (frame, shadow) = (self.frame.uniform(), self.frame.shadow_group());
+        let built = build(
+            device,
+            made,
+            (&self.rig, self.coarse),
+            &self.options,
+            frame,
+            shadow,
+        )?;
         (self.frame.passes, self.frame.edits) = (built.passes, built.edits);
         (self.shared, self.pyramids, self.displays) =
             (built.shared, built.pyramids, built.displays);
@@ -517,8 +520,10 @@ impl Renderer {
 fn build(
     device: &wgpu::Device,
     made: Made,
-    (rig, coarse, options): (&Rig, bool, &RendererOptions),
-    (frame, shadow_group): (&wgpu::Buffer, &wgpu::BindGroup),
+    (rig, coarse): (&Rig, bool),
+    options: &RendererOptions,
+    frame: &wgpu::Buffer,
+    shadow_group: &wgpu::BindGroup,
 ) -> Result<Built> {
     let plan = FramePlan::new(rig, options, coarse, 0.0)?;
     let inputs = PathInputs {

@@ -309,7 +309,7 @@ impl FramePlan {
                 inset_cull,
                 ahead: times[1] - times[0],
             };
-            plan.set(i, (d, r), (far, hidden), shown);
+            plan.set(i, (d, r), far, hidden, shown);
         }
         let light_cull = options.shadows.then(|| PlannedCull {
             view: CullView::Light,
@@ -403,7 +403,8 @@ impl DisplayPlan {
         &mut self,
         i: usize,
         (d, r): (&Display, &ResolvedDisplay),
-        (far, hidden): (Option<FarPlan>, Option<Arc<HiddenArea>>),
+        far: Option<FarPlan>,
+        hidden: Option<Arc<HiddenArea>>,
         shown: Shown,
     ) {
         let Shown {

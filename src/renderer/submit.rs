@@ -7,7 +7,6 @@
 //! submit; [`Renderer::submit_frame`] does it all headless.
 
 use super::display::indirect::IndirectDisplay;
-use super::display::occlusion::cull_late;
 use super::display::{Display, Shared};
 use super::frame::FrameScene;
 use super::frame::edits::{Staging, SyncInto};
@@ -51,7 +50,7 @@ impl Renderer {
             slots: self.slots,
             levels: self.options.lod_levels(),
         };
-        let mut stats = match self.frame.edits.stage(device, (queue, live), changes, into) {
+        let mut stats = match self.frame.edits.stage(device, queue, live, changes, into) {
             Staging::Staged(stats) => stats,
             Staging::Reallocate => {
                 let needed = (live.scene().instances.len() as u32).max(live.places().len());
@@ -162,7 +161,7 @@ impl Renderer {
     pub fn prepare(&mut self, queue: &wgpu::Queue, rig: &Rig, time: f32) -> Result<FrameStats> {
         let plan = self.plan_again(rig, time)?;
         let next = time + self.options.dt;
-        self.prepare_plan(queue, plan, (rig, time), next)
+        self.prepare_plan(queue, plan, rig, [time, next])
     }
 
     /// [`Renderer::prepare`] for a submission of two frames
@@ -177,16 +176,17 @@ impl Renderer {
         next: (&Rig, f32),
     ) -> Result<FrameStats> {
         let plan = self.plan_pair(now, next)?;
-        self.prepare_plan(queue, plan, now, next.1)
+        self.prepare_plan(queue, plan, now.0, [now.1, next.1])
     }
 
     fn prepare_plan(
         &mut self,
         queue: &wgpu::Queue,
         mut plan: FramePlan,
-        (rig, time): (&Rig, f32),
-        next_time: f32,
+        rig: &Rig,
+        times: [f32; 2],
     ) -> Result<FrameStats> {
+        let [time, next_time] = times;
         if self.options.motion_vectors {
             self.motion_from = self.motion_last.take();
         }
@@ -273,7 +273,7 @@ impl Renderer {
             queue,
         };
         let frame_bytes = self.frame.write(to, &plan);
-        let mut stats = write_displays(to, &plan, (&mut self.shared, &mut self.displays));
+        let mut stats = write_displays(to, &plan, &mut self.shared, &mut self.displays);
         let start = std::time::Instant::now();
         stats.bytes_uploaded += self.frame.write_shadow(to, &plan, &self.shared.culler);
         stats.cpu_upload += start.elapsed();
@@ -345,7 +345,13 @@ impl Renderer {
         timer: Option<&mut GpuTimer>,
     ) -> Result<FrameStats> {
         self.check_targets(targets)?;
-        let culled = cull_late((device, queue), &mut self.shared.culler, &self.displays)?;
+        let views: Vec<_> = (self.displays.iter().map(Display::indirect))
+            .map(|d| match d {
+                Some(d) => (d.late().map(|l| l.cull_pass()), d.far_cull_pass()),
+                None => (None, None),
+            })
+            .collect();
+        let culled = self.shared.culler.cull_late((device, queue), &views)?;
         // The second half's log continues the first's.
         let mut rec = Recorder::new(timer, std::mem::take(&mut self.passes));
         let late = self.record_late(encoder, targets, &mut rec);
@@ -398,7 +404,7 @@ impl Renderer {
         let mut stats = self.encode_frame(encoder, rec);
         stats.dispatch_levels.frame = stats.dispatches;
         for (display, target) in self.displays.iter().zip(targets) {
-            stats = stats + display.encode_early(encoder, (&self.shared, target), rec);
+            stats = stats + display.encode_early(encoder, &self.shared, target, rec);
         }
         let pyramids = (self.pyramids).encode(encoder, (&self.shared.culler, targets), rec);
         for display in &self.displays {
@@ -418,7 +424,7 @@ impl Renderer {
     ) -> FrameStats {
         let mut stats = FrameStats::default();
         for (display, target) in self.displays.iter().zip(targets) {
-            stats = stats + display.encode_late(encoder, (&self.shared, target), rec);
+            stats = stats + display.encode_late(encoder, &self.shared, target, rec);
         }
         stats
     }
@@ -528,7 +534,8 @@ impl Renderer {
 fn write_displays(
     to: Writes,
     plan: &FramePlan,
-    (shared, displays): (&mut Shared, &mut [Display]),
+    shared: &mut Shared,
+    displays: &mut [Display],
 ) -> FrameStats {
     let mut stats = FrameStats::default();
     let start = std::time::Instant::now();

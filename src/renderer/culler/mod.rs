@@ -9,8 +9,6 @@
 //! read back after a frame, in `diagnostics.rs`).
 
 mod diagnostics;
-mod edits;
-mod marks;
 
 pub use diagnostics::WallCulls;
 mod occlusion;
@@ -27,11 +25,13 @@ use crate::cull::gpu::{CoarseGroups, CullerFeatures, GpuCuller};
 use crate::cull::gpu_buffers::{CullScene, OcclusionRoom};
 use crate::cull::rig::RigSets;
 use crate::cull::targets::CullTargets;
-use crate::cull::tile_marks::TileMarks;
-
+use crate::cull::tile_marks::{TileDisplay, TileMarks};
+use crate::error::Result;
 use crate::occlusion::{Phase, cull_early};
-use crate::records::CullLayout;
-
+use crate::records::{CullLayout, MoveEdit, PlaceEdit};
+use crate::renderer::plan::KeptTiles;
+use crate::scene::Scene;
+use crate::shaders::SPAN;
 use crate::shaders::{CullTests, Windows};
 use std::sync::OnceLock;
 
@@ -251,7 +251,7 @@ impl Culler {
             Kind::Gpu { scene, marks, .. } => {
                 let planes: Vec<_> = plan.resolved.displays.iter().map(|d| d.planes).collect();
                 let marked = match marks {
-                    Some(marks) => marks::write_marks(queue, marks, plan),
+                    Some(marks) => write_marks(queue, marks, plan),
                     None => 0,
                 };
                 scene.write_block_tests(queue, &planes)
@@ -476,5 +476,145 @@ impl CullPass {
     /// Which part of a two-phase cull the view is.
     pub fn phase(&self) -> Phase {
         self.phase
+    }
+}
+
+// What `Renderer::sync` changes in the culler: a new layout, the
+// places filled and vacated, the moved instances' spheres (the CPU culler's own copy;
+// the GPU's are scattered), and what the scatter passes write into on the GPU.
+impl Culler {
+    /// Takes a new `layout` (instances inserted or removed, same room); returns the
+    /// bytes written.
+    pub fn reload(&mut self, queue: &wgpu::Queue, layout: CullLayout) -> u64 {
+        match &mut self.kind {
+            Kind::Gpu { scene, .. } => scene.reload(queue, &layout),
+            Kind::Cpu {
+                layout: own,
+                visibility,
+                ..
+            } => {
+                // Laid out afresh, no place holds what it held: every instance starts
+                // as not drawn last frame, as the GPU's reload clears its words.
+                let words = layout.spheres.len().div_ceil(SPAN as usize);
+                for w in visibility.iter_mut().flatten() {
+                    *w = vec![0; words];
+                }
+                *own = layout;
+                0
+            }
+        }
+    }
+
+    /// Each slot's world sphere on the GPU (`None` culling on the CPU).
+    pub fn read_spheres(
+        &self,
+        device: &wgpu::Device,
+        queue: &wgpu::Queue,
+        slots: u32,
+    ) -> Result<Option<Vec<[f32; 4]>>> {
+        match &self.kind {
+            Kind::Gpu { scene, .. } => scene.read_spheres(device, queue, slots).map(Some),
+            Kind::Cpu { .. } => Ok(None),
+        }
+    }
+
+    /// The GPU culler's spheres, cull positions, order, mesh bounds and occlusion
+    /// words, which the scatter passes write edits into, and the visibility words' shape
+    /// (words per display slot, slots); `None` for the CPU culler, which takes edits
+    /// into its layout ([`Culler::place`], [`Culler::moved`]).
+    pub fn scatter_targets(&self) -> (Option<[&wgpu::Buffer; 5]>, (u32, u32)) {
+        match &self.kind {
+            Kind::Gpu { scene, .. } => (Some(scene.scatter_targets()), scene.visibility_shape()),
+            Kind::Cpu { .. } => (None, (0, 0)),
+        }
+    }
+
+    /// The places filled and vacated, into the CPU culler's layout (the GPU's are
+    /// scattered). Whoever now holds a place was not drawn last frame: its bit goes in
+    /// every display's words, as `wgsl/scatter_places.wgsl` clears the GPU's.
+    pub fn place(&mut self, placed: &[PlaceEdit]) {
+        if let Kind::Cpu {
+            layout, visibility, ..
+        } = &mut self.kind
+        {
+            for edit in placed {
+                layout.set_place((edit.place, edit.slot, CullLayout::VACANT_SPHERE));
+                let (word, bit) = ((edit.place / SPAN) as usize, edit.place % SPAN);
+                for words in visibility.iter_mut().flatten() {
+                    words[word] &= !(1 << bit);
+                }
+            }
+        }
+    }
+
+    /// The moved instances' new spheres, into the CPU culler's layout (the GPU's are
+    /// scattered).
+    pub fn moved(&mut self, scene: &Scene, moved: &[MoveEdit]) {
+        if let Kind::Cpu { layout, .. } = &mut self.kind {
+            for edit in moved {
+                let slot = edit.slot as usize;
+                let sphere = scene.world_sphere(&scene.instances[slot]);
+                layout.set_sphere(layout.positions[slot], sphere);
+            }
+        }
+    }
+
+    /// A second frame's moved spheres, grown to hold both frames' poses, into the CPU
+    /// culler's layout, as the moves scatter writes the GPU's in its grow mode.
+    pub fn grown(&mut self, grown: &[(u32, glam::Vec4)]) {
+        if let Kind::Cpu { layout, .. } = &mut self.kind {
+            for &(slot, sphere) in grown {
+                layout.set_sphere(layout.positions[slot as usize], sphere);
+            }
+        }
+    }
+}
+
+// A kept frame's changed tiles marked on the GPU ([`crate::cull::tile_marks`]): the
+// culler arms its marking pass with the plan's listed slots, records its two phases
+// around the frame's pose, and tells the draw pass where the marked words lie.
+impl Culler {
+    /// Records the marking pass's phase before the frame's scatter and pose (`after`
+    /// false: every kept display's tiles cleared, the spheres as last drawn marked) or
+    /// after them. Returns the dispatches (0 unless the frame keeps on the GPU).
+    pub fn encode_marks(&mut self, encoder: &mut wgpu::CommandEncoder, after: bool) -> u32 {
+        match &mut self.kind {
+            Kind::Gpu {
+                marks: Some(marks), ..
+            } => match after {
+                false => marks.encode_before(encoder),
+                true => marks.encode_after(encoder),
+            },
+            _ => 0,
+        }
+    }
+
+    /// Display slot `slot`'s `words` words of marked tiles: the buffer, the offset and
+    /// the bytes (`None` where the GPU marks none).
+    pub fn marked_words(&self, slot: u32, words: u32) -> Option<(&wgpu::Buffer, u64, u64)> {
+        match &self.kind {
+            Kind::Gpu {
+                marks: Some(marks), ..
+            } => Some(marks.words_of(slot, words)),
+            _ => None,
+        }
+    }
+}
+
+/// Arms `marks` for `plan`'s frame where it keeps with the tiles marked on the GPU:
+/// its listed slots, over its kept displays. Returns the bytes written.
+fn write_marks(queue: &impl Upload, marks: &mut TileMarks, plan: &FramePlan) -> u64 {
+    let kept = (plan.displays.iter()).filter(|d| matches!(d.tiles, Some(KeptTiles::Gpu)));
+    let displays: Vec<TileDisplay> = kept
+        .map(|d| &d.context)
+        .map(|c| TileDisplay {
+            eyes: c.rig_occlusion(),
+            planes: c.planes,
+            base: marks.base(c.cull_slot),
+        })
+        .collect();
+    match displays.is_empty() {
+        true => 0,
+        false => marks.write(queue, &plan.marks, &displays),
     }
 }

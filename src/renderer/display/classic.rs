@@ -189,7 +189,8 @@ impl ClassicDisplay {
     pub fn encode(
         &self,
         encoder: &mut wgpu::CommandEncoder,
-        (shared, target): (&Shared, &TargetViews),
+        shared: &Shared,
+        target: &TargetViews,
         rec: &mut Recorder,
     ) -> FrameStats {
         let (index, views) = (self.index, self.eyes.len());

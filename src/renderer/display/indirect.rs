@@ -212,7 +212,7 @@ impl IndirectDisplay {
                 );
                 let context = early.context().clone();
                 let late = phased((CullView::Late(index), Phase::Late), context);
-                (early, Some(LatePhase::new((index, key), late, shape)))
+                (early, Some(LatePhase::new(index, key, late, shape)))
             }
             None => (view(CullView::Display(index)), None),
         };
@@ -221,7 +221,7 @@ impl IndirectDisplay {
             .inset
             .as_ref()
             .map(|_| ViewPass::new(device, drawing, frame, culler, CullView::Inset(index)));
-        let far = far_display(made, (index, planned), (view.context(), late.is_some()));
+        let far = far_display(made, index, planned, (view.context(), late.is_some()));
         IndirectDisplay {
             index,
             view,
@@ -280,10 +280,11 @@ impl IndirectDisplay {
     pub(super) fn encode_early(
         &self,
         encoder: &mut wgpu::CommandEncoder,
-        (shared, target): (&Shared, &TargetViews),
+        shared: &Shared,
+        target: &TargetViews,
         rec: &mut Recorder,
     ) -> FrameStats {
-        let culled = self.encode_cull(encoder, (shared, false), rec);
+        let culled = self.encode_cull(encoder, shared, false, rec);
         let multiview = self.key.multiview_mask();
         // With occlusion the far layer is drawn and composited in the late phase.
         let composite = self.late.is_none();
@@ -325,7 +326,8 @@ impl IndirectDisplay {
     fn encode_far(
         &self,
         encoder: &mut wgpu::CommandEncoder,
-        (shared, phase): (&Shared, Phase),
+        shared: &Shared,
+        phase: Phase,
         rec: &mut Recorder,
     ) -> FrameStats {
         let (Some(layers), Some(far)) = (&shared.far, &self.far) else {
@@ -347,7 +349,8 @@ impl IndirectDisplay {
     pub(super) fn encode_cull(
         &self,
         encoder: &mut wgpu::CommandEncoder,
-        (shared, one_pass): (&Shared, bool),
+        shared: &Shared,
+        one_pass: bool,
         rec: &mut Recorder,
     ) -> FrameStats {
         let culler = &shared.culler;
@@ -369,7 +372,7 @@ impl IndirectDisplay {
         }
         // With occlusion in the renderer's passes, the far layer waits for the pyramids.
         if one_pass || self.late.is_none() {
-            stats = stats + self.encode_far(encoder, (shared, Phase::Frustum), rec);
+            stats = stats + self.encode_far(encoder, shared, Phase::Frustum, rec);
         }
         stats
     }
@@ -418,13 +421,14 @@ impl IndirectDisplay {
     pub(super) fn encode_late(
         &self,
         encoder: &mut wgpu::CommandEncoder,
-        (shared, target): (&Shared, &TargetViews),
+        shared: &Shared,
+        target: &TargetViews,
         rec: &mut Recorder,
     ) -> FrameStats {
         let Some(late) = &self.late else {
             return FrameStats::default();
         };
-        let mut stats = self.encode_far(encoder, (shared, Phase::Tested), rec);
+        let mut stats = self.encode_far(encoder, shared, Phase::Tested, rec);
         let far = shared.far.as_ref().zip(self.far.as_ref());
         let with = (shared.drawing(), &self.own, far);
         stats.draw_calls += late.encode_draw(encoder, with, target, rec);
@@ -443,7 +447,7 @@ impl IndirectDisplay {
     }
 
     /// Its far layer's cull (with one).
-    pub(super) fn far_view_cull(&self) -> Option<&crate::renderer::culler::CullPass> {
+    pub fn far_cull_pass(&self) -> Option<&crate::renderer::culler::CullPass> {
         self.far.as_ref().map(FarDisplay::cull_pass)
     }
 
@@ -485,7 +489,8 @@ impl IndirectDisplay {
 /// its pyramids.
 fn far_display(
     made: Made,
-    (index, planned): (usize, &DisplayPlan),
+    index: usize,
+    planned: &DisplayPlan,
     (context, tested): (&wgpu::Buffer, bool),
 ) -> Option<FarDisplay> {
     let Made {

@@ -181,13 +181,14 @@ impl Display {
     pub fn encode_early(
         &self,
         encoder: &mut wgpu::CommandEncoder,
-        (shared, target): (&Shared, &TargetViews),
+        shared: &Shared,
+        target: &TargetViews,
         rec: &mut Recorder,
     ) -> FrameStats {
         rec.enter(encoder, &self.name);
         let recorded = match &self.passes {
-            DisplayPasses::Indirect(d) => d.encode_early(encoder, (shared, target), rec),
-            DisplayPasses::Classic(d) => d.encode(encoder, (shared, target), rec),
+            DisplayPasses::Indirect(d) => d.encode_early(encoder, shared, target, rec),
+            DisplayPasses::Classic(d) => d.encode(encoder, shared, target, rec),
         };
         rec.leave(encoder);
         recorded.at_display_level()
@@ -206,7 +207,7 @@ impl Display {
             return FrameStats::default();
         };
         rec.enter(encoder, &self.name);
-        let culled = d.encode_cull(encoder, (shared, true), rec);
+        let culled = d.encode_cull(encoder, shared, true, rec);
         rec.leave(encoder);
         culled.at_display_level()
     }
@@ -235,14 +236,15 @@ impl Display {
     pub fn encode_late(
         &self,
         encoder: &mut wgpu::CommandEncoder,
-        (shared, target): (&Shared, &TargetViews),
+        shared: &Shared,
+        target: &TargetViews,
         rec: &mut Recorder,
     ) -> FrameStats {
         let Some(d) = self.indirect().filter(|d| d.late().is_some()) else {
             return FrameStats::default();
         };
         rec.enter(encoder, &self.name);
-        let recorded = d.encode_late(encoder, (shared, target), rec);
+        let recorded = d.encode_late(encoder, shared, target, rec);
         rec.leave(encoder);
         recorded.at_display_level()
     }

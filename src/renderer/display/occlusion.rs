@@ -1,21 +1,18 @@
 //! Occlusion's passes on the GPU-driven path (`indirect.rs`): after every display's
 //! early draw, every display's depth pyramids in sets of displays (`PyramidSets`),
 //! then each display's late cull (the rig cull's late members, or its own dispatches)
-//! and its late draw ([`LatePhase`]); culling on the CPU, the late culls between the
-//! frame's halves ([`cull_late`]); which displays cull by occlusion, and what it costs
-//! in GPU memory. The technique and its CPU twin are [`crate::occlusion`]'s; where the
+//! and its late draw ([`LatePhase`]); which displays cull by occlusion, and what it
+//! costs in GPU memory. Culling on the CPU, the late culls between the frame's halves
+//! are the culler's (`Culler::cull_late`, over the views `Renderer::encode_late` lists). The technique and its CPU twin are [`crate::occlusion`]'s; where the
 //! late cull reads the pyramids is the culler's (`culler/occlusion.rs`).
 
 use std::sync::Mutex;
 
-use super::Display;
 use super::far_layer::{FarDisplay, FarLayers};
 use crate::draw::{BinPipelines, Drawing, OwnPipelines};
-use crate::error::Result;
 use crate::occlusion::PyramidShape;
 use crate::occlusion::pyramid::{PyramidDispatch, PyramidPass, PyramidSlice};
 use crate::renderer::culler::{CullPass, Culler};
-use crate::renderer::frame_stats::FrameStats;
 use crate::renderer::options::RendererOptions;
 use crate::renderer::plan::FramePlan;
 use crate::renderer::recorder::{PassRecord, Recorder, begin_draw_pass};
@@ -36,7 +33,8 @@ impl LatePhase {
     /// Display `index`'s late phase, drawn with pipeline variant `key` and culled and
     /// drawn by `view` (whose context is the display's), its pyramids `shape`.
     pub(super) fn new(
-        (index, key): (usize, DrawKey),
+        index: usize,
+        key: DrawKey,
         view: ViewPass,
         shape: PyramidShape,
     ) -> LatePhase {
@@ -286,7 +284,7 @@ pub(super) fn pyramid_shapes(
 
 impl LatePhase {
     /// Its cull, as the culler keeps it.
-    pub(super) fn cull_pass(&self) -> &CullPass {
+    pub fn cull_pass(&self) -> &CullPass {
         self.view.cull_pass()
     }
 
@@ -299,21 +297,4 @@ impl LatePhase {
     pub(super) fn shape(&self) -> PyramidShape {
         self.shape
     }
-}
-
-/// Culling on the CPU with occlusion, after the frame's early half was submitted: each
-/// display's late phase and far layer culled against its pyramids, read back
-/// ([`Culler::cull_late`]).
-pub fn cull_late(
-    (device, queue): (&wgpu::Device, &wgpu::Queue),
-    culler: &mut Culler,
-    displays: &[Display],
-) -> Result<FrameStats> {
-    let views: Vec<_> = (displays.iter())
-        .map(|d| match d.indirect() {
-            Some(d) => (d.late().map(LatePhase::cull_pass), d.far_view_cull()),
-            None => (None, None),
-        })
-        .collect();
-    culler.cull_late((device, queue), &views)
 }

@@ -94,7 +94,8 @@ impl Edits {
     pub fn stage(
         &mut self,
         device: &wgpu::Device,
-        (queue, live): (&wgpu::Queue, &mut LiveScene),
+        queue: &wgpu::Queue,
+        live: &mut LiveScene,
         changes: Changes,
         into: SyncInto,
     ) -> Staging {
@@ -120,7 +121,7 @@ impl Edits {
             if into.culler.bins() != layout.bin_ranges(into.levels) {
                 return Staging::Reallocate;
             }
-            return Staging::Staged(self.reload(queue, live, (layout, into)));
+            return Staging::Staged(self.reload(queue, live, layout, into));
         }
         for &slot in &changes.removed {
             self.scatter.moves.void(slot);
@@ -142,7 +143,8 @@ impl Edits {
         &mut self,
         queue: &wgpu::Queue,
         live: &LiveScene,
-        (layout, into): (CullLayout, SyncInto),
+        layout: CullLayout,
+        into: SyncInto,
     ) -> SyncStats {
         self.scatter.reset();
         if let Some(second) = &mut self.second {
