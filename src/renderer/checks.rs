@@ -334,7 +334,7 @@ fn unjoined_option(options: &RendererOptions) -> Option<&'static str> {
 }
 
 /// The rig and scene content whose second frame cannot be drawn so: a foveated
-/// display's views, and posed content (`second_frame.rs`) where the lights or the
+/// display's views, and posed content (`frames.rs`) where the lights or the
 /// shadow are one per submission.
 fn unjoined_content(scene: &Scene, rig: &Rig, options: &RendererOptions) -> Option<&'static str> {
     if rig.displays.iter().any(|d| d.views() > 2) {

@@ -4,7 +4,7 @@
 
 use super::display::Display;
 use super::display::indirect::{Gpu, IndirectDisplay};
-use super::{Renderer, WallCulls};
+use super::{OcclusionCounts, Renderer, WallCulls};
 use crate::cull::CullOutput;
 use crate::draw::keep_tiles::TileGrid;
 use crate::error::Result;
@@ -43,15 +43,6 @@ impl<'a> Diagnostics<'a> {
             queue,
         }
     }
-}
-
-/// What one display's occlusion phases drew in a frame.
-#[derive(Clone, Copy, Debug, PartialEq, Eq, serde::Serialize)]
-pub struct OcclusionCounts {
-    /// Instances drawn early: drawn last frame, kept by the frustum.
-    pub early: u32,
-    /// Instances drawn late: not drawn last frame, not hidden by the early depth.
-    pub late: u32,
 }
 
 impl Diagnostics<'_> {

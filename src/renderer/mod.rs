@@ -64,18 +64,25 @@
 //! # Ok(()) }
 //! ```
 //!
-//! One frame, in the order it runs, by the chapter's levels (the directories below):
-//! [`Renderer::prepare`] makes the frame's plan (`plan.rs`: the rig resolved once,
-//! every context, every cull, the levels of detail, the coarse cull, the far/near split,
-//! the light) and hands it to the path chosen once in [`Renderer::new`]
-//! (`display/indirect.rs`: `instanced`, `multiview`; `display/classic.rs`: the
-//! per-instance modes). [`Renderer::encode`] (`encode.rs`) records the frame level's
-//! passes (the scatter of edits, `frame/`: posing, skinning, the shadow map; the coarse
-//! cull), then each display's cull and passes (`display/`, with the far layer and
-//! occlusion). Every view (display, eye, far layer, light) is a `view.rs` culled through
-//! the one culler (`culler/`: GPU passes or the CPU culler); `recorder.rs` times and
-//! logs the passes. The eye level lives in the contexts (`eye[e]`) and the shaders, and
-//! in the classic modes' per-eye passes.
+//! The chapter's levels are values. A [`FramePlan`] (`plan.rs`) is what one frame
+//! decides: the frame level's (the rig resolved once, the frame context, the levels of
+//! detail, the coarse cull, the light) and one [`DisplayPlan`] per display (its
+//! context, culls, far layer, insets, hidden area, kept tiles). A `Renderer` holds the
+//! frame level (`frame/`: `FrameLevel`, the frame context, the lights, the passes that
+//! run once per frame and the live scene's edits), what every level's passes share
+//! (the one culler, `culler/`, GPU passes or the CPU culler; the draw pipelines; the
+//! scene as drawn) and one `Display` per rig display (`display/`: its target shape and
+//! its passes on the path chosen once in [`Renderer::new`], `indirect.rs` for
+//! `instanced` and `multiview` with its far layer, occlusion's late phase, mask and
+//! kept tiles, `classic.rs` for the per-instance modes). The eye level lives in the
+//! contexts (`eye[e]`) and the shaders, and in the classic modes' per-eye passes.
+//!
+//! `mod.rs` makes a renderer and answers questions about it; `submit.rs` holds a
+//! frame's calls, and [`Renderer::encode`] reads top-down: the frame level's passes,
+//! each display's cull and draw (with occlusion its early phase), every display's
+//! pyramids, the late culls, each display's late phase. Every view (display, eye, far
+//! layer, inset, light) is a `view.rs` culled through the one culler; `recorder.rs`
+//! times and logs the passes; `checks.rs` holds every refusal of the options.
 
 use crate::cull::targets::CullTargets;
 use crate::draw::{DrawScene, OwnPipeline};
@@ -108,10 +115,10 @@ mod view;
 
 pub use checks::check_rig;
 pub use culler::WallCulls;
-pub use diagnostics::{Diagnostics, FarSplit, OcclusionCounts};
+pub use diagnostics::{Diagnostics, FarSplit};
 use display::indirect::IndirectDisplay;
-pub use display::occlusion::OcclusionBytes;
 use display::occlusion::PyramidSets;
+pub use display::occlusion::{OcclusionBytes, OcclusionCounts};
 use display::{Display, PathInputs, Shared};
 pub use frame::edits::SyncStats;
 use frame::edits::{self, Edits};

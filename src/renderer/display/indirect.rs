@@ -6,7 +6,7 @@
 //! records a fixed number of commands: its cost does not depend on the instance count.
 
 use super::far_layer::{FarDisplay, FarLayers};
-use super::occlusion::{LatePhase, PyramidSets, pyramid_shapes};
+use super::occlusion::{LatePhase, OcclusionCounts, PyramidSets, pyramid_shapes};
 use super::{Display, DisplayPasses, PathInputs, Shared};
 use crate::contexts::context_buffer;
 use crate::cull::gpu_buffers::OcclusionRoom;
@@ -24,7 +24,6 @@ use crate::readback::read_pod_at;
 use crate::records::CullLayout;
 use crate::records::DrawArgs;
 use crate::renderer::culler::{CullShape, Culler};
-use crate::renderer::diagnostics::OcclusionCounts;
 use crate::renderer::frame_stats::FrameStats;
 use crate::renderer::keeping;
 use crate::renderer::options::StereoMode;
@@ -151,7 +150,7 @@ struct Made<'a> {
 /// slots and far split.
 fn cull_shape(
     plan: &FramePlan,
-    options: &crate::renderer::RendererOptions,
+    options: &crate::renderer::options::RendererOptions,
     shapes: &[Option<PyramidShape>],
     tiles: Option<&[u32]>,
     slots: u32,

@@ -197,6 +197,15 @@ fn set_slices(
     slices
 }
 
+/// What one display's occlusion phases drew in a frame.
+#[derive(Clone, Copy, Debug, PartialEq, Eq, serde::Serialize)]
+pub struct OcclusionCounts {
+    /// Instances drawn early: drawn last frame, kept by the frustum.
+    pub early: u32,
+    /// Instances drawn late: not drawn last frame, not hidden by the early depth.
+    pub late: u32,
+}
+
 /// GPU memory occlusion culling adds.
 #[derive(Clone, Copy, Debug, PartialEq, Eq, serde::Serialize)]
 pub struct OcclusionBytes {
