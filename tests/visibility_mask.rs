@@ -420,3 +420,61 @@ fn a_mask_that_cuts_a_convex_window_is_taken_by_its_cuts() {
     let mixed = [fan.clone(), vec![middle]].concat();
     assert!(!area_of(vec![mixed]).hides(across));
 }
+
+/// A sync that outgrows the buffers builds every display again, whole: its lens mask
+/// comes back with it, and still keeps the pixels it hides at the clear color.
+#[test]
+fn a_sync_that_reallocates_keeps_the_lens_mask() {
+    let (w, h) = (72, 80);
+    let rig = support::sized("hmd", w, h);
+    let mask = rig.displays[0].visibility_mask.clone().unwrap();
+    let gpu = support::gpu();
+    let scene = stereocull::scene_spec::load("default").unwrap();
+    let options = RendererOptions {
+        sample_count: 1,
+        visibility_mask: true,
+        ..support::frustum_only()
+    };
+    let mut renderer = Renderer::new(&gpu.device, &scene, &rig, options).unwrap();
+    let masked = renderer.masked_pixels();
+    assert!(masked > 0);
+    let mut live = stereocull::live::LiveScene::new(scene.clone());
+    // One instance more than the buffers hold: everything goes up again.
+    live.insert(scene.instances[0]).unwrap();
+    let synced = renderer.sync(&gpu.device, &gpu.queue, &mut live).unwrap();
+    assert!(synced.reallocated);
+    assert_eq!(renderer.masked_pixels(), masked);
+    let targets = renderer.create_targets(&gpu.device);
+    (renderer.submit_frame(&gpu.device, &gpu.queue, &rig, 0.0, &targets)).unwrap();
+    let image =
+        stereocull::readback::read_rgba8(&gpu.device, &gpu.queue, &targets[0].color).unwrap();
+    let clear = stereocull::draw::CLEAR_COLOR;
+    let byte = |l: f64| support::srgb(l as f32).round() as u8;
+    let clear = [byte(clear.r), byte(clear.g), byte(clear.b), 255];
+    let (plain, _) = render_scene(
+        &gpu,
+        live.scene(),
+        &rig,
+        (StereoMode::Instanced, CullMode::Gpu),
+        false,
+    );
+    let (mut hidden, mut reached) = (0, 0);
+    for (x, y, p) in image.enumerate_pixels() {
+        let (view, vx) = ((x / w) as usize, x % w);
+        let ndc = (
+            (vx as f32 + 0.5) / w as f32 * 2.0 - 1.0,
+            1.0 - (y as f32 + 0.5) / h as f32 * 2.0,
+        );
+        if !mask.hides(view, ndc) || near_edge(&mask, view, (vx, y), (w, h), 0.05) {
+            continue;
+        }
+        assert_eq!(p.0, clear, "({x}, {y}): hidden, yet drawn after the sync");
+        hidden += 1;
+        reached += usize::from(plain.get_pixel(x, y).0 != clear);
+    }
+    // The control: unmasked, the scene reaches some of those pixels.
+    assert!(
+        hidden > 500 && reached > 100,
+        "{hidden} hidden, {reached} reached"
+    );
+}
