@@ -194,10 +194,7 @@ impl Diagnostics<'_> {
     /// SPAN` of word `k / SPAN` set where the late phase found place `k` not hidden),
     /// read back; `None` for a display without occlusion.
     pub fn visibility(&self, index: usize) -> Result<Option<(PyramidShape, Vec<u32>)>> {
-        let Some(shape) = self
-            .indirect(index)
-            .and_then(IndirectDisplay::pyramid_shape)
-        else {
+        let Some(shape) = self.pyramid_shape(index) else {
             return Ok(None);
         };
         let culler = &self.renderer.shared.culler;
@@ -205,17 +202,20 @@ impl Diagnostics<'_> {
         Ok(words.map(|words| (shape, words)))
     }
 
+    /// Display `index`'s pyramids' shape (`None` without occlusion).
+    fn pyramid_shape(&self, index: usize) -> Option<PyramidShape> {
+        self.indirect(index)?.pyramid_shape()
+    }
+
     /// The depth pyramids display `index` built in the last frame, read back; `None`
     /// for a display without occlusion.
     pub fn pyramid(&self, index: usize) -> Result<Option<Vec<f32>>> {
-        let Some(shape) = self
-            .indirect(index)
-            .and_then(IndirectDisplay::pyramid_shape)
-        else {
-            return Ok(None);
-        };
-        let culler = &self.renderer.shared.culler;
-        culler.read_pyramid(self.device, self.queue, (index, shape))
+        match self.pyramid_shape(index) {
+            Some(shape) => {
+                (self.renderer.shared.culler).read_pyramid(self.device, self.queue, (index, shape))
+            }
+            None => Ok(None),
+        }
     }
 
     /// The last frame's far/near split per display (`None` for displays without a far
