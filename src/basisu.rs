@@ -244,7 +244,7 @@ fn uastc(reader: &ktx2::Reader<&[u8]>) -> Step<Basis> {
 
 /// A Zstandard level, which must inflate to exactly `length` bytes (the file's own
 /// count is not trusted with the allocation).
-fn inflate(data: &[u8], length: usize) -> Step<Vec<u8>> {
+pub(crate) fn inflate(data: &[u8], length: usize) -> Step<Vec<u8>> {
     let mut out = vec![0; length];
     let mut decoder = ruzstd::decoding::FrameDecoder::new();
     let written =

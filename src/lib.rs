@@ -49,6 +49,7 @@ pub mod frame_input;
 pub mod frustum;
 pub mod gltf_import;
 pub mod keep;
+pub mod ktx2_raw;
 pub mod lights;
 pub mod live;
 pub mod materials;

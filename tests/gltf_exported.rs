@@ -631,6 +631,164 @@ fn a_basis_universal_texture_loads_and_draws() {
     assert!(differ > 500, "the control differs at {differ} pixels only");
 }
 
+/// BoxTextured with its texture's image `ktx2` in a new buffer view: referenced
+/// directly by the texture (`basisu` false: no extension, the way Bevy writes plain
+/// KTX2 files) or through `KHR_texture_basisu`; the image is read as the base color
+/// (sRGB) and as the metallic-roughness map (linear).
+fn box_with_raw_ktx2(ktx2: &[u8], basisu: bool) -> Vec<u8> {
+    let glb = match basisu {
+        true => box_with_ktx2(ktx2, true),
+        false => {
+            let glb = std::fs::read(support::gltf_sample("BoxTextured", "glb")).unwrap();
+            let (mut json, mut bin) = split_glb(&glb);
+            while !bin.len().is_multiple_of(4) {
+                bin.push(0);
+            }
+            let views = json["bufferViews"].as_array().unwrap().len();
+            let images = json["images"].as_array().unwrap().len();
+            json["bufferViews"].as_array_mut().unwrap().push(json!(
+                {"buffer": 0, "byteOffset": bin.len(), "byteLength": ktx2.len()}));
+            bin.extend_from_slice(ktx2);
+            json["buffers"][0]["byteLength"] = json!(bin.len());
+            json["images"].as_array_mut().unwrap().push(json!(
+                {"bufferView": views, "mimeType": "image/ktx2"}));
+            json["textures"][0]["source"] = json!(images);
+            write_glb(&json, &bin)
+        }
+    };
+    let (mut json, bin) = split_glb(&glb);
+    let pbr = &mut json["materials"][0]["pbrMetallicRoughness"];
+    pbr["metallicRoughnessTexture"] = json!({"index": 0});
+    write_glb(&json, &bin)
+}
+
+/// The plain formats a KTX2 image may hold (Vulkan's numbers), with their channels,
+/// bytes per channel and whether 8-bit values are sRGB-encoded.
+const RAW_FORMATS: [(&str, u32, usize, usize, bool); 12] = [
+    ("R8_UNORM", 9, 1, 1, false),
+    ("R8G8_UNORM", 16, 2, 1, false),
+    ("R8G8B8_UNORM", 23, 3, 1, false),
+    ("R8G8B8A8_UNORM", 37, 4, 1, false),
+    ("R8_SRGB", 15, 1, 1, true),
+    ("R8G8_SRGB", 22, 2, 1, true),
+    ("R8G8B8_SRGB", 29, 3, 1, true),
+    ("R8G8B8A8_SRGB", 43, 4, 1, true),
+    ("R16_SFLOAT", 76, 1, 2, false),
+    ("R16G16_SFLOAT", 83, 2, 2, false),
+    ("R16G16B16_SFLOAT", 90, 3, 2, false),
+    ("R16G16B16A16_SFLOAT", 97, 4, 2, false),
+];
+
+/// A texel of a plain format as a GPU samples it into an 8-bit slot read as sRGB
+/// (`srgb`) or linear: missing green and blue 0, missing alpha 1, converted where the
+/// format's transfer function is not the slot's.
+fn sampled(channels: &[f32], srgb_format: bool, srgb_slot: bool) -> [u8; 4] {
+    let linear_of = |s: f32| match s <= 0.04045 {
+        true => s / 12.92,
+        false => ((s + 0.055) / 1.055).powf(2.4),
+    };
+    let mut out = [0, 0, 0, 255];
+    for (c, &v) in channels.iter().enumerate() {
+        let linear = if srgb_format && c < 3 {
+            linear_of(v)
+        } else {
+            v
+        };
+        out[c] = match (c < 3 && srgb_slot, srgb_format) {
+            // An sRGB format's own bytes are the slot's.
+            (true, true) => (v * 255.0).round() as u8,
+            (true, false) => support::srgb(linear).round() as u8,
+            _ => (linear.clamp(0.0, 1.0) * 255.0).round() as u8,
+        };
+    }
+    out
+}
+
+/// A KTX2 image of each plain format, raw and Zstandard-supercompressed, referenced
+/// directly and through `KHR_texture_basisu`, loads as what a GPU samples from it, for
+/// the base color (sRGB) and the metallic-roughness map (linear). A format we do not
+/// read is refused by name.
+#[test]
+fn plain_ktx2_textures_load_in_every_format() {
+    use rand::{Rng, SeedableRng};
+    let dir = tempfile::tempdir().unwrap();
+    let mut rng = rand_pcg::Pcg64::seed_from_u64(66);
+    let (w, h) = (5u32, 3u32);
+    for (name, format, channels, size, srgb) in RAW_FORMATS {
+        let values: Vec<f32> = (0..(w * h) as usize * channels)
+            .map(|_| match size {
+                1 => rng.random_range(0..=255u8) as f32 / 255.0,
+                _ => half::f16::from_f32(rng.random_range(-0.25f32..1.25)).to_f32(),
+            })
+            .collect();
+        let texels: Vec<u8> = match size {
+            1 => values.iter().map(|v| (v * 255.0).round() as u8).collect(),
+            _ => (values.iter())
+                .flat_map(|&v| half::f16::from_f32(v).to_le_bytes())
+                .collect(),
+        };
+        for (zstd, basisu) in [(false, false), (true, false), (false, true), (true, true)] {
+            let ktx2 = support::ktx2::raw(format, (w, h), size as u32, &texels, zstd);
+            let what = format!("{name} zstd {zstd} basisu {basisu}");
+            let file = format!("{name}-{zstd}-{basisu}.glb");
+            let scene = load_bytes(dir.path(), &file, &box_with_raw_ktx2(&ktx2, basisu));
+            assert_eq!(scene.textures.len(), 2, "{what}");
+            for texture in &scene.textures {
+                let srgb_slot = texture.encoding == stereocull::scene::Encoding::Srgb;
+                assert_eq!(texture.image.dimensions(), (w, h), "{what}");
+                for (i, pixel) in texture.image.pixels().enumerate() {
+                    let texel = &values[i * channels..][..channels];
+                    let want = sampled(texel, srgb, srgb_slot);
+                    assert_eq!(pixel.0, want, "{what} slot sRGB {srgb_slot} texel {i}");
+                }
+            }
+        }
+    }
+    // A compressed format: refused, by name.
+    let bc7 = support::ktx2::raw(145, (4, 4), 1, &[0; 16], false);
+    let glb = box_with_raw_ktx2(&bc7, false);
+    let path = dir.path().join("bc7.glb");
+    std::fs::write(&path, glb).unwrap();
+    let refused = scene_spec::load(path.to_str().unwrap())
+        .unwrap_err()
+        .to_string();
+    assert!(refused.contains("BC7_UNORM_BLOCK"), "{refused}");
+}
+
+/// A plain KTX2 referenced directly draws exactly as the same texels from a PNG would.
+#[test]
+fn a_plain_ktx2_texture_draws_as_its_texels_do() {
+    let dir = tempfile::tempdir().unwrap();
+    let original_path = support::gltf_sample("BoxTextured", "glb");
+    let original = scene_spec::load(original_path.to_str().unwrap()).unwrap();
+    let png = original.textures[0].image.clone();
+    let ktx2 = support::ktx2::raw(43, png.dimensions(), 1, png.as_raw(), true);
+    let glb = std::fs::read(&original_path).unwrap();
+    let (mut json, mut bin) = split_glb(&glb);
+    while !bin.len().is_multiple_of(4) {
+        bin.push(0);
+    }
+    let views = json["bufferViews"].as_array().unwrap().len();
+    json["bufferViews"].as_array_mut().unwrap().push(json!(
+        {"buffer": 0, "byteOffset": bin.len(), "byteLength": ktx2.len()}));
+    bin.extend_from_slice(&ktx2);
+    json["buffers"][0]["byteLength"] = json!(bin.len());
+    json["images"][0] = json!({"bufferView": views, "mimeType": "image/ktx2"});
+    let scene = load_bytes(dir.path(), "direct.glb", &write_glb(&json, &bin));
+    assert!(scene.textures[0].image == png);
+    let gpu = support::gpu();
+    let rig = facing_the_box();
+    let draw = |scene: &Scene| draw_with_formats(&gpu, scene, &rig).0;
+    // Exact on any CPU: the same pipelines draw the same geometry with the same texels.
+    let reference = draw(&original);
+    support::assert_images_match(
+        "ktx2 raw",
+        &draw(&scene),
+        &reference,
+        support::Tolerance::EXACT,
+    );
+}
+
 /// Pixels where a color channel of `a` and `b` differs by more than `levels`.
 fn pixels_apart(a: &image::RgbaImage, b: &image::RgbaImage, levels: u8) -> usize {
     (a.pixels().zip(b.pixels()))

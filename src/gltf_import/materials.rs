@@ -13,6 +13,7 @@ use image::RgbaImage;
 
 use super::{Importer, Step};
 use crate::basisu::{self, BasisTexture};
+use crate::ktx2_raw;
 use crate::scene::{AlphaMode, Encoding, Material, SecondUv, Shading, Texture};
 
 /// A material's texture slots: what it reads, and the set of coordinates and the
@@ -173,7 +174,7 @@ impl Importer<'_> {
             .name()
             .map_or_else(|| format!("image {}", image.index()), str::to_string);
         let (decoded, basis) = self
-            .decode(&image)
+            .decode(&image, encoding)
             .map_err(|e| format!("image {} ({name}): {e}", image.index()))?;
         self.scene.textures.push(Texture {
             name,
@@ -186,9 +187,14 @@ impl Importer<'_> {
         Ok(id)
     }
 
-    /// The image's pixels as RGBA8 (PNG, JPEG, or KTX2 with Basis Universal texels,
-    /// then kept too), from a buffer view, a data URI or a file.
-    fn decode(&self, image: &gltf::Image) -> Step<(RgbaImage, Option<BasisTexture>)> {
+    /// The image's pixels as RGBA8 (PNG, JPEG, KTX2 of plain texels read as `encoding`,
+    /// or KTX2 with Basis Universal texels, then kept too), from a buffer view, a data
+    /// URI or a file.
+    fn decode(
+        &self,
+        image: &gltf::Image,
+        encoding: Encoding,
+    ) -> Step<(RgbaImage, Option<BasisTexture>)> {
         let owned;
         let bytes: &[u8] = match image.source() {
             gltf::image::Source::View { view, .. } => {
@@ -218,6 +224,9 @@ impl Importer<'_> {
                 &owned
             }
         };
+        if basisu::is_ktx2(bytes) && ktx2_raw::is_raw(bytes) {
+            return Ok((ktx2_raw::decode(bytes, encoding)?, None));
+        }
         if basisu::is_ktx2(bytes) {
             let basis = BasisTexture::from_ktx2(bytes)?;
             return Ok((basis.rgba()?, Some(basis)));

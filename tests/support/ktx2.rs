@@ -50,3 +50,35 @@ pub fn inflated(file: &[u8]) -> Vec<u8> {
     }
     out
 }
+
+/// A KTX2 of one `w` x `h` image of plain texels in Vulkan format `format` (channels of
+/// `type_size` bytes), its one level raw or, with `zstd`, Zstandard-supercompressed.
+pub fn raw(format: u32, (w, h): (u32, u32), type_size: u32, texels: &[u8], zstd: bool) -> Vec<u8> {
+    let level = match zstd {
+        true => {
+            ruzstd::encoding::compress_to_vec(texels, ruzstd::encoding::CompressionLevel::Fastest)
+        }
+        false => texels.to_vec(),
+    };
+    let mut out = vec![
+        0xAB, 0x4B, 0x54, 0x58, 0x20, 0x32, 0x30, 0xBB, 0x0D, 0x0A, 0x1A, 0x0A,
+    ];
+    let scheme = if zstd { 2 } else { 0 };
+    // vkFormat, typeSize, width, height, depth, layers, faces, levels, supercompression.
+    for word in [format, type_size, w, h, 0, 0, 1, 1, scheme] {
+        out.extend_from_slice(&word.to_le_bytes());
+    }
+    // The data format descriptor: its total size alone (no blocks), after the index.
+    let dfd_at = 80 + 24;
+    let level_at = (dfd_at + 4u64).next_multiple_of(16);
+    for word in [dfd_at as u32, 4, 0, 0] {
+        out.extend_from_slice(&word.to_le_bytes());
+    }
+    for word in [0u64, 0, level_at, level.len() as u64, texels.len() as u64] {
+        out.extend_from_slice(&word.to_le_bytes());
+    }
+    out.extend_from_slice(&4u32.to_le_bytes());
+    out.resize(level_at as usize, 0);
+    out.extend_from_slice(&level);
+    out
+}
