@@ -453,36 +453,10 @@ impl Culler {
             CullMode::Cpu => 0,
         }
     }
-}
 
-/// With the coarse cull, `view`'s slot and the candidates group its passes read (a view
-/// that takes no blocks runs over everything).
-fn over_candidates<'a>(
-    coarse: Option<&'a CoarseGroups>,
-    view: &CullPass,
-) -> Option<(u32, &'a wgpu::BindGroup)> {
-    Some((view.view.coarse_slot()?, &coarse?.candidates))
-}
-
-/// Sets (or adds) `view`'s output.
-fn set_output(outputs: &mut Vec<(CullView, CullOutput)>, view: CullView, out: CullOutput) {
-    match outputs.iter_mut().find(|(v, _)| *v == view) {
-        Some((_, o)) => *o = out,
-        None => outputs.push((view, out)),
-    }
-}
-
-impl CullPass {
-    /// Which part of a two-phase cull the view is.
-    pub fn phase(&self) -> Phase {
-        self.phase
-    }
-}
-
-// What `Renderer::sync` changes in the culler: a new layout, the
-// places filled and vacated, the moved instances' spheres (the CPU culler's own copy;
-// the GPU's are scattered), and what the scatter passes write into on the GPU.
-impl Culler {
+    // What `Renderer::sync` changes in the culler: a new layout, the
+    // places filled and vacated, the moved instances' spheres (the CPU culler's own copy;
+    // the GPU's are scattered), and what the scatter passes write into on the GPU.
     /// Takes a new `layout` (instances inserted or removed, same room); returns the
     /// bytes written.
     pub fn reload(&mut self, queue: &wgpu::Queue, layout: CullLayout) -> u64 {
@@ -568,12 +542,10 @@ impl Culler {
             }
         }
     }
-}
 
-// A kept frame's changed tiles marked on the GPU ([`crate::cull::tile_marks`]): the
-// culler arms its marking pass with the plan's listed slots, records its two phases
-// around the frame's pose, and tells the draw pass where the marked words lie.
-impl Culler {
+    // A kept frame's changed tiles marked on the GPU ([`crate::cull::tile_marks`]): the
+    // culler arms its marking pass with the plan's listed slots, records its two phases
+    // around the frame's pose, and tells the draw pass where the marked words lie.
     /// Records the marking pass's phase before the frame's scatter and pose (`after`
     /// false: every kept display's tiles cleared, the spheres as last drawn marked) or
     /// after them. Returns the dispatches (0 unless the frame keeps on the GPU).
@@ -598,6 +570,30 @@ impl Culler {
             } => Some(marks.words_of(slot, words)),
             _ => None,
         }
+    }
+}
+
+/// With the coarse cull, `view`'s slot and the candidates group its passes read (a view
+/// that takes no blocks runs over everything).
+fn over_candidates<'a>(
+    coarse: Option<&'a CoarseGroups>,
+    view: &CullPass,
+) -> Option<(u32, &'a wgpu::BindGroup)> {
+    Some((view.view.coarse_slot()?, &coarse?.candidates))
+}
+
+/// Sets (or adds) `view`'s output.
+fn set_output(outputs: &mut Vec<(CullView, CullOutput)>, view: CullView, out: CullOutput) {
+    match outputs.iter_mut().find(|(v, _)| *v == view) {
+        Some((_, o)) => *o = out,
+        None => outputs.push((view, out)),
+    }
+}
+
+impl CullPass {
+    /// Which part of a two-phase cull the view is.
+    pub fn phase(&self) -> Phase {
+        self.phase
     }
 }
 

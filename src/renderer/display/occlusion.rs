@@ -45,6 +45,54 @@ impl LatePhase {
             key,
         }
     }
+
+    /// The display's late cull in its own dispatches (culling on the GPU, where the
+    /// rig cull does not take it), after every display's pyramids.
+    pub(super) fn encode_cull(
+        &self,
+        encoder: &mut wgpu::CommandEncoder,
+        culler: &Culler,
+        rec: &mut Recorder,
+    ) -> u32 {
+        let what = PassRecord::display("late_cull", self.index);
+        self.view.encode_cull(encoder, culler, rec, what)
+    }
+
+    /// The late draw into `target`: a pass that keeps what the early one drew, opening
+    /// with the display's far layer composited (where it has one). Returns the draw
+    /// calls.
+    pub(super) fn encode_draw(
+        &self,
+        encoder: &mut wgpu::CommandEncoder,
+        (drawing, own, far): (Drawing, &OwnPipelines, Option<(&FarLayers, &FarDisplay)>),
+        target: &TargetViews,
+        rec: &mut Recorder,
+    ) -> u32 {
+        let mut open = rec.open(encoder, PassRecord::display("late_draw", self.index));
+        let mask = self.key.multiview_mask();
+        let mut pass = begin_draw_pass(encoder, rec, (target, false, mask), &mut open);
+        rec.count_samples(&mut pass, &mut open);
+        let composite = far.map_or(0, |(layers, far)| layers.composite(&mut pass, far));
+        let with = BinPipelines::Draw(self.key, own);
+        let calls = composite + self.view.draw(&mut pass, drawing, with);
+        rec.close_render(encoder, pass, open);
+        calls
+    }
+
+    /// Its cull, as the culler keeps it.
+    pub fn cull_pass(&self) -> &CullPass {
+        self.view.cull_pass()
+    }
+
+    /// Its cull outputs, per the cull contract.
+    pub(super) fn cull(&self) -> &crate::cull::targets::CullTargets {
+        self.view.cull()
+    }
+
+    /// The shape of its pyramids.
+    pub(super) fn shape(&self) -> PyramidShape {
+        self.shape
+    }
 }
 
 /// Every display's pyramids, in sets of up to [`PYRAMID_SET_DEPTHS`] displays whose
@@ -219,41 +267,6 @@ pub struct OcclusionBytes {
     pub pyramids: u64,
 }
 
-impl LatePhase {
-    /// The display's late cull in its own dispatches (culling on the GPU, where the
-    /// rig cull does not take it), after every display's pyramids.
-    pub(super) fn encode_cull(
-        &self,
-        encoder: &mut wgpu::CommandEncoder,
-        culler: &Culler,
-        rec: &mut Recorder,
-    ) -> u32 {
-        let what = PassRecord::display("late_cull", self.index);
-        self.view.encode_cull(encoder, culler, rec, what)
-    }
-
-    /// The late draw into `target`: a pass that keeps what the early one drew, opening
-    /// with the display's far layer composited (where it has one). Returns the draw
-    /// calls.
-    pub(super) fn encode_draw(
-        &self,
-        encoder: &mut wgpu::CommandEncoder,
-        (drawing, own, far): (Drawing, &OwnPipelines, Option<(&FarLayers, &FarDisplay)>),
-        target: &TargetViews,
-        rec: &mut Recorder,
-    ) -> u32 {
-        let mut open = rec.open(encoder, PassRecord::display("late_draw", self.index));
-        let mask = self.key.multiview_mask();
-        let mut pass = begin_draw_pass(encoder, rec, (target, false, mask), &mut open);
-        rec.count_samples(&mut pass, &mut open);
-        let composite = far.map_or(0, |(layers, far)| layers.composite(&mut pass, far));
-        let with = BinPipelines::Draw(self.key, own);
-        let calls = composite + self.view.draw(&mut pass, drawing, with);
-        rec.close_render(encoder, pass, open);
-        calls
-    }
-}
-
 /// What occlusion adds in GPU memory for displays' `late` phases (`None` without any):
 /// culling on the GPU, the bits and the shared pyramids; culling on the CPU, the
 /// `read_back` pyramids (one region per display; the bits stay on the CPU).
@@ -289,21 +302,4 @@ pub(super) fn pyramid_shapes(
                 .then_some(shape)
         })
         .collect()
-}
-
-impl LatePhase {
-    /// Its cull, as the culler keeps it.
-    pub fn cull_pass(&self) -> &CullPass {
-        self.view.cull_pass()
-    }
-
-    /// Its cull outputs, per the cull contract.
-    pub(super) fn cull(&self) -> &crate::cull::targets::CullTargets {
-        self.view.cull()
-    }
-
-    /// The shape of its pyramids.
-    pub(super) fn shape(&self) -> PyramidShape {
-        self.shape
-    }
 }
