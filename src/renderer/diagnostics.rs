@@ -140,12 +140,7 @@ impl Diagnostics<'_> {
     /// from (multi-camera: the left eye's).
     pub fn cull(&self, index: usize) -> Result<CullOutput> {
         let culler = &self.renderer.shared.culler;
-        let display = self.renderer.display(index)?;
-        match (display.indirect(), display.classic()) {
-            (Some(d), _) => d.read_cull(self.gpu(), culler),
-            (_, Some(d)) => Ok(d.cull_output(culler)),
-            (None, None) => Ok(CullOutput::default()),
-        }
+        self.renderer.display(index)?.read_cull(self.gpu(), culler)
     }
 
     /// Display `index`'s far layer cull of the last frame (the far instances, each drawn
@@ -324,11 +319,7 @@ impl Diagnostics<'_> {
     pub fn visible_counts(&self) -> Result<Vec<u32>> {
         let culler = &self.renderer.shared.culler;
         (self.renderer.displays.iter())
-            .map(|d| match (d.indirect(), d.classic()) {
-                (Some(d), _) => d.visible_count(self.gpu()),
-                (_, Some(d)) => Ok(d.visible_count(culler)),
-                (None, None) => Ok(0),
-            })
+            .map(|d| d.visible_count(self.gpu(), culler))
             .collect()
     }
 }

@@ -3,15 +3,12 @@
 //! GPU-driven submission. They draw the same images as the indirect path, so that each
 //! can be profiled against it.
 
-use super::indirect::Built;
 use super::occlusion::PyramidSets;
-use super::{Display, DisplayPasses, PathInputs, Shared};
+use super::{Display, DisplayPasses, Displays, PathInputs, Shared, drawn};
 use crate::buffers::{Upload, storage_buffer, write};
 use crate::contexts::context_buffer;
 use crate::cull::CullOutput;
-use crate::draw::{
-    BinDraw, BinPipelines, DrawFeatures, DrawScene, Drawer, NO_OWN_PIPELINES, set_viewport,
-};
+use crate::draw::{BinDraw, BinPipelines, DrawFeatures, Drawer, NO_OWN_PIPELINES, set_viewport};
 use crate::error::Result;
 use crate::records::CullLayout;
 use crate::renderer::culler::{CullShape, Culler};
@@ -62,26 +59,12 @@ pub(super) fn build(
     device: &wgpu::Device,
     layout: CullLayout,
     inputs: &PathInputs,
-) -> Result<Built> {
-    let &PathInputs {
-        scene,
-        records,
-        options,
-        slots,
-        shadow_group,
-        ..
-    } = inputs;
+) -> Result<Displays> {
+    let (options, slots) = (inputs.options, inputs.slots);
     let clip = DrawFeatures::of(device).clip_distances;
     let windows = options.windows(device, slots);
     let keys = [DrawKey::new(1, clip)];
-    let drawer = Drawer::new(
-        device,
-        options.target_format(),
-        (&keys, &layout.bins.kinds),
-        options.shaders(),
-        options.shadow_size(),
-        windows,
-    );
+    let (drawer, draw_scene) = drawn(device, inputs, &keys, &layout.bins.kinds)?;
     let shape = CullShape {
         rig: Vec::new(),
         slots,
@@ -93,7 +76,6 @@ pub(super) fn build(
         hidden_slots: 0,
         split: options.far_layer,
     };
-    let draw_scene = DrawScene::new(device, &drawer, (scene, records, shadow_group), slots)?;
     let shared = Shared {
         culler: Culler::new(device, options.cull, layout, shape, windows),
         drawer,
@@ -107,7 +89,11 @@ pub(super) fn build(
             Display::new(inputs, i, DisplayPasses::Classic(Box::new(passes)))
         })
         .collect();
-    Ok((shared, PyramidSets::none(device), displays))
+    Ok(Displays {
+        shared,
+        pyramids: PyramidSets::none(device),
+        displays,
+    })
 }
 
 impl ClassicDisplay {

@@ -7,7 +7,7 @@
 
 use super::far_layer::{FarDisplay, FarLayers};
 use super::occlusion::{LatePhase, OcclusionCounts, PyramidSets, pyramid_shapes};
-use super::{Display, DisplayPasses, PathInputs, Shared};
+use super::{Display, DisplayPasses, Displays, PathInputs, Shared, drawn};
 use crate::contexts::context_buffer;
 use crate::cull::gpu_buffers::OcclusionRoom;
 use crate::cull::targets::{COUNTS_BYTES, CullTargets};
@@ -15,7 +15,7 @@ use crate::cull::{BinDraws, CullOutput};
 use crate::draw::keep_tiles::KeepTiles;
 use crate::draw::keep_tiles::TileGrid;
 use crate::draw::mask::{DisplayMask, MaskPipeline};
-use crate::draw::{BinPipelines, DrawFeatures, DrawScene, Drawer, OwnPipeline};
+use crate::draw::{BinPipelines, DrawFeatures, OwnPipeline};
 use crate::draw::{OwnPipelines, mask};
 use crate::error::{Error, Result};
 use crate::keep::KeepUnchanged;
@@ -69,24 +69,18 @@ struct Kept {
     marked_in: Option<u32>,
 }
 
-/// What the indirect path builds: what its displays share, the pyramids of those that
-/// occlude, and each display.
-pub(super) type Built = (Shared, PyramidSets, Vec<Display>);
-
 /// The path for `inputs`: built for its plan (the rig as made, which sizes the far
 /// layers) and its coarse cull.
 pub(super) fn build(
     device: &wgpu::Device,
     layout: CullLayout,
     inputs: &PathInputs,
-) -> Result<Built> {
+) -> Result<Displays> {
     let &PathInputs {
         scene,
-        records,
         plan,
         options,
         slots,
-        shadow_group,
         ..
     } = inputs;
     let windows = options.windows(device, slots);
@@ -103,15 +97,7 @@ pub(super) fn build(
     let shaders = options.shaders();
     let target = options.target_format();
     let keep = tiles.map(|tiles| KeepTiles::new(device, target, &tiles));
-    let drawer = Drawer::new(
-        device,
-        target,
-        (&keys, &kinds),
-        shaders,
-        options.shadow_size(),
-        windows,
-    );
-    let draw_scene = DrawScene::new(device, &drawer, (scene, records, shadow_group), slots)?;
+    let (drawer, draw_scene) = drawn(device, inputs, &keys, &kinds)?;
     let far =
         (options.far_layer).then(|| FarLayers::new(device, (target, &kinds), shaders, windows));
     let shared = Shared {
@@ -133,7 +119,11 @@ pub(super) fn build(
             Display::new(inputs, i, DisplayPasses::Indirect(Box::new(passes)))
         })
         .collect();
-    Ok((shared, pyramids, displays))
+    Ok(Displays {
+        shared,
+        pyramids,
+        displays,
+    })
 }
 
 /// What a display is made from: the device, the renderer's inputs and what its passes
@@ -377,7 +367,7 @@ impl IndirectDisplay {
     }
 
     /// The display's one multi-draw-indirect call into `pass`, whose pipeline the
-    /// caller set (built on [`Drawer::layout`] and the decode).
+    /// caller set (built on [`crate::draw::Drawer::layout`] and the decode).
     pub fn draw_with_own_pipeline(&self, pass: &mut wgpu::RenderPass, shared: &Shared) {
         self.view.draw(pass, shared.drawing(), BinPipelines::Own);
     }

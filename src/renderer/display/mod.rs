@@ -16,6 +16,8 @@ use far_layer::FarLayers;
 use indirect::IndirectDisplay;
 use occlusion::PyramidSets;
 
+use crate::bins::Bin;
+use crate::cull::CullOutput;
 use crate::draw::keep_tiles::KeepTiles;
 use crate::draw::{DrawScene, Drawer, Drawing};
 use crate::error::{Error, Result};
@@ -29,6 +31,8 @@ use crate::renderer::targets::{TargetShape, TargetViews};
 use crate::renderer::uploads::Writes;
 use crate::rig::Rig;
 use crate::scene::Scene;
+use crate::shaders::DrawKey;
+use indirect::Gpu;
 
 /// What a renderer's displays are made from: the scene, the rig and
 /// the frame plan of the rig as made, and the options.
@@ -114,12 +118,32 @@ pub fn build(device: &wgpu::Device, layout: CullLayout, inputs: &PathInputs) -> 
     if let Some(e) = pollster::block_on(scope.pop()) {
         return Err(Error::Wgpu(e));
     }
-    let (shared, pyramids, displays) = built?;
-    Ok(Displays {
-        shared,
-        pyramids,
-        displays,
-    })
+    built
+}
+
+/// The draw pipelines of `inputs`' target for the pipeline variants `keys` over the
+/// material bins `kinds`, and the scene as they draw it.
+fn drawn(
+    device: &wgpu::Device,
+    inputs: &PathInputs,
+    keys: &[DrawKey],
+    kinds: &[Bin],
+) -> Result<(Drawer, DrawScene)> {
+    let options = inputs.options;
+    let windows = options.windows(device, inputs.slots);
+    let format = options.target_format();
+    let shaders = options.shaders();
+    let drawer = Drawer::new(
+        device,
+        format,
+        (keys, kinds),
+        shaders,
+        options.shadow_size(),
+        windows,
+    );
+    let scene = (inputs.scene, inputs.records, inputs.shadow_group);
+    let draw_scene = DrawScene::new(device, &drawer, scene, inputs.slots)?;
+    Ok((drawer, draw_scene))
 }
 
 impl Display {
@@ -159,11 +183,22 @@ impl Display {
         }
     }
 
-    /// Its passes in the classic modes (`None` on the GPU-driven path).
-    pub fn classic(&self) -> Option<&ClassicDisplay> {
+    /// Its cull result of the last frame: on the GPU-driven path its buffers read back
+    /// through `gpu`; in the classic modes the CPU cull they drew from (multi-camera:
+    /// the left eye's).
+    pub fn read_cull(&self, gpu: Gpu, culler: &Culler) -> Result<CullOutput> {
         match &self.passes {
-            DisplayPasses::Classic(d) => Some(d),
-            DisplayPasses::Indirect(_) => None,
+            DisplayPasses::Indirect(d) => d.read_cull(gpu, culler),
+            DisplayPasses::Classic(d) => Ok(d.cull_output(culler)),
+        }
+    }
+
+    /// Its visible total of the last frame: read back on the GPU-driven path (with
+    /// occlusion both phases'), the CPU cull's in the classic modes.
+    pub fn visible_count(&self, gpu: Gpu, culler: &Culler) -> Result<u32> {
+        match &self.passes {
+            DisplayPasses::Indirect(d) => d.visible_count(gpu),
+            DisplayPasses::Classic(d) => Ok(d.visible_count(culler)),
         }
     }
 
