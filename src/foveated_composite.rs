@@ -7,6 +7,7 @@
 use encase::ShaderType;
 use glam::{DMat3, Mat3, Vec2, Vec4};
 
+use crate::materials::{linear_from_srgb, srgb_from_linear};
 use crate::records::uniform_bytes;
 use crate::rig::{ResolvedDisplay, ViewLayout};
 
@@ -276,27 +277,12 @@ fn smooth_edge(t: f32) -> f32 {
 }
 
 fn decode(p: [u8; 4]) -> Vec4 {
-    let c = |v: u8| {
-        let v = v as f32 / 255.0;
-        if v <= 0.04045 {
-            v / 12.92
-        } else {
-            ((v + 0.055) / 1.055).powf(2.4)
-        }
-    };
+    let c = |v: u8| linear_from_srgb(v as f32 / 255.0);
     Vec4::new(c(p[0]), c(p[1]), c(p[2]), p[3] as f32 / 255.0)
 }
 
 fn encode(v: Vec4) -> image::Rgba<u8> {
-    let c = |v: f32| {
-        let v = v.clamp(0.0, 1.0);
-        let s = if v <= 0.0031308 {
-            v * 12.92
-        } else {
-            1.055 * v.powf(1.0 / 2.4) - 0.055
-        };
-        (s * 255.0).round() as u8
-    };
+    let c = |v: f32| (srgb_from_linear(v.clamp(0.0, 1.0)) * 255.0).round() as u8;
     image::Rgba([
         c(v.x),
         c(v.y),

@@ -13,6 +13,7 @@ use half::f16;
 use image::RgbaImage;
 use ktx2::{Format, SupercompressionScheme};
 
+use crate::materials::{linear_from_srgb, srgb_from_linear};
 use crate::scene::Encoding;
 
 type Step<T> = std::result::Result<T, String>;
@@ -62,20 +63,15 @@ fn layout(format: Format) -> Option<Layout> {
     })
 }
 
-/// Whether `bytes` (a KTX2 file) hold plain texels (a format in their header), not
-/// Basis Universal's (whose format is undefined).
-pub fn is_raw(bytes: &[u8]) -> bool {
-    ktx2::Reader::new(bytes).is_ok_and(|r| r.header().format.is_some())
-}
-
 /// The largest level of a KTX2 file of plain texels as RGBA8, for a texture read as
-/// `encoding`. Formats other than those above are refused, by name.
-pub fn decode(bytes: &[u8], encoding: Encoding) -> Step<RgbaImage> {
+/// `encoding`; `None` where the file holds Basis Universal texels (its format
+/// undefined: [`crate::basisu`]'s). Formats other than those above are refused, by name.
+pub fn decode(bytes: &[u8], encoding: Encoding) -> Step<Option<RgbaImage>> {
     let reader = ktx2::Reader::new(bytes).map_err(|e| format!("KTX2: {e}"))?;
     let header = reader.header();
-    let format = header
-        .format
-        .ok_or("KTX2 without a format (Basis Universal texels)")?;
+    let Some(format) = header.format else {
+        return Ok(None);
+    };
     let layout = layout(format).ok_or_else(|| {
         format!(
             "KTX2 format {format:?}; we read R8, R8G8, R8G8B8, R8G8B8A8 (UNORM, SRGB) and R16 to R16G16B16A16 (SFLOAT)"
@@ -102,7 +98,8 @@ pub fn decode(bytes: &[u8], encoding: Encoding) -> Step<RgbaImage> {
         .chunks_exact(layout.bytes_per_texel())
         .flat_map(|texel| layout.rgba8(texel, encoding))
         .collect();
-    RgbaImage::from_raw(w, h, rgba).ok_or_else(|| "KTX2: too few texels".to_string())
+    let image = RgbaImage::from_raw(w, h, rgba).ok_or("KTX2: too few texels")?;
+    Ok(Some(image))
 }
 
 /// A level's bytes as stored, or inflated from Zstandard (to at most `size` bytes:
@@ -159,20 +156,4 @@ impl Layout {
 /// `value` in [0, 1] as the nearest 8-bit level (clamped; NaN is 0).
 fn unorm8(value: f32) -> u8 {
     (value.clamp(0.0, 1.0) * 255.0).round() as u8
-}
-
-/// The sRGB encoding of linear `l` (IEC 61966-2-1).
-fn srgb_from_linear(l: f32) -> f32 {
-    match l <= 0.003_130_8 {
-        true => 12.92 * l,
-        false => 1.055 * l.powf(1.0 / 2.4) - 0.055,
-    }
-}
-
-/// The linear value of sRGB-encoded `s`.
-fn linear_from_srgb(s: f32) -> f32 {
-    match s <= 0.040_45 {
-        true => s / 12.92,
-        false => ((s + 0.055) / 1.055).powf(2.4),
-    }
 }

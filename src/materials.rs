@@ -490,3 +490,19 @@ impl GpuMaterials {
 }
 
 const WHITE: image::Rgba<u8> = image::Rgba([255; 4]);
+
+/// The sRGB encoding of linear `l` (IEC 61966-2-1).
+pub fn srgb_from_linear(l: f32) -> f32 {
+    match l <= 0.003_130_8 {
+        true => 12.92 * l,
+        false => 1.055 * l.powf(1.0 / 2.4) - 0.055,
+    }
+}
+
+/// The linear value of sRGB-encoded `s`.
+pub fn linear_from_srgb(s: f32) -> f32 {
+    match s <= 0.040_45 {
+        true => s / 12.92,
+        false => ((s + 0.055) / 1.055).powf(2.4),
+    }
+}

@@ -562,10 +562,9 @@ fn a_texture_on_the_second_set_reads_the_second_set() {
     assert!(differ > 500, "the control differs at {differ} pixels only");
 }
 
-/// BoxTextured with its texture's image `ktx2` (a KTX2 in a new buffer view) through
-/// `KHR_texture_basisu`: `required` drops the core PNG source and requires the
-/// extension; otherwise the PNG stays as the fallback and the extension is only used.
-fn box_with_ktx2(ktx2: &[u8], required: bool) -> Vec<u8> {
+/// BoxTextured's JSON and binary chunk with `ktx2` one more image (`image/ktx2`) in a new
+/// buffer view, and that image's index; no texture reads it yet.
+fn box_with_ktx2_image(ktx2: &[u8]) -> (Value, Vec<u8>, usize) {
     let glb = std::fs::read(support::gltf_sample("BoxTextured", "glb")).unwrap();
     let (mut json, mut bin) = split_glb(&glb);
     while !bin.len().is_multiple_of(4) {
@@ -579,6 +578,14 @@ fn box_with_ktx2(ktx2: &[u8], required: bool) -> Vec<u8> {
     json["buffers"][0]["byteLength"] = json!(bin.len());
     json["images"].as_array_mut().unwrap().push(json!(
         {"bufferView": views, "mimeType": "image/ktx2"}));
+    (json, bin, images)
+}
+
+/// BoxTextured with its texture's image `ktx2` (a KTX2 in a new buffer view) through
+/// `KHR_texture_basisu`: `required` drops the core PNG source and requires the
+/// extension; otherwise the PNG stays as the fallback and the extension is only used.
+fn box_with_ktx2(ktx2: &[u8], required: bool) -> Vec<u8> {
+    let (mut json, bin, images) = box_with_ktx2_image(ktx2);
     let texture = &mut json["textures"][0];
     texture["extensions"] = json!({"KHR_texture_basisu": {"source": images}});
     let name = json!("KHR_texture_basisu");
@@ -639,20 +646,8 @@ fn box_with_raw_ktx2(ktx2: &[u8], basisu: bool) -> Vec<u8> {
     let glb = match basisu {
         true => box_with_ktx2(ktx2, true),
         false => {
-            let glb = std::fs::read(support::gltf_sample("BoxTextured", "glb")).unwrap();
-            let (mut json, mut bin) = split_glb(&glb);
-            while !bin.len().is_multiple_of(4) {
-                bin.push(0);
-            }
-            let views = json["bufferViews"].as_array().unwrap().len();
-            let images = json["images"].as_array().unwrap().len();
-            json["bufferViews"].as_array_mut().unwrap().push(json!(
-                {"buffer": 0, "byteOffset": bin.len(), "byteLength": ktx2.len()}));
-            bin.extend_from_slice(ktx2);
-            json["buffers"][0]["byteLength"] = json!(bin.len());
-            json["images"].as_array_mut().unwrap().push(json!(
-                {"bufferView": views, "mimeType": "image/ktx2"}));
-            json["textures"][0]["source"] = json!(images);
+            let (mut json, bin, image) = box_with_ktx2_image(ktx2);
+            json["textures"][0]["source"] = json!(image);
             write_glb(&json, &bin)
         }
     };
@@ -763,17 +758,8 @@ fn a_plain_ktx2_texture_draws_as_its_texels_do() {
     let original = scene_spec::load(original_path.to_str().unwrap()).unwrap();
     let png = original.textures[0].image.clone();
     let ktx2 = support::ktx2::raw(43, png.dimensions(), 1, png.as_raw(), true);
-    let glb = std::fs::read(&original_path).unwrap();
-    let (mut json, mut bin) = split_glb(&glb);
-    while !bin.len().is_multiple_of(4) {
-        bin.push(0);
-    }
-    let views = json["bufferViews"].as_array().unwrap().len();
-    json["bufferViews"].as_array_mut().unwrap().push(json!(
-        {"buffer": 0, "byteOffset": bin.len(), "byteLength": ktx2.len()}));
-    bin.extend_from_slice(&ktx2);
-    json["buffers"][0]["byteLength"] = json!(bin.len());
-    json["images"][0] = json!({"bufferView": views, "mimeType": "image/ktx2"});
+    let (mut json, bin, image) = box_with_ktx2_image(&ktx2);
+    json["textures"][0]["source"] = json!(image);
     let scene = load_bytes(dir.path(), "direct.glb", &write_glb(&json, &bin));
     assert!(scene.textures[0].image == png);
     let gpu = support::gpu();

@@ -224,10 +224,10 @@ impl Importer<'_> {
                 &owned
             }
         };
-        if basisu::is_ktx2(bytes) && ktx2_raw::is_raw(bytes) {
-            return Ok((ktx2_raw::decode(bytes, encoding)?, None));
-        }
         if basisu::is_ktx2(bytes) {
+            if let Some(texels) = ktx2_raw::decode(bytes, encoding)? {
+                return Ok((texels, None));
+            }
             let basis = BasisTexture::from_ktx2(bytes)?;
             return Ok((basis.rgba()?, Some(basis)));
         }
