@@ -10,7 +10,7 @@
 //! Modules, in the order data flows: [`rig`] (viewer and displays, resolved once per
 //! frame) -> [`frustum`] (eye, display and frame frusta, in f64) -> [`contexts`] (what
 //! shaders read per display and eye) -> [`scene`] (what is drawn; filled by
-//! [`gltf_import`] or [`procedural`], chosen by name in [`scene_spec`]; [`posing`] moves
+//! [`gltf_import`] or [`procedural`], chosen by name in [`scene_spec`]; [`pose`] moves
 //! its animated instances once per frame) -> [`records`]
 //! (GPU layouts; [`places`], each instance's place in the cull order) -> [`cull`]
 //! (visible lists and draw arguments, CPU or GPU) -> [`draw`]
