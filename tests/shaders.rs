@@ -10,9 +10,9 @@ use stereocull::cull::CoarseCull;
 use stereocull::cull::gpu_buffers::CullParams;
 use stereocull::cull::hidden::{HiddenArea, HiddenRegion, HiddenView, MAX_HIDDEN_REGIONS};
 use stereocull::cull::rig::{MAX_RIG_VIEWS, RigCull, RigOcclusion, RigView};
-use stereocull::cull::tile_marks::TileDisplay;
 use stereocull::draw::VERTEX_ATTRIBUTES;
-use stereocull::draw::keep_tiles::TileGrid;
+use stereocull::keep::clear::TileGrid;
+use stereocull::keep::marks::TileDisplay;
 use stereocull::materials::MaterialRecord;
 use stereocull::occlusion::pyramid::{PyramidSet, PyramidSlice};
 use stereocull::records::{

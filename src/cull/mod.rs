@@ -18,7 +18,6 @@ pub mod gpu_buffers;
 pub mod hidden;
 pub mod rig;
 pub mod targets;
-pub mod tile_marks;
 pub mod tiles;
 
 pub use coarse::CoarseCull;

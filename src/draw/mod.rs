@@ -3,7 +3,6 @@
 //! multi-draw per bin; render passes in `passes.rs`. The renderer decides what to draw
 //! (`renderer::indirect`, `renderer::classic`); this module knows how.
 
-pub mod keep_tiles;
 pub mod mask;
 mod passes;
 mod pipelines;

@@ -2,13 +2,25 @@
 //! When the viewer's pose, the rig and the time's effect on the scene leave most of a
 //! frame as the last one drew it, a display redraws only the [`crate::cull::tiles::TILE`]-pixel tiles
 //! that something changed: a moved, inserted, removed, re-materialed or animated
-//! instance marks the tiles its bounds cover before and after, in each eye
-//! ([`crate::cull::tiles::TileMask`]); the cull keeps only instances that touch a marked tile; the
-//! draw pass keeps last frame's color and depth, clears the marked tiles and redraws
-//! them. Everything else stays as it was, so the frame is the one a full redraw makes.
+//! instance marks the tiles its bounds cover before and after, in each eye; the cull
+//! keeps only instances that touch a marked tile; the draw pass keeps last frame's
+//! color and depth, clears the marked tiles and redraws them. Everything else stays as
+//! it was, so the frame is the one a full redraw makes.
 //!
 //! Whatever can change pixels away from the object, or every pixel, redraws the frame
 //! whole, and [`WholeRedraw`] says why.
+//!
+//! The technique's room, pass by pass:
+//! - here, [`Keeper`]: what changed since the last frame, or why it redraws whole;
+//! - [`marks`]: the changed tiles marked on the GPU (`wgsl/keep_mark.wgsl`);
+//! - [`crate::cull::tiles::TileMask`]: their CPU twin, and the cull's tile test, which
+//!   the cull reads (it sits with the cull's other tests, so the cull names nothing here);
+//! - [`clear`]: the changed tiles listed and cleared in the draw pass
+//!   (`wgsl/keep_list.wgsl`, `wgsl/keep_tiles.wgsl`);
+//! - `renderer/keeping.rs`: a frame plan's tiles, and the options that never keep.
+
+pub mod clear;
+pub mod marks;
 
 use glam::Vec4;
 

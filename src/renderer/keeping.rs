@@ -8,10 +8,10 @@ use glam::UVec2;
 use super::options::{OcclusionMode, PosingMode, RendererOptions, StereoMode};
 use super::plan::{CullView, FramePlan, KeptTiles};
 use crate::contexts::DisplayContext;
-use crate::cull::tile_marks::{MARK_AFTER, MARK_BEFORE};
 use crate::cull::tiles::{self, CULL_TILES, TileEye, TileMask};
 use crate::frustum::sphere_in_planes;
 use crate::keep::Change;
+use crate::keep::marks::{MARK_AFTER, MARK_BEFORE};
 use crate::scene::Scene;
 
 /// Why no frame of a renderer made with `options` for `scene`, whose displays have

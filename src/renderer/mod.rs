@@ -74,8 +74,9 @@
 //! scene as drawn) and one `Display` per rig display (`display/`: its target shape and
 //! its passes on the path chosen once in [`Renderer::new`], `indirect.rs` for
 //! `instanced` and `multiview` with its far layer, occlusion's late phase, mask and
-//! kept tiles, `classic.rs` for the per-instance modes). The eye level lives in the
-//! contexts (`eye[e]`) and the shaders, and in the classic modes' per-eye passes.
+//! kept tiles, `classic.rs` for the per-instance modes). The eye level (`eye/`) is
+//! data on the indirect path (the contexts' `eye[e]`, read in the shaders) and an `Eye`
+//! per view of a classic mode's stereo display (its context, viewport and list).
 //!
 //! `mod.rs` makes a renderer and answers questions about it; `submit.rs` holds a
 //! frame's calls, and [`Renderer::encode`] reads top-down: the frame level's passes,
@@ -101,6 +102,7 @@ mod checks;
 mod culler;
 mod diagnostics;
 mod display;
+mod eye;
 mod frame;
 mod frame_stats;
 pub mod frames;

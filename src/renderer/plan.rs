@@ -91,8 +91,8 @@ pub struct FramePlan {
     /// Per display, in the rig's order.
     pub displays: Vec<DisplayPlan>,
     /// Keeping unchanged pixels with the tiles marked on the GPU: the slots whose
-    /// tiles change, each with its phases ([`crate::cull::tile_marks::MARK_BEFORE`],
-    /// [`crate::cull::tile_marks::MARK_AFTER`]).
+    /// tiles change, each with its phases ([`crate::keep::marks::MARK_BEFORE`],
+    /// [`crate::keep::marks::MARK_AFTER`]).
     pub marks: Vec<u32>,
 }
 
@@ -157,7 +157,7 @@ impl DisplayPlan {
 
 /// A kept display's changed tiles: marked on the CPU (culling on the CPU: its cull and
 /// its draw pass read this mask), or on the GPU by the marking pass, from the frame's
-/// listed slots ([`FramePlan::marks`], [`crate::cull::tile_marks`]).
+/// listed slots ([`FramePlan::marks`], [`crate::keep::marks`]).
 #[derive(Clone, Debug, PartialEq)]
 pub enum KeptTiles {
     /// The CPU marked them: the mask its cull and draw pass read.

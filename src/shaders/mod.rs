@@ -36,7 +36,7 @@ pub const TILE: u32 = 16;
 /// rounding of the projection (as occlusion's, `crate::contexts::BOUNDS_GROWTH_PX`).
 pub const TILE_MARGIN_PX: f32 = 1.0;
 
-/// A slot listed for the tile marking pass ([`crate::cull::tile_marks`]): it held an
+/// A slot listed for the tile marking pass ([`crate::keep::marks`]): it held an
 /// instance as last drawn (its sphere then marks).
 pub const MARK_BEFORE: u32 = 1 << 31;
 /// A listed slot's flag: it holds an instance now (its sphere now marks).
@@ -159,7 +159,7 @@ pub fn scatter_source(windows: &Windows, kind: EditKind) -> String {
     [&span, RECORDS, &bindings, shared, body].concat()
 }
 
-/// The marking pass of a kept frame's changed tiles ([`crate::cull::tile_marks`]) for
+/// The marking pass of a kept frame's changed tiles ([`crate::keep::marks`]) for
 /// spheres bound in `windows`.
 pub fn keep_mark_source(windows: &Windows) -> String {
     let bindings = declarations(&MARK_TILES_BINDINGS, 0, windows);

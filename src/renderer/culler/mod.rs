@@ -25,8 +25,8 @@ use crate::cull::gpu::{CoarseGroups, CullerFeatures, GpuCuller};
 use crate::cull::gpu_buffers::{CullScene, OcclusionRoom};
 use crate::cull::rig::RigSets;
 use crate::cull::targets::CullTargets;
-use crate::cull::tile_marks::{TileDisplay, TileMarks};
 use crate::error::Result;
+use crate::keep::marks::{TileDisplay, TileMarks};
 use crate::occlusion::{Phase, cull_early};
 use crate::records::{CullLayout, MoveEdit, PlaceEdit};
 use crate::renderer::plan::KeptTiles;
@@ -543,7 +543,7 @@ impl Culler {
         }
     }
 
-    // A kept frame's changed tiles marked on the GPU ([`crate::cull::tile_marks`]): the
+    // A kept frame's changed tiles marked on the GPU ([`crate::keep::marks`]): the
     // culler arms its marking pass with the plan's listed slots, records its two phases
     // around the frame's pose, and tells the draw pass where the marked words lie.
     /// Records the marking pass's phase before the frame's scatter and pose (`after`

@@ -8,10 +8,11 @@ use super::{Display, DisplayPasses, Displays, PathInputs, Shared, drawn};
 use crate::buffers::{Upload, storage_buffer, write};
 use crate::contexts::context_buffer;
 use crate::cull::CullOutput;
-use crate::draw::{BinDraw, BinPipelines, DrawFeatures, Drawer, NO_OWN_PIPELINES, set_viewport};
+use crate::draw::{BinDraw, BinPipelines, DrawFeatures, Drawer, NO_OWN_PIPELINES};
 use crate::error::Result;
 use crate::records::CullLayout;
 use crate::renderer::culler::{CullShape, Culler};
+use crate::renderer::eye::{Eye, EyeInputs};
 use crate::renderer::frame_stats::FrameStats;
 use crate::renderer::options::StereoMode;
 use crate::renderer::plan::{CullView, DisplayPlan};
@@ -20,17 +21,6 @@ use crate::renderer::targets::TargetViews;
 use crate::renderer::uploads::Writes;
 use crate::shaders::Bound;
 use crate::shaders::DrawKey;
-
-/// One view of a stereo display (an eye, or a foveated display's inset): its own
-/// context (that view in every eye slot), its viewport, and for multi-camera its own
-/// visible list.
-struct EyeState {
-    context: wgpu::Buffer,
-    visible: Option<wgpu::Buffer>,
-    bind_group: wgpu::BindGroup,
-    /// `[x, y, width, height]` in the display's target.
-    viewport: [u32; 4],
-}
 
 /// One display in a classic mode: its context, visible list and binding, its eyes'.
 pub struct ClassicDisplay {
@@ -42,7 +32,7 @@ pub struct ClassicDisplay {
     /// Mono displays draw with this; stereo ones with their eyes'.
     bind_group: wgpu::BindGroup,
     /// Two for stereo displays, four for foveated ones, none for mono.
-    eyes: Vec<EyeState>,
+    eyes: Vec<Eye>,
 }
 
 /// What a view the frame did not cull draws: nothing.
@@ -103,32 +93,33 @@ impl ClassicDisplay {
         let (slots, mode) = (inputs.slots, inputs.options.mode);
         let per_eye_lists = mode == StereoMode::MultiCamera;
         let usage = wgpu::BufferUsages::STORAGE | wgpu::BufferUsages::COPY_DST;
-        let visible_list = || storage_buffer(device, "stereocull.visible", 4 * slots as u64, usage);
+        let visible = storage_buffer(device, "stereocull.visible", 4 * slots as u64, usage);
         let drawing = shared.drawing();
-        let bind = |context: &wgpu::Buffer, list: &wgpu::Buffer| {
-            let contexts = [inputs.frame, context];
-            (drawing.drawer).bind_group(device, contexts, drawing.scene, list.bound())
-        };
         let planned = &inputs.plan.displays[index].context;
         let views = inputs.plan.resolved.displays[index].eyes.len();
         let context = context_buffer(device);
-        let visible = visible_list();
+        let eye_inputs = EyeInputs {
+            frame: inputs.frame,
+            drawing,
+            display_list: &visible,
+            slots,
+        };
         let eyes = (0..if views > 1 { views } else { 0 })
             .map(|e| {
-                let context = context_buffer(device);
-                let own = per_eye_lists.then(visible_list);
-                EyeState {
-                    bind_group: bind(&context, own.as_ref().unwrap_or(&visible)),
-                    context,
-                    visible: own,
-                    viewport: planned.eye[e].viewport.to_array().map(|v| v as u32),
-                }
+                let viewport = planned.eye[e].viewport.to_array().map(|v| v as u32);
+                Eye::new(device, &eye_inputs, per_eye_lists, viewport)
             })
             .collect();
+        let bind_group = (drawing.drawer).bind_group(
+            device,
+            [inputs.frame, &context],
+            drawing.scene,
+            visible.bound(),
+        );
         ClassicDisplay {
             index,
             mode,
-            bind_group: bind(&context, &visible),
+            bind_group,
             context,
             visible,
             eyes,
@@ -141,7 +132,7 @@ impl ClassicDisplay {
         let ctx = &plan.context;
         let mut bytes = to.pose.write_uniform(&self.context, 0, ctx);
         for (e, eye) in self.eyes.iter().enumerate() {
-            bytes += to.pose.write_uniform(&eye.context, 0, &ctx.for_eye(e));
+            bytes += eye.prepare(to, ctx, e);
         }
         for (out, buffer) in self.visible_lists(culler) {
             bytes += write(to.queue, buffer, bytemuck::cast_slice(&out.visible));
@@ -153,7 +144,7 @@ impl ClassicDisplay {
     /// eye's own in multi-camera, else the display's one.
     fn visible_lists<'a>(&'a self, culler: &'a Culler) -> Vec<(&'a CullOutput, &'a wgpu::Buffer)> {
         let own: Vec<_> = (self.eyes.iter().enumerate())
-            .filter_map(|(e, eye)| Some((self.cull_of(culler, Some(e)), eye.visible.as_ref()?)))
+            .filter_map(|(e, eye)| Some((self.cull_of(culler, Some(e)), eye.visible()?)))
             .collect();
         match own.is_empty() {
             true => vec![(self.cull_of(culler, None), &self.visible)],
@@ -218,7 +209,7 @@ impl ClassicDisplay {
                 instance_draws(cull).map(|d| drawer.draw(pass, d)).count() as u32
             }
             (StereoMode::SinglePass, eyes) => {
-                Drawer::bind(pass, &shared.draw_scene, &eyes[0].bind_group);
+                eyes[0].bind(pass, &shared.draw_scene);
                 single_pass_cadence(pass, (cull, bin_drawer(shared)), eyes)
             }
             (_, eyes) => (0..eyes.len())
@@ -230,8 +221,7 @@ impl ClassicDisplay {
     /// View `e` of the stereo display into its viewport, from its cull (multi-camera)
     /// or the display's.
     fn draw_eye(&self, pass: &mut wgpu::RenderPass, shared: &Shared, e: usize) -> u32 {
-        Drawer::bind(pass, &shared.draw_scene, &self.eyes[e].bind_group);
-        set_viewport(pass, self.eyes[e].viewport);
+        self.eyes[e].bind(pass, &shared.draw_scene);
         let out = self.cull_of(&shared.culler, Some(e));
         let mut drawer = bin_drawer(shared);
         instance_draws(out).map(|d| drawer.draw(pass, d)).count() as u32
@@ -270,7 +260,7 @@ fn bin_drawer(shared: &Shared) -> BinDrawer<'_> {
 fn single_pass_cadence(
     pass: &mut wgpu::RenderPass,
     (out, mut drawer): (&CullOutput, BinDrawer),
-    eyes: &[EyeState],
+    eyes: &[Eye],
 ) -> u32 {
     let mut current = usize::MAX;
     let mut calls = 0;
@@ -283,8 +273,7 @@ fn single_pass_cadence(
         };
         for e in order {
             if e != current {
-                pass.set_bind_group(0, &eyes[e].bind_group, &[]);
-                set_viewport(pass, eyes[e].viewport);
+                eyes[e].switch_to(pass);
                 current = e;
             }
             drawer.draw(pass, d.clone());

@@ -18,9 +18,9 @@ use occlusion::PyramidSets;
 
 use crate::bins::Bin;
 use crate::cull::CullOutput;
-use crate::draw::keep_tiles::KeepTiles;
 use crate::draw::{DrawScene, Drawer, Drawing};
 use crate::error::{Error, Result};
+use crate::keep::clear::KeepTiles;
 use crate::records::{CullLayout, InstanceRecord};
 use crate::renderer::culler::Culler;
 use crate::renderer::frame_stats::FrameStats;

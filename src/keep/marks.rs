@@ -3,15 +3,15 @@
 //! pixels too, and the CPU only lists slots. The frame's listed slots mark, in each
 //! display's tiles in the occlusion buffer (where the display's cull reads them), the
 //! tiles their world sphere may cover: once before the frame's scatter and pose (the
-//! sphere as last drawn) and once after (the sphere now). [`super::tiles::TileMask`] is
+//! sphere as last drawn) and once after (the sphere now). [`crate::cull::tiles::TileMask`] is
 //! the CPU twin: marking the same spheres gives the same words.
 
 use encase::ShaderType;
 use glam::Vec4;
 
-use super::gpu_buffers::CullScene;
-use super::rig::RigOcclusion;
 use crate::buffers::{Upload, init_buffer, storage_buffer};
+use crate::cull::gpu_buffers::CullScene;
+use crate::cull::rig::RigOcclusion;
 use crate::records::storage_bytes;
 pub use crate::shaders::{MARK_AFTER, MARK_BEFORE, MARK_GROUP, MARK_SLOT};
 use crate::shaders::{

@@ -3,13 +3,13 @@
 //! changed tile becomes the clear color at the far plane, as a cleared pass would
 //! leave it, before the scene redraws it. The tiles' bits come from the CPU (culling on
 //! the CPU) or from the GPU's marking pass, copied here from the culler's occlusion
-//! buffer ([`crate::cull::tile_marks`]). A dispatch lists the changed tiles
+//! buffer ([`crate::keep::marks`]). A dispatch lists the changed tiles
 //! (`wgsl/keep_list.wgsl`) and one indirect draw per display clears them: an instance
 //! of two triangles per changed tile, none for the rest.
 
-use super::TargetFormat;
 use crate::buffers::storage_buffer;
 use crate::cull::tiles::{self, TileMask};
+use crate::draw::TargetFormat;
 use crate::shaders::{
     Bound, KEEP_LIST_BINDINGS, KEEP_TILES_BINDINGS, LIST_GROUP, ScreenTargets, Windows, bind_group,
     bind_group_layout, compute_pipeline, depth_write, keep_list_source, keep_tiles_source,
@@ -98,7 +98,7 @@ impl KeepTiles {
             device,
             label,
             (
-                keep_tiles_source(format.color, super::CLEAR_COLOR),
+                keep_tiles_source(format.color, crate::draw::CLEAR_COLOR),
                 &clear_layout,
             ),
             targets,
