@@ -128,8 +128,10 @@ pub(super) fn measure(
                 let early = renderer.encode_early(&mut encoder, &views, timer.as_deref_mut())?;
                 gpu.queue.submit([encoder.finish()]);
                 encoder = gpu.device.create_command_encoder(&Default::default());
-                let device = (&gpu.device, &gpu.queue);
-                early + renderer.encode_late(device, &mut encoder, &views, timer.as_deref_mut())?
+                let (device, queue) = (&gpu.device, &gpu.queue);
+                let late =
+                    renderer.encode_late(device, queue, &mut encoder, &views, timer.as_deref_mut());
+                early + late?
             }
             false => renderer.encode(&mut encoder, &views, timer.as_deref_mut())?,
         };

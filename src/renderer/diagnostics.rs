@@ -207,7 +207,7 @@ impl Diagnostics<'_> {
     pub fn pyramid(&self, index: usize) -> Result<Option<Vec<f32>>> {
         match self.pyramid_shape(index) {
             Some(shape) => {
-                (self.renderer.shared.culler).read_pyramid(self.device, self.queue, (index, shape))
+                (self.renderer.shared.culler).read_pyramid(self.device, self.queue, index, shape)
             }
             None => Ok(None),
         }

@@ -192,7 +192,8 @@ impl SecondFrame {
         device: &wgpu::Device,
         live: &LiveScene,
         staged: Staged,
-        (targets, copy): (ScatterTargets, ScatterTargets),
+        targets: ScatterTargets,
+        copy: ScatterTargets,
     ) -> (u64, Vec<MoveEdit>) {
         let Staged {
             filled,

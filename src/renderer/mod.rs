@@ -233,7 +233,7 @@ impl Renderer {
             posed: &|_| true,
         };
         let (frame, shadow) = (base.uniform(), base.shadow_group());
-        let built = build(device, made, (rig, coarse), &options, frame, shadow)?;
+        let built = build(device, made, rig, coarse, &options, frame, shadow)?;
         Ok(Renderer {
             frame: FrameLevel::new(base, built.passes, built.edits),
             shared: built.shared,
@@ -279,7 +279,8 @@ impl Renderer {
         let built = build(
             device,
             made,
-            (&self.rig, self.coarse),
+            &self.rig,
+            self.coarse,
             &self.options,
             frame,
             shadow,
@@ -529,7 +530,8 @@ impl Renderer {
 fn build(
     device: &wgpu::Device,
     made: Made,
-    (rig, coarse): (&Rig, bool),
+    rig: &Rig,
+    coarse: bool,
     options: &RendererOptions,
     frame: &wgpu::Buffer,
     shadow_group: &wgpu::BindGroup,
@@ -556,11 +558,11 @@ fn build(
         culler,
         scatter: edits::scatter_targets(culler, draw_scene),
     };
-    let passes = FramePasses::new(device, (made.scene, options), bindings, made.posed)?;
+    let passes = FramePasses::new(device, made.scene, options, bindings, made.posed)?;
     let pairs = options.frames_per_submit == 2;
     Ok(Built {
         passes,
-        edits: Edits::new(device, windows, (made.scene, pairs)),
+        edits: Edits::new(device, windows, made.scene, pairs),
         shared: built.shared,
         pyramids: built.pyramids,
         displays: built.displays,

@@ -315,7 +315,7 @@ impl RendererOptions {
     /// `instanced` mode or in `multiview` without MSAA (a pyramid per layer; WebGPU has
     /// no multisampled array textures to read). With the far layer, the display's far
     /// instances are tested against its pyramids too.
-    pub fn occludes(&self, views: usize, (pixels, triangles): (u64, u64)) -> bool {
+    pub fn occludes(&self, views: usize, pixels: u64, triangles: u64) -> bool {
         let asked = match self.occlusion {
             OcclusionMode::On => true,
             OcclusionMode::Auto => {

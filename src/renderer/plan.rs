@@ -309,7 +309,7 @@ impl FramePlan {
                 inset_cull,
                 ahead: times[1] - times[0],
             };
-            plan.set(i, (d, r), far, hidden, shown);
+            plan.set(i, d, r, far, hidden, shown);
         }
         let light_cull = options.shadows.then(|| PlannedCull {
             view: CullView::Light,
@@ -402,7 +402,8 @@ impl DisplayPlan {
     fn set(
         &mut self,
         i: usize,
-        (d, r): (&Display, &ResolvedDisplay),
+        d: &Display,
+        r: &ResolvedDisplay,
         far: Option<FarPlan>,
         hidden: Option<Arc<HiddenArea>>,
         shown: Shown,

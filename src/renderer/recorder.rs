@@ -254,7 +254,9 @@ impl<'a> Recorder<'a> {
 pub fn begin_draw_pass(
     encoder: &mut wgpu::CommandEncoder,
     rec: &mut Recorder,
-    (target, clear, multiview_mask): (&TargetViews, bool, Option<std::num::NonZeroU32>),
+    target: &TargetViews,
+    clear: bool,
+    multiview_mask: Option<std::num::NonZeroU32>,
     open: &mut OpenPass,
 ) -> wgpu::RenderPass<'static> {
     open.multiview = multiview_mask.is_some();

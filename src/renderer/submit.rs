@@ -339,7 +339,8 @@ impl Renderer {
     /// against them, then uploads those culls; then records each display's late phase.
     pub fn encode_late(
         &mut self,
-        (device, queue): (&wgpu::Device, &wgpu::Queue),
+        device: &wgpu::Device,
+        queue: &wgpu::Queue,
         encoder: &mut wgpu::CommandEncoder,
         targets: &[TargetViews],
         timer: Option<&mut GpuTimer>,
@@ -351,7 +352,7 @@ impl Renderer {
                 None => (None, None),
             })
             .collect();
-        let culled = self.shared.culler.cull_late((device, queue), &views)?;
+        let culled = self.shared.culler.cull_late(device, queue, &views)?;
         // The second half's log continues the first's.
         let mut rec = Recorder::new(timer, std::mem::take(&mut self.passes));
         let late = self.record_late(encoder, targets, &mut rec);
@@ -406,7 +407,7 @@ impl Renderer {
         for (display, target) in self.displays.iter().zip(targets) {
             stats = stats + display.encode_early(encoder, &self.shared, target, rec);
         }
-        let pyramids = (self.pyramids).encode(encoder, (&self.shared.culler, targets), rec);
+        let pyramids = (self.pyramids).encode(encoder, &self.shared.culler, targets, rec);
         for display in &self.displays {
             stats = stats + display.encode_late_cull(encoder, &self.shared, rec);
         }
@@ -490,7 +491,7 @@ impl Renderer {
                 let early = self.encode_early(&mut encoder, &views, timer.as_deref_mut())?;
                 queue.submit([encoder.finish()]);
                 encoder = device.create_command_encoder(&Default::default());
-                early + self.encode_late((device, queue), &mut encoder, &views, timer)?
+                early + self.encode_late(device, queue, &mut encoder, &views, timer)?
             }
             false => self.encode(&mut encoder, &views, timer)?,
         };

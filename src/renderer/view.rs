@@ -44,7 +44,8 @@ impl ViewPass {
             drawing,
             frame,
             culler,
-            (view, Phase::Frustum),
+            view,
+            Phase::Frustum,
             context,
         )
     }
@@ -56,11 +57,12 @@ impl ViewPass {
         drawing: Drawing,
         frame: &wgpu::Buffer,
         culler: &Culler,
-        view: (CullView, Phase),
+        view: CullView,
+        phase: Phase,
         context: wgpu::Buffer,
     ) -> ViewPass {
-        let cull = culler.view(device, view, [frame, &context]);
-        ViewPass::bound(device, drawing, frame, culler, (context, None, cull))
+        let cull = culler.view(device, view, phase, [frame, &context]);
+        ViewPass::bound(device, drawing, frame, culler, context, None, cull)
     }
 
     /// `view` culled in [`Phase::Tested`]: against its display's pyramids, with a cull
@@ -74,14 +76,16 @@ impl ViewPass {
         view: CullView,
     ) -> ViewPass {
         let cull_context = context_buffer(device);
-        let cull = culler.view(device, (view, Phase::Tested), [frame, &cull_context]);
+        let cull = culler.view(device, view, Phase::Tested, [frame, &cull_context]);
         let context = context_buffer(device);
         ViewPass::bound(
             device,
             drawing,
             frame,
             culler,
-            (context, Some(cull_context), cull),
+            context,
+            Some(cull_context),
+            cull,
         )
     }
 
@@ -90,7 +94,9 @@ impl ViewPass {
         drawing: Drawing,
         frame: &wgpu::Buffer,
         culler: &Culler,
-        (context, cull_context, cull): (wgpu::Buffer, Option<wgpu::Buffer>, CullPass),
+        context: wgpu::Buffer,
+        cull_context: Option<wgpu::Buffer>,
+        cull: CullPass,
     ) -> ViewPass {
         ViewPass {
             draw_bind_group: drawing.drawer.bind_group(
@@ -148,7 +154,7 @@ impl ViewPass {
         rec: &mut Recorder,
         what: PassRecord,
     ) -> u32 {
-        self.encode_cull_in(encoder, (culler, self.cull.phase()), rec, what)
+        self.encode_cull_in(encoder, culler, self.cull.phase(), rec, what)
     }
 
     /// [`ViewPass::encode_cull`] in `phase` (a tested view culled by its frustum alone
@@ -156,11 +162,12 @@ impl ViewPass {
     pub fn encode_cull_in(
         &self,
         encoder: &mut wgpu::CommandEncoder,
-        (culler, phase): (&Culler, Phase),
+        culler: &Culler,
+        phase: Phase,
         rec: &mut Recorder,
         what: PassRecord,
     ) -> u32 {
-        culler.encode(encoder, (&self.cull, phase), rec, what)
+        culler.encode(encoder, &self.cull, phase, rec, what)
     }
 
     /// The view's draws into `pass`: per material bin, its pipeline of `with` and one

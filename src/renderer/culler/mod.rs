@@ -208,7 +208,8 @@ impl Culler {
     pub fn view(
         &self,
         device: &wgpu::Device,
-        (view, phase): (CullView, Phase),
+        view: CullView,
+        phase: Phase,
         contexts: [&wgpu::Buffer; 2],
     ) -> CullPass {
         let member = (self.members.iter().position(|m| *m == view))
@@ -419,7 +420,8 @@ impl Culler {
     pub fn encode(
         &self,
         encoder: &mut wgpu::CommandEncoder,
-        (view, phase): (&CullPass, Phase),
+        view: &CullPass,
+        phase: Phase,
         rec: &mut Recorder,
         what: PassRecord,
     ) -> u32 {

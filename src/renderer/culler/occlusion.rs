@@ -149,7 +149,8 @@ impl Culler {
         &self,
         device: &wgpu::Device,
         queue: &wgpu::Queue,
-        (i, shape): (usize, PyramidShape),
+        i: usize,
+        shape: PyramidShape,
     ) -> Result<Option<Vec<f32>>> {
         match &self.kind {
             Kind::Cpu { late: Some(l), .. } => {
@@ -183,7 +184,8 @@ impl Culler {
     /// time the culls took; nothing on the GPU.
     pub fn cull_late(
         &mut self,
-        (device, queue): (&wgpu::Device, &wgpu::Queue),
+        device: &wgpu::Device,
+        queue: &wgpu::Queue,
         views: &[LateViews],
     ) -> Result<FrameStats> {
         let Kind::Cpu {

@@ -75,7 +75,7 @@ pub(super) fn build(
     };
     let displays = (0..inputs.plan.displays.len())
         .map(|i| {
-            let passes = ClassicDisplay::new(device, (inputs, &shared), i);
+            let passes = ClassicDisplay::new(device, inputs, &shared, i);
             Display::new(inputs, i, DisplayPasses::Classic(Box::new(passes)))
         })
         .collect();
@@ -89,7 +89,7 @@ pub(super) fn build(
 impl ClassicDisplay {
     /// Display `index`'s contexts, visible lists and bindings: a stereo display's eyes
     /// get their own contexts, and in multi-camera their own visible lists.
-    fn new(device: &wgpu::Device, (inputs, shared): (&PathInputs, &Shared), index: usize) -> Self {
+    fn new(device: &wgpu::Device, inputs: &PathInputs, shared: &Shared, index: usize) -> Self {
         let (slots, mode) = (inputs.slots, inputs.options.mode);
         let per_eye_lists = mode == StereoMode::MultiCamera;
         let usage = wgpu::BufferUsages::STORAGE | wgpu::BufferUsages::COPY_DST;
@@ -175,7 +175,7 @@ impl ClassicDisplay {
             StereoMode::MultiCamera | StereoMode::MultiPass if views > 0 => (0..views)
                 .map(|e| {
                     let mut open = rec.open(encoder, PassRecord::eye("draw", index, e));
-                    let mut pass = begin_draw_pass(encoder, rec, (target, e == 0, None), &mut open);
+                    let mut pass = begin_draw_pass(encoder, rec, target, e == 0, None, &mut open);
                     rec.count_samples(&mut pass, &mut open);
                     let calls = self.draw_eye(&mut pass, shared, e);
                     rec.close_render(encoder, pass, open);
@@ -184,7 +184,7 @@ impl ClassicDisplay {
                 .sum(),
             _ => {
                 let mut open = rec.open(encoder, PassRecord::display("draw", index));
-                let mut pass = begin_draw_pass(encoder, rec, (target, true, None), &mut open);
+                let mut pass = begin_draw_pass(encoder, rec, target, true, None, &mut open);
                 rec.count_samples(&mut pass, &mut open);
                 let calls = self.draw(&mut pass, shared);
                 rec.close_render(encoder, pass, open);
@@ -210,7 +210,7 @@ impl ClassicDisplay {
             }
             (StereoMode::SinglePass, eyes) => {
                 eyes[0].bind(pass, &shared.draw_scene);
-                single_pass_cadence(pass, (cull, bin_drawer(shared)), eyes)
+                single_pass_cadence(pass, cull, bin_drawer(shared), eyes)
             }
             (_, eyes) => (0..eyes.len())
                 .map(|e| self.draw_eye(pass, shared, e))
@@ -259,7 +259,8 @@ fn bin_drawer(shared: &Shared) -> BinDrawer<'_> {
 /// multi-camera instead draw one pass per view into its viewport.
 fn single_pass_cadence(
     pass: &mut wgpu::RenderPass,
-    (out, mut drawer): (&CullOutput, BinDrawer),
+    out: &CullOutput,
+    mut drawer: BinDrawer,
     eyes: &[Eye],
 ) -> u32 {
     let mut current = usize::MAX;

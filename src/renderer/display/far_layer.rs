@@ -42,7 +42,8 @@ pub struct FarDisplay {
 impl FarLayers {
     pub(super) fn new(
         device: &wgpu::Device,
-        (format, kinds): (TargetFormat, &[Bin]),
+        format: TargetFormat,
+        kinds: &[Bin],
         shaders: Shaders,
         windows: crate::shaders::Windows,
     ) -> FarLayers {
@@ -129,13 +130,15 @@ impl FarLayers {
     pub(super) fn encode(
         &self,
         encoder: &mut wgpu::CommandEncoder,
-        (far, phase): (&FarDisplay, Phase),
-        (scene, culler): (&DrawScene, &Culler),
+        far: &FarDisplay,
+        phase: Phase,
+        scene: &DrawScene,
+        culler: &Culler,
         rec: &mut Recorder,
     ) -> (u32, u32) {
         let index = far.index;
         let cull = PassRecord::display("far_cull", index);
-        let dispatches = (far.view).encode_cull_in(encoder, (culler, phase), rec, cull);
+        let dispatches = (far.view).encode_cull_in(encoder, culler, phase, rec, cull);
         let mut open = rec.open(encoder, PassRecord::display("far_layer", index));
         let mut pass = encoder
             .begin_render_pass(&wgpu::RenderPassDescriptor {
@@ -196,7 +199,8 @@ impl FarDisplay {
     pub(super) fn prepare(
         &self,
         to: Writes,
-        (plan, display): (&FarPlan, &DisplayContext),
+        plan: &FarPlan,
+        display: &DisplayContext,
         culler: &Culler,
     ) -> u64 {
         let slot = self.index as u32;

@@ -98,8 +98,7 @@ pub(super) fn build(
     let target = options.target_format();
     let keep = tiles.map(|tiles| KeepTiles::new(device, target, &tiles));
     let (drawer, draw_scene) = drawn(device, inputs, &keys, &kinds)?;
-    let far =
-        (options.far_layer).then(|| FarLayers::new(device, (target, &kinds), shaders, windows));
+    let far = (options.far_layer).then(|| FarLayers::new(device, target, &kinds, shaders, windows));
     let shared = Shared {
         culler,
         drawer,
@@ -107,7 +106,7 @@ pub(super) fn build(
         far,
         keep,
     };
-    let pyramids = PyramidSets::new(device, options, (&keys, plan, &shapes), &shared.culler);
+    let pyramids = PyramidSets::new(device, options, &keys, plan, &shapes, &shared.culler);
     let displays = (0..plan.displays.len())
         .map(|i| {
             let made = Made {
@@ -192,15 +191,17 @@ impl IndirectDisplay {
         let drawing = shared.drawing();
         let culler = &shared.culler;
         let view = |v| ViewPass::new(device, drawing, frame, culler, v);
-        let phased = |v, context| ViewPass::phased(device, drawing, frame, culler, v, context);
+        let phased =
+            |v, phase, context| ViewPass::phased(device, drawing, frame, culler, v, phase, context);
         let (view, late) = match shape {
             Some(shape) => {
                 let early = phased(
-                    (CullView::Display(index), Phase::Early),
+                    CullView::Display(index),
+                    Phase::Early,
                     context_buffer(device),
                 );
                 let context = early.context().clone();
-                let late = phased((CullView::Late(index), Phase::Late), context);
+                let late = phased(CullView::Late(index), Phase::Late, context);
                 (early, Some(LatePhase::new(index, key, late, shape)))
             }
             None => (view(CullView::Display(index)), None),
@@ -210,7 +211,7 @@ impl IndirectDisplay {
             .inset
             .as_ref()
             .map(|_| ViewPass::new(device, drawing, frame, culler, CullView::Inset(index)));
-        let far = far_display(made, index, planned, (view.context(), late.is_some()));
+        let far = far_display(made, index, planned, view.context(), late.is_some());
         IndirectDisplay {
             index,
             view,
@@ -241,7 +242,7 @@ impl IndirectDisplay {
         }
         self.far_distance = plan.far.map(|p| p.distance);
         if let (Some(far), Some(far_plan)) = (&self.far, &plan.far) {
-            bytes += far.prepare(to, (far_plan, ctx), culler);
+            bytes += far.prepare(to, far_plan, ctx, culler);
         }
         self.kept = None;
         if let (Some(keep), Some(tiles)) = (&mut shared.keep, &plan.tiles) {
@@ -280,7 +281,7 @@ impl IndirectDisplay {
         let listed = self.encode_tile_list(encoder, shared);
         let mut open = rec.open(encoder, PassRecord::display("draw", self.index));
         let kept = self.kept.is_some();
-        let mut pass = begin_draw_pass(encoder, rec, (target, !kept, multiview), &mut open);
+        let mut pass = begin_draw_pass(encoder, rec, target, !kept, multiview, &mut open);
         let mut draw_calls = match (&shared.keep, kept) {
             (Some(keep), true) => keep.draw(&mut pass, self.index),
             _ => 0,
@@ -322,8 +323,8 @@ impl IndirectDisplay {
         let (Some(layers), Some(far)) = (&shared.far, &self.far) else {
             return FrameStats::default();
         };
-        let culling = (&shared.draw_scene, &shared.culler);
-        let (dispatches, draw_calls) = layers.encode(encoder, (far, phase), culling, rec);
+        let (scene, culler) = (&shared.draw_scene, &shared.culler);
+        let (dispatches, draw_calls) = layers.encode(encoder, far, phase, scene, culler, rec);
         FrameStats {
             dispatches,
             draw_calls,
@@ -345,10 +346,7 @@ impl IndirectDisplay {
         let culler = &shared.culler;
         let what = PassRecord::display("cull", self.index);
         let dispatches = match one_pass {
-            true => {
-                let frustum = (self.view.cull_pass(), Phase::Frustum);
-                culler.encode(encoder, frustum, rec, what)
-            }
+            true => culler.encode(encoder, self.view.cull_pass(), Phase::Frustum, rec, what),
             false => self.view.encode_cull(encoder, culler, rec, what),
         };
         let mut stats = FrameStats {
@@ -419,8 +417,8 @@ impl IndirectDisplay {
         };
         let mut stats = self.encode_far(encoder, shared, Phase::Tested, rec);
         let far = shared.far.as_ref().zip(self.far.as_ref());
-        let with = (shared.drawing(), &self.own, far);
-        stats.draw_calls += late.encode_draw(encoder, with, target, rec);
+        let drawing = shared.drawing();
+        stats.draw_calls += late.encode_draw(encoder, drawing, &self.own, far, target, rec);
         stats
     }
 
@@ -480,7 +478,8 @@ fn far_display(
     made: Made,
     index: usize,
     planned: &DisplayPlan,
-    (context, tested): (&wgpu::Buffer, bool),
+    context: &wgpu::Buffer,
+    tested: bool,
 ) -> Option<FarDisplay> {
     let Made {
         device,

@@ -64,13 +64,15 @@ impl LatePhase {
     pub(super) fn encode_draw(
         &self,
         encoder: &mut wgpu::CommandEncoder,
-        (drawing, own, far): (Drawing, &OwnPipelines, Option<(&FarLayers, &FarDisplay)>),
+        drawing: Drawing,
+        own: &OwnPipelines,
+        far: Option<(&FarLayers, &FarDisplay)>,
         target: &TargetViews,
         rec: &mut Recorder,
     ) -> u32 {
         let mut open = rec.open(encoder, PassRecord::display("late_draw", self.index));
         let mask = self.key.multiview_mask();
-        let mut pass = begin_draw_pass(encoder, rec, (target, false, mask), &mut open);
+        let mut pass = begin_draw_pass(encoder, rec, target, false, mask, &mut open);
         rec.count_samples(&mut pass, &mut open);
         let composite = far.map_or(0, |(layers, far)| layers.composite(&mut pass, far));
         let with = BinPipelines::Draw(self.key, own);
@@ -129,7 +131,9 @@ impl PyramidSets {
     pub(super) fn new(
         device: &wgpu::Device,
         options: &RendererOptions,
-        (keys, plan, shapes): (&[DrawKey], &FramePlan, &[Option<PyramidShape>]),
+        keys: &[DrawKey],
+        plan: &FramePlan,
+        shapes: &[Option<PyramidShape>],
         culler: &Culler,
     ) -> PyramidSets {
         let samples = options.sample_count;
@@ -144,7 +148,7 @@ impl PyramidSets {
             }
             let samples = if variant { 1 } else { samples };
             for chunk in displays.chunks(PYRAMID_SET_DEPTHS) {
-                let slices = set_slices(chunk, (plan, shapes, variant), culler);
+                let slices = set_slices(chunk, plan, shapes, variant, culler);
                 sets.push(PyramidSetPass {
                     pass: PyramidPass::new(device, samples, variant, chunk.len()),
                     set: PyramidPass::set_buffer(device, &slices),
@@ -166,7 +170,8 @@ impl PyramidSets {
     pub fn encode(
         &self,
         encoder: &mut wgpu::CommandEncoder,
-        (culler, targets): (&Culler, &[TargetViews]),
+        culler: &Culler,
+        targets: &[TargetViews],
         rec: &mut Recorder,
     ) -> u32 {
         if self.sets.is_empty() {
@@ -220,7 +225,9 @@ impl PyramidSetPass {
 /// display's region of `culler`'s pyramids.
 fn set_slices(
     displays: &[usize],
-    (plan, shapes, layered): (&FramePlan, &[Option<PyramidShape>], bool),
+    plan: &FramePlan,
+    shapes: &[Option<PyramidShape>],
+    layered: bool,
     culler: &Culler,
 ) -> Vec<PyramidSlice> {
     let mut slices = Vec::new();
@@ -298,7 +305,7 @@ pub(super) fn pyramid_shapes(
             };
             let pixels = shape.eye.element_product() as u64 * shape.eyes as u64;
             options
-                .occludes(d.eyes.len(), (pixels, triangles))
+                .occludes(d.eyes.len(), pixels, triangles)
                 .then_some(shape)
         })
         .collect()

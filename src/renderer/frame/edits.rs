@@ -65,7 +65,7 @@ pub enum Staging {
 impl Edits {
     /// Empty staging in `windows`; with `pairs` (two frames per submission) room for
     /// the second frame's own edits of `scene`.
-    pub fn new(device: &wgpu::Device, windows: Windows, (scene, pairs): (&Scene, bool)) -> Edits {
+    pub fn new(device: &wgpu::Device, windows: Windows, scene: &Scene, pairs: bool) -> Edits {
         Edits {
             scatter: Scatters::new(device, windows),
             second: pairs.then(|| SecondFrame::new(device, windows, scene)),
@@ -129,9 +129,9 @@ impl Edits {
         let targets = scatter_targets(into.culler, into.draw_scene);
         let records = self.stage_records(device, live, &changes.recolored, targets);
         let Changes { placed, moved, .. } = changes;
-        let (mut stats, placed) = self.stage_places(device, placed, (into.culler, into.draw_scene));
+        let (mut stats, placed) = self.stage_places(device, placed, into.culler, into.draw_scene);
         let (moved, moved_edits) =
-            self.stage_moves(device, scene, moved, (into.culler, into.draw_scene));
+            self.stage_moves(device, scene, moved, into.culler, into.draw_scene);
         stats.moved = moved.moved;
         stats.bytes_uploaded += moved.bytes_uploaded + records;
         live.recycle(placed, moved_edits);
@@ -169,7 +169,8 @@ impl Edits {
         &mut self,
         device: &wgpu::Device,
         placed: Vec<PlaceEdit>,
-        (culler, draw_scene): (&mut Culler, &DrawScene),
+        culler: &mut Culler,
+        draw_scene: &DrawScene,
     ) -> (SyncStats, Vec<PlaceEdit>) {
         if placed.is_empty() {
             return (SyncStats::default(), placed);
@@ -193,7 +194,8 @@ impl Edits {
         device: &wgpu::Device,
         scene: &Scene,
         moved: Vec<MoveEdit>,
-        (culler, draw_scene): (&mut Culler, &DrawScene),
+        culler: &mut Culler,
+        draw_scene: &DrawScene,
     ) -> (SyncStats, Vec<MoveEdit>) {
         if moved.is_empty() {
             return (SyncStats::default(), moved);
@@ -277,8 +279,8 @@ impl Edits {
             spheres: None,
             visibility: (0, 0),
         };
-        let targets = (scatter_targets(into.culler, into.draw_scene), copy);
-        let (bytes, spare) = second.stage(device, live, staged, targets);
+        let targets = scatter_targets(into.culler, into.draw_scene);
+        let (bytes, spare) = second.stage(device, live, staged, targets, copy);
         stats.bytes_uploaded += bytes;
         live.recycle(Vec::new(), spare);
         Ok((stats, changes.joints))

@@ -60,8 +60,9 @@ impl FrameBase {
         if options.posing == PosingMode::Gpu {
             lighting.pose_with(&scene.posing, &scene.lights);
         }
-        let lit = (&lighting.lights, &lighting.views, &lighting.clusters);
-        let shadow_map = ShadowMap::new(device, options.shadow_size().unwrap_or(1), lit);
+        let size = options.shadow_size().unwrap_or(1);
+        let (lights, views, clusters) = (&lighting.lights, &lighting.views, &lighting.clusters);
+        let shadow_map = ShadowMap::new(device, size, lights, views, clusters);
         Ok(FrameBase {
             uniform,
             lighting,
@@ -165,10 +166,10 @@ impl FrameLevel {
         }
         // A kept frame's changed tiles: the spheres as last drawn, then as posed now.
         let marked = culler.encode_marks(encoder, false);
-        let (mut posing, mut cpu_staging) = self.encode_pose(encoder, (rec, draw_scene), false);
+        let (mut posing, mut cpu_staging) = self.encode_pose(encoder, rec, draw_scene, false);
         if pairs {
             draw_scene.keep_previous(encoder);
-            let (second, staging) = self.encode_pose(encoder, (rec, draw_scene), true);
+            let (second, staging) = self.encode_pose(encoder, rec, draw_scene, true);
             (posing, cpu_staging) = (posing + second, cpu_staging + staging);
         }
         let marked = marked + culler.encode_marks(encoder, true);
@@ -184,7 +185,7 @@ impl FrameLevel {
             scene: draw_scene,
         };
         let (shadowed, draw_calls) = match &self.passes.shadow {
-            Some(shadow) => shadow.encode(encoder, (drawing, culler), &self.shadow_map, rec),
+            Some(shadow) => shadow.encode(encoder, drawing, culler, &self.shadow_map, rec),
             None => (0, 0),
         };
         FrameStats {
@@ -202,7 +203,8 @@ impl FrameLevel {
     fn encode_pose(
         &mut self,
         encoder: &mut wgpu::CommandEncoder,
-        (rec, draw_scene): (&mut Recorder, &mut DrawScene),
+        rec: &mut Recorder,
+        draw_scene: &mut DrawScene,
         second: bool,
     ) -> (u32, std::time::Duration) {
         let (scattered, cpu_staging) = self.edits.encode(encoder, rec, second);
@@ -266,7 +268,8 @@ impl FramePasses {
     /// whether it poses the instance in `slot`) and the shadow pass (with shadows).
     pub fn new(
         device: &wgpu::Device,
-        (scene, options): (&Scene, &RendererOptions),
+        scene: &Scene,
+        options: &RendererOptions,
         bound: FrameBindings,
         posed: impl Fn(u32) -> bool,
     ) -> Result<FramePasses> {
@@ -280,7 +283,7 @@ impl FramePasses {
         let vertices = &drawing.scene.vertices;
         let skin = SkinPass::new(device, &scene.skins, vertices);
         let rest = skin.as_ref().map(SkinPass::rest);
-        let morph = MorphPass::new(device, &scene.morphs, (vertices, rest));
+        let morph = MorphPass::new(device, &scene.morphs, vertices, rest);
         let gpu = pose::GpuParts {
             frame,
             skin: skin.as_ref(),
@@ -304,7 +307,9 @@ pub fn one_dispatch(
     encoder: &mut wgpu::CommandEncoder,
     rec: &mut Recorder,
     name: &'static str,
-    (pipeline, group, size): (&wgpu::ComputePipeline, &wgpu::BindGroup, (u32, u32)),
+    pipeline: &wgpu::ComputePipeline,
+    group: &wgpu::BindGroup,
+    size: (u32, u32),
 ) -> u32 {
     let (mut pass, open) = rec.frame_pass(encoder, name);
     pass.set_pipeline(pipeline);

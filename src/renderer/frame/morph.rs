@@ -32,7 +32,8 @@ impl MorphPass {
     pub fn new(
         device: &wgpu::Device,
         morphs: &Morphs,
-        (vertex_buffer, skin_rest): (&wgpu::Buffer, Option<&wgpu::Buffer>),
+        vertex_buffer: &wgpu::Buffer,
+        skin_rest: Option<&wgpu::Buffer>,
     ) -> Option<MorphPass> {
         if morphs.is_empty() {
             return None;
@@ -149,8 +150,8 @@ impl MorphPass {
 
     /// Records the frame's one morph dispatch, logged as the frame pass `morph`.
     pub fn encode(&self, encoder: &mut wgpu::CommandEncoder, rec: &mut Recorder) -> u32 {
-        let with = (&self.pipeline, &self.bind_group, self.dispatch);
-        super::one_dispatch(encoder, rec, "morph", with)
+        let (pipeline, group) = (&self.pipeline, &self.bind_group);
+        super::one_dispatch(encoder, rec, "morph", pipeline, group, self.dispatch)
     }
 
     /// Morphed vertices per frame.

@@ -42,7 +42,8 @@ impl ShadowPass {
     pub fn encode(
         &self,
         encoder: &mut wgpu::CommandEncoder,
-        (drawing, culler): (Drawing, &Culler),
+        drawing: Drawing,
+        culler: &Culler,
         map: &ShadowMap,
         rec: &mut Recorder,
     ) -> (u32, u32) {
@@ -89,7 +90,9 @@ impl ShadowMap {
     pub fn new(
         device: &wgpu::Device,
         size: u32,
-        (lights, views, clusters): (&wgpu::Buffer, &wgpu::Buffer, &wgpu::Buffer),
+        lights: &wgpu::Buffer,
+        views: &wgpu::Buffer,
+        clusters: &wgpu::Buffer,
     ) -> ShadowMap {
         let texture = device.create_texture(&wgpu::TextureDescriptor {
             label: Some("stereocull.shadow_map"),

@@ -134,8 +134,8 @@ impl SkinPass {
 
     /// Records the frame's one skinning dispatch, logged as the frame pass `skin`.
     pub fn encode(&self, encoder: &mut wgpu::CommandEncoder, rec: &mut Recorder) -> u32 {
-        let with = (&self.pipeline, &self.bind_group, self.dispatch);
-        super::one_dispatch(encoder, rec, "skin", with)
+        let (pipeline, group) = (&self.pipeline, &self.bind_group);
+        super::one_dispatch(encoder, rec, "skin", pipeline, group, self.dispatch)
     }
 
     /// The rest vertices the pass moves (the morph pass writes a morphed skin's).
