@@ -43,6 +43,11 @@ pub struct FrameContext {
     /// The previous frame's time: with motion vectors, the draw animates each
     /// instance's previous position from it ([`crate::motion`]); else `time`.
     pub previous_time: f32,
+    /// The camera's exposure: the scale of the light that reaches it
+    /// ([`crate::exposure`]; 1 unless a renderer sets it).
+    pub exposure: f32,
+    /// Its tone mapper ([`crate::exposure::Tonemap::wgsl`]; 0, none, unless set).
+    pub tonemap: u32,
 }
 
 impl FrameContext {
@@ -69,6 +74,8 @@ impl FrameContext {
             light_direction: light.direction,
             shadows: u32::from(shadows),
             previous_time: time,
+            exposure: 1.0,
+            tonemap: 0,
         }
     }
 }

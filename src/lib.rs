@@ -43,6 +43,7 @@ pub mod cull;
 pub mod device;
 pub mod draw;
 pub mod error;
+pub mod exposure;
 pub mod far_layer;
 pub mod foveated_composite;
 pub mod frame_input;

@@ -54,6 +54,13 @@ pub fn load(spec: &str) -> Result<Scene> {
     checked(spec, scene)
 }
 
+/// Whether `spec` names a .gltf / .glb file (not the built-in room): a scene someone
+/// else placed, which the CLI frames by its cameras or bounds.
+pub fn is_file(spec: &str) -> bool {
+    let lower = spec.to_lowercase();
+    spec != DEFAULT_SCENE && (lower.ends_with(".gltf") || lower.ends_with(".glb"))
+}
+
 /// `scene` with non-finite instances dropped; an error when none remain.
 fn checked(spec: &str, mut scene: Scene) -> Result<Scene> {
     let dropped = scene.drop_non_finite_instances();

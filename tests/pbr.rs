@@ -6,6 +6,7 @@
 
 use glam::{Vec2, Vec3, Vec4};
 use image::{Rgba, RgbaImage};
+use stereocull::exposure::{self, Exposure, Tonemap};
 use stereocull::pbr::{self, Pbr};
 use stereocull::records::pack_unorm4x8;
 use stereocull::renderer::RendererOptions;
@@ -179,10 +180,18 @@ fn expected(scene: &Scene, p: Vec3, eye: Vec3, mapped: bool) -> Vec3 {
 /// would miss most samples by more than 10 levels: the test sees the tilt.
 #[test]
 fn a_normal_mapped_plane_matches_the_cpu_brdf() {
+    let tilted = matches_the_cpu(options(LIGHT), |c| c);
+    assert!(tilted, "the normal map changes most samples");
+}
+
+/// Renders the mapped plane under `options` and holds sampled pixels to the CPU twin's
+/// color passed through `camera` (2 levels: see the test above). Returns whether the
+/// normal map changed most samples by more than 10 levels.
+fn matches_the_cpu(options: RendererOptions, camera: impl Fn(Vec3) -> Vec3) -> bool {
     let gpu = support::gpu();
     let scene = mapped_plane();
     let rig = facing_the_plane(2.2);
-    let image = support::render(&gpu, &scene, &rig, options(LIGHT))
+    let image = support::render(&gpu, &scene, &rig, options)
         .unwrap()
         .remove(0);
     let (mut checked, mut tilted, mut worst) = (0, 0, 0.0f32);
@@ -195,8 +204,10 @@ fn a_normal_mapped_plane_matches_the_cpu_brdf() {
                     continue;
                 }
                 let got = image.get_pixel(x + e as u32 * EYE_W, y);
-                let want = expected(&scene, p, eye, true).to_array().map(support::srgb);
-                let flat = expected(&scene, p, eye, false)
+                let want = camera(expected(&scene, p, eye, true))
+                    .to_array()
+                    .map(support::srgb);
+                let flat = camera(expected(&scene, p, eye, false))
                     .to_array()
                     .map(support::srgb);
                 for c in 0..3 {
@@ -218,10 +229,111 @@ fn a_normal_mapped_plane_matches_the_cpu_brdf() {
         "{checked} pixels checked, worst {worst:.2} levels; {tilted} lit differently without the map"
     );
     assert!(checked > 150, "{checked} pixels checked");
+    tilted * 2 > checked
+}
+
+/// The exposure scales the shaded light by `1 / (1.2 * 2^EV100)`: the plane at three
+/// EVs a stop apart (tone mapping off) matches the CPU twin scaled by each, so a
+/// surface's value before tone mapping halves per EV (the scale itself halves exactly:
+/// `stereocull::exposure`'s unit test).
+#[test]
+fn the_exposure_scales_the_light_by_two_to_the_minus_ev() {
+    for ev100 in [-1.5, -0.5, 0.5] {
+        let exposed = RendererOptions {
+            exposure: Exposure::Ev100(ev100),
+            tonemap: Tonemap::None,
+            ..options(LIGHT)
+        };
+        let scale = exposure::scale_of_ev100(ev100);
+        matches_the_cpu(exposed, |c| c * scale);
+    }
+}
+
+/// Each tone mapper on the GPU follows its CPU twin (whose values the published curves
+/// give: `stereocull::exposure`'s unit tests), with the plane exposed a stop and a
+/// half over unit, so that its brightest texels reach the curves' shoulders.
+#[test]
+fn each_tone_mapper_follows_its_curve() {
+    let ev100 = -1.8;
+    for curve in [Tonemap::Neutral, Tonemap::Aces] {
+        let mapped = RendererOptions {
+            exposure: Exposure::Ev100(ev100),
+            tonemap: curve,
+            ..options(LIGHT)
+        };
+        let scale = exposure::scale_of_ev100(ev100);
+        matches_the_cpu(mapped, |c| exposure::tone_map(c * scale, curve));
+    }
+}
+
+/// A white-grey plane under a 2,000 lux sun from straight behind the viewer, lit in
+/// physical units as a file's `KHR_lights_punctual` are. At `auto` exposure no lit
+/// pixel saturates. At EV100 10 without tone mapping, each sampled pixel is the glTF
+/// BRDF worked by hand at a rough surface (roughness 1: GGX's D is 1/pi, the
+/// visibility term 0.5 / (n.v + n.l)) lit at normal incidence: E / (1.2 * 2^10) *
+/// ((1 - F) * base / pi + F * V / pi), F Schlick's from v.h. Within a level: the
+/// built-in light and ambient add under 0.0003 at this exposure (a third of a level
+/// here), and the sRGB rounding the rest.
+#[test]
+fn a_sun_in_lux_is_metered_and_matches_the_brdf_worked_by_hand() {
+    let gpu = support::gpu();
+    let base = 0.5;
+    let lux = 2000.0;
+    let mut scene = support::plane(1.0);
+    scene.instances[0].color = Vec4::new(base, base, base, 1.0);
+    scene.materials = vec![material(1.0, 0.0)];
+    scene.lights = vec![stereocull::lights::Light {
+        kind: stereocull::lights::LightKind::Directional,
+        color: Vec3::ONE,
+        intensity: lux,
+        range: None,
+        position: Vec3::ZERO,
+        direction: Vec3::NEG_Z,
+    }];
+    scene.physical_lights = true;
+    let rig = facing_the_plane(2.2);
+    let render = |o| support::render(&gpu, &scene, &rig, o).unwrap().remove(0);
+
+    let metered = render(support::frustum_only());
+    let brightest = metered.pixels().map(|p| p[0].max(p[1]).max(p[2])).max();
+    assert!(brightest.is_some_and(|b| b < 255), "{brightest:?}");
     assert!(
-        tilted * 2 > checked,
-        "the normal map changes most samples: {tilted} of {checked}"
+        brightest.is_some_and(|b| b > 100),
+        "not black: {brightest:?}"
     );
+
+    let ev100 = 10.0;
+    let fixed = RendererOptions {
+        exposure: Exposure::Ev100(ev100),
+        tonemap: Tonemap::None,
+        ..support::frustum_only()
+    };
+    let image = render(fixed);
+    let k = 1.0 / (1.2 * 1024.0);
+    let pi = std::f32::consts::PI;
+    let mut checked = 0;
+    for e in 0..2 {
+        for (x, y) in [(70, 56), (80, 64), (92, 70)] {
+            let (p, eye) = on_plane(&rig, e, (x, y));
+            assert!(
+                p.x.abs() < 0.9 && p.y.abs() < 0.9,
+                "({x}, {y}) sees {p}, off the plane"
+            );
+            let v = (eye - p).normalize();
+            let (n_dot_v, h) = (v.z, (v + Vec3::Z).normalize());
+            let f = 0.04 + 0.96 * (1.0 - v.dot(h)).powi(5);
+            let visibility = 0.5 / (n_dot_v + 1.0);
+            let want = lux * k * ((1.0 - f) * base / pi + f * visibility / pi);
+            let got = image.get_pixel(x + e as u32 * EYE_W, y)[1] as f32;
+            let want = support::srgb(want);
+            assert!(
+                (got - want).abs() <= 1.0,
+                "eye {e} ({x}, {y}): {got} against {want:.2}"
+            );
+            checked += 1;
+        }
+    }
+    assert_eq!(checked, 6);
 }
 
 /// The plane (no textures) with material `m` and a dark base color, and where eye 0

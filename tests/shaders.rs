@@ -396,6 +396,8 @@ fn contexts_match_wgsl() {
         light_direction: Vec3::splat(9.0),
         shadows: 10,
         previous_time: 11.0,
+        exposure: 12.0,
+        tonemap: 13,
     };
     let bytes = uniform_bytes(&f);
     check_uniform(
@@ -413,6 +415,8 @@ fn contexts_match_wgsl() {
             ("light_direction", 9.0),
             ("shadows", f32::from_bits(10)),
             ("previous_time", 11.0),
+            ("exposure", 12.0),
+            ("tonemap", f32::from_bits(13)),
         ],
     );
     let (members, _) = wgsl_struct(&module(), "FrameContext");

@@ -224,7 +224,7 @@ impl Head {
 /// Opens rank `rank`'s part: its displays (those the rig file assigns it, then round
 /// robin over the ranks that draw) and, on rank 0, the head.
 fn open(args: &ClusterArgs, rank: u32, ranks: u32) -> Result<Node> {
-    let rig = args.scene.load_rig()?;
+    let rig = args.scene.load_rig(&args.scene.load_scene()?)?;
     if let Some(d) = rig
         .displays
         .iter()

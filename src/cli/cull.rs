@@ -84,8 +84,9 @@ pub fn display_dump(name: &str, views: u32, out: &CullOutput, scene: &Scene) -> 
 }
 
 pub(super) fn cull(args: &CullArgs) -> Result<()> {
-    let rig = args.scene.load_rig()?;
-    let mut live = LiveScene::new(args.scene.load_scene()?);
+    let scene = args.scene.load_scene()?;
+    let rig = args.scene.load_rig(&scene)?;
+    let mut live = LiveScene::new(scene);
     let mut driver = edits::EditDriver::new(&live, &args.edits)?;
     let options = args.scene.options();
     let culls = match (args.cull, options.occlusion) {

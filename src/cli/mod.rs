@@ -26,8 +26,10 @@ use serde::Serialize;
 
 use crate::device::{Gpu, OPTIONAL_FEATURES, Tier};
 use crate::error::{Error, Result};
+use crate::exposure::{Exposure, Tonemap};
 use crate::renderer::{CoarseMode, CullMode, OcclusionMode, PosingMode, RendererOptions};
-use crate::rig::{Gaze, Rig};
+use crate::rig::{Gaze, Rig, framing};
+use crate::scene::Scene;
 use crate::scene_spec::DEFAULT_SCENE;
 
 /// The clock of `stress` and `profile`: frames of a 90 Hz headset.
@@ -93,9 +95,26 @@ pub struct SceneArgs {
     /// as for the whole rig: one process per CAVE wall (default: every display).
     #[arg(long, value_delimiter = ',')]
     pub displays: Vec<String>,
-    /// Viewer position override: x,y,z in meters.
-    #[arg(long, value_parser = parse_vec3, allow_hyphen_values = true)]
-    pub viewer: Option<[f32; 3]>,
+    /// Where the viewer stands: x,y,z in meters, or `fit`: back from the scene's
+    /// bounds, looking at them from the front and 20 degrees above, until both eyes of
+    /// every display see all of them (`--yaw` walks around the scene, `--pitch` sets
+    /// the look down). Default: the rig's spot; for a .gltf/.glb scene its first
+    /// camera, or `fit` where it has none or `--yaw`/`--pitch` is given.
+    #[arg(long, value_parser = parse_viewer, allow_hyphen_values = true)]
+    pub viewer: Option<ViewerSpot>,
+    /// The camera's exposure: `auto` (a file lit in physical units metered as an
+    /// incident-light meter reads its brightest light at the scene's center; our own
+    /// scenes at unit exposure) or an EV100 (Bevy's default is 9.7).
+    #[arg(long, value_parser = parse_exposure, default_value = "auto", allow_hyphen_values = true)]
+    pub exposure: Exposure,
+    /// The tone mapper after the exposure (auto: neutral where the exposure is
+    /// physical, none at unit exposure).
+    #[arg(long, value_enum, default_value = "auto")]
+    pub tonemap: Tonemap,
+    /// View through the scene file's camera N (0 first, in `info --scene`'s order): its
+    /// pose, vertical field of view and clip planes; the rig's IPD kept.
+    #[arg(long, conflicts_with_all = ["viewer", "yaw", "pitch"])]
+    pub camera: Option<usize>,
     /// Viewer yaw override in degrees (positive turns left).
     #[arg(long, allow_hyphen_values = true)]
     pub yaw: Option<f32>,
@@ -247,15 +266,16 @@ impl SceneArgs {
             frames_per_submit: self.frames_per_submit,
             dt: self.dt,
             keep_unchanged: self.keep_unchanged,
+            exposure: self.exposure,
+            tonemap: self.tonemap,
             ..Default::default()
         }
     }
 
-    pub fn load_rig(&self) -> Result<Rig> {
+    /// The rig `--rig` names, with the viewer and resolution options applied; `scene`
+    /// (what `--scene` loads) places the viewer where `--viewer fit` or a camera does.
+    pub fn load_rig(&self, scene: &Scene) -> Result<Rig> {
         let mut rig = Rig::load(&self.rig)?;
-        if let Some(p) = self.viewer {
-            rig.viewer.position = p;
-        }
         if let Some(y) = self.yaw {
             rig.viewer.yaw_deg = y;
         }
@@ -268,6 +288,8 @@ impl SceneArgs {
                 self.height.unwrap_or(d.resolution[1]),
             ];
         }
+        self.place_viewer(&mut rig, scene)
+            .map_err(|m| Error::rig(&self.rig, m))?;
         if let Some([yaw, pitch]) = self.gaze {
             rig.set_gaze(Gaze::both(yaw, pitch))
                 .map_err(|m| Error::rig(&self.rig, format!("--gaze: {m}")))?;
@@ -277,6 +299,32 @@ impl SceneArgs {
             true => Ok(rig),
             false => rig.subset(&self.displays, &self.rig),
         }
+    }
+}
+
+/// `--viewer`: a spot, or `fit`.
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub enum ViewerSpot {
+    /// x,y,z in meters.
+    At([f32; 3]),
+    /// Back from the scene's bounds until every eye sees them ([`framing::fit_viewer`]).
+    Fit,
+}
+
+fn parse_viewer(s: &str) -> std::result::Result<ViewerSpot, String> {
+    match s {
+        "fit" => Ok(ViewerSpot::Fit),
+        _ => parse_vec3(s).map(ViewerSpot::At),
+    }
+}
+
+fn parse_exposure(s: &str) -> std::result::Result<Exposure, String> {
+    match s {
+        "auto" => Ok(Exposure::Auto),
+        _ => match s.parse::<f32>() {
+            Ok(ev) if ev.is_finite() => Ok(Exposure::Ev100(ev)),
+            _ => Err(format!("{s:?}: `auto` or an EV100 (a finite number)")),
+        },
     }
 }
 
@@ -295,6 +343,43 @@ impl SceneArgs {
             crate::procedural::scatter_lights(&mut scene, n, seed);
         }
         Ok(scene)
+    }
+
+    /// Where `--viewer` and `--camera` put the viewer, or (neither given) the scene
+    /// file's first camera, else `fit`; a generated scene, or any scene on a rig with
+    /// a display fixed in the room, keeps the rig's spot.
+    fn place_viewer(&self, rig: &mut Rig, scene: &Scene) -> std::result::Result<(), String> {
+        // A room-fixed rig (a CAVE) stands where it is built; only a head moves.
+        let is_file = crate::scene_spec::is_file(&self.scene) && framing::moves_with_head(rig);
+        let turned = self.yaw.is_some() || self.pitch.is_some();
+        let camera = match (self.camera, self.viewer) {
+            (Some(n), _) => Some(n),
+            (None, None) if is_file && !turned && !scene.cameras.is_empty() => Some(0),
+            _ => None,
+        };
+        if let Some(n) = camera {
+            let Some(c) = scene.cameras.get(n) else {
+                let have = scene.cameras.len();
+                return Err(format!("--camera {n}: the scene has {have} camera(s)"));
+            };
+            return framing::view_through(rig, c).map_err(|m| format!("camera {n}: {m}"));
+        }
+        match self.viewer {
+            Some(ViewerSpot::At(p)) => rig.viewer.position = p,
+            Some(ViewerSpot::Fit) => self.fit(rig, scene)?,
+            None if is_file => self.fit(rig, scene)?,
+            None => {}
+        }
+        Ok(())
+    }
+
+    /// `fit`, looking down by [`framing::FIT_ELEVATION_DEG`] unless `--pitch` says.
+    fn fit(&self, rig: &mut Rig, scene: &Scene) -> std::result::Result<(), String> {
+        if self.pitch.is_none() {
+            rig.viewer.pitch_deg = -framing::FIT_ELEVATION_DEG;
+        }
+        let bounds = scene.bounds().ok_or("--viewer fit: the scene is empty")?;
+        framing::fit_viewer(rig, bounds).map(|_| ())
     }
 }
 
@@ -435,6 +520,9 @@ fn scene_info(spec: &str) -> Result<()> {
         scene.morphs.morphs.len(),
         scene.lights.len(),
     );
+    for (n, camera) in scene.cameras.iter().enumerate() {
+        println!("  camera {n}: {}", camera.describe());
+    }
     Ok(())
 }
 

@@ -339,6 +339,10 @@ pub fn render(args: &RenderArgs) -> Result<()> {
         stats.dispatches,
         stats.bytes_uploaded
     );
+    let (ev100, tonemap) = session.renderer.exposure();
+    if let Some(ev) = ev100 {
+        println!("exposure: EV100 {ev:.2}, tone mapping {tonemap:?}");
+    }
     for r in occlusion.iter().flatten() {
         println!(
             "{:>18}: occlusion: {} in the frustum, {} drawn early, {} late, {} occluded",
@@ -363,6 +367,7 @@ pub fn render(args: &RenderArgs) -> Result<()> {
             "coarse_cull": session.renderer.coarse_cull(),
             "coarse_candidates": candidates,
             "shadows": session.renderer.options().shadows,
+            "exposure": { "ev100": ev100, "tonemap": tonemap },
             "far_layer": session.renderer.options().far_layer,
             "far_near": far_near,
             "occlusion": occlusion,

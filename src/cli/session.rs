@@ -83,8 +83,8 @@ impl Session {
         edits: &EditArgs,
         time: f32,
     ) -> Result<Session> {
-        let rig = args.load_rig()?;
         let mut scene = args.load_scene()?;
+        let rig = args.load_rig(&scene)?;
         if !args.animation.on() {
             scene.posing.clips.clear();
             scene.morphs.stop();

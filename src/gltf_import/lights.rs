@@ -51,6 +51,7 @@ impl Importer<'_> {
             });
         }
         self.scene.lights.push(placed);
+        self.scene.physical_lights = true;
         Ok(())
     }
 }

@@ -21,6 +21,7 @@ use crate::scene::{Animation, Instance, Scene, Vertex, both_windings};
 mod animations;
 mod attributes;
 mod buffers;
+mod cameras;
 pub mod extensions;
 mod lights;
 mod materials;
@@ -204,6 +205,7 @@ impl Importer<'_> {
             let world = parent * Affine3A::from_mat4(local);
             let pose = self.pose_node(&node, parent, parent_pose);
             self.place_light(&node, world, pose)?;
+            self.place_camera(&node, world)?;
             self.place(&node, world, pose)?;
             let children: Vec<_> = node.children().collect();
             stack.extend(children.into_iter().rev().map(|c| (c, world, pose)));

@@ -387,6 +387,13 @@ impl Renderer {
         &self.options
     }
 
+    /// The EV100 its frames are exposed at (`None`: unit exposure, a scene lit in our
+    /// units) and their tone mapper: [`RendererOptions::exposure`] and `tonemap` with
+    /// `auto` resolved ([`crate::exposure`]).
+    pub fn exposure(&self) -> (Option<f32>, crate::exposure::Tonemap) {
+        self.frame.exposure(&self.options)
+    }
+
     /// The stereo mode it was made for.
     pub fn mode(&self) -> StereoMode {
         self.options.mode

@@ -2,6 +2,7 @@
 //! runs, ...), and the level-of-detail choice those options and a rig make for each
 //! frame.
 
+use crate::exposure::{Exposure, Tonemap};
 use crate::keep::KeepUnchanged;
 use std::sync::Arc;
 
@@ -240,6 +241,13 @@ pub struct RendererOptions {
     /// the tiles that something changed ([`crate::keep`]); `on` and `auto` turn
     /// occlusion's `auto` off (its phases need every instance tested each frame).
     pub keep_unchanged: KeepUnchanged,
+    /// The camera's exposure ([`crate::exposure`]): `auto` meters a scene lit in
+    /// physical units (a file's lights) as the renderer is made, and keeps a scene lit
+    /// in our units at unit exposure; or an EV100.
+    pub exposure: Exposure,
+    /// The tone mapper after the exposure; `auto`: PBR Neutral where the exposure is
+    /// physical, none at unit exposure.
+    pub tonemap: Tonemap,
     /// Every frame's pose is latched at its submit ([`super::Renderer::latch`]): the
     /// pose's writes wait in memory mapped before the pose is sampled, which the latch
     /// fills and closes, so that a latch makes no staging of its own. Every encoded
@@ -373,6 +381,8 @@ impl Default for RendererOptions {
             frames_per_submit: 1,
             dt: DEFAULT_DT,
             keep_unchanged: KeepUnchanged::Off,
+            exposure: Exposure::Auto,
+            tonemap: Tonemap::Auto,
             late_latch: false,
         }
     }

@@ -114,7 +114,8 @@ impl Renderer {
 
     fn plan_in(&self, rig: &Rig, time: f32, storage: PlanStorage) -> Result<FramePlan> {
         self.check_shapes(rig)?;
-        let plan = FramePlan::new_in(rig, &self.options, self.coarse, time, storage)?;
+        let mut plan = FramePlan::new_in(rig, &self.options, self.coarse, time, storage)?;
+        self.frame.expose(&mut plan.frame, &self.options);
         Ok(plan.with_far_sizes(self.displays.iter().map(Display::far_size)))
     }
 
@@ -130,7 +131,8 @@ impl Renderer {
     pub fn plan_pair(&self, now: (&Rig, f32), next: (&Rig, f32)) -> Result<FramePlan> {
         self.check_shapes(now.0)?;
         self.check_shapes(next.0)?;
-        let plan = FramePlan::pair(now, next, &self.options, self.coarse)?;
+        let mut plan = FramePlan::pair(now, next, &self.options, self.coarse)?;
+        self.frame.expose(&mut plan.frame, &self.options);
         Ok(plan.with_far_sizes(self.displays.iter().map(Display::far_size)))
     }
 

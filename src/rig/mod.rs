@@ -14,6 +14,7 @@ use crate::error::{Error, Result};
 use crate::frustum::Fov;
 
 mod foveation;
+pub mod framing;
 mod mask;
 mod posed;
 mod presets;

@@ -8,8 +8,10 @@
 use bytemuck::{Pod, Zeroable};
 use glam::{Affine3A, Mat4, Vec3, Vec4};
 
+mod camera;
 mod material;
 
+pub use camera::{Camera, Projection};
 pub use material::{AlphaMode, Encoding, Material, SecondUv, Shading, Texture};
 
 /// One vertex as the draw pipeline reads it (`VertexInput` in `wgsl/shared/decode.wgsl`).
@@ -171,6 +173,13 @@ pub struct Scene {
     pub morphs: crate::morph::Morphs,
     /// Punctual lights ([`crate::lights`]), shaded through each display's clusters.
     pub lights: Vec<crate::lights::Light>,
+    /// The file's cameras, in node order; empty for generated scenes.
+    pub cameras: Vec<Camera>,
+    /// Whether `lights` are in physical units (lux, candela), as a file's
+    /// `KHR_lights_punctual` are: `--exposure auto` meters them
+    /// ([`crate::exposure::metered_ev100`]). Generated lamps are in our units, lit for
+    /// unit exposure.
+    pub physical_lights: bool,
 }
 
 impl Scene {
@@ -310,6 +319,12 @@ impl Scene {
         self.meshes.len() as u32 - 1
     }
 
+    /// The scene's bounds as one sphere (center, radius) that holds every instance's
+    /// world sphere ([`Scene::world_sphere`]) as placed now; `None` without instances.
+    pub fn bounds(&self) -> Option<Vec4> {
+        enclosing_sphere(self.instances.iter().map(|i| self.world_sphere(i)))
+    }
+
     /// The instance's world bounding sphere: the local center transformed, the radius
     /// scaled by the largest axis scale (conservative under non-uniform scale), grown to
     /// hold every pose of its [`Animation`] (a spinning mesh's points stay within twice
@@ -319,6 +334,24 @@ impl Scene {
     pub fn world_sphere(&self, instance: &Instance) -> Vec4 {
         world_sphere_of(&self.meshes, instance)
     }
+}
+
+/// The scene's bounds as one sphere (center, radius) holding every instance's world
+/// sphere: centered on the box around them, as wide as the farthest one reaches.
+/// `None` for a scene without instances.
+fn enclosing_sphere(spheres: impl Iterator<Item = Vec4> + Clone) -> Option<Vec4> {
+    let (lo, hi) = spheres.clone().fold(None, |acc: Option<(Vec3, Vec3)>, s| {
+        let (c, r) = (s.truncate(), s.w);
+        Some(match acc {
+            None => (c - r, c + r),
+            Some((lo, hi)) => (lo.min(c - r), hi.max(c + r)),
+        })
+    })?;
+    let center = (lo + hi) * 0.5;
+    let radius = spheres
+        .map(|s| center.distance(s.truncate()) + s.w)
+        .fold(0.0, f32::max);
+    Some(center.extend(radius))
 }
 
 fn world_sphere_of(meshes: &[Mesh], instance: &Instance) -> Vec4 {

@@ -5,8 +5,8 @@
 use super::{
     BASE_COLOR, DRAW, DRAW_CLIP_DISTANCES, DRAW_CLIP_RECT, DRAW_COMMON, DRAW_FIRST_POSE,
     DRAW_MOTION, DRAW_MULTIVIEW, DRAW_NO_CLIP_DISTANCES, LIGHT_RECORDS, LIGHTS, MATERIAL_BINDINGS,
-    MOTION, MOTION_BINDINGS, PBR, SHADOW_MAP_BINDINGS, Windows, declarations, decode_source_with,
-    light_constants,
+    MOTION, MOTION_BINDINGS, PBR, SHADOW_MAP_BINDINGS, TONEMAP, Windows, declarations,
+    decode_source_with, light_constants,
 };
 use crate::bins::{Bin, BinKind};
 use crate::scene::Shading;
@@ -259,6 +259,7 @@ impl DrawKey {
             BASE_COLOR,
             &declarations(&SHADOW_MAP_BINDINGS, 2, windows),
             &marked(DRAW_COMMON),
+            TONEMAP,
             PBR,
             &light_constants(),
             LIGHT_RECORDS,

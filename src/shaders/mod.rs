@@ -84,6 +84,7 @@ const DECODE: &str = include_str!("../../wgsl/shared/decode.wgsl");
 const DRAW_COMMON: &str = include_str!("../../wgsl/shared/draw_common.wgsl");
 const BASE_COLOR: &str = include_str!("../../wgsl/shared/base_color.wgsl");
 const PBR: &str = include_str!("../../wgsl/shared/pbr.wgsl");
+const TONEMAP: &str = include_str!("../../wgsl/shared/tonemap.wgsl");
 const DRAW: &str = include_str!("../../wgsl/draw.wgsl");
 const DRAW_MULTIVIEW: &str = include_str!("../../wgsl/draw_multiview.wgsl");
 const DRAW_MOTION: &str = include_str!("../../wgsl/draw_motion.wgsl");

@@ -92,4 +92,8 @@ struct FrameContext {
     shadows: u32,
     // The previous frame's time, with motion vectors; else time.
     previous_time: f32,
+    // The camera's exposure, the light's scale, and its tone mapper (TONEMAP_* in
+    // tonemap.wgsl): src/exposure.rs.
+    exposure: f32,
+    tonemap: u32,
 }

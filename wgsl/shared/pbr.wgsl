@@ -109,6 +109,7 @@ fn pbr_shade(s: Surface, p: Pbr) -> vec4<f32> {
     return vec4(direct + ambient + p.emissive, p.base.a);
 }
 
+// The built-in shading as the frame's camera sees it (wgsl/shared/tonemap.wgsl).
 fn shade(s: Surface) -> vec4<f32> {
-    return pbr_shade(s, pbr_inputs(s));
+    return exposed(pbr_shade(s, pbr_inputs(s)));
 }

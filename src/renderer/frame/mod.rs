@@ -8,6 +8,7 @@ use crate::buffers::{Upload, uniform_buffer};
 use crate::contexts::FrameContext;
 use crate::draw::{DrawScene, Drawer, Drawing};
 use crate::error::Result;
+use crate::exposure;
 use crate::renderer::culler::{CullPass, Culler};
 use crate::renderer::frame_stats::FrameStats;
 use crate::renderer::options::{PosingMode, RendererOptions};
@@ -36,6 +37,8 @@ pub struct FrameLevel {
     /// Built over the scene's buffers (again when a sync reallocates them).
     pub passes: FramePasses,
     pub edits: Edits,
+    /// `--exposure auto`'s reading of the scene as made ([`exposure::metered_ev100`]).
+    metered: Option<f32>,
 }
 
 /// What the displays' passes bind of the frame level, made before them: the frame
@@ -44,6 +47,7 @@ pub struct FrameBase {
     uniform: wgpu::Buffer,
     lighting: Lighting,
     shadow_map: ShadowMap,
+    metered: Option<f32>,
 }
 
 impl FrameBase {
@@ -67,6 +71,7 @@ impl FrameBase {
             uniform,
             lighting,
             shadow_map,
+            metered: exposure::metered_ev100(scene),
         })
     }
 
@@ -99,6 +104,7 @@ impl FrameLevel {
             uniform,
             lighting,
             shadow_map,
+            metered,
         } = base;
         FrameLevel {
             uniform,
@@ -106,7 +112,26 @@ impl FrameLevel {
             shadow_map,
             passes,
             edits,
+            metered,
         }
+    }
+
+    /// The EV100 frames are exposed at (`None`: unit exposure) and the tone mapper,
+    /// as `options` ask, `auto` from the scene's meter reading as the renderer was made.
+    pub fn exposure(&self, options: &RendererOptions) -> (Option<f32>, exposure::Tonemap) {
+        let ev100 = match options.exposure {
+            exposure::Exposure::Ev100(ev) => Some(ev),
+            exposure::Exposure::Auto => self.metered,
+        };
+        let (_, curve) = exposure::resolve(options.exposure, options.tonemap, self.metered);
+        (ev100, curve)
+    }
+
+    /// Sets the frame context's exposure and tone mapper as `options` ask, `auto`
+    /// from the scene's meter reading as the renderer was made.
+    pub fn expose(&self, frame: &mut FrameContext, options: &RendererOptions) {
+        let (scale, curve) = exposure::resolve(options.exposure, options.tonemap, self.metered);
+        (frame.exposure, frame.tonemap) = (scale, curve.wgsl());
     }
 
     /// The frame context's uniform, as a reallocation binds it again.
