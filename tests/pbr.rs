@@ -7,9 +7,11 @@
 use glam::{Vec2, Vec3, Vec4};
 use image::{Rgba, RgbaImage};
 use stereocull::exposure::{self, Exposure, Tonemap};
+use stereocull::keep::KeepUnchanged;
 use stereocull::pbr::{self, Pbr};
+use stereocull::readback::read_rgba8;
 use stereocull::records::pack_unorm4x8;
-use stereocull::renderer::RendererOptions;
+use stereocull::renderer::{Renderer, RendererOptions};
 use stereocull::rig::Rig;
 use stereocull::scene::{Animation, Encoding, Instance, Material, Scene, Texture, Vertex};
 use stereocull::shadow::Light;
@@ -334,6 +336,45 @@ fn a_sun_in_lux_is_metered_and_matches_the_brdf_worked_by_hand() {
         }
     }
     assert_eq!(checked, 6);
+}
+
+/// An engine sets its camera's exposure per frame (`Renderer::set_exposure`): the
+/// next frame equals a renderer made with those settings, byte for byte (the same
+/// pipelines read the same frame context), though the frames keep unchanged pixels:
+/// a new exposure moves every pixel, so that frame redraws whole.
+#[test]
+fn an_exposure_set_per_frame_draws_as_one_made_with_it() {
+    let gpu = support::gpu();
+    let scene = mapped_plane();
+    let rig = facing_the_plane(2.2);
+    let kept = RendererOptions {
+        keep_unchanged: KeepUnchanged::On,
+        ..options(LIGHT)
+    };
+    let (exposure, tonemap) = (Exposure::Ev100(-1.0), Tonemap::Aces);
+    let with = RendererOptions {
+        exposure,
+        tonemap,
+        ..kept.clone()
+    };
+    let made = support::render(&gpu, &scene, &rig, with).unwrap().remove(0);
+    let mut renderer = Renderer::new(&gpu.device, &scene, &rig, kept).unwrap();
+    let targets = renderer.create_targets(&gpu.device);
+    let frame = |renderer: &mut Renderer| {
+        renderer
+            .submit_frame(&gpu.device, &gpu.queue, &rig, 0.0, &targets)
+            .unwrap();
+        read_rgba8(&gpu.device, &gpu.queue, &targets[0].color).unwrap()
+    };
+    let before = frame(&mut renderer);
+    renderer.set_exposure(exposure, tonemap);
+    assert_eq!(renderer.exposure(), (Some(-1.0), Tonemap::Aces));
+    let after = frame(&mut renderer);
+    assert!(after != before, "the exposure changes the kept frame");
+    assert!(
+        after == made,
+        "the frame differs from one made with the exposure"
+    );
 }
 
 /// The plane (no textures) with material `m` and a dark base color, and where eye 0

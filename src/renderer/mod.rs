@@ -88,6 +88,7 @@
 use crate::cull::targets::CullTargets;
 use crate::draw::{DrawScene, OwnPipeline};
 use crate::error::{Error, Result};
+use crate::exposure::Tonemap;
 use crate::keep::Keeper;
 pub use crate::keep::{KeepUnchanged, WholeRedraw};
 use crate::motion::PreviousFrame;
@@ -305,6 +306,17 @@ impl Renderer {
         self.frame.lighting_mut().set(lights)
     }
 
+    /// The camera's exposure and tone mapper from the next frame on: an engine's
+    /// camera settings, which may change per frame. `auto` keeps the meter reading
+    /// taken when the renderer was made. A change redraws the next frame whole (it
+    /// moves every pixel).
+    pub fn set_exposure(&mut self, exposure: crate::exposure::Exposure, tonemap: Tonemap) {
+        if (exposure, tonemap) != (self.options.exposure, self.options.tonemap) {
+            self.keeper.redraw_whole();
+        }
+        (self.options.exposure, self.options.tonemap) = (exposure, tonemap);
+    }
+
     /// Morph `m`'s weights ([`crate::morph::Morphs::morphs`], in the scene the
     /// renderer was made with; `Morph::mesh` names the mesh it moves) from the next
     /// `prepare` on, its animations stopped: for an engine that plays its own blend
@@ -390,7 +402,7 @@ impl Renderer {
     /// The EV100 its frames are exposed at (`None`: unit exposure, a scene lit in our
     /// units) and their tone mapper: [`RendererOptions::exposure`] and `tonemap` with
     /// `auto` resolved ([`crate::exposure`]).
-    pub fn exposure(&self) -> (Option<f32>, crate::exposure::Tonemap) {
+    pub fn exposure(&self) -> (Option<f32>, Tonemap) {
         self.frame.exposure(&self.options)
     }
 
