@@ -91,10 +91,14 @@ pub fn metered_ev100(scene: &Scene) -> Option<f32> {
     (brightest > 0.0).then(|| (brightest / METER_C_OVER_ISO).log2())
 }
 
-/// The frame's exposure scale and curve (the frame context's `exposure` and
-/// `tonemap`) under `exposure` and `tonemap`, for a scene whose meter read `metered`
-/// ([`metered_ev100`]).
-pub fn resolve(exposure: Exposure, tonemap: Tonemap, metered: Option<f32>) -> (f32, Tonemap) {
+/// The EV100 frames are exposed at (`None`: unit exposure, a scale of 1) and their
+/// curve under `exposure` and `tonemap`, for a scene whose meter read `metered`
+/// ([`metered_ev100`]). The frame context takes [`scale_of_ev100`] of the first.
+pub fn resolve(
+    exposure: Exposure,
+    tonemap: Tonemap,
+    metered: Option<f32>,
+) -> (Option<f32>, Tonemap) {
     let ev100 = match exposure {
         Exposure::Ev100(ev) => Some(ev),
         Exposure::Auto => metered,
@@ -104,7 +108,7 @@ pub fn resolve(exposure: Exposure, tonemap: Tonemap, metered: Option<f32>) -> (f
         (Tonemap::Auto, None) => Tonemap::None,
         (t, _) => t,
     };
-    (ev100.map_or(1.0, scale_of_ev100), curve)
+    (ev100, curve)
 }
 
 /// `rgb` (linear, exposed) through `curve`, the operations in the order the shader's
@@ -188,14 +192,12 @@ mod tests {
 
     #[test]
     fn auto_is_neutral_where_physical_and_untouched_at_unit_exposure() {
-        assert_eq!(
-            resolve(Exposure::Auto, Tonemap::Auto, None),
-            (1.0, Tonemap::None)
-        );
-        let (scale, curve) = resolve(Exposure::Auto, Tonemap::Auto, Some(9.0));
-        assert_eq!((scale, curve), (scale_of_ev100(9.0), Tonemap::Neutral));
-        let given = resolve(Exposure::Ev100(2.0), Tonemap::Aces, None);
-        assert_eq!(given, (scale_of_ev100(2.0), Tonemap::Aces));
+        let unit = resolve(Exposure::Auto, Tonemap::Auto, None);
+        assert_eq!(unit, (None, Tonemap::None));
+        let metered = resolve(Exposure::Auto, Tonemap::Auto, Some(9.0));
+        assert_eq!(metered, (Some(9.0), Tonemap::Neutral));
+        let given = resolve(Exposure::Ev100(2.0), Tonemap::Aces, Some(9.0));
+        assert_eq!(given, (Some(2.0), Tonemap::Aces));
     }
 
     #[test]

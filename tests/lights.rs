@@ -232,12 +232,7 @@ fn a_moved_light_moves_its_light() {
     };
     let mut renderer = Renderer::new(&gpu.device, &scene, &rig, options).unwrap();
     let targets = renderer.create_targets(&gpu.device);
-    let frame = |renderer: &mut Renderer| {
-        renderer
-            .submit_frame(&gpu.device, &gpu.queue, &rig, 0.0, &targets)
-            .unwrap();
-        stereocull::readback::read_rgba8(&gpu.device, &gpu.queue, &targets[0].color).unwrap()
-    };
+    let frame = |renderer: &mut Renderer| support::next_frame(&gpu, renderer, &rig, &targets);
     let before = frame(&mut renderer);
     lights[0].position = Vec3::new(0.5, 0.5, 0.6);
     renderer.set_lights(&lights).unwrap();

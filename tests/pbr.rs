@@ -9,7 +9,6 @@ use image::{Rgba, RgbaImage};
 use stereocull::exposure::{self, Exposure, Tonemap};
 use stereocull::keep::KeepUnchanged;
 use stereocull::pbr::{self, Pbr};
-use stereocull::readback::read_rgba8;
 use stereocull::records::pack_unorm4x8;
 use stereocull::renderer::{Renderer, RendererOptions};
 use stereocull::rig::Rig;
@@ -360,12 +359,7 @@ fn an_exposure_set_per_frame_draws_as_one_made_with_it() {
     let made = support::render(&gpu, &scene, &rig, with).unwrap().remove(0);
     let mut renderer = Renderer::new(&gpu.device, &scene, &rig, kept).unwrap();
     let targets = renderer.create_targets(&gpu.device);
-    let frame = |renderer: &mut Renderer| {
-        renderer
-            .submit_frame(&gpu.device, &gpu.queue, &rig, 0.0, &targets)
-            .unwrap();
-        read_rgba8(&gpu.device, &gpu.queue, &targets[0].color).unwrap()
-    };
+    let frame = |renderer: &mut Renderer| support::next_frame(&gpu, renderer, &rig, &targets);
     let before = frame(&mut renderer);
     renderer.set_exposure(exposure, tonemap);
     assert_eq!(renderer.exposure(), (Some(-1.0), Tonemap::Aces));

@@ -350,11 +350,11 @@ impl SceneArgs {
     /// a display fixed in the room, keeps the rig's spot.
     fn place_viewer(&self, rig: &mut Rig, scene: &Scene) -> std::result::Result<(), String> {
         // A room-fixed rig (a CAVE) stands where it is built; only a head moves.
-        let is_file = crate::scene_spec::is_file(&self.scene) && framing::moves_with_head(rig);
+        let framed = crate::scene_spec::is_file(&self.scene) && framing::moves_with_head(rig);
         let turned = self.yaw.is_some() || self.pitch.is_some();
         let camera = match (self.camera, self.viewer) {
             (Some(n), _) => Some(n),
-            (None, None) if is_file && !turned && !scene.cameras.is_empty() => Some(0),
+            (None, None) if framed && !turned && !scene.cameras.is_empty() => Some(0),
             _ => None,
         };
         if let Some(n) = camera {
@@ -367,7 +367,7 @@ impl SceneArgs {
         match self.viewer {
             Some(ViewerSpot::At(p)) => rig.viewer.position = p,
             Some(ViewerSpot::Fit) => self.fit(rig, scene)?,
-            None if is_file => self.fit(rig, scene)?,
+            None if framed => self.fit(rig, scene)?,
             None => {}
         }
         Ok(())

@@ -22,7 +22,9 @@ use stereocull::device::Gpu;
 use stereocull::procedural;
 use stereocull::readback::read_rgba8;
 use stereocull::records::CullLayout;
-use stereocull::renderer::{CullMode, OcclusionMode, Renderer, RendererOptions, StereoMode};
+use stereocull::renderer::{
+    CullMode, DisplayTarget, OcclusionMode, Renderer, RendererOptions, StereoMode,
+};
 use stereocull::rig::{Mount, Rig};
 use stereocull::scene::{Animation, Instance, Scene};
 use stereocull::shapes;
@@ -111,6 +113,20 @@ pub fn one_frame(gpu: &Gpu, scene: &Scene, rig: &Rig, options: RendererOptions) 
         .submit_frame(&gpu.device, &gpu.queue, rig, 0.0, &targets)
         .unwrap();
     renderer
+}
+
+/// `renderer`'s next frame of `rig` at time 0 into `targets`, display 0's color read
+/// back: for tests that change a renderer between frames.
+pub fn next_frame(
+    gpu: &Gpu,
+    renderer: &mut Renderer,
+    rig: &Rig,
+    targets: &[DisplayTarget],
+) -> RgbaImage {
+    renderer
+        .submit_frame(&gpu.device, &gpu.queue, rig, 0.0, targets)
+        .unwrap();
+    read_rgba8(&gpu.device, &gpu.queue, &targets[0].color).unwrap()
 }
 
 /// Every display's cull buffers of `renderer`'s last frame, read back.

@@ -119,19 +119,14 @@ impl FrameLevel {
     /// The EV100 frames are exposed at (`None`: unit exposure) and the tone mapper,
     /// as `options` ask, `auto` from the scene's meter reading as the renderer was made.
     pub fn exposure(&self, options: &RendererOptions) -> (Option<f32>, exposure::Tonemap) {
-        let ev100 = match options.exposure {
-            exposure::Exposure::Ev100(ev) => Some(ev),
-            exposure::Exposure::Auto => self.metered,
-        };
-        let (_, curve) = exposure::resolve(options.exposure, options.tonemap, self.metered);
-        (ev100, curve)
+        exposure::resolve(options.exposure, options.tonemap, self.metered)
     }
 
-    /// Sets the frame context's exposure and tone mapper as `options` ask, `auto`
-    /// from the scene's meter reading as the renderer was made.
+    /// Sets the frame context's exposure and tone mapper as `options` ask.
     pub fn expose(&self, frame: &mut FrameContext, options: &RendererOptions) {
-        let (scale, curve) = exposure::resolve(options.exposure, options.tonemap, self.metered);
-        (frame.exposure, frame.tonemap) = (scale, curve.wgsl());
+        let (ev100, curve) = self.exposure(options);
+        frame.exposure = ev100.map_or(1.0, exposure::scale_of_ev100);
+        frame.tonemap = curve.wgsl();
     }
 
     /// The frame context's uniform, as a reallocation binds it again.
